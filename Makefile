@@ -1,0 +1,24 @@
+# Two set-up commands for a fresh machine with Python >= 3.10 and git:
+#   make run    installs into .venv and runs the default scenario end to end on python-can's virtual bus
+#   make test   installs into .venv (with test extras) and runs the test suite
+PYTHON ?= python3
+VENV ?= .venv
+SCENARIO ?= scenarios/highway_cut_in.yaml
+
+$(VENV)/.installed: pyproject.toml
+	$(PYTHON) -m venv $(VENV)
+	$(VENV)/bin/python -m pip install --quiet --upgrade pip
+	$(VENV)/bin/python -m pip install --quiet -e '.[test]'
+	touch $@
+
+.PHONY: install run test bench
+install: $(VENV)/.installed
+
+run: $(VENV)/.installed
+	$(VENV)/bin/radarnode run $(SCENARIO)
+
+test: $(VENV)/.installed
+	$(VENV)/bin/python -m pytest -q
+
+bench: $(VENV)/.installed
+	$(VENV)/bin/python benchmarks/wire.py

@@ -1,0 +1,3 @@
+from radarnode.cli.main import main
+
+raise SystemExit(main())

@@ -1,0 +1,130 @@
+"""Struct-of-arrays records for one radar cycle.
+
+Every array of a list has shape (n,), one entry per object or cluster, in the
+order the radar sends them. Positions and velocities are in the sensor frame
+(x forward, y left); σ fields are one standard deviation in SI units.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+# ARS 408 Obj_DynProp codes
+DYN_MOVING, DYN_STATIONARY, DYN_ONCOMING, DYN_STATIONARY_CANDIDATE = 0, 1, 2, 3
+DYN_UNKNOWN, DYN_CROSSING_STATIONARY, DYN_CROSSING_MOVING, DYN_STOPPED = 4, 5, 6, 7
+DYN_NAMES = ("moving", "stationary", "oncoming", "stat.cand", "unknown", "cross.stat", "crossing", "stopped")
+CLASS_NAMES = ("point", "car", "truck", "pedestrian", "motorcycle", "bicycle", "wide", "reserved")
+# ARS 408 Obj_MeasState codes
+MEAS_DELETED, MEAS_NEW, MEAS_MEASURED, MEAS_PREDICTED = 0, 1, 2, 3
+
+
+def _empty(n: int, dtype: type = np.float64) -> np.ndarray:
+    return np.zeros(n, dtype=dtype)
+
+
+@dataclass
+class ObjectList:
+    """One cycle's object list (ARS 408 messages 0x60B, 0x60C, 0x60D).
+
+    Quality and extended fields are NaN (or -1 for codes) when the cycle did
+    not carry them. ``actor_index`` links an object to its ground-truth actor
+    (-1 when unknown, e.g. after decoding).
+    """
+
+    id: np.ndarray
+    dist_long_m: np.ndarray
+    dist_lat_m: np.ndarray
+    vrel_long_mps: np.ndarray
+    vrel_lat_mps: np.ndarray
+    dyn_prop: np.ndarray
+    rcs_dbsm: np.ndarray
+    dist_long_sigma_m: np.ndarray
+    dist_lat_sigma_m: np.ndarray
+    vrel_long_sigma_mps: np.ndarray
+    vrel_lat_sigma_mps: np.ndarray
+    arel_long_sigma_mps2: np.ndarray
+    arel_lat_sigma_mps2: np.ndarray
+    orientation_sigma_rad: np.ndarray
+    meas_state: np.ndarray
+    prob_of_exist: np.ndarray  # ARS 408 code 0..7
+    arel_long_mps2: np.ndarray
+    arel_lat_mps2: np.ndarray
+    obj_class: np.ndarray
+    orientation_rad: np.ndarray
+    length_m: np.ndarray
+    width_m: np.ndarray
+    actor_index: np.ndarray
+
+    INT_FIELDS = ("id", "dyn_prop", "meas_state", "prob_of_exist", "obj_class", "actor_index")
+
+    @classmethod
+    def empty(cls, n: int = 0) -> ObjectList:
+        kw = {f.name: _empty(n, np.int64 if f.name in cls.INT_FIELDS else np.float64)
+              for f in dataclasses.fields(cls)}
+        return cls(**kw)
+
+    def __len__(self) -> int:
+        return int(self.id.shape[0])
+
+    def take(self, index: np.ndarray) -> ObjectList:
+        """A new list with the entries ``index`` (an integer or boolean array), in that order."""
+        return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
+
+    @property
+    def range_m(self) -> np.ndarray:
+        return np.hypot(self.dist_long_m, self.dist_lat_m)
+
+
+@dataclass
+class ClusterList:
+    """One cycle's cluster list (ARS 408 messages 0x701, 0x702): near clusters first, then far."""
+
+    id: np.ndarray
+    dist_long_m: np.ndarray
+    dist_lat_m: np.ndarray
+    vrel_long_mps: np.ndarray
+    vrel_lat_mps: np.ndarray
+    dyn_prop: np.ndarray
+    rcs_dbsm: np.ndarray
+    dist_long_sigma_m: np.ndarray
+    dist_lat_sigma_m: np.ndarray
+    vrel_long_sigma_mps: np.ndarray
+    vrel_lat_sigma_mps: np.ndarray
+    pdh0: np.ndarray            # false-alarm probability code 0..7
+    ambig_state: np.ndarray
+    invalid_state: np.ndarray
+    is_near: np.ndarray         # bool
+    actor_index: np.ndarray     # -1 for guardrail posts, false alarms and decoded clusters
+
+    INT_FIELDS = ("id", "dyn_prop", "pdh0", "ambig_state", "invalid_state", "actor_index")
+
+    @classmethod
+    def empty(cls, n: int = 0) -> ClusterList:
+        kw = {}
+        for f in dataclasses.fields(cls):
+            dtype = bool if f.name == "is_near" else np.int64 if f.name in cls.INT_FIELDS else np.float64
+            kw[f.name] = _empty(n, dtype)
+        return cls(**kw)
+
+    def __len__(self) -> int:
+        return int(self.id.shape[0])
+
+    def take(self, index: np.ndarray) -> ClusterList:
+        return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
+
+    @property
+    def range_m(self) -> np.ndarray:
+        return np.hypot(self.dist_long_m, self.dist_lat_m)
+
+
+@dataclass
+class RadarFrame:
+    """What the radar reports for one cycle."""
+
+    t_s: float
+    cycle: int
+    objects: ObjectList
+    clusters: ClusterList

@@ -1,0 +1,1 @@
+"""Radar configuration, presets and the radar models (object level for now)."""

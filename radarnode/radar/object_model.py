@@ -1,0 +1,302 @@
+"""Fidelity level 1: the statistical object-level radar model (DESIGN.md section 5.1).
+
+Per cycle and per actor, vectorised over actors:
+
+1. field of view (the preset's sectors), minimum/maximum range and the
+   configured MaxDistance;
+2. occlusion: the fraction of an actor's azimuth extent not hidden behind
+   nearer actors; below ``MIN_VISIBLE_FRACTION`` it is not seen, above it its
+   RCS is scaled by the visible fraction;
+3. SNR from the radar equation, detection with the Swerling 1 probability;
+4. measurement noise in range, radial speed and azimuth with σ from the
+   Cramér–Rao bound at that SNR, floored by the preset;
+5. an internal tracker the way a production radar has one: an object is
+   confirmed after 2 detections in 3 cycles, coasts (MeasState "predicted")
+   through up to ``COAST_CYCLES`` misses, keeps its ID while it lives, and the
+   lowest free ID is given to a new object;
+6. ARS 408 DynProp from the ego-motion-compensated velocity, class, size,
+   orientation, ProbOfExist and the σ fields.
+
+The cluster list holds this cycle's detections (actors and guardrail posts)
+plus Poisson false alarms at the preset's false-alarm rate.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from radarnode.perception.types import (
+    DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
+    MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
+from radarnode.radar import equation
+from radarnode.radar.presets import RadarPreset
+from radarnode.scene.world import Scene, SensorView
+
+MIN_VISIBLE_FRACTION = 0.25
+COAST_CYCLES = 3
+CONFIRM_HITS = 2          # detections in the last CONFIRM_WINDOW cycles that make an object
+CONFIRM_WINDOW = 3
+MAX_OBJECTS = 100         # ARS 408 object list capacity
+MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are 8 bits each)
+MOVING_THRESHOLD_MPS = 0.5
+OCCLUSION_SAMPLES = 16
+_PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
+
+
+@dataclass(frozen=True)
+class RuntimeConfig:
+    """The part of the sensor configuration that RadarConfiguration (0x200) can change."""
+
+    max_distance_m: float
+    power_reduction_db: float = 0.0
+    high_sensitivity: bool = False
+
+
+def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
+    """True where (range, azimuth) lies inside any of the preset's sectors and above the minimum range."""
+    inside = np.zeros(np.shape(range_m), dtype=bool)
+    abs_az = np.abs(azimuth_rad)
+    for sector in preset.fov:
+        inside |= (range_m <= sector.max_range_m) & (abs_az <= math.radians(sector.half_angle_deg))
+    return inside & (range_m >= preset.min_range_m)
+
+
+def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, occluder: np.ndarray) -> np.ndarray:
+    """Fraction of each actor's azimuth extent not covered by any nearer occluding actor.
+
+    Shapes: all inputs (n,); returns (n,). Cost O(n²·16), fine for the tens to
+    hundreds of actors of a scene.
+    """
+    n = range_m.shape[0]
+    if n == 0:
+        return np.ones(0)
+    u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
+    samples = az_lo[:, None] + u[None, :] * (az_hi - az_lo)[:, None]          # (n, S)
+    nearer = (range_m[None, :] < range_m[:, None]) & occluder[None, :]          # (target, occluder)
+    covered = ((samples[:, :, None] >= az_lo[None, None, :]) & (samples[:, :, None] <= az_hi[None, None, :])
+               & nearer[:, None, :]).any(axis=2)                               # (n, S)
+    return 1.0 - covered.mean(axis=1)
+
+
+def sigma_to_xy(range_m, azimuth_rad, sigma_r, sigma_az):
+    """Cartesian σ of a polar measurement (first-order propagation)."""
+    c, s = np.cos(azimuth_rad), np.sin(azimuth_rad)
+    sx = np.sqrt((c * sigma_r) ** 2 + (range_m * s * sigma_az) ** 2)
+    sy = np.sqrt((s * sigma_r) ** 2 + (range_m * c * sigma_az) ** 2)
+    return sx, sy
+
+
+class ObjectModel:
+    """Statistical object-level radar model with its own light tracker.
+
+    Parameters
+    ----------
+    scene : Scene
+    preset : RadarPreset
+    rng : numpy.random.Generator
+        The only source of randomness; seed it from the scenario.
+    """
+
+    def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator) -> None:
+        self.scene = scene
+        self.preset = preset
+        self.rng = rng
+        n = scene.n
+        self.hist = np.zeros(n, dtype=np.uint8)      # detection history, bit 0 = this cycle
+        self.alive = np.zeros(n, dtype=bool)
+        self.obj_id = np.full(n, -1, dtype=np.int64)
+        self.misses = np.zeros(n, dtype=np.int64)
+        self.was_moving = np.zeros(n, dtype=bool)
+        self.state = np.zeros((n, 4))                  # last reported x, y, vx, vy
+        self.last_t = 0.0
+        self.cycle = 0
+        self.occluder = ~scene.is_guardrail
+        self.reportable = ~scene.is_guardrail         # guardrails show up as clusters only
+
+    def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
+             ) -> tuple[RadarFrame, SensorView]:
+        """Advance to ``t_s`` and return the cycle's frame and the ground truth it came from.
+
+        ``sensor_velocity_est`` is the sensor's velocity over ground (sensor axes)
+        as the radar knows it from the ego-motion input; ``None`` uses the truth.
+        """
+        p, rng, sc = self.preset, self.rng, self.scene
+        view = sc.view(t_s)
+        rng_m, az = view.range_m, view.azimuth_rad
+        observable = in_fov(p, rng_m, az) & (rng_m <= config.max_distance_m)
+        frac = visible_fraction(rng_m, view.az_lo_rad, view.az_hi_rad, self.occluder & observable)
+        observable &= frac >= MIN_VISIBLE_FRACTION
+        rcs_eff = sc.rcs_dbsm + 10.0 * np.log10(np.maximum(frac, 1e-3))
+        snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db)
+        pd = equation.detection_probability(snr, p.pfa)
+        u = rng.random(sc.n)
+        detected = observable & (u < pd)
+
+        # --- measurement noise, Cramér–Rao bound with a floor --------------
+        sig_r = np.maximum(equation.crb_range_m(p, snr), p.range_sigma_floor_m)
+        sig_v = np.maximum(equation.crb_speed_mps(p, snr), p.speed_sigma_floor_mps)
+        sig_az = np.maximum(equation.crb_azimuth_rad(p, snr, az), math.radians(p.azimuth_sigma_floor_deg))
+        noise = rng.standard_normal((6, sc.n))
+        m_r = rng_m + sig_r * noise[0]
+        m_az = az + sig_az * noise[1]
+        c, s = np.cos(az), np.sin(az)
+        v_rad = view.vx_mps * c + view.vy_mps * s
+        v_tan = -view.vx_mps * s + view.vy_mps * c
+        m_vr = v_rad + sig_v * noise[2]
+        m_vt = v_tan + p.lateral_speed_sigma_mps * noise[3]
+        mc, ms = np.cos(m_az), np.sin(m_az)
+        meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=1)
+
+        # --- tracker bookkeeping --------------------------------------------
+        dt = t_s - self.last_t if self.cycle else 0.0
+        self.hist = ((self.hist << 1) | detected.astype(np.uint8)).astype(np.uint8)
+        recent = np.unpackbits(self.hist[:, None], axis=1)[:, -CONFIRM_WINDOW:].sum(axis=1)
+        self.misses = np.where(detected, 0, self.misses + 1)
+        new = ~self.alive & detected & (recent >= CONFIRM_HITS) & self.reportable
+        lost = self.alive & ((self.misses > COAST_CYCLES) | ~in_fov(p, rng_m, az))
+        self.alive = (self.alive & ~lost) | new
+        self.obj_id[lost] = -1
+        self._assign_ids(np.flatnonzero(new))
+        predicted = self.state.copy()
+        predicted[:, 0:2] += predicted[:, 2:4] * dt
+        self.state = np.where(detected[:, None], meas, predicted)
+        self.last_t, self.cycle = t_s, self.cycle + 1
+
+        idx = np.flatnonzero(self.alive)
+        objects = self._object_list(idx, view, detected, new, snr, pd, sig_r, sig_v, sig_az, sensor_velocity_est)
+        clusters = self._cluster_list(t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
+                                      sensor_velocity_est)
+        return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
+
+    def _assign_ids(self, newcomers: np.ndarray) -> None:
+        used = set(self.obj_id[self.obj_id >= 0].tolist())
+        free = (i for i in range(256) if i not in used)
+        for k in newcomers:  # only the (rare) newly confirmed objects, not every object
+            self.obj_id[k] = next(free)
+
+    def _dyn_prop(self, idx, vx, vy, sensor_velocity_est, view):
+        svx, svy = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps,
+                                                                                  view.sensor_vy_mps)
+        gx, gy = vx + svx, vy + svy
+        speed = np.hypot(gx, gy)
+        moving = speed >= MOVING_THRESHOLD_MPS
+        if idx is not None:
+            self.was_moving[idx] |= moving
+            ever = self.was_moving[idx]
+        else:
+            ever = np.zeros_like(moving)
+        angle = np.abs(np.arctan2(gy, gx))
+        dyn = np.where(angle > np.radians(135.0), DYN_ONCOMING,
+                       np.where(angle > np.radians(45.0), DYN_CROSSING_MOVING, DYN_MOVING))
+        return np.where(moving, dyn, np.where(ever, DYN_STOPPED, DYN_STATIONARY)).astype(np.int64)
+
+    def _object_list(self, idx, view, detected, new, snr, pd, sig_r, sig_v, sig_az, sensor_velocity_est):
+        p, sc = self.preset, self.scene
+        n = idx.shape[0]
+        st = self.state[idx]
+        ol = ObjectList.empty(n)
+        ol.id = self.obj_id[idx].copy()
+        ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps = st[:, 0], st[:, 1], st[:, 2], st[:, 3]
+        ol.dyn_prop = self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view)
+        ol.rcs_dbsm = sc.rcs_dbsm[idx] + self.rng.normal(0.0, 1.0, n)
+        r = np.hypot(st[:, 0], st[:, 1])
+        az = np.arctan2(st[:, 1], st[:, 0])
+        coast = np.where(detected[idx], 1.0, 1.0 + self.misses[idx])  # σ grows while coasting
+        sx, sy = sigma_to_xy(r, az, sig_r[idx] * coast, sig_az[idx] * coast)
+        ol.dist_long_sigma_m, ol.dist_lat_sigma_m = sx, sy
+        svr = sig_v[idx] * coast
+        ol.vrel_long_sigma_mps = np.hypot(np.cos(az) * svr, np.sin(az) * p.lateral_speed_sigma_mps)
+        ol.vrel_lat_sigma_mps = np.hypot(np.sin(az) * svr, np.cos(az) * p.lateral_speed_sigma_mps)
+        ol.arel_long_sigma_mps2 = np.full(n, 0.5)
+        ol.arel_lat_sigma_mps2 = np.full(n, 0.5)
+        ol.orientation_sigma_rad = np.full(n, math.radians(5.0))
+        ol.meas_state = np.where(new[idx], MEAS_NEW, np.where(detected[idx], MEAS_MEASURED, MEAS_PREDICTED))
+        hits = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1)
+        p_exist = 1.0 - (1.0 - np.clip(pd[idx], 0.0, 0.999999)) ** np.maximum(hits, 1)
+        ol.prob_of_exist = np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1
+        ol.arel_long_mps2 = view.ax_mps2[idx] + self.rng.normal(0.0, 0.1, n)
+        ol.arel_lat_mps2 = view.ay_mps2[idx] + self.rng.normal(0.0, 0.05, n)
+        ol.obj_class = sc.class_code[idx].copy()
+        ol.orientation_rad = view.orientation_rad[idx]
+        ol.length_m = np.maximum(sc.length_m[idx] + self.rng.normal(0.0, p.size_sigma_m, n), 0.2)
+        ol.width_m = np.maximum(sc.width_m[idx] + self.rng.normal(0.0, p.size_sigma_m / 2, n), 0.2)
+        ol.actor_index = idx.astype(np.int64)
+        return ol
+
+    def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
+                      sensor_velocity_est):
+        p, rng, sc = self.preset, self.rng, self.scene
+        parts_xy, parts_v, parts_rcs, parts_sig, parts_actor = [], [], [], [], []
+        a_idx = np.flatnonzero(detected & self.reportable)
+        parts_xy.append(meas[a_idx, 0:2])
+        parts_v.append(meas[a_idx, 2:4])
+        parts_rcs.append(rcs_eff[a_idx])
+        parts_sig.append(np.stack([sig_r[a_idx], sig_az[a_idx], sig_v[a_idx]], axis=1))
+        parts_actor.append(a_idx)
+        # guardrail posts: stationary point targets
+        gx, gy = sc.guardrail_posts(t_s, p.max_range_m)
+        if gx.size:
+            g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
+            keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
+            g_r, g_az = g_r[keep], g_az[keep]
+            g_rcs = np.full(g_r.shape, sc.scenario.road.guardrails.rcs_dbsm)
+            g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db)
+            hit = rng.random(g_r.shape) < equation.detection_probability(g_snr, p.pfa)
+            g_r, g_az, g_snr, g_rcs = g_r[hit], g_az[hit], g_snr[hit], g_rcs[hit]
+            gs_r = np.maximum(equation.crb_range_m(p, g_snr), p.range_sigma_floor_m)
+            gs_az = np.maximum(equation.crb_azimuth_rad(p, g_snr, g_az), math.radians(p.azimuth_sigma_floor_deg))
+            gs_v = np.maximum(equation.crb_speed_mps(p, g_snr), p.speed_sigma_floor_mps)
+            nz = rng.standard_normal((3, g_r.size))
+            mr, maz = g_r + gs_r * nz[0], g_az + gs_az * nz[1]
+            # a stationary post moves at minus the sensor velocity; radar measures its radial part
+            vr = -(view.sensor_vx_mps * np.cos(g_az) + view.sensor_vy_mps * np.sin(g_az)) + gs_v * nz[2]
+            parts_xy.append(np.stack([mr * np.cos(maz), mr * np.sin(maz)], axis=1))
+            parts_v.append(np.stack([vr * np.cos(maz), vr * np.sin(maz)], axis=1))
+            parts_rcs.append(g_rcs)
+            parts_sig.append(np.stack([gs_r, gs_az, gs_v], axis=1))
+            parts_actor.append(np.full(g_r.size, -1))
+        # false alarms
+        rate = p.pfa * p.num_cells * (10.0 if config.high_sensitivity else 1.0)
+        n_fa = int(rng.poisson(rate))
+        if n_fa:
+            fr = rng.uniform(p.min_range_m, min(p.max_range_m, config.max_distance_m), n_fa)
+            faz = rng.uniform(-p.max_half_fov_rad, p.max_half_fov_rad, n_fa)
+            ok = in_fov(p, fr, faz)
+            fr, faz = fr[ok], faz[ok]
+            fv = rng.uniform(-p.max_unambiguous_speed_mps, p.max_unambiguous_speed_mps, fr.size)
+            parts_xy.append(np.stack([fr * np.cos(faz), fr * np.sin(faz)], axis=1))
+            parts_v.append(np.stack([fv * np.cos(faz), fv * np.sin(faz)], axis=1))
+            f_snr = np.full(fr.size, 13.0)
+            parts_rcs.append(f_snr - equation.snr_db(p, fr, np.zeros(fr.size)))
+            parts_sig.append(np.stack([np.full(fr.size, p.range_resolution_m / 2),
+                                       np.full(fr.size, p.angular_resolution_rad / 2),
+                                       np.full(fr.size, p.speed_resolution_mps / 2)], axis=1))
+            parts_actor.append(np.full(fr.size, -1))
+        xy = np.concatenate(parts_xy)
+        v = np.concatenate(parts_v)
+        rcs = np.concatenate(parts_rcs)
+        sig = np.concatenate(parts_sig)
+        actor = np.concatenate(parts_actor).astype(np.int64)
+        r = np.hypot(xy[:, 0], xy[:, 1])
+        near = r <= p.near_range_m
+        order = np.lexsort((r, ~near))[:MAX_CLUSTERS]    # near first, then far, each by range
+        n = order.size
+        cl = ClusterList.empty(n)
+        cl.id = np.arange(n, dtype=np.int64)
+        cl.dist_long_m, cl.dist_lat_m = xy[order, 0], xy[order, 1]
+        cl.vrel_long_mps, cl.vrel_lat_mps = v[order, 0], v[order, 1]
+        cl.dyn_prop = self._dyn_prop(None, v[order, 0], v[order, 1], sensor_velocity_est, view)
+        cl.rcs_dbsm = rcs[order]
+        az = np.arctan2(xy[order, 1], xy[order, 0])
+        cl.dist_long_sigma_m, cl.dist_lat_sigma_m = sigma_to_xy(r[order], az, sig[order, 0], sig[order, 1])
+        cl.vrel_long_sigma_mps = np.abs(np.cos(az)) * sig[order, 2] + np.abs(np.sin(az)) * p.lateral_speed_sigma_mps
+        cl.vrel_lat_sigma_mps = np.abs(np.sin(az)) * sig[order, 2] + np.abs(np.cos(az)) * p.lateral_speed_sigma_mps
+        cl.pdh0 = np.where(actor[order] >= 0, 1, 2).astype(np.int64)
+        cl.ambig_state = np.full(n, 3, dtype=np.int64)
+        cl.invalid_state = np.zeros(n, dtype=np.int64)
+        cl.is_near = near[order]
+        cl.actor_index = actor[order]
+        return cl

@@ -1,0 +1,253 @@
+"""Radar presets: waveform, array and link-budget parameters of the source documents.
+
+Each preset reproduces the figures its source gives (DESIGN.md section 4); the
+derived figures (range and speed resolution, unambiguous range and speed,
+angular resolution) are properties so they can never drift from the waveform.
+
+References
+----------
+seed 000: Belyaev, Suanov, Trots, automotive radar modelling (mimo12).
+seed 001: Artyukhin, Flaksman, Rubtsov, distributed incoherent radars (srr_corner).
+seed 002: Bui Shi Khan, thesis abstract, scanning 39 GHz radar (scanning_ka).
+seed 003: MATLAB/Simulink FMCW ACC example (acc_lrr).
+seed 004: Jiao Anxia, SystemVue automotive radar (fast_chirp).
+ARS 408-21 data sheet (ars408_like).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+from radarnode import validate
+from radarnode.errors import ConfigError, FieldError
+
+SPEED_OF_LIGHT_MPS = 299_792_458.0
+BOLTZMANN_J_PER_K = 1.380649e-23
+REFERENCE_TEMPERATURE_K = 290.0
+
+
+@dataclass(frozen=True)
+class FovSector:
+    """One field-of-view sector: targets up to ``max_range_m`` within ``±half_angle_deg``."""
+
+    max_range_m: float
+    half_angle_deg: float
+
+    def __post_init__(self) -> None:
+        validate.number("fov.max_range_m", self.max_range_m, lo=0.0, lo_open=True)
+        validate.number("fov.half_angle_deg", self.half_angle_deg, lo=0.0, hi=90.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class RadarPreset:
+    """Waveform, array, coverage and link budget of one radar.
+
+    Units are in the names. ``chirp_period_s`` is the repetition period of one
+    chirp of one transmitter; with ``num_tx`` transmitters in TDM the same
+    virtual channel repeats every ``num_tx * chirp_period_s``.
+    """
+
+    name: str
+    carrier_hz: float
+    bandwidth_hz: float
+    chirp_period_s: float
+    num_chirps: int
+    num_samples: int
+    num_tx: int
+    num_rx: int
+    element_spacing_wl: float
+    complex_sampling: bool
+    cycle_period_s: float
+    min_range_m: float
+    max_range_m: float
+    fov: tuple[FovSector, ...]
+    near_range_m: float
+    tx_power_dbm: float
+    antenna_gain_dbi: float
+    noise_figure_db: float
+    system_loss_db: float
+    pfa: float
+    range_sigma_floor_m: float
+    speed_sigma_floor_mps: float
+    azimuth_sigma_floor_deg: float
+    lateral_speed_sigma_mps: float
+    size_sigma_m: float
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        validate.text("name", self.name)
+        for f in ("carrier_hz", "bandwidth_hz", "chirp_period_s", "element_spacing_wl", "cycle_period_s",
+                  "max_range_m", "near_range_m", "lateral_speed_sigma_mps", "size_sigma_m"):
+            validate.number(f, getattr(self, f), lo=0.0, lo_open=True)
+        for f in ("range_sigma_floor_m", "speed_sigma_floor_mps", "azimuth_sigma_floor_deg", "min_range_m",
+                  "system_loss_db", "noise_figure_db"):
+            validate.number(f, getattr(self, f), lo=0.0)
+        for f in ("tx_power_dbm", "antenna_gain_dbi"):
+            validate.number(f, getattr(self, f), lo=-30.0, hi=60.0)
+        for f in ("num_chirps", "num_samples", "num_tx", "num_rx"):
+            validate.integer(f, getattr(self, f), lo=1, hi=1 << 16)
+        validate.boolean("complex_sampling", self.complex_sampling)
+        validate.number("pfa", self.pfa, lo=0.0, hi=0.5, lo_open=True)
+        if self.min_range_m >= self.max_range_m:
+            raise FieldError("min_range_m", self.min_range_m, f"less than max_range_m ({self.max_range_m})")
+        if not self.fov or not all(isinstance(s, FovSector) for s in self.fov):
+            raise FieldError("fov", self.fov, "a non-empty tuple of FovSector")
+
+    # --- derived figures -------------------------------------------------
+    @property
+    def wavelength_m(self) -> float:
+        return SPEED_OF_LIGHT_MPS / self.carrier_hz
+
+    @property
+    def range_resolution_m(self) -> float:
+        """ΔR = c / (2B)."""
+        return SPEED_OF_LIGHT_MPS / (2.0 * self.bandwidth_hz)
+
+    @property
+    def unambiguous_range_m(self) -> float:
+        """Range of the last FFT bin: N·ΔR with complex (IQ) sampling, N/2·ΔR with real sampling."""
+        bins = self.num_samples if self.complex_sampling else self.num_samples // 2
+        return bins * self.range_resolution_m
+
+    @property
+    def frame_chirp_period_s(self) -> float:
+        """Repetition period of one virtual channel (TDM over the transmitters)."""
+        return self.num_tx * self.chirp_period_s
+
+    @property
+    def max_unambiguous_speed_mps(self) -> float:
+        """v_max = λ / (4 T), T the repetition period of one virtual channel."""
+        return self.wavelength_m / (4.0 * self.frame_chirp_period_s)
+
+    @property
+    def speed_resolution_mps(self) -> float:
+        """Δv = λ / (2 N T)."""
+        return self.wavelength_m / (2.0 * self.num_chirps * self.frame_chirp_period_s)
+
+    @property
+    def num_virtual(self) -> int:
+        return self.num_tx * self.num_rx
+
+    @property
+    def angular_resolution_rad(self) -> float:
+        """Rayleigh resolution of the virtual ULA at boresight, 1/(K·d/λ) rad (2/K for d = λ/2)."""
+        return 1.0 / (self.num_virtual * self.element_spacing_wl)
+
+    @property
+    def integration_time_s(self) -> float:
+        """Coherent dwell of one frame: all chirps of all transmitters."""
+        return self.num_chirps * self.frame_chirp_period_s
+
+    @property
+    def num_cells(self) -> int:
+        """Range–Doppler cells tested by CFAR in one frame (sets the false-alarm count)."""
+        bins = self.num_samples if self.complex_sampling else self.num_samples // 2
+        return bins * self.num_chirps
+
+    @property
+    def max_half_fov_rad(self) -> float:
+        return math.radians(max(s.half_angle_deg for s in self.fov))
+
+    def with_overrides(self, overrides: dict[str, object]) -> RadarPreset:
+        """Return a copy with some fields replaced; unknown fields raise."""
+        names = {f.name for f in dataclasses.fields(self)} - {"name", "fov", "source"}
+        for key in overrides:
+            if key not in names:
+                raise FieldError(f"overrides.{key}", key, "one of " + ", ".join(sorted(names)))
+        try:
+            return dataclasses.replace(self, **overrides)
+        except FieldError as exc:
+            raise FieldError(f"overrides.{exc.field}", exc.value, exc.allowed) from None
+
+
+def _c_over(x: float) -> float:
+    return SPEED_OF_LIGHT_MPS / x
+
+
+_LAMBDA_77 = SPEED_OF_LIGHT_MPS / 77e9
+
+PRESETS: dict[str, RadarPreset] = {
+    "mimo12": RadarPreset(
+        name="mimo12", source="seed 000",
+        carrier_hz=77e9,
+        # ΔR = 112.5 m / 256 bins = 0.44 m, so R_max = 112.5 m with 256 IQ samples.
+        bandwidth_hz=_c_over(2 * 112.5 / 256),
+        # v_max = 32.4 m/s -> repetition period of a virtual channel λ/(4·32.4); 3 Tx in TDM.
+        chirp_period_s=_LAMBDA_77 / (4 * 32.4) / 3,
+        num_chirps=256, num_samples=256, num_tx=3, num_rx=4, element_spacing_wl=0.5,
+        complex_sampling=True, cycle_period_s=0.072,
+        min_range_m=0.5, max_range_m=112.5, fov=(FovSector(112.5, 60.0),), near_range_m=112.5,
+        tx_power_dbm=12.0, antenna_gain_dbi=15.0, noise_figure_db=12.0, system_loss_db=6.0, pfa=1e-6,
+        range_sigma_floor_m=0.02, speed_sigma_floor_mps=0.02, azimuth_sigma_floor_deg=0.2,
+        lateral_speed_sigma_mps=0.5, size_sigma_m=0.2,
+    ),
+    "srr_corner": RadarPreset(
+        name="srr_corner", source="seed 001",
+        carrier_hz=77e9, bandwidth_hz=750e6,
+        # Δv = 1.1 m/s with 128 chirps: N·T = λ/(2·1.1).
+        chirp_period_s=_LAMBDA_77 / (2 * 1.1) / 128 / 3,
+        num_chirps=128, num_samples=512, num_tx=3, num_rx=4, element_spacing_wl=0.5,
+        complex_sampling=False, cycle_period_s=0.05,
+        min_range_m=0.2, max_range_m=30.0, fov=(FovSector(30.0, 75.0),), near_range_m=30.0,
+        tx_power_dbm=10.0, antenna_gain_dbi=10.0, noise_figure_db=14.0, system_loss_db=6.0, pfa=1e-6,
+        range_sigma_floor_m=0.02, speed_sigma_floor_mps=0.05, azimuth_sigma_floor_deg=0.5,
+        lateral_speed_sigma_mps=0.8, size_sigma_m=0.2,
+    ),
+    "acc_lrr": RadarPreset(
+        name="acc_lrr", source="seed 003",
+        carrier_hz=77e9, bandwidth_hz=150e6, chirp_period_s=7.33e-6,
+        num_chirps=64, num_samples=512, num_tx=1, num_rx=4, element_spacing_wl=0.5,
+        complex_sampling=False, cycle_period_s=0.05,
+        min_range_m=1.0, max_range_m=200.0, fov=(FovSector(200.0, 10.0),), near_range_m=200.0,
+        tx_power_dbm=10.0, antenna_gain_dbi=25.0, noise_figure_db=4.5, system_loss_db=6.0, pfa=1e-6,
+        range_sigma_floor_m=0.05, speed_sigma_floor_mps=0.05, azimuth_sigma_floor_deg=0.3,
+        lateral_speed_sigma_mps=0.8, size_sigma_m=0.3,
+    ),
+    "fast_chirp": RadarPreset(
+        name="fast_chirp", source="seed 004",
+        carrier_hz=77e9, bandwidth_hz=200e6, chirp_period_s=51.2e-6,
+        num_chirps=128, num_samples=512, num_tx=1, num_rx=4, element_spacing_wl=0.5,
+        complex_sampling=True, cycle_period_s=0.05,
+        min_range_m=1.0, max_range_m=200.0, fov=(FovSector(200.0, 30.0),), near_range_m=200.0,
+        tx_power_dbm=12.0, antenna_gain_dbi=22.0, noise_figure_db=12.0, system_loss_db=6.0, pfa=1e-6,
+        range_sigma_floor_m=0.05, speed_sigma_floor_mps=0.05, azimuth_sigma_floor_deg=0.3,
+        lateral_speed_sigma_mps=0.8, size_sigma_m=0.3,
+    ),
+    "scanning_ka": RadarPreset(
+        name="scanning_ka", source="seed 002",
+        carrier_hz=39e9, bandwidth_hz=200e6, chirp_period_s=50e-6,
+        num_chirps=64, num_samples=512, num_tx=1, num_rx=1, element_spacing_wl=0.5 * 115,
+        complex_sampling=False, cycle_period_s=0.1,
+        min_range_m=5.0, max_range_m=250.0, fov=(FovSector(250.0, 45.0),), near_range_m=250.0,
+        tx_power_dbm=17.8, antenna_gain_dbi=30.0, noise_figure_db=8.0, system_loss_db=6.0, pfa=1e-6,
+        range_sigma_floor_m=0.1, speed_sigma_floor_mps=0.1, azimuth_sigma_floor_deg=0.1,
+        lateral_speed_sigma_mps=0.8, size_sigma_m=0.3,
+    ),
+    "ars408_like": RadarPreset(
+        name="ars408_like", source="ARS 408-21 data sheet",
+        carrier_hz=77e9,
+        # far scan: range resolution 1.79 m
+        bandwidth_hz=_c_over(2 * 1.79),
+        chirp_period_s=25e-6, num_chirps=128, num_samples=512, num_tx=2, num_rx=4, element_spacing_wl=0.5,
+        complex_sampling=False, cycle_period_s=0.072,
+        min_range_m=0.2, max_range_m=250.0,
+        # far scan ±9° to 250 m; near scan ±45° to 70 m and ±60° to 20 m
+        fov=(FovSector(250.0, 9.0), FovSector(70.0, 45.0), FovSector(20.0, 60.0)), near_range_m=70.0,
+        # link budget calibrated so a 10 dBsm car at 250 m has ≈18 dB per-cell SNR (Pd ≈ 0.9)
+        tx_power_dbm=0.0, antenna_gain_dbi=23.0, noise_figure_db=14.0, system_loss_db=8.0, pfa=1e-6,
+        range_sigma_floor_m=0.1, speed_sigma_floor_mps=0.05, azimuth_sigma_floor_deg=0.1,
+        lateral_speed_sigma_mps=0.5, size_sigma_m=0.3,
+    ),
+}
+
+
+def get_preset(name: object) -> RadarPreset:
+    """Return the preset called ``name``; an unknown name raises with the list of known ones."""
+    if not isinstance(name, str) or name not in PRESETS:
+        raise FieldError("preset", name, "one of " + ", ".join(sorted(PRESETS)))
+    return PRESETS[name]
+
+
+__all__ = ["PRESETS", "FovSector", "RadarPreset", "get_preset", "ConfigError"]

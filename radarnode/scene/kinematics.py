@@ -1,0 +1,137 @@
+"""Piecewise motion profiles evaluated for many movers at once.
+
+Each mover is either a speed profile (initial speed, piecewise-constant
+acceleration along a fixed road-relative heading; the speed never goes below
+zero) or a waypoint path (straight segments, constant speed on each). The
+profiles are compiled once into padded knot tables so that evaluating all
+movers at one time is a handful of numpy operations.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from radarnode.scene.scenario import AccelStep, Waypoint
+
+
+@dataclass(frozen=True)
+class MoverState:
+    """Road-frame state of every mover at one time; every array has shape (n_movers,)."""
+
+    x_m: np.ndarray
+    y_m: np.ndarray
+    vx_mps: np.ndarray
+    vy_mps: np.ndarray
+    ax_mps2: np.ndarray
+    ay_mps2: np.ndarray
+
+
+def _speed_knots(speed0: float, steps: Sequence[AccelStep]) -> list[tuple[float, float, float, float]]:
+    """Return (t, v, L, a) knots: at time t the speed is v, the distance L, and a holds until the next knot."""
+    events = [(0.0, 0.0)] + [(s.t_s, s.accel_mps2) for s in steps]
+    # A step at t=0 replaces the implicit zero acceleration.
+    merged: list[tuple[float, float]] = []
+    for t, a in events:
+        if merged and merged[-1][0] == t:
+            merged[-1] = (t, a)
+        else:
+            merged.append((t, a))
+    knots: list[tuple[float, float, float, float]] = []
+    v, dist = speed0, 0.0
+    for i, (t, a) in enumerate(merged):
+        t_next = merged[i + 1][0] if i + 1 < len(merged) else np.inf
+        if v <= 0.0 and a <= 0.0:
+            knots.append((t, 0.0, dist, 0.0))
+            v = 0.0
+            continue
+        knots.append((t, v, dist, a))
+        if a < 0.0 and v + a * (t_next - t) < 0.0:  # comes to a stop inside this segment
+            t_stop = t - v / a
+            dist += v * (t_stop - t) + 0.5 * a * (t_stop - t) ** 2
+            knots.append((t_stop, 0.0, dist, 0.0))
+            v = 0.0
+            continue
+        if np.isfinite(t_next):
+            dt = t_next - t
+            dist += v * dt + 0.5 * a * dt * dt
+            v += a * dt
+    return knots
+
+
+class MoverTable:
+    """Compiled motion profiles of many movers.
+
+    Parameters
+    ----------
+    x0_m, y0_m, speed_mps, heading_rad : sequences of length n
+        Initial road-frame position, speed and road-relative heading.
+    accel : sequence of n sequences of AccelStep
+    waypoints : sequence of n sequences of Waypoint (a mover with waypoints ignores the rest)
+    """
+
+    def __init__(self, x0_m, y0_m, speed_mps, heading_rad, accel, waypoints) -> None:
+        n = len(x0_m)
+        self.n = n
+        spd = [_speed_knots(float(speed_mps[i]), accel[i]) for i in range(n)]
+        k = max([len(s) for s in spd] + [len(w) for w in waypoints] + [1])
+        self.is_path = np.array([len(w) >= 2 for w in waypoints], dtype=bool)
+        self.t = np.full((n, k), np.inf)
+        self.v = np.zeros((n, k))
+        self.dist = np.zeros((n, k))
+        self.a = np.zeros((n, k))
+        self.px = np.zeros((n, k))
+        self.py = np.zeros((n, k))
+        for i in range(n):
+            if self.is_path[i]:
+                w = waypoints[i]
+                self.t[i, : len(w)] = [p.t_s for p in w]
+                self.px[i, : len(w)] = [p.x_m for p in w]
+                self.py[i, : len(w)] = [p.y_m for p in w]
+                # hold the last point after the path ends
+                self.px[i, len(w):] = w[-1].x_m
+                self.py[i, len(w):] = w[-1].y_m
+            else:
+                rows = np.array(spd[i])
+                self.t[i, : len(rows)] = rows[:, 0]
+                self.v[i, : len(rows)] = rows[:, 1]
+                self.dist[i, : len(rows)] = rows[:, 2]
+                self.a[i, : len(rows)] = rows[:, 3]
+        self.x0 = np.asarray(x0_m, dtype=np.float64)
+        self.y0 = np.asarray(y0_m, dtype=np.float64)
+        self.cos_h = np.cos(np.asarray(heading_rad, dtype=np.float64))
+        self.sin_h = np.sin(np.asarray(heading_rad, dtype=np.float64))
+        self._rows = np.arange(n)
+
+    def state(self, t_s: float) -> MoverState:
+        """Road-frame position, velocity and acceleration of every mover at ``t_s``."""
+        idx = np.maximum(np.sum(self.t <= t_s, axis=1) - 1, 0)
+        r = self._rows
+        t0 = np.where(np.isfinite(self.t[r, idx]), self.t[r, idx], 0.0)
+        dt = np.maximum(t_s - t0, 0.0)
+        # speed-profile movers
+        a = self.a[r, idx]
+        v = self.v[r, idx] + a * dt
+        dist = self.dist[r, idx] + self.v[r, idx] * dt + 0.5 * a * dt * dt
+        sx = self.x0 + dist * self.cos_h
+        sy = self.y0 + dist * self.sin_h
+        svx, svy = v * self.cos_h, v * self.sin_h
+        sax, say = a * self.cos_h, a * self.sin_h
+        if not self.is_path.any():
+            return MoverState(sx, sy, svx, svy, sax, say)
+        # waypoint movers: before the first waypoint they wait at it
+        nxt = np.minimum(idx + 1, self.t.shape[1] - 1)
+        t1 = self.t[r, nxt]
+        seg = np.where(np.isfinite(t1) & (t1 > t0) & (t_s >= self.t[r, 0]), t1 - t0, np.inf)
+        frac = np.clip(dt / seg, 0.0, 1.0)
+        px = self.px[r, idx] + frac * (self.px[r, nxt] - self.px[r, idx])
+        py = self.py[r, idx] + frac * (self.py[r, nxt] - self.py[r, idx])
+        moving = np.isfinite(seg) & (frac < 1.0)
+        pvx = np.where(moving, (self.px[r, nxt] - self.px[r, idx]) / np.where(moving, seg, 1.0), 0.0)
+        pvy = np.where(moving, (self.py[r, nxt] - self.py[r, idx]) / np.where(moving, seg, 1.0), 0.0)
+        p = self.is_path
+        zero = np.zeros(self.n)
+        return MoverState(np.where(p, px, sx), np.where(p, py, sy), np.where(p, pvx, svx),
+                          np.where(p, pvy, svy), np.where(p, zero, sax), np.where(p, zero, say))

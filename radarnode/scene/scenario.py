@@ -1,0 +1,433 @@
+"""Scenario description: frozen, validated dataclasses and the YAML loader.
+
+The schema is documented in ``scenarios/README.md``. Every dataclass checks its
+own values in ``__post_init__`` and raises :class:`FieldError`; the loader adds
+the file name, the dotted path of the field and its line, and raises
+:class:`ScenarioError`. Unknown keys and missing required fields are caught by
+the loader from the dataclass definitions themselves, so the schema has one
+source of truth.
+
+Coordinates: the road frame has x along the road (metres from the ego's start
+position) and y to the left of the centre of the ego lane. Headings are
+relative to the road direction, positive to the left (counter-clockwise).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import yaml
+
+from radarnode import validate
+from radarnode.errors import FieldError, ScenarioError
+from radarnode.radar.presets import RadarPreset, get_preset
+
+#: class name -> (ARS 408 Obj_Class code, default length m, default width m, default RCS dBsm)
+ACTOR_CLASSES: dict[str, tuple[int, float, float, float]] = {
+    "point": (0, 0.3, 0.3, 0.0),
+    "car": (1, 4.5, 1.8, 10.0),
+    "truck": (2, 12.0, 2.5, 20.0),
+    "pedestrian": (3, 0.5, 0.6, -5.0),
+    "motorcycle": (4, 2.2, 0.8, 3.0),
+    "bicycle": (5, 1.8, 0.6, 0.0),
+    "sign": (0, 0.2, 0.8, 10.0),
+    "guardrail": (6, 0.0, 0.3, -5.0),  # length required; RCS per post
+}
+
+OUTPUT_TYPES = ("objects", "clusters", "none")
+SORT_INDICES = ("none", "range", "rcs")
+FIDELITIES = ("object",)
+
+
+@dataclass(frozen=True)
+class AccelStep:
+    """From ``t_s`` on, the acceleration along the path is ``accel_mps2`` (until the next step)."""
+
+    t_s: float
+    accel_mps2: float
+
+    def __post_init__(self) -> None:
+        validate.number("t_s", self.t_s, lo=0.0)
+        validate.number("accel_mps2", self.accel_mps2, lo=-15.0, hi=15.0)
+
+
+@dataclass(frozen=True)
+class Waypoint:
+    """Road-frame position at time ``t_s``; the actor moves in straight segments between waypoints."""
+
+    t_s: float
+    x_m: float
+    y_m: float
+
+    def __post_init__(self) -> None:
+        validate.number("t_s", self.t_s, lo=0.0)
+        validate.number("x_m", self.x_m, lo=-1e5, hi=1e5)
+        validate.number("y_m", self.y_m, lo=-1e4, hi=1e4)
+
+
+def _check_profile(accel: tuple[AccelStep, ...], waypoints: tuple[Waypoint, ...] = ()) -> None:
+    for name, seq in (("accel", accel), ("waypoints", waypoints)):
+        times = [s.t_s for s in seq]
+        if any(b <= a for a, b in zip(times, times[1:])):
+            raise FieldError(name, times, "strictly increasing t_s")
+
+
+@dataclass(frozen=True)
+class Mount:
+    """Sensor position on the ego (from the rear-axle centre, x forward, y left) and yaw."""
+
+    x_m: float = 3.7
+    y_m: float = 0.0
+    z_m: float = 0.5
+    yaw_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        validate.number("x_m", self.x_m, lo=-10.0, hi=10.0)
+        validate.number("y_m", self.y_m, lo=-5.0, hi=5.0)
+        validate.number("z_m", self.z_m, lo=0.0, hi=5.0)
+        validate.number("yaw_deg", self.yaw_deg, lo=-180.0, hi=180.0)
+
+
+@dataclass(frozen=True)
+class RadarSetup:
+    """Which radar, where it sits, and how it talks on the bus."""
+
+    preset: str = "ars408_like"
+    overrides: dict = field(default_factory=dict)
+    mount: Mount = Mount()
+    sensor_id: int = 0
+    bitrate: int = 500_000
+    output: str = "objects"
+    send_quality: bool = True
+    send_ext_info: bool = True
+    sort_index: str = "range"
+    max_distance_m: float | None = None
+    radar_power: int = 0
+    bus_load_limit: float = 0.8
+
+    def __post_init__(self) -> None:
+        get_preset(self.preset)
+        if not isinstance(self.overrides, dict):
+            raise FieldError("overrides", self.overrides, "a mapping of preset field to value")
+        self.model  # validates the overrides against the preset
+        validate.integer("sensor_id", self.sensor_id, lo=0, hi=7)
+        validate.integer("bitrate", self.bitrate, lo=10_000, hi=1_000_000)
+        validate.choice("output", self.output, OUTPUT_TYPES)
+        validate.boolean("send_quality", self.send_quality)
+        validate.boolean("send_ext_info", self.send_ext_info)
+        validate.choice("sort_index", self.sort_index, SORT_INDICES)
+        if self.max_distance_m is not None:
+            validate.number("max_distance_m", self.max_distance_m, lo=2.0, hi=2046.0)
+        validate.integer("radar_power", self.radar_power, lo=0, hi=3)
+        validate.number("bus_load_limit", self.bus_load_limit, lo=0.0, hi=1.0, lo_open=True)
+
+    @property
+    def model(self) -> RadarPreset:
+        """The preset with the scenario's overrides applied."""
+        return get_preset(self.preset).with_overrides(self.overrides)
+
+
+@dataclass(frozen=True)
+class Guardrails:
+    """Guardrails along the road edges; an offset of null means no guardrail on that side."""
+
+    left_offset_m: float | None = None
+    right_offset_m: float | None = None
+    post_spacing_m: float = 2.0
+    rcs_dbsm: float = -5.0
+
+    def __post_init__(self) -> None:
+        for name in ("left_offset_m", "right_offset_m"):
+            v = getattr(self, name)
+            if v is not None:
+                validate.number(name, v, lo=0.0, hi=50.0)
+        validate.number("post_spacing_m", self.post_spacing_m, lo=0.5, hi=50.0)
+        validate.number("rcs_dbsm", self.rcs_dbsm, lo=-40.0, hi=40.0)
+
+
+@dataclass(frozen=True)
+class Road:
+    """Lanes (index 0 is the rightmost), the ego lane, curvature (1/m, left positive), guardrails."""
+
+    lanes: int = 3
+    lane_width_m: float = 3.5
+    ego_lane: int = 1
+    curvature_1pm: float = 0.0
+    guardrails: Guardrails = Guardrails()
+
+    def __post_init__(self) -> None:
+        validate.integer("lanes", self.lanes, lo=1, hi=10)
+        validate.number("lane_width_m", self.lane_width_m, lo=2.0, hi=6.0)
+        validate.integer("ego_lane", self.ego_lane, lo=0, hi=self.lanes - 1)
+        validate.number("curvature_1pm", self.curvature_1pm, lo=-0.05, hi=0.05)
+
+    def lane_center_y_m(self, lane: int) -> float:
+        return (lane - self.ego_lane) * self.lane_width_m
+
+    @property
+    def left_edge_y_m(self) -> float:
+        return (self.lanes - self.ego_lane - 0.5) * self.lane_width_m
+
+    @property
+    def right_edge_y_m(self) -> float:
+        return -(self.ego_lane + 0.5) * self.lane_width_m
+
+
+@dataclass(frozen=True)
+class Ego:
+    """The vehicle carrying the radar; it keeps to the centre of the ego lane."""
+
+    speed_mps: float = 0.0
+    accel: tuple[AccelStep, ...] = ()
+    length_m: float = 4.7
+    width_m: float = 1.9
+
+    def __post_init__(self) -> None:
+        validate.number("speed_mps", self.speed_mps, lo=0.0, hi=100.0)
+        validate.number("length_m", self.length_m, lo=0.0, hi=30.0, lo_open=True)
+        validate.number("width_m", self.width_m, lo=0.0, hi=5.0, lo_open=True)
+        _check_profile(self.accel)
+
+
+@dataclass(frozen=True)
+class Actor:
+    """One road user or roadside object.
+
+    Give either ``y_m`` or ``lane`` (default: the ego lane). Motion is either
+    a speed with piecewise-constant ``accel`` along ``heading_deg`` (speeds
+    never go below zero: a braking vehicle stops), or ``waypoints``.
+    """
+
+    id: str
+    object_class: str
+    x_m: float = 0.0
+    y_m: float | None = None
+    lane: int | None = None
+    speed_mps: float = 0.0
+    heading_deg: float = 0.0
+    accel: tuple[AccelStep, ...] = ()
+    waypoints: tuple[Waypoint, ...] = ()
+    length_m: float | None = None
+    width_m: float | None = None
+    rcs_dbsm: float | None = None
+
+    def __post_init__(self) -> None:
+        validate.text("id", self.id)
+        validate.choice("class", self.object_class, ACTOR_CLASSES)
+        validate.number("x_m", self.x_m, lo=-1e5, hi=1e5)
+        if self.y_m is not None:
+            validate.number("y_m", self.y_m, lo=-1e4, hi=1e4)
+            if self.lane is not None:
+                raise FieldError("lane", self.lane, "no lane when y_m is given (use one of them)")
+        if self.lane is not None:
+            validate.integer("lane", self.lane, lo=0, hi=9)
+        validate.number("speed_mps", self.speed_mps, lo=0.0, hi=150.0)
+        validate.number("heading_deg", self.heading_deg, lo=-180.0, hi=180.0)
+        for name in ("length_m", "width_m"):
+            v = getattr(self, name)
+            if v is not None:
+                validate.number(name, v, lo=0.0, hi=1e4, lo_open=True)
+        if self.object_class == "guardrail" and self.length_m is None:
+            raise FieldError("length_m", None, "a guardrail length in metres (> 0)")
+        if self.rcs_dbsm is not None:
+            validate.number("rcs_dbsm", self.rcs_dbsm, lo=-60.0, hi=60.0)
+        if self.accel and self.waypoints:
+            raise FieldError("waypoints", "...", "either accel or waypoints, not both")
+        if len(self.waypoints) == 1:
+            raise FieldError("waypoints", "one waypoint", "two or more waypoints")
+        _check_profile(self.accel, self.waypoints)
+
+    @property
+    def class_code(self) -> int:
+        return ACTOR_CLASSES[self.object_class][0]
+
+    @property
+    def length(self) -> float:
+        return self.length_m if self.length_m is not None else ACTOR_CLASSES[self.object_class][1]
+
+    @property
+    def width(self) -> float:
+        return self.width_m if self.width_m is not None else ACTOR_CLASSES[self.object_class][2]
+
+    @property
+    def rcs(self) -> float:
+        return self.rcs_dbsm if self.rcs_dbsm is not None else ACTOR_CLASSES[self.object_class][3]
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A complete scenario: timing, seed, radar, ego, road and actors."""
+
+    name: str
+    duration_s: float
+    seed: int
+    description: str = ""
+    cycle_period_s: float | None = None
+    fidelity: str = "object"
+    radar: RadarSetup = RadarSetup()
+    ego: Ego = Ego()
+    road: Road = Road()
+    actors: tuple[Actor, ...] = ()
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        validate.text("name", self.name)
+        validate.text("description", self.description)
+        validate.number("duration_s", self.duration_s, lo=0.0, hi=86_400.0, lo_open=True)
+        validate.integer("seed", self.seed, lo=0, hi=2**63 - 1)
+        if self.cycle_period_s is not None:
+            validate.number("cycle_period_s", self.cycle_period_s, lo=0.005, hi=10.0)
+        validate.choice("fidelity", self.fidelity, FIDELITIES)
+        ids = [a.id for a in self.actors]
+        dup = sorted({i for i in ids if ids.count(i) > 1})
+        if dup:
+            raise FieldError("actors", dup, "unique actor ids")
+        for i, a in enumerate(self.actors):
+            if a.lane is not None and a.lane >= self.road.lanes:
+                raise FieldError(f"actors[{i}].lane", a.lane, f"a lane index in [0, {self.road.lanes - 1}]")
+
+    @property
+    def period_s(self) -> float:
+        return self.cycle_period_s if self.cycle_period_s is not None else self.radar.model.cycle_period_s
+
+    @property
+    def num_cycles(self) -> int:
+        return int(math.floor(self.duration_s / self.period_s + 1e-9))
+
+    def actor_y_m(self, actor: Actor) -> float:
+        if actor.y_m is not None:
+            return actor.y_m
+        lane = self.road.ego_lane if actor.lane is None else actor.lane
+        return self.road.lane_center_y_m(lane)
+
+
+# ---------------------------------------------------------------------------
+# Loader
+# ---------------------------------------------------------------------------
+
+#: YAML key -> dataclass field where they differ
+_ALIASES = {Actor: {"class": "object_class"}}
+#: fields that hold nested dataclasses, or tuples of them
+_NESTED: dict[type, dict[str, tuple[type, bool]]] = {
+    Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False), "actors": (Actor, True)},
+    RadarSetup: {"mount": (Mount, False)},
+    Road: {"guardrails": (Guardrails, False)},
+    Ego: {"accel": (AccelStep, True)},
+    Actor: {"accel": (AccelStep, True), "waypoints": (Waypoint, True)},
+}
+
+
+class _Source:
+    """A parsed YAML document with the line of every node, keyed by its dotted path."""
+
+    def __init__(self, path: str, text: str) -> None:
+        self.path = path
+        self.lines: dict[str, int] = {}
+        try:
+            node = yaml.compose(text, Loader=yaml.SafeLoader)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            where = f":{mark.line + 1}" if mark is not None else ""
+            raise ScenarioError(f"{path}{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+        if node is None:
+            raise ScenarioError(f"{path}: the file is empty; expected a mapping with name, duration_s and seed")
+        self.data = self._convert(node, "")
+
+    def _convert(self, node: yaml.Node, path: str) -> object:
+        self.lines[path] = node.start_mark.line + 1
+        if isinstance(node, yaml.MappingNode):
+            out = {}
+            for key_node, value_node in node.value:
+                key = key_node.value
+                child = f"{path}.{key}" if path else str(key)
+                if key in out:
+                    raise ScenarioError(f"{self.path}:{key_node.start_mark.line + 1}: field '{child}' appears twice")
+                self.lines[child] = key_node.start_mark.line + 1
+                out[key] = self._convert(value_node, child)
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [self._convert(v, f"{path}[{i}]") for i, v in enumerate(node.value)]
+        loader = yaml.SafeLoader("")
+        return loader.construct_object(node, deep=True)
+
+    def error(self, path: str, message: str) -> ScenarioError:
+        line = self._line(path)
+        where = f"{self.path}:{line}" if line else self.path
+        return ScenarioError(f"{where}: {message}")
+
+    def _line(self, path: str) -> int | None:
+        while path:
+            if path in self.lines:
+                return self.lines[path]
+            path = path.rsplit(".", 1)[0] if "." in path else path.split("[")[0] if "[" in path else ""
+        return None
+
+
+def _build(cls: type, data: object, path: str, src: _Source, extra: dict | None = None):
+    where = path or "top level"
+    if not isinstance(data, dict):
+        raise src.error(path, f"field '{where}': value {data!r} is not allowed; expected a mapping")
+    aliases = _ALIASES.get(cls, {})
+    inverse = {v: k for k, v in aliases.items()}
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.name != "source"}
+    allowed = sorted(inverse.get(n, n) for n in fields)
+    kwargs = dict(extra or {})
+    for key, value in data.items():
+        name = aliases.get(key, key)
+        child = f"{path}.{key}" if path else str(key)
+        if name not in fields or not isinstance(key, str):
+            raise src.error(child, f"unknown field '{child}'; allowed here: {', '.join(allowed)}")
+        nested = _NESTED.get(cls, {}).get(name)
+        if nested is not None and value is not None:
+            sub, many = nested
+            if many:
+                if not isinstance(value, list):
+                    raise src.error(child, f"field '{child}': value {value!r} is not allowed; expected a list")
+                value = tuple(_build(sub, v, f"{child}[{i}]", src) for i, v in enumerate(value))
+            else:
+                value = _build(sub, value, child, src)
+        kwargs[name] = value
+    for name, f in fields.items():
+        required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        if required and name not in kwargs:
+            key = inverse.get(name, name)
+            raise src.error(path, f"missing required field '{(path + '.') if path else ''}{key}' in {where}")
+    try:
+        return cls(**kwargs)
+    except FieldError as exc:
+        key = inverse.get(exc.field.split(".")[0], exc.field.split(".")[0])
+        rest = exc.field[len(exc.field.split(".")[0]):]
+        child = (f"{path}.{key}" if path else key) + rest
+        raise src.error(child, f"field '{child}': value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+    except TypeError as exc:  # pragma: no cover - defensive: a field the schema does not describe
+        raise src.error(path, f"{where}: {exc}") from None
+
+
+def load_scenario(path: str | Path) -> Scenario:
+    """Read and validate a scenario file.
+
+    Raises
+    ------
+    ScenarioError
+        With ``file:line: field 'a.b': value X is not allowed; expected ...``.
+    """
+    p = Path(path)
+    try:
+        text = p.read_text(encoding="utf-8")
+    except OSError as exc:
+        raise ScenarioError(f"{p}: cannot read scenario file: {exc.strerror}") from None
+    src = _Source(str(p), text)
+    return _build(Scenario, src.data, "", src, extra={"source": str(p)})
+
+
+def parse_scenario(text: str, name: str = "<string>") -> Scenario:
+    """Validate a scenario given as YAML text (used by tests and tools)."""
+    src = _Source(name, text)
+    return _build(Scenario, src.data, "", src, extra={"source": name})
+
+
+__all__ = ["ACTOR_CLASSES", "Actor", "AccelStep", "Ego", "Guardrails", "Mount", "RadarSetup", "Road",
+           "Scenario", "Waypoint", "load_scenario", "parse_scenario"]

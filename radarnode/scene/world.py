@@ -1,0 +1,207 @@
+"""The road scene in the world frame and as the sensor sees it.
+
+The road's reference line is the centre of the ego lane, an arc of constant
+curvature κ (straight when κ = 0). Road coordinates (s, d) — distance along the
+reference line and lateral offset to the left — map to world coordinates by
+
+    x = sin(κs)/κ − d·sin(κs),   y = (1 − cos(κs))/κ + d·cos(κs)
+
+Movers are integrated in road coordinates (so a car keeps its lane around a
+bend); their speed is measured along the reference line.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from radarnode.scene.kinematics import MoverState, MoverTable
+from radarnode.scene.scenario import Scenario
+
+
+@dataclass(frozen=True)
+class EgoState:
+    """World-frame pose and motion of the ego's rear-axle centre."""
+
+    x_m: float
+    y_m: float
+    heading_rad: float
+    speed_mps: float
+    accel_mps2: float
+    yaw_rate_rps: float
+
+
+@dataclass(frozen=True)
+class SensorView:
+    """The actors as the sensor sees them at one time (sensor frame: x forward, y left).
+
+    Every array has shape (n_actors,), in scenario actor order.
+    ``x_m``/``y_m`` is the point of the actor's outline nearest to the sensor
+    (what a radar reports); ``az_lo_rad``/``az_hi_rad`` bound its azimuth extent.
+    """
+
+    t_s: float
+    x_m: np.ndarray
+    y_m: np.ndarray
+    vx_mps: np.ndarray          # relative velocity (actor minus sensor), sensor axes
+    vy_mps: np.ndarray
+    ax_mps2: np.ndarray         # relative acceleration, sensor axes
+    ay_mps2: np.ndarray
+    ground_vx_mps: np.ndarray   # actor velocity over ground, sensor axes
+    ground_vy_mps: np.ndarray
+    orientation_rad: np.ndarray  # actor heading relative to the sensor's x axis
+    az_lo_rad: np.ndarray
+    az_hi_rad: np.ndarray
+    sensor_vx_mps: float        # sensor velocity over ground, sensor axes
+    sensor_vy_mps: float
+
+    @property
+    def range_m(self) -> np.ndarray:
+        return np.hypot(self.x_m, self.y_m)
+
+    @property
+    def azimuth_rad(self) -> np.ndarray:
+        return np.arctan2(self.y_m, self.x_m)
+
+
+def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    c, s = np.cos(angle), np.sin(angle)
+    return c * x - s * y, s * x + c * y
+
+
+class Scene:
+    """Evaluates a scenario's ego and actors at any time."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        self.scenario = scenario
+        self.kappa = scenario.road.curvature_1pm
+        actors = scenario.actors
+        self.actors = actors
+        self.n = len(actors)
+        self._ego = MoverTable([0.0], [0.0], [scenario.ego.speed_mps], [0.0], [scenario.ego.accel], [()])
+        self._movers = MoverTable(
+            [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
+            [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
+        self.length_m = np.array([a.length for a in actors], dtype=np.float64)
+        self.width_m = np.array([a.width for a in actors], dtype=np.float64)
+        self.rcs_dbsm = np.array([a.rcs for a in actors], dtype=np.float64)
+        self.class_code = np.array([a.class_code for a in actors], dtype=np.int64)
+        self.is_guardrail = np.array([a.object_class == "guardrail" for a in actors], dtype=bool)
+        self.heading_rel = np.array([math.radians(a.heading_deg) for a in actors], dtype=np.float64)
+        m = scenario.radar.mount
+        self.mount = (m.x_m, m.y_m, math.radians(m.yaw_deg))
+
+    # --- road geometry ---------------------------------------------------
+    def road_to_world(self, s: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World position and road heading at road coordinates (s, d)."""
+        k = self.kappa
+        if k == 0.0:
+            return np.asarray(s, dtype=np.float64), np.asarray(d, dtype=np.float64), np.zeros(np.shape(s))
+        psi = k * np.asarray(s, dtype=np.float64)
+        x = np.sin(psi) / k - d * np.sin(psi)
+        y = (1.0 - np.cos(psi)) / k + d * np.cos(psi)
+        return x, y, psi
+
+    def _world_motion(self, st: MoverState) -> tuple[np.ndarray, ...]:
+        x, y, psi = self.road_to_world(st.x_m, st.y_m)
+        scale = 1.0 - self.kappa * st.y_m  # ds along an offset line is (1 − κd) times longer
+        vx, vy = _rot(psi, st.vx_mps * scale, st.vy_mps)
+        return x, y, psi, vx, vy
+
+    def ego_state(self, t_s: float) -> EgoState:
+        st = self._ego.state(t_s)
+        x, y, psi, vx, vy = self._world_motion(st)
+        speed = float(st.vx_mps[0])
+        return EgoState(float(x[0]), float(y[0]), float(psi[0]), speed, float(st.ax_mps2[0]), self.kappa * speed)
+
+    def _actor_world(self, t_s: float) -> tuple[np.ndarray, ...]:
+        st = self._movers.state(t_s)
+        x, y, psi, vx, vy = self._world_motion(st)
+        speed = np.hypot(vx, vy)
+        heading = np.where(speed > 0.1, np.arctan2(vy, vx), psi + self.heading_rel)
+        return x, y, vx, vy, heading
+
+    # --- the sensor's view -------------------------------------------------
+    def sensor_pose(self, ego: EgoState) -> tuple[float, float, float, float, float]:
+        """World position, heading and velocity of the sensor."""
+        mx, my, myaw = self.mount
+        ox, oy = _rot(ego.heading_rad, np.float64(mx), np.float64(my))
+        px, py = ego.x_m + float(ox), ego.y_m + float(oy)
+        evx, evy = ego.speed_mps * math.cos(ego.heading_rad), ego.speed_mps * math.sin(ego.heading_rad)
+        w = ego.yaw_rate_rps
+        return px, py, ego.heading_rad + myaw, evx - w * float(oy), evy + w * float(ox)
+
+    def view(self, t_s: float, h_s: float = 1e-3) -> SensorView:
+        """Everything the sensor needs about the actors at ``t_s``."""
+        ego = self.ego_state(t_s)
+        px, py, psi_s, svx, svy = self.sensor_pose(ego)
+        ax_, ay_, avx, avy, aheading = self._actor_world(t_s)
+        # accelerations by a central difference (exact for the piecewise profiles away from knots)
+        _, _, vpx, vpy, _ = self._actor_world(t_s + h_s)
+        _, _, vmx, vmy, _ = self._actor_world(max(t_s - h_s, 0.0))
+        dt = h_s + min(h_s, t_s)
+        aax, aay = (vpx - vmx) / dt, (vpy - vmy) / dt
+        e_p, e_m = self.ego_state(t_s + h_s), self.ego_state(max(t_s - h_s, 0.0))
+        eax = (e_p.speed_mps * math.cos(e_p.heading_rad) - e_m.speed_mps * math.cos(e_m.heading_rad)) / dt
+        eay = (e_p.speed_mps * math.sin(e_p.heading_rad) - e_m.speed_mps * math.sin(e_m.heading_rad)) / dt
+
+        cx, cy = _rot(-psi_s, ax_ - px, ay_ - py)
+        rel_heading = aheading - psi_s
+        # nearest point of each box to the sensor
+        lx, ly = _rot(-rel_heading, -cx, -cy)
+        hl, hw = self.length_m / 2.0, self.width_m / 2.0
+        qx, qy = np.clip(lx, -hl, hl), np.clip(ly, -hw, hw)
+        ox, oy = _rot(rel_heading, qx, qy)
+        rx, ry = cx + ox, cy + oy
+        # azimuth extent from the four corners
+        corners_x = np.stack([hl, hl, -hl, -hl], axis=-1) if self.n else np.zeros((0, 4))
+        corners_y = np.stack([hw, -hw, hw, -hw], axis=-1) if self.n else np.zeros((0, 4))
+        kx, ky = _rot(rel_heading[:, None], corners_x, corners_y)
+        az = np.arctan2(cy[:, None] + ky, cx[:, None] + kx)
+        vx, vy = _rot(-psi_s, avx - svx, avy - svy)
+        gvx, gvy = _rot(-psi_s, avx, avy)
+        ax_rel, ay_rel = _rot(-psi_s, aax - eax, aay - eay)
+        s_vx, s_vy = _rot(-psi_s, np.float64(svx), np.float64(svy))
+        wrapped = (rel_heading + np.pi) % (2.0 * np.pi) - np.pi
+        return SensorView(t_s, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped,
+                          az.min(axis=1) if self.n else np.zeros(0), az.max(axis=1) if self.n else np.zeros(0),
+                          float(s_vx), float(s_vy))
+
+    def guardrail_posts(self, t_s: float, max_range_m: float) -> tuple[np.ndarray, np.ndarray]:
+        """Sensor-frame positions of the guardrail posts within ``max_range_m`` ahead and behind.
+
+        Road-edge guardrails come from ``road.guardrails``; guardrail actors add
+        posts along their own length. Posts are fixed in the world, so they are
+        stationary targets.
+        """
+        sc = self.scenario
+        g = sc.road.guardrails
+        ego = self.ego_state(t_s)
+        px, py, psi_s, _, _ = self.sensor_pose(ego)
+        s_ego = self._ego.state(t_s).x_m[0]
+        xs, ys = [], []
+        k0 = math.floor((s_ego - 5.0) / g.post_spacing_m)
+        k1 = math.ceil((s_ego + max_range_m + 5.0) / g.post_spacing_m)
+        s = np.arange(k0, k1 + 1) * g.post_spacing_m
+        for offset, edge, sign in ((g.left_offset_m, sc.road.left_edge_y_m, 1.0),
+                                   (g.right_offset_m, sc.road.right_edge_y_m, -1.0)):
+            if offset is None:
+                continue
+            wx, wy, _ = self.road_to_world(s, np.full_like(s, edge + sign * offset))
+            xs.append(wx)
+            ys.append(wy)
+        for i in np.flatnonzero(self.is_guardrail):
+            a = self.actors[i]
+            n_posts = max(int(a.length / g.post_spacing_m) + 1, 2)
+            u = np.linspace(0.0, a.length, n_posts)
+            y0 = sc.actor_y_m(a)
+            h = self.heading_rel[i]
+            wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), y0 + u * math.sin(h))
+            xs.append(wx)
+            ys.append(wy)
+        if not xs:
+            return np.zeros(0), np.zeros(0)
+        wx, wy = np.concatenate(xs), np.concatenate(ys)
+        return _rot(-psi_s, wx - px, wy - py)

@@ -1,0 +1,65 @@
+"""Small value checks shared by the configuration dataclasses.
+
+They reject what numpy would silently accept (NaN, infinities, booleans used as
+numbers, strings) and raise :class:`FieldError` naming the field, the value
+and what is allowed.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Collection
+
+from radarnode.errors import FieldError
+
+
+def number(field: str, value: object, *, lo: float | None = None, hi: float | None = None,
+           lo_open: bool = False, hi_open: bool = False) -> float:
+    """Return ``value`` as a finite float inside the given interval, or raise."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise FieldError(field, value, f"a number{_interval(lo, hi, lo_open, hi_open)}")
+    v = float(value)
+    if not math.isfinite(v):
+        raise FieldError(field, value, f"a finite number{_interval(lo, hi, lo_open, hi_open)}")
+    bad_lo = lo is not None and (v <= lo if lo_open else v < lo)
+    bad_hi = hi is not None and (v >= hi if hi_open else v > hi)
+    if bad_lo or bad_hi:
+        raise FieldError(field, value, f"a number{_interval(lo, hi, lo_open, hi_open)}")
+    return v
+
+
+def integer(field: str, value: object, *, lo: int | None = None, hi: int | None = None) -> int:
+    """Return ``value`` as an int inside ``[lo, hi]``, or raise."""
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise FieldError(field, value, f"an integer{_interval(lo, hi, False, False)}")
+    if (lo is not None and value < lo) or (hi is not None and value > hi):
+        raise FieldError(field, value, f"an integer{_interval(lo, hi, False, False)}")
+    return value
+
+
+def boolean(field: str, value: object) -> bool:
+    if not isinstance(value, bool):
+        raise FieldError(field, value, "true or false")
+    return value
+
+
+def choice(field: str, value: object, allowed: Collection[str]) -> str:
+    if not isinstance(value, str) or value not in allowed:
+        raise FieldError(field, value, "one of " + ", ".join(sorted(allowed)))
+    return value
+
+
+def text(field: str, value: object) -> str:
+    if not isinstance(value, str):
+        raise FieldError(field, value, "a string")
+    return value
+
+
+def _interval(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) -> str:
+    if lo is None and hi is None:
+        return ""
+    if hi is None:
+        return f" {'>' if lo_open else '>='} {lo:g}"
+    if lo is None:
+        return f" {'<' if hi_open else '<='} {hi:g}"
+    return f" in {'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"

@@ -1,0 +1,60 @@
+"""Opening python-can buses the way python-can's own tools do.
+
+Options left out on the command line are not passed, so python-can fills them
+from its configuration file (``~/can.conf``, ``can.ini``) and the environment
+(``CAN_INTERFACE``, ``CAN_CHANNEL``, ``CAN_BITRATE``, ``CAN_CONFIG``).
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import can
+
+from radarnode.errors import ConfigError
+
+
+def add_bus_arguments(parser: argparse.ArgumentParser, bitrate: bool = True) -> None:
+    group = parser.add_argument_group("bus (python-can conventions; missing options come from its config)")
+    group.add_argument("-i", "--interface", help="python-can interface, e.g. socketcan, virtual, udp_multicast")
+    group.add_argument("-c", "--channel", help="channel, e.g. vcan0, 239.74.163.2")
+    if bitrate:
+        group.add_argument("-b", "--bitrate", type=int, help="bit rate in bit/s (also used for the bus-load budget)")
+    group.add_argument("--bus-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
+                       help="extra keyword arguments for can.Bus, e.g. receive_own_messages=True")
+
+
+def _parse_value(text: str) -> object:
+    for conv in (int, float):
+        try:
+            return conv(text)
+        except ValueError:
+            pass
+    if text in ("True", "False", "true", "false"):
+        return text.lower() == "true"
+    return text
+
+
+def bus_kwargs(args: argparse.Namespace) -> dict:
+    kwargs: dict = {}
+    for item in getattr(args, "bus_kwargs", []) or []:
+        if "=" not in item:
+            raise ConfigError(f"option --bus-kwargs: value {item!r} is not allowed; expected KEY=VALUE")
+        key, value = item.split("=", 1)
+        kwargs[key] = _parse_value(value)
+    if args.interface:
+        kwargs["interface"] = args.interface
+    if args.channel:
+        kwargs["channel"] = args.channel
+    if getattr(args, "bitrate", None):
+        kwargs["bitrate"] = args.bitrate
+    return kwargs
+
+
+def open_bus(args: argparse.Namespace) -> can.BusABC:
+    """Open the bus the arguments describe; a bad interface or channel raises ConfigError."""
+    kwargs = bus_kwargs(args)
+    try:
+        return can.Bus(**kwargs)
+    except (can.CanError, ValueError, OSError, ImportError, NotImplementedError) as exc:
+        raise ConfigError(f"cannot open CAN bus {kwargs or '(from python-can config)'}: {exc}") from None

@@ -1,0 +1,34 @@
+"""CAN frame lengths on the wire and the bus-load budget of one cycle.
+
+A classical CAN data frame with a standard 11-bit identifier and ``n`` data
+bytes has 47 + 8n bits including the 3-bit interframe space; of these, the
+34 + 8n bits from start-of-frame to the end of the CRC are subject to bit
+stuffing, which adds at most one bit per four after the first:
+⌊(34 + 8n − 1)/4⌋. An 8-byte frame is 111 bits, 135 in the worst case.
+(Extended identifiers: 67 + 8n bits, 54 + 8n stuffable.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def frame_bits(dlc: int | np.ndarray, extended: bool = False, worst_case: bool = True) -> int | np.ndarray:
+    """Bits one data frame occupies on the bus, interframe space included."""
+    n = np.asarray(dlc)
+    base, stuffable = (67, 54) if extended else (47, 34)
+    bits = base + 8 * n
+    if worst_case:
+        bits = bits + (stuffable + 8 * n - 1) // 4
+    return bits if isinstance(dlc, np.ndarray) else int(bits)
+
+
+def frame_time_s(dlc: int, bitrate: int, extended: bool = False, worst_case: bool = True) -> float:
+    """Time one frame takes on the bus at ``bitrate`` bit/s."""
+    return frame_bits(dlc, extended, worst_case) / float(bitrate)
+
+
+def bus_load(dlcs: list[int] | np.ndarray, bitrate: int, period_s: float, worst_case: bool = True) -> float:
+    """Fraction of ``period_s`` the frames with these DLCs occupy at ``bitrate``."""
+    bits = int(np.sum(frame_bits(np.asarray(dlcs, dtype=np.int64), False, worst_case)))
+    return bits / (bitrate * period_s)

@@ -1,0 +1,112 @@
+"""Vectorised DBC encoding: many frames of one message in one numpy pass.
+
+cantools encodes one frame per call (about 5 µs each here, 30 µs with
+``strict=True``); a 100-object cycle with quality and extended information is
+300 frames. :class:`MessageCodec` compiles a cantools message once into shifts
+and masks and encodes all objects of a group at once. Values outside a
+signal's [minimum, maximum] are saturated to the range first and counted per
+signal (cantools would raise on a raw overflow). The byte layout is checked
+against cantools in the tests, for every message of the DBC.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass
+
+import numpy as np
+
+from radarnode.errors import WireError
+
+
+@dataclass(frozen=True)
+class _Field:
+    name: str
+    shift: int
+    bits: int
+    scale: float
+    offset: float
+    minimum: float
+    maximum: float
+
+
+class MessageCodec:
+    """Encoder/decoder of one (non-multiplexed, Motorola) message, vectorised over frames.
+
+    Parameters
+    ----------
+    message : cantools.database.can.Message
+    saturated : collections.Counter, optional
+        Shared counter of saturated values, keyed by signal name.
+    """
+
+    def __init__(self, message, saturated: Counter | None = None) -> None:
+        if message.is_multiplexed():
+            raise WireError(f"message {message.name}: multiplexed messages are encoded with cantools, not here")
+        self.name = message.name
+        self.frame_id = message.frame_id
+        self.length = message.length
+        self.saturated = saturated if saturated is not None else Counter()
+        fields = []
+        for sig in message.signals:
+            if sig.byte_order != "big_endian" or sig.is_signed or sig.is_float:
+                raise WireError(f"signal {sig.name} of {message.name}: only unsigned Motorola integer signals "
+                                f"are supported (got {sig.byte_order}, signed={sig.is_signed})")
+            msb = (sig.start // 8) * 8 + (7 - sig.start % 8)   # bit index from the left of the 64-bit word
+            shift = 63 - (msb + sig.length - 1)
+            raw_max = (1 << sig.length) - 1
+            lo = sig.minimum if sig.minimum is not None else sig.offset
+            hi = sig.maximum if sig.maximum is not None else sig.offset + sig.scale * raw_max
+            if round((hi - sig.offset) / sig.scale) > raw_max or round((lo - sig.offset) / sig.scale) < 0:
+                raise WireError(f"signal {sig.name} of {message.name}: range [{lo}, {hi}] does not fit "
+                                f"{sig.length} bits with scale {sig.scale} and offset {sig.offset}")
+            fields.append(_Field(sig.name, shift, sig.length, float(sig.scale), float(sig.offset), float(lo),
+                                 float(hi)))
+        self.fields = tuple(fields)
+        self.signal_names = tuple(f.name for f in fields)
+
+    def encode(self, values: dict[str, np.ndarray | float]) -> np.ndarray:
+        """Encode physical values to frame payloads.
+
+        Parameters
+        ----------
+        values : dict
+            Signal name -> scalar or array of shape (n,); every signal of the
+            message must be present.
+
+        Returns
+        -------
+        numpy.ndarray of uint8, shape (n, length)
+        """
+        missing = [f.name for f in self.fields if f.name not in values]
+        if missing:
+            raise WireError(f"message {self.name}: no value for signal(s) {', '.join(missing)}")
+        n = max([np.size(values[f.name]) for f in self.fields] + [1])
+        word = np.zeros(n, dtype=np.uint64)
+        for f in self.fields:
+            v = np.broadcast_to(np.asarray(values[f.name], dtype=np.float64), (n,))
+            if np.isnan(v).any():
+                raise WireError(f"message {self.name}: signal {f.name} got NaN; expected a number in "
+                                f"[{f.minimum:g}, {f.maximum:g}]")
+            # a value within a millionth of an LSB of a limit is the limit (float round-off), not saturation
+            tol = 1e-6 * f.scale
+            out = (v < f.minimum - tol) | (v > f.maximum + tol)
+            if out.any():
+                self.saturated[f.name] += int(out.sum())
+            v = np.clip(v, f.minimum, f.maximum)
+            # same arithmetic as cantools: round((value - offset) / scale), ties to even
+            raw = np.rint((v - f.offset) / f.scale).astype(np.uint64)
+            word |= (raw & np.uint64((1 << f.bits) - 1)) << np.uint64(f.shift)
+        return word.astype(">u8").view(np.uint8).reshape(n, 8)[:, : self.length]
+
+    def decode(self, payload: np.ndarray) -> dict[str, np.ndarray]:
+        """Decode payloads of shape (n, length) (uint8) back to physical values."""
+        payload = np.asarray(payload, dtype=np.uint8)
+        buf = np.zeros((payload.shape[0], 8), dtype=np.uint8)
+        buf[:, : payload.shape[1]] = payload
+        word = buf.view(">u8").reshape(-1).astype(np.uint64)
+        out = {}
+        for f in self.fields:
+            raw = (word >> np.uint64(f.shift)) & np.uint64((1 << f.bits) - 1)
+            out[f.name] = raw.astype(np.float64) * f.scale + f.offset
+        return out

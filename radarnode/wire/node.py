@@ -1,0 +1,332 @@
+"""The radar node: configuration state, ego-motion input, and one cycle's frames.
+
+:class:`RadarNode` owns the radar model and turns each cycle into the ordered
+list of ARS 408-21 frames: RadarState 0x201 at start, once a second and after
+every configuration change; VersionID 0x700 once a second; then either the
+object list (0x60A, all 0x60B, all 0x60C if SendQuality, all 0x60D if
+SendExtInfo, one object order in every group) or the cluster list (0x600, all
+0x701, all 0x702 if SendQuality). It keeps a bus-load budget: when a cycle
+would not fit, the lowest-priority objects are dropped, counted, and warned
+about once. Pacing and I/O are the runner's job (``radarnode.wire.runner``).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+from collections import Counter
+from dataclasses import dataclass, field
+
+import can
+import numpy as np
+
+from radarnode.perception.types import RadarFrame
+from radarnode.radar.object_model import MAX_OBJECTS, ObjectModel, RuntimeConfig
+from radarnode.scene.scenario import Scenario
+from radarnode.scene.world import Scene, SensorView
+from radarnode.wire import ars408 as P
+from radarnode.wire.busload import frame_bits
+from radarnode.wire.codec import MessageCodec
+from radarnode.wire.dbc import load_database
+
+logger = logging.getLogger(__name__)
+
+MOTION_TIMEOUT_S = 1.0     # ego-motion input older than this is "missing"
+STATUS_PERIOD_S = 1.0      # RadarState and VersionID
+
+
+@dataclass
+class NodeConfig:
+    """The sensor configuration in force (what RadarState 0x201 echoes)."""
+
+    output_type: int = P.OUTPUT_OBJECTS
+    send_quality: bool = True
+    send_ext_info: bool = True
+    max_distance_m: float = 250.0
+    sort_index: int = 1
+    radar_power: int = 0
+    sensor_id: int = 0
+    rcs_threshold: int = 0
+    ctrl_relay: bool = False
+    nvm_write_ok: bool = False
+
+
+@dataclass
+class CycleOutput:
+    """Everything one cycle produced: frames in bus order, the frame, and ground truth."""
+
+    t_s: float
+    messages: list[can.Message]
+    frame: RadarFrame
+    view: SensorView
+    bits: int
+    objects_dropped: int = 0
+    counters: dict = field(default_factory=dict)
+
+
+class RadarNode:
+    """An ARS 408-21 compatible node driven by a scenario.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    database : cantools Database, optional
+        Defaults to the project's ``dbc/ars408.dbc``.
+    """
+
+    def __init__(self, scenario: Scenario, database=None) -> None:
+        self.scenario = scenario
+        self.db = database if database is not None else load_database()
+        setup = scenario.radar
+        self.preset = setup.model
+        self.period_s = scenario.period_s
+        self.bitrate = setup.bitrate
+        self.bus_load_limit = setup.bus_load_limit
+        self.config = NodeConfig(
+            output_type=P.OUTPUT_CODES[setup.output], send_quality=setup.send_quality,
+            send_ext_info=setup.send_ext_info,
+            max_distance_m=setup.max_distance_m if setup.max_distance_m is not None else self.preset.max_range_m,
+            sort_index=P.SORT_CODES[setup.sort_index], radar_power=setup.radar_power, sensor_id=setup.sensor_id)
+        self.scene = Scene(scenario)
+        self.model = ObjectModel(self.scene, self.preset, np.random.default_rng(scenario.seed))
+        self.counters: Counter = Counter()
+        self.saturated: Counter = Counter()
+        self.codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in self.db.messages
+                       if not m.is_multiplexed()}
+        self._speed: tuple[float, float] | None = None    # (value m/s signed, time received)
+        self._yaw: tuple[float, float] | None = None      # (deg/s, time received)
+        self._next_status_s = 0.0
+        self._status_now = True
+        self._meas_counter = 0
+        self._warned: set[str] = set()
+
+    # --- input ------------------------------------------------------------
+    def receive(self, msg: can.Message, t_s: float) -> None:
+        """Handle a received frame (configuration and ego motion); anything else is ignored."""
+        if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame:
+            return
+        base = msg.arbitration_id - 0x10 * self.config.sensor_id
+        if base not in (P.RADAR_CFG, P.SPEED_INFO, P.YAW_RATE_INFO):
+            return
+        codec = self.codecs[base]
+        if len(msg.data) != codec.length:
+            self.counters["rx_wrong_dlc"] += 1
+            self._warn_once(f"dlc{base}", "frame 0x%X has DLC %d, expected %d; dropped",
+                            msg.arbitration_id, len(msg.data), codec.length)
+            return
+        values = {k: float(v[0]) for k, v in codec.decode(np.frombuffer(bytes(msg.data), np.uint8)[None, :]).items()}
+        if base == P.SPEED_INFO:
+            direction = int(values["RadarDevice_SpeedDirection"])
+            if direction == 3:
+                self.counters["rx_invalid_speed_direction"] += 1
+                return
+            sign = -1.0 if direction == 2 else 1.0
+            self._speed = (sign * values["RadarDevice_Speed"], t_s)
+            self.counters["rx_speed"] += 1
+        elif base == P.YAW_RATE_INFO:
+            self._yaw = (values["RadarDevice_YawRate"], t_s)
+            self.counters["rx_yaw_rate"] += 1
+        else:
+            self._apply_config(values)
+
+    def _apply_config(self, v: dict[str, float]) -> None:
+        cfg = self.config
+        self.counters["rx_config"] += 1
+
+        def take(valid: str, name: str, allowed: range | None = None) -> int | None:
+            if not int(v[valid]):
+                return None
+            value = int(round(v[name]))
+            if allowed is not None and value not in allowed:
+                self.counters["config_rejected"] += 1
+                self._warn_once(f"cfg{name}", "RadarConfiguration: %s=%d is not allowed (allowed %d..%d); "
+                                "field ignored", name, value, allowed.start, allowed.stop - 1)
+                return None
+            return value
+
+        if (x := take("RadarCfg_MaxDistance_valid", "RadarCfg_MaxDistance")) is not None:
+            if x < 10:
+                self.counters["config_rejected"] += 1
+                self._warn_once("cfgmaxd", "RadarConfiguration: MaxDistance=%d m is not allowed (10..2046 m); "
+                                "field ignored", x)
+            else:
+                cfg.max_distance_m = float(x)
+        if (x := take("RadarCfg_SensorID_valid", "RadarCfg_SensorID", range(8))) is not None:
+            cfg.sensor_id = x
+        if (x := take("RadarCfg_RadarPower_valid", "RadarCfg_RadarPower", range(4))) is not None:
+            cfg.radar_power = x
+        if (x := take("RadarCfg_OutputType_valid", "RadarCfg_OutputType", range(3))) is not None:
+            cfg.output_type = x
+        if (x := take("RadarCfg_SendQuality_valid", "RadarCfg_SendQuality")) is not None:
+            cfg.send_quality = bool(x)
+        if (x := take("RadarCfg_SendExtInfo_valid", "RadarCfg_SendExtInfo")) is not None:
+            cfg.send_ext_info = bool(x)
+        if (x := take("RadarCfg_SortIndex_valid", "RadarCfg_SortIndex", range(3))) is not None:
+            cfg.sort_index = x
+        if (x := take("RadarCfg_StoreInNVM_valid", "RadarCfg_StoreInNVM")) is not None:
+            cfg.nvm_write_ok = bool(x)
+        if (x := take("RadarCfg_CtrlRelay_valid", "RadarCfg_CtrlRelay")) is not None:
+            cfg.ctrl_relay = bool(x)
+        if (x := take("RadarCfg_RCS_Threshold_Valid", "RadarCfg_RCS_Threshold", range(2))) is not None:
+            cfg.rcs_threshold = x
+        self._status_now = True   # echo the result at the next cycle
+
+    def motion_rx_state(self, t_s: float) -> int:
+        """ARS 408 MotionRxState: 0 ok, 1 speed missing, 2 yaw rate missing, 3 both missing."""
+        speed_missing = self._speed is None or t_s - self._speed[1] > MOTION_TIMEOUT_S
+        yaw_missing = self._yaw is None or t_s - self._yaw[1] > MOTION_TIMEOUT_S
+        return int(speed_missing) | (int(yaw_missing) << 1)
+
+    def _sensor_velocity_estimate(self, t_s: float) -> tuple[float, float]:
+        """Sensor velocity over ground (sensor axes) from the ego-motion input.
+
+        Like the real sensor, missing input counts as standstill, so DynProp
+        goes wrong in a moving car until speed and yaw rate arrive.
+        """
+        state = self.motion_rx_state(t_s)
+        v = self._speed[0] if not state & 1 else 0.0
+        w = math.radians(self._yaw[0]) if not state & 2 else 0.0
+        mx, my, myaw = self.scene.mount
+        vx, vy = v - w * my, w * mx
+        c, s = math.cos(-myaw), math.sin(-myaw)
+        return c * vx - s * vy, s * vx + c * vy
+
+    # --- output -------------------------------------------------------------
+    def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
+        return can.Message(arbitration_id=P.shifted(base_id, self.config.sensor_id), is_extended_id=False,
+                           data=payload.tobytes(), timestamp=t, check=False)
+
+    def _status_frames(self, t_s: float) -> list[tuple[int, np.ndarray]]:
+        cfg = self.config
+        state = self.codecs[P.RADAR_STATE].encode({
+            "RadarState_NVMwriteStatus": int(cfg.nvm_write_ok), "RadarState_NVMReadStatus": 1,
+            "RadarState_MaxDistanceCfg": cfg.max_distance_m, "RadarState_Voltage_Error": 0,
+            "RadarState_Temporary_Error": 0, "RadarState_Temperature_Error": 0, "RadarState_Interference": 0,
+            "RadarState_Persistent_Error": 0, "RadarState_RadarPowerCfg": cfg.radar_power,
+            "RadarState_SensorID": cfg.sensor_id, "RadarState_SortIndex": cfg.sort_index,
+            "RadarState_CtrlRelayCfg": int(cfg.ctrl_relay), "RadarState_OutputTypeCfg": cfg.output_type,
+            "RadarState_SendQualityCfg": int(cfg.send_quality), "RadarState_SendExtInfoCfg": int(cfg.send_ext_info),
+            "RadarState_MotionRxState": self.motion_rx_state(t_s), "RadarState_RCS_Threshold": cfg.rcs_threshold,
+        })[0]
+        major, minor, patch = P.FIRMWARE_VERSION
+        version = self.codecs[P.VERSION_ID].encode({
+            "Version_MajorRelease": major, "Version_MinorRelease": minor, "Version_PatchLevel": patch,
+            "Version_ExtendedRange": 0, "Version_CountryCode": 0})[0]
+        return [(P.RADAR_STATE, state), (P.VERSION_ID, version)]
+
+    def _priority(self, ranges: np.ndarray, rcs: np.ndarray) -> np.ndarray:
+        """Indices from most to least important: by RCS when SortIndex says so, else nearest first."""
+        return np.argsort(-rcs, kind="stable") if self.config.sort_index == 2 else np.argsort(ranges, kind="stable")
+
+    def _send_order(self, ids: np.ndarray, ranges: np.ndarray, rcs: np.ndarray) -> np.ndarray:
+        if self.config.sort_index == 0:
+            return np.argsort(ids, kind="stable")
+        return self._priority(ranges, rcs)
+
+    def _fit(self, n: int, frames_per_item: list[int], fixed_bits: int) -> int:
+        """How many list items fit in the cycle's bus-load budget."""
+        budget = self.bus_load_limit * self.bitrate * self.period_s - fixed_bits
+        per_item = int(np.sum(frame_bits(np.asarray(frames_per_item))))
+        return max(0, min(n, int(budget // per_item))) if per_item else n
+
+    def cycle(self, t_s: float, timestamp: float | None = None) -> CycleOutput:
+        """Run the model at ``t_s`` and return this cycle's frames in bus order.
+
+        ``timestamp`` is the time of the first frame (default ``t_s``); later
+        frames are spaced by their nominal time on the wire.
+        """
+        cfg = self.config
+        runtime = RuntimeConfig(max_distance_m=min(cfg.max_distance_m, self.preset.max_range_m),
+                                power_reduction_db=3.0 * cfg.radar_power, high_sensitivity=cfg.rcs_threshold == 1)
+        frame, view = self.model.step(t_s, runtime, self._sensor_velocity_estimate(t_s))
+        out: list[tuple[int, np.ndarray]] = []
+        if self._status_now or t_s + 1e-9 >= self._next_status_s:
+            out += self._status_frames(t_s)
+            self._status_now = False
+            while self._next_status_s <= t_s + 1e-9:
+                self._next_status_s += STATUS_PERIOD_S
+        fixed_bits = int(np.sum(frame_bits(np.array([len(p) for _, p in out] + [8], dtype=np.int64))))
+        dropped = 0
+        if cfg.output_type == P.OUTPUT_OBJECTS:
+            ol = frame.objects
+            keep = self._priority(ol.range_m, ol.rcs_dbsm)[:MAX_OBJECTS]
+            groups = [8] + ([7] if cfg.send_quality else []) + ([8] if cfg.send_ext_info else [])
+            n_fit = self._fit(len(keep), groups, fixed_bits)
+            dropped = len(keep) - n_fit
+            ol = ol.take(keep[:n_fit])
+            ol = ol.take(self._send_order(ol.id, ol.range_m, ol.rcs_dbsm))
+            frame.objects = ol
+            general, quality, extended = P.object_signals(ol)
+            out.append((P.OBJ_STATUS, self.codecs[P.OBJ_STATUS].encode({
+                "Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
+                "Obj_InterfaceVersion": P.INTERFACE_VERSION})[0]))
+            if len(ol):
+                out += [(P.OBJ_GENERAL, row) for row in self.codecs[P.OBJ_GENERAL].encode(general)]
+                if cfg.send_quality:
+                    out += [(P.OBJ_QUALITY, row) for row in self.codecs[P.OBJ_QUALITY].encode(quality)]
+                if cfg.send_ext_info:
+                    out += [(P.OBJ_EXTENDED, row) for row in self.codecs[P.OBJ_EXTENDED].encode(extended)]
+        elif cfg.output_type == P.OUTPUT_CLUSTERS:
+            cl = frame.clusters
+            groups = [8] + ([5] if cfg.send_quality else [])
+            n_fit = self._fit(len(cl), groups, fixed_bits)
+            dropped = len(cl) - n_fit
+            if dropped:  # drop the farthest, keeping near-before-far order
+                cl = cl.take(np.sort(np.argsort(cl.range_m, kind="stable")[:n_fit]))
+                cl.id = np.arange(len(cl), dtype=np.int64)
+            frame.clusters = cl
+            general, quality = P.cluster_signals(cl)
+            n_near = int(cl.is_near.sum())
+            out.append((P.CLUSTER_STATUS, self.codecs[P.CLUSTER_STATUS].encode({
+                "Cluster_NofClustersNear": n_near, "Cluster_NofClustersFar": len(cl) - n_near,
+                "Cluster_MeasCounter": self._meas_counter, "Cluster_InterfaceVersion": P.INTERFACE_VERSION})[0]))
+            if len(cl):
+                out += [(P.CLUSTER_GENERAL, row) for row in self.codecs[P.CLUSTER_GENERAL].encode(general)]
+                if cfg.send_quality:
+                    out += [(P.CLUSTER_QUALITY, row) for row in self.codecs[P.CLUSTER_QUALITY].encode(quality)]
+        if dropped:
+            self.counters["objects_dropped_busload"] += dropped
+            self._warn_once("busload", "cycle at t=%.3f s does not fit %.0f %% of %d bit/s in %.1f ms: dropped %d "
+                            "lowest-priority entries (counted in objects_dropped_busload; warned once)",
+                            t_s, 100 * self.bus_load_limit, self.bitrate, 1e3 * self.period_s, dropped)
+        self._meas_counter = (self._meas_counter + 1) & 0xFFFF
+        dlcs = np.array([len(p) for _, p in out], dtype=np.int64)
+        nominal = frame_bits(dlcs, worst_case=False)
+        t0 = t_s if timestamp is None else timestamp
+        offsets = t0 + np.concatenate([[0.0], np.cumsum(nominal[:-1])]) / self.bitrate
+        messages = [self._msg(base, payload, float(ts)) for (base, payload), ts in zip(out, offsets)]
+        self.counters["cycles"] += 1
+        self.counters["frames"] += len(messages)
+        return CycleOutput(t_s, messages, frame, view, int(np.sum(frame_bits(dlcs))), dropped)
+
+    def _warn_once(self, key: str, fmt: str, *args) -> None:
+        if key not in self._warned:
+            self._warned.add(key)
+            logger.warning(fmt, *args)
+
+
+class EgoMotionSender:
+    """The vehicle side: SpeedInformation 0x300 and YawRateInformation 0x301 from the scenario's ego.
+
+    In a car another ECU sends these; ``radarnode run`` and ``radarnode log``
+    include one so that the node's MotionRxState is "ok" and logs are complete.
+    """
+
+    def __init__(self, scene: Scene, sensor_id: int = 0, database=None) -> None:
+        db = database if database is not None else load_database()
+        self.scene = scene
+        self.sensor_id = sensor_id
+        self._speed = MessageCodec(db.get_message_by_frame_id(P.SPEED_INFO))
+        self._yaw = MessageCodec(db.get_message_by_frame_id(P.YAW_RATE_INFO))
+
+    def frames(self, t_s: float, timestamp: float | None = None) -> list[can.Message]:
+        ego = self.scene.ego_state(t_s)
+        speed = abs(ego.speed_mps)
+        direction = 0 if speed < 0.01 else (1 if ego.speed_mps > 0 else 2)
+        ts = t_s if timestamp is None else timestamp
+        sp = self._speed.encode({"RadarDevice_Speed": speed, "RadarDevice_SpeedDirection": direction})[0]
+        yr = self._yaw.encode({"RadarDevice_YawRate": math.degrees(ego.yaw_rate_rps)})[0]
+        return [can.Message(arbitration_id=P.shifted(P.SPEED_INFO, self.sensor_id), data=sp.tobytes(),
+                            is_extended_id=False, timestamp=ts, check=False),
+                can.Message(arbitration_id=P.shifted(P.YAW_RATE_INFO, self.sensor_id), data=yr.tobytes(),
+                            is_extended_id=False, timestamp=ts, check=False)]
