@@ -11,7 +11,8 @@ Per cycle and per actor, vectorised over actors:
 4. measurement noise in range, radial speed and azimuth with σ from the
    Cramér–Rao bound at that SNR, floored by the preset;
 5. an internal tracker the way a production radar has one: an object is
-   confirmed after 2 detections in 3 cycles, coasts (MeasState "predicted")
+   confirmed after 2 detections in 3 cycles, its velocity is smoothed with an
+   alpha filter (gain ``VELOCITY_GAIN``), coasts (MeasState "predicted")
    through up to ``COAST_CYCLES`` misses, keeps its ID while it lives, and the
    lowest free ID is given to a new object;
 6. ARS 408 DynProp from the ego-motion-compensated velocity, class, size,
@@ -41,7 +42,8 @@ CONFIRM_HITS = 2          # detections in the last CONFIRM_WINDOW cycles that ma
 CONFIRM_WINDOW = 3
 MAX_OBJECTS = 100         # ARS 408 object list capacity
 MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are 8 bits each)
-MOVING_THRESHOLD_MPS = 0.5
+MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
+VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 
@@ -162,7 +164,11 @@ class ObjectModel:
         self._assign_ids(np.flatnonzero(new))
         predicted = self.state.copy()
         predicted[:, 0:2] += predicted[:, 2:4] * dt
-        self.state = np.where(detected[:, None], meas, predicted)
+        # velocity of a continuing track is smoothed like a tracker would (the lateral part is poorly measured)
+        tracked = (self.alive & ~new)[:, None]
+        smoothed = meas.copy()
+        smoothed[:, 2:4] = predicted[:, 2:4] + VELOCITY_GAIN * (meas[:, 2:4] - predicted[:, 2:4])
+        self.state = np.where(detected[:, None], np.where(tracked, smoothed, meas), predicted)
         self.last_t, self.cycle = t_s, self.cycle + 1
 
         idx = np.flatnonzero(self.alive)

@@ -1,0 +1,122 @@
+"""Scenario files: the shipped ones load, and every kind of mistake is reported with file, line, field, value."""
+
+from __future__ import annotations
+
+import pytest
+
+from radarnode.errors import ScenarioError
+from radarnode.scene.scenario import load_scenario
+from tests.conftest import SCENARIOS
+
+GOOD = """name: t
+duration_s: 2.0
+seed: 1
+radar:
+  preset: ars408_like
+actors:
+  - id: a
+    class: car
+    x_m: 30.0
+    length_m: 4.0
+"""
+
+
+@pytest.mark.parametrize("path", sorted(SCENARIOS.glob("*.yaml")), ids=lambda p: p.name)
+def test_shipped_scenarios_load(path):
+    sc = load_scenario(path)
+    assert sc.num_cycles > 10
+    assert sc.actors
+
+
+def _fails(tmp_path, text, *fragments):
+    p = tmp_path / "bad.yaml"
+    p.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(p)
+    msg = str(info.value)
+    assert str(p) in msg
+    for f in fragments:
+        assert f in msg, msg
+    return msg
+
+
+def test_good_text_loads(tmp_path):
+    p = tmp_path / "good.yaml"
+    p.write_text(GOOD)
+    assert load_scenario(p).actors[0].length == 4.0
+
+
+def test_unknown_key(tmp_path):
+    _fails(tmp_path, GOOD.replace("    x_m: 30.0", "    x_m: 30.0\n    colour: red"),
+           ":10:", "unknown field 'actors[0].colour'", "allowed here:", "length_m")
+
+
+def test_wrong_type(tmp_path):
+    _fails(tmp_path, GOOD.replace("x_m: 30.0", "x_m: thirty"), ":9:", "actors[0].x_m", "'thirty'", "a number")
+
+
+def test_negative_size(tmp_path):
+    _fails(tmp_path, GOOD.replace("length_m: 4.0", "length_m: -4.0"), ":10:", "actors[0].length_m", "-4.0", "(0,")
+
+
+def test_unknown_class(tmp_path):
+    _fails(tmp_path, GOOD.replace("class: car", "class: tank"), ":8:", "actors[0].class", "'tank'", "pedestrian")
+
+
+def test_unknown_preset(tmp_path):
+    _fails(tmp_path, GOOD.replace("preset: ars408_like", "preset: ars999"), ":5:", "radar.preset", "'ars999'",
+           "mimo12")
+
+
+def test_nan(tmp_path):
+    _fails(tmp_path, GOOD.replace("x_m: 30.0", "x_m: .nan"), ":9:", "actors[0].x_m", "nan", "finite")
+
+
+def test_missing_field(tmp_path):
+    _fails(tmp_path, GOOD.replace("seed: 1\n", ""), "missing required field 'seed'")
+    _fails(tmp_path, GOOD.replace("    class: car\n", ""), "missing required field 'actors[0].class'")
+
+
+def test_unknown_override(tmp_path):
+    _fails(tmp_path, GOOD.replace("  preset: ars408_like", "  preset: ars408_like\n  overrides: {tx_power: 3}"),
+           "radar.overrides.tx_power", "tx_power_dbm")
+
+
+def test_bad_override_value(tmp_path):
+    _fails(tmp_path, GOOD.replace("  preset: ars408_like", "  preset: ars408_like\n  overrides: {pfa: 2.0}"),
+           "radar.overrides.pfa", "2.0")
+
+
+def test_invalid_yaml(tmp_path):
+    _fails(tmp_path, GOOD + "  - [unclosed\n", "not valid YAML")
+
+
+def test_empty_file(tmp_path):
+    _fails(tmp_path, "", "empty")
+
+
+def test_missing_file(tmp_path):
+    with pytest.raises(ScenarioError, match="cannot read"):
+        load_scenario(tmp_path / "nope.yaml")
+
+
+def test_non_increasing_profile(tmp_path):
+    text = GOOD + "    accel: [{t_s: 2.0, accel_mps2: 1.0}, {t_s: 1.0, accel_mps2: 0.0}]\n"
+    _fails(tmp_path, text, "actors[0].accel", "strictly increasing")
+
+
+def test_duplicate_actor_ids(tmp_path):
+    text = GOOD + "  - {id: a, class: car, x_m: 50.0}\n"
+    _fails(tmp_path, text, "actors", "unique actor ids")
+
+
+def test_lane_out_of_road(tmp_path):
+    _fails(tmp_path, GOOD.replace("x_m: 30.0", "x_m: 30.0\n    lane: 5"), "actors[0].lane", "5")
+
+
+def test_bool_is_not_a_number(tmp_path):
+    _fails(tmp_path, GOOD.replace("duration_s: 2.0", "duration_s: true"), ":2:", "duration_s", "True")
+
+
+def test_duplicate_key(tmp_path):
+    _fails(tmp_path, GOOD.replace("seed: 1", "seed: 1\nseed: 2"), ":4:", "appears twice")
