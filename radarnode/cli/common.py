@@ -31,7 +31,7 @@ def scenario_from_args(args) -> Scenario:
             sc = dataclasses.replace(sc, seed=validate.integer("--seed", args.seed, lo=0))
         if args.duration is not None:
             sc = dataclasses.replace(sc, duration_s=validate.number("--duration", args.duration, lo=0.0,
-                                                                      lo_open=True))
+                                                                      hi=86_400.0, lo_open=True))
     except FieldError as exc:
         raise ConfigError(f"option {exc.field}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
     return sc

@@ -1,0 +1,153 @@
+"""Every subcommand, run as a user would run it (a subprocess), plus two processes over udp_multicast."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+
+import cantools
+import pytest
+
+from tests.conftest import ROOT, SCENARIOS
+
+CLI = [sys.executable, "-m", "radarnode.cli"]
+DEFAULT = str(SCENARIOS / "highway_cut_in.yaml")
+
+
+def run(*args, timeout=120, **kw):
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT, **kw)
+
+
+def test_run_prints_cycles_and_summary():
+    r = run("run", DEFAULT, "--fast", "--duration", "3")
+    assert r.returncode == 0, r.stderr
+    assert "objects" in r.stdout and "   ID  class" in r.stdout
+    assert "summary: 41 cycles" in r.stdout
+    assert "consumer: frames=" in r.stdout and "incomplete_cycles" not in r.stdout
+    assert "object   0 car" in r.stdout
+
+
+def test_run_realtime_paces_cycles():
+    t0 = time.monotonic()
+    r = run("run", DEFAULT, "--realtime", "--duration", "1.0", "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert time.monotonic() - t0 >= 0.9
+    assert "summary: 13 cycles" in r.stdout
+
+
+def test_bad_scenario_is_a_one_line_error(tmp_path):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("name: x\nduration_s: -1\nseed: 1\n")
+    r = run("run", str(bad), "--fast")
+    assert r.returncode == 2
+    assert r.stderr.strip() == f"error: {bad}:2: field 'duration_s': value -1 is not allowed; expected a number " \
+                               "in (0, 86400]"
+    r = run("log", DEFAULT, "-o", str(tmp_path / "x.unknownsuffix"))
+    assert r.returncode == 2 and "error: option --output" in r.stderr
+
+
+def _decoded_objects(db, path):
+    out = []
+    for line in path.read_text().splitlines():
+        ts, chan, frame = line.split()[:3]
+        fid, data = frame.split("#")
+        if int(fid, 16) == 0x60B:
+            out.append(db.decode_message(0x60B, bytes.fromhex(data)))
+    return out
+
+
+def test_log_then_cantools_decode_with_our_dbc_and_the_reference(tmp_path, reference_dir):
+    out = tmp_path / "out.log"
+    r = run("log", DEFAULT, "-o", str(out), "--duration", "2")
+    assert r.returncode == 0, r.stderr
+    ours = subprocess.run([sys.executable, "-m", "cantools", "decode", str(ROOT / "dbc" / "ars408.dbc")],
+                          stdin=out.open(), capture_output=True, text=True, cwd=ROOT, timeout=60)
+    assert ours.returncode == 0 and "Obj_1_General(" in ours.stdout and "Obj_DistLong:" in ours.stdout
+    a = _decoded_objects(cantools.database.load_file(str(ROOT / "dbc" / "ars408.dbc")), out)
+    b = _decoded_objects(cantools.database.load_file(str(reference_dir / "ARS408_id0.dbc"), encoding="latin-1",
+                                                      strict=False), out)
+    assert len(a) > 50 and a == b
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".asc", ".csv", ".log"])
+def test_log_and_decode_round_trip(tmp_path, suffix):
+    out = tmp_path / f"out{suffix}"
+    r = run("log", str(SCENARIOS / "stopped_vehicle.yaml"), "-o", str(out), "--duration", "2")
+    assert r.returncode == 0, r.stderr
+    d = run("decode", str(out))
+    assert d.returncode == 0, d.stderr
+    assert d.stdout.count("objects\n") == 27
+    assert "consumer: frames=" in d.stdout and "incomplete_cycles" not in d.stdout
+    assert "object   0 car" in d.stdout
+
+
+def test_decode_the_real_capture(reference_dir):
+    d = run("decode", str(reference_dir / "candump-ars408-parked.log"), "--summary")
+    assert d.returncode == 0, d.stderr
+    assert "cycles=515" in d.stdout
+    assert "object  56 point" in d.stdout and "object  32 car" in d.stdout
+
+
+def test_log_interrupted_is_complete_and_readable(tmp_path):
+    out = tmp_path / "long.blf"
+    p = subprocess.Popen([*CLI, "log", DEFAULT, "-o", str(out), "--duration", "80000"], cwd=ROOT,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(4.0)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 0, err
+    assert "interrupted: wrote" in err
+    d = run("decode", str(out), "--summary")
+    assert d.returncode == 0, d.stderr
+    assert "incomplete_cycles" not in d.stdout and "cycles=" in d.stdout
+    n_cycles = int(d.stdout.split("cycles=")[1].split(",")[0])
+    assert n_cycles > 20 and f"in {n_cycles} complete cycles" in err
+
+
+def _can_unshare() -> bool:
+    if not shutil.which("unshare") or not shutil.which("ip"):
+        return False
+    r = subprocess.run(["unshare", "-n", "true"], capture_output=True)
+    return r.returncode == 0
+
+
+@pytest.mark.skipif(not _can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
+                    "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
+def test_node_and_consumer_in_two_processes_over_udp_multicast(tmp_path):
+    group = "239.74.163.2"
+    script = f"""
+set -e
+ip link set lo up
+ip link set lo multicast on
+ip route add 224.0.0.0/4 dev lo
+{sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} --json --count 20 --timeout 20 > {tmp_path}/cycles.jsonl 2> {tmp_path}/consume.err &
+CONSUMER=$!
+for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done
+{sys.executable} -m radarnode.cli node {DEFAULT} -i udp_multicast -c {group} --duration 2.5 --send-ego-motion 2> {tmp_path}/node.err
+wait $CONSUMER
+"""
+    r = subprocess.run(["unshare", "-n", "bash", "-c", script], capture_output=True, text=True, timeout=120,
+                       cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
+    lines = [json.loads(x) for x in (tmp_path / "cycles.jsonl").read_text().splitlines()]
+    assert len(lines) == 20
+    counters = [x["meas_counter"] for x in lines]
+    assert counters == list(range(counters[0], counters[0] + 20))
+    assert any(o["obj_class"] == 1 and 40 < o["dist_long_m"] < 70 for x in lines[5:] for o in x["objects"])
+    assert "sent 34 cycles" in (tmp_path / "node.err").read_text()
+
+
+def test_bad_cli_option_names_the_option():
+    r = run("log", DEFAULT, "-o", "/tmp/x.log", "--duration", "100000")
+    assert r.returncode == 2
+    assert r.stderr.strip() == "error: option --duration: value 100000.0 is not allowed; expected a number in (0, 86400]"
+
+
+def test_consume_reports_a_bus_that_cannot_be_opened():
+    r = run("consume", "-i", "no_such_interface", "-c", "x", "--count", "1")
+    assert r.returncode == 2 and r.stderr.startswith("error: cannot open CAN bus")
