@@ -151,3 +151,18 @@ def test_bad_cli_option_names_the_option():
 def test_consume_reports_a_bus_that_cannot_be_opened():
     r = run("consume", "-i", "no_such_interface", "-c", "x", "--count", "1")
     assert r.returncode == 2 and r.stderr.startswith("error: cannot open CAN bus")
+
+
+def test_node_on_a_virtual_bus_reports_what_it_sent():
+    r = run("node", DEFAULT, "-i", "virtual", "-c", "cli-test", "--fast", "--duration", "1")
+    assert r.returncode == 0, r.stderr
+    assert "sent 13 cycles" in r.stderr and "frames=" in r.stderr
+
+
+def test_bad_run_and_bus_options_are_named():
+    r = run("run", DEFAULT, "--fast", "--every", "0")
+    assert r.returncode == 2 and "error: option --every: value 0 is not allowed" in r.stderr
+    r = run("node", DEFAULT, "-i", "virtual", "-c", "x", "--bus-kwargs", "novalue")
+    assert r.returncode == 2 and "error: option --bus-kwargs: value 'novalue' is not allowed" in r.stderr
+    r = run("decode", "/nonexistent/file.blf")
+    assert r.returncode == 2 and r.stderr.startswith("error: argument FILE")

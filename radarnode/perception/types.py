@@ -25,8 +25,35 @@ def _empty(n: int, dtype: type = np.float64) -> np.ndarray:
     return np.zeros(n, dtype=dtype)
 
 
+class _Columns:
+    """Shared behaviour of the struct-of-arrays lists: construction, length, selection, range."""
+
+    INT_FIELDS: tuple[str, ...] = ()
+    BOOL_FIELDS: tuple[str, ...] = ()
+
+    @classmethod
+    def empty(cls, n: int = 0):
+        """A list of ``n`` zero entries (integer and boolean fields get their own dtypes)."""
+        kw = {}
+        for f in dataclasses.fields(cls):
+            dtype = bool if f.name in cls.BOOL_FIELDS else np.int64 if f.name in cls.INT_FIELDS else np.float64
+            kw[f.name] = _empty(n, dtype)
+        return cls(**kw)
+
+    def __len__(self) -> int:
+        return int(self.id.shape[0])
+
+    def take(self, index: np.ndarray):
+        """A new list with the entries ``index`` (an integer or boolean array), in that order."""
+        return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
+
+    @property
+    def range_m(self) -> np.ndarray:
+        return np.hypot(self.dist_long_m, self.dist_lat_m)
+
+
 @dataclass
-class ObjectList:
+class ObjectList(_Columns):
     """One cycle's object list (ARS 408 messages 0x60B, 0x60C, 0x60D).
 
     Quality and extended fields are NaN (or -1 for codes) when the cycle did
@@ -60,26 +87,9 @@ class ObjectList:
 
     INT_FIELDS = ("id", "dyn_prop", "meas_state", "prob_of_exist", "obj_class", "actor_index")
 
-    @classmethod
-    def empty(cls, n: int = 0) -> ObjectList:
-        kw = {f.name: _empty(n, np.int64 if f.name in cls.INT_FIELDS else np.float64)
-              for f in dataclasses.fields(cls)}
-        return cls(**kw)
-
-    def __len__(self) -> int:
-        return int(self.id.shape[0])
-
-    def take(self, index: np.ndarray) -> ObjectList:
-        """A new list with the entries ``index`` (an integer or boolean array), in that order."""
-        return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
-
-    @property
-    def range_m(self) -> np.ndarray:
-        return np.hypot(self.dist_long_m, self.dist_lat_m)
-
 
 @dataclass
-class ClusterList:
+class ClusterList(_Columns):
     """One cycle's cluster list (ARS 408 messages 0x701, 0x702): near clusters first, then far."""
 
     id: np.ndarray
@@ -100,24 +110,7 @@ class ClusterList:
     actor_index: np.ndarray     # -1 for guardrail posts, false alarms and decoded clusters
 
     INT_FIELDS = ("id", "dyn_prop", "pdh0", "ambig_state", "invalid_state", "actor_index")
-
-    @classmethod
-    def empty(cls, n: int = 0) -> ClusterList:
-        kw = {}
-        for f in dataclasses.fields(cls):
-            dtype = bool if f.name == "is_near" else np.int64 if f.name in cls.INT_FIELDS else np.float64
-            kw[f.name] = _empty(n, dtype)
-        return cls(**kw)
-
-    def __len__(self) -> int:
-        return int(self.id.shape[0])
-
-    def take(self, index: np.ndarray) -> ClusterList:
-        return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
-
-    @property
-    def range_m(self) -> np.ndarray:
-        return np.hypot(self.dist_long_m, self.dist_lat_m)
+    BOOL_FIELDS = ("is_near",)
 
 
 @dataclass
