@@ -166,3 +166,10 @@ def test_bad_run_and_bus_options_are_named():
     assert r.returncode == 2 and "error: option --bus-kwargs: value 'novalue' is not allowed" in r.stderr
     r = run("decode", "/nonexistent/file.blf")
     assert r.returncode == 2 and r.stderr.startswith("error: argument FILE")
+
+
+def test_bus_from_python_can_environment_variables():
+    env = {**os.environ, "CAN_INTERFACE": "virtual", "CAN_CHANNEL": "from-env"}
+    r = run("node", DEFAULT, "--fast", "--duration", "0.5", env=env)
+    assert r.returncode == 0, r.stderr
+    assert "channel from-env" in r.stderr
