@@ -18,6 +18,8 @@ def add_scenario_argument(parser) -> None:
     parser.add_argument("scenario", help="scenario file (YAML), e.g. scenarios/highway_cut_in.yaml")
     parser.add_argument("--seed", type=int, help="override the scenario's seed")
     parser.add_argument("--duration", type=float, help="override the scenario's duration in seconds")
+    parser.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"),
+                        help="radar model level (default: the scenario's)")
 
 
 def scenario_from_args(args) -> Scenario:
@@ -29,6 +31,8 @@ def scenario_from_args(args) -> Scenario:
     try:
         if args.seed is not None:
             sc = dataclasses.replace(sc, seed=validate.integer("--seed", args.seed, lo=0))
+        if getattr(args, "fidelity", None):
+            sc = dataclasses.replace(sc, fidelity=args.fidelity)
         if args.duration is not None:
             sc = dataclasses.replace(sc, duration_s=validate.number("--duration", args.duration, lo=0.0,
                                                                       hi=86_400.0, lo_open=True))

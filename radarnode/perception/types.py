@@ -41,11 +41,15 @@ class _Columns:
         return cls(**kw)
 
     def __len__(self) -> int:
-        return int(self.id.shape[0])
+        return int(getattr(self, dataclasses.fields(self)[0].name).shape[0])
 
     def take(self, index: np.ndarray):
         """A new list with the entries ``index`` (an integer or boolean array), in that order."""
         return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
+
+
+class _Planar:
+    """Range of list entries given by longitudinal and lateral distance."""
 
     @property
     def range_m(self) -> np.ndarray:
@@ -53,7 +57,7 @@ class _Columns:
 
 
 @dataclass
-class ObjectList(_Columns):
+class ObjectList(_Columns, _Planar):
     """One cycle's object list (ARS 408 messages 0x60B, 0x60C, 0x60D).
 
     Quality and extended fields are NaN (or -1 for codes) when the cycle did
@@ -89,7 +93,7 @@ class ObjectList(_Columns):
 
 
 @dataclass
-class ClusterList(_Columns):
+class ClusterList(_Columns, _Planar):
     """One cycle's cluster list (ARS 408 messages 0x701, 0x702): near clusters first, then far."""
 
     id: np.ndarray
@@ -121,3 +125,30 @@ class RadarFrame:
     cycle: int
     objects: ObjectList
     clusters: ClusterList
+
+
+@dataclass
+class Detections(_Columns):
+    """One cycle's detections, the common output of the detection and signal models.
+
+    ``range_rate_mps`` is negative when closing. ``actor_index`` is the ground
+    truth the detection came from where the model knows it (-1: noise, clutter,
+    merged from several actors, or unknown).
+    """
+
+    range_m: np.ndarray
+    range_rate_mps: np.ndarray
+    azimuth_rad: np.ndarray
+    rcs_dbsm: np.ndarray
+    snr_db: np.ndarray
+    actor_index: np.ndarray
+
+    INT_FIELDS = ("actor_index",)
+
+    @property
+    def x_m(self) -> np.ndarray:
+        return self.range_m * np.cos(self.azimuth_rad)
+
+    @property
+    def y_m(self) -> np.ndarray:
+        return self.range_m * np.sin(self.azimuth_rad)

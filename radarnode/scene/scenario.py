@@ -23,6 +23,8 @@ import yaml
 
 from radarnode import validate
 from radarnode.errors import FieldError, ScenarioError
+from radarnode.dsp.chain import DspConfig
+from radarnode.radar.options import Impairments, SignalOptions
 from radarnode.radar.presets import RadarPreset, get_preset
 
 #: class name -> (ARS 408 Obj_Class code, default length m, default width m, default RCS dBsm)
@@ -39,7 +41,7 @@ ACTOR_CLASSES: dict[str, tuple[int, float, float, float]] = {
 
 OUTPUT_TYPES = ("objects", "clusters", "none")
 SORT_INDICES = ("none", "range", "rcs")
-FIDELITIES = ("object",)
+FIDELITIES = ("object", "detection", "signal", "auto")
 
 
 @dataclass(frozen=True)
@@ -267,6 +269,7 @@ class Scenario:
     description: str = ""
     cycle_period_s: float | None = None
     fidelity: str = "object"
+    signal: SignalOptions = SignalOptions()
     radar: RadarSetup = RadarSetup()
     ego: Ego = Ego()
     road: Road = Road()
@@ -312,7 +315,9 @@ class Scenario:
 _ALIASES = {Actor: {"class": "object_class"}}
 #: fields that hold nested dataclasses, or tuples of them
 _NESTED: dict[type, dict[str, tuple[type, bool]]] = {
-    Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False), "actors": (Actor, True)},
+    Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False), "actors": (Actor, True),
+               "signal": (SignalOptions, False)},
+    SignalOptions: {"dsp": (DspConfig, False), "impairments": (Impairments, False)},
     RadarSetup: {"mount": (Mount, False)},
     Road: {"guardrails": (Guardrails, False)},
     Ego: {"accel": (AccelStep, True)},

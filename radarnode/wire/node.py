@@ -21,7 +21,8 @@ import can
 import numpy as np
 
 from radarnode.perception.types import RadarFrame
-from radarnode.radar.object_model import MAX_OBJECTS, ObjectModel, RuntimeConfig
+from radarnode.radar.models import make_model
+from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
 from radarnode.wire import ars408 as P
@@ -72,9 +73,11 @@ class RadarNode:
     scenario : Scenario
     database : cantools Database, optional
         Defaults to the project's ``dbc/ars408.dbc``.
+    fidelity : str, optional
+        ``object``, ``detection``, ``signal`` or ``auto``; default: the scenario's.
     """
 
-    def __init__(self, scenario: Scenario, database=None) -> None:
+    def __init__(self, scenario: Scenario, database=None, fidelity: str | None = None) -> None:
         self.scenario = scenario
         self.db = database if database is not None else load_database()
         setup = scenario.radar
@@ -88,7 +91,9 @@ class RadarNode:
             max_distance_m=setup.max_distance_m if setup.max_distance_m is not None else self.preset.max_range_m,
             sort_index=P.SORT_CODES[setup.sort_index], radar_power=setup.radar_power, sensor_id=setup.sensor_id)
         self.scene = Scene(scenario)
-        self.model = ObjectModel(self.scene, self.preset, np.random.default_rng(scenario.seed))
+        self.fidelity = fidelity or scenario.fidelity
+        self.model = make_model(self.fidelity, self.scene, self.preset, np.random.default_rng(scenario.seed),
+                                scenario.signal, clusters_wanted=setup.output == "clusters")
         self.counters: Counter = Counter()
         self.saturated: Counter = Counter()
         self.codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in self.db.messages

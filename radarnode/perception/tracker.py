@@ -1,0 +1,302 @@
+"""The radar's own perception for the detection and signal levels: detections -> clusters -> objects.
+
+A short composition of single-purpose roles (Stone Soup style), each a plain
+function that can be tested alone:
+
+* :func:`group_detections` — DBSCAN over position and radial speed; one
+  measurement per group (nearest-face position, mean radial speed, extent);
+* :func:`predict` — constant-velocity Kalman prediction;
+* :func:`update` — extended Kalman update with position and radial speed;
+* :func:`associate` — Mahalanobis gating and global nearest neighbour
+  (``scipy.optimize.linear_sum_assignment``);
+* :class:`ObjectTracker` — initiation, M-of-N confirmation, coasting, deletion
+  and stable lowest-free IDs, and the ARS 408 fields of the object list.
+
+The object level does not run this: it models the result of such a tracker
+statistically (see ``radarnode.radar.object_model``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.optimize
+
+from radarnode.dsp.cluster import dbscan
+from radarnode.perception.types import (
+    DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
+    MEAS_PREDICTED, ClusterList, Detections, ObjectList)
+
+GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
+CONFIRM_HITS, CONFIRM_WINDOW = 2, 3
+COAST_CYCLES = 3
+MOVING_THRESHOLD_MPS = 1.0
+_PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
+
+
+@dataclass
+class Groups:
+    """One measurement per detection group; arrays of shape (n,)."""
+
+    x_m: np.ndarray
+    y_m: np.ndarray
+    range_rate_mps: np.ndarray
+    length_m: np.ndarray
+    width_m: np.ndarray
+    rcs_dbsm: np.ndarray
+    snr_db: np.ndarray
+    actor_index: np.ndarray     # most common truth tag of the group (-1 if none)
+
+    def __len__(self) -> int:
+        return int(self.x_m.shape[0])
+
+
+def group_detections(det: Detections, eps_m: float = 2.5, eps_mps: float = 1.5) -> Groups:
+    """DBSCAN over (x, y, radial speed) scaled by (eps_m, eps_m, eps_mps); a group per cluster."""
+    n = len(det)
+    if n == 0:
+        z = np.zeros(0)
+        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64))
+    x, y = det.x_m, det.y_m
+    labels = dbscan(np.stack([x / eps_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
+    g = labels.max() + 1
+    power = 10.0 ** (det.snr_db / 10.0)
+    wsum = np.bincount(labels, weights=power, minlength=g)
+    # the reported point: the group's nearest detection in x (the face towards the sensor), mean lateral
+    xmin = np.full(g, np.inf)
+    np.minimum.at(xmin, labels, x)
+    xmax = np.full(g, -np.inf)
+    np.maximum.at(xmax, labels, x)
+    ymin = np.full(g, np.inf)
+    np.minimum.at(ymin, labels, y)
+    ymax = np.full(g, -np.inf)
+    np.maximum.at(ymax, labels, y)
+    gy = np.bincount(labels, weights=power * y, minlength=g) / wsum
+    vr = np.bincount(labels, weights=power * det.range_rate_mps, minlength=g) / wsum
+    rcs = 10.0 * np.log10(np.bincount(labels, weights=10.0 ** (det.rcs_dbsm / 10.0), minlength=g))
+    snr = 10.0 * np.log10(wsum)
+    tags = np.full(g, -1, dtype=np.int64)
+    tagged = det.actor_index >= 0
+    if tagged.any():
+        counts = np.zeros((g, int(det.actor_index.max()) + 1))
+        np.add.at(counts, (labels[tagged], det.actor_index[tagged]), 1)
+        tags = np.where(counts.max(axis=1) > 0, counts.argmax(axis=1), -1)
+    return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags)
+
+
+def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
+    """Constant-velocity prediction of states (n, 4) = [x, y, vx, vy] and covariances (n, 4, 4)."""
+    f = np.eye(4)
+    f[0, 2] = f[1, 3] = dt
+    q1 = np.array([[dt ** 4 / 4, dt ** 3 / 2], [dt ** 3 / 2, dt ** 2]]) * accel_sigma ** 2
+    q = np.zeros((4, 4))
+    q[np.ix_([0, 2], [0, 2])] = q1
+    q[np.ix_([1, 3], [1, 3])] = q1
+    return x @ f.T, f @ p @ f.T + q
+
+
+def measure(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Measurement function h(x) = [x, y, radial speed] and its Jacobian, for states (n, 4)."""
+    px, py, vx, vy = x.T
+    r = np.maximum(np.hypot(px, py), 1e-3)
+    vr = (px * vx + py * vy) / r
+    h = np.stack([px, py, vr], axis=1)
+    jac = np.zeros((x.shape[0], 3, 4))
+    jac[:, 0, 0] = jac[:, 1, 1] = 1.0
+    jac[:, 2, 0] = vx / r - vr * px / r ** 2
+    jac[:, 2, 1] = vy / r - vr * py / r ** 2
+    jac[:, 2, 2] = px / r
+    jac[:, 2, 3] = py / r
+    return h, jac
+
+
+def innovation(x, p, z, r_cov):
+    """Innovations (n, m, 3) and their covariances (n, 3, 3) of n tracks against m measurements."""
+    h, jac = measure(x)
+    s = jac @ p @ np.transpose(jac, (0, 2, 1)) + r_cov
+    return z[None, :, :] - h[:, None, :], s, jac
+
+
+def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, int]]:
+    """Global nearest neighbour on the squared Mahalanobis distance, inside the gate."""
+    if x.shape[0] == 0 or z.shape[0] == 0:
+        return []
+    nu, s, _ = innovation(x, p, z, r_cov)
+    d2 = np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s), nu)
+    cost = np.where(d2 <= gate, d2, 1e9)
+    rows, cols = scipy.optimize.linear_sum_assignment(cost)
+    return [(int(i), int(j)) for i, j in zip(rows, cols) if cost[i, j] < 1e9]
+
+
+def update(x, p, z, r_cov):
+    """EKF update of states (n, 4) with measurements (n, 3)."""
+    h, jac = measure(x)
+    s = jac @ p @ np.transpose(jac, (0, 2, 1)) + r_cov
+    k = p @ np.transpose(jac, (0, 2, 1)) @ np.linalg.inv(s)
+    x_new = x + np.einsum("nij,nj->ni", k, z - h)
+    p_new = (np.eye(4)[None] - k @ jac) @ p
+    return x_new, p_new
+
+
+class ObjectTracker:
+    """Turns each cycle's detections into the ARS 408 object list.
+
+    Parameters
+    ----------
+    sigma_pos_m, sigma_vr_mps : measurement noise of a detection group
+    """
+
+    def __init__(self, sigma_pos_m: float = 0.5, sigma_vr_mps: float = 0.3, max_objects: int = 100) -> None:
+        self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
+        self.max_objects = max_objects
+        self.x = np.zeros((0, 4))
+        self.p = np.zeros((0, 4, 4))
+        self.hist = np.zeros(0, dtype=np.uint8)
+        self.misses = np.zeros(0, dtype=np.int64)
+        self.confirmed = np.zeros(0, dtype=bool)
+        self.ids = np.zeros(0, dtype=np.int64)
+        self.was_moving = np.zeros(0, dtype=bool)
+        self.size = np.zeros((0, 2))
+        self.rcs = np.zeros(0)
+        self.tag = np.zeros(0, dtype=np.int64)
+        self.last_t: float | None = None
+
+    def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float]) -> ObjectList:
+        groups = group_detections(det)
+        dt = 0.0 if self.last_t is None else t_s - self.last_t
+        self.last_t = t_s
+        if len(self.x):
+            self.x, self.p = predict(self.x, self.p, dt)
+        z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
+        pairs = associate(self.x, self.p, z, self.r_cov)
+        hit = np.zeros(len(self.x), dtype=bool)
+        used = np.zeros(len(groups), dtype=bool)
+        if pairs:
+            ti, gi = np.array(pairs).T
+            self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], self.r_cov)
+            hit[ti], used[gi] = True, True
+            self.size[ti] = 0.8 * self.size[ti] + 0.2 * np.stack([groups.length_m[gi], groups.width_m[gi]], 1)
+            self.rcs[ti] = 0.8 * self.rcs[ti] + 0.2 * groups.rcs_dbsm[gi]
+            self.tag[ti] = groups.actor_index[gi]
+        self.hist = ((self.hist << 1) | hit).astype(np.uint8)
+        self.misses = np.where(hit, 0, self.misses + 1)
+        new_tracks = np.flatnonzero(~used)
+        self._initiate(groups, z, new_tracks, sensor_velocity)
+        recent = np.unpackbits(self.hist[:, None], axis=1)[:, -CONFIRM_WINDOW:].sum(axis=1)
+        newly = ~self.confirmed & (recent >= CONFIRM_HITS)
+        self.confirmed |= newly
+        self._assign_ids(np.flatnonzero(newly))
+        self._delete((self.misses > COAST_CYCLES) | (~self.confirmed & (self.misses > 0)))
+        return self._object_list(sensor_velocity)
+
+    def _initiate(self, groups, z, idx, sensor_velocity) -> None:
+        if idx.size == 0:
+            return
+        k = idx.size
+        x0 = np.zeros((k, 4))
+        x0[:, 0:2] = z[idx, 0:2]
+        # velocity: a stationary world is the best prior; the radial component is measured
+        r = np.maximum(np.hypot(z[idx, 0], z[idx, 1]), 1e-3)
+        ux, uy = z[idx, 0] / r, z[idx, 1] / r
+        vx0, vy0 = -sensor_velocity[0], -sensor_velocity[1]
+        vr_prior = vx0 * ux + vy0 * uy
+        x0[:, 2] = vx0 + (z[idx, 2] - vr_prior) * ux
+        x0[:, 3] = vy0 + (z[idx, 2] - vr_prior) * uy
+        p0 = np.tile(np.diag([1.0, 1.0, 4.0, 4.0]), (k, 1, 1))
+        self.x = np.concatenate([self.x, x0])
+        self.p = np.concatenate([self.p, p0])
+        self.hist = np.concatenate([self.hist, np.ones(k, dtype=np.uint8)])
+        self.misses = np.concatenate([self.misses, np.zeros(k, dtype=np.int64)])
+        self.confirmed = np.concatenate([self.confirmed, np.zeros(k, dtype=bool)])
+        self.ids = np.concatenate([self.ids, np.full(k, -1, dtype=np.int64)])
+        self.was_moving = np.concatenate([self.was_moving, np.zeros(k, dtype=bool)])
+        self.size = np.concatenate([self.size, np.stack([groups.length_m[idx], groups.width_m[idx]], 1)])
+        self.rcs = np.concatenate([self.rcs, groups.rcs_dbsm[idx]])
+        self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
+
+    def _assign_ids(self, idx: np.ndarray) -> None:
+        used = set(self.ids[self.ids >= 0].tolist())
+        free = (i for i in range(256) if i not in used)
+        for k in idx:   # only newly confirmed tracks
+            self.ids[k] = next(free)
+
+    def _delete(self, gone: np.ndarray) -> None:
+        keep = ~gone
+        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "rcs", "tag"):
+            setattr(self, name, getattr(self, name)[keep])
+
+    def _object_list(self, sensor_velocity) -> ObjectList:
+        idx = np.flatnonzero(self.confirmed)
+        if idx.size > self.max_objects:
+            idx = idx[np.argsort(np.hypot(self.x[idx, 0], self.x[idx, 1]))[: self.max_objects]]
+        n = idx.size
+        x = self.x[idx]
+        ol = ObjectList.empty(n)
+        ol.id = self.ids[idx].copy()
+        ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
+        gx, gy = x[:, 2] + sensor_velocity[0], x[:, 3] + sensor_velocity[1]
+        speed = np.hypot(gx, gy)
+        moving = speed >= MOVING_THRESHOLD_MPS
+        self.was_moving[idx] |= moving
+        angle = np.abs(np.arctan2(gy, gx))
+        dyn = np.where(angle > np.radians(135), DYN_ONCOMING, np.where(angle > np.radians(45), DYN_CROSSING_MOVING,
+                                                                        DYN_MOVING))
+        ol.dyn_prop = np.where(moving, dyn, np.where(self.was_moving[idx], DYN_STOPPED, DYN_STATIONARY))
+        ol.rcs_dbsm = self.rcs[idx]
+        p = self.p[idx]
+        ol.dist_long_sigma_m, ol.dist_lat_sigma_m = np.sqrt(p[:, 0, 0]), np.sqrt(p[:, 1, 1])
+        ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps = np.sqrt(p[:, 2, 2]), np.sqrt(p[:, 3, 3])
+        ol.arel_long_sigma_mps2 = np.full(n, 2.0)
+        ol.arel_lat_sigma_mps2 = np.full(n, 2.0)
+        ol.orientation_sigma_rad = np.full(n, math.radians(10.0))
+        fresh = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1) <= CONFIRM_HITS
+        ol.meas_state = np.where(self.misses[idx] > 0, MEAS_PREDICTED, np.where(fresh, MEAS_NEW, MEAS_MEASURED))
+        hits = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1)
+        ol.prob_of_exist = np.searchsorted(_PROB_EDGES, 1.0 - 0.5 ** hits, side="right").astype(np.int64) + 1
+        ol.arel_long_mps2 = np.zeros(n)
+        ol.arel_lat_mps2 = np.zeros(n)
+        length, width = np.maximum(self.size[idx, 0], 0.2), np.maximum(self.size[idx, 1], 0.2)
+        ol.obj_class = classify(length, width, self.rcs[idx], moving)
+        ol.orientation_rad = np.where(moving, np.arctan2(gy, gx), 0.0)
+        ol.length_m, ol.width_m = length, width
+        ol.actor_index = self.tag[idx].copy()
+        return ol
+
+
+def classify(length_m, width_m, rcs_dbsm, moving) -> np.ndarray:
+    """A coarse ARS 408 class from extent and RCS (point, car, truck, pedestrian, wide)."""
+    extent = np.maximum(length_m, width_m)
+    return np.where(extent > 8.0, 2,
+                    np.where(extent > 1.2, np.where(width_m > 3.0, 6, 1),
+                             np.where((rcs_dbsm < 3.0) & moving, 3, 0))).astype(np.int64)
+
+
+def clusters_from_detections(det: Detections, near_range_m: float, sensor_velocity: tuple[float, float],
+                             max_clusters: int = 250) -> ClusterList:
+    """Each detection is an ARS 408 cluster; near-scan clusters first, each part sorted by range."""
+    r = det.range_m
+    near = r <= near_range_m
+    order = np.lexsort((r, ~near))[:max_clusters]
+    d = det.take(order)
+    n = len(d)
+    cl = ClusterList.empty(n)
+    cl.id = np.arange(n, dtype=np.int64)
+    c, s = np.cos(d.azimuth_rad), np.sin(d.azimuth_rad)
+    cl.dist_long_m, cl.dist_lat_m = d.range_m * c, d.range_m * s
+    cl.vrel_long_mps, cl.vrel_lat_mps = d.range_rate_mps * c, d.range_rate_mps * s
+    ground = d.range_rate_mps + sensor_velocity[0] * c + sensor_velocity[1] * s
+    cl.dyn_prop = np.where(np.abs(ground) < MOVING_THRESHOLD_MPS, DYN_STATIONARY,
+                           np.where(ground < 0, DYN_ONCOMING, DYN_MOVING)).astype(np.int64)
+    cl.rcs_dbsm = d.rcs_dbsm
+    cl.dist_long_sigma_m = np.full(n, 0.2)
+    cl.dist_lat_sigma_m = np.maximum(0.2, d.range_m * 0.01)
+    cl.vrel_long_sigma_mps = np.full(n, 0.1)
+    cl.vrel_lat_sigma_mps = np.full(n, 0.5)
+    cl.pdh0 = np.where(d.snr_db > 20.0, 1, 2).astype(np.int64)
+    cl.ambig_state = np.full(n, 3, dtype=np.int64)
+    cl.invalid_state = np.zeros(n, dtype=np.int64)
+    cl.is_near = near[order]
+    cl.actor_index = d.actor_index.copy()
+    return cl

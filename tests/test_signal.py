@@ -1,0 +1,120 @@
+"""Signal level and detection level: the source documents' cases, recovered through the real DSP chain."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from radarnode.dsp.chain import DspChain
+from radarnode.radar import detection_model
+from radarnode.radar.presets import PRESETS
+from radarnode.radar.scatterers import point_targets
+from radarnode.radar.signal_model import synthesize
+
+
+def _match(det, r_true, v_true, az_true_deg):
+    """Nearest detection (in bins) to each truth: (range error m, speed error m/s, azimuth error deg)."""
+    out = []
+    for r, v, a in zip(r_true, v_true, az_true_deg):
+        cost = np.abs(det.range_m - r) + np.abs(det.range_rate_mps - v) + np.abs(np.degrees(det.azimuth_rad) - a) / 5
+        k = int(np.argmin(cost))
+        out.append((det.range_m[k] - r, det.range_rate_mps[k] - v, math.degrees(det.azimuth_rad[k]) - a))
+    return np.array(out)
+
+
+def _run(preset, r, v, az, seed, **kw):
+    scat = point_targets(r, az, v, kw.pop("rcs_dbsm", 10.0))
+    cube = synthesize(preset, scat, np.random.default_rng(seed), **kw)
+    return DspChain(preset).process(cube)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_seed000_three_point_targets_at_minus_5_db(seed):
+    """Seed 000: 30/40/50 m, −40/30/10°, −20/0/15 m/s, SNR −5 dB, the 12-element mimo12 radar."""
+    p = PRESETS["mimo12"]
+    r, v, az = [30.0, 40.0, 50.0], [-20.0, 0.0, 15.0], [-40.0, 30.0, 10.0]
+    det = _run(p, r, v, az, seed, snr_db=-5.0)
+    err = _match(det, r, v, az)
+    assert np.all(np.abs(err[:, 0]) <= p.range_resolution_m / 4)
+    assert np.all(np.abs(err[:, 1]) <= p.speed_resolution_mps / 4)
+    assert np.all(np.abs(err[:, 2]) <= math.degrees(p.angular_resolution_rad) / 10)
+    assert len(det) == 3     # no false alarm at Pfa 1e-6 over 65 536 cells (expected 0.07)
+
+
+def test_seed003_car_and_truck_range_and_speed():
+    """Seed 003: ego 100 km/h; car 50 m ahead at 60 km/h, truck 150 m ahead at 130 km/h.
+
+    Seed 003 counts approaching speed positive (11.1 and −8.3 m/s); radarnode's range rate is negative
+    when closing.
+    """
+    p = PRESETS["acc_lrr"]
+    r = [50.0, 150.0]
+    v = [-(100 - 60) / 3.6, (130 - 100) / 3.6]
+    det = _run(p, r, v, [0.0, 0.0], 3, rcs_dbsm=[10.0, 20.0])
+    err = _match(det, r, v, [0.0, 0.0])
+    assert -det.range_rate_mps[np.argmin(np.abs(det.range_m - 50))] == pytest.approx(11.1, abs=p.speed_resolution_mps / 4)
+    assert -det.range_rate_mps[np.argmin(np.abs(det.range_m - 150))] == pytest.approx(-8.3, abs=p.speed_resolution_mps / 4)
+    assert np.all(np.abs(err[:, 0]) <= p.range_resolution_m / 4)
+
+
+def test_seed003_three_cars_doa_with_a_4_element_ula():
+    """Seed 003's DOA scene: 20 m at 0°, 40.05 m at −2.9°, 80.03 m at 1.4° (85, 125, 110 km/h; ego 100)."""
+    p = PRESETS["acc_lrr"]
+    r, az = [20.0, 40.05, 80.03], [0.0, -2.9, 1.4]
+    v = [(85 - 100) / 3.6, (125 - 100) / 3.6, (110 - 100) / 3.6]
+    det = _run(p, r, v, az, 4)
+    err = _match(det, r, v, az)
+    res_deg = math.degrees(p.angular_resolution_rad)          # 28.6° for 4 elements at λ/2
+    assert np.all(np.abs(err[:, 2]) <= res_deg / 20)
+    assert np.all(np.abs(err[:, 0]) <= p.range_resolution_m / 4)
+
+
+def test_seed004_table1_errors_no_larger_than_the_paper():
+    """Seed 004, table 1: truth and the paper's measured values; our errors must not be larger.
+
+    The paper prints whole degrees, so its 0° target shows no error; we hold that one to 0.05°.
+    """
+    p = PRESETS["fast_chirp"]
+    r = np.array([10.0, 60.21, 60.21, 90.55])
+    v = np.array([10.0, 14.95, 3.99, 4.97])
+    az = np.array([0.0, 4.76, -4.76, -6.34])
+    paper = np.array([[10.5, 60.75, 60.75, 90.75], [10.11, 14.86, 3.86, 5.05], [0.0, 5.0, -5.0, -6.0]])
+    allowed = np.abs(paper - np.stack([r, v, az]))
+    allowed[2, 0] = 0.05
+    det = _run(p, r, v, az, 5)
+    err = np.abs(_match(det, r, v, az)).T
+    assert np.all(err <= allowed), (err, allowed)
+
+
+def test_complex64_costs_little_accuracy():
+    p = PRESETS["mimo12"]
+    r, v, az = [30.0, 40.0, 50.0], [-20.0, 0.0, 15.0], [-40.0, 30.0, 10.0]
+    e64 = np.abs(_match(_run(p, r, v, az, 7, snr_db=0.0, dtype=np.complex64), r, v, az))
+    e128 = np.abs(_match(_run(p, r, v, az, 7, snr_db=0.0), r, v, az))
+    np.testing.assert_allclose(e64, e128, atol=1e-3)
+
+
+def test_detection_model_agrees_with_the_signal_chain():
+    p = PRESETS["mimo12"]
+    r, v, az = [30.0, 40.0, 50.0], [-20.0, 0.0, 15.0], [-40.0, 30.0, 10.0]
+    det = detection_model.detect(p, point_targets(r, az, v, 10.0), np.random.default_rng(0), sidelobes=False)
+    sig = _run(p, r, v, az, 0)
+    e_det, e_sig = np.abs(_match(det, r, v, az)), np.abs(_match(sig, r, v, az))
+    assert np.all(e_det[:, 0] <= p.range_resolution_m / 4) and np.all(e_det[:, 1] <= p.speed_resolution_mps / 4)
+    # both see every target with nearly the same SNR (straddle and window losses modelled analytically)
+    snr_det = np.sort(det.snr_db[det.actor_index >= 0])
+    snr_sig = np.sort(sig.snr_db)
+    assert snr_det.size == 3 and snr_sig.size == 3
+    np.testing.assert_allclose(snr_det, snr_sig, atol=3.0)
+
+
+def test_cells_merge_in_the_detection_model():
+    p = PRESETS["mimo12"]
+    # two scatterers 0.1 m and 0.5° apart share one cell: one detection between them
+    scat = point_targets([40.0, 40.1], [5.0, 5.5], [3.0, 3.0], [10.0, 10.0])
+    scat.actor_index[:] = [0, 1]
+    det = detection_model.detect(p, scat, np.random.default_rng(0), sidelobes=False, pfa=1e-9)
+    assert len(det) == 1 and det.actor_index[0] == -1
+    assert 39.8 < det.range_m[0] < 40.4
