@@ -3,7 +3,9 @@
 Each detector estimates the noise level in a ring of training cells around
 every cell (guard cells excluded) and compares the cell against a threshold
 set for a false-alarm probability. Doppler wraps around (it is circular);
-range does not (edges are mirrored).
+range does not: near the first and last range bins the ring is one-sided and
+the threshold factor is set for the cells it still holds (mirroring the map
+instead would put a target near the edge into its own training cells).
 
 ``CFAR_KINDS`` is the registry: name -> class.
 
@@ -65,11 +67,12 @@ class Cfar:
     def __call__(self, power: np.ndarray) -> CfarResult:
         if power.ndim != 2:
             raise ConfigError(f"cfar power: shape {power.shape} is not allowed; expected (doppler, range)")
-        noise = self.noise(np.asarray(power, dtype=np.float64))
-        threshold = self.alpha * noise
+        noise, alpha = self.noise(np.asarray(power, dtype=np.float64))
+        threshold = alpha * noise
         return CfarResult(power > threshold, noise, threshold)
 
-    def noise(self, power: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
+    def noise(self, power: np.ndarray) -> tuple[np.ndarray, np.ndarray | float]:  # pragma: no cover - abstract
+        """Noise estimate per cell and the threshold factor (per cell where the ring is cut by an edge)."""
         raise NotImplementedError
 
 
@@ -83,15 +86,26 @@ class CellAveragingCfar(Cfar):
         n = self.n_train
         self.alpha = n * (self.pfa ** (-1.0 / n) - 1.0)   # applied to the mean of the training cells
 
-    def noise(self, power: np.ndarray) -> np.ndarray:
-        # ring sum = box sum over guard+training − box sum over the guard: two separable O(n) box filters
+    def _ring_sum(self, x: np.ndarray) -> np.ndarray:
+        # ring sum = box sum over guard+training − box sum over the guard: two separable O(n) box filters;
+        # zeros beyond the range edges, wrap-around in Doppler
         (gd, gr), (td, tr) = self.guard, self.train
         outer = (2 * (gd + td) + 1, 2 * (gr + tr) + 1)
         inner = (2 * gd + 1, 2 * gr + 1)
-        mode = ("wrap", "reflect")
-        box_o = scipy.ndimage.uniform_filter(power, size=outer, mode=mode) * (outer[0] * outer[1])
-        box_i = scipy.ndimage.uniform_filter(power, size=inner, mode=mode) * (inner[0] * inner[1])
-        return np.maximum(box_o - box_i, 0.0) / self.n_train
+        mode = ("wrap", "constant")
+        box_o = scipy.ndimage.uniform_filter(x, size=outer, mode=mode, cval=0.0) * (outer[0] * outer[1])
+        box_i = scipy.ndimage.uniform_filter(x, size=inner, mode=mode, cval=0.0) * (inner[0] * inner[1])
+        return np.maximum(box_o - box_i, 0.0)
+
+    def noise(self, power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        shape = power.shape[1]
+        key = (power.shape[0], shape)
+        if getattr(self, "_count_key", None) != key:   # cells in each (edge-cut) ring, once per map shape
+            count = np.rint(self._ring_sum(np.ones(power.shape)))
+            self._count = np.maximum(count, 1.0)
+            self._alpha = self._count * (self.pfa ** (-1.0 / self._count) - 1.0)
+            self._count_key = key
+        return self._ring_sum(power) / self._count, self._alpha
 
 
 class OrderedStatisticCfar(Cfar):
@@ -112,11 +126,13 @@ class OrderedStatisticCfar(Cfar):
 
         self.alpha = scipy.optimize.brentq(log_pfa, 1e-9, 1e9)
 
-    def noise(self, power: np.ndarray) -> np.ndarray:
+    def noise(self, power: np.ndarray) -> tuple[np.ndarray, float]:
+        # beyond the range edges the ring holds +inf, which never ranks below the k-th cell (k < N)
         pad = self.guard[1] + self.train[1]
-        padded = np.pad(power, ((0, 0), (pad, pad)), mode="reflect")
+        padded = np.pad(power, ((0, 0), (pad, pad)), mode="constant", constant_values=np.inf)
         ranked = scipy.ndimage.rank_filter(padded, self.k - 1, footprint=self.footprint, mode="wrap")
-        return ranked[:, pad:padded.shape[1] - pad]
+        noise = ranked[:, pad:padded.shape[1] - pad]
+        return np.where(np.isfinite(noise), noise, np.inf), self.alpha
 
 
 CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStatisticCfar}

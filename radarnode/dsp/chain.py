@@ -80,7 +80,10 @@ class DspChain:
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         fd = 2.0 * speed / p.wavelength_m
         snap = rd[:, d, r].T * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
-        snr = 10.0 * np.log10(np.maximum(power[d, r] / np.maximum(res.noise[d, r], 1e-300), 1e-30))
+        # SNR against the calibrated noise floor (the median cell is noise: median = mean·ln 2 for
+        # exponential power), not the CFAR's local estimate, which a strong target's sidelobes inflate
+        floor = max(float(np.median(power)) / np.log(2.0), np.finfo(np.float64).tiny)
+        snr = 10.0 * np.log10(np.maximum(power[d, r] / floor, 1e-30))
         if d.size:   # every angle peak of a cell is a detection
             row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db)
             # the beam at the DOA peak adds the coherent gain of the channels to the non-coherent sum
