@@ -3,9 +3,10 @@
 Each detector estimates the noise level in a ring of training cells around
 every cell (guard cells excluded) and compares the cell against a threshold
 set for a false-alarm probability. Doppler wraps around (it is circular);
-range does not: near the first and last range bins the ring is one-sided and
-the threshold factor is set for the cells it still holds (mirroring the map
-instead would put a target near the edge into its own training cells).
+range does not: near the first and last range bins the CA ring is one-sided
+and its threshold factor is set for the cells it still holds (mirroring the
+map would put a target near the edge into its own training cells); OS-CFAR
+mirrors, since its order statistic ignores those few cells.
 
 ``CFAR_KINDS`` is the registry: name -> class.
 
@@ -127,12 +128,11 @@ class OrderedStatisticCfar(Cfar):
         self.alpha = scipy.optimize.brentq(log_pfa, 1e-9, 1e9)
 
     def noise(self, power: np.ndarray) -> tuple[np.ndarray, float]:
-        # beyond the range edges the ring holds +inf, which never ranks below the k-th cell (k < N)
+        # mirrored at the range edges: the order statistic ignores the few strong cells a mirrored target adds
         pad = self.guard[1] + self.train[1]
-        padded = np.pad(power, ((0, 0), (pad, pad)), mode="constant", constant_values=np.inf)
+        padded = np.pad(power, ((0, 0), (pad, pad)), mode="symmetric")
         ranked = scipy.ndimage.rank_filter(padded, self.k - 1, footprint=self.footprint, mode="wrap")
-        noise = ranked[:, pad:padded.shape[1] - pad]
-        return np.where(np.isfinite(noise), noise, np.inf), self.alpha
+        return ranked[:, pad:padded.shape[1] - pad], self.alpha
 
 
 CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStatisticCfar}
