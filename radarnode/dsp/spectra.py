@@ -54,12 +54,21 @@ def range_doppler(cube: np.ndarray, *, range_window: str = "hann", doppler_windo
     c, m, n = cube.shape
     real = np.float32 if cube.dtype == np.complex64 else np.float64
     x = cube * window(range_window, n, np.dtype(real).name)[None, None, :]
-    x = scipy.fft.fft(x, axis=2, workers=workers)
+    x = scipy.fft.fft(x, axis=2, workers=workers, overwrite_x=True)
     if num_range_bins is not None:
         x = x[:, :, :num_range_bins]
-    x *= window(doppler_window, m, np.dtype(real).name)[None, :, None]
-    x = scipy.fft.fft(x, axis=1, workers=workers)
-    return scipy.fft.fftshift(x, axes=1)
+    x *= _doppler_weights(doppler_window, m, np.dtype(real).name)[None, :, None]
+    return scipy.fft.fft(x, axis=1, workers=workers, overwrite_x=True)
+
+
+@functools.lru_cache(maxsize=64)
+def _doppler_weights(name: str, m: int, dtype: str) -> np.ndarray:
+    """The Doppler window times (−1)^m: shifts zero speed to bin M/2 without an fftshift copy (M even)."""
+    w = window(name, m, dtype) * np.where(np.arange(m) % 2, -1.0, 1.0).astype(dtype)
+    if m % 2:
+        raise ConfigError(f"num_chirps: value {m} is not allowed; expected an even number")
+    w.setflags(write=False)
+    return w
 
 
 def noncoherent_power(rd: np.ndarray) -> np.ndarray:

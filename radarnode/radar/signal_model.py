@@ -121,29 +121,31 @@ def synthesize(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, 
     # speed in steps of MIGRATION_SPEED_STEP_MPS: one group shares the coupling term exp(j2π·v·t_m·n/(ΔR·N)),
     # so it costs one small matrix product and one elementwise product.
     migrating = np.abs(v) * m * preset.frame_chirp_period_s > 0.5 * preset.range_resolution_m
-    cube = np.zeros((c * m, n), dtype=dtype)
     still = ~migrating
+    cube = np.empty((c * m, n), dtype=dtype)
     if still.any():
-        left = (a_mat[:, None, still] * d_mat[None, :, still]).reshape(c * m, -1).astype(dtype)
-        cube += left @ s_mat[still].astype(dtype)
+        left = (a_mat[:, None, still] * d_mat[None, :, still]).reshape(c * m, -1).astype(dtype, copy=False)
+        np.matmul(left, s_mat[still].astype(dtype, copy=False), out=cube)
+    else:
+        cube[:] = 0
     if migrating.any():
         group = np.rint(v / MIGRATION_SPEED_STEP_MPS).astype(np.int64)
         cube3 = cube.reshape(c, m, n)
         for g in np.unique(group[migrating]):      # a loop over speed groups, not over scatterers
             sel = migrating & (group == g)
-            left = (a_mat[:, None, sel] * d_mat[None, :, sel]).reshape(c * m, -1).astype(dtype)
-            part = (left @ s_mat[sel].astype(dtype)).reshape(c, m, n)
+            left = (a_mat[:, None, sel] * d_mat[None, :, sel]).reshape(c * m, -1).astype(dtype, copy=False)
+            part = (left @ s_mat[sel].astype(dtype, copy=False)).reshape(c, m, n)
             drift = g * MIGRATION_SPEED_STEP_MPS * t_chirp / preset.range_resolution_m / n_full
-            cube3 += part * np.exp(2j * np.pi * drift[:, None] * samples[None, :]).astype(dtype)[None]
+            cube3 += part * np.exp(2j * np.pi * drift[:, None] * samples[None, :]).astype(dtype, copy=False)[None]
     cube = cube.reshape(c, m, n)
 
     if imp.phase_noise_deg > 0:
         walk = np.cumsum(rng.normal(0.0, np.radians(imp.phase_noise_deg), m))
-        cube *= np.exp(1j * walk).astype(dtype)[None, :, None]
+        cube *= np.exp(1j * walk).astype(dtype, copy=False)[None, :, None]
     if imp.channel_gain_sigma_db > 0 or imp.channel_phase_sigma_deg > 0:
         g = 10.0 ** (rng.normal(0.0, imp.channel_gain_sigma_db, c) / 20.0)
         ph = np.radians(rng.normal(0.0, imp.channel_phase_sigma_deg, c))
-        cube *= (g * np.exp(1j * ph)).astype(dtype)[:, None, None]
+        cube *= (g * np.exp(1j * ph)).astype(dtype, copy=False)[:, None, None]
     if noise:
         # Noise samples are drawn in float32 whatever the cube's dtype: they are random to begin with, so
         # 24 bits of mantissa cost nothing measurable, and drawing them takes half the time.
@@ -155,7 +157,7 @@ def synthesize(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, 
         phi = np.radians(imp.iq_phase_deg)
         mu = (1.0 + g * np.exp(-1j * phi)) / 2.0
         nu = (1.0 - g * np.exp(1j * phi)) / 2.0
-        cube = (mu * cube + nu * np.conj(cube)).astype(dtype)
+        cube = (mu * cube + nu * np.conj(cube)).astype(dtype, copy=False)
     if imp.adc_bits > 0:
         cube = _quantise(cube, imp.adc_bits, imp.adc_headroom_db)
     return cube
