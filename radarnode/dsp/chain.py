@@ -74,7 +74,7 @@ class DspChain:
         if d.size > cfg.max_detections:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
             d, r = d[keep], r[keep]
-        dd, dr = interpolate(power, d, r)
+        dd, dr = interpolate(power, d, r, cfg.range_window if cfg.range_window == cfg.doppler_window else "")
         range_m = (r + dr) * p.range_resolution_m
         speed = (d - m // 2 + dd) * p.speed_resolution_mps          # positive: opening
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
