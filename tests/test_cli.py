@@ -173,3 +173,22 @@ def test_bus_from_python_can_environment_variables():
     r = run("node", DEFAULT, "--fast", "--duration", "0.5", env=env)
     assert r.returncode == 0, r.stderr
     assert "channel from-env" in r.stderr
+
+
+@pytest.mark.parametrize("level", ["detection", "signal"])
+def test_run_with_fidelity(level):
+    r = run("run", str(SCENARIOS / "stopped_vehicle.yaml"), "--fast", "--quiet", "--duration", "1",
+            "--fidelity", level)
+    assert r.returncode == 0, r.stderr
+    assert "summary: 13 cycles" in r.stdout and "object_cycles=13" in r.stdout
+
+
+def test_image_writes_a_png(tmp_path):
+    pytest.importorskip("matplotlib", reason="radarnode image needs the optional matplotlib")
+    out = tmp_path / "frame.png"
+    r = run("image", str(SCENARIOS / "point_targets_mimo12.yaml"), "-o", str(out), "--time", "0.5")
+    assert r.returncode == 0, r.stderr
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and out.stat().st_size > 20_000
+    assert "detections" in r.stderr
+    r = run("image", str(SCENARIOS / "point_targets_mimo12.yaml"), "-o", str(out), "--time", "99")
+    assert r.returncode == 2 and "option --time" in r.stderr

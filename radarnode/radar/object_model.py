@@ -55,6 +55,7 @@ class RuntimeConfig:
     max_distance_m: float
     power_reduction_db: float = 0.0
     high_sensitivity: bool = False
+    clusters: bool = True       # the object level builds its cluster list only when it is sent
 
 
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
@@ -173,8 +174,8 @@ class ObjectModel:
 
         idx = np.flatnonzero(self.alive)
         objects = self._object_list(idx, view, detected, new, snr, pd, sig_r, sig_v, sig_az, sensor_velocity_est)
-        clusters = self._cluster_list(t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
-                                      sensor_velocity_est)
+        clusters = (self._cluster_list(t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
+                                       sensor_velocity_est) if config.clusters else ClusterList.empty(0))
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
     def _assign_ids(self, newcomers: np.ndarray) -> None:

@@ -242,7 +242,8 @@ class RadarNode:
         """
         cfg = self.config
         runtime = RuntimeConfig(max_distance_m=min(cfg.max_distance_m, self.preset.max_range_m),
-                                power_reduction_db=3.0 * cfg.radar_power, high_sensitivity=cfg.rcs_threshold == 1)
+                                power_reduction_db=3.0 * cfg.radar_power, high_sensitivity=cfg.rcs_threshold == 1,
+                                clusters=cfg.output_type == P.OUTPUT_CLUSTERS)
         frame, view = self.model.step(t_s, runtime, self._sensor_velocity_estimate(t_s))
         out: list[tuple[int, np.ndarray]] = []
         if self._status_now or t_s + 1e-9 >= self._next_status_s:
