@@ -57,13 +57,8 @@ class _Planar:
 
 
 @dataclass
-class ObjectList(_Columns, _Planar):
-    """One cycle's object list (ARS 408 messages 0x60B, 0x60C, 0x60D).
-
-    Quality and extended fields are NaN (or -1 for codes) when the cycle did
-    not carry them. ``actor_index`` links an object to its ground-truth actor
-    (-1 when unknown, e.g. after decoding).
-    """
+class _Reported(_Columns, _Planar):
+    """Fields objects and clusters share: ID, position and relative velocity (sensor frame), their σ."""
 
     id: np.ndarray
     dist_long_m: np.ndarray
@@ -76,6 +71,17 @@ class ObjectList(_Columns, _Planar):
     dist_lat_sigma_m: np.ndarray
     vrel_long_sigma_mps: np.ndarray
     vrel_lat_sigma_mps: np.ndarray
+
+
+@dataclass
+class ObjectList(_Reported):
+    """One cycle's object list (ARS 408 messages 0x60B, 0x60C, 0x60D).
+
+    Quality and extended fields are NaN (or -1 for codes) when the cycle did
+    not carry them. ``actor_index`` links an object to its ground-truth actor
+    (-1 when unknown, e.g. after decoding).
+    """
+
     arel_long_sigma_mps2: np.ndarray
     arel_lat_sigma_mps2: np.ndarray
     orientation_sigma_rad: np.ndarray
@@ -93,20 +99,9 @@ class ObjectList(_Columns, _Planar):
 
 
 @dataclass
-class ClusterList(_Columns, _Planar):
+class ClusterList(_Reported):
     """One cycle's cluster list (ARS 408 messages 0x701, 0x702): near clusters first, then far."""
 
-    id: np.ndarray
-    dist_long_m: np.ndarray
-    dist_lat_m: np.ndarray
-    vrel_long_mps: np.ndarray
-    vrel_lat_mps: np.ndarray
-    dyn_prop: np.ndarray
-    rcs_dbsm: np.ndarray
-    dist_long_sigma_m: np.ndarray
-    dist_lat_sigma_m: np.ndarray
-    vrel_long_sigma_mps: np.ndarray
-    vrel_lat_sigma_mps: np.ndarray
     pdh0: np.ndarray            # false-alarm probability code 0..7
     ambig_state: np.ndarray
     invalid_state: np.ndarray
