@@ -158,3 +158,14 @@ def test_occluded_actor_reappears_with_a_new_id_after_being_lost():
     present = [0 in f.objects.actor_index for f, _ in frames]
     assert present[10] is False or present[20] is False   # hidden while the truck is in front
     assert present[-1]
+
+
+def test_relative_acceleration_on_straight_and_curved_roads():
+    text = "  - {id: a, class: car, x_m: 40.0, lane: 1, speed_mps: 20.0, accel: [{t_s: 0.0, accel_mps2: -3.0}]}"
+    straight = Scene(scenario(text, ego="{speed_mps: 20.0, accel: [{t_s: 0.0, accel_mps2: 1.0}]}"))
+    v = straight.view(1.0)
+    assert v.ax_mps2[0] == pytest.approx(-4.0) and v.ay_mps2[0] == pytest.approx(0.0)
+    curved = Scene(scenario(text, ego="{speed_mps: 20.0, accel: [{t_s: 0.0, accel_mps2: 1.0}]}",
+                            road="{lanes: 3, ego_lane: 1, curvature_1pm: 0.002}"))
+    v = curved.view(1.0)
+    assert v.ax_mps2[0] == pytest.approx(-4.0, abs=0.05)

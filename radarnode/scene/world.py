@@ -138,14 +138,20 @@ class Scene:
         ego = self.ego_state(t_s)
         px, py, psi_s, svx, svy = self.sensor_pose(ego)
         ax_, ay_, avx, avy, aheading = self._actor_world(t_s)
-        # accelerations by a central difference (exact for the piecewise profiles away from knots)
-        _, _, vpx, vpy, _ = self._actor_world(t_s + h_s)
-        _, _, vmx, vmy, _ = self._actor_world(max(t_s - h_s, 0.0))
-        dt = h_s + min(h_s, t_s)
-        aax, aay = (vpx - vmx) / dt, (vpy - vmy) / dt
-        e_p, e_m = self.ego_state(t_s + h_s), self.ego_state(max(t_s - h_s, 0.0))
-        eax = (e_p.speed_mps * math.cos(e_p.heading_rad) - e_m.speed_mps * math.cos(e_m.heading_rad)) / dt
-        eay = (e_p.speed_mps * math.sin(e_p.heading_rad) - e_m.speed_mps * math.sin(e_m.heading_rad)) / dt
+        if self.kappa == 0.0:
+            # straight road: the road frame is the world frame, the profiles' accelerations are exact
+            st = self._movers.state(t_s)
+            aax, aay = st.ax_mps2, st.ay_mps2
+            eax, eay = ego.accel_mps2, 0.0
+        else:
+            # curved road: central differences of the world velocity (centripetal terms included)
+            _, _, vpx, vpy, _ = self._actor_world(t_s + h_s)
+            _, _, vmx, vmy, _ = self._actor_world(max(t_s - h_s, 0.0))
+            dt = h_s + min(h_s, t_s)
+            aax, aay = (vpx - vmx) / dt, (vpy - vmy) / dt
+            e_p, e_m = self.ego_state(t_s + h_s), self.ego_state(max(t_s - h_s, 0.0))
+            eax = (e_p.speed_mps * math.cos(e_p.heading_rad) - e_m.speed_mps * math.cos(e_m.heading_rad)) / dt
+            eay = (e_p.speed_mps * math.sin(e_p.heading_rad) - e_m.speed_mps * math.sin(e_m.heading_rad)) / dt
 
         cx, cy = _rot(-psi_s, ax_ - px, ay_ - py)
         rel_heading = aheading - psi_s
