@@ -1,0 +1,122 @@
+"""Straight lines in point sets by the Hough transform, vectorised over the points.
+
+Lines in normal form ρ = x·cosθ + y·sinθ, θ in [−90°, 90°), ρ signed. Every
+point votes, with an optional weight (e.g. its detection power), for one ρ
+cell in every θ column; the votes of all points are accumulated with one
+``numpy.bincount`` over the flattened (θ, ρ) index. Peaks are found with
+non-maximum suppression so that two parallel boundaries a lane apart stay
+two lines.
+
+Reference: seed 002 (road boundaries from stationary radar returns by the
+Hough transform); Duda and Hart, "Use of the Hough transformation to detect
+lines and curves in pictures", 1972.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.ndimage
+
+from radarnode.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Line:
+    """ρ = x·cosθ + y·sinθ; ``votes`` is the accumulated (weighted) vote."""
+
+    theta_rad: float
+    rho_m: float
+    votes: float
+
+    def distance_m(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Signed distance of points to the line."""
+        return x * np.cos(self.theta_rad) + y * np.sin(self.theta_rad) - self.rho_m
+
+
+@dataclass(frozen=True)
+class HoughGrid:
+    """The (θ, ρ) cells of the accumulator."""
+
+    theta_rad: np.ndarray   # shape (n_theta,)
+    rho_m: np.ndarray       # shape (n_rho,), cell centres
+
+    @classmethod
+    def make(cls, rho_max_m: float, rho_step_m: float = 0.25, theta_step_deg: float = 0.5,
+             theta_min_deg: float = -90.0, theta_max_deg: float = 90.0) -> HoughGrid:
+        if not rho_max_m > 0 or not rho_step_m > 0 or not theta_step_deg > 0:
+            raise ConfigError(f"hough grid: rho_max_m={rho_max_m!r}, rho_step_m={rho_step_m!r}, "
+                              f"theta_step_deg={theta_step_deg!r} are not allowed; expected positive numbers")
+        if not -90.0 <= theta_min_deg < theta_max_deg <= 90.0:
+            raise ConfigError(f"hough grid: theta range [{theta_min_deg}, {theta_max_deg}) is not allowed; "
+                              "expected -90 <= min < max <= 90 degrees")
+        theta = np.radians(np.arange(theta_min_deg, theta_max_deg, theta_step_deg))
+        n_rho = int(np.ceil(rho_max_m / rho_step_m))
+        rho = (np.arange(-n_rho, n_rho + 1)) * rho_step_m
+        return cls(theta, rho)
+
+
+def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarray | None = None) -> np.ndarray:
+    """The Hough accumulator, shape (n_theta, n_rho); points beyond the ρ range vote nowhere."""
+    x = np.asarray(x, dtype=np.float64)
+    y = np.asarray(y, dtype=np.float64)
+    if x.shape != y.shape or x.ndim != 1:
+        raise ConfigError(f"hough points: shapes {x.shape} and {y.shape} are not allowed; expected two (n,) arrays")
+    n_t, n_r = grid.theta_rad.size, grid.rho_m.size
+    if x.size == 0:
+        return np.zeros((n_t, n_r))
+    w = np.ones_like(x) if weights is None else np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
+    rho = x[:, None] * np.cos(grid.theta_rad)[None, :] + y[:, None] * np.sin(grid.theta_rad)[None, :]   # (n, n_t)
+    step = grid.rho_m[1] - grid.rho_m[0]
+    idx = np.rint((rho - grid.rho_m[0]) / step).astype(np.int64)
+    ok = (idx >= 0) & (idx < n_r)
+    flat = (np.arange(n_t)[None, :] * n_r + idx)[ok]
+    votes = np.broadcast_to(w[:, None], rho.shape)[ok]
+    return np.bincount(flat, weights=votes, minlength=n_t * n_r).reshape(n_t, n_r)
+
+
+def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_votes: float = 3.0,
+                    suppress_rho_m: float = 1.0, suppress_theta_deg: float = 5.0) -> list[Line]:
+    """Up to ``max_lines`` accumulator peaks with at least ``min_votes``, strongest first.
+
+    A peak suppresses its neighbourhood (±``suppress_rho_m`` and ±``suppress_theta_deg``) so that one line
+    is not reported twice.
+    """
+    if acc.size == 0 or acc.max() < min_votes:
+        return []
+    step_r = grid.rho_m[1] - grid.rho_m[0]
+    step_t = np.degrees(grid.theta_rad[1] - grid.theta_rad[0]) if grid.theta_rad.size > 1 else 1.0
+    size = (2 * max(int(round(suppress_theta_deg / step_t)), 0) + 1, 2 * max(int(round(suppress_rho_m / step_r)), 0) + 1)
+    local = acc >= scipy.ndimage.maximum_filter(acc, size=size, mode="nearest")
+    ti, ri = np.nonzero(local & (acc >= min_votes))
+    order = np.argsort(-acc[ti, ri], kind="stable")
+    lines: list[Line] = []
+    for k in order:        # at most a handful of candidate peaks, not points or cells
+        t, r = ti[k], ri[k]
+        if any(abs(np.degrees(grid.theta_rad[t] - ln.theta_rad)) <= suppress_theta_deg
+               and abs(grid.rho_m[r] - ln.rho_m) <= suppress_rho_m for ln in lines):
+            continue
+        lines.append(Line(float(grid.theta_rad[t]), float(grid.rho_m[r]), float(acc[t, r])))
+        if len(lines) == max_lines:
+            break
+    return lines
+
+
+def refine(line: Line, x: np.ndarray, y: np.ndarray, band_m: float = 1.0) -> tuple[Line, np.ndarray]:
+    """Total-least-squares fit on the points within ``band_m`` of a Hough line; returns (line, inlier mask)."""
+    inliers = np.abs(line.distance_m(x, y)) <= band_m
+    if inliers.sum() < 2:
+        return line, inliers
+    px, py = x[inliers], y[inliers]
+    mx, my = px.mean(), py.mean()
+    cov = np.cov(np.stack([px - mx, py - my]))
+    evals, evecs = np.linalg.eigh(cov)
+    nx, ny = evecs[:, 0]                        # normal: eigenvector of the smallest eigenvalue
+    theta = np.arctan2(ny, nx)
+    if theta >= np.pi / 2:                      # keep θ in [−90°, 90°)
+        theta -= np.pi
+    elif theta < -np.pi / 2:
+        theta += np.pi
+    rho = mx * np.cos(theta) + my * np.sin(theta)
+    return Line(float(theta), float(rho), float(inliers.sum())), inliers

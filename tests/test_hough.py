@@ -1,0 +1,76 @@
+"""The Hough transform on synthetic points with known lines (issue 5, item 4)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from radarnode.dsp.hough import HoughGrid, accumulate, refine, strongest_lines
+from radarnode.errors import ConfigError
+
+GRID = HoughGrid.make(rho_max_m=60.0, rho_step_m=0.25, theta_step_deg=0.5)
+
+
+def _lines(x, y, **kw):
+    return strongest_lines(accumulate(np.asarray(x, float), np.asarray(y, float), GRID), GRID, **kw)
+
+
+def test_vertical_line_x_equals_12():
+    y = np.linspace(-20, 20, 41)
+    (line,) = _lines(np.full_like(y, 12.0), y, max_lines=1)
+    assert math.degrees(line.theta_rad) == pytest.approx(0.0, abs=0.5) and line.rho_m == pytest.approx(12.0, abs=0.25)
+
+
+def test_horizontal_line_a_guardrail_3_5_m_to_the_right():
+    x = np.linspace(5, 80, 76)
+    (line,) = _lines(x, np.full_like(x, -3.5), max_lines=1)
+    assert abs(math.degrees(line.theta_rad)) == pytest.approx(90.0, abs=0.5)
+    assert line.rho_m * math.sin(line.theta_rad) == pytest.approx(-3.5, abs=0.25)
+    assert line.votes == pytest.approx(76)
+
+
+def test_two_parallel_lines_a_road_apart():
+    x = np.linspace(5, 80, 60)
+    lines = _lines(np.concatenate([x, x]), np.concatenate([np.full_like(x, 6.0), np.full_like(x, -5.0)]))
+    offsets = sorted(ln.rho_m * math.sin(ln.theta_rad) for ln in lines)
+    assert offsets == pytest.approx([-5.0, 6.0], abs=0.25)
+
+
+def test_no_points_and_one_point():
+    assert _lines([], []) == []
+    # one point votes once per θ: below any sensible min_votes, so no line
+    assert _lines([10.0], [2.0], min_votes=2.0) == []
+    acc = accumulate(np.array([10.0]), np.array([2.0]), GRID)
+    assert acc.sum() == pytest.approx(GRID.theta_rad.size)
+
+
+def test_noise_only_gives_no_line():
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(0, 60, 40), rng.uniform(-20, 20, 40)
+    assert _lines(x, y, min_votes=12) == []
+
+
+def test_outliers_do_not_move_the_refined_line():
+    rng = np.random.default_rng(1)
+    x = np.linspace(5, 80, 50)
+    y = 0.02 * x + 4.0 + rng.normal(0, 0.1, x.size)          # a slightly slanted boundary
+    ox, oy = rng.uniform(5, 80, 30), rng.uniform(-15, 15, 30)  # clutter
+    xs, ys = np.concatenate([x, ox]), np.concatenate([y, oy])
+    (line,) = _lines(xs, ys, max_lines=1, min_votes=20)
+    fit, inliers = refine(line, xs, ys, band_m=0.6)
+    assert inliers[:50].mean() > 0.95 and inliers[50:].mean() < 0.2
+    slope = -1.0 / math.tan(fit.theta_rad)
+    assert slope == pytest.approx(0.02, abs=0.005)
+    assert fit.rho_m / math.sin(fit.theta_rad) == pytest.approx(4.0, abs=0.1)
+
+
+def test_weights_and_bad_input():
+    x = np.linspace(5, 50, 10)
+    acc = accumulate(x, np.zeros_like(x), GRID, weights=2.0)
+    assert acc.max() == pytest.approx(20.0)
+    with pytest.raises(ConfigError, match="hough points"):
+        accumulate(np.zeros(3), np.zeros(4), GRID)
+    with pytest.raises(ConfigError, match="hough grid"):
+        HoughGrid.make(rho_max_m=-1.0)
