@@ -7,7 +7,6 @@ import logging
 
 import can
 import numpy as np
-import pytest
 
 from radarnode.wire import ars408 as P
 from radarnode.wire.busload import bus_load, frame_bits

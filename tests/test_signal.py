@@ -102,7 +102,8 @@ def test_detection_model_agrees_with_the_signal_chain():
     det = detection_model.detect(p, point_targets(r, az, v, 10.0), np.random.default_rng(0), sidelobes=False)
     sig = _run(p, r, v, az, 0)
     e_det, e_sig = np.abs(_match(det, r, v, az)), np.abs(_match(sig, r, v, az))
-    assert np.all(e_det[:, 0] <= p.range_resolution_m / 4) and np.all(e_det[:, 1] <= p.speed_resolution_mps / 4)
+    for e in (e_det, e_sig):
+        assert np.all(e[:, 0] <= p.range_resolution_m / 4) and np.all(e[:, 1] <= p.speed_resolution_mps / 4)
     # both see every target with nearly the same SNR (straddle and window losses modelled analytically)
     snr_det = np.sort(det.snr_db[det.actor_index >= 0])
     snr_sig = np.sort(sig.snr_db)

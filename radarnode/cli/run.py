@@ -77,7 +77,7 @@ def cmd(args) -> int:
     decoded += assembler.drain()
     print(f"\nsummary: {stats.cycles} cycles, {stats.frames} frames, bus load {100 * stats.bus_load(node.bitrate):.1f} % "
           f"of {node.bitrate} bit/s (worst-case stuffing)")
-    print(f"node: " + ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())))
+    print("node: " + ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())))
     if node.saturated:
         print("saturated values: " + ", ".join(f"{k}={v}" for k, v in sorted(node.saturated.items())))
     print(format_stats(assembler.stats))

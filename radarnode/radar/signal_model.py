@@ -84,7 +84,6 @@ def synthesize(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, 
         raise ConfigError(f"decimation: value {decimation!r} is not allowed; expected a divisor of "
                           f"{num_range_samples(preset)}")
     imp = impairments or Impairments()
-    real = np.float32 if dtype == np.complex64 else np.float64
     n_full = num_range_samples(preset)
     n = n_full // decimation
     m, c = preset.num_chirps, preset.num_virtual

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radarnode.scene.scenario import AccelStep, Waypoint
+from radarnode.scene.scenario import AccelStep
 
 
 @dataclass(frozen=True)

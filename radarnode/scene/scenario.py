@@ -114,7 +114,7 @@ class RadarSetup:
         get_preset(self.preset)
         if not isinstance(self.overrides, dict):
             raise FieldError("overrides", self.overrides, "a mapping of preset field to value")
-        self.model  # validates the overrides against the preset
+        _ = self.model  # validates the overrides against the preset
         validate.integer("sensor_id", self.sensor_id, lo=0, hi=7)
         validate.integer("bitrate", self.bitrate, lo=10_000, hi=1_000_000)
         validate.choice("output", self.output, OUTPUT_TYPES)
