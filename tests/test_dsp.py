@@ -91,3 +91,27 @@ def test_dbscan_groups_chains_and_marks_noise():
     assert dbscan(np.zeros((0, 2)), 1.0).tolist() == []
     with pytest.raises(ConfigError):
         dbscan(pts, 0.0)
+
+
+def test_ml_range_refinement_reaches_the_cramer_rao_bound():
+    from radarnode.dsp.peaks import refine_ml
+    n, c = 256, 12
+    w = window("hann", n)
+    rng = np.random.default_rng(3)
+    snr_db = 20.0
+    err_ml, err_3 = [], []
+    for _ in range(200):
+        f = 40.0 + rng.random()
+        amp = math.sqrt(10 ** (snr_db / 10) / n / c)
+        x = amp * np.exp(2j * np.pi * (f * np.arange(n) / n + rng.random((c, 1))))
+        x = x + (rng.standard_normal((c, n)) + 1j * rng.standard_normal((c, n))) / math.sqrt(2)
+        spec = np.fft.fft(x * w, axis=1)
+        p = (np.abs(spec) ** 2).sum(axis=0)
+        k = int(np.argmax(p))
+        _, dr = interpolate(p[None, :], np.array([0]), np.array([k]))
+        err_3.append(k + dr[0] - f)
+        err_ml.append(refine_ml(spec[None], np.array([k + dr[0]]), w)[0] - f)
+    crb = math.sqrt(6) / (2 * math.pi * math.sqrt(10 ** (snr_db / 10)))
+    rmse_ml = math.sqrt(np.mean(np.square(err_ml)))
+    rmse_3 = math.sqrt(np.mean(np.square(err_3)))
+    assert rmse_ml < 1.5 * crb < rmse_3

