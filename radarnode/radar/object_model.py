@@ -45,6 +45,12 @@ MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are
 MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
+CHUNK_CYCLES = 256        # cycles whose physics is computed in one vectorised pass (fewer for crowded scenes)
+CHUNK_OCCLUSION_CELLS = 16_000_000   # bound on the (cycles, actors, samples, actors) occlusion test
+DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixed, for reproducibility)
+_NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
+_POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
+_POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 
 
@@ -70,18 +76,18 @@ def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) ->
 def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, occluder: np.ndarray) -> np.ndarray:
     """Fraction of each actor's azimuth extent not covered by any nearer occluding actor.
 
-    Shapes: all inputs (n,); returns (n,). Cost O(n²·16), fine for the tens to
-    hundreds of actors of a scene.
+    Shapes: all inputs (..., n) — any leading axes, e.g. time; returns (..., n).
+    Cost O(n²·16) per leading index, fine for the tens of actors of a scene.
     """
-    n = range_m.shape[0]
+    n = range_m.shape[-1]
     if n == 0:
-        return np.ones(0)
+        return np.ones(range_m.shape)
     u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
-    samples = az_lo[:, None] + u[None, :] * (az_hi - az_lo)[:, None]          # (n, S)
-    nearer = (range_m[None, :] < range_m[:, None]) & occluder[None, :]          # (target, occluder)
-    covered = ((samples[:, :, None] >= az_lo[None, None, :]) & (samples[:, :, None] <= az_hi[None, None, :])
-               & nearer[:, None, :]).any(axis=2)                               # (n, S)
-    return 1.0 - covered.mean(axis=1)
+    samples = az_lo[..., :, None] + u * (az_hi - az_lo)[..., :, None]                   # (..., n, S)
+    nearer = (range_m[..., None, :] < range_m[..., :, None]) & occluder[..., None, :]    # (..., target, occluder)
+    covered = ((samples[..., None] >= az_lo[..., None, None, :]) & (samples[..., None] <= az_hi[..., None, None, :])
+               & nearer[..., :, None, :]).any(axis=-1)                                  # (..., n, S)
+    return 1.0 - covered.mean(axis=-1)
 
 
 def sigma_to_xy(range_m, azimuth_rad, sigma_r, sigma_az):
@@ -116,8 +122,128 @@ class ObjectModel:
         self.state = np.zeros((n, 4))                  # last reported x, y, vx, vy
         self.last_t = 0.0
         self.cycle = 0
+        self.period_s = scene.scenario.period_s
+        self._cache: dict | None = None
+        # constant σ fields of the object list, shared read-only by every cycle
+        self._half = np.full(max(n, 1), 0.5)
+        self._five_deg = np.full(max(n, 1), math.radians(5.0))
+        self._half.setflags(write=False)
+        self._five_deg.setflags(write=False)
+        self._blocks: dict[int, dict[str, np.ndarray]] = {}
+        self._drawn_upto = -1
+        # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own stream
+        self._cluster_rng = np.random.default_rng(int(rng.integers(0, 2**63)))
         self.occluder = ~scene.is_guardrail
         self.reportable = ~scene.is_guardrail         # guardrails show up as clusters only
+
+    def _draws(self, k0: int, count: int) -> dict[str, np.ndarray]:
+        """The random numbers of cycles k0 … k0+count−1, drawn in fixed blocks so that they depend only on
+        the seed and the cycle index, never on how the cycles were grouped into chunks."""
+        n = self.scene.n
+        first, last = k0 // DRAW_BLOCK, (k0 + count - 1) // DRAW_BLOCK
+        while self._drawn_upto < last:
+            self._drawn_upto += 1
+            self._blocks[self._drawn_upto] = {"u": self.rng.random((DRAW_BLOCK, n)),
+                                              "z": self.rng.standard_normal((DRAW_BLOCK, 11, n))}
+        for b in [b for b in self._blocks if b < first]:
+            del self._blocks[b]
+        off = k0 - first * DRAW_BLOCK
+        return {name: np.concatenate([self._blocks[b][name] for b in range(first, last + 1)])[off:off + count]
+                for name in ("u", "z")}
+
+    def _chunk(self, k0: int, times: np.ndarray, config: RuntimeConfig) -> dict:
+        """Everything of cycles k0 … that does not depend on the tracker's state, as (T, n) arrays."""
+        p, sc = self.preset, self.scene
+        view = sc.views(times)
+        rng_m, az = view.range_m, view.azimuth_rad
+        fov = in_fov(p, rng_m, az)
+        observable = fov & (rng_m <= config.max_distance_m)
+        frac = visible_fraction(rng_m, view.az_lo_rad, view.az_hi_rad, self.occluder & observable)
+        observable &= frac >= MIN_VISIBLE_FRACTION
+        rcs_eff = sc.rcs_dbsm + 10.0 * np.log10(np.maximum(frac, 1e-3))
+        snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db)
+        pd = equation.detection_probability(snr, p.pfa)
+        draws = self._draws(k0, times.size)
+        u, z = draws["u"], draws["z"]
+        # measurement noise, Cramér–Rao bound with a floor
+        sig_r = np.maximum(equation.crb_range_m(p, snr), p.range_sigma_floor_m)
+        sig_v = np.maximum(equation.crb_speed_mps(p, snr), p.speed_sigma_floor_mps)
+        sig_az = np.maximum(equation.crb_azimuth_rad(p, snr, az), math.radians(p.azimuth_sigma_floor_deg))
+        m_r = rng_m + sig_r * z[:, 0]
+        m_az = az + sig_az * z[:, 1]
+        c, s = np.cos(az), np.sin(az)
+        v_rad = view.vx_mps * c + view.vy_mps * s
+        v_tan = -view.vx_mps * s + view.vy_mps * c
+        m_vr = v_rad + sig_v * z[:, 2]
+        m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
+        mc, ms = np.cos(m_az), np.sin(m_az)
+        meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
+        sx, sy = sigma_to_xy(rng_m, az, sig_r, sig_az)
+        flags = self._track_flags(observable & (u < pd), fov)
+        # the object list's fields that follow from the flags, for every cycle of the chunk
+        det, misses, hits = flags["detected"], flags["misses"], flags["hits"]
+        coast = np.where(det, 1.0, 1.0 + misses)                 # σ grows while coasting
+        c2 = coast * coast
+        p_exist = 1.0 - np.exp(np.maximum(hits, 1) * np.log1p(-np.minimum(pd, 0.999999)))
+        c, s = np.cos(az), np.sin(az)
+        lat = p.lateral_speed_sigma_mps
+        return {**flags,
+            "sig_long": sx * coast, "sig_lat": sy * coast,
+            "sig_vlong": np.sqrt((c * sig_v) ** 2 * c2 + (s * lat) ** 2),
+            "sig_vlat": np.sqrt((s * sig_v) ** 2 * c2 + (c * lat) ** 2),
+            "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
+            "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
+            "k0": k0, "times": times, "config": config, "view": view, "fov": fov,
+            "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff,
+            "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
+            "rcs_rep": sc.rcs_dbsm + z[:, 4],
+            "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
+            "length": np.maximum(sc.length_m + p.size_sigma_m * z[:, 7], 0.2),
+            "width": np.maximum(sc.width_m + 0.5 * p.size_sigma_m * z[:, 8], 0.2),
+        }
+
+    def _track_flags(self, det: np.ndarray, fov: np.ndarray) -> dict[str, np.ndarray]:
+        """The tracker's bookkeeping for a chunk of cycles, from its state before the chunk.
+
+        Detection history, consecutive misses, confirmation (``CONFIRM_HITS`` of the last
+        ``CONFIRM_WINDOW``) and loss (more than ``COAST_CYCLES`` misses, or out of the field of view) depend
+        only on the detections, so they are computed for all cycles at once: ``alive`` is a set/reset
+        latch — set by a confirmation, reset by a loss (the two never coincide: a detection needs the field
+        of view) — i.e. the forward fill of the last event.
+        """
+        t_n, n = det.shape
+        prior = ((self.hist[None, :] >> np.arange(7, -1, -1)[:, None]) & 1).astype(bool)    # (8, n) oldest first
+        ext = np.concatenate([prior, det]).astype(np.uint8)
+        hist = np.zeros((t_n, n), dtype=np.uint8)
+        for j in range(8):       # eight shifted slices, not a loop over cycles
+            hist |= (ext[8 - j: 8 - j + t_n] << j).astype(np.uint8)
+        recent = _POPCOUNT_LOW3[hist]
+        steps = np.arange(t_n)[:, None]
+        last = np.maximum.accumulate(np.where(det, steps, -1 - self.misses[None, :]), axis=0)
+        misses = steps - last
+        confirm = det & (recent >= CONFIRM_HITS) & self.reportable
+        loss = (misses > COAST_CYCLES) | ~fov
+        event = np.where(confirm, 1, np.where(loss, -1, 0))
+        at = np.maximum.accumulate(np.where(event != 0, steps, -1), axis=0)
+        cols = np.broadcast_to(np.arange(n), at.shape)
+        alive = np.where(at >= 0, event[np.maximum(at, 0), cols] == 1, self.alive[None, :])
+        before = np.concatenate([self.alive[None, :], alive[:-1]])
+        return {"detected": det, "hist": hist, "hits": _POPCOUNT[hist], "misses": misses, "alive": alive,
+                "new": alive & ~before, "lost": before & ~alive}
+
+    def _row(self, t_s: float, config: RuntimeConfig) -> tuple[dict, int]:
+        period = self.period_s
+        k = int(round(t_s / period))
+        on_grid = abs(t_s - k * period) <= 1e-9 * max(1.0, abs(t_s))
+        ch = self._cache
+        if (ch is not None and ch["config"] == config and ch["k0"] <= k < ch["k0"] + ch["times"].size
+                and abs(ch["times"][k - ch["k0"]] - t_s) <= 1e-9 * max(1.0, abs(t_s))):
+            return ch, k - ch["k0"]
+        n = max(self.scene.n, 1)
+        size = int(min(CHUNK_CYCLES, max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
+        times = (k + np.arange(size)) * period if on_grid else np.array([t_s])
+        self._cache = self._chunk(k, times, config)
+        return self._cache, 0
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
              ) -> tuple[RadarFrame, SensorView]:
@@ -125,44 +251,22 @@ class ObjectModel:
 
         ``sensor_velocity_est`` is the sensor's velocity over ground (sensor axes)
         as the radar knows it from the ego-motion input; ``None`` uses the truth.
+        The physics of the next ``CHUNK_CYCLES`` cycles is computed in one
+        vectorised pass and reused while the configuration stays the same.
         """
-        p, rng, sc = self.preset, self.rng, self.scene
-        view = sc.view(t_s)
-        rng_m, az = view.range_m, view.azimuth_rad
-        observable = in_fov(p, rng_m, az) & (rng_m <= config.max_distance_m)
-        frac = visible_fraction(rng_m, view.az_lo_rad, view.az_hi_rad, self.occluder & observable)
-        observable &= frac >= MIN_VISIBLE_FRACTION
-        rcs_eff = sc.rcs_dbsm + 10.0 * np.log10(np.maximum(frac, 1e-3))
-        snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db)
-        pd = equation.detection_probability(snr, p.pfa)
-        u = rng.random(sc.n)
-        detected = observable & (u < pd)
+        ch, i = self._row(t_s, config)
+        view = ch["view"].row(i)
+        detected = ch["detected"][i]
+        meas = ch["meas"][i]
 
-        # --- measurement noise, Cramér–Rao bound with a floor --------------
-        sig_r = np.maximum(equation.crb_range_m(p, snr), p.range_sigma_floor_m)
-        sig_v = np.maximum(equation.crb_speed_mps(p, snr), p.speed_sigma_floor_mps)
-        sig_az = np.maximum(equation.crb_azimuth_rad(p, snr, az), math.radians(p.azimuth_sigma_floor_deg))
-        noise = rng.standard_normal((6, sc.n))
-        m_r = rng_m + sig_r * noise[0]
-        m_az = az + sig_az * noise[1]
-        c, s = np.cos(az), np.sin(az)
-        v_rad = view.vx_mps * c + view.vy_mps * s
-        v_tan = -view.vx_mps * s + view.vy_mps * c
-        m_vr = v_rad + sig_v * noise[2]
-        m_vt = v_tan + p.lateral_speed_sigma_mps * noise[3]
-        mc, ms = np.cos(m_az), np.sin(m_az)
-        meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=1)
-
-        # --- tracker bookkeeping --------------------------------------------
+        # --- tracker bookkeeping (flags precomputed for the chunk) -------------
         dt = t_s - self.last_t if self.cycle else 0.0
-        self.hist = ((self.hist << 1) | detected.astype(np.uint8)).astype(np.uint8)
-        recent = np.unpackbits(self.hist[:, None], axis=1)[:, -CONFIRM_WINDOW:].sum(axis=1)
-        self.misses = np.where(detected, 0, self.misses + 1)
-        new = ~self.alive & detected & (recent >= CONFIRM_HITS) & self.reportable
-        lost = self.alive & ((self.misses > COAST_CYCLES) | ~in_fov(p, rng_m, az))
-        self.alive = (self.alive & ~lost) | new
-        self.obj_id[lost] = -1
-        self._assign_ids(np.flatnonzero(new))
+        self.hist, self.misses, self.alive = ch["hist"][i], ch["misses"][i], ch["alive"][i]
+        new, lost = ch["new"][i], ch["lost"][i]
+        if lost.any():
+            self.obj_id[lost] = -1
+        if new.any():
+            self._assign_ids(np.flatnonzero(new))
         predicted = self.state.copy()
         predicted[:, 0:2] += predicted[:, 2:4] * dt
         # velocity of a continuing track is smoothed like a tracker would (the lateral part is poorly measured)
@@ -173,9 +277,10 @@ class ObjectModel:
         self.last_t, self.cycle = t_s, self.cycle + 1
 
         idx = np.flatnonzero(self.alive)
-        objects = self._object_list(idx, view, detected, new, snr, pd, sig_r, sig_v, sig_az, sensor_velocity_est)
-        clusters = (self._cluster_list(t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
-                                       sensor_velocity_est) if config.clusters else ClusterList.empty(0))
+        objects = self._object_list(ch, i, idx, view, detected, new, sensor_velocity_est)
+        clusters = (self._cluster_list(t_s, view, detected, meas, ch["snr"][i], ch["rcs_eff"][i], ch["sig_r"][i],
+                                       ch["sig_v"][i], ch["sig_az"][i], config, sensor_velocity_est)
+                    if config.clusters else _NO_CLUSTERS)
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
     def _assign_ids(self, newcomers: np.ndarray) -> None:
@@ -195,47 +300,33 @@ class ObjectModel:
             ever = self.was_moving[idx]
         else:
             ever = np.zeros_like(moving)
-        angle = np.abs(np.arctan2(gy, gx))
-        dyn = np.where(angle > np.radians(135.0), DYN_ONCOMING,
-                       np.where(angle > np.radians(45.0), DYN_CROSSING_MOVING, DYN_MOVING))
-        return np.where(moving, dyn, np.where(ever, DYN_STOPPED, DYN_STATIONARY)).astype(np.int64)
+        # heading of the ground velocity against the sensor's x axis: > 135° oncoming, 45°–135° crossing
+        cos45 = 0.7071067811865476
+        dyn = np.where(gx < -cos45 * speed, DYN_ONCOMING, np.where(gx < cos45 * speed, DYN_CROSSING_MOVING,
+                                                                    DYN_MOVING))
+        return np.where(moving, dyn, np.where(ever, DYN_STOPPED, DYN_STATIONARY))
 
-    def _object_list(self, idx, view, detected, new, snr, pd, sig_r, sig_v, sig_az, sensor_velocity_est):
-        p, sc = self.preset, self.scene
-        n = idx.shape[0]
+    def _object_list(self, ch: dict, i: int, idx: np.ndarray, view: SensorView, detected: np.ndarray,
+                     new: np.ndarray, sensor_velocity_est) -> ObjectList:
         st = self.state[idx]
-        ol = ObjectList.empty(n)
-        ol.id = self.obj_id[idx].copy()
-        ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps = st[:, 0], st[:, 1], st[:, 2], st[:, 3]
-        ol.dyn_prop = self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view)
-        ol.rcs_dbsm = sc.rcs_dbsm[idx] + self.rng.normal(0.0, 1.0, n)
-        r = np.hypot(st[:, 0], st[:, 1])
-        az = np.arctan2(st[:, 1], st[:, 0])
-        coast = np.where(detected[idx], 1.0, 1.0 + self.misses[idx])  # σ grows while coasting
-        sx, sy = sigma_to_xy(r, az, sig_r[idx] * coast, sig_az[idx] * coast)
-        ol.dist_long_sigma_m, ol.dist_lat_sigma_m = sx, sy
-        svr = sig_v[idx] * coast
-        ol.vrel_long_sigma_mps = np.hypot(np.cos(az) * svr, np.sin(az) * p.lateral_speed_sigma_mps)
-        ol.vrel_lat_sigma_mps = np.hypot(np.sin(az) * svr, np.cos(az) * p.lateral_speed_sigma_mps)
-        ol.arel_long_sigma_mps2 = np.full(n, 0.5)
-        ol.arel_lat_sigma_mps2 = np.full(n, 0.5)
-        ol.orientation_sigma_rad = np.full(n, math.radians(5.0))
-        ol.meas_state = np.where(new[idx], MEAS_NEW, np.where(detected[idx], MEAS_MEASURED, MEAS_PREDICTED))
-        hits = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1)
-        p_exist = 1.0 - (1.0 - np.clip(pd[idx], 0.0, 0.999999)) ** np.maximum(hits, 1)
-        ol.prob_of_exist = np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1
-        ol.arel_long_mps2 = view.ax_mps2[idx] + self.rng.normal(0.0, 0.1, n)
-        ol.arel_lat_mps2 = view.ay_mps2[idx] + self.rng.normal(0.0, 0.05, n)
-        ol.obj_class = sc.class_code[idx].copy()
-        ol.orientation_rad = view.orientation_rad[idx]
-        ol.length_m = np.maximum(sc.length_m[idx] + self.rng.normal(0.0, p.size_sigma_m, n), 0.2)
-        ol.width_m = np.maximum(sc.width_m[idx] + self.rng.normal(0.0, p.size_sigma_m / 2, n), 0.2)
-        ol.actor_index = idx.astype(np.int64)
-        return ol
+        n = idx.size
+        return ObjectList(
+            id=self.obj_id[idx].copy(),
+            dist_long_m=st[:, 0], dist_lat_m=st[:, 1], vrel_long_mps=st[:, 2], vrel_lat_mps=st[:, 3],
+            dyn_prop=self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view),
+            rcs_dbsm=ch["rcs_rep"][i, idx],
+            dist_long_sigma_m=ch["sig_long"][i, idx], dist_lat_sigma_m=ch["sig_lat"][i, idx],
+            vrel_long_sigma_mps=ch["sig_vlong"][i, idx], vrel_lat_sigma_mps=ch["sig_vlat"][i, idx],
+            arel_long_sigma_mps2=self._half[:n], arel_lat_sigma_mps2=self._half[:n],
+            orientation_sigma_rad=self._five_deg[:n],
+            meas_state=ch["meas_state"][i, idx], prob_of_exist=ch["prob_of_exist"][i, idx],
+            arel_long_mps2=ch["arel_long"][i, idx], arel_lat_mps2=ch["arel_lat"][i, idx],
+            obj_class=self.scene.class_code[idx], orientation_rad=view.orientation_rad[idx],
+            length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
 
     def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
                       sensor_velocity_est):
-        p, rng, sc = self.preset, self.rng, self.scene
+        p, rng, sc = self.preset, self._cluster_rng, self.scene
         parts_xy, parts_v, parts_rcs, parts_sig, parts_actor = [], [], [], [], []
         a_idx = np.flatnonzero(detected & self.reportable)
         parts_xy.append(meas[a_idx, 0:2])

@@ -105,10 +105,20 @@ class MoverTable:
         self.sin_h = np.sin(np.asarray(heading_rad, dtype=np.float64))
         self._rows = np.arange(n)
 
-    def state(self, t_s: float) -> MoverState:
-        """Road-frame position, velocity and acceleration of every mover at ``t_s``."""
-        idx = np.maximum(np.sum(self.t <= t_s, axis=1) - 1, 0)
-        r = self._rows
+    def state(self, t_s: float | np.ndarray) -> MoverState:
+        """Road-frame position, velocity and acceleration of every mover at ``t_s``.
+
+        A scalar time gives arrays of shape (n_movers,); an array of T times gives (T, n_movers).
+        """
+        t = np.asarray(t_s, dtype=np.float64)
+        if t.ndim == 0:
+            idx = np.maximum(np.sum(self.t <= t, axis=1) - 1, 0)
+            r = self._rows
+        else:
+            t = t[:, None]
+            idx = np.maximum(np.sum(self.t[None, :, :] <= t[:, :, None], axis=2) - 1, 0)
+            r = self._rows[None, :]
+        t_s = t
         t0 = np.where(np.isfinite(self.t[r, idx]), self.t[r, idx], 0.0)
         dt = np.maximum(t_s - t0, 0.0)
         # speed-profile movers
@@ -124,7 +134,7 @@ class MoverTable:
         # waypoint movers: before the first waypoint they wait at it
         nxt = np.minimum(idx + 1, self.t.shape[1] - 1)
         t1 = self.t[r, nxt]
-        seg = np.where(np.isfinite(t1) & (t1 > t0) & (t_s >= self.t[r, 0]), t1 - t0, np.inf)
+        seg = np.where(np.isfinite(t1) & (t1 > t0) & (t_s >= self.t[:, 0]), t1 - t0, np.inf)
         frac = np.clip(dt / seg, 0.0, 1.0)
         px = self.px[r, idx] + frac * (self.px[r, nxt] - self.px[r, idx])
         py = self.py[r, idx] + frac * (self.py[r, nxt] - self.py[r, idx])
@@ -132,6 +142,6 @@ class MoverTable:
         pvx = np.where(moving, (self.px[r, nxt] - self.px[r, idx]) / np.where(moving, seg, 1.0), 0.0)
         pvy = np.where(moving, (self.py[r, nxt] - self.py[r, idx]) / np.where(moving, seg, 1.0), 0.0)
         p = self.is_path
-        zero = np.zeros(self.n)
+        zero = np.zeros_like(sx)
         return MoverState(np.where(p, px, sx), np.where(p, py, sy), np.where(p, pvx, svx),
                           np.where(p, pvy, svy), np.where(p, zero, sax), np.where(p, zero, say))

@@ -65,6 +65,15 @@ class SensorView:
     def azimuth_rad(self) -> np.ndarray:
         return np.arctan2(self.y_m, self.x_m)
 
+    def row(self, k: int) -> SensorView:
+        """Time ``k`` of a view computed for several times (see :meth:`Scene.views`)."""
+        f = [getattr(self, name)[k] for name in _VIEW_ARRAYS]
+        return SensorView(float(self.t_s[k]), *f, float(self.sensor_vx_mps[k]), float(self.sensor_vy_mps[k]))
+
+
+_VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
+                "orientation_rad", "az_lo_rad", "az_hi_rad")
+
 
 def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     c, s = np.cos(angle), np.sin(angle)
@@ -92,6 +101,9 @@ class Scene:
         self.heading_rel = np.array([math.radians(a.heading_deg) for a in actors], dtype=np.float64)
         m = scenario.radar.mount
         self.mount = (m.x_m, m.y_m, math.radians(m.yaw_deg))
+        hl, hw = self.length_m / 2.0, self.width_m / 2.0
+        self._corners_x = np.stack([hl, hl, -hl, -hl], axis=-1) if self.n else np.zeros((0, 4))
+        self._corners_y = np.stack([hw, -hw, hw, -hw], axis=-1) if self.n else np.zeros((0, 4))
 
     # --- road geometry ---------------------------------------------------
     def road_to_world(self, s: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -135,45 +147,63 @@ class Scene:
 
     def view(self, t_s: float, h_s: float = 1e-3) -> SensorView:
         """Everything the sensor needs about the actors at ``t_s``."""
-        ego = self.ego_state(t_s)
-        px, py, psi_s, svx, svy = self.sensor_pose(ego)
-        ax_, ay_, avx, avy, aheading = self._actor_world(t_s)
+        return self.views(np.array([t_s], dtype=np.float64), h_s).row(0)
+
+    def views(self, times_s: np.ndarray, h_s: float = 1e-3) -> SensorView:
+        """The sensor's view at T times at once: arrays of shape (T, n_actors), sensor velocity (T,).
+
+        One pass of numpy operations for all the times (the object level renders
+        its cycles in chunks this way).
+        """
+        t = np.asarray(times_s, dtype=np.float64)
+        est = self._ego.state(t)                                   # (T, 1)
+        ex, ey, epsi, evx_w, evy_w = self._world_motion(est)
+        ex, ey, epsi = ex[:, 0], ey[:, 0], epsi[:, 0]
+        espeed, eacc = est.vx_mps[:, 0], est.ax_mps2[:, 0]
+        w = self.kappa * espeed
+        mx, my, myaw = self.mount
+        ox, oy = _rot(epsi, np.float64(mx), np.float64(my))
+        px, py, psi_s = ex + ox, ey + oy, epsi + myaw
+        svx, svy = espeed * np.cos(epsi) - w * oy, espeed * np.sin(epsi) + w * ox
+        st = self._movers.state(t)                                 # (T, n)
+        ax_, ay_, _, avx, avy = self._world_motion(st)
+        speed = np.hypot(avx, avy)
+        aheading = np.where(speed > 0.1, np.arctan2(avy, avx), self.road_to_world(st.x_m, st.y_m)[2]
+                            + self.heading_rel)
         if self.kappa == 0.0:
             # straight road: the road frame is the world frame, the profiles' accelerations are exact
-            st = self._movers.state(t_s)
             aax, aay = st.ax_mps2, st.ay_mps2
-            eax, eay = ego.accel_mps2, 0.0
+            eax, eay = eacc, np.zeros_like(eacc)
         else:
             # curved road: central differences of the world velocity (centripetal terms included)
-            _, _, vpx, vpy, _ = self._actor_world(t_s + h_s)
-            _, _, vmx, vmy, _ = self._actor_world(max(t_s - h_s, 0.0))
-            dt = h_s + min(h_s, t_s)
+            tm = np.maximum(t - h_s, 0.0)
+            dt = (h_s + np.minimum(h_s, t))[:, None]
+            _, _, _, vpx, vpy = self._world_motion(self._movers.state(t + h_s))
+            _, _, _, vmx, vmy = self._world_motion(self._movers.state(tm))
             aax, aay = (vpx - vmx) / dt, (vpy - vmy) / dt
-            e_p, e_m = self.ego_state(t_s + h_s), self.ego_state(max(t_s - h_s, 0.0))
-            eax = (e_p.speed_mps * math.cos(e_p.heading_rad) - e_m.speed_mps * math.cos(e_m.heading_rad)) / dt
-            eay = (e_p.speed_mps * math.sin(e_p.heading_rad) - e_m.speed_mps * math.sin(e_m.heading_rad)) / dt
-
-        cx, cy = _rot(-psi_s, ax_ - px, ay_ - py)
-        rel_heading = aheading - psi_s
+            _, _, _, epx, epy = self._world_motion(self._ego.state(t + h_s))
+            _, _, _, emx, emy = self._world_motion(self._ego.state(tm))
+            eax, eay = (epx - emx)[:, 0] / dt[:, 0], (epy - emy)[:, 0] / dt[:, 0]
+        c_ = psi_s[:, None]
+        cx, cy = _rot(-c_, ax_ - px[:, None], ay_ - py[:, None])
+        rel_heading = aheading - c_
         # nearest point of each box to the sensor
         lx, ly = _rot(-rel_heading, -cx, -cy)
         hl, hw = self.length_m / 2.0, self.width_m / 2.0
         qx, qy = np.clip(lx, -hl, hl), np.clip(ly, -hw, hw)
-        ox, oy = _rot(rel_heading, qx, qy)
-        rx, ry = cx + ox, cy + oy
+        ox_, oy_ = _rot(rel_heading, qx, qy)
+        rx, ry = cx + ox_, cy + oy_
         # azimuth extent from the four corners
-        corners_x = np.stack([hl, hl, -hl, -hl], axis=-1) if self.n else np.zeros((0, 4))
-        corners_y = np.stack([hw, -hw, hw, -hw], axis=-1) if self.n else np.zeros((0, 4))
-        kx, ky = _rot(rel_heading[:, None], corners_x, corners_y)
-        az = np.arctan2(cy[:, None] + ky, cx[:, None] + kx)
-        vx, vy = _rot(-psi_s, avx - svx, avy - svy)
-        gvx, gvy = _rot(-psi_s, avx, avy)
-        ax_rel, ay_rel = _rot(-psi_s, aax - eax, aay - eay)
-        s_vx, s_vy = _rot(-psi_s, np.float64(svx), np.float64(svy))
+        kx, ky = _rot(rel_heading[..., None], self._corners_x, self._corners_y)
+        az = np.arctan2(cy[..., None] + ky, cx[..., None] + kx)
+        vx, vy = _rot(-c_, avx - svx[:, None], avy - svy[:, None])
+        gvx, gvy = _rot(-c_, avx, avy)
+        ax_rel, ay_rel = _rot(-c_, aax - eax[:, None], aay - eay[:, None])
+        s_vx, s_vy = _rot(-psi_s, svx, svy)
         wrapped = (rel_heading + np.pi) % (2.0 * np.pi) - np.pi
-        return SensorView(t_s, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped,
-                          az.min(axis=1) if self.n else np.zeros(0), az.max(axis=1) if self.n else np.zeros(0),
-                          float(s_vx), float(s_vy))
+        lo = az.min(axis=-1) if self.n else np.zeros(rx.shape)
+        hi = az.max(axis=-1) if self.n else np.zeros(rx.shape)
+        return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, s_vx, s_vy)
 
     def guardrail_posts(self, t_s: float, max_range_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame positions of the guardrail posts within ``max_range_m`` ahead and behind.
