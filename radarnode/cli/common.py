@@ -92,6 +92,21 @@ def format_cycle(cycle: ObjectCycle | ClusterCycle, t_s: float | None = None, ma
     return "\n".join(lines)
 
 
+def format_boundaries(boundaries: dict) -> str:
+    """One line with the decoded road boundaries (radarnode's 0x690/0x691)."""
+    parts = []
+    for side in ("left", "right"):
+        b = boundaries.get(side)
+        if b is None:
+            continue
+        if not b.valid:
+            parts.append(f"{side} unavailable")
+        else:
+            parts.append(f"{side} {b.offset_m:+.2f} m, heading {np.degrees(b.heading_rad):+.1f}°, "
+                         f"{b.range_start_m:.0f}-{b.range_end_m:.0f} m, confidence {b.confidence:.2f}")
+    return "road: " + "; ".join(parts) if parts else ""
+
+
 def format_stats(stats: ConsumerStats) -> str:
     d = stats.as_dict()
     shown = {k: v for k, v in d.items() if v or k in ("frames", "cycles")}

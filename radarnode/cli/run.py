@@ -12,8 +12,8 @@ import uuid
 
 import can
 
-from radarnode.cli.common import add_scenario_argument, format_cycle, format_stats, scenario_from_args, \
-    stop_on_signals
+from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
+    scenario_from_args, stop_on_signals
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -63,6 +63,9 @@ def cmd(args) -> int:
             if args.quiet or (shown[0] - 1) % every:
                 return
             text = format_cycle(cycle, out.t_s)
+            road = format_boundaries(assembler.road_boundaries)
+            if road:
+                text += "\n" + road
             if tty:
                 sys.stdout.write("\x1b[H\x1b[J" + text + "\n")
             else:

@@ -28,7 +28,9 @@ import numpy as np
 
 from radarnode.perception.types import ClusterList, ObjectList
 from radarnode.wire import ars408 as P
-from radarnode.wire.dbc import load_database
+from radarnode.perception.boundaries import Boundary
+from radarnode.wire.dbc import load_database, load_own_database
+from radarnode.wire.e2e import E2EChecker
 
 logger = logging.getLogger(__name__)
 
@@ -75,10 +77,14 @@ class ConsumerStats:
     extra_frames: int = 0           # more general frames than the header announced
     status_frames: int = 0          # RadarState, VersionID, ego motion, configuration
     errors_frames: int = 0          # CAN error and remote frames
+    boundary_frames: int = 0        # radarnode's road-boundary frames accepted
+    e2e_errors: int = 0             # own frames with a wrong E2E CRC: dropped
+    e2e_repeated: int = 0           # own frames whose alive counter did not advance: dropped
 
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames
-                + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames)
+                + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
+                + self.e2e_errors + self.e2e_repeated)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
@@ -130,6 +136,10 @@ class CycleAssembler(can.Listener):
         self._last_counter: dict[str, int] = {}
         self._stride: dict[str, int] = {}
         self._messages = {m.frame_id: m for m in self.db.messages}
+        self._own = {m.frame_id: m for m in load_own_database().messages}
+        self.e2e = E2EChecker()
+        #: latest decoded road boundaries: {"left": Boundary, "right": Boundary}
+        self.road_boundaries: dict[str, Boundary] = {}
 
     # --- can.Listener ---------------------------------------------------------
     def on_message_received(self, msg: can.Message) -> None:
@@ -185,6 +195,9 @@ class CycleAssembler(can.Listener):
         base = msg.arbitration_id - 0x10 * self.sensor_id if msg.arbitration_id != P.COLL_DET_RELAY else 0x008
         message = self._messages.get(base)
         if message is None:
+            if base in self._own:
+                self._own_frame(base, msg)
+                return
             self.stats.unknown_id += 1
             return
         data = bytes(msg.data)
@@ -211,6 +224,26 @@ class CycleAssembler(can.Listener):
                 self.ego_speed_mps = sign * values["RadarDevice_Speed"]
             elif base == P.YAW_RATE_INFO:
                 self.ego_yaw_rate_dps = values["RadarDevice_YawRate"]
+
+    def _own_frame(self, base: int, msg: can.Message) -> None:
+        """radarnode's own E2E-protected messages: checked, then decoded."""
+        message = self._own[base]
+        data = bytes(msg.data)
+        if len(data) != message.length:
+            self.stats.wrong_dlc += 1
+            return
+        before = (self.e2e.stats.crc_errors, self.e2e.stats.repeated)
+        if not self.e2e.check(msg.arbitration_id, data):
+            self.stats.e2e_errors += self.e2e.stats.crc_errors - before[0]
+            self.stats.e2e_repeated += self.e2e.stats.repeated - before[1]
+            return
+        v = message.decode(data, decode_choices=False)
+        prefix, side = ("RBL", "left") if base == P.ROAD_BOUNDARY_LEFT else ("RBR", "right")
+        self.road_boundaries[side] = Boundary(
+            bool(v[f"{prefix}_Valid"]), v[f"{prefix}_LatOffset"], np.radians(v[f"{prefix}_Heading"]),
+            v[f"{prefix}_Curvature"], v[f"{prefix}_RangeStart"], v[f"{prefix}_RangeEnd"],
+            v[f"{prefix}_Confidence"] / 7.0)
+        self.stats.boundary_frames += 1
 
     def _header(self, base: int, values: dict, timestamp: float) -> None:
         self.flush()

@@ -109,6 +109,7 @@ class RadarSetup:
     max_distance_m: float | None = None
     radar_power: int = 0
     bus_load_limit: float = 0.8
+    road_boundaries: bool | None = None    # publish 0x690/0x691; None: when the road has guardrails
 
     def __post_init__(self) -> None:
         get_preset(self.preset)
@@ -125,6 +126,8 @@ class RadarSetup:
             validate.number("max_distance_m", self.max_distance_m, lo=2.0, hi=2046.0)
         validate.integer("radar_power", self.radar_power, lo=0, hi=3)
         validate.number("bus_load_limit", self.bus_load_limit, lo=0.0, hi=1.0, lo_open=True)
+        if self.road_boundaries is not None:
+            validate.boolean("road_boundaries", self.road_boundaries)
 
     @property
     def model(self) -> RadarPreset:

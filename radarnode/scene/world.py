@@ -205,6 +205,17 @@ class Scene:
         hi = az.max(axis=-1) if self.n else np.zeros(rx.shape)
         return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, s_vx, s_vy)
 
+    def road_line(self, t_s: float, d_m: float, max_range_m: float, step_m: float = 1.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
+        """Sensor-frame points of the road-parallel line at lateral offset ``d_m`` (road frame), ahead of
+        the ego up to ``max_range_m`` along the road — the ground truth of a road boundary."""
+        ego = self.ego_state(t_s)
+        px, py, psi_s, _, _ = self.sensor_pose(ego)
+        s_ego = float(self._ego.state(t_s).x_m[0])
+        s = s_ego + np.arange(0.0, max_range_m + step_m, step_m)
+        wx, wy, _ = self.road_to_world(s, np.full_like(s, d_m))
+        return _rot(-psi_s, wx - px, wy - py)
+
     def guardrail_posts(self, t_s: float, max_range_m: float) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame positions of the guardrail posts within ``max_range_m`` ahead and behind.
 

@@ -11,6 +11,7 @@ import cantools
 from radarnode.errors import WireError
 
 ARS408_DBC = "ars408.dbc"
+RADARNODE_DBC = "radarnode.dbc"
 
 
 def dbc_path(name: str = ARS408_DBC) -> Path:
@@ -28,6 +29,16 @@ def dbc_path(name: str = ARS408_DBC) -> Path:
 def load_database(path: str | None = None) -> cantools.database.can.Database:
     """Load (once) the ARS 408 DBC, or any DBC file given by path."""
     p = Path(path) if path is not None else dbc_path()
+    return _load(str(p))
+
+
+@functools.lru_cache(maxsize=None)
+def load_own_database() -> cantools.database.can.Database:
+    """radarnode's own outputs (``dbc/radarnode.dbc``): road boundaries, E2E protected."""
+    return _load(str(dbc_path(RADARNODE_DBC)))
+
+
+def _load(p: str) -> cantools.database.can.Database:
     try:
         return cantools.database.load_file(str(p), strict=True)
     except (OSError, cantools.database.UnsupportedDatabaseFormatError) as exc:

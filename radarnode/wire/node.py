@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import can
 import numpy as np
 
+from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import RadarFrame
 from radarnode.radar.models import make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
@@ -28,7 +29,8 @@ from radarnode.scene.world import Scene, SensorView
 from radarnode.wire import ars408 as P
 from radarnode.wire.busload import frame_bits
 from radarnode.wire.codec import MessageCodec
-from radarnode.wire.dbc import load_database
+from radarnode.wire.dbc import load_database, load_own_database
+from radarnode.wire.e2e import E2EProtector
 
 logger = logging.getLogger(__name__)
 
@@ -63,6 +65,7 @@ class CycleOutput:
     bits: int
     objects_dropped: int = 0
     counters: dict = field(default_factory=dict)
+    boundaries: tuple[Boundary, Boundary] | None = None
 
 
 class RadarNode:
@@ -98,6 +101,15 @@ class RadarNode:
         self.saturated: Counter = Counter()
         self.codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in self.db.messages
                        if not m.is_multiplexed()}
+        self.own_codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in load_own_database().messages}
+        wants = setup.road_boundaries
+        if wants is None:
+            g = scenario.road.guardrails
+            wants = g.left_offset_m is not None or g.right_offset_m is not None or any(
+                a.object_class == "guardrail" for a in scenario.actors)
+        self.boundaries = RoadBoundaryEstimator() if wants else None
+        self._e2e = E2EProtector()
+        self._last_t: float | None = None
         self._speed: tuple[float, float] | None = None    # (value m/s signed, time received)
         self._yaw: tuple[float, float] | None = None      # (deg/s, time received)
         self._next_status_s = 0.0
@@ -196,6 +208,31 @@ class RadarNode:
         c, s = math.cos(-myaw), math.sin(-myaw)
         return c * vx - s * vy, s * vx + c * vy
 
+    def _yaw_rate_estimate(self, t_s: float) -> float:
+        """Yaw rate (rad/s) from the ego-motion input; missing input counts as zero."""
+        return math.radians(self._yaw[0]) if not self.motion_rx_state(t_s) & 2 else 0.0
+
+    def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float]
+                         ) -> list[tuple[int, np.ndarray]]:
+        """Update the road-boundary estimate and encode 0x690/0x691 (E2E protected)."""
+        cl = frame.clusters
+        dt = 0.0 if self._last_t is None else t_s - self._last_t
+        r = np.maximum(cl.range_m, 1e-6)
+        rate = (cl.dist_long_m * cl.vrel_long_mps + cl.dist_lat_m * cl.vrel_lat_mps) / r
+        left, right = self.boundaries.update(cl.dist_long_m, cl.dist_lat_m, rate, dt, sensor_velocity,
+                                             self._yaw_rate_estimate(t_s))
+        self.last_boundaries = (left, right)
+        out = []
+        for base, prefix, b in ((P.ROAD_BOUNDARY_LEFT, "RBL", left), (P.ROAD_BOUNDARY_RIGHT, "RBR", right)):
+            payload = self.own_codecs[base].encode({
+                f"{prefix}_CRC": 0, f"{prefix}_Counter": 0, f"{prefix}_Valid": int(b.valid),
+                f"{prefix}_Confidence": round(7 * b.confidence), f"{prefix}_LatOffset": b.offset_m,
+                f"{prefix}_Heading": math.degrees(b.heading_rad), f"{prefix}_Curvature": b.curvature_1pm,
+                f"{prefix}_RangeStart": 4 * math.floor(b.range_start_m / 4), f"{prefix}_RangeEnd": b.range_end_m})[0]
+            protected = self._e2e.protect(P.shifted(base, self.config.sensor_id), payload.tobytes())
+            out.append((base, np.frombuffer(protected, dtype=np.uint8)))
+        return out
+
     # --- output -------------------------------------------------------------
     def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
         return can.Message(arbitration_id=P.shifted(base_id, self.config.sensor_id), is_extended_id=False,
@@ -243,15 +280,18 @@ class RadarNode:
         cfg = self.config
         runtime = RuntimeConfig(max_distance_m=min(cfg.max_distance_m, self.preset.max_range_m),
                                 power_reduction_db=3.0 * cfg.radar_power, high_sensitivity=cfg.rcs_threshold == 1,
-                                clusters=cfg.output_type == P.OUTPUT_CLUSTERS)
-        frame, view = self.model.step(t_s, runtime, self._sensor_velocity_estimate(t_s))
+                                clusters=cfg.output_type == P.OUTPUT_CLUSTERS or self.boundaries is not None)
+        sensor_velocity = self._sensor_velocity_estimate(t_s)
+        frame, view = self.model.step(t_s, runtime, sensor_velocity)
+        own = self._boundary_frames(frame, t_s, sensor_velocity) if self.boundaries is not None else []
+        self._last_t = t_s
         out: list[tuple[int, np.ndarray]] = []
         if self._status_now or t_s + 1e-9 >= self._next_status_s:
             out += self._status_frames(t_s)
             self._status_now = False
             while self._next_status_s <= t_s + 1e-9:
                 self._next_status_s += STATUS_PERIOD_S
-        fixed_bits = int(np.sum(frame_bits(np.array([len(p) for _, p in out] + [8], dtype=np.int64))))
+        fixed_bits = int(np.sum(frame_bits(np.array([len(p) for _, p in out + own] + [8], dtype=np.int64))))
         dropped = 0
         if cfg.output_type == P.OUTPUT_OBJECTS:
             ol = frame.objects
@@ -296,6 +336,7 @@ class RadarNode:
                             "lowest-priority entries (counted in objects_dropped_busload; warned once)",
                             t_s, 100 * self.bus_load_limit, self.bitrate, 1e3 * self.period_s, dropped)
         self._meas_counter = (self._meas_counter + 1) & 0xFFFF
+        out += own
         dlcs = np.array([len(p) for _, p in out], dtype=np.int64)
         nominal = frame_bits(dlcs, worst_case=False)
         t0 = t_s if timestamp is None else timestamp
@@ -303,7 +344,8 @@ class RadarNode:
         messages = [self._msg(base, payload, float(ts)) for (base, payload), ts in zip(out, offsets)]
         self.counters["cycles"] += 1
         self.counters["frames"] += len(messages)
-        return CycleOutput(t_s, messages, frame, view, int(np.sum(frame_bits(dlcs))), dropped)
+        return CycleOutput(t_s, messages, frame, view, int(np.sum(frame_bits(dlcs))), dropped,
+                           boundaries=(self.last_boundaries if own else None))
 
     def _warn_once(self, key: str, fmt: str, *args) -> None:
         if key not in self._warned:
