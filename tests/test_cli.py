@@ -192,3 +192,14 @@ def test_image_writes_a_png(tmp_path):
     assert "detections" in r.stderr
     r = run("image", str(SCENARIOS / "point_targets_mimo12.yaml"), "-o", str(out), "--time", "99")
     assert r.returncode == 2 and "option --time" in r.stderr
+    r = run("image", str(SCENARIOS / "point_targets_mimo12.yaml"), "-o", str(out), "--k", "0.5")
+    assert r.returncode == 2 and "option --k" in r.stderr
+
+
+def test_image_animates_a_scenario(tmp_path):
+    pytest.importorskip("matplotlib", reason="radarnode image needs the optional matplotlib")
+    out = tmp_path / "run.gif"
+    r = run("image", str(SCENARIOS / "point_targets_mimo12.yaml"), "-o", str(out), "--animate", "--every", "4",
+            "--duration", "0.8")
+    assert r.returncode == 0, r.stderr
+    assert out.read_bytes()[:6] == b"GIF89a" and "3 frames" in r.stderr

@@ -1,17 +1,21 @@
-"""``radarnode image SCENARIO -o out.png``: the range–Doppler map and range–azimuth image of one frame.
+"""``radarnode image SCENARIO -o out.png``: the radar image of a frame, in four views.
 
-Renders the scenario at the signal level at ``--time`` and draws what the
-DSP chain sees (seed 000, figures 3–4): the range–Doppler map (power summed
-over the virtual channels) and the range–azimuth image, both shown with the
-R⁴ spreading loss taken out (beamformed over the
-channels, strongest Doppler bin per cell), with the detections marked.
-Needs matplotlib (``pip install 'radarnode[image]'``).
+Renders the scenario at the signal level up to ``--time`` and draws what the
+DSP chain sees (seed 000, figures 3–4; seed 002, figure 10): the
+range–Doppler map, the range–azimuth image in polar form (azimuth × range),
+the bird's-eye Cartesian image and seed 002's direct-perspective view (near
+edge widened by ``--k``), with detections, objects (boxes of their estimated
+size), their tracks and the road boundaries overlaid. Images are shown with
+the R⁴ spreading loss taken out. ``--animate out.gif`` renders the whole
+scenario instead. Needs matplotlib (``pip install 'radarnode[image]'``).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import math
 import sys
+from collections import defaultdict, deque
 
 import numpy as np
 import scipy.fft
@@ -19,17 +23,25 @@ import scipy.fft
 from radarnode.cli.common import add_scenario_argument, scenario_from_args
 from radarnode.dsp.spectra import noncoherent_power, range_doppler
 from radarnode.errors import ConfigError
+from radarnode.perception.boundaries import RoadBoundaryEstimator
+from radarnode.perception.views import direct_perspective
 from radarnode.radar.models import SignalModel
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.scene.world import Scene
 
+TRAIL_CYCLES = 15
+LATERAL_VIEW_M = 30.0     # the road and its surroundings, not the whole ±60° fan
+
 
 def add_subparser(sub) -> None:
-    p = sub.add_parser("image", help="draw the range-Doppler and range-azimuth images of one frame",
+    p = sub.add_parser("image", help="draw the radar image of a frame (four views) or animate a scenario",
                        description=__doc__)
     add_scenario_argument(p)
-    p.add_argument("-o", "--output", required=True, help="PNG file to write")
+    p.add_argument("-o", "--output", required=True, help="PNG file to write (or GIF with --animate)")
     p.add_argument("--time", type=float, default=0.0, help="scenario time of the frame, s (default 0)")
+    p.add_argument("--k", type=float, default=2.5, help="direct-perspective widening of the near edge (1.7, 2.5)")
+    p.add_argument("--animate", action="store_true", help="render every --every-th cycle of the scenario as a GIF")
+    p.add_argument("--every", type=int, default=5, help="cycles between animation frames (default 5)")
     p.set_defaults(func=cmd)
 
 
@@ -45,68 +57,154 @@ def range_azimuth(rd: np.ndarray, preset, n_angle: int = 128) -> tuple[np.ndarra
     tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
     comp = np.exp(-2j * np.pi * fd[None, :] * tx_of[:, None] * preset.chirp_period_s)   # (channel, doppler)
     taper = np.hanning(c + 2)[1:-1][:, None, None]
-    x = rd * comp[:, :, None] * taper
-    spec = scipy.fft.fftshift(scipy.fft.fft(x, n=n_angle, axis=0), axes=0)   # (angle, doppler, range)
-    power = (spec.real ** 2 + spec.imag ** 2).max(axis=1)
+    spec = scipy.fft.fftshift(scipy.fft.fft(rd * comp[:, :, None] * taper, n=n_angle, axis=0), axes=0)
+    power = (spec.real ** 2 + spec.imag ** 2).max(axis=1)          # (angle, range)
     u = scipy.fft.fftshift(scipy.fft.fftfreq(n_angle)) / preset.element_spacing_wl
     return power, u
 
 
-def cmd(args) -> int:
+class Renderer:
+    """Runs the signal level cycle by cycle and draws the four views of any cycle."""
+
+    def __init__(self, scenario, k: float) -> None:
+        self.scenario = dataclasses.replace(scenario, signal=dataclasses.replace(scenario.signal, decimate=False))
+        self.preset = self.scenario.radar.model
+        self.scene = Scene(self.scenario)
+        self.model = SignalModel(self.scene, self.preset, np.random.default_rng(self.scenario.seed),
+                                 self.scenario.signal, keep_cube=True)
+        self.boundaries = RoadBoundaryEstimator()
+        self.tracks: dict[int, deque] = defaultdict(lambda: deque(maxlen=TRAIL_CYCLES))
+        self.k = k
+        self.cfg = RuntimeConfig(max_distance_m=self.preset.max_range_m)
+        self.t_prev: float | None = None
+
+    def step(self, t_s: float):
+        frame, view = self.model.step(t_s, self.cfg)
+        det = self.model.info.detections
+        yaw = self.scene.ego_state(t_s).yaw_rate_rps
+        dt = 0.0 if self.t_prev is None else t_s - self.t_prev
+        self.t_prev = t_s
+        left, right = self.boundaries.update(det.x_m, det.y_m, det.range_rate_mps, dt,
+                                             (view.sensor_vx_mps, view.sensor_vy_mps), yaw)
+        for k in range(len(frame.objects)):
+            self.tracks[int(frame.objects.id[k])].append((frame.objects.dist_long_m[k], frame.objects.dist_lat_m[k]))
+        return frame, (left, right)
+
+    def draw(self, fig, t_s: float, frame, boundaries) -> None:
+        p = self.preset
+        cube, det = self.model.info.cube, self.model.info.detections
+        rd = range_doppler(cube)
+        n_r = rd.shape[2]
+        ranges = np.arange(n_r) * p.range_resolution_m
+        stc = 40.0 * np.log10(np.maximum(ranges, 2.0))      # R⁴ taken out for display
+        rdp = 10 * np.log10(noncoherent_power(rd) + 1e-12) + stc[None, :]
+        rap, u = range_azimuth(rd, p)
+        rap = 10 * np.log10(rap + 1e-12) + stc[None, :]
+        valid = np.abs(u) <= 1
+        az = np.arcsin(u[valid])
+        img = rap[valid]
+        speeds = (np.arange(rd.shape[1]) - rd.shape[1] // 2) * p.speed_resolution_mps
+        fig.clf()
+        a1, a2, a3, a4 = fig.subplots(1, 4)
+        vmax = rdp.max()
+        a1.imshow(rdp.T, origin="lower", aspect="auto", cmap="viridis", vmin=vmax - 50, vmax=vmax,
+                  extent=[speeds[0], speeds[-1], 0, ranges[-1]])
+        a1.scatter(det.range_rate_mps, det.range_m, s=20, facecolors="none", edgecolors="r")
+        top = min(ranges[-1], p.max_range_m)
+        a1.set(xlabel="range rate, m/s", ylabel="range, m", title="range–Doppler", ylim=(0, top))
+        vmax = img.max()
+        a2.pcolormesh(np.degrees(az), ranges, img.T, cmap="viridis", vmin=vmax - 45, vmax=vmax, shading="auto")
+        a2.scatter(np.degrees(det.azimuth_rad), det.range_m, s=20, facecolors="none", edgecolors="r")
+        a2.set(xlabel="azimuth, ° (left positive)", ylabel="range, m", title="range–azimuth (polar form)",
+               ylim=(0, top))
+        a2.invert_xaxis()
+        rr, aa = np.meshgrid(ranges, az)
+        lat, lon = rr * np.sin(aa), rr * np.cos(aa)
+        for ax, persp in ((a3, False), (a4, True)):
+            x_img, y_img = (direct_perspective(lat, lon, self.k, top) if persp else (lat, lon))
+            ax.pcolormesh(x_img, y_img, img, cmap="viridis", vmin=vmax - 45, vmax=vmax, shading="gouraud")
+            self._overlay(ax, det, frame, boundaries, top, persp)
+            ax.set(xlabel="lateral, m (left on the left)", ylabel="longitudinal, m",
+                   title=(f"direct perspective, k={self.k}" if persp else "bird's eye (Cartesian)"))
+            half = LATERAL_VIEW_M * (self.k if persp else 1.0)
+            ax.set_xlim(half, -half)           # left of the radar on the left
+            ax.set_ylim(0, top)
+        fig.suptitle(f"{self.scenario.name}, t = {t_s:.2f} s, {len(det)} detections, {len(frame.objects)} objects")
+
+    def _overlay(self, ax, det, frame, boundaries, range_max, persp: bool) -> None:
+        def tf(lat, lon):
+            return direct_perspective(lat, lon, self.k, range_max) if persp else (np.asarray(lat), np.asarray(lon))
+
+        ax.scatter(*tf(det.y_m, det.x_m), s=12, facecolors="none", edgecolors="r", linewidths=0.8)
+        ol = frame.objects
+        for k in range(len(ol)):
+            x0, y0 = ol.dist_long_m[k], ol.dist_lat_m[k]
+            L, W = max(ol.length_m[k], 0.5), max(ol.width_m[k], 0.5)
+            bx = np.array([x0, x0 + L, x0 + L, x0, x0])
+            by = np.array([y0 - W / 2, y0 - W / 2, y0 + W / 2, y0 + W / 2, y0 - W / 2])
+            ax.plot(*tf(by, bx), color="w", linewidth=1.0)
+            trail = np.array(self.tracks.get(int(ol.id[k]), []))
+            # trails of road users only (not of the point-like guardrail posts the tracker also follows)
+            if (len(trail) > 1 and ol.dyn_prop[k] in (0, 2, 6) and 1 <= ol.obj_class[k] <= 5
+                    and np.max(np.hypot(*np.diff(trail, axis=0).T)) < 4.0):   # no re-associated jumps
+                ax.plot(*tf(trail[:, 1], trail[:, 0]), color="orange", linewidth=0.8)
+        xs = np.linspace(0.0, range_max, 60)
+        for b in boundaries:
+            if b.valid:
+                xb = xs[(xs >= b.range_start_m) & (xs <= b.range_end_m)]
+                ax.plot(*tf(b.y_at(xb), xb), color="c", linewidth=1.5)
+
+
+def _matplotlib():
     try:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
         raise ConfigError("radarnode image needs matplotlib: pip install 'radarnode[image]'") from None
+    return plt
+
+
+def cmd(args) -> int:
+    plt = _matplotlib()
     scenario = scenario_from_args(args)
     if not 0.0 <= args.time <= scenario.duration_s:
         raise ConfigError(f"option --time: value {args.time} is not allowed; expected a time in "
                           f"[0, {scenario.duration_s}] s")
-    scenario = dataclasses.replace(scenario, signal=dataclasses.replace(scenario.signal, decimate=False))
-    preset = scenario.radar.model
-    model = SignalModel(Scene(scenario), preset, np.random.default_rng(scenario.seed), scenario.signal,
-                        keep_cube=True)
-    model.step(args.time, RuntimeConfig(max_distance_m=preset.max_range_m))
-    cube, det = model.info.cube, model.info.detections
-    rd = range_doppler(cube)
-    rdp = 10 * np.log10(noncoherent_power(rd) + 1e-12)
-    rap, u = range_azimuth(rd, preset)
-    rap = 10 * np.log10(rap + 1e-12)
-    n_r = rd.shape[2]
-    ranges = np.arange(n_r) * preset.range_resolution_m
-    # display with the R⁴ spreading loss taken out (as a sensitivity-time control would), so far and near
-    # targets share one colour scale
-    stc = 40.0 * np.log10(np.maximum(ranges, 2.0))
-    rdp = rdp + stc[None, :]
-    rap = rap + stc[None, :]
-    speeds = (np.arange(rd.shape[1]) - rd.shape[1] // 2) * preset.speed_resolution_mps
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(13, 5.5))
-    vmax = rdp.max()
-    a1.imshow(rdp.T, origin="lower", aspect="auto", cmap="viridis", vmin=vmax - 50, vmax=vmax,
-              extent=[speeds[0], speeds[-1], 0, ranges[-1]])
-    a1.scatter(det.range_rate_mps, det.range_m, s=30, facecolors="none", edgecolors="r", label="detections")
-    a1.set_xlabel("range rate, m/s")
-    a1.set_ylabel("range, m")
-    a1.set_title(f"range–Doppler map, {scenario.name} t={args.time:.2f} s")
-    a1.legend(loc="upper right")
-    valid = np.abs(u) <= 1
-    az = np.degrees(np.arcsin(u[valid]))
-    rr, aa = np.meshgrid(ranges, np.radians(az))
-    vmax = rap.max()
-    a2.pcolormesh(rr * np.sin(aa), rr * np.cos(aa), rap[valid], cmap="viridis", vmin=vmax - 45, vmax=vmax,
-                  shading="gouraud")
-    a2.scatter(det.y_m, det.x_m, s=30, facecolors="none", edgecolors="r")
-    a2.set_aspect("equal")
-    a2.set_xlabel("lateral, m (left of the radar on the left)")
-    a2.set_ylabel("longitudinal, m")
-    a2.invert_xaxis()
-    a2.set_title("range–azimuth image (bird's eye)")
-    fig.tight_layout()
+    if not 1.0 <= args.k <= 10.0:
+        raise ConfigError(f"option --k: value {args.k} is not allowed; expected a number in [1, 10]")
+    if args.every < 1:
+        raise ConfigError(f"option --every: value {args.every} is not allowed; expected an integer >= 1")
+    r = Renderer(scenario, args.k)
+    period = scenario.period_s
+    fig = plt.figure(figsize=(22, 6))
     try:
-        fig.savefig(args.output, dpi=90)
+        if args.animate:
+            from matplotlib.animation import PillowWriter
+            writer = PillowWriter(fps=max(1, round(1.0 / (period * args.every))))
+            with writer.saving(fig, args.output, dpi=60):
+                n = 0
+                for k in range(scenario.num_cycles):
+                    frame, bnd = r.step(k * period)
+                    if k % args.every == 0:
+                        r.draw(fig, k * period, frame, bnd)
+                        writer.grab_frame()
+                        n += 1
+            print(f"wrote {args.output}: {n} frames", file=sys.stderr)
+            return 0
+        last = int(math.floor(args.time / period + 1e-9))
+        for k in range(last):
+            r.step(k * period)
+        frame, bnd = r.step(args.time)
+        r.draw(fig, args.time, frame, bnd)
+        fig.tight_layout()
+        fig.savefig(args.output, dpi=80)
     except (OSError, ValueError) as exc:
         raise ConfigError(f"option --output: cannot write {args.output!r}: {exc}") from None
-    print(f"wrote {args.output}: {len(det)} detections, {len(model.info.scatterers)} scatterers, "
-          f"cube {cube.shape[0]}x{cube.shape[1]}x{cube.shape[2]}", file=sys.stderr)
+    finally:
+        plt.close(fig)
+    info = r.model.info
+    cube = info.cube
+    print(f"wrote {args.output}: {len(info.detections)} detections, {len(frame.objects)} objects, "
+          f"{len(info.scatterers)} scatterers, cube {cube.shape[0]}x{cube.shape[1]}x{cube.shape[2]}", file=sys.stderr)
     return 0
