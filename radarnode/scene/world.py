@@ -128,13 +128,6 @@ class Scene:
         speed = float(st.vx_mps[0])
         return EgoState(float(x[0]), float(y[0]), float(psi[0]), speed, float(st.ax_mps2[0]), self.kappa * speed)
 
-    def _actor_world(self, t_s: float) -> tuple[np.ndarray, ...]:
-        st = self._movers.state(t_s)
-        x, y, psi, vx, vy = self._world_motion(st)
-        speed = np.hypot(vx, vy)
-        heading = np.where(speed > 0.1, np.arctan2(vy, vx), psi + self.heading_rel)
-        return x, y, vx, vy, heading
-
     # --- the sensor's view -------------------------------------------------
     def sensor_pose(self, ego: EgoState) -> tuple[float, float, float, float, float]:
         """World position, heading and velocity of the sensor."""
