@@ -1,0 +1,231 @@
+"""The consumer ECU's tracker on decoded object or cluster lists.
+
+Stone Soup's composition of single-purpose roles, each a function tested alone:
+
+* :func:`predict` — Kalman prediction with a constant-velocity or constant-acceleration model, plus the
+  ego's rotation (the lists are relative to a sensor that turns with the car);
+* :func:`update` — linear Kalman update with [x, y, vx, vy] (objects) or [x, y] (clusters);
+* :func:`associate` — Mahalanobis gate and global nearest neighbour (``linear_sum_assignment``);
+  object lists carry IDs, which take precedence inside the gate;
+* :func:`initiate` — new tentative tracks; :class:`Tracker` confirms with M of N and deletes after
+  ``max_coast`` missed cycles.
+
+State per track, relative to the sensor: [x, y, vx, vy, ax, ay] (CA) or [x, y, vx, vy] (CV).
+Quality figures: :func:`nees` and :func:`ospa`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.optimize
+import scipy.stats
+
+from radarnode.errors import ConfigError
+
+MODELS = ("cv", "ca")
+
+
+def transition(model: str, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
+    """State transition F and process noise Q (white acceleration for CV, white jerk for CA), 2-D."""
+    if model == "cv":
+        f1 = np.array([[1.0, dt], [0.0, 1.0]])
+        q1 = q * np.array([[dt ** 4 / 4, dt ** 3 / 2], [dt ** 3 / 2, dt ** 2]])
+        order = [0, 2]                                # x, vx ; y, vy
+    elif model == "ca":
+        f1 = np.array([[1.0, dt, dt * dt / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
+        q1 = q * np.array([[dt ** 5 / 20, dt ** 4 / 8, dt ** 3 / 6], [dt ** 4 / 8, dt ** 3 / 3, dt ** 2 / 2],
+                           [dt ** 3 / 6, dt ** 2 / 2, dt]])
+        order = [0, 2, 4]
+    else:
+        raise ConfigError(f"tracker model: value {model!r} is not allowed; expected one of {', '.join(MODELS)}")
+    n = 2 * len(order)
+    f, qq = np.zeros((n, n)), np.zeros((n, n))
+    for axis in range(2):
+        idx = [o + axis for o in order]
+        f[np.ix_(idx, idx)] = f1
+        qq[np.ix_(idx, idx)] = q1
+    return f, qq
+
+
+def _rotation(n: int, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    rot = np.zeros((n, n))
+    for k in range(0, n, 2):
+        rot[k:k + 2, k:k + 2] = [[c, -s], [s, c]]
+    return rot
+
+
+def predict(x: np.ndarray, p: np.ndarray, model: str, dt: float, q: float, yaw_rad: float = 0.0):
+    """Predict states (n, d) and covariances (n, d, d) by ``dt``; the sensor turned by ``yaw_rad`` meanwhile."""
+    f, qq = transition(model, dt, q)
+    if yaw_rad:
+        f = _rotation(f.shape[0], -yaw_rad) @ f
+    return x @ f.T, f @ p @ f.T + qq
+
+
+def measurement_matrix(state_dim: int, kind: str) -> np.ndarray:
+    """H for 'objects' ([x, y, vx, vy]) or 'clusters' ([x, y])."""
+    m = 4 if kind == "objects" else 2
+    h = np.zeros((m, state_dim))
+    h[np.arange(m), np.arange(m)] = 1.0
+    return h
+
+
+def update(x, p, z, r, h):
+    """Kalman update of states (n, d) with measurements (n, m) and their covariances (n, m, m)."""
+    s = h @ p @ h.T + r
+    k = p @ h.T @ np.linalg.inv(s)
+    x_new = x + np.einsum("nij,nj->ni", k, z - x @ h.T)
+    i_kh = np.eye(x.shape[1])[None] - k @ h
+    # Joseph form: stays symmetric and positive definite
+    p_new = i_kh @ p @ np.transpose(i_kh, (0, 2, 1)) + k @ r @ np.transpose(k, (0, 2, 1))
+    return x_new, p_new
+
+
+def mahalanobis2(x, p, z, r, h) -> np.ndarray:
+    """Squared Mahalanobis distances, shape (tracks, measurements)."""
+    if len(x) == 0 or len(z) == 0:
+        return np.zeros((len(x), len(z)))
+    nu = z[None, :, :] - (x @ h.T)[:, None, :]                        # (n, m, dim)
+    s = (h @ p @ h.T)[:, None, :, :] + r[None, :, :, :]                 # (n, m, dim, dim)
+    return np.einsum("nmi,nmij,nmj->nm", nu, np.linalg.inv(s), nu)
+
+
+def associate(d2: np.ndarray, gate: float, track_ids: np.ndarray | None = None,
+              meas_ids: np.ndarray | None = None) -> list[tuple[int, int]]:
+    """Global nearest neighbour inside the gate; equal IDs (object lists) win when inside the gate."""
+    if d2.size == 0:
+        return []
+    cost = np.where(d2 <= gate, d2, np.inf)
+    if track_ids is not None and meas_ids is not None:
+        same = track_ids[:, None] == meas_ids[None, :]
+        cost = np.where(same & np.isfinite(cost), cost - 1e6, cost)
+    finite = np.where(np.isfinite(cost), cost, 1e12)
+    rows, cols = scipy.optimize.linear_sum_assignment(finite)
+    return [(int(i), int(j)) for i, j in zip(rows, cols) if np.isfinite(cost[i, j])]
+
+
+def initiate(z: np.ndarray, r: np.ndarray, state_dim: int, kind: str, v_sigma: float = 10.0,
+             a_sigma: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
+    """New states from measurements: measured parts as measured, the rest zero with a wide covariance."""
+    n, m = z.shape
+    x = np.zeros((n, state_dim))
+    x[:, :m] = z
+    p = np.zeros((n, state_dim, state_dim))
+    p[:, :m, :m] = r
+    diag = np.arange(m, state_dim)
+    p[:, diag, diag] = np.where(diag < 4, v_sigma ** 2, a_sigma ** 2)
+    return x, p
+
+
+def nees(x_est: np.ndarray, p_est: np.ndarray, x_true: np.ndarray) -> np.ndarray:
+    """Normalised estimation error squared of each estimate, shape (n,)."""
+    e = x_est - x_true
+    return np.einsum("ni,nij,nj->n", e, np.linalg.inv(p_est), e)
+
+
+def nees_bounds(dim: int, runs: int, confidence: float = 0.95) -> tuple[float, float]:
+    """Two-sided χ² bounds of the average NEES over ``runs`` Monte Carlo runs."""
+    lo, hi = scipy.stats.chi2.ppf([(1 - confidence) / 2, (1 + confidence) / 2], dim * runs)
+    return lo / runs, hi / runs
+
+
+def ospa(estimates: np.ndarray, truth: np.ndarray, c: float = 10.0, order: float = 2.0) -> float:
+    """OSPA distance (Schuhmacher et al., 2008) between two point sets of shape (n, d) and (m, d)."""
+    n, m = len(estimates), len(truth)
+    if n == 0 and m == 0:
+        return 0.0
+    if n == 0 or m == 0:
+        return c
+    d = np.minimum(np.linalg.norm(estimates[:, None, :] - truth[None, :, :], axis=2), c) ** order
+    rows, cols = scipy.optimize.linear_sum_assignment(d)
+    total = d[rows, cols].sum() + c ** order * abs(n - m)
+    return float((total / max(n, m)) ** (1.0 / order))
+
+
+@dataclass
+class Track:
+    """One track; ``history`` holds the last N association results for M-of-N confirmation."""
+
+    id: int
+    x: np.ndarray
+    p: np.ndarray
+    meas_id: int = -1
+    hits: list[bool] = field(default_factory=list)
+    confirmed: bool = False
+    misses: int = 0
+    age: int = 0
+
+
+class Tracker:
+    """Tracks from object lists (``kind='objects'``) or cluster lists (``kind='clusters'``).
+
+    Parameters
+    ----------
+    model : 'cv' or 'ca'
+    confirm : (M, N) — confirmed after M hits in the last N cycles
+    max_coast : cycles a confirmed track survives without a measurement
+    gate : χ² gate on the squared Mahalanobis distance
+    """
+
+    def __init__(self, kind: str = "objects", model: str = "ca", q: float = 4.0, confirm: tuple[int, int] = (2, 3),
+                 max_coast: int = 3, gate: float | None = None) -> None:
+        if kind not in ("objects", "clusters"):
+            raise ConfigError(f"tracker kind: value {kind!r} is not allowed; expected 'objects' or 'clusters'")
+        if model not in MODELS:
+            raise ConfigError(f"tracker model: value {model!r} is not allowed; expected one of {', '.join(MODELS)}")
+        self.kind, self.model, self.q = kind, model, q
+        self.dim = 6 if model == "ca" else 4
+        self.h = measurement_matrix(self.dim, kind)
+        m = self.h.shape[0]
+        self.gate = gate if gate is not None else float(scipy.stats.chi2.ppf(0.999, m))
+        self.confirm = confirm
+        self.max_coast = max_coast
+        self.tracks: list[Track] = []
+        self._next_id = 0
+        self.last_t: float | None = None
+
+    def step(self, t_s: float, z: np.ndarray, r: np.ndarray, meas_ids: np.ndarray | None = None,
+             yaw_rate_rps: float = 0.0) -> list[Track]:
+        """One cycle: predict all tracks to ``t_s``, associate the measurements (n, m) with covariances
+        (n, m, m), update, initiate, confirm and delete; returns the confirmed tracks."""
+        dt = 0.0 if self.last_t is None else max(t_s - self.last_t, 0.0)
+        self.last_t = t_s
+        if self.tracks:
+            x = np.stack([t.x for t in self.tracks])
+            p = np.stack([t.p for t in self.tracks])
+            if dt > 0:
+                x, p = predict(x, p, self.model, dt, self.q, yaw_rate_rps * dt)
+        else:
+            x, p = np.zeros((0, self.dim)), np.zeros((0, self.dim, self.dim))
+        ids = np.array([t.meas_id for t in self.tracks]) if meas_ids is not None else None
+        pairs = associate(mahalanobis2(x, p, z, r, self.h), self.gate, ids, meas_ids)
+        hit = np.zeros(len(self.tracks), dtype=bool)
+        used = np.zeros(len(z), dtype=bool)
+        if pairs:
+            ti, mi = np.array(pairs).T
+            x[ti], p[ti] = update(x[ti], p[ti], z[mi], r[mi], self.h)
+            hit[ti], used[mi] = True, True
+        m_conf, n_conf = self.confirm
+        for k, tr in enumerate(self.tracks):
+            tr.x, tr.p = x[k], p[k]
+            tr.hits = (tr.hits + [bool(hit[k])])[-n_conf:]
+            tr.misses = 0 if hit[k] else tr.misses + 1
+            tr.age += 1
+            if hit[k] and meas_ids is not None:
+                tr.meas_id = int(meas_ids[[j for i, j in pairs if i == k][0]])
+            if not tr.confirmed and sum(tr.hits) >= m_conf:
+                tr.confirmed = True
+        # deletion: confirmed tracks after max_coast misses, tentative ones at their first miss
+        self.tracks = [t for t in self.tracks if (t.misses <= self.max_coast if t.confirmed else t.misses == 0)]
+        new = np.flatnonzero(~used)
+        if new.size:
+            nx, npc = initiate(z[new], r[new], self.dim, self.kind)
+            for k, j in enumerate(new):
+                self.tracks.append(Track(self._next_id, nx[k], npc[k], int(meas_ids[j]) if meas_ids is not None
+                                         else -1, [True], m_conf <= 1))
+                self._next_id += 1
+        return [t for t in self.tracks if t.confirmed]
