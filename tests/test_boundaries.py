@@ -22,7 +22,8 @@ def test_own_dbc_messages_are_in_the_free_range_with_cycle_times_and_start_value
     for m in db.messages:
         assert 0x680 <= m.frame_id <= 0x6FF and m.length == 8 and m.cycle_time == 72
         assert all(s.byte_order == "big_endian" for s in m.signals)
-        offset = next(s for s in m.signals if s.name.endswith("LatOffset"))
+    for name in ("RoadBoundary_Left", "RoadBoundary_Right"):
+        offset = next(s for s in db.get_message_by_name(name).signals if s.name.endswith("LatOffset"))
         assert offset.raw_initial == 2048 and offset.initial == pytest.approx(0.0)
 
 

@@ -78,6 +78,7 @@ class ConsumerStats:
     status_frames: int = 0          # RadarState, VersionID, ego motion, configuration
     errors_frames: int = 0          # CAN error and remote frames
     boundary_frames: int = 0        # radarnode's road-boundary frames accepted
+    ecu_frames: int = 0             # AccStatus / FcwStatus frames accepted
     e2e_errors: int = 0             # own frames with a wrong E2E CRC: dropped
     e2e_repeated: int = 0           # own frames whose alive counter did not advance: dropped
 
@@ -140,6 +141,8 @@ class CycleAssembler(can.Listener):
         self.e2e = E2EChecker()
         #: latest decoded road boundaries: {"left": Boundary, "right": Boundary}
         self.road_boundaries: dict[str, Boundary] = {}
+        #: latest decoded AccStatus / FcwStatus signals, by message name
+        self.ecu_status: dict[str, dict] = {}
 
     # --- can.Listener ---------------------------------------------------------
     def on_message_received(self, msg: can.Message) -> None:
@@ -238,6 +241,11 @@ class CycleAssembler(can.Listener):
             self.stats.e2e_repeated += self.e2e.stats.repeated - before[1]
             return
         v = message.decode(data, decode_choices=False)
+        if base not in (P.ROAD_BOUNDARY_LEFT, P.ROAD_BOUNDARY_RIGHT):
+            # the consumer ECU's AccStatus / FcwStatus, as another ECU on the bus would read them
+            self.ecu_status[message.name] = v
+            self.stats.ecu_frames += 1
+            return
         prefix, side = ("RBL", "left") if base == P.ROAD_BOUNDARY_LEFT else ("RBR", "right")
         self.road_boundaries[side] = Boundary(
             bool(v[f"{prefix}_Valid"]), v[f"{prefix}_LatOffset"], np.radians(v[f"{prefix}_Heading"]),

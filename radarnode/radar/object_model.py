@@ -241,6 +241,8 @@ class ObjectModel:
             return ch, k - ch["k0"]
         n = max(self.scene.n, 1)
         size = int(min(CHUNK_CYCLES, max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
+        if self.scene.dynamic_ego is not None:
+            size = 1          # closed loop: the ego's future is not known in advance
         times = (k + np.arange(size)) * period if on_grid else np.array([t_s])
         self._cache = self._chunk(k, times, config)
         return self._cache, 0

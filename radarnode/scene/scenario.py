@@ -263,6 +263,52 @@ class Actor:
 
 
 @dataclass(frozen=True)
+class Expectation:
+    """Acceptance criteria checked by ``radarnode report`` (all optional)."""
+
+    lead: str | None = None                # actor whose gap and TTC are measured
+    fcw_ttc_min_s: float | None = None     # an FCW warning must come at a (constant-speed) TTC ≥ this
+    fcw_required: bool = False             # an FCW warning must come before the gap closes
+    no_fcw: bool = False                   # no FCW warning at all
+    gap_settle_s: float | None = None      # ACC: time gap within ±gap_tolerance of the setting from then on
+    gap_tolerance: float = 0.1
+    min_gap_m: float | None = None         # the gap to the lead never below this
+
+    def __post_init__(self) -> None:
+        if self.lead is not None:
+            validate.text("lead", self.lead)
+        if self.fcw_ttc_min_s is not None:
+            validate.number("fcw_ttc_min_s", self.fcw_ttc_min_s, lo=0.0, hi=20.0)
+        validate.boolean("fcw_required", self.fcw_required)
+        validate.boolean("no_fcw", self.no_fcw)
+        if self.gap_settle_s is not None:
+            validate.number("gap_settle_s", self.gap_settle_s, lo=0.0, hi=3600.0)
+        validate.number("gap_tolerance", self.gap_tolerance, lo=0.0, hi=1.0, lo_open=True)
+        if self.min_gap_m is not None:
+            validate.number("min_gap_m", self.min_gap_m, lo=0.0, hi=500.0)
+
+
+@dataclass(frozen=True)
+class EcuSpec:
+    """The consumer ECU under test: ACC settings, closed loop, and what to expect."""
+
+    acc_enabled: bool = False
+    set_speed_mps: float = 30.0
+    time_gap_s: float = 1.5
+    closed_loop: bool = False
+    actuator_lag_s: float = 0.3
+    expect: Expectation = Expectation()
+
+    def __post_init__(self) -> None:
+        validate.boolean("acc_enabled", self.acc_enabled)
+        validate.number("set_speed_mps", self.set_speed_mps, lo=0.0, hi=70.0)
+        if self.time_gap_s not in (1.0, 1.5, 2.0):
+            raise FieldError("time_gap_s", self.time_gap_s, "one of 1.0, 1.5, 2.0 s (ISO 15622 settings)")
+        validate.boolean("closed_loop", self.closed_loop)
+        validate.number("actuator_lag_s", self.actuator_lag_s, lo=0.01, hi=5.0)
+
+
+@dataclass(frozen=True)
 class Scenario:
     """A complete scenario: timing, seed, radar, ego, road and actors."""
 
@@ -273,6 +319,7 @@ class Scenario:
     cycle_period_s: float | None = None
     fidelity: str = "object"
     signal: SignalOptions = SignalOptions()
+    ecu: EcuSpec = EcuSpec()
     radar: RadarSetup = RadarSetup()
     ego: Ego = Ego()
     road: Road = Road()
@@ -291,6 +338,9 @@ class Scenario:
         dup = sorted({i for i in ids if ids.count(i) > 1})
         if dup:
             raise FieldError("actors", dup, "unique actor ids")
+        lead = self.ecu.expect.lead
+        if lead is not None and lead not in ids:
+            raise FieldError("ecu.expect.lead", lead, "the id of one of the actors: " + ", ".join(ids))
         for i, a in enumerate(self.actors):
             if a.lane is not None and a.lane >= self.road.lanes:
                 raise FieldError(f"actors[{i}].lane", a.lane, f"a lane index in [0, {self.road.lanes - 1}]")
@@ -319,7 +369,8 @@ _ALIASES = {Actor: {"class": "object_class"}}
 #: fields that hold nested dataclasses, or tuples of them
 _NESTED: dict[type, dict[str, tuple[type, bool]]] = {
     Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False), "actors": (Actor, True),
-               "signal": (SignalOptions, False)},
+               "signal": (SignalOptions, False), "ecu": (EcuSpec, False)},
+    EcuSpec: {"expect": (Expectation, False)},
     SignalOptions: {"dsp": (DspConfig, False), "impairments": (Impairments, False)},
     RadarSetup: {"mount": (Mount, False)},
     Road: {"guardrails": (Guardrails, False)},

@@ -80,6 +80,28 @@ def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.nd
     return c * x - s * y, s * x + c * y
 
 
+class DynamicEgo:
+    """An ego driven from outside (closed loop): position, speed and acceleration set each cycle.
+
+    Between updates the state is extrapolated with constant acceleration; it
+    answers ``state(t)`` like a :class:`MoverTable` of one mover.
+    """
+
+    def __init__(self, speed_mps: float) -> None:
+        self.t0, self.s0, self.v0, self.a0 = 0.0, 0.0, speed_mps, 0.0
+
+    def set(self, t_s: float, s_m: float, v_mps: float, a_mps2: float) -> None:
+        self.t0, self.s0, self.v0, self.a0 = t_s, s_m, v_mps, a_mps2
+
+    def state(self, t_s) -> MoverState:
+        t = np.asarray(t_s, dtype=np.float64)
+        dt = (t - self.t0)[..., None] if t.ndim else np.array([t - self.t0])
+        v = np.maximum(self.v0 + self.a0 * dt, 0.0)
+        x = self.s0 + self.v0 * dt + 0.5 * self.a0 * dt * dt
+        z = np.zeros_like(x)
+        return MoverState(x, z, v, z.copy(), np.full_like(x, self.a0), z.copy())
+
+
 class Scene:
     """Evaluates a scenario's ego and actors at any time."""
 
@@ -90,6 +112,7 @@ class Scene:
         self.actors = actors
         self.n = len(actors)
         self._ego = MoverTable([0.0], [0.0], [scenario.ego.speed_mps], [0.0], [scenario.ego.accel], [()])
+        self.dynamic_ego: DynamicEgo | None = None
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
@@ -104,6 +127,12 @@ class Scene:
         hl, hw = self.length_m / 2.0, self.width_m / 2.0
         self._corners_x = np.stack([hl, hl, -hl, -hl], axis=-1) if self.n else np.zeros((0, 4))
         self._corners_y = np.stack([hw, -hw, hw, -hw], axis=-1) if self.n else np.zeros((0, 4))
+
+    def drive_ego(self) -> DynamicEgo:
+        """Hand the ego to a closed loop: from now on its motion is set from outside."""
+        self.dynamic_ego = DynamicEgo(self.scenario.ego.speed_mps)
+        self._ego = self.dynamic_ego
+        return self.dynamic_ego
 
     # --- road geometry ---------------------------------------------------
     def road_to_world(self, s: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:

@@ -1,0 +1,124 @@
+"""Adaptive cruise control on the tracked object list (ISO 15622 limits, DESIGN §7).
+
+Target: the nearest track in the ego path (predicted from yaw rate over
+speed, or the lane between the road boundaries when the radar reports them)
+that is a road user: moving, stopped, or a stationary vehicle-class object.
+Control: the smaller of a speed loop, k_s·(v_set − v), and a gap loop,
+k_d·(d − d_des) + k_v·Δv + lead acceleration, with d_des = max(d_0, τ·v); then
+the acceleration, deceleration and jerk limits of ISO 15622 by speed.
+States: off, standby (no target handling, no request), active, fault (radar
+unavailable or stale: the request is released to zero and flagged).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from radarnode import validate
+from radarnode.errors import FieldError
+
+TIME_GAPS_S = (1.0, 1.5, 2.0)
+STATE_OFF, STATE_STANDBY, STATE_ACTIVE, STATE_FAULT = 0, 1, 2, 3
+STATE_NAMES = ("off", "standby", "active", "fault")
+
+
+@dataclass(frozen=True)
+class AccSettings:
+    """Driver settings and controller gains."""
+
+    enabled: bool = True
+    set_speed_mps: float = 30.0
+    time_gap_s: float = 1.5
+    standstill_gap_m: float = 4.0
+    k_speed: float = 0.4
+    k_gap: float = 0.2
+    k_rel_speed: float = 0.8
+    path_half_width_m: float = 1.6
+
+    def __post_init__(self) -> None:
+        validate.boolean("enabled", self.enabled)
+        validate.number("set_speed_mps", self.set_speed_mps, lo=0.0, hi=70.0)
+        if self.time_gap_s not in TIME_GAPS_S:
+            raise FieldError("time_gap_s", self.time_gap_s, "one of 1.0, 1.5, 2.0 s (ISO 15622 settings)")
+        validate.number("standstill_gap_m", self.standstill_gap_m, lo=1.0, hi=20.0)
+        for f in ("k_speed", "k_gap", "k_rel_speed"):
+            validate.number(f, getattr(self, f), lo=0.0, hi=5.0)
+        validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
+
+
+def iso15622_limits(speed_mps: float) -> tuple[float, float, float]:
+    """(max deceleration (negative), max acceleration, max jerk) at an ego speed; linear between 5 and 20 m/s."""
+    f = min(max((speed_mps - 5.0) / 15.0, 0.0), 1.0)
+    return -5.0 + 1.5 * f, 4.0 - 2.0 * f, 5.0 - 2.5 * f
+
+
+@dataclass(frozen=True)
+class Target:
+    """The selected object: track ID, distance (m, along x), relative speed (m/s, negative closing), lead accel."""
+
+    track_id: int
+    object_id: int
+    distance_m: float
+    lateral_m: float
+    rel_speed_mps: float
+    lead_accel_mps2: float
+
+
+def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: float, half_width_m: float,
+            boundaries: dict | None = None) -> np.ndarray:
+    """Which points lie in the ego's predicted path (a circle of curvature yaw rate / speed)."""
+    kappa = yaw_rate_rps / ego_speed_mps if ego_speed_mps > 1.0 else 0.0
+    centre = 0.5 * kappa * x * x
+    inside = (x > 0.0) & (np.abs(y - centre) <= half_width_m)
+    if boundaries:
+        # where the radar reports both road edges, the path may not leave the road
+        left, right = boundaries.get("left"), boundaries.get("right")
+        if left is not None and left.valid:
+            inside &= y < left.y_at(x)
+        if right is not None and right.valid:
+            inside &= y > right.y_at(x)
+    return inside
+
+
+class Acc:
+    """The ACC state machine and controller; call :meth:`step` once per radar cycle."""
+
+    def __init__(self, settings: AccSettings = AccSettings()) -> None:
+        self.settings = settings
+        self.state = STATE_ACTIVE if settings.enabled else STATE_OFF
+        self.request = 0.0
+        self.fault = False
+
+    def step(self, dt: float, ego_speed_mps: float, target: Target | None, radar_ok: bool) -> float:
+        """The acceleration request (m/s²) for this cycle."""
+        s = self.settings
+        if not s.enabled:
+            self.state, self.request = STATE_OFF, 0.0
+            return 0.0
+        if not radar_ok:
+            # never act on stale objects: release the request and flag the fault
+            self.state, self.fault, self.request = STATE_FAULT, True, 0.0
+            return 0.0
+        if self.state == STATE_FAULT:
+            self.state, self.fault = STATE_ACTIVE, False
+        a_min, a_max, jerk = iso15622_limits(ego_speed_mps)
+        want = s.k_speed * (s.set_speed_mps - ego_speed_mps)
+        if target is not None:
+            # the time gap is the setting; the standstill gap only matters at low speed
+            d_des = max(s.standstill_gap_m, s.time_gap_s * ego_speed_mps)
+            gap = (s.k_gap * (target.distance_m - d_des) + s.k_rel_speed * target.rel_speed_mps
+                   + 0.5 * target.lead_accel_mps2)
+            want = min(want, gap)
+        want = min(max(want, a_min), a_max)
+        if dt > 0:
+            step = jerk * dt
+            want = min(max(want, self.request - step), self.request + step)
+        self.request = want
+        return want
+
+    @staticmethod
+    def time_gap(distance_m: float, ego_speed_mps: float) -> float:
+        return distance_m / ego_speed_mps if ego_speed_mps > 0.1 else math.inf

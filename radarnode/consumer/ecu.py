@@ -1,0 +1,166 @@
+"""The consumer ECU: decoded radar cycles → tracker → ACC and FCW → status frames on the bus.
+
+:class:`Ecu` is fed by a :class:`~radarnode.consumer.assembler.CycleAssembler` (``on_cycle``), reads the
+ego's speed and yaw rate from the same bus (0x300/0x301, as the radar does), and after every radar cycle
+produces the ACC request, the FCW level and the two status frames AccStatus 0x6A0 and FcwStatus 0x6A1
+(``dbc/radarnode.dbc``, E2E Profile 2). When no complete radar cycle has arrived for ``timeout_cycles``
+cycle periods the radar is unavailable: ACC goes to fault and releases its request (:meth:`Ecu.tick`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import can
+import numpy as np
+
+from radarnode.consumer.acc import Acc, AccSettings, Target, in_path
+from radarnode.consumer.assembler import ObjectCycle
+from radarnode.consumer.fcw import Fcw, FcwSettings
+from radarnode.consumer.tracking import Tracker
+from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED
+from radarnode.wire.ars408 import shifted
+from radarnode.wire.codec import MessageCodec
+from radarnode.wire.dbc import load_own_database
+from radarnode.wire.e2e import E2EProtector
+
+ACC_STATUS, FCW_STATUS = 0x6A0, 0x6A1
+VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones still count in the path
+
+
+@dataclass
+class EcuOutput:
+    """What the ECU decided in one cycle."""
+
+    t_s: float
+    accel_request_mps2: float
+    acc_state: int
+    fault: int
+    warning_level: int
+    ttc_s: float
+    required_decel_mps2: float
+    target: Target | None
+    radar_ok: bool
+
+
+class Ecu:
+    """ACC and FCW on the decoded object list of one radar."""
+
+    def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
+                 period_s: float = 0.072, timeout_cycles: int = 3) -> None:
+        self.tracker = Tracker("objects", "ca")
+        self.acc = Acc(acc)
+        self.fcw = Fcw(fcw)
+        self.sensor_id = sensor_id
+        self.period_s = period_s
+        self.timeout_s = timeout_cycles * period_s
+        self.last_cycle_t: float | None = None
+        self.ego_speed_mps = 0.0
+        self.ego_yaw_rate_rps = 0.0
+        self.ego_accel_mps2 = 0.0
+        self._prev_speed: tuple[float, float] | None = None
+        self.outputs: list[EcuOutput] = []
+        db = load_own_database()
+        self._acc_codec = MessageCodec(db.get_message_by_frame_id(ACC_STATUS))
+        self._fcw_codec = MessageCodec(db.get_message_by_frame_id(FCW_STATUS))
+        self._e2e = E2EProtector()
+        self.boundaries: dict | None = None
+        self._last_out_t: float | None = None
+
+    def set_ego(self, t_s: float, speed_mps: float | None, yaw_rate_dps: float | None) -> None:
+        """Ego motion as read from the bus; the acceleration is differentiated (and smoothed)."""
+        if speed_mps is None:
+            return
+        if self._prev_speed is not None and t_s > self._prev_speed[0]:
+            a = (speed_mps - self._prev_speed[1]) / (t_s - self._prev_speed[0])
+            self.ego_accel_mps2 += 0.5 * (a - self.ego_accel_mps2)
+        self._prev_speed = (t_s, speed_mps)
+        self.ego_speed_mps = speed_mps
+        self.ego_yaw_rate_rps = math.radians(yaw_rate_dps or 0.0)
+
+    def on_cycle(self, t_s: float, cycle: ObjectCycle) -> EcuOutput:
+        """A complete radar cycle arrived at ``t_s``."""
+        ol = cycle.objects
+        n = len(ol)
+        z = np.stack([ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps], axis=1) if n else \
+            np.zeros((0, 4))
+        sig = np.stack([ol.dist_long_sigma_m, ol.dist_lat_sigma_m, ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps],
+                       axis=1) if n else np.zeros((0, 4))
+        sig = np.where(np.isfinite(sig), np.maximum(sig, [0.1, 0.1, 0.1, 0.3]), [0.5, 0.5, 0.3, 0.8])
+        r = np.zeros((n, 4, 4))
+        r[:, np.arange(4), np.arange(4)] = sig ** 2
+        tracks = self.tracker.step(t_s, z, r, ol.id.astype(np.int64), self.ego_yaw_rate_rps)
+        by_id = {int(ol.id[k]): k for k in range(n)}
+        self.last_cycle_t = t_s
+        return self._decide(t_s, tracks, ol, by_id, radar_ok=True)
+
+    def tick(self, t_s: float) -> EcuOutput | None:
+        """Call between cycles (e.g. on a timer): reports the radar unavailable after the time-out."""
+        if self.last_cycle_t is not None and t_s - self.last_cycle_t <= self.timeout_s:
+            return None
+        if self._last_out_t is not None and t_s - self._last_out_t < self.period_s:
+            return None
+        return self._decide(t_s, [], None, {}, radar_ok=False)
+
+    def _select(self, tracks, ol, by_id) -> Target | None:
+        if not tracks:
+            return None
+        x = np.array([t.x[0] for t in tracks])
+        y = np.array([t.x[1] for t in tracks])
+        ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
+                     self.boundaries)
+        road_user = np.zeros(len(tracks), dtype=bool)
+        for i, t in enumerate(tracks):
+            k = by_id.get(t.meas_id)
+            if k is None:
+                road_user[i] = True            # coasting: it was a road user when selected
+                continue
+            dyn, cls = int(ol.dyn_prop[k]), int(ol.obj_class[k])
+            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or cls in VEHICLE_CLASSES
+        cand = np.flatnonzero(ok & road_user)
+        if cand.size == 0:
+            return None
+        i = int(cand[np.argmin(x[cand])])
+        t = tracks[i]
+        ax = t.x[4] if t.x.size == 6 else 0.0
+        return Target(t.id, t.meas_id, float(t.x[0]), float(t.x[1]), float(t.x[2]), float(ax + self.ego_accel_mps2))
+
+    def _decide(self, t_s, tracks, ol, by_id, radar_ok: bool) -> EcuOutput:
+        dt = self.period_s if self._last_out_t is None else t_s - self._last_out_t
+        self._last_out_t = t_s
+        target = self._select(tracks, ol, by_id) if radar_ok else None
+        accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
+        v, lead_v = self.ego_speed_mps, None
+        if target is not None:
+            lead_v = max(v + target.rel_speed_mps, 0.0)
+            level = self.fcw.step(target.distance_m, v, lead_v, self.ego_accel_mps2, target.lead_accel_mps2)
+        else:
+            level = self.fcw.step(None, v, 0.0, 0.0, 0.0)
+        fault = (0 if radar_ok else 1)
+        out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
+                        target, radar_ok)
+        self.outputs.append(out)
+        return out
+
+    def frames(self, out: EcuOutput, timestamp: float | None = None) -> list[can.Message]:
+        """AccStatus and FcwStatus for ``out``, E2E protected."""
+        tgt = out.target
+        acc = self._acc_codec.encode({
+            "ACC_CRC": 0, "ACC_Counter": 0, "ACC_State": out.acc_state, "ACC_Fault": out.fault,
+            "ACC_TargetID": tgt.track_id % 255 if tgt else 255,
+            "ACC_Distance": tgt.distance_m if tgt else 0.0, "ACC_RelSpeed": tgt.rel_speed_mps if tgt else 0.0,
+            "ACC_TimeGap": min(Acc.time_gap(tgt.distance_m, self.ego_speed_mps), 6.35) if tgt else 6.35,
+            "ACC_AccelRequest": out.accel_request_mps2})[0]
+        fcw = self._fcw_codec.encode({
+            "FCW_CRC": 0, "FCW_Counter": 0, "FCW_WarningLevel": out.warning_level,
+            "FCW_TargetID": tgt.track_id % 255 if tgt else 255, "FCW_TTC": min(out.ttc_s, 25.5),
+            "FCW_RequiredDecel": -out.required_decel_mps2,
+            "FCW_LeadAccel": tgt.lead_accel_mps2 if tgt else 0.0})[0]
+        ts = out.t_s if timestamp is None else timestamp
+        msgs = []
+        for base, payload in ((ACC_STATUS, acc), (FCW_STATUS, fcw)):
+            fid = shifted(base, self.sensor_id)
+            msgs.append(can.Message(arbitration_id=fid, data=self._e2e.protect(fid, payload.tobytes()),
+                                    is_extended_id=False, timestamp=ts, check=False))
+        return msgs

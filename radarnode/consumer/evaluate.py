@@ -1,0 +1,150 @@
+"""Run a scenario through node, wire, consumer and ECU, and measure what the ECU did.
+
+Everything goes through real frames: the node's ARS 408 frames and the
+vehicle's 0x300/0x301 are decoded by a :class:`CycleAssembler`, the ECU
+decides on the decoded cycles, and its AccStatus/FcwStatus frames are
+decoded and E2E-checked again. In closed loop (``ecu.closed_loop``) the ego
+follows the ACC request through a first-order actuator lag and its speed
+and yaw rate go back to the node as 0x300/0x301.
+
+Truth for the figures: gap and closing speed to the scenario's ``expect.lead``
+actor, measured from the sensor (front bumper) to the lead's nearest point.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from radarnode.consumer.acc import AccSettings, iso15622_limits
+from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
+from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.fcw import LEVEL_WARNING
+from radarnode.scene.scenario import Scenario
+from radarnode.wire.node import EgoMotionSender, RadarNode
+
+
+@dataclass
+class ScenarioResult:
+    """Figures of one run; ``passed`` against the scenario's ``ecu.expect``."""
+
+    name: str
+    seed: int
+    warning_time_s: float | None = None
+    ttc_at_warning_s: float | None = None
+    min_ttc_s: float = math.inf
+    min_gap_m: float = math.inf
+    peak_decel_mps2: float = 0.0
+    peak_accel_mps2: float = 0.0
+    peak_jerk_mps3: float = 0.0
+    final_time_gap_s: float | None = None
+    iso_limits_ok: bool = True
+    passed: bool = True
+    reasons: list[str] = field(default_factory=list)
+    trace: dict = field(default_factory=dict)
+
+
+def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
+    """Run ``scenario`` in simulated time and return the ECU's figures."""
+    spec = scenario.ecu
+    node = RadarNode(scenario, fidelity=fidelity)
+    scene = node.scene
+    ego = scene.drive_ego() if spec.closed_loop else None
+    vehicle = EgoMotionSender(scene, scenario.radar.sensor_id)
+    period = node.period_s
+    ecu = Ecu(AccSettings(enabled=spec.acc_enabled, set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s),
+              sensor_id=scenario.radar.sensor_id, period_s=period)
+    assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
+    lead = next((i for i, a in enumerate(scenario.actors) if a.id == spec.expect.lead), None)
+    res = ScenarioResult(scenario.name, scenario.seed)
+    s_m, v_mps, a_mps2 = 0.0, scenario.ego.speed_mps, 0.0
+    prev_a = None
+    tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap")}
+    for k in range(scenario.num_cycles):
+        t = k * period
+        if ego is not None:
+            ego.set(t, s_m, v_mps, a_mps2)
+        for m in vehicle.frames(t):
+            node.receive(m, t)
+            assembler.on_message_received(m)
+        out = node.cycle(t)
+        for m in out.messages:
+            assembler.on_message_received(m)
+        ecu.set_ego(t, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+        decision = None
+        for cycle in assembler.drain():
+            if isinstance(cycle, ObjectCycle):
+                decision = ecu.on_cycle(t, cycle)
+        if decision is None:
+            decision = ecu.tick(t)
+        if decision is not None:
+            for m in ecu.frames(decision):
+                assembler.on_message_received(m)       # the ECU's frames, decoded and E2E-checked
+        # truth
+        view = out.view
+        ego_state = scene.ego_state(t)
+        gap = ttc = math.inf
+        if lead is not None:
+            gap = float(view.x_m[lead]) if abs(view.y_m[lead]) < 3.0 else math.inf
+            closing = -float(view.vx_mps[lead])
+            ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
+        res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)
+        warning = decision is not None and decision.warning_level == LEVEL_WARNING
+        if warning and res.warning_time_s is None:
+            res.warning_time_s, res.ttc_at_warning_s = t, ttc
+        # closed loop: the ego follows the request through a first-order lag
+        if ego is not None:
+            request = decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0
+            a_new = a_mps2 + (request - a_mps2) * (1.0 - math.exp(-period / spec.actuator_lag_s))
+            s_m += v_mps * period + 0.5 * a_new * period * period
+            v_mps = max(v_mps + a_new * period, 0.0)
+            a_mps2 = a_new if v_mps > 0 else 0.0
+        accel = ego_state.accel_mps2
+        jerk = abs(accel - prev_a) / period if prev_a is not None else 0.0
+        res.peak_jerk_mps3 = max(res.peak_jerk_mps3, jerk)
+        prev_a = accel
+        res.peak_decel_mps2 = min(res.peak_decel_mps2, accel)
+        res.peak_accel_mps2 = max(res.peak_accel_mps2, accel)
+        if ego is not None:
+            lo, hi, jerk_max = iso15622_limits(ego_state.speed_mps)
+            if accel < lo - 0.05 or accel > hi + 0.05 or jerk > jerk_max + 0.05:
+                res.iso_limits_ok = False
+        for key, val in (("t", t), ("gap", gap), ("ttc", ttc), ("speed", ego_state.speed_mps), ("accel", accel),
+                         ("request", decision.accel_request_mps2 if decision else 0.0),
+                         ("warning", decision.warning_level if decision else 0),
+                         ("state", decision.acc_state if decision else 0),
+                         ("time_gap", gap / ego_state.speed_mps if ego_state.speed_mps > 0.5 else math.inf)):
+            tr[key].append(val)
+    res.trace = {k: np.asarray(v) for k, v in tr.items()}
+    res.final_time_gap_s = float(res.trace["time_gap"][-1]) if len(res.trace["t"]) else None
+    res.trace["assembler"] = assembler
+    _judge(scenario, res)
+    return res
+
+
+def _judge(scenario: Scenario, res: ScenarioResult) -> None:
+    e = scenario.ecu.expect
+    if e.fcw_ttc_min_s is not None:
+        if res.warning_time_s is None:
+            res.reasons.append("no FCW warning")
+        elif not (res.ttc_at_warning_s is not None and res.ttc_at_warning_s >= e.fcw_ttc_min_s):
+            res.reasons.append(f"warning at TTC {res.ttc_at_warning_s:.2f} s < {e.fcw_ttc_min_s} s")
+    if e.fcw_required and res.warning_time_s is None:
+        res.reasons.append("no FCW warning")
+    if e.no_fcw and res.warning_time_s is not None:
+        res.reasons.append(f"FCW warning at t = {res.warning_time_s:.2f} s")
+    if e.gap_settle_s is not None:
+        tr = res.trace
+        after = tr["t"] >= e.gap_settle_s
+        target = scenario.ecu.time_gap_s
+        gaps = tr["time_gap"][after]
+        if gaps.size == 0 or np.any(np.abs(gaps - target) > e.gap_tolerance * target):
+            worst = float(np.max(np.abs(gaps - target))) if gaps.size else math.inf
+            res.reasons.append(f"time gap off the {target} s setting by up to {worst:.2f} s after {e.gap_settle_s} s")
+    if e.min_gap_m is not None and res.min_gap_m < e.min_gap_m:
+        res.reasons.append(f"gap fell to {res.min_gap_m:.1f} m < {e.min_gap_m} m")
+    if scenario.ecu.closed_loop and not res.iso_limits_ok:
+        res.reasons.append("acceleration outside the ISO 15622 limits")
+    res.passed = not res.reasons
