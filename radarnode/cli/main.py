@@ -7,10 +7,10 @@ import logging
 import sys
 
 from radarnode import __version__
-from radarnode.cli import consume, decode, image, log, node, run
+from radarnode.cli import consume, decode, image, log, node, report, run
 from radarnode.errors import RadarnodeError
 
-SUBCOMMANDS = (run, node, consume, log, decode, image)
+SUBCOMMANDS = (run, node, consume, log, decode, image, report)
 
 
 def build_parser() -> argparse.ArgumentParser:

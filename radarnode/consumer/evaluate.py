@@ -87,7 +87,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         ego_state = scene.ego_state(t)
         gap = ttc = math.inf
         if lead is not None:
-            gap = float(view.x_m[lead]) if abs(view.y_m[lead]) < 3.0 else math.inf
+            ahead = view.x_m[lead] > 0.0 and abs(view.y_m[lead]) < 2.0     # in the ego lane, ahead
+            gap = float(view.x_m[lead]) if ahead else math.inf
             closing = -float(view.vx_mps[lead])
             ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
         res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)

@@ -1,0 +1,82 @@
+"""ACC and FCW alone: ISO 15622 limits, TTC with a braking lead, required deceleration, hysteresis, states."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from radarnode.consumer.acc import STATE_ACTIVE, STATE_FAULT, STATE_OFF, Acc, AccSettings, Target, in_path, \
+    iso15622_limits
+from radarnode.consumer.fcw import LEVEL_NONE, LEVEL_WARNING, Fcw, required_deceleration, time_to_collision
+from radarnode.errors import FieldError
+
+
+def test_iso15622_limits_by_speed():
+    assert iso15622_limits(3.0) == (-5.0, 4.0, 5.0)
+    assert iso15622_limits(25.0) == (-3.5, 2.0, 2.5)
+    lo, hi, jerk = iso15622_limits(12.5)
+    assert lo == pytest.approx(-4.25) and hi == pytest.approx(3.0) and jerk == pytest.approx(3.75)
+
+
+def test_time_gap_settings_are_the_iso_ones():
+    with pytest.raises(FieldError, match="time_gap_s"):
+        AccSettings(time_gap_s=0.8)
+
+
+def test_ttc_with_constant_speeds_braking_lead_and_stopping_lead():
+    assert time_to_collision(40.0, 20.0, 10.0) == pytest.approx(4.0)
+    assert time_to_collision(40.0, 10.0, 20.0) == math.inf
+    # NHTSA test 2: 30 m at 45 mph each, lead at −0.3 g: the gap closes as ½·a·t²
+    assert time_to_collision(30.0, 20.1, 20.1, 0.0, -2.94) == pytest.approx(math.sqrt(2 * 30 / 2.94))
+    # a lead that stops first: the ego reaches its stopping point
+    t = time_to_collision(10.0, 10.0, 4.0, 0.0, -8.0)
+    assert t == pytest.approx((10.0 + 4.0 ** 2 / 16.0) / 10.0)
+
+
+def test_required_deceleration():
+    assert required_deceleration(50.0, 20.0, 20.0) == 0.0
+    assert required_deceleration(50.0, 20.0, 10.0) == pytest.approx(-(10.0 ** 2) / 100.0)
+    assert required_deceleration(30.0, 20.0, 20.0, -3.0) == pytest.approx(-400.0 / (2 * (30.0 + 400.0 / 6.0)))
+
+
+def test_fcw_hysteresis_and_silence():
+    fcw = Fcw()
+    levels = [fcw.step(gap, 20.0, 0.0, 0.0, 0.0) for gap in (100.0, 60.0, 55.0, 54.0, 53.0)]
+    assert levels == [LEVEL_NONE, 1, 1, LEVEL_WARNING, LEVEL_WARNING]      # two cycles at TTC ≤ 2.8 s
+    # the danger goes away: the warning holds for off_cycles, then drops
+    later = [fcw.step(None, 20.0, 0.0, 0.0, 0.0) for _ in range(12)]
+    assert later[0] == LEVEL_WARNING and later[-1] == LEVEL_NONE
+
+
+def test_acc_follows_the_gap_and_falls_back_to_speed_control():
+    acc = Acc(AccSettings(set_speed_mps=30.0, time_gap_s=1.5))
+    # 20 m too close at 25 m/s and closing: brake, within the limits and the jerk
+    reqs = [acc.step(0.072, 25.0, Target(1, 1, 17.5, 0.0, -2.0, 0.0), True) for _ in range(60)]
+    assert min(reqs) >= -3.5 - 1e-9 and reqs[-1] < -1.0
+    assert np.max(np.abs(np.diff(reqs))) <= 2.5 * 0.072 + 1e-9
+    # no target: speed control towards 30 m/s, limited to 2 m/s² above 20 m/s
+    for _ in range(200):
+        a = acc.step(0.072, 25.0, None, True)
+    assert a == pytest.approx(2.0)
+
+
+def test_acc_states_off_and_fault():
+    off = Acc(AccSettings(enabled=False))
+    assert off.step(0.072, 20.0, None, True) == 0.0 and off.state == STATE_OFF
+    acc = Acc(AccSettings())
+    acc.step(0.072, 20.0, None, True)
+    assert acc.state == STATE_ACTIVE
+    assert acc.step(0.072, 20.0, Target(1, 1, 5.0, 0.0, -5.0, 0.0), False) == 0.0
+    assert acc.state == STATE_FAULT and acc.fault
+    acc.step(0.072, 20.0, None, True)
+    assert acc.state == STATE_ACTIVE and not acc.fault
+
+
+def test_ego_path_follows_the_yaw_rate():
+    x = np.array([50.0, 50.0, 50.0])
+    y = np.array([0.0, 5.0, -5.0])
+    assert in_path(x, y, 20.0, 0.0, 1.6).tolist() == [True, False, False]
+    # turning left at κ = 0.004: at 50 m the path is 5 m to the left
+    assert in_path(x, y, 20.0, 0.08, 1.6).tolist() == [False, True, False]
