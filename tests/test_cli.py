@@ -203,3 +203,23 @@ def test_image_animates_a_scenario(tmp_path):
             "--duration", "0.8")
     assert r.returncode == 0, r.stderr
     assert out.read_bytes()[:6] == b"GIF89a" and "3 frames" in r.stderr
+
+
+def test_report_judges_scenarios_and_sets_the_exit_code(tmp_path):
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), str(SCENARIOS / "no_fcw_following.yaml"))
+    assert r.returncode == 0, r.stderr
+    assert "| nhtsa_lead_stopped | 1 |" in r.stdout and r.stdout.count("| pass |") == 2
+    strict = (SCENARIOS / "nhtsa_lead_stopped.yaml").read_text().replace("fcw_ttc_min_s: 2.1", "fcw_ttc_min_s: 9.0")
+    bad = tmp_path / "strict.yaml"
+    bad.write_text(strict)
+    r = run("report", str(bad))
+    assert r.returncode == 1 and "FAIL: warning at TTC" in r.stdout
+
+
+def test_run_closed_loop_slows_the_ego_to_the_lead():
+    r = run("run", str(SCENARIOS / "acc_follow_90.yaml"), "--fast", "--closed-loop", "--duration", "20",
+            "--every", "100")
+    assert r.returncode == 0, r.stderr
+    assert "ACC active, target track" in r.stdout and "(closed loop)" in r.stdout
+    speed = float(r.stdout.split("ego speed at the end ")[1].split(" m/s")[0])
+    assert abs(speed - 25.0) < 1.0

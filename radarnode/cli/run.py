@@ -14,7 +14,11 @@ import can
 
 from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
     scenario_from_args, stop_on_signals
+from radarnode.consumer.acc import STATE_NAMES, AccSettings
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
+from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.evaluate import EgoActuator
+from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
@@ -30,7 +34,25 @@ def add_subparser(sub) -> None:
     p.add_argument("--every", type=int, default=None,
                    help="print every Nth cycle (default: every cycle on a terminal, one per second otherwise)")
     p.add_argument("--quiet", action="store_true", help="print only the summary")
+    p.add_argument("--closed-loop", action="store_true",
+                   help="the ego follows the consumer's ACC request (first-order actuator lag); its speed and yaw "
+                        "rate go back to the node as 0x300/0x301")
     p.set_defaults(func=cmd, fast=False)
+
+
+def format_ecu(d, ego_speed_mps: float) -> str:
+    """One line with the consumer ECU's decision."""
+    acc = f"ACC {STATE_NAMES[d.acc_state]}"
+    if d.target is not None:
+        gap = d.target.distance_m / ego_speed_mps if ego_speed_mps > 0.5 else float("inf")
+        acc += (f", target track {d.target.track_id} at {d.target.distance_m:.1f} m "
+                f"({d.target.rel_speed_mps:+.1f} m/s, gap {gap:.2f} s)")
+    acc += f", request {d.accel_request_mps2:+.2f} m/s²"
+    if not d.radar_ok:
+        acc += " [FAULT: radar unavailable]"
+    fcw = ["none", "pre-warning", "WARNING"][d.warning_level]
+    ttc = f"{d.ttc_s:.1f} s" if d.ttc_s < 99 else "-"
+    return f"{acc}; FCW {fcw} (TTC {ttc})"
 
 
 def cmd(args) -> int:
@@ -44,6 +66,13 @@ def cmd(args) -> int:
         raise ConfigError(f"option --every: value {args.every} is not allowed; expected an integer >= 1")
     every = args.every or (1 if tty else max(1, round(1.0 / node.period_s)))
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
+    spec = scenario.ecu
+    ecu = Ecu(AccSettings(enabled=spec.acc_enabled or args.closed_loop, set_speed_mps=spec.set_speed_mps,
+                          time_gap_s=spec.time_gap_s), sensor_id=scenario.radar.sensor_id, period_s=node.period_s)
+    actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
+    if actuator is not None:
+        actuator.at(0.0)
+    warnings = []
     print(f"scenario {scenario.name}: {scenario.description.strip()}".rstrip(": "))
     print(f"radar {node.preset.name}, cycle {node.period_s * 1e3:.0f} ms, {scenario.num_cycles} cycles, "
           f"{'simulated' if args.fast else 'real'} time, python-can virtual bus {channel}")
@@ -57,6 +86,21 @@ def cmd(args) -> int:
         def on_cycle(out) -> None:
             cycle = assembler.get(timeout=1.0)
             if cycle is None:
+                decision = ecu.tick(out.t_s)
+            else:
+                ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+                decision = ecu.on_cycle(out.t_s, cycle)
+            if decision is not None:
+                for m in ecu.frames(decision):
+                    consumer_bus.send(m)             # the ECU's status frames, on the same bus
+                if decision.warning_level == LEVEL_WARNING and (not warnings or warnings[-1][1] != "on"):
+                    warnings.append((out.t_s, "on"))
+                elif decision.warning_level != LEVEL_WARNING and warnings and warnings[-1][1] == "on":
+                    warnings.append((out.t_s, "off"))
+            if actuator is not None:
+                actuator.apply(decision.accel_request_mps2 if decision is not None else 0.0, node.period_s)
+                actuator.at(out.t_s + node.period_s)
+            if cycle is None:
                 return
             decoded.append(cycle)
             shown[0] += 1
@@ -66,6 +110,8 @@ def cmd(args) -> int:
             road = format_boundaries(assembler.road_boundaries)
             if road:
                 text += "\n" + road
+            if decision is not None:
+                text += "\n" + format_ecu(decision, ecu.ego_speed_mps)
             if tty:
                 sys.stdout.write("\x1b[H\x1b[J" + text + "\n")
             else:
@@ -84,6 +130,10 @@ def cmd(args) -> int:
     if node.saturated:
         print("saturated values: " + ", ".join(f"{k}={v}" for k, v in sorted(node.saturated.items())))
     print(format_stats(assembler.stats))
+    if warnings:
+        print("FCW: " + ", ".join(f"{state} at {t:.2f} s" for t, state in warnings))
+    print(f"ego speed at the end {node.scene.ego_state(stats.duration_s).speed_mps:.1f} m/s"
+          + (" (closed loop)" if args.closed_loop else ""))
     objects = summarize_objects([c for c in decoded if hasattr(c, "objects")])
     for oid, d in sorted(objects.items()):
         cls = CLASS_NAMES[d["obj_class"]] if d["obj_class"] >= 0 else "-"

@@ -16,7 +16,7 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target, in_path
-from radarnode.consumer.assembler import ObjectCycle
+from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.tracking import Tracker
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED
@@ -50,6 +50,7 @@ class Ecu:
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
                  period_s: float = 0.072, timeout_cycles: int = 3) -> None:
         self.tracker = Tracker("objects", "ca")
+        self.cluster_tracker = Tracker("clusters", "ca")
         self.acc = Acc(acc)
         self.fcw = Fcw(fcw)
         self.sensor_id = sensor_id
@@ -79,8 +80,10 @@ class Ecu:
         self.ego_speed_mps = speed_mps
         self.ego_yaw_rate_rps = math.radians(yaw_rate_dps or 0.0)
 
-    def on_cycle(self, t_s: float, cycle: ObjectCycle) -> EcuOutput:
-        """A complete radar cycle arrived at ``t_s``."""
+    def on_cycle(self, t_s: float, cycle: ObjectCycle | ClusterCycle) -> EcuOutput:
+        """A complete radar cycle (object or cluster list) arrived at ``t_s``."""
+        if isinstance(cycle, ClusterCycle):
+            return self._on_clusters(t_s, cycle)
         ol = cycle.objects
         n = len(ol)
         z = np.stack([ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps], axis=1) if n else \
@@ -95,6 +98,25 @@ class Ecu:
         self.last_cycle_t = t_s
         return self._decide(t_s, tracks, ol, by_id, radar_ok=True)
 
+    def _on_clusters(self, t_s: float, cycle: ClusterCycle) -> EcuOutput:
+        """Cluster lists carry no IDs: the tracker associates them by position alone."""
+        cl = cycle.clusters
+        n = len(cl)
+        z = np.stack([cl.dist_long_m, cl.dist_lat_m], axis=1) if n else np.zeros((0, 2))
+        sig = np.stack([cl.dist_long_sigma_m, cl.dist_lat_sigma_m], axis=1) if n else np.zeros((0, 2))
+        sig = np.where(np.isfinite(sig), np.maximum(sig, 0.2), 0.5)
+        r = np.zeros((n, 2, 2))
+        r[:, np.arange(2), np.arange(2)] = sig ** 2
+        tracks = self.cluster_tracker.step(t_s, z, r, None, self.ego_yaw_rate_rps)
+        # a cluster track is a road user when it moves over ground or is as strong as a vehicle
+        strong = {}
+        for t in tracks:
+            d = np.hypot(cl.dist_long_m - t.x[0], cl.dist_lat_m - t.x[1]) if n else np.zeros(0)
+            k = int(np.argmin(d)) if d.size else -1
+            strong[t.id] = bool(k >= 0 and cl.rcs_dbsm[k] >= 5.0)
+        self.last_cycle_t = t_s
+        return self._decide(t_s, tracks, None, {}, radar_ok=True, cluster_strength=strong)
+
     def tick(self, t_s: float) -> EcuOutput | None:
         """Call between cycles (e.g. on a timer): reports the radar unavailable after the time-out."""
         if self.last_cycle_t is not None and t_s - self.last_cycle_t <= self.timeout_s:
@@ -103,7 +125,7 @@ class Ecu:
             return None
         return self._decide(t_s, [], None, {}, radar_ok=False)
 
-    def _select(self, tracks, ol, by_id) -> Target | None:
+    def _select(self, tracks, ol, by_id, cluster_strength=None) -> Target | None:
         if not tracks:
             return None
         x = np.array([t.x[0] for t in tracks])
@@ -112,6 +134,10 @@ class Ecu:
                      self.boundaries)
         road_user = np.zeros(len(tracks), dtype=bool)
         for i, t in enumerate(tracks):
+            if cluster_strength is not None:
+                ground = math.hypot(t.x[2] + self.ego_speed_mps, t.x[3])
+                road_user[i] = ground > 1.0 or cluster_strength.get(t.id, False)
+                continue
             k = by_id.get(t.meas_id)
             if k is None:
                 road_user[i] = True            # coasting: it was a road user when selected
@@ -126,10 +152,10 @@ class Ecu:
         ax = t.x[4] if t.x.size == 6 else 0.0
         return Target(t.id, t.meas_id, float(t.x[0]), float(t.x[1]), float(t.x[2]), float(ax + self.ego_accel_mps2))
 
-    def _decide(self, t_s, tracks, ol, by_id, radar_ok: bool) -> EcuOutput:
+    def _decide(self, t_s, tracks, ol, by_id, radar_ok: bool, cluster_strength=None) -> EcuOutput:
         dt = self.period_s if self._last_out_t is None else t_s - self._last_out_t
         self._last_out_t = t_s
-        target = self._select(tracks, ol, by_id) if radar_ok else None
+        target = self._select(tracks, ol, by_id, cluster_strength) if radar_ok else None
         accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
         v, lead_v = self.ego_speed_mps, None
         if target is not None:

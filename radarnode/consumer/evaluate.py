@@ -26,6 +26,25 @@ from radarnode.scene.scenario import Scenario
 from radarnode.wire.node import EgoMotionSender, RadarNode
 
 
+class EgoActuator:
+    """Closed loop: the ego follows the ACC request through a first-order lag (time constant ``lag_s``)."""
+
+    def __init__(self, scene, lag_s: float, speed_mps: float) -> None:
+        self.ego = scene.drive_ego()
+        self.lag_s = lag_s
+        self.s_m, self.v_mps, self.a_mps2 = 0.0, speed_mps, 0.0
+
+    def at(self, t_s: float) -> None:
+        """Publish the current state to the scene for the cycle at ``t_s``."""
+        self.ego.set(t_s, self.s_m, self.v_mps, self.a_mps2)
+
+    def apply(self, request_mps2: float, dt_s: float) -> None:
+        a_new = self.a_mps2 + (request_mps2 - self.a_mps2) * (1.0 - math.exp(-dt_s / self.lag_s))
+        self.s_m += self.v_mps * dt_s + 0.5 * a_new * dt_s * dt_s
+        self.v_mps = max(self.v_mps + a_new * dt_s, 0.0)
+        self.a_mps2 = a_new if self.v_mps > 0 else 0.0
+
+
 @dataclass
 class ScenarioResult:
     """Figures of one run; ``passed`` against the scenario's ``ecu.expect``."""
@@ -51,7 +70,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     spec = scenario.ecu
     node = RadarNode(scenario, fidelity=fidelity)
     scene = node.scene
-    ego = scene.drive_ego() if spec.closed_loop else None
+    actuator = EgoActuator(scene, spec.actuator_lag_s, scenario.ego.speed_mps) if spec.closed_loop else None
     vehicle = EgoMotionSender(scene, scenario.radar.sensor_id)
     period = node.period_s
     ecu = Ecu(AccSettings(enabled=spec.acc_enabled, set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s),
@@ -59,13 +78,12 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     lead = next((i for i, a in enumerate(scenario.actors) if a.id == spec.expect.lead), None)
     res = ScenarioResult(scenario.name, scenario.seed)
-    s_m, v_mps, a_mps2 = 0.0, scenario.ego.speed_mps, 0.0
     prev_a = None
     tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap")}
     for k in range(scenario.num_cycles):
         t = k * period
-        if ego is not None:
-            ego.set(t, s_m, v_mps, a_mps2)
+        if actuator is not None:
+            actuator.at(t)
         for m in vehicle.frames(t):
             node.receive(m, t)
             assembler.on_message_received(m)
@@ -96,19 +114,16 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         if warning and res.warning_time_s is None:
             res.warning_time_s, res.ttc_at_warning_s = t, ttc
         # closed loop: the ego follows the request through a first-order lag
-        if ego is not None:
-            request = decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0
-            a_new = a_mps2 + (request - a_mps2) * (1.0 - math.exp(-period / spec.actuator_lag_s))
-            s_m += v_mps * period + 0.5 * a_new * period * period
-            v_mps = max(v_mps + a_new * period, 0.0)
-            a_mps2 = a_new if v_mps > 0 else 0.0
+        if actuator is not None:
+            actuator.apply(decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0,
+                           period)
         accel = ego_state.accel_mps2
         jerk = abs(accel - prev_a) / period if prev_a is not None else 0.0
         res.peak_jerk_mps3 = max(res.peak_jerk_mps3, jerk)
         prev_a = accel
         res.peak_decel_mps2 = min(res.peak_decel_mps2, accel)
         res.peak_accel_mps2 = max(res.peak_accel_mps2, accel)
-        if ego is not None:
+        if actuator is not None:
             lo, hi, jerk_max = iso15622_limits(ego_state.speed_mps)
             if accel < lo - 0.05 or accel > hi + 0.05 or jerk > jerk_max + 0.05:
                 res.iso_limits_ok = False

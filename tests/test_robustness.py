@@ -1,0 +1,156 @@
+"""The consumer ECU under bad traffic (issue 4, item 7): it keeps working, and stops acting on stale data."""
+
+from __future__ import annotations
+
+import can
+import numpy as np
+import pytest
+
+from radarnode.consumer.acc import STATE_ACTIVE, STATE_FAULT, AccSettings
+from radarnode.consumer.assembler import CycleAssembler
+from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.tracking import ospa
+from radarnode.wire import ars408 as P
+from radarnode.wire.node import EgoMotionSender, RadarNode
+from tests.helpers import scenario
+
+FOLLOW = "  - {id: lead, class: car, x_m: 45.0, lane: 1, speed_mps: 24.0}"
+
+
+def _cycles(n=110, node=None, t0=0.0):
+    """Frames per cycle of a following scene: [(t, [messages])]."""
+    sc = scenario(FOLLOW, ego="{speed_mps: 25.0}", duration=n * 0.072 + 0.1)
+    node = node or RadarNode(sc)
+    veh = EgoMotionSender(node.scene)
+    out = []
+    for k in range(n):
+        t = k * node.period_s
+        ego = veh.frames(t)
+        for m in ego:
+            node.receive(m, t)
+        out.append((t0 + t, ego + node.cycle(t).messages))
+    return out
+
+
+def _drive(cycles, mutate=lambda k, msgs: msgs):
+    asm = CycleAssembler()
+    ecu = Ecu(AccSettings(set_speed_mps=30.0, time_gap_s=1.5))
+    decisions = []
+    for k, (t, msgs) in enumerate(cycles):
+        for m in mutate(k, list(msgs)):
+            asm.on_message_received(m)
+        ecu.set_ego(t, asm.ego_speed_mps, asm.ego_yaw_rate_dps)
+        d = None
+        for c in asm.drain():
+            d = ecu.on_cycle(t, c)
+        d = d or ecu.tick(t)
+        if d is not None:
+            for m in ecu.frames(d):
+                asm.on_message_received(m)
+            decisions.append(d)
+    return asm, ecu, decisions
+
+
+def _steady(decisions, start=20):
+    d = decisions[start:]
+    return all(x.radar_ok for x in d) and all(x.target is not None for x in d) and all(
+        x.acc_state == STATE_ACTIVE for x in d)
+
+
+def test_clean_traffic_follows_the_lead():
+    asm, ecu, dec = _drive(_cycles())
+    assert _steady(dec)
+    assert dec[-1].target.distance_m == pytest.approx(asm.ecu_status["AccStatus"]["ACC_Distance"], abs=0.1)
+
+
+def test_lost_cycles_and_missing_frames():
+    def lose(k, msgs):
+        if k % 7 == 3:
+            return []                                                   # a whole cycle lost
+        if k % 5 == 1:
+            drop = next(i for i, m in enumerate(msgs) if m.arbitration_id == P.OBJ_GENERAL) \
+                if any(m.arbitration_id == P.OBJ_GENERAL for m in msgs) else None
+            return [m for i, m in enumerate(msgs) if i != drop]         # a frame missing inside a cycle
+        return msgs
+    asm, _, dec = _drive(_cycles(), lose)
+    assert asm.stats.incomplete_cycles > 5 and asm.stats.lost_cycles > 5
+    assert _steady(dec)                                                 # coasting, never a fault
+
+
+def test_duplicated_reordered_and_wrong_dlc_frames():
+    rng = np.random.default_rng(0)
+
+    def mess(k, msgs):
+        if len(msgs) > 4:
+            msgs.insert(3, msgs[3])                                     # duplicate
+            q = [i for i, m in enumerate(msgs) if m.arbitration_id == P.OBJ_QUALITY]
+            if len(q) > 1:
+                msgs[q[0]], msgs[q[1]] = msgs[q[1]], msgs[q[0]]         # reordered within a group
+        msgs.append(can.Message(arbitration_id=P.OBJ_GENERAL, data=bytes(3), is_extended_id=False))  # wrong DLC
+        rng.random()
+        return msgs
+    asm, _, dec = _drive(_cycles(), mess)
+    assert asm.stats.duplicate_frames > 50 and asm.stats.wrong_dlc > 50
+    assert _steady(dec)
+
+
+def test_e2e_failures_are_counted_and_dropped():
+    asm, ecu, dec = _drive(_cycles(60))
+    bad = ecu.frames(dec[-1])[0]
+    data = bytearray(bad.data)
+    data[2] ^= 0x40
+    before = asm.stats.ecu_frames
+    asm.on_message_received(can.Message(arbitration_id=bad.arbitration_id, data=bytes(data), is_extended_id=False))
+    assert asm.stats.e2e_errors == 1 and asm.stats.ecu_frames == before
+
+
+def test_node_restart_and_bus_silence_fault_then_recover():
+    first = _cycles(60)
+    silent = [(first[-1][0] + 0.072 * (k + 1), []) for k in range(14)]          # 1 s without a frame
+    restarted = _cycles(60, t0=silent[-1][0] + 0.072)                           # a new node: counters from 0
+    asm, _, dec = _drive(first + silent + restarted)
+    assert asm.stats.counter_resets >= 1
+    during = [d for d in dec if first[-1][0] + 0.3 < d.t_s < silent[-1][0]]
+    assert during and all(d.acc_state == STATE_FAULT and d.accel_request_mps2 == 0.0 and d.fault for d in during)
+    assert all(not d.radar_ok for d in during)
+    assert dec[-1].acc_state == STATE_ACTIVE and dec[-1].target is not None       # back after the restart
+    assert asm.ecu_status["AccStatus"]["ACC_State"] == STATE_ACTIVE
+
+
+def test_tracks_against_truth_ospa():
+    sc = scenario("""
+  - {id: a, class: car, x_m: 40.0, lane: 1, speed_mps: 22.0}
+  - {id: b, class: car, x_m: 80.0, lane: 2, speed_mps: 27.0}
+  - {id: c, class: truck, x_m: 60.0, lane: 0, speed_mps: 20.0}
+""", duration=8.0)
+    node = RadarNode(sc)
+    veh = EgoMotionSender(node.scene)
+    asm, ecu = CycleAssembler(), Ecu()
+    dist = []
+    for k in range(100):
+        t = k * node.period_s
+        for m in veh.frames(t):
+            node.receive(m, t)
+            asm.on_message_received(m)
+        out = node.cycle(t)
+        for m in out.messages:
+            asm.on_message_received(m)
+        for c in asm.drain():
+            ecu.set_ego(t, asm.ego_speed_mps, asm.ego_yaw_rate_dps)
+            ecu.on_cycle(t, c)
+        if k >= 10:
+            est = np.array([t_.x[:2] for t_ in ecu.tracker.tracks if t_.confirmed])
+            truth = np.stack([out.view.x_m, out.view.y_m], axis=1)
+            dist.append(ospa(est, truth, c=10.0))
+    assert np.median(dist) < 1.0 and np.percentile(dist, 95) < 3.0
+
+
+def test_ecu_tracks_cluster_lists_too():
+    sc = scenario(FOLLOW, ego="{speed_mps: 25.0}", radar="{preset: ars408_like, output: clusters}", duration=5.0)
+    node = RadarNode(sc)
+    _, _, dec = _drive(_cycles(60, node=node))
+    late = dec[20:]
+    assert all(d.target is not None for d in late)
+    # the lead's rear is 45 − 2.25 − 3.7 = 39 m ahead at the start and closes at 1 m/s
+    assert late[-1].target.distance_m == pytest.approx(39.05 - 60 * 0.072, abs=1.5)
+    assert late[-1].target.rel_speed_mps == pytest.approx(-1.0, abs=0.5)
