@@ -80,3 +80,14 @@ def test_ego_path_follows_the_yaw_rate():
     assert in_path(x, y, 20.0, 0.0, 1.6).tolist() == [True, False, False]
     # turning left at κ = 0.004: at 50 m the path is 5 m to the left
     assert in_path(x, y, 20.0, 0.08, 1.6).tolist() == [False, True, False]
+
+
+def test_acc_standby_below_the_operating_speed():
+    from radarnode.consumer.acc import STATE_STANDBY
+    acc = Acc(AccSettings(set_speed_mps=30.0, min_speed_mps=5.0))
+    for _ in range(20):
+        acc.step(0.072, 20.0, None, True)
+    assert acc.state == STATE_ACTIVE and acc.request > 1.0
+    reqs = [acc.step(0.072, 3.0, None, True) for _ in range(40)]
+    assert acc.state == STATE_STANDBY and reqs[-1] == 0.0
+    assert np.max(np.abs(np.diff(reqs))) <= 5.0 * 0.072 + 1e-9      # ramps out within the jerk limit

@@ -89,3 +89,14 @@ def test_ospa():
     assert ospa(a, a + [1.0, 0.0], c=10.0) == pytest.approx(1.0)
     assert ospa(a, a[:1], c=10.0) == pytest.approx(np.sqrt(100.0 / 2))
     assert ospa(np.zeros((0, 2)), np.zeros((0, 2))) == 0.0
+
+
+def test_gospa_counts_misses_and_false_tracks_without_normalising():
+    from radarnode.consumer.tracking import gospa
+    a = np.array([[0.0, 0.0], [10.0, 0.0]])
+    assert gospa(a, a) == 0.0
+    assert gospa(a, a + [1.0, 0.0], c=10.0) == pytest.approx(np.sqrt(2.0))
+    # one truth missed: c²/2 added
+    assert gospa(a[:1], a, c=10.0) == pytest.approx(np.sqrt(50.0))
+    # a far-away estimate counts as one miss and one false track
+    assert gospa(np.array([[100.0, 0.0]]), np.array([[0.0, 0.0]]), c=10.0) == pytest.approx(10.0)

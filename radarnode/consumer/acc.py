@@ -37,6 +37,7 @@ class AccSettings:
     k_gap: float = 0.2
     k_rel_speed: float = 0.8
     path_half_width_m: float = 1.6
+    min_speed_mps: float = 0.0         # below it ACC waits in standby (ISO 15622 ACC without stop and go: ~5 m/s)
 
     def __post_init__(self) -> None:
         validate.boolean("enabled", self.enabled)
@@ -47,6 +48,7 @@ class AccSettings:
         for f in ("k_speed", "k_gap", "k_rel_speed"):
             validate.number(f, getattr(self, f), lo=0.0, hi=5.0)
         validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
+        validate.number("min_speed_mps", self.min_speed_mps, lo=0.0, hi=30.0)
 
 
 def iso15622_limits(speed_mps: float) -> tuple[float, float, float]:
@@ -104,6 +106,13 @@ class Acc:
             return 0.0
         if self.state == STATE_FAULT:
             self.state, self.fault = STATE_ACTIVE, False
+        if ego_speed_mps < s.min_speed_mps:
+            # standby: engaged by the driver but below the operating speed; the request ramps out
+            self.state = STATE_STANDBY
+            step = iso15622_limits(ego_speed_mps)[2] * dt if dt > 0 else abs(self.request)
+            self.request = float(np.clip(0.0, self.request - step, self.request + step))
+            return self.request
+        self.state = STATE_ACTIVE
         a_min, a_max, jerk = iso15622_limits(ego_speed_mps)
         want = s.k_speed * (s.set_speed_mps - ego_speed_mps)
         if target is not None:
