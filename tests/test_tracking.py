@@ -100,3 +100,42 @@ def test_gospa_counts_misses_and_false_tracks_without_normalising():
     assert gospa(a[:1], a, c=10.0) == pytest.approx(np.sqrt(50.0))
     # a far-away estimate counts as one miss and one false track
     assert gospa(np.array([[100.0, 0.0]]), np.array([[0.0, 0.0]]), c=10.0) == pytest.approx(10.0)
+
+
+def _braking_target(model, rng):
+    """A lead at 20 m/s that brakes at 6 m/s² from 3 s; position and velocity measured with noise."""
+    tr = Tracker("objects", model, q=2.0, confirm=(1, 1), max_coast=5)
+    dt, err, mu_ca = 0.072, [], []
+    x, v = 40.0, 0.0          # relative: the ego keeps 20 m/s
+    for k in range(100):
+        t = k * dt
+        a = -6.0 if t >= 3.0 else 0.0
+        v += a * dt
+        x += v * dt
+        z = np.array([[x + rng.normal(0, 0.2), rng.normal(0, 0.2), v + rng.normal(0, 0.1), rng.normal(0, 0.3)]])
+        r = np.tile(np.diag([0.04, 0.04, 0.01, 0.09]), (1, 1, 1))
+        conf = tr.step(t, z, r, np.array([1]))
+        if conf and t >= 3.0:
+            err.append(conf[0].x[2] - v)
+            if model == "imm":
+                mu_ca.append(conf[0].mu[1])
+    return np.sqrt(np.mean(np.square(err))), mu_ca
+
+
+def test_imm_follows_a_braking_lead_better_than_constant_velocity():
+    rng = np.random.default_rng(4)
+    rmse_cv, _ = _braking_target("cv", rng)
+    rmse_imm, mu_ca = _braking_target("imm", rng)
+    assert rmse_imm < 0.7 * rmse_cv
+    assert max(mu_ca) > 0.8                      # the constant-acceleration mode takes over while braking
+
+
+def test_imm_mixing_keeps_probabilities_and_moments():
+    from radarnode.consumer.tracking import imm_combine, imm_mix
+    xm = np.array([[[0.0] * 6, [1.0] + [0.0] * 5]])
+    pm = np.tile(np.eye(6), (1, 2, 1, 1))
+    mu = np.array([[0.25, 0.75]])
+    x0, p0, c = imm_mix(xm, pm, mu)
+    assert c.sum() == pytest.approx(1.0)
+    x, p = imm_combine(xm, pm, mu)
+    assert x[0, 0] == pytest.approx(0.75) and p[0, 0, 0] == pytest.approx(1.0 + 0.25 * 0.75)

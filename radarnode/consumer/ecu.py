@@ -49,7 +49,7 @@ class Ecu:
 
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
                  period_s: float = 0.072, timeout_cycles: int = 3) -> None:
-        self.tracker = Tracker("objects", "ca")
+        self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self.acc = Acc(acc)
         self.fcw = Fcw(fcw)

@@ -3,7 +3,8 @@
 Stone Soup's composition of single-purpose roles, each a function tested alone:
 
 * :func:`predict` — Kalman prediction with a constant-velocity or constant-acceleration model, plus the
-  ego's rotation (the lists are relative to a sensor that turns with the car);
+  ego's rotation (the lists are relative to a sensor that turns with the car); or an IMM of the two
+  (:func:`imm_mix`, :func:`imm_update`, :func:`imm_combine`, model ``'imm'``);
 * :func:`update` — linear Kalman update with [x, y, vx, vy] (objects) or [x, y] (clusters);
 * :func:`associate` — Mahalanobis gate and global nearest neighbour (``linear_sum_assignment``);
   object lists carry IDs, which take precedence inside the gate;
@@ -25,7 +26,8 @@ import scipy.stats
 
 from radarnode.errors import ConfigError
 
-MODELS = ("cv", "ca")
+MODELS = ("cv", "ca", "imm")
+IMM_SWITCH = 0.05          # probability per cycle of switching between the constant-velocity and -acceleration mode
 
 
 def transition(model: str, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
@@ -48,6 +50,54 @@ def transition(model: str, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]
         f[np.ix_(idx, idx)] = f1
         qq[np.ix_(idx, idx)] = q1
     return f, qq
+
+
+def imm_models(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
+    """The IMM's two modes in one 6-state space: constant velocity (acceleration forced to zero, little
+    process noise) and constant acceleration. Returns F (2, 6, 6) and Q (2, 6, 6)."""
+    f_ca, q_ca = transition("ca", dt, q)
+    f_cv4, q_cv4 = transition("cv", dt, 0.1 * q)
+    f_cv, q_cv = np.zeros((6, 6)), np.zeros((6, 6))
+    f_cv[:4, :4], q_cv[:4, :4] = f_cv4, q_cv4
+    q_cv[4:, 4:] = np.eye(2) * 1e-4                   # the acceleration of the CV mode stays at ~0
+    return np.stack([f_cv, f_ca]), np.stack([q_cv, q_ca])
+
+
+def imm_mix(xm: np.ndarray, pm: np.ndarray, mu: np.ndarray, switch: float = IMM_SWITCH):
+    """IMM interaction: mixed initial states for each mode. Shapes (n, 2, d), (n, 2, d, d), (n, 2).
+
+    Returns (x0 (n, 2, d), p0 (n, 2, d, d), predicted mode probabilities c (n, 2))."""
+    trans = np.array([[1.0 - switch, switch], [switch, 1.0 - switch]])      # trans[i, j]: from i to j
+    c = mu @ trans                                                         # (n, 2)
+    w = mu[:, :, None] * trans[None, :, :] / np.maximum(c[:, None, :], 1e-300)   # (n, i, j)
+    x0 = np.einsum("nij,nid->njd", w, xm)
+    dx = xm[:, :, None, :] - x0[:, None, :, :]                             # (n, i, j, d)
+    p0 = np.einsum("nij,nijde->njde", w, pm[:, :, None, :, :] + dx[..., :, None] * dx[..., None, :])
+    return x0, p0, c
+
+
+def imm_combine(xm: np.ndarray, pm: np.ndarray, mu: np.ndarray):
+    """Moment-matched estimate of the mixture: (x (n, d), p (n, d, d))."""
+    x = np.einsum("nj,njd->nd", mu, xm)
+    dx = xm - x[:, None, :]
+    p = np.einsum("nj,njde->nde", mu, pm + dx[..., :, None] * dx[..., None, :])
+    return x, p
+
+
+def imm_update(xm, pm, c, z, r, h):
+    """Update both modes with one measurement each; mode probabilities from their likelihoods."""
+    n, modes, d = xm.shape
+    xs, ps = update(xm.reshape(n * modes, d), pm.reshape(n * modes, d, d), np.repeat(z, modes, axis=0),
+                    np.repeat(r, modes, axis=0), h)
+    nu = np.repeat(z, modes, axis=0) - xm.reshape(n * modes, d) @ h.T
+    s = h @ pm.reshape(n * modes, d, d) @ h.T + np.repeat(r, modes, axis=0)
+    m = h.shape[0]
+    quad = np.einsum("ni,nij,nj->n", nu, np.linalg.inv(s), nu)
+    like = np.exp(-0.5 * quad) / np.sqrt((2 * np.pi) ** m * np.linalg.det(s))
+    mu = c * like.reshape(n, modes)
+    mu = mu / np.maximum(mu.sum(axis=1, keepdims=True), 1e-300)
+    mu = np.where(np.isfinite(mu).all(axis=1, keepdims=True) & (mu.sum(axis=1, keepdims=True) > 0), mu, c)
+    return xs.reshape(n, modes, d), ps.reshape(n, modes, d, d), mu
 
 
 def _rotation(n: int, angle: float) -> np.ndarray:
@@ -175,6 +225,9 @@ class Track:
     confirmed: bool = False
     misses: int = 0
     age: int = 0
+    xm: np.ndarray | None = None          # IMM: per-mode states (2, 6), covariances (2, 6, 6), probabilities (2,)
+    pm: np.ndarray | None = None
+    mu: np.ndarray | None = None
 
 
 class Tracker:
@@ -195,7 +248,7 @@ class Tracker:
         if model not in MODELS:
             raise ConfigError(f"tracker model: value {model!r} is not allowed; expected one of {', '.join(MODELS)}")
         self.kind, self.model, self.q = kind, model, q
-        self.dim = 6 if model == "ca" else 4
+        self.dim = 6 if model in ("ca", "imm") else 4
         self.h = measurement_matrix(self.dim, kind)
         m = self.h.shape[0]
         self.gate = gate if gate is not None else float(scipy.stats.chi2.ppf(0.999, m))
@@ -211,10 +264,23 @@ class Tracker:
         (n, m, m), update, initiate, confirm and delete; returns the confirmed tracks."""
         dt = 0.0 if self.last_t is None else max(t_s - self.last_t, 0.0)
         self.last_t = t_s
+        imm = self.model == "imm"
         if self.tracks:
             x = np.stack([t.x for t in self.tracks])
             p = np.stack([t.p for t in self.tracks])
-            if dt > 0:
+            if imm:
+                xm, pm, mu = (np.stack([getattr(t, a) for t in self.tracks]) for a in ("xm", "pm", "mu"))
+                x0, p0, c = imm_mix(xm, pm, mu)
+                if dt > 0:
+                    f, qq = imm_models(dt, self.q)
+                    if yaw_rate_rps:
+                        rot = _rotation(6, -yaw_rate_rps * dt)
+                        f = rot[None] @ f
+                    x0 = np.einsum("jde,nje->njd", f, x0)
+                    p0 = f[None] @ p0 @ np.transpose(f, (0, 2, 1))[None] + qq[None]
+                xm, pm = x0, p0
+                x, p = imm_combine(xm, pm, c)
+            elif dt > 0:
                 x, p = predict(x, p, self.model, dt, self.q, yaw_rate_rps * dt)
         else:
             x, p = np.zeros((0, self.dim)), np.zeros((0, self.dim, self.dim))
@@ -224,11 +290,17 @@ class Tracker:
         used = np.zeros(len(z), dtype=bool)
         if pairs:
             ti, mi = np.array(pairs).T
-            x[ti], p[ti] = update(x[ti], p[ti], z[mi], r[mi], self.h)
+            if imm:
+                xm[ti], pm[ti], c[ti] = imm_update(xm[ti], pm[ti], c[ti], z[mi], r[mi], self.h)
+                x[ti], p[ti] = imm_combine(xm[ti], pm[ti], c[ti])
+            else:
+                x[ti], p[ti] = update(x[ti], p[ti], z[mi], r[mi], self.h)
             hit[ti], used[mi] = True, True
         m_conf, n_conf = self.confirm
         for k, tr in enumerate(self.tracks):
             tr.x, tr.p = x[k], p[k]
+            if imm:
+                tr.xm, tr.pm, tr.mu = xm[k], pm[k], c[k]
             tr.hits = (tr.hits + [bool(hit[k])])[-n_conf:]
             tr.misses = 0 if hit[k] else tr.misses + 1
             tr.age += 1
@@ -242,7 +314,10 @@ class Tracker:
         if new.size:
             nx, npc = initiate(z[new], r[new], self.dim, self.kind)
             for k, j in enumerate(new):
-                self.tracks.append(Track(self._next_id, nx[k], npc[k], int(meas_ids[j]) if meas_ids is not None
-                                         else -1, [True], m_conf <= 1))
+                tr = Track(self._next_id, nx[k], npc[k], int(meas_ids[j]) if meas_ids is not None else -1,
+                           [True], m_conf <= 1)
+                if imm:
+                    tr.xm, tr.pm, tr.mu = np.stack([nx[k], nx[k]]), np.stack([npc[k], npc[k]]), np.array([0.5, 0.5])
+                self.tracks.append(tr)
                 self._next_id += 1
         return [t for t in self.tracks if t.confirmed]
