@@ -223,3 +223,10 @@ def test_run_closed_loop_slows_the_ego_to_the_lead():
     assert "ACC active, target track" in r.stdout and "(closed loop)" in r.stdout
     speed = float(r.stdout.split("ego speed at the end ")[1].split(" m/s")[0])
     assert abs(speed - 25.0) < 1.0
+
+
+def test_report_rejects_bad_options():
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--seeds", "0")
+    assert r.returncode == 2 and "option --seeds" in r.stderr
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--seeds", "2", "--min-passes", "3")
+    assert r.returncode == 2 and "option --min-passes" in r.stderr

@@ -120,3 +120,10 @@ def test_bool_is_not_a_number(tmp_path):
 
 def test_duplicate_key(tmp_path):
     _fails(tmp_path, GOOD.replace("seed: 1", "seed: 1\nseed: 2"), ":4:", "appears twice")
+
+
+def test_ecu_block_is_validated(tmp_path):
+    _fails(tmp_path, GOOD + "ecu: {time_gap_s: 0.8}\n", "ecu.time_gap_s", "0.8", "1.0, 1.5, 2.0")
+    _fails(tmp_path, GOOD + "ecu: {expect: {lead: ghost}}\n", "ecu.expect.lead", "ghost", "a")
+    _fails(tmp_path, GOOD + "ecu: {expect: {fcw_ttc_min_s: -1}}\n", "ecu.expect.fcw_ttc_min_s", "-1")
+    _fails(tmp_path, GOOD + "ecu: {closed_loop: yes please}\n", "ecu.closed_loop", "true or false")

@@ -86,6 +86,9 @@ class Renderer:
         self.t_prev = t_s
         left, right = self.boundaries.update(det.x_m, det.y_m, det.range_rate_mps, dt,
                                              (view.sensor_vx_mps, view.sensor_vy_mps), yaw)
+        present = {int(i) for i in frame.objects.id}
+        for gone in [i for i in self.tracks if i not in present]:
+            del self.tracks[gone]          # an ID that comes back later belongs to a new object
         for k in range(len(frame.objects)):
             self.tracks[int(frame.objects.id[k])].append((frame.objects.dist_long_m[k], frame.objects.dist_lat_m[k]))
         return frame, (left, right)
