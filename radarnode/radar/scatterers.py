@@ -87,7 +87,7 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
     L, W = scene.length_m[idx], scene.width_m[idx]
     h = view.orientation_rad[idx]
     ch, sh = np.cos(h), np.sin(h)
-    centre_x, centre_y = _box_centre(scene, view, idx)
+    centre_x, centre_y = view.centre_x_m[idx], view.centre_y_m[idx]
     small = (L <= POINT_SIZE_M) & (W <= POINT_SIZE_M)
     # the four edges: midpoints and directions in the box frame
     ex = np.stack([L / 2, -L / 2, np.zeros_like(L), np.zeros_like(L)], axis=1)     # (n, 4) edge midpoints, box frame
@@ -119,23 +119,6 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
     rcs = scene.rcs_dbsm[idx][a_i] + 10.0 * np.log10(weight / wsum[a_i])
     actor = idx[a_i]
     return Scatterers(px, py, np.zeros(total), view.vx_mps[actor], view.vy_mps[actor], rcs, actor.astype(np.int64))
-
-
-def _box_centre(scene: Scene, view: SensorView, idx: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Centres of the actors' boxes in the sensor frame (the view stores their nearest points)."""
-    # the nearest point q = c + R(h)·clip(R(-h)(−c)); recover c by iterating on the clamp (converges at once
-    # unless the sensor is inside the box, which cannot be told apart and is then left as is)
-    x, y, h = view.x_m[idx], view.y_m[idx], view.orientation_rad[idx]
-    ch, sh = np.cos(h), np.sin(h)
-    hl, hw = scene.length_m[idx] / 2, scene.width_m[idx] / 2
-    # direction from the nearest point towards the box centre in the box frame
-    lx = ch * x + sh * y
-    ly = -sh * x + ch * y
-    ox = np.where(lx > 0, hl, np.where(lx < 0, -hl, 0.0))
-    oy = np.where(np.abs(ly) > 1e-9, np.sign(ly) * hw, 0.0)
-    ox = np.where(np.abs(lx) < hl * 0.999, 0.0, ox)   # nearest point on a long side: no offset along x
-    oy = np.where(np.abs(ly) < hw * 0.999, 0.0, oy)
-    return x + ch * ox - sh * oy, y + sh * ox + ch * oy
 
 
 def guardrail_scatterers(scene: Scene, t_s: float, view: SensorView, max_range_m: float) -> Scatterers:

@@ -54,6 +54,8 @@ class SensorView:
     orientation_rad: np.ndarray  # actor heading relative to the sensor's x axis
     az_lo_rad: np.ndarray
     az_hi_rad: np.ndarray
+    centre_x_m: np.ndarray      # centre of the actor's box
+    centre_y_m: np.ndarray
     sensor_vx_mps: float        # sensor velocity over ground, sensor axes
     sensor_vy_mps: float
 
@@ -72,7 +74,7 @@ class SensorView:
 
 
 _VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
-                "orientation_rad", "az_lo_rad", "az_hi_rad")
+                "orientation_rad", "az_lo_rad", "az_hi_rad", "centre_x_m", "centre_y_m")
 
 
 def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -225,7 +227,7 @@ class Scene:
         wrapped = (rel_heading + np.pi) % (2.0 * np.pi) - np.pi
         lo = az.min(axis=-1) if self.n else np.zeros(rx.shape)
         hi = az.max(axis=-1) if self.n else np.zeros(rx.shape)
-        return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, s_vx, s_vy)
+        return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, cx, cy, s_vx, s_vy)
 
     def road_line(self, t_s: float, d_m: float, max_range_m: float, step_m: float = 1.0
                   ) -> tuple[np.ndarray, np.ndarray]:
