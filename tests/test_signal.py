@@ -119,3 +119,12 @@ def test_cells_merge_in_the_detection_model():
     det = detection_model.detect(p, scat, np.random.default_rng(0), sidelobes=False, pfa=1e-9)
     assert len(det) == 1 and det.actor_index[0] == -1
     assert 39.8 < det.range_m[0] < 40.4
+
+
+def test_the_cube_depends_only_on_the_seed():
+    """Noise is drawn on a second thread; the numbers must still be those of the seed."""
+    p = PRESETS["mimo12"]
+    scat = point_targets([30.0, 40.0], [0.0, 10.0], [1.0, 2.0])
+    cubes = [synthesize(p, scat, np.random.default_rng(3)) for _ in range(3)]
+    assert all(np.array_equal(cubes[0], c) for c in cubes[1:])
+    assert not np.array_equal(cubes[0], synthesize(p, scat, np.random.default_rng(4)))
