@@ -25,31 +25,10 @@ import scipy.optimize
 import scipy.stats
 
 from radarnode.errors import ConfigError
+from radarnode.perception.motion import transition
 
 MODELS = ("cv", "ca", "imm")
 IMM_SWITCH = 0.05          # probability per cycle of switching between the constant-velocity and -acceleration mode
-
-
-def transition(model: str, dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:
-    """State transition F and process noise Q (white acceleration for CV, white jerk for CA), 2-D."""
-    if model == "cv":
-        f1 = np.array([[1.0, dt], [0.0, 1.0]])
-        q1 = q * np.array([[dt ** 4 / 4, dt ** 3 / 2], [dt ** 3 / 2, dt ** 2]])
-        order = [0, 2]                                # x, vx ; y, vy
-    elif model == "ca":
-        f1 = np.array([[1.0, dt, dt * dt / 2], [0.0, 1.0, dt], [0.0, 0.0, 1.0]])
-        q1 = q * np.array([[dt ** 5 / 20, dt ** 4 / 8, dt ** 3 / 6], [dt ** 4 / 8, dt ** 3 / 3, dt ** 2 / 2],
-                           [dt ** 3 / 6, dt ** 2 / 2, dt]])
-        order = [0, 2, 4]
-    else:
-        raise ConfigError(f"tracker model: value {model!r} is not allowed; expected one of {', '.join(MODELS)}")
-    n = 2 * len(order)
-    f, qq = np.zeros((n, n)), np.zeros((n, n))
-    for axis in range(2):
-        idx = [o + axis for o in order]
-        f[np.ix_(idx, idx)] = f1
-        qq[np.ix_(idx, idx)] = q1
-    return f, qq
 
 
 def imm_models(dt: float, q: float) -> tuple[np.ndarray, np.ndarray]:

@@ -25,6 +25,7 @@ import numpy as np
 import scipy.optimize
 
 from radarnode.dsp.cluster import dbscan
+from radarnode.perception.motion import transition
 from radarnode.perception.types import (
     DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, Detections, ObjectList)
@@ -88,12 +89,7 @@ def group_detections(det: Detections, eps_m: float = 2.5, eps_mps: float = 1.5) 
 
 def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
     """Constant-velocity prediction of states (n, 4) = [x, y, vx, vy] and covariances (n, 4, 4)."""
-    f = np.eye(4)
-    f[0, 2] = f[1, 3] = dt
-    q1 = np.array([[dt ** 4 / 4, dt ** 3 / 2], [dt ** 3 / 2, dt ** 2]]) * accel_sigma ** 2
-    q = np.zeros((4, 4))
-    q[np.ix_([0, 2], [0, 2])] = q1
-    q[np.ix_([1, 3], [1, 3])] = q1
+    f, q = transition("cv", dt, accel_sigma ** 2)
     return x @ f.T, f @ p @ f.T + q
 
 
