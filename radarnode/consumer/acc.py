@@ -19,8 +19,8 @@ import numpy as np
 
 from radarnode import validate
 from radarnode.errors import FieldError
+from radarnode.scene.scenario import ACC_TIME_GAPS_S
 
-TIME_GAPS_S = (1.0, 1.5, 2.0)
 STATE_OFF, STATE_STANDBY, STATE_ACTIVE, STATE_FAULT = 0, 1, 2, 3
 STATE_NAMES = ("off", "standby", "active", "fault")
 
@@ -42,7 +42,7 @@ class AccSettings:
     def __post_init__(self) -> None:
         validate.boolean("enabled", self.enabled)
         validate.number("set_speed_mps", self.set_speed_mps, lo=0.0, hi=70.0)
-        if self.time_gap_s not in TIME_GAPS_S:
+        if self.time_gap_s not in ACC_TIME_GAPS_S:
             raise FieldError("time_gap_s", self.time_gap_s, "one of 1.0, 1.5, 2.0 s (ISO 15622 settings)")
         validate.number("standstill_gap_m", self.standstill_gap_m, lo=1.0, hi=20.0)
         for f in ("k_speed", "k_gap", "k_rel_speed"):

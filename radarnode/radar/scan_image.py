@@ -56,14 +56,9 @@ def scan_image(fp: Footprint, snr_db: float, rng: np.random.Generator, range_axi
                azimuth_axis_deg: np.ndarray, noise: bool = True) -> np.ndarray:
     """Amplitude image, shape (range, azimuth); ``snr_db`` is the object's total power over the noise per cell."""
     amp = fp.weight * 10.0 ** (snr_db / 20.0) * np.exp(2j * np.pi * rng.random(fp.weight.size))
-    h = hann_straddle_wide((range_axis_m[:, None] - fp.range_m[None, :]) / RANGE_RESOLUTION_M)
+    h = hann_straddle((range_axis_m[:, None] - fp.range_m[None, :]) / RANGE_RESOLUTION_M)   # sidelobes too
     b = np.exp(-4.0 * math.log(2.0) * ((azimuth_axis_deg[None, :] - fp.azimuth_deg[:, None]) / BEAMWIDTH_DEG) ** 2)
     img = (h * amp[None, :]) @ b
     if noise:
         img = img + (rng.standard_normal(img.shape) + 1j * rng.standard_normal(img.shape)) / math.sqrt(2.0)
     return np.abs(img)
-
-
-def hann_straddle_wide(delta: np.ndarray) -> np.ndarray:
-    """The Hann range response at any offset in resolution cells (the sidelobes included)."""
-    return hann_straddle(delta)

@@ -40,6 +40,7 @@ ACTOR_CLASSES: dict[str, tuple[int, float, float, float]] = {
 }
 
 OUTPUT_TYPES = ("objects", "clusters", "none")
+ACC_TIME_GAPS_S = (1.0, 1.5, 2.0)      # the ISO 15622 time-gap settings
 SORT_INDICES = ("none", "range", "rcs")
 FIDELITIES = ("object", "detection", "signal", "auto")
 
@@ -302,7 +303,7 @@ class EcuSpec:
     def __post_init__(self) -> None:
         validate.boolean("acc_enabled", self.acc_enabled)
         validate.number("set_speed_mps", self.set_speed_mps, lo=0.0, hi=70.0)
-        if self.time_gap_s not in (1.0, 1.5, 2.0):
+        if self.time_gap_s not in ACC_TIME_GAPS_S:
             raise FieldError("time_gap_s", self.time_gap_s, "one of 1.0, 1.5, 2.0 s (ISO 15622 settings)")
         validate.boolean("closed_loop", self.closed_loop)
         validate.number("actuator_lag_s", self.actuator_lag_s, lo=0.01, hi=5.0)
