@@ -8,13 +8,19 @@ and its threshold factor is set for the cells it still holds (mirroring the
 map would put a target near the edge into its own training cells); OS-CFAR
 mirrors, since its order statistic ignores those few cells.
 
+The threshold factors are those of the statistic actually tested: the map is
+the non-coherent sum of ``n_channels`` channels (each cell Gamma(N) under
+noise), and the windows make neighbouring cells correlated, which the
+training sum feels (:mod:`radarnode.dsp.detection_stats` derives both
+exactly). With ``n_channels=1`` and no correlation they reduce to the
+single-cell formulas (Richards eq. 6.84 for CA; Rohling 1983 for OS).
+
 ``CFAR_KINDS`` is the registry: name -> class.
 
 References
 ----------
-Richards, *Fundamentals of Radar Signal Processing*, 2nd ed., sec. 6.5:
-cell-averaging (eq. 6.84: α = N(Pfa^(−1/N) − 1)) and ordered-statistic CFAR
-(Pfa = Π_{i=0}^{k−1} (N−i)/(N−i+α), Rohling 1983).
+Richards, *Fundamentals of Radar Signal Processing*, 2nd ed., sec. 6.5.
+Rohling, IEEE Trans. AES-19 (1983).
 """
 
 from __future__ import annotations
@@ -23,8 +29,8 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.ndimage
-import scipy.optimize
 
+from radarnode.dsp import detection_stats as stats
 from radarnode.errors import ConfigError
 
 
@@ -47,23 +53,53 @@ class CfarResult:
 
 
 class Cfar:
-    """Base class: guard and training cells per axis (doppler, range), and a false-alarm probability."""
+    """Base class: guard and training cells per axis (doppler, range), and a false-alarm probability.
+
+    Parameters
+    ----------
+    pfa : float
+        False-alarm probability per cell, in (0, 0.5).
+    guard, train : (int, int)
+        Guard and training cells on each side, (doppler, range).
+    n_channels : int
+        Channels summed non-coherently into the map (each noise cell is Gamma(N, σ²)).
+    correlation : (complex array, complex array), optional
+        Noise correlation between bins of the (doppler, range) axes, as
+        :func:`radarnode.dsp.detection_stats.noise_correlation` gives it for the
+        windows; ``None`` for independent cells. The guard cells must cover its
+        length so the cell under test is independent of its training cells.
+    """
 
     name = ""
 
-    def __init__(self, pfa: float = 1e-6, guard: tuple[int, int] = (2, 2), train: tuple[int, int] = (4, 8)) -> None:
-        if not 0.0 < pfa < 0.5:
+    def __init__(self, pfa: float = 1e-6, guard: tuple[int, int] = (2, 2), train: tuple[int, int] = (4, 8),
+                 n_channels: int = 1, correlation: tuple[np.ndarray, np.ndarray] | None = None) -> None:
+        if not (isinstance(pfa, (int, float)) and 0.0 < pfa < 0.5):
             raise ConfigError(f"cfar pfa: value {pfa!r} is not allowed; expected a number in (0, 0.5)")
         for name, pair in (("guard", guard), ("train", train)):
             if len(pair) != 2 or any((not isinstance(v, (int, np.integer))) or v < 0 for v in pair):
                 raise ConfigError(f"cfar {name}: value {pair!r} is not allowed; expected two integers >= 0")
+        if not isinstance(n_channels, (int, np.integer)) or not 1 <= n_channels <= 4096:
+            raise ConfigError(f"cfar n_channels: value {n_channels!r} is not allowed; expected an integer in 1..4096")
         self.pfa = pfa
         self.guard = tuple(int(v) for v in guard)
         self.train = tuple(int(v) for v in train)
+        self.n_channels = int(n_channels)
         self.footprint = _ring(self.guard, self.train)
         self.n_train = int(self.footprint.sum())
         if self.n_train < 4:
             raise ConfigError(f"cfar train: value {train!r} gives {self.n_train} training cells; expected >= 4")
+        if correlation is None:
+            span = 2 * max(self.guard[0] + self.train[0], self.guard[1] + self.train[1]) + 3
+            delta = np.zeros(span, dtype=np.complex128)
+            delta[0] = 1.0
+            correlation = (delta, delta)
+        self.rho_d, self.rho_r = (np.asarray(c, dtype=np.complex128) for c in correlation)
+        for axis, rho, g in (("doppler", self.rho_d, self.guard[0]), ("range", self.rho_r, self.guard[1])):
+            length = stats.correlation_length(rho)
+            if length > g:
+                raise ConfigError(f"cfar guard: value {self.guard!r} is not allowed; the window correlates {axis} "
+                                  f"bins up to {length} apart, so expected at least {length} guard cells in {axis}")
 
     def __call__(self, power: np.ndarray) -> CfarResult:
         if power.ndim != 2:
@@ -76,16 +112,33 @@ class Cfar:
         """Noise estimate per cell and the threshold factor (per cell where the ring is cut by an edge)."""
         raise NotImplementedError
 
+    def offsets(self) -> np.ndarray:
+        """(doppler, range) offsets of the full training ring, shape (n_train, 2)."""
+        return stats.ring_offsets(self.guard, self.train)
+
 
 class CellAveragingCfar(Cfar):
-    """CA-CFAR: the mean of the training cells, threshold α = N(Pfa^(−1/N) − 1)."""
+    """CA-CFAR: the mean of the training cells times α, α exact for the tested statistic (module docstring)."""
 
     name = "ca"
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        n = self.n_train
-        self.alpha = n * (self.pfa ** (-1.0 / n) - 1.0)   # applied to the mean of the training cells
+        self.eigenvalues = self._eigenvalues(self.offsets())
+        self.alpha = stats.ca_alpha(self.pfa, self.n_channels, self.eigenvalues)   # on the mean of the ring
+        self._alpha_by_cut: dict[tuple[int, int], float] = {}
+
+    def _eigenvalues(self, offsets: np.ndarray) -> np.ndarray:
+        return stats.ring_eigenvalues(offsets, self.rho_d, self.rho_r)
+
+    def alpha_for_cut(self, left: int, right: int) -> float:
+        """α of a ring that loses the range columns beyond ``left`` bins to the left and ``right`` to the right."""
+        key = (left, right)
+        if key not in self._alpha_by_cut:
+            off = self.offsets()
+            keep = (off[:, 1] >= -left) & (off[:, 1] <= right)
+            self._alpha_by_cut[key] = stats.ca_alpha(self.pfa, self.n_channels, self._eigenvalues(off[keep]))
+        return self._alpha_by_cut[key]
 
     def _ring_sum(self, x: np.ndarray) -> np.ndarray:
         # ring sum = box sum over guard+training − box sum over the guard: two separable O(n) box filters;
@@ -99,12 +152,17 @@ class CellAveragingCfar(Cfar):
         return np.maximum(box_o - box_i, 0.0)
 
     def noise(self, power: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        shape = power.shape[1]
-        key = (power.shape[0], shape)
-        if getattr(self, "_count_key", None) != key:   # cells in each (edge-cut) ring, once per map shape
-            count = np.rint(self._ring_sum(np.ones(power.shape)))
-            self._count = np.maximum(count, 1.0)
-            self._alpha = self._count * (self.pfa ** (-1.0 / self._count) - 1.0)
+        n_r = power.shape[1]
+        key = power.shape
+        if getattr(self, "_count_key", None) != key:   # cells and α of each (edge-cut) ring, once per map shape
+            reach = self.guard[1] + self.train[1]
+            self._count = np.maximum(np.rint(self._ring_sum(np.ones(power.shape))), 1.0)
+            cols = np.arange(n_r)
+            left, right = np.minimum(cols, reach), np.minimum(n_r - 1 - cols, reach)
+            cuts = {(int(a), int(b)) for a, b in zip(left, right)}       # at most 2·reach + 1 ring shapes
+            table = {cut: self.alpha_for_cut(*cut) for cut in cuts}
+            per_col = np.array([table[(int(a), int(b))] for a, b in zip(left, right)])
+            self._alpha = np.broadcast_to(per_col[None, :], power.shape)
             self._count_key = key
         return self._ring_sum(power) / self._count, self._alpha
 
@@ -118,14 +176,9 @@ class OrderedStatisticCfar(Cfar):
         super().__init__(*args, **kwargs)
         if not 0.0 < rank_fraction <= 1.0:
             raise ConfigError(f"cfar rank_fraction: value {rank_fraction!r} is not allowed; expected (0, 1]")
-        n = self.n_train
-        self.k = max(1, int(round(rank_fraction * n)))
-        i = np.arange(self.k)
-
-        def log_pfa(alpha: float) -> float:
-            return float(np.sum(np.log(n - i) - np.log(n - i + alpha))) - np.log(self.pfa)
-
-        self.alpha = scipy.optimize.brentq(log_pfa, 1e-9, 1e9)
+        self.k = max(1, int(round(rank_fraction * self.n_train)))
+        ranked = stats.os_rank_samples(self.n_channels, self.offsets(), self.rho_d, self.rho_r, self.k)
+        self.alpha = stats.os_alpha(self.pfa, self.n_channels, ranked)
 
     def noise(self, power: np.ndarray) -> tuple[np.ndarray, float]:
         # mirrored at the range edges: the order statistic ignores the few strong cells a mirrored target adds

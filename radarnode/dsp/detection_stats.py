@@ -1,0 +1,376 @@
+"""Exact statistics of the detection test: the non-coherent sum of N channels under CA- and OS-CFAR.
+
+The signal chain tests, in every range–Doppler cell, the power summed over the
+N virtual channels, X = Σ_c |x_c|². Per channel the noise is complex Gaussian
+with the same variance σ² in every cell, but a window makes neighbouring cells
+correlated: windowed white noise is white noise convolved with the window's
+spectrum, so the complex correlation between cells ``lag`` bins apart is the
+normalised DFT of w² (DFT-even Hann: 1, −2/3, +1/6, 0, …). Range and Doppler
+windows act separably, so the correlation of two cells is ρ_d(Δd)·ρ_r(Δr).
+
+Under noise alone, with σ² = 1:
+
+* the cell under test is X ~ Gamma(N, 1) (independent of its training cells
+  when the guard cells cover the window's correlation length);
+* the sum of the training cells is Z = Σ_j λ_j E_j, E_j ~ Gamma(N, 1), λ_j the
+  eigenvalues of the training cells' correlation matrix (all 1 without a
+  window, then Z ~ Gamma(N·N_T, 1)).
+
+CA-CFAR declares a detection when X > α·Z/N_T, so
+
+    Pfa(α) = E_Z[ P(X > a Z) ],  a = α/N_T,
+           = M(a) · Σ_{k<N} ν_k,   M(a) = Π_j (1 + aλ_j)^(−N),
+    ν_0 = 1,  ν_{k+1} = N/(k+1) · Σ_{i=0}^{k} S_{i+1} ν_{k−i},  S_m = Σ_j (aλ_j/(1 + aλ_j))^m,
+
+which follows from P(X > t) = e^{−t} Σ_{k<N} t^k/k! and the derivatives of
+the moment-generating function of Z (every term is positive, so the sum is
+stable at any Pfa). For λ_j = 1 it reduces to the closed form
+Pfa = P(B > a/(1 + a)), B ~ Beta(N, N·N_T), which the tests use as the
+independent reference. The threshold factor is found by a root search on
+log Pfa. OS-CFAR has no closed form with correlated training cells: its
+false-alarm probability is E[Q_N(α·Y_(k))] (Q_N the Gamma(N) survival
+function, Y_(k) the k-th smallest training cell) averaged over simulated
+training rings drawn with the exact correlation (a fixed seed: the threshold
+is deterministic). Conditioning on Y_(k) makes this average smooth, so a few
+thousand rings give it to a few per cent even at 1e-6.
+
+Detection probability (the target's complex amplitude is the same in every
+channel up to the array phase, total windowed energy E over σ²):
+
+* Swerling 0: 2X ~ χ'²(2N, 2E) (non-central), Pd = E_Z[P(X > aZ)];
+* Swerling 1 (Rayleigh amplitude, frame to frame): X = (1 + E)·Exp(1) +
+  Gamma(N − 1), whose survival function is closed:
+  P(X > t) = Q_{N−1}(t) + e^{−t/μ} b^{−(N−1)} P_{N−1}(b t), μ = 1 + E, b = 1 − 1/μ.
+
+All functions are pure; arrays broadcast; nothing loops over cells.
+
+References
+----------
+Richards, *Fundamentals of Radar Signal Processing*, 2nd ed., sec. 6.2–6.5
+(non-coherent integration, Swerling models, CA- and OS-CFAR).
+Rohling, "Radar CFAR thresholding in clutter and multiple target situations",
+IEEE Trans. AES-19 (1983).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+import scipy.optimize
+import scipy.special
+import scipy.stats
+
+from radarnode.errors import ConfigError
+
+#: simulated training rings behind an OS-CFAR threshold (fixed seed)
+OS_RINGS = 4000
+#: quantiles of the training sum over which a detection probability is averaged
+Z_QUANTILES = 48
+
+
+def noise_correlation(window: np.ndarray) -> np.ndarray:
+    """Complex correlation of windowed white noise between DFT bins ``lag`` apart.
+
+    Parameters
+    ----------
+    window : array, shape (n,)
+        The window applied before the FFT.
+
+    Returns
+    -------
+    complex array, shape (n,): ρ[lag], ρ[0] = 1, circular in the lag.
+    """
+    w2 = np.asarray(window, dtype=np.float64) ** 2
+    if w2.ndim != 1 or w2.size == 0 or not np.all(np.isfinite(w2)) or w2.sum() <= 0:
+        raise ConfigError(f"window: value of shape {np.shape(window)} is not allowed; expected a finite, non-zero "
+                          "1-D window")
+    rho = np.fft.fft(w2) / w2.sum()
+    rho[np.abs(rho) < 1e-12] = 0.0
+    return rho
+
+
+def correlation_length(rho: np.ndarray) -> int:
+    """The largest lag (≤ n/2) at which the correlation is not zero."""
+    n = rho.size
+    lags = np.flatnonzero(np.abs(rho[: n // 2 + 1]) > 1e-9)
+    return int(lags.max()) if lags.size else 0
+
+
+def ring_correlation(offsets: np.ndarray, rho_d: np.ndarray, rho_r: np.ndarray) -> np.ndarray:
+    """Correlation matrix of a set of cells given as (doppler, range) offsets, shape (n, 2) -> (n, n)."""
+    dd = offsets[:, None, 0] - offsets[None, :, 0]
+    dr = offsets[:, None, 1] - offsets[None, :, 1]
+    return rho_d[dd % rho_d.size] * rho_r[dr % rho_r.size]
+
+
+def ring_eigenvalues(offsets: np.ndarray, rho_d: np.ndarray, rho_r: np.ndarray) -> np.ndarray:
+    """Eigenvalues λ_j of the training cells' correlation (Hermitian, so real and ≥ 0)."""
+    lam = np.linalg.eigvalsh(ring_correlation(offsets, rho_d, rho_r))
+    return np.clip(lam, 0.0, None)
+
+
+def ca_log_pfa(alpha: float, n_channels: int, eig: np.ndarray) -> float:
+    """log Pfa of CA-CFAR with threshold α·mean(training) (see the module docstring)."""
+    eig = np.asarray(eig, dtype=np.float64)
+    a = alpha / eig.size
+    q = a * eig / (1.0 + a * eig)
+    s = np.array([np.sum(q ** m) for m in range(1, n_channels)])     # S_1 … S_{N−1}
+    nu = np.zeros(n_channels)
+    nu[0] = 1.0
+    for k in range(n_channels - 1):           # N terms of a recurrence, not a loop over cells
+        nu[k + 1] = n_channels / (k + 1) * np.dot(s[: k + 1], nu[k::-1])
+    return float(-n_channels * np.sum(np.log1p(a * eig)) + np.log(np.sum(nu)))
+
+
+def ca_alpha(pfa: float, n_channels: int, eig: np.ndarray) -> float:
+    """Threshold factor α (on the mean of the training cells) that gives ``pfa`` exactly."""
+    _check_pfa(pfa)
+    target = math.log(pfa)
+    f = lambda alpha: ca_log_pfa(alpha, n_channels, eig) - target   # noqa: E731 - decreasing in α
+    hi = 1.0
+    while f(hi) > 0:
+        hi *= 2.0
+    return float(scipy.optimize.brentq(f, 0.0, hi, xtol=1e-12, rtol=1e-12))
+
+
+def gamma_sf(n_channels: int, t: np.ndarray) -> np.ndarray:
+    """P(X > t) for X ~ Gamma(N, 1): the noise-only cell."""
+    return scipy.special.gammaincc(n_channels, t)
+
+
+def os_rank_samples(n_channels: int, offsets: np.ndarray, rho_d: np.ndarray, rho_r: np.ndarray, rank: int,
+                    draws: int = OS_RINGS, seed: int = 0) -> np.ndarray:
+    """The ``rank``-th smallest training cell (1-based) of ``draws`` simulated noise-only rings.
+
+    Each ring's cells are the sum over channels of |x|², x complex Gaussian with
+    the cells' exact correlation (through the Cholesky-free square root
+    U·√Λ of the correlation matrix). Returns shape (draws,).
+    """
+    corr = ring_correlation(offsets, rho_d, rho_r)
+    lam, u = np.linalg.eigh(corr)
+    root = u * np.sqrt(np.clip(lam, 0.0, None))[None, :]              # corr = root @ root^H
+    rng = np.random.default_rng(seed)
+    n = offsets.shape[0]
+    power = np.zeros((n, draws))
+    for _ in range(n_channels):               # N channels, each one matrix product over all rings
+        y = (rng.standard_normal((n, draws)) + 1j * rng.standard_normal((n, draws))) * math.sqrt(0.5)
+        x = root @ y
+        power += x.real ** 2 + x.imag ** 2
+    return np.partition(power, rank - 1, axis=0)[rank - 1]
+
+
+def os_log_pfa(alpha: float, n_channels: int, ranked: np.ndarray) -> float:
+    """log Pfa of OS-CFAR (threshold α·Y_(k)) from the simulated order statistics ``ranked``."""
+    return float(scipy.special.logsumexp(_log_gamma_sf(n_channels, alpha * ranked)) - math.log(ranked.size))
+
+
+def os_alpha(pfa: float, n_channels: int, ranked: np.ndarray) -> float:
+    """Threshold factor α (on the k-th smallest training cell) that gives ``pfa``."""
+    _check_pfa(pfa)
+    target = math.log(pfa)
+    f = lambda alpha: os_log_pfa(alpha, n_channels, ranked) - target   # noqa: E731
+    hi = 1.0
+    while f(hi) > 0:
+        hi *= 2.0
+    return float(scipy.optimize.brentq(f, 1e-9, hi, xtol=1e-12, rtol=1e-12))
+
+
+def _log_gamma_sf(n: int, t: np.ndarray) -> np.ndarray:
+    """log Q_N(t), accurate far in the tail (where gammaincc underflows): log Γ(N, t) − log Γ(N)."""
+    t = np.asarray(t, dtype=np.float64)
+    q = scipy.special.gammaincc(n, t)
+    with np.errstate(divide="ignore"):
+        out = np.log(q)
+    tail = q < 1e-250
+    if tail.any():
+        # Γ(N, t) = e^{−t} t^{N−1} Σ_{k<N} (N−1)!/(N−1−k)! t^{−k} for integer N
+        tt = t[tail]
+        k = np.arange(n)
+        terms = scipy.special.gammaln(n) - scipy.special.gammaln(n - k)[None, :] - k[None, :] * np.log(tt)[:, None]
+        out[tail] = -tt + (n - 1) * np.log(tt) + scipy.special.logsumexp(terms, axis=1) - scipy.special.gammaln(n)
+    return out
+
+
+def _check_pfa(pfa: float) -> None:
+    if not (isinstance(pfa, (int, float)) and 0.0 < pfa < 0.5):
+        raise ConfigError(f"pfa: value {pfa!r} is not allowed; expected a number in (0, 0.5)")
+
+
+# --- detection probability ---------------------------------------------------------------------------------
+
+
+def training_sum_quantiles(n_channels: int, eig: np.ndarray, count: int = Z_QUANTILES) -> np.ndarray:
+    """Equally likely values of the training sum Z (mid-quantiles of a Gamma law with Z's mean and variance).
+
+    Z is a positive sum of N·N_T weighted exponentials: a Gamma law with its
+    first two moments is accurate to far better than what a detection
+    probability needs (Pd depends on Z only through the small CFAR loss).
+    """
+    eig = np.asarray(eig, dtype=np.float64)
+    mean = n_channels * eig.sum()
+    var = n_channels * np.sum(eig ** 2)
+    shape, scale = mean * mean / var, var / mean
+    u = (np.arange(count) + 0.5) / count
+    return scipy.stats.gamma.ppf(u, shape, scale=scale)
+
+
+def sf_swerling0(t: np.ndarray, energy: np.ndarray, n_channels: int) -> np.ndarray:
+    """P(X > t) for a steady target of total energy ``energy`` (over σ²) in N channels."""
+    return scipy.stats.ncx2.sf(2.0 * np.asarray(t), 2 * n_channels, 2.0 * np.asarray(energy))
+
+
+def sf_swerling1(t: np.ndarray, energy: np.ndarray, n_channels: int) -> np.ndarray:
+    """P(X > t) for a Rayleigh-fluctuating target of mean total energy ``energy`` in N channels."""
+    t = np.asarray(t, dtype=np.float64)
+    e = np.maximum(np.asarray(energy, dtype=np.float64), 1e-12)
+    mu = 1.0 + e
+    if n_channels == 1:
+        return np.exp(-t / mu)
+    b = e / mu
+    nm1 = n_channels - 1
+    # e^{−t/μ} b^{−(N−1)} P_{N−1}(b t), in logs so a weak target (b → 0) stays finite
+    with np.errstate(divide="ignore"):
+        log_p = np.log(scipy.special.gammainc(nm1, b * t))
+    tail = np.exp(np.minimum(-t / mu - nm1 * np.log(b) + log_p, 0.0))
+    return np.minimum(scipy.special.gammaincc(nm1, t) + tail, 1.0)
+
+
+def detection_probability(energy: np.ndarray, alpha: float, n_channels: int, eig: np.ndarray,
+                          swerling: int = 1) -> np.ndarray:
+    """Pd of CA-CFAR for targets of total windowed energy ``energy`` (over σ², linear), any shape."""
+    if swerling not in (0, 1):
+        raise ConfigError(f"swerling: value {swerling!r} is not allowed; expected 0 or 1")
+    eig = np.asarray(eig, dtype=np.float64)
+    z = training_sum_quantiles(n_channels, eig)
+    t = (alpha / eig.size) * z                                        # (Q,)
+    e = np.asarray(energy, dtype=np.float64)
+    sf = sf_swerling0 if swerling == 0 else sf_swerling1
+    return sf(t.reshape((-1,) + (1,) * e.ndim), e[None], n_channels).mean(axis=0)
+
+
+@functools.lru_cache(maxsize=32)
+def _cached_ring(guard: tuple[int, int], train: tuple[int, int]) -> np.ndarray:
+    gd, gr = guard
+    td, tr = train
+    d, r = np.mgrid[-(gd + td):gd + td + 1, -(gr + tr):gr + tr + 1]
+    ring = (np.abs(d) > gd) | (np.abs(r) > gr)
+    return np.stack([d[ring], r[ring]], axis=1)
+
+
+def ring_offsets(guard: tuple[int, int], train: tuple[int, int]) -> np.ndarray:
+    """(doppler, range) offsets of the training cells of a rectangular ring, shape (n_train, 2)."""
+    return _cached_ring(tuple(guard), tuple(train))
+
+
+# --- the statistic of one processing chain -----------------------------------------------------------------
+
+
+def window_snr_gain(window: np.ndarray) -> float:
+    """Coherent SNR gain of a window against none, (Σw)² / (N·Σw²) (Hann: 2/3, −1.76 dB)."""
+    w = np.asarray(window, dtype=np.float64)
+    return float(w.sum() ** 2 / (w.size * np.sum(w * w)))
+
+
+def straddle_gain(window: np.ndarray, delta: np.ndarray) -> np.ndarray:
+    """Power of a windowed tone ``delta`` bins off the bin centre, relative to on-bin (any shape of delta)."""
+    w = np.asarray(window, dtype=np.float64)
+    d = np.asarray(delta, dtype=np.float64)
+    n = np.arange(w.size)
+    resp = np.exp(2j * np.pi * d.reshape(-1, 1) * n[None, :] / w.size) @ w
+    return (np.abs(resp) ** 2 / w.sum() ** 2).reshape(d.shape)
+
+
+class DetectionStatistic:
+    """The detection test of one chain: N channels summed non-coherently, two windows, one CFAR.
+
+    It converts the integrated SNR ρ (the matched-filter SNR of all samples,
+    chirps and channels, no window: ``radarnode.radar.equation.snr_db``) into
+    the windowed energy E the test sees, gives the exact Pd of that test, and
+    draws the test's outcome without a signal (the detection level), so every
+    fidelity level detects with the same law.
+
+    Parameters
+    ----------
+    cfar : Cfar
+        The CFAR the chain applies (its n_channels, α and training-ring eigenvalues are used).
+    range_window, doppler_window : arrays
+        The windows applied before the range and Doppler FFTs.
+    """
+
+    #: straddle offsets (bins) over which a target's unknown position within its cell is averaged
+    STRADDLE_POINTS = 9
+
+    def __init__(self, cfar, range_window: np.ndarray, doppler_window: np.ndarray) -> None:
+        self.cfar = cfar
+        self.n_channels = cfar.n_channels
+        self.range_window = np.asarray(range_window, dtype=np.float64)
+        self.doppler_window = np.asarray(doppler_window, dtype=np.float64)
+        self.window_gain = window_snr_gain(self.range_window) * window_snr_gain(self.doppler_window)
+        eig = getattr(cfar, "eigenvalues", None)
+        self.eigenvalues = eig if eig is not None else np.ones(cfar.n_train)
+        # the threshold on the training sum: α·Z/N_T (OS-CFAR: the CA factor with the same Pfa stands in for Pd)
+        self.alpha_ca = cfar.alpha if cfar.name == "ca" else ca_alpha(cfar.pfa, self.n_channels, self.eigenvalues)
+        self._pd_tables: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def energy(self, rho: np.ndarray, delta_range: np.ndarray = 0.0, delta_doppler: np.ndarray = 0.0) -> np.ndarray:
+        """Windowed energy E over σ² (summed over channels) of targets of integrated SNR ρ (linear)."""
+        return (np.asarray(rho, dtype=np.float64) * self.window_gain
+                * straddle_gain(self.range_window, delta_range) * straddle_gain(self.doppler_window, delta_doppler))
+
+    def pd(self, energy: np.ndarray, swerling: int = 1) -> np.ndarray:
+        """Exact Pd of the test for windowed energy ``energy`` (linear, any shape)."""
+        return detection_probability(energy, self.alpha_ca, self.n_channels, self.eigenvalues, swerling)
+
+    def pd_of_snr(self, rho_db: np.ndarray, swerling: int = 1) -> np.ndarray:
+        """Pd of targets of integrated SNR ``rho_db`` at a position uniform within their cell (straddle averaged).
+
+        Tabulated once per Swerling case on a 0.05 dB grid and interpolated, so it
+        costs one ``np.interp`` per call (the object level calls it every cycle).
+        """
+        if swerling not in self._pd_tables:
+            # Pd of the windowed energy on a fine dB grid (one function of one variable), then its average
+            # over the straddle gains of a uniform position, by interpolation in dB
+            e_grid = np.arange(-40.0, 70.0001, 0.02)
+            pd_e = self.pd(10.0 ** (e_grid / 10.0), swerling)
+            u = (np.arange(self.STRADDLE_POINTS) + 0.5) / self.STRADDLE_POINTS - 0.5
+            g = (straddle_gain(self.range_window, u)[:, None] * straddle_gain(self.doppler_window, u)[None, :]).ravel()
+            offset = 10.0 * np.log10(self.window_gain * g)                 # dB from ρ to E
+            grid = np.arange(-30.0, 60.0001, 0.05)
+            table = np.interp(grid[:, None] + offset[None, :], e_grid, pd_e).mean(axis=1)
+            self._pd_tables[swerling] = (grid, table)
+        grid, table = self._pd_tables[swerling]
+        return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
+
+    def draw(self, energy: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+        """One draw of the test for steady targets of windowed energy ``energy``, shape (n,).
+
+        The cell's statistic is X = |√E + n₀|² + Gamma(N − 1) (the signal's
+        direction plus the N − 1 orthogonal noise dimensions), the threshold
+        α·Z/N_T with Z the training sum (a Gamma law with Z's exact mean and
+        variance). A fluctuating (Swerling 1) target is a steady one whose
+        energy was drawn from an exponential law first.
+
+        Returns (detected, statistic), the statistic in units of σ² (the cell's
+        power over the per-channel noise).
+        """
+        e = np.asarray(energy, dtype=np.float64)
+        n = e.size
+        z0 = (rng.standard_normal(n) + 1j * rng.standard_normal(n)) * math.sqrt(0.5)
+        x = np.abs(np.sqrt(e) + z0) ** 2
+        if self.n_channels > 1:
+            x = x + rng.gamma(self.n_channels - 1, 1.0, n)
+        eig = self.eigenvalues
+        mean, var = self.n_channels * eig.sum(), self.n_channels * np.sum(eig ** 2)
+        z = rng.gamma(mean * mean / var, var / mean, n)
+        return x > self.alpha_ca * z / eig.size, x
+
+    def threshold_mean(self) -> float:
+        """The mean threshold in units of σ²: α·E[Z]/N_T."""
+        return float(self.alpha_ca * self.n_channels * self.eigenvalues.sum() / self.eigenvalues.size)
+
+    def noise_floor(self, power: np.ndarray) -> float:
+        """Per-channel noise σ² of a power map, unbiased: its median over the median of Gamma(N, 1)."""
+        med = float(np.median(power))
+        return max(med / float(scipy.special.gammaincinv(self.n_channels, 0.5)), np.finfo(np.float64).tiny)

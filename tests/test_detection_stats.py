@@ -1,0 +1,148 @@
+"""The detection statistic, derived (issue 9 item 1): exact CFAR thresholds for the non-coherent sum of N
+windowed channels, measured false-alarm probability on noise-only cubes, Pd against theory, unbiased noise floor."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import scipy.stats
+
+from radarnode.dsp import detection_stats as ds
+from radarnode.dsp.chain import DspChain, DspConfig
+from radarnode.dsp.spectra import noncoherent_power, range_doppler, window
+from radarnode.errors import ConfigError
+from radarnode.radar import equation
+from radarnode.radar.presets import PRESETS
+from radarnode.radar.scatterers import point_targets
+from radarnode.radar.signal_model import synthesize
+
+
+@pytest.mark.parametrize("n_channels", [1, 4, 12])
+@pytest.mark.parametrize("pfa", [1e-3, 1e-6, 1e-9])
+def test_ca_threshold_matches_the_beta_closed_form_without_correlation(n_channels, pfa):
+    """With independent cells X/(X+Z) ~ Beta(N, N·N_T): an independent reference for the recurrence."""
+    n_t = 248
+    alpha = ds.ca_alpha(pfa, n_channels, np.ones(n_t))
+    a = alpha / n_t
+    assert scipy.stats.beta.sf(a / (1 + a), n_channels, n_channels * n_t) == pytest.approx(pfa, rel=1e-8)
+
+
+def test_single_cell_formula_is_the_one_channel_case():
+    n_t = 248
+    assert ds.ca_alpha(1e-6, 1, np.ones(n_t)) == pytest.approx(n_t * (1e-6 ** (-1 / n_t) - 1), rel=1e-9)
+
+
+def test_hann_noise_correlation_and_its_guard():
+    rho = ds.noise_correlation(window("hann", 256))
+    np.testing.assert_allclose(rho[:4], [1.0, -2 / 3, 1 / 6, 0.0], atol=1e-12)
+    assert ds.correlation_length(rho) == 2
+    with pytest.raises(ConfigError, match="guard.*at least 2 guard cells in range"):
+        DspChain(PRESETS["mimo12"], DspConfig(guard_range=1))
+
+
+def test_old_single_cell_threshold_was_far_too_high():
+    """The defect of issue 9: α for one exponential cell on a 12-channel sum sits ~6.7 dB above the exact one."""
+    chain = DspChain(PRESETS["mimo12"])
+    old = 248 * (1e-6 ** (-1 / 248) - 1)
+    assert 10 * math.log10(old / chain.cfar.alpha) == pytest.approx(6.7, abs=0.2)
+
+
+def _noise_maps(preset, frames, seed):
+    rng = np.random.default_rng(seed)
+    c, m, n = preset.num_virtual, preset.num_chirps, preset.num_samples
+    for _ in range(frames):
+        cube = (rng.standard_normal((c, m, n)) + 1j * rng.standard_normal((c, m, n))) * math.sqrt(0.5)
+        yield noncoherent_power(range_doppler(cube))
+
+
+def test_ca_false_alarm_probability_on_noise_cubes():
+    """10⁷ cells of the real mimo12 chain (12 channels, Hann × Hann): within ±30 % at 1e-3 and 1e-4."""
+    p = PRESETS["mimo12"]
+    cfars = {pfa: DspChain(p, DspConfig(pfa=pfa)).cfar for pfa in (1e-3, 1e-4)}
+    hits = dict.fromkeys(cfars, 0)
+    cells = 0
+    for power in _noise_maps(p, 153, 11):
+        cells += power.size
+        for pfa, cfar in cfars.items():
+            hits[pfa] += int(cfar(power).mask.sum())
+    assert cells >= 10_000_000
+    for pfa, h in hits.items():
+        assert h / cells == pytest.approx(pfa, rel=0.3), (pfa, h / cells)
+
+
+def test_os_false_alarm_probability_on_noise_cubes():
+    """OS-CFAR (k = 3/4 of the ring), its threshold from simulated correlated rings: 2·10⁶ cells at 1e-3."""
+    p = PRESETS["mimo12"]
+    cfar = DspChain(p, DspConfig(cfar="os", pfa=1e-3)).cfar
+    hits = cells = 0
+    for power in _noise_maps(p, 31, 12):
+        hits += int(cfar(power).mask.sum())
+        cells += power.size
+    assert hits / cells == pytest.approx(1e-3, rel=0.3)
+
+
+@pytest.mark.parametrize("swerling", [0, 1])
+def test_the_detection_levels_draw_follows_the_exact_pd(swerling):
+    stat = DspChain(PRESETS["mimo12"]).statistic
+    rng = np.random.default_rng(3)
+    for e_db in (12.0, 16.0, 20.0):
+        e = np.full(40_000, 10 ** (e_db / 10))
+        if swerling:
+            e = e * rng.exponential(1.0, e.size)
+        measured = stat.draw(e, rng)[0].mean()
+        assert measured == pytest.approx(float(stat.pd(10 ** (e_db / 10), swerling)), abs=0.015)
+
+
+def _small_preset():
+    """A 4-channel, 64 × 64 radar: the same chain, cheap enough for hundreds of trials in a test."""
+    return PRESETS["mimo12"].with_overrides({"num_chirps": 64, "num_samples": 64, "num_tx": 1})
+
+
+@pytest.mark.parametrize("swerling", [0, 1])
+def test_signal_chain_pd_matches_theory_within_half_a_db(swerling):
+    """On-bin targets at the SNR where theory gives Pd 0.5 and 0.9: measured Pd within 0.5 dB of it."""
+    p = _small_preset()
+    chain = DspChain(p)
+    stat = chain.statistic
+    rng = np.random.default_rng(21 + swerling)
+    grid = np.arange(0.0, 30.0, 0.01)
+    theory = stat.pd(stat.energy(10 ** (grid / 10)), swerling)
+    n_r = p.num_samples
+    for target in (0.5, 0.9):
+        snr = float(np.interp(target, theory, grid))
+        hits, trials = 0, 300
+        for _ in range(trials):
+            r = (rng.integers(10, n_r - 10)) * p.range_resolution_m          # on a bin centre
+            v = rng.integers(-20, 20) * p.speed_resolution_mps
+            rcs = snr - float(equation.snr_db(p, r, 0.0, azimuth_rad=0.0))
+            if swerling:
+                rcs += 10 * math.log10(rng.exponential())
+            det = chain.process(synthesize(p, point_targets([r], [0.0], [v], rcs), rng))
+            hits += bool(np.any((np.abs(det.range_m - r) < p.range_resolution_m)
+                                & (np.abs(det.range_rate_mps - v) < p.speed_resolution_mps)))
+        # slope of Pd at this point, to turn 0.5 dB into a Pd tolerance (plus 2.5σ of sampling error)
+        slope = float(np.interp(snr + 0.5, grid, theory) - target)
+        tol = abs(slope) + 2.5 * math.sqrt(target * (1 - target) / trials)
+        assert hits / trials == pytest.approx(target, abs=tol), (target, hits / trials, tol)
+
+
+def test_noise_floor_and_rcs_are_unbiased():
+    """Point targets of 10 dBsm anywhere in range, speed and angle: median RCS error within 0.3 dB."""
+    p = PRESETS["mimo12"]
+    chain = DspChain(p)
+    rng = np.random.default_rng(7)
+    errors = []
+    for _ in range(6):
+        r, az, v = rng.uniform(20, 100, 5), rng.uniform(-40, 40, 5), rng.uniform(-25, 25, 5)
+        det = chain.process(synthesize(p, point_targets(r, az, v, 10.0), rng))
+        for i in range(5):
+            j = np.argmin(np.abs(det.range_m - r[i]) + np.abs(det.range_rate_mps - v[i]))
+            errors.append(det.rcs_dbsm[j] - 10.0)
+    assert abs(np.median(errors)) <= 0.3
+    # and the floor of a pure-noise map is its per-channel variance
+    power = next(_noise_maps(p, 1, 3))
+    w = window("hann", 256)
+    sigma2 = float((w ** 2).sum() ** 2)          # per channel: Σw_r²·Σw_d², unit-variance samples
+    assert chain.statistic.noise_floor(power) == pytest.approx(sigma2, rel=0.01)
