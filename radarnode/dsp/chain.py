@@ -7,15 +7,17 @@ each detection's own Doppler estimate before beamforming.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
 from radarnode import validate
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
+from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
 from radarnode.dsp.peaks import interpolate, local_maxima, refine_ml
-from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window, window_gains
+from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
 from radarnode.radar.presets import RadarPreset
@@ -36,6 +38,7 @@ class DspConfig:
     doa: str = "fft"
     doa_fft_size: int = 256
     doa_floor_db: float = 9.0
+    doa_secondary_snr_db: float = 12.0   # a cell's second angle peak must stand this far above the beam noise
     range_ml: bool = True          # maximum-likelihood range refinement of the strongest peaks
     range_ml_max_peaks: int = 32
     max_detections: int = 1000
@@ -50,9 +53,25 @@ class DspConfig:
         validate.choice("doa", self.doa, DOA_METHODS)
         validate.integer("doa_fft_size", self.doa_fft_size, lo=4, hi=1 << 16)
         validate.number("doa_floor_db", self.doa_floor_db, lo=0.0, hi=40.0)
+        validate.number("doa_secondary_snr_db", self.doa_secondary_snr_db, lo=0.0, hi=60.0)
         validate.boolean("range_ml", self.range_ml)
         validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
+
+
+@functools.lru_cache(maxsize=16)
+def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_range: int) -> DetectionStatistic:
+    """The CFAR and detection statistic of a chain (built once per configuration and cube shape)."""
+    w_r, w_d = window(config.range_window, n_range), window(config.doppler_window, n_doppler)
+    cfar = make_cfar(config.cfar, pfa=config.pfa, guard=(config.guard_doppler, config.guard_range),
+                     train=(config.train_doppler, config.train_range), n_channels=n_channels,
+                     correlation=(noise_correlation(w_d), noise_correlation(w_r)))
+    return DetectionStatistic(cfar, w_r, w_d)
+
+
+def range_bins(preset: RadarPreset) -> int:
+    """Range bins of the map: N with complex (IQ) sampling, N/2 with real sampling."""
+    return preset.num_samples if preset.complex_sampling else preset.num_samples // 2
 
 
 class DspChain:
@@ -61,19 +80,52 @@ class DspChain:
     def __init__(self, preset: RadarPreset, config: DspConfig = DspConfig()) -> None:
         self.preset = preset
         self.config = config
-        self.cfar = make_cfar(config.cfar, pfa=config.pfa, guard=(config.guard_doppler, config.guard_range),
-                              train=(config.train_doppler, config.train_range))
+        self.statistic = detection_statistic(config, preset.num_virtual, preset.num_chirps, range_bins(preset))
+        self.cfar = self.statistic.cfar
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
 
+    def _tdm_hypotheses(self, snap: np.ndarray) -> np.ndarray:
+        """Undo the TDM phase of an aliased speed: each snapshot under the N_tx hypotheses of its wrap count.
+
+        With N_tx transmitters in TDM, a speed that aliases by k·2·v_max leaves a
+        phase step of 2π·k/N_tx from one transmitter's slot to the next after the
+        (aliased) Doppler correction: for k not a multiple of N_tx the virtual
+        array is broken into sub-arrays and the beam splits into ghosts (a post
+        at motorway speed seen at two wrong angles). The hypothesis whose beam
+        peak is highest restores the array (production TDM-MIMO radars do this).
+        Returns the snapshots with the chosen correction, shape (n, channels).
+        """
+        p = self.preset
+        h = np.arange(p.num_tx)
+        fix = np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)       # (hyp, channel)
+        trial = snap[:, None, :] * fix[None, :, :]                                       # (n, hyp, channel)
+        peak = self.doa.spectrum(trial).max(axis=-1)                                      # (n, hyp)
+        best = np.argmax(peak, axis=1)
+        return trial[np.arange(snap.shape[0]), best]
+
     def process(self, cube: np.ndarray, decimation: int = 1, power_reduction_db: float = 0.0) -> Detections:
         """Detections of one cube (shape (channel, chirp, sample)); see the module docstring."""
-        p, cfg = self.preset, self.config
-        c, m, n = cube.shape
+        cfg = self.config
         rd = range_doppler(cube, range_window=cfg.range_window, doppler_window=cfg.doppler_window)
+        return self.process_rd(rd, power_reduction_db)
+
+    def process_rd(self, rd: np.ndarray, power_reduction_db: float = 0.0) -> Detections:
+        """Detections of one windowed range–Doppler spectrum, shape (channel, doppler, range), Doppler
+        fftshifted (bin M/2 is zero speed), as :func:`radarnode.dsp.spectra.range_doppler` returns it.
+
+        ``snr_db`` of a detection is the estimate of the integrated SNR ρ (the
+        convention of :func:`radarnode.radar.equation.snr_db`): the cell's power
+        less the noise's share, over the unbiased noise floor, with the window
+        and straddle losses at the interpolated position divided out.
+        """
+        p, cfg = self.preset, self.config
+        c, m, n = rd.shape
+        stat = self.statistic if (m, n) == (len(self.statistic.doppler_window), len(self.statistic.range_window)) \
+            else detection_statistic(cfg, c, m, n)
         power = noncoherent_power(rd)
-        res = self.cfar(power)
+        res = stat.cfar(power)
         d, r = local_maxima(power, res.mask)
         if d.size > cfg.max_detections:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
@@ -87,24 +139,27 @@ class DspChain:
             r_bins = r_bins.copy()
             r_bins[top] = refine_ml(np.transpose(rd[:, d[top], :], (1, 0, 2)), r_bins[top],
                                     window(cfg.range_window, n))
+        # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative range)
+        r_bins = np.mod(r_bins, n)
         range_m = r_bins * p.range_resolution_m
         speed = (d - m // 2 + dd) * p.speed_resolution_mps          # positive: opening
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         fd = 2.0 * speed / p.wavelength_m
         snap = rd[:, d, r].T * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
-        # SNR against the calibrated noise floor (the median cell is noise: median = mean·ln 2 for
-        # exponential power), not the CFAR's local estimate, which a strong target's sidelobes inflate
-        floor = max(float(np.median(power)) / np.log(2.0), np.finfo(np.float64).tiny)
-        snr = 10.0 * np.log10(np.maximum(power[d, r] / floor, 1e-30))
-        if d.size:   # every angle peak of a cell is a detection
-            row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db)
-            # the beam at the DOA peak adds the coherent gain of the channels to the non-coherent sum
-            range_m, speed, snr = range_m[row], speed[row], snr[row] + rel_db + 10.0 * np.log10(c)
+        if p.num_tx > 1 and d.size:
+            snap = self._tdm_hypotheses(snap)
+        # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
+        # which a strong target's sidelobes inflate
+        sigma2 = stat.noise_floor(power)
+        energy = np.maximum(power[d, r] / sigma2 - c, 1e-30)
+        delta_r = r_bins - np.rint(r_bins)
+        rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
+        if d.size:   # every angle peak of a cell is a detection, sharing the cell's energy by its beam power
+            row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db)
+            range_m, speed, rho = range_m[row], speed[row], rho[row] * 10.0 ** (rel_db / 10.0)
         else:
             sin_t = np.zeros(0)
-        # SNR of the window-free matched filter, to turn the measured SNR back into an RCS
-        cr, nr = window_gains(cfg.range_window, n)
-        cd, nd = window_gains(cfg.doppler_window, m)
-        loss_db = -10.0 * np.log10((cr * cr / (n * nr)) * (cd * cd / (m * nd)))
-        rcs = snr + loss_db - equation.snr_db(p, range_m, 0.0, power_reduction_db)
-        return Detections(range_m, speed, np.arcsin(sin_t), rcs, snr, np.full(range_m.size, -1, dtype=np.int64))
+        snr = 10.0 * np.log10(rho)
+        azimuth = np.arcsin(sin_t)
+        rcs = snr - equation.snr_db(p, range_m, 0.0, power_reduction_db, azimuth)
+        return Detections(range_m, speed, azimuth, rcs, snr, np.full(range_m.size, -1, dtype=np.int64))

@@ -60,13 +60,17 @@ class FftBeamformer(Doa):
         k = np.argmax(p, axis=1)
         return self._refine(p, np.arange(p.shape[0]), k)
 
-    def estimate_peaks(self, snapshots: np.ndarray, floor_db: float = 9.0
-                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def estimate_peaks(self, snapshots: np.ndarray, floor_db: float = 9.0, noise_power: float | None = None,
+                       secondary_snr_db: float = 12.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every spectral peak within ``floor_db`` of each snapshot's strongest.
 
         Several sources in one range–Doppler cell (two guardrails at the same
         range, a car beside a truck) come out as several peaks. The floor stays
-        above the −13 dB sidelobes of the uniform taper.
+        above the −13 dB sidelobes of the uniform taper. With ``noise_power``
+        (per element), a peak other than the strongest must also stand
+        ``secondary_snr_db`` above the beam's noise (K·noise_power): the angle
+        spectrum of a noise cell has several peaks within 9 dB, and without
+        this test one false alarm would become several detections.
 
         Returns (row, sin_azimuth, relative_power_db), each of shape (n_peaks,).
         """
@@ -75,6 +79,9 @@ class FftBeamformer(Doa):
         peak = (p >= np.roll(p, 1, axis=1)) & (p > np.roll(p, -1, axis=1))
         top = p.max(axis=1, keepdims=True)
         strong = peak & (p >= top * 10.0 ** (-floor_db / 10.0)) & (p > 0)
+        if noise_power is not None:
+            loud = p >= self.num_elements * noise_power * 10.0 ** (secondary_snr_db / 10.0)
+            strong &= loud | (p >= top)
         rows, k = np.nonzero(strong)
         rel = 10.0 * np.log10(p[rows, k] / top[rows, 0])
         return rows, self._refine(p, rows, k), rel
@@ -86,7 +93,9 @@ class FftBeamformer(Doa):
         den = a_m - 2 * a_0 + a_p
         with np.errstate(divide="ignore", invalid="ignore"):
             delta = np.clip(np.where(den < 0, 0.5 * (a_m - a_p) / den, 0.0), -0.5, 0.5)
-        u = (np.where(k >= n // 2, k - n, k) + delta) / n
+        # spatial frequency is circular: a peak refined past ±½ cycle belongs to the other end (a source at
+        # +85° whose peak falls on the −½ bin is still at +85°, never at −90°)
+        u = np.mod((k + delta) / n + 0.5, 1.0) - 0.5
         return np.clip(u / self.spacing_wl, -1.0, 1.0)
 
 

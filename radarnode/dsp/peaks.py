@@ -7,11 +7,11 @@ import scipy.ndimage
 
 
 def local_maxima(power: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Cells of ``mask`` that are the maximum of their 3×3 neighbourhood (Doppler wraps).
+    """Cells of ``mask`` that are the maximum of their 3×3 neighbourhood (both axes wrap: both FFTs are circular).
 
     Returns (doppler_index, range_index), each of shape (n,).
     """
-    peak = power >= scipy.ndimage.maximum_filter(power, size=3, mode=("wrap", "nearest"))
+    peak = power >= scipy.ndimage.maximum_filter(power, size=3, mode="wrap")
     return np.nonzero(mask & peak)
 
 
@@ -23,14 +23,14 @@ def interpolate(power: np.ndarray, d: np.ndarray, r: np.ndarray, window: str = "
     peak, α = |X_{k±1}|/|X_k|, gives the offset exactly for one tone:
     δ = (2α − 1)/(α + 1) (from W(δ) ∝ sinc δ / (1 − δ²)). Other windows use a
     parabola through the log-power (bias up to a few hundredths of a bin).
+    Both axes wrap (a beat frequency past the last range bin is the first bins').
     Returns (delta_doppler, delta_range) in bins, each in [-0.5, 0.5].
     """
     nd, nr = power.shape
-    rm, rp = np.maximum(r - 1, 0), np.minimum(r + 1, nr - 1)
+    rm, rp = (r - 1) % nr, (r + 1) % nr
     est = _hann_ratio if window == "hann" else _log_parabola
     dd = est(power[(d - 1) % nd, r], power[d, r], power[(d + 1) % nd, r])
     dr = est(power[d, rm], power[d, r], power[d, rp])
-    dr = np.where((r == 0) | (r == nr - 1), 0.0, dr)
     return dd, dr
 
 
