@@ -23,7 +23,7 @@ def _process(scat, dtype=np.complex128, seed=0, **kw):
         with np.errstate(all="raise", under="ignore"):
             cube = synthesize(P, scat, np.random.default_rng(seed), dtype=dtype, **kw)
             det = DspChain(P).process(cube)
-            ana = detection_model.detect(P, scat, np.random.default_rng(seed))
+            ana = detection_model.detect(P, scat, np.random.default_rng(seed), DspChain(P).statistic)
     for d in (det, ana):
         for name in ("range_m", "range_rate_mps", "azimuth_rad", "rcs_dbsm", "snr_db"):
             assert np.all(np.isfinite(getattr(d, name))), name
@@ -61,11 +61,20 @@ def test_speed_at_and_beyond_vmax_aliases(dtype):
     assert abs(_nearest(ana, 60.0).range_rate_mps[0] - (-vmax + 5.0)) < 2 * P.speed_resolution_mps
 
 
-def test_azimuth_at_the_fov_edge_and_at_90_degrees():
-    det, _ = _process(point_targets([20.0, 40.0, 60.0], [60.0, -89.9, 90.0], [0.0, 2.0, -2.0]))
-    assert abs(math.degrees(_nearest(det, 20.0).azimuth_rad[0]) - 60.0) < 1.0
-    for r in (40.0, 60.0):
-        assert abs(math.degrees(abs(_nearest(det, r).azimuth_rad[0]))) > 75.0
+def test_azimuth_at_the_fov_edge_at_85_and_at_90_degrees():
+    """The element pattern (two-way cos²θ here) attenuates a target at ±85° by 21 dB, and one at ±90° to nothing:
+    a strong reflector at +85° is reported on its own side, never at −90°, and one at ±90° is not reported."""
+    az = [60.0, 85.0, -85.0, 90.0, -89.99]
+    rng_m = [20.0, 30.0, 40.0, 50.0, 60.0]
+    det, ana = _process(point_targets(rng_m, az, [0.0, 2.0, -2.0, 1.0, -1.0], [10.0, 30.0, 30.0, 30.0, 30.0]))
+    for d in (det, ana):
+        assert abs(math.degrees(_nearest(d, 20.0).azimuth_rad[0]) - 60.0) < 1.0
+        for r, a in ((30.0, 85.0), (40.0, -85.0)):
+            near = d.take(np.abs(d.range_m - r) < P.range_resolution_m)
+            assert len(near) >= 1 and np.all(np.sign(near.azimuth_rad) == np.sign(a))
+            assert np.all(np.abs(np.degrees(near.azimuth_rad) - a) < 5.0)
+        for r in (50.0, 60.0):
+            assert not np.any(np.abs(d.range_m - r) < P.range_resolution_m)
 
 
 def test_rcs_from_minus_20_to_plus_40_dbsm_in_one_frame():

@@ -234,7 +234,12 @@ class ObjectTracker:
         ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
         gx, gy = x[:, 2] + sensor_velocity[0], x[:, 3] + sensor_velocity[1]
         speed = np.hypot(gx, gy)
-        moving = speed >= MOVING_THRESHOLD_MPS
+        # moving only where the ground speed stands out of its own uncertainty: the lateral velocity of a far
+        # object is poorly observed (azimuth noise × range), and a post must not become a crossing object
+        pv = self.p[idx][:, 2:4, 2:4]
+        ux, uy = gx / np.maximum(speed, 1e-9), gy / np.maximum(speed, 1e-9)
+        sigma = np.sqrt(np.maximum(ux * ux * pv[:, 0, 0] + 2 * ux * uy * pv[:, 0, 1] + uy * uy * pv[:, 1, 1], 0.0))
+        moving = speed >= np.maximum(MOVING_THRESHOLD_MPS, 3.0 * sigma)
         self.was_moving[idx] |= moving
         angle = np.abs(np.arctan2(gy, gx))
         dyn = np.where(angle > np.radians(135), DYN_ONCOMING, np.where(angle > np.radians(45), DYN_CROSSING_MOVING,
@@ -269,6 +274,17 @@ def classify(length_m, width_m, rcs_dbsm, moving) -> np.ndarray:
                              np.where((rcs_dbsm < 3.0) & moving, 3, 0))).astype(np.int64)
 
 
+def cluster_dyn_prop(range_rate_mps: np.ndarray, azimuth_rad: np.ndarray, sensor_velocity) -> np.ndarray:
+    """DynProp of a single detection from what it measures: its radial speed over ground (ego-compensated).
+
+    A cluster has no lateral speed of its own; its radial ground speed decides
+    stationary (below ``MOVING_THRESHOLD_MPS``), oncoming (closing) or moving.
+    """
+    ground = range_rate_mps + sensor_velocity[0] * np.cos(azimuth_rad) + sensor_velocity[1] * np.sin(azimuth_rad)
+    return np.where(np.abs(ground) < MOVING_THRESHOLD_MPS, DYN_STATIONARY,
+                    np.where(ground < 0, DYN_ONCOMING, DYN_MOVING)).astype(np.int64)
+
+
 def clusters_from_detections(det: Detections, near_range_m: float, sensor_velocity: tuple[float, float],
                              max_clusters: int = 250) -> ClusterList:
     """Each detection is an ARS 408 cluster; near-scan clusters first, each part sorted by range."""
@@ -282,16 +298,14 @@ def clusters_from_detections(det: Detections, near_range_m: float, sensor_veloci
     c, s = np.cos(d.azimuth_rad), np.sin(d.azimuth_rad)
     cl.dist_long_m, cl.dist_lat_m = d.range_m * c, d.range_m * s
     cl.vrel_long_mps, cl.vrel_lat_mps = d.range_rate_mps * c, d.range_rate_mps * s
-    ground = d.range_rate_mps + sensor_velocity[0] * c + sensor_velocity[1] * s
-    cl.dyn_prop = np.where(np.abs(ground) < MOVING_THRESHOLD_MPS, DYN_STATIONARY,
-                           np.where(ground < 0, DYN_ONCOMING, DYN_MOVING)).astype(np.int64)
+    cl.dyn_prop = cluster_dyn_prop(d.range_rate_mps, d.azimuth_rad, sensor_velocity)
     cl.rcs_dbsm = d.rcs_dbsm
     cl.dist_long_sigma_m = np.full(n, 0.2)
     cl.dist_lat_sigma_m = np.maximum(0.2, d.range_m * 0.01)
     cl.vrel_long_sigma_mps = np.full(n, 0.1)
     cl.vrel_lat_sigma_mps = np.full(n, 0.5)
     cl.pdh0 = np.where(d.snr_db > 20.0, 1, 2).astype(np.int64)
-    cl.ambig_state = np.full(n, 3, dtype=np.int64)
+    cl.ambig_state = d.ambig_state.copy()
     cl.invalid_state = np.zeros(n, dtype=np.int64)
     cl.is_near = near[order]
     cl.actor_index = d.actor_index.copy()

@@ -17,6 +17,9 @@ DYN_MOVING, DYN_STATIONARY, DYN_ONCOMING, DYN_STATIONARY_CANDIDATE = 0, 1, 2, 3
 DYN_UNKNOWN, DYN_CROSSING_STATIONARY, DYN_CROSSING_MOVING, DYN_STOPPED = 4, 5, 6, 7
 DYN_NAMES = ("moving", "stationary", "oncoming", "stat.cand", "unknown", "cross.stat", "crossing", "stopped")
 CLASS_NAMES = ("point", "car", "truck", "pedestrian", "motorcycle", "bicycle", "wide", "reserved")
+# ARS 408 Cluster_AmbigState codes
+AMBIG_INVALID, AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_UNAMBIGUOUS, AMBIG_STATIONARY = 0, 1, 2, 3, 4
+AMBIG_NAMES = ("invalid", "ambiguous", "staggered ramp", "unambiguous", "stationary candidate")
 # ARS 408 Obj_MeasState codes
 MEAS_DELETED, MEAS_NEW, MEAS_MEASURED, MEAS_PREDICTED = 0, 1, 2, 3
 
@@ -46,6 +49,11 @@ class _Columns:
     def take(self, index: np.ndarray):
         """A new list with the entries ``index`` (an integer or boolean array), in that order."""
         return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
+
+    @classmethod
+    def concat(cls, parts: list):
+        """One list of the entries of ``parts``, in order."""
+        return cls(**{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(cls)})
 
 
 class _Planar:
@@ -128,7 +136,10 @@ class Detections(_Columns):
 
     ``range_rate_mps`` is negative when closing. ``actor_index`` is the ground
     truth the detection came from where the model knows it (-1: noise, clutter,
-    merged from several actors, or unknown).
+    merged from several actors, or unknown). ``snr_db`` is the estimated
+    integrated SNR ρ (:func:`radarnode.radar.equation.snr_db`). ``ambig_state``
+    is the ARS 408 Cluster_AmbigState of the range rate (:data:`AMBIG_NAMES`);
+    left out, it is 3 (unambiguous).
     """
 
     range_m: np.ndarray
@@ -137,8 +148,13 @@ class Detections(_Columns):
     rcs_dbsm: np.ndarray
     snr_db: np.ndarray
     actor_index: np.ndarray
+    ambig_state: np.ndarray | None = None
 
-    INT_FIELDS = ("actor_index",)
+    INT_FIELDS = ("actor_index", "ambig_state")
+
+    def __post_init__(self) -> None:
+        if self.ambig_state is None:
+            self.ambig_state = np.full(np.shape(self.range_m), AMBIG_UNAMBIGUOUS, dtype=np.int64)
 
     @property
     def x_m(self) -> np.ndarray:

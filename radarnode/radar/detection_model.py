@@ -1,17 +1,33 @@
 """Fidelity level 2: the analytic detection model (no time-domain signal).
 
-Each scatterer lands in its range–Doppler–angle resolution cell (Doppler
-aliased as the radar would alias it); scatterers sharing a cell merge as a coherent sum with their
-random scattering phases; the window's main-lobe straddle loss is applied for
-the scatterer's offset from the bin centre; the result is detected against a
-CA-CFAR threshold with the Swerling 1 closed form
-Pd = (1 + T/(1 + SNR))^(−N), T = Pfa^(−1/N) − 1 (Richards eq. 6.87); the
-estimate carries noise at the Cramér–Rao bound; Poisson false alarms come at
-the CFAR's rate. Range sidelobes of strong cells are off by default: in the
-signal chain the main lobe sits in the sidelobe cell's CA-CFAR ring and raises
-its threshold ~19 dB above the −31.5 dB sidelobe, so they are not detected
-(measured: 0.05 false alarms per frame at the signal level against 5 per frame
-with sidelobes modelled, ``benchmarks/fidelity.py``); ``sidelobes=True`` adds them.
+What the signal chain does to scatterers, without the signal:
+
+1. each scatterer lands where the chain would see it: range bin modulo the
+   unambiguous range (the range FFT is circular: never a negative range),
+   Doppler bin modulo ±v_max, spatial frequency d·sinθ modulo one cycle
+   (grating lobes where the element spacing exceeds λ/2), power through the
+   element pattern (:func:`radarnode.radar.equation.pattern_db`);
+2. scatterers in one range–Doppler–angle cell add coherently with their
+   random scattering phases, each weighted by its window straddle loss;
+3. cells closer than the chain's measured resolution (:data:`RESOLUTION`, in
+   range bins, Doppler bins and beamwidths) are one peak: a cell that has a
+   stronger cell within the resolution in every axis gives its power to the
+   strongest of them, as a weak tone inside a strong main lobe does;
+4. each range–Doppler cell is tested with the same statistic as the chain:
+   :meth:`DetectionStatistic.draw` — the non-coherent sum of N channels
+   against the exact CA-CFAR threshold; in a detected cell every angle peak
+   within the chain's DOA floor is a detection;
+5. the estimates carry noise at the chain's measured efficiency times the
+   Cramér–Rao bound of the peak's integrated SNR (:data:`CHAIN_EFFICIENCY`);
+   the reported SNR is drawn from the statistic, as the chain estimates it;
+6. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
+
+The measured constants live in :mod:`radarnode.radar.calibration`.
+
+Range sidelobes of strong cells are off by default: in the signal chain the
+main lobe sits in the sidelobe cell's CA-CFAR ring and raises its threshold
+far above the −31.5 dB sidelobe; ``sidelobes=True`` adds them.
+
 """
 
 from __future__ import annotations
@@ -19,16 +35,16 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import scipy.spatial
 
+from radarnode.dsp.detection_stats import DetectionStatistic, straddle_gain
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
+from radarnode.radar.calibration import CHAIN_EFFICIENCY, DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers
-from radarnode.radar.signal_model import num_range_samples
 
-HANN_PROCESSING_LOSS_DB = 2 * 1.76      # range and Doppler Hann windows
 HANN_SIDELOBE_DB = -31.5                 # first sidelobe, ±2.5 bins
-N_TRAIN = 248                            # CA-CFAR training cells of the default DSP chain
 
 
 def hann_straddle(delta: np.ndarray) -> np.ndarray:
@@ -42,86 +58,154 @@ def hann_straddle(delta: np.ndarray) -> np.ndarray:
     return np.where(np.abs(np.abs(d) - 1.0) < 1e-9, 0.5, w)
 
 
-def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, *, pfa: float | None = None,
-           power_reduction_db: float = 0.0, snr_db: float | None = None, sidelobes: bool = False) -> Detections:
-    """Detections of one frame, computed from the scatterers analytically."""
+def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½))."""
     p = preset
-    pfa = p.pfa if pfa is None else pfa
-    n_r = num_range_samples(p)
+    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
     m = p.num_chirps
+    rb = np.mod(scat.range_m / p.range_resolution_m, n_r)
+    vb = np.mod(scat.range_rate_mps / p.speed_resolution_mps + m / 2, m) - m / 2
+    u = np.mod(p.element_spacing_wl * np.sin(scat.azimuth_rad) + 0.5, 1.0) - 0.5
+    return rb, vb, u
+
+
+def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, statistic: DetectionStatistic, *,
+           power_reduction_db: float = 0.0, snr_db: float | None = None, sidelobes: bool = False) -> Detections:
+    """Detections of one frame, computed from the scatterers analytically (see the module docstring).
+
+    Parameters
+    ----------
+    statistic : DetectionStatistic
+        The chain's detection test (``radarnode.dsp.chain.DspChain(preset, config).statistic``).
+    snr_db : float, optional
+        Per-sample, per-channel SNR of every scatterer, as the signal level takes it.
+    """
+    p = preset
+    scat.require_finite()
+    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    m, k_el = p.num_chirps, p.num_virtual
     k = len(scat)
-    r, v, az = scat.range_m, scat.range_rate_mps, scat.azimuth_rad
+    az = scat.azimuth_rad
     if snr_db is not None:
-        rho = np.full(k, 10.0 ** ((snr_db + 10 * math.log10(n_r * m * p.num_virtual)) / 10.0))
+        rho = np.full(k, 10.0 ** ((snr_db + 10 * math.log10(n_r * m * k_el)) / 10.0))
     else:
-        rho = 10.0 ** (equation.snr_db(p, r, scat.rcs_dbsm, power_reduction_db) / 10.0)
-    # continuous bin positions; range beyond the unambiguous range and speed beyond ±v_max alias
-    rb = np.mod(r / p.range_resolution_m, n_r)
-    vb = np.mod(v / p.speed_resolution_mps + m / 2, m) - m / 2
-    ri, vi = np.rint(rb).astype(np.int64) % n_r, np.rint(vb).astype(np.int64)
-    # the beamformer separates what the range–Doppler cell does not: the cell includes the angle bin
-    ai = np.rint(np.sin(az) / p.angular_resolution_rad).astype(np.int64)
-    n_a = int(np.ceil(2.0 / p.angular_resolution_rad)) + 3
-    cell = (ri * m + (vi % m)) * n_a + (ai + n_a // 2)
-    # coherent sum within a cell with random scattering phases
-    amp = np.sqrt(rho) * hann_straddle(rb - np.rint(rb)) * hann_straddle(vb - np.rint(vb))
-    phase = np.exp(2j * np.pi * rng.random(k))
+        rho = 10.0 ** (equation.snr_db(p, scat.range_m, scat.rcs_dbsm, power_reduction_db, az) / 10.0)
+    rb, vb, u = apparent_positions(p, scat)
+    ri, vi = np.rint(rb).astype(np.int64), np.rint(vb).astype(np.int64)
+    beam = 1.0 / k_el                                   # Rayleigh beamwidth in d·sinθ
+    ai = np.rint(u / beam).astype(np.int64)
+    n_a = k_el + 2
+    cell = ((ri % n_r) * m + (vi % m)) * n_a + (ai % n_a)
+    # coherent sum within a cell, each scatterer weighted by its straddle amplitude
+    gain = np.sqrt(statistic.window_gain * straddle_gain(statistic.range_window, rb - ri)
+                   * straddle_gain(statistic.doppler_window, vb - vi))
+    amp = np.sqrt(rho) * gain
     uniq, inv = np.unique(cell, return_inverse=True)
+    inv = inv.ravel()
     field = np.zeros(uniq.size, dtype=np.complex128)
-    np.add.at(field, inv, amp * phase)
-    power = np.abs(field) ** 2 * 10.0 ** (-HANN_PROCESSING_LOSS_DB / 10.0)
-    weight = np.zeros(uniq.size)
-    np.add.at(weight, inv, amp ** 2)
-    wsafe = np.maximum(weight, 1e-300)
+    np.add.at(field, inv, amp * np.exp(2j * np.pi * rng.random(k)))
+    energy = np.abs(field) ** 2
+    w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
+    wsafe = np.maximum(w, 1e-300)
+    c_r = np.bincount(inv, weights=amp ** 2 * rb, minlength=uniq.size) / wsafe
+    c_v = np.bincount(inv, weights=amp ** 2 * vb, minlength=uniq.size) / wsafe
+    c_u = np.bincount(inv, weights=amp ** 2 * u, minlength=uniq.size) / wsafe
+    c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
+    lo = np.full(uniq.size, np.iinfo(np.int64).max)
+    hi = np.full(uniq.size, np.iinfo(np.int64).min)
+    np.minimum.at(lo, inv, scat.actor_index)
+    np.maximum.at(hi, inv, scat.actor_index)
+    tag = np.where(lo == hi, lo, -1)
 
-    def mean(x):
-        acc = np.zeros(uniq.size)
-        np.add.at(acc, inv, amp ** 2 * x)
-        return acc / wsafe
-
-    c_r, c_v, c_sin = mean(rb), mean(vb), mean(np.sin(az))
-    tag = np.full(uniq.size, -1, dtype=np.int64)
-    first = np.full(uniq.size, -2, dtype=np.int64)
-    np.maximum.at(first, inv, scat.actor_index)
-    last = np.full(uniq.size, 1 << 40, dtype=np.int64)
-    np.minimum.at(last, inv, scat.actor_index)
-    tag = np.where(first == last, first, -1)
-    # CA-CFAR with Swerling 1 targets
-    t = pfa ** (-1.0 / N_TRAIN) - 1.0
-    pd = (1.0 + t / (1.0 + power)) ** (-N_TRAIN)
-    hit = rng.random(uniq.size) < pd
-    snr_cell = 10.0 * np.log10(np.maximum(power[hit], 1e-30))
-    sig = snr_cell
-    # estimation noise at the Cramér–Rao bound of the cell's SNR
-    sr = equation.crb_range_m(p, sig) / p.range_resolution_m
-    sv = equation.crb_speed_mps(p, sig) / p.speed_resolution_mps
-    saz = equation.crb_azimuth_rad(p, sig, np.arcsin(np.clip(c_sin[hit], -1, 1)))
-    nz = rng.standard_normal((3, int(hit.sum())))
-    est_r = (c_r[hit] + sr * nz[0]) * p.range_resolution_m
-    est_v = (c_v[hit] + sv * nz[1]) * p.speed_resolution_mps
-    est_az = np.arcsin(np.clip(c_sin[hit], -1, 1)) + saz * nz[2]
-    det = Detections(est_r, est_v, est_az, snr_cell + HANN_PROCESSING_LOSS_DB - equation.snr_db(
-        p, np.maximum(est_r, 0.01), 0.0, power_reduction_db), snr_cell, tag[hit])
+    # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
+    peak, energy = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
+    rd = (uniq // n_a)
+    # the range–Doppler test on the summed energy of each range–Doppler cell's peaks
+    rd_u, rd_inv = np.unique(rd[peak], return_inverse=True)
+    rd_inv = rd_inv.ravel()
+    e_rd = np.bincount(rd_inv, weights=energy[peak], minlength=rd_u.size)
+    hit_rd, stat_rd = statistic.draw(e_rd, rng)
+    top = np.zeros(rd_u.size)
+    np.maximum.at(top, rd_inv, energy[peak])
+    idx = np.flatnonzero(peak)
+    keep = hit_rd[rd_inv] & (energy[idx] >= top[rd_inv] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
+    idx, share = idx[keep], energy[idx[keep]] / np.maximum(e_rd[rd_inv[keep]], 1e-300)
+    measured = np.maximum(stat_rd[rd_inv[keep]] - statistic.n_channels, 1e-30) * share   # energy estimate
+    rho_peak = c_rho[idx]
+    snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
+    er, ev, ea = CHAIN_EFFICIENCY
+    nz = rng.standard_normal((3, idx.size))
+    est_r = np.mod(c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0], n_r) \
+        * p.range_resolution_m
+    est_v = (c_v[idx] + ev * equation.crb_speed_mps(p, snr_peak) / p.speed_resolution_mps * nz[1]) \
+        * p.speed_resolution_mps
+    sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
+    est_az = np.arcsin(sin_t) + ea * equation.crb_azimuth_rad(p, snr_peak, np.arcsin(sin_t)) * nz[2]
+    est_az = np.clip(est_az, -math.pi / 2, math.pi / 2)
+    # the chain divides the window and straddle losses out of the measured energy
+    loss = statistic.energy(1.0, c_r[idx] - np.rint(c_r[idx]), c_v[idx] - np.rint(c_v[idx]))
+    snr_est = 10.0 * np.log10(measured / np.maximum(loss, 1e-30))
+    det = Detections(est_r, est_v, est_az, snr_est - equation.snr_db(p, est_r, 0.0, power_reduction_db, est_az),
+                     snr_est, tag[idx])
     parts = [det]
     if sidelobes:
-        threshold_db = 10.0 * math.log10(t * N_TRAIN)       # α = N·T over the mean noise
-        strong = snr_cell + HANN_SIDELOBE_DB > threshold_db + 3.0
+        threshold_db = 10.0 * math.log10(statistic.threshold_mean() / statistic.window_gain)
+        strong = det.snr_db + HANN_SIDELOBE_DB > threshold_db + 3.0
         if strong.any():
             s = det.take(strong)
             for shift in (-2.5, 2.5):
-                parts.append(Detections(s.range_m + shift * p.range_resolution_m, s.range_rate_mps, s.azimuth_rad,
-                                        s.rcs_dbsm + HANN_SIDELOBE_DB, s.snr_db + HANN_SIDELOBE_DB,
-                                        np.full(len(s), -1, dtype=np.int64)))
-    n_fa = int(rng.poisson(pfa * n_r * m))
-    if n_fa:
-        fr = rng.uniform(0, n_r, n_fa) * p.range_resolution_m
-        fv = rng.uniform(-m / 2, m / 2, n_fa) * p.speed_resolution_mps
-        faz = np.arcsin(rng.uniform(-1, 1, n_fa))
-        fs = 10.0 * np.log10(t * N_TRAIN) + rng.exponential(0.5, n_fa)     # just above the threshold
-        parts.append(Detections(fr, fv, faz, fs + HANN_PROCESSING_LOSS_DB - equation.snr_db(p, np.maximum(fr, 0.01),
-                                                                                           0.0), fs,
-                                np.full(n_fa, -1, dtype=np.int64)))
-    out = Detections(*(np.concatenate([getattr(q, f) for q in parts]) for f in
-                       ("range_m", "range_rate_mps", "azimuth_rad", "rcs_dbsm", "snr_db", "actor_index")))
-    keep = out.range_m >= 0
-    return out.take(keep)
+                parts.append(Detections(np.mod(s.range_m + shift * p.range_resolution_m, n_r * p.range_resolution_m),
+                                        s.range_rate_mps, s.azimuth_rad, s.rcs_dbsm + HANN_SIDELOBE_DB,
+                                        s.snr_db + HANN_SIDELOBE_DB, np.full(len(s), -1, dtype=np.int64)))
+    parts.append(false_alarms(p, statistic, rng, power_reduction_db))
+    return Detections.concat(parts)
+
+
+def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r: int, m: int, n_beams: int
+           ) -> tuple[np.ndarray, np.ndarray]:
+    """Which cells are peaks, and each peak's energy with its unresolved neighbours' added.
+
+    Positions in bins (range, Doppler) and beamwidths (angle); Doppler and angle are circular.
+    """
+    n = energy.size
+    if n < 2:
+        return np.ones(n, dtype=bool), energy
+    res = np.asarray(RESOLUTION, dtype=np.float64)
+    pts = np.stack([r / res[0], np.mod(v, m) / res[1], np.mod(a, n_beams) / res[2]], axis=1)
+    box = np.array([n_r / res[0], m / res[1], n_beams / res[2]])      # every axis is circular
+    tree = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box)
+    pairs = tree.query_pairs(1.0 - 1e-9, p=np.inf, output_type="ndarray")
+    if pairs.size == 0:
+        return np.ones(n, dtype=bool), energy
+    i, j = pairs[:, 0], pairs[:, 1]
+    stronger = np.where(energy[i] >= energy[j], i, j)
+    weaker = np.where(energy[i] >= energy[j], j, i)
+    peak = np.ones(n, dtype=bool)
+    peak[weaker] = False
+    # each suppressed cell gives its energy to its strongest neighbour that is a peak
+    best = np.full(n, -1.0)
+    ok = peak[stronger]
+    np.maximum.at(best, weaker[ok], energy[stronger[ok]])
+    take = ok & (energy[stronger] == best[weaker])
+    gives, gets = weaker[take], stronger[take]
+    _, first = np.unique(gives, return_index=True)
+    out = energy.copy()
+    np.add.at(out, gets[first], energy[gives[first]])
+    return peak, out
+
+
+def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.random.Generator,
+                 power_reduction_db: float = 0.0) -> Detections:
+    """Poisson false alarms at the chain's rate, uniform over the map, with the statistic's tail as SNR."""
+    p = preset
+    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    m = p.num_chirps
+    n_fa = int(rng.poisson(statistic.cfar.pfa * n_r * m * FALSE_ALARMS_PER_PFA_CELL))
+    fr = rng.uniform(0, n_r, n_fa) * p.range_resolution_m
+    fv = rng.uniform(-m / 2, m / 2, n_fa) * p.speed_resolution_mps
+    faz = np.arcsin(np.clip(rng.uniform(-0.5, 0.5, n_fa) / p.element_spacing_wl, -1.0, 1.0))
+    # Gamma(N) past the threshold: the excess is nearly exponential with unit mean
+    x = statistic.threshold_mean() + rng.exponential(1.0, n_fa)
+    fs = 10.0 * np.log10(np.maximum(x - statistic.n_channels, 1e-30) / statistic.window_gain)
+    return Detections(fr, fv, faz, fs - equation.snr_db(p, np.maximum(fr, 0.01), 0.0, power_reduction_db, faz), fs,
+                      np.full(n_fa, -1, dtype=np.int64))

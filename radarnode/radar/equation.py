@@ -18,11 +18,15 @@ from radarnode.radar.presets import BOLTZMANN_J_PER_K, REFERENCE_TEMPERATURE_K, 
 
 
 def snr_db(preset: RadarPreset, range_m: np.ndarray, rcs_dbsm: np.ndarray,
-           power_reduction_db: float = 0.0) -> np.ndarray:
-    """Per-cell SNR after range and Doppler processing and non-coherent channel summation.
+           power_reduction_db: float = 0.0, azimuth_rad: np.ndarray | None = None) -> np.ndarray:
+    """The integrated SNR ρ of a target: the one SNR definition of radarnode.
 
-    SNR = Pt·Gt·Gr·λ²·σ·T / ((4π)³·R⁴·k·T0·F·L), with T the coherent dwell
-    (all chirps of the frame) and ``num_virtual`` channels summed.
+    ρ = Pt·Gt·Gr·λ²·σ·T / ((4π)³·R⁴·k·T0·F·L), with T the coherent dwell (all
+    chirps of the frame) and ``num_virtual`` channels: the SNR of the ideal
+    matched filter over every sample, chirp and channel, no window, target on
+    the bin centres. The detection statistic sees ρ less the window and
+    straddle losses (:class:`radarnode.dsp.detection_stats.DetectionStatistic`);
+    the Cramér–Rao bounds below take ρ itself.
 
     Parameters
     ----------
@@ -32,6 +36,8 @@ def snr_db(preset: RadarPreset, range_m: np.ndarray, rcs_dbsm: np.ndarray,
         Radar cross section, dBsm.
     power_reduction_db : float
         Transmit attenuation (ARS 408 ``RadarPower``: 0, 3, 6 or 9 dB).
+    azimuth_rad : array, optional
+        Azimuth: the element pattern's two-way gain (:func:`pattern_db`) is applied; ``None``: boresight.
 
     Returns
     -------
@@ -47,7 +53,16 @@ def snr_db(preset: RadarPreset, range_m: np.ndarray, rcs_dbsm: np.ndarray,
         - 10.0 * np.log10(BOLTZMANN_J_PER_K * REFERENCE_TEMPERATURE_K)
         - preset.noise_figure_db - preset.system_loss_db
     )
-    return const_db + np.asarray(rcs_dbsm, dtype=np.float64) - 40.0 * np.log10(r)
+    out = const_db + np.asarray(rcs_dbsm, dtype=np.float64) - 40.0 * np.log10(r)
+    if azimuth_rad is not None:
+        out = out + pattern_db(preset, azimuth_rad)
+    return out
+
+
+def pattern_db(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
+    """Two-way element-pattern gain, dB: 2q·10·log10(cos θ); −120 dB at and beyond ±90° (behind the antenna)."""
+    c = np.cos(np.asarray(azimuth_rad, dtype=np.float64))
+    return 2.0 * preset.element_pattern_exponent * 10.0 * np.log10(np.maximum(c, 1e-6))
 
 
 def detection_probability(snr_db_: np.ndarray, pfa: float) -> np.ndarray:

@@ -21,8 +21,8 @@ import numpy as np
 from radarnode.dsp.chain import DspChain
 from radarnode.perception.tracker import ObjectTracker, clusters_from_detections
 from radarnode.perception.types import Detections, RadarFrame
-from radarnode.radar import detection_model
-from radarnode.radar.object_model import ObjectModel, RuntimeConfig
+from radarnode.radar import ambiguity, detection_model
+from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
 from radarnode.radar.options import SignalOptions
@@ -30,17 +30,6 @@ from radarnode.radar.signal_model import decimation_for, synthesize
 from radarnode.scene.world import Scene, SensorView
 
 FIDELITY_LEVELS = ("object", "detection", "signal", "auto")
-
-
-@dataclass
-class StepInfo:
-    """What the last step did (for the benchmark and ``radarnode image``)."""
-
-    level: str = ""
-    scatterers: Scatterers | None = None
-    detections: Detections | None = None
-    cube: np.ndarray | None = None
-    seconds: dict = field(default_factory=dict)
 
 
 class ScattererModel:
@@ -61,11 +50,18 @@ class ScattererModel:
 
     def scatterers(self, t_s: float, view: SensorView, config: RuntimeConfig) -> Scatterers:
         o = self.options
-        return scene_scatterers(self.scene, t_s, view, self.preset, config.max_distance_m, o.scatterer_spacing_m,
+        scat = scene_scatterers(self.scene, t_s, view, self.preset, config.max_distance_m, o.scatterer_spacing_m,
                                 self.rng, o.clutter_density_per_m2, o.clutter_rcs_dbsm)
+        return fluctuate(self.scene, scat, self.rng)
 
-    def detections(self, scat: Scatterers, config: RuntimeConfig) -> Detections:  # pragma: no cover
-        raise NotImplementedError
+    def sequences(self) -> list[RadarPreset]:
+        """One preset per chirp sequence of a cycle (two with staggered ramps)."""
+        p = self.preset
+        return [p, p.second_sequence()] if p.stagger_chirp_period_s else [p]
+
+    def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
+        """The detections of one chirp sequence (``preset``) of the cycle, speeds as measured (aliased)."""
+        raise NotImplementedError  # pragma: no cover
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
              ) -> tuple[RadarFrame, SensorView]:
@@ -73,10 +69,10 @@ class ScattererModel:
         view = self.scene.view(t_s)
         scat = self.scatterers(t_s, view, config)
         t1 = time.perf_counter()
-        det = self.detections(scat, config)
+        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
+        det = ambiguity.resolve(self.preset, [self.detections(scat, config, seq) for seq in self.sequences()], sv)
         det = det.take(det.range_m <= config.max_distance_m)
         t2 = time.perf_counter()
-        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
         clusters = clusters_from_detections(det, self.preset.near_range_m, sv)
         objects = self.tracker.step(t_s, det, sv)
         t3 = time.perf_counter()
@@ -87,12 +83,36 @@ class ScattererModel:
         return frame, view
 
 
+def fluctuate(scene: Scene, scat: Scatterers, rng: np.random.Generator) -> Scatterers:
+    """Swerling 1 actors: one exponential power factor per actor and frame, shared by all its scatterers.
+
+    Guardrail posts and clutter (actor −1) fluctuate each on its own (Swerling 1
+    per post). One draw per actor and one per scatterer, always, so the random
+    stream does not depend on which actors are visible.
+    """
+    per_actor = rng.exponential(1.0, max(scene.n, 1))
+    per_point = rng.exponential(1.0, len(scat))
+    if len(scat) == 0:
+        return scat
+    a = scat.actor_index
+    own = a >= 0
+    factor = np.where(own, per_actor[np.where(own, a, 0)], per_point)
+    steady = own & (scene.swerling[np.where(own, a, 0)] == 0) if scene.n else np.zeros(len(scat), dtype=bool)
+    factor = np.where(steady, 1.0, factor)
+    scat.rcs_dbsm = scat.rcs_dbsm + 10.0 * np.log10(np.maximum(factor, 1e-12))
+    return scat
+
+
 class DetectionModel(ScattererModel):
     level = "detection"
 
-    def detections(self, scat: Scatterers, config: RuntimeConfig) -> Detections:
-        return detection_model.detect(self.preset, scat, self.rng, power_reduction_db=config.power_reduction_db,
-                                      snr_db=self.options.snr_db)
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        self.statistic = DspChain(self.preset, self.options.dsp).statistic
+
+    def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
+        return detection_model.detect(preset, scat, self.rng, self.statistic,
+                                      power_reduction_db=config.power_reduction_db, snr_db=self.options.snr_db)
 
 
 class SignalModel(ScattererModel):
@@ -100,17 +120,17 @@ class SignalModel(ScattererModel):
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.chain = DspChain(self.preset, self.options.dsp)
+        self.chains = {seq.chirp_period_s: DspChain(seq, self.options.dsp) for seq in self.sequences()}
 
-    def detections(self, scat: Scatterers, config: RuntimeConfig) -> Detections:
+    def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
         o = self.options
         far = float(np.max(scat.range_m)) if len(scat) else 0.0
-        dec = decimation_for(self.preset, max(far, 1.0)) if o.decimate else 1
-        cube = synthesize(self.preset, scat, self.rng, snr_db=o.snr_db, power_reduction_db=config.power_reduction_db,
+        dec = decimation_for(preset, max(far, 1.0)) if o.decimate else 1
+        cube = synthesize(preset, scat, self.rng, snr_db=o.snr_db, power_reduction_db=config.power_reduction_db,
                           dtype=o.complex_dtype, impairments=o.impairments, decimation=dec)
-        if self.keep_cube:
+        if self.keep_cube and preset is self.preset:
             self.info.cube = cube
-        det = self.chain.process(cube, dec, config.power_reduction_db)
+        det = self.chains[preset.chirp_period_s].process(cube, dec, config.power_reduction_db)
         # the signal chain cannot know the truth; tag each detection with the nearest scatterer for evaluation
         if len(det) and len(scat):
             d2 = ((det.x_m[:, None] - scat.x_m[None, :]) ** 2 + (det.y_m[:, None] - scat.y_m[None, :]) ** 2)
@@ -140,7 +160,7 @@ class AutoModel:
 
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                  options: SignalOptions = SignalOptions(), clusters_wanted: bool = False) -> None:
-        self.object = ObjectModel(scene, preset, rng)
+        self.object = ObjectModel(scene, preset, rng, options)
         self.detection = DetectionModel(scene, preset, rng, options)
         self.signal = SignalModel(scene, preset, rng, options)
         self.options = options
@@ -173,7 +193,7 @@ def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Gen
                options: SignalOptions = SignalOptions(), clusters_wanted: bool = False):
     from radarnode.errors import ConfigError
     if level == "object":
-        return ObjectModel(scene, preset, rng)
+        return ObjectModel(scene, preset, rng, options)
     if level == "detection":
         return DetectionModel(scene, preset, rng, options)
     if level == "signal":

@@ -25,14 +25,18 @@ plus Poisson false alarms at the preset's false-alarm rate.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from radarnode.perception.types import (
-    DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
+    AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
-from radarnode.radar import equation
+from radarnode.perception.types import Detections
+from radarnode.perception.tracker import cluster_dyn_prop
+from radarnode.radar import ambiguity, equation
+from radarnode.radar.calibration import CHAIN_EFFICIENCY, FALSE_ALARMS_PER_PFA_CELL
+from radarnode.radar.options import SignalOptions
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
 
@@ -52,6 +56,17 @@ _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
+
+
+@dataclass
+class StepInfo:
+    """What the last step did (for the benchmarks and ``radarnode image``)."""
+
+    level: str = ""
+    scatterers: object = None
+    detections: Detections | None = None
+    cube: np.ndarray | None = None
+    seconds: dict = field(default_factory=dict)
 
 
 @dataclass(frozen=True)
@@ -109,10 +124,16 @@ class ObjectModel:
         The only source of randomness; seed it from the scenario.
     """
 
-    def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator) -> None:
+    def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
+                 options: SignalOptions = SignalOptions()) -> None:
+        from radarnode.dsp.chain import DspChain
         self.scene = scene
         self.preset = preset
         self.rng = rng
+        # the signal chain's detection test: every level detects with the same law (issue 9)
+        self.statistic = DspChain(preset, options.dsp).statistic
+        self.extended = (scene.length_m > 1.0) | (scene.width_m > 1.0)
+        self.info = StepInfo(level="object")
         n = scene.n
         self.hist = np.zeros(n, dtype=np.uint8)      # detection history, bit 0 = this cycle
         self.alive = np.zeros(n, dtype=bool)
@@ -161,20 +182,28 @@ class ObjectModel:
         frac = visible_fraction(rng_m, view.az_lo_rad, view.az_hi_rad, self.occluder & observable)
         observable &= frac >= MIN_VISIBLE_FRACTION
         rcs_eff = sc.rcs_dbsm + 10.0 * np.log10(np.maximum(frac, 1e-3))
-        snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db)
-        pd = equation.detection_probability(snr, p.pfa)
+        snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db, az)
+        stat = self.statistic
+        pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
+            np.where(sc.swerling == 0, stat.pd_of_snr(snr, 0), stat.pd_of_snr(snr, 1))
         draws = self._draws(k0, times.size)
         u, z = draws["u"], draws["z"]
-        # measurement noise, Cramér–Rao bound with a floor
-        sig_r = np.maximum(equation.crb_range_m(p, snr), p.range_sigma_floor_m)
-        sig_v = np.maximum(equation.crb_speed_mps(p, snr), p.speed_sigma_floor_mps)
-        sig_az = np.maximum(equation.crb_azimuth_rad(p, snr, az), math.radians(p.azimuth_sigma_floor_deg))
+        # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
+        # extended actor adds the preset's floor (where on the body the reflection centre lies)
+        er, ev, ea = CHAIN_EFFICIENCY
+        ext = self.extended
+        sig_r = np.hypot(er * equation.crb_range_m(p, snr), np.where(ext, p.range_sigma_floor_m, 0.0))
+        sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
+        sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az),
+                          np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = rng_m + sig_r * z[:, 0]
         m_az = az + sig_az * z[:, 1]
         c, s = np.cos(az), np.sin(az)
         v_rad = view.vx_mps * c + view.vy_mps * s
         v_tan = -view.vx_mps * s + view.vy_mps * c
-        m_vr = v_rad + sig_v * z[:, 2]
+        # the speed the radar can measure: aliased and resolved by the same rules as the other levels
+        m_vr, ambig = ambiguity.apparent_range_rate(p, v_rad + sig_v * z[:, 2], az,
+                                                    (view.sensor_vx_mps[:, None], view.sensor_vy_mps[:, None]))
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
@@ -194,7 +223,7 @@ class ObjectModel:
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
             "k0": k0, "times": times, "config": config, "view": view, "fov": fov,
-            "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff,
+            "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
@@ -278,10 +307,13 @@ class ObjectModel:
         self.state = np.where(detected[:, None], np.where(tracked, smoothed, meas), predicted)
         self.last_t, self.cycle = t_s, self.cycle + 1
 
+        seen = np.flatnonzero(detected & self.reportable)
+        self.info.detections = Detections(ch["m_r"][i, seen], ch["m_vr"][i, seen], ch["m_az"][i, seen],
+                                          ch["rcs_rep"][i, seen], ch["snr"][i, seen], seen, ch["ambig"][i, seen])
         idx = np.flatnonzero(self.alive)
         objects = self._object_list(ch, i, idx, view, detected, new, sensor_velocity_est)
         clusters = (self._cluster_list(t_s, view, detected, meas, ch["snr"][i], ch["rcs_eff"][i], ch["sig_r"][i],
-                                       ch["sig_v"][i], ch["sig_az"][i], config, sensor_velocity_est)
+                                       ch["sig_v"][i], ch["sig_az"][i], config, sensor_velocity_est, ch["ambig"][i])
                     if config.clusters else _NO_CLUSTERS)
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
@@ -327,9 +359,10 @@ class ObjectModel:
             length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
 
     def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
-                      sensor_velocity_est):
+                      sensor_velocity_est, ambig):
         p, rng, sc = self.preset, self._cluster_rng, self.scene
         parts_xy, parts_v, parts_rcs, parts_sig, parts_actor = [], [], [], [], []
+        parts_ambig = [ambig[np.flatnonzero(detected & self.reportable)]]
         a_idx = np.flatnonzero(detected & self.reportable)
         parts_xy.append(meas[a_idx, 0:2])
         parts_v.append(meas[a_idx, 2:4])
@@ -343,23 +376,27 @@ class ObjectModel:
             keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
             g_r, g_az = g_r[keep], g_az[keep]
             g_rcs = np.full(g_r.shape, sc.scenario.road.guardrails.rcs_dbsm)
-            g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db)
-            hit = rng.random(g_r.shape) < equation.detection_probability(g_snr, p.pfa)
+            g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
+            hit = rng.random(g_r.shape) < self.statistic.pd_of_snr(g_snr, 1)
             g_r, g_az, g_snr, g_rcs = g_r[hit], g_az[hit], g_snr[hit], g_rcs[hit]
-            gs_r = np.maximum(equation.crb_range_m(p, g_snr), p.range_sigma_floor_m)
-            gs_az = np.maximum(equation.crb_azimuth_rad(p, g_snr, g_az), math.radians(p.azimuth_sigma_floor_deg))
-            gs_v = np.maximum(equation.crb_speed_mps(p, g_snr), p.speed_sigma_floor_mps)
+            er, ev, ea = CHAIN_EFFICIENCY         # posts are point targets: the chain's accuracy, no floor
+            gs_r = er * equation.crb_range_m(p, g_snr)
+            gs_az = ea * equation.crb_azimuth_rad(p, g_snr, g_az)
+            gs_v = ev * equation.crb_speed_mps(p, g_snr)
             nz = rng.standard_normal((3, g_r.size))
             mr, maz = g_r + gs_r * nz[0], g_az + gs_az * nz[1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
             vr = -(view.sensor_vx_mps * np.cos(g_az) + view.sensor_vy_mps * np.sin(g_az)) + gs_v * nz[2]
+            vr, g_amb = ambiguity.apparent_range_rate(p, vr, g_az, (view.sensor_vx_mps, view.sensor_vy_mps))
+            parts_ambig.append(g_amb)
             parts_xy.append(np.stack([mr * np.cos(maz), mr * np.sin(maz)], axis=1))
             parts_v.append(np.stack([vr * np.cos(maz), vr * np.sin(maz)], axis=1))
             parts_rcs.append(g_rcs)
             parts_sig.append(np.stack([gs_r, gs_az, gs_v], axis=1))
             parts_actor.append(np.full(g_r.size, -1))
         # false alarms
-        rate = p.pfa * p.num_cells * (10.0 if config.high_sensitivity else 1.0)
+        rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
+                * (10.0 if config.high_sensitivity else 1.0))
         n_fa = int(rng.poisson(rate))
         if n_fa:
             fr = rng.uniform(p.min_range_m, min(p.max_range_m, config.max_distance_m), n_fa)
@@ -375,6 +412,7 @@ class ObjectModel:
                                        np.full(fr.size, p.angular_resolution_rad / 2),
                                        np.full(fr.size, p.speed_resolution_mps / 2)], axis=1))
             parts_actor.append(np.full(fr.size, -1))
+            parts_ambig.append(np.full(fr.size, AMBIG_AMBIGUOUS))
         xy = np.concatenate(parts_xy)
         v = np.concatenate(parts_v)
         rcs = np.concatenate(parts_rcs)
@@ -388,14 +426,16 @@ class ObjectModel:
         cl.id = np.arange(n, dtype=np.int64)
         cl.dist_long_m, cl.dist_lat_m = xy[order, 0], xy[order, 1]
         cl.vrel_long_mps, cl.vrel_lat_mps = v[order, 0], v[order, 1]
-        cl.dyn_prop = self._dyn_prop(None, v[order, 0], v[order, 1], sensor_velocity_est, view)
+        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
+        az_o = np.arctan2(xy[order, 1], xy[order, 0])
+        cl.dyn_prop = cluster_dyn_prop(v[order, 0] * np.cos(az_o) + v[order, 1] * np.sin(az_o), az_o, sv)
         cl.rcs_dbsm = rcs[order]
         az = np.arctan2(xy[order, 1], xy[order, 0])
         cl.dist_long_sigma_m, cl.dist_lat_sigma_m = sigma_to_xy(r[order], az, sig[order, 0], sig[order, 1])
         cl.vrel_long_sigma_mps = np.abs(np.cos(az)) * sig[order, 2] + np.abs(np.sin(az)) * p.lateral_speed_sigma_mps
         cl.vrel_lat_sigma_mps = np.abs(np.sin(az)) * sig[order, 2] + np.abs(np.cos(az)) * p.lateral_speed_sigma_mps
         cl.pdh0 = np.where(actor[order] >= 0, 1, 2).astype(np.int64)
-        cl.ambig_state = np.full(n, 3, dtype=np.int64)
+        cl.ambig_state = np.concatenate(parts_ambig).astype(np.int64)[order]
         cl.invalid_state = np.zeros(n, dtype=np.int64)
         cl.is_near = near[order]
         cl.actor_index = actor[order]

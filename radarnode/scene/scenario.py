@@ -219,6 +219,7 @@ class Actor:
     length_m: float | None = None
     width_m: float | None = None
     rcs_dbsm: float | None = None
+    swerling: int | None = None      # RCS fluctuation: 0 steady, 1 Rayleigh from frame to frame
 
     def __post_init__(self) -> None:
         validate.text("id", self.id)
@@ -240,6 +241,8 @@ class Actor:
             raise FieldError("length_m", None, "a guardrail length in metres (> 0)")
         if self.rcs_dbsm is not None:
             validate.number("rcs_dbsm", self.rcs_dbsm, lo=-60.0, hi=60.0)
+        if self.swerling is not None:
+            validate.integer("swerling", self.swerling, lo=0, hi=1)
         if self.accel and self.waypoints:
             raise FieldError("waypoints", "...", "either accel or waypoints, not both")
         if len(self.waypoints) == 1:
@@ -249,6 +252,14 @@ class Actor:
     @property
     def class_code(self) -> int:
         return ACTOR_CLASSES[self.object_class][0]
+
+    @property
+    def swerling_case(self) -> int:
+        """Swerling case: as given, else 0 for a point reflector (a corner reflector is steady) and 1 otherwise
+        (a car or a person is many scatterers whose sum fluctuates as the aspect changes)."""
+        if self.swerling is not None:
+            return self.swerling
+        return 0 if self.object_class == "point" else 1
 
     @property
     def length(self) -> float:

@@ -122,6 +122,7 @@ class Scene:
         self.width_m = np.array([a.width for a in actors], dtype=np.float64)
         self.rcs_dbsm = np.array([a.rcs for a in actors], dtype=np.float64)
         self.class_code = np.array([a.class_code for a in actors], dtype=np.int64)
+        self.swerling = np.array([a.swerling_case for a in actors], dtype=np.int64)
         self.is_guardrail = np.array([a.object_class == "guardrail" for a in actors], dtype=bool)
         self.heading_rel = np.array([math.radians(a.heading_deg) for a in actors], dtype=np.float64)
         m = scenario.radar.mount

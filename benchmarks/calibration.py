@@ -1,0 +1,261 @@
+"""Calibration of the three fidelity levels against theory and against each other (issue 9, items 1 and 2).
+
+SNR is defined once: ρ, the integrated SNR of :func:`radarnode.radar.equation.snr_db` (matched filter over
+every sample, chirp and channel, no window, target on the bin centres); the Cramér–Rao bounds take the same ρ.
+
+Prints Markdown tables:
+
+1. false-alarm probability of the chain's CFAR on noise-only mimo12 cubes against the set value;
+2. Pd against ρ for point targets, Swerling 0 and 1, level by level, with the exact theory (CA-CFAR on the
+   non-coherent sum of 12 channels, straddle averaged): the ρ at Pd 0.5 and 0.9 of each;
+3. RMSE over the CRB of range, range rate and azimuth, and false alarms per frame, per level;
+4. resolution: probability that two equal point targets come out as two, against their separation in range
+   bins, Doppler bins and beamwidths, signal against detection level, and the 50 % point of each.
+
+Run: ``python benchmarks/calibration.py [--quick]`` (about 6 minutes; ``--quick`` about 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from radarnode.dsp.chain import DspChain, DspConfig  # noqa: E402
+from radarnode.dsp.spectra import noncoherent_power, range_doppler  # noqa: E402
+from radarnode.radar import detection_model, equation  # noqa: E402
+from radarnode.radar.models import make_model  # noqa: E402
+from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
+from radarnode.radar.presets import PRESETS  # noqa: E402
+from radarnode.radar.scatterers import point_targets  # noqa: E402
+from radarnode.radar.signal_model import synthesize  # noqa: E402
+from radarnode.scene.scenario import parse_scenario  # noqa: E402
+from radarnode.scene.world import Scene  # noqa: E402
+
+P = PRESETS["mimo12"]
+LEVELS = ("object", "detection", "signal")
+
+
+def pfa_table(quick: bool) -> None:
+    print("### False-alarm probability, noise-only mimo12 cubes (12 channels, Hann × Hann)\n")
+    print("| CFAR | set Pfa | cells | false alarms | measured Pfa | measured / set |")
+    print("|---|---:|---:|---:|---:|---:|")
+    rows = [("ca", 1e-3, 1e7), ("ca", 1e-4, 1e7), ("ca", 1e-6, 1e7 if quick else 1e8), ("os", 1e-3, 2e6),
+            ("os", 1e-4, 2e6 if quick else 1e7)]
+    rng = np.random.default_rng(2026)
+    c, m, n = P.num_virtual, P.num_chirps, P.num_samples
+    for kind, pfa, want in rows:
+        cfar = DspChain(P, DspConfig(cfar=kind, pfa=pfa)).cfar
+        hits = cells = 0
+        while cells < want:
+            cube = (rng.standard_normal((c, m, n)) + 1j * rng.standard_normal((c, m, n))) * math.sqrt(0.5)
+            hits += int(cfar(noncoherent_power(range_doppler(cube))).mask.sum())
+            cells += m * n
+        print(f"| {kind.upper()} | {pfa:.0e} | {cells:.2e} | {hits} | {hits / cells:.3e} | {hits / cells / pfa:.2f} |",
+              flush=True)
+    print()
+
+
+def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10) -> str:
+    """Point targets at one integrated SNR, spread so that none shares a cell; Doppler offsets cover a bin."""
+    rng = np.random.default_rng(seed)
+    lines = []
+    for k in range(n_targets):
+        r = 15.0 + 9.0 * k
+        az = math.radians(-40.0 + 80.0 * ((k * 7) % n_targets) / n_targets)
+        v = (-20 + 4 * k + (k + 0.5) / n_targets) * P.speed_resolution_mps
+        rcs = rho_db - float(equation.snr_db(P, r, 0.0, azimuth_rad=az))
+        x, y = r * math.cos(az), r * math.sin(az)
+        heading = math.degrees(math.atan2(y, x)) if v >= 0 else math.degrees(math.atan2(-y, -x))
+        lines.append(f"  - {{id: p{k}, class: point, swerling: {swerling}, rcs_dbsm: {rcs:.3f}, x_m: {x:.3f}, "
+                     f"y_m: {y:.3f}, speed_mps: {abs(v):.4f}, heading_deg: {heading:.3f}}}")
+    del rng
+    return f"""
+name: calibration
+duration_s: 30
+seed: {seed}
+radar: {{preset: mimo12, output: clusters}}
+ego: {{speed_mps: 0.0}}
+road: {{lanes: 1, ego_lane: 0}}
+actors:
+""" + "\n".join(lines) + "\n"
+
+
+def run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> dict:
+    sc = parse_scenario(point_scene(rho_db, swerling, seed))
+    scene = Scene(sc)
+    model = make_model(level, scene, P, np.random.default_rng(seed), sc.signal, clusters_wanted=True)
+    cfg = RuntimeConfig(max_distance_m=P.max_range_m)
+    hits = trials = false = 0
+    err = []
+    for k in range(frames):
+        _, view = model.step(k * sc.period_s, cfg)
+        det = model.info.detections
+        tr, taz = view.range_m, view.azimuth_rad
+        tvr = view.vx_mps * np.cos(taz) + view.vy_mps * np.sin(taz)
+        used = np.zeros(len(det), dtype=bool)
+        for i in range(scene.n):
+            trials += 1
+            d = (np.abs(det.range_m - tr[i]) / (1.5 * P.range_resolution_m)
+                 + np.abs(det.range_rate_mps - tvr[i]) / (1.5 * P.speed_resolution_mps)
+                 + np.abs(np.sin(det.azimuth_rad) - np.sin(taz[i])) / (2.0 * P.angular_resolution_rad))
+            if d.size == 0 or d.min() > 1.0:
+                continue
+            j = int(np.argmin(d))
+            used[j] = True
+            hits += 1
+            crb = (equation.crb_range_m(P, rho_db), equation.crb_speed_mps(P, rho_db),
+                   equation.crb_azimuth_rad(P, rho_db, taz[i]))
+            err.append(((det.range_m[j] - tr[i]) / crb[0], (det.range_rate_mps[j] - tvr[i]) / crb[1],
+                        (det.azimuth_rad[j] - taz[i]) / crb[2]))
+        false += int((~used).sum())
+    e = np.array(err) if err else np.zeros((0, 3))
+    return {"pd": hits / trials, "fa": false / frames, "ratio": np.sqrt(np.mean(e ** 2, axis=0)) if len(e) else None}
+
+
+def snr_at(pd: np.ndarray, grid: np.ndarray, target: float) -> float:
+    """The ρ at which a (noisy, mostly increasing) Pd curve crosses ``target``: linear interpolation."""
+    above = np.flatnonzero(pd >= target)
+    if above.size == 0 or above[0] == 0:
+        return float("nan")
+    i = above[0]
+    return float(grid[i - 1] + (target - pd[i - 1]) / (pd[i] - pd[i - 1]) * (grid[i] - grid[i - 1]))
+
+
+def pd_tables(quick: bool) -> None:
+    stat = DspChain(P).statistic
+    grid = np.arange(8.0, 24.01, 1.0) if not quick else np.arange(8.0, 24.01, 2.0)
+    frames = 30 if not quick else 12
+    for swerling in (0, 1):
+        print(f"### Pd against integrated SNR ρ, point targets, Swerling {swerling} ({frames} frames × 10 targets "
+              "per point)\n")
+        print("| ρ dB | theory | " + " | ".join(LEVELS) + " |")
+        print("|---:|---:|" + "---:|" * len(LEVELS))
+        curves = {lv: [] for lv in LEVELS}
+        for rho in grid:
+            for lv in LEVELS:
+                curves[lv].append(run_points(lv, float(rho), swerling, frames, seed=int(rho * 10) + swerling)["pd"])
+            print(f"| {rho:.0f} | {float(stat.pd_of_snr(rho, swerling)):.3f} | "
+                  + " | ".join(f"{curves[lv][-1]:.3f}" for lv in LEVELS) + " |", flush=True)
+        fine = np.arange(0.0, 40.0, 0.01)
+        theory = stat.pd_of_snr(fine, swerling)
+        print("\n| Pd | theory ρ | " + " | ".join(f"{lv} ρ (Δ)" for lv in LEVELS) + " |")
+        print("|---:|---:|" + "---:|" * len(LEVELS))
+        for target in (0.5, 0.9):
+            t = snr_at(theory, fine, target)
+            cells = []
+            for lv in LEVELS:
+                s = snr_at(np.array(curves[lv]), grid, target)
+                cells.append(f"{s:.2f} dB ({s - t:+.2f})")
+            print(f"| {target} | {t:.2f} dB | " + " | ".join(cells) + " |")
+        print()
+
+
+def accuracy_table(quick: bool) -> None:
+    frames = 40 if not quick else 15
+    print(f"### RMSE over the Cramér–Rao bound and false alarms, point targets, Swerling 0 ({frames} frames × 10)\n")
+    print("| ρ | level | Pd | range RMSE/CRB | range-rate RMSE/CRB | azimuth RMSE/CRB | false alarms/frame |")
+    print("|---:|---|---:|---:|---:|---:|---:|")
+    for rho in (20.0, 30.0):
+        for lv in LEVELS:
+            a = run_points(lv, rho, 0, frames, seed=77)
+            r = a["ratio"]
+            print(f"| {rho:.0f} dB | {lv} | {a['pd']:.3f} | {r[0]:.2f} | {r[1]:.2f} | {r[2]:.2f} | {a['fa']:.2f} |",
+                  flush=True)
+    print()
+
+
+def resolved(det, axis: str, sep: float, t0: tuple, t1: tuple) -> bool:
+    """Two targets resolved: each has its own detection, within half the separation along ``axis`` and one
+    cell along the others."""
+    scale = np.array([P.range_resolution_m, P.speed_resolution_mps, P.angular_resolution_rad])
+    pos = np.stack([det.range_m, det.range_rate_mps, np.sin(det.azimuth_rad)], axis=1) / scale
+    tol = np.ones(3)
+    tol[("range", "doppler", "angle").index(axis)] = sep / 2
+    picks = []
+    for t in (t0, t1):
+        d = np.abs(pos - np.array(t) / scale)
+        ok = np.flatnonzero(np.all(d <= tol, axis=1))
+        if ok.size == 0:
+            return False
+        picks.append(ok[np.argmin(d[ok].sum(axis=1))])
+    return picks[0] != picks[1]
+
+
+def resolution_table(quick: bool) -> None:
+    trials = 40 if not quick else 15
+    chain = DspChain(P)
+    stat = chain.statistic
+    rho = 30.0
+    seps = np.arange(1.0, 4.01, 0.25)
+    print(f"### Resolution: two equal point targets at ρ = {rho:.0f} dB, random phases ({trials} trials per point)\n")
+    print("| separation | range: signal | range: detection | Doppler: signal | Doppler: detection | "
+          "angle: signal | angle: detection |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
+    rng = np.random.default_rng(99)
+    curves = {}
+    for axis in ("range", "doppler", "angle"):
+        for lv in ("signal", "detection"):
+            curves[(axis, lv)] = []
+    for s in seps:
+        row = []
+        for axis in ("range", "doppler", "angle"):
+            for lv in ("signal", "detection"):
+                ok = 0
+                for _ in range(trials):
+                    r0 = rng.uniform(30, 80)
+                    v0 = rng.uniform(-10, 10)
+                    a0 = rng.uniform(-0.2, 0.2)           # sinθ
+                    r1, v1, a1 = r0, v0, a0
+                    if axis == "range":
+                        r1 = r0 + s * P.range_resolution_m
+                    elif axis == "doppler":
+                        v1 = v0 + s * P.speed_resolution_mps
+                    else:
+                        a1 = a0 + s * P.angular_resolution_rad
+                    az = np.degrees(np.arcsin([a0, a1]))
+                    rcs = [rho - float(equation.snr_db(P, r, 0.0, azimuth_rad=math.radians(a)))
+                           for r, a in zip((r0, r1), az)]
+                    scat = point_targets([r0, r1], az, [v0, v1], rcs)
+                    if lv == "signal":
+                        det = chain.process(synthesize(P, scat, rng))
+                    else:
+                        det = detection_model.detect(P, scat, rng, stat)
+                    ok += resolved(det, axis, s, (r0, v0, a0), (r1, v1, a1))
+                curves[(axis, lv)].append(ok / trials)
+                row.append(f"{ok / trials:.2f}")
+        unit = "bins / beamwidths"
+        print(f"| {s:.2f} {unit} | " + " | ".join(row) + " |", flush=True)
+    print("\n| axis | 50 % point, signal | 50 % point, detection | difference |")
+    print("|---|---:|---:|---:|")
+    for axis in ("range", "doppler", "angle"):
+        a = snr_at(np.array(curves[(axis, "signal")]), seps, 0.5)
+        b = snr_at(np.array(curves[(axis, "detection")]), seps, 0.5)
+        print(f"| {axis} | {a:.2f} | {b:.2f} | {b - a:+.2f} |")
+    print()
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution"))
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, `python benchmarks/calibration.py"
+          f"{' --quick' if args.quick else ''}`\n")
+    for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("accuracy", accuracy_table),
+                     ("resolution", resolution_table)):
+        if args.only in (None, name):
+            fn(args.quick)
+    print(f"(total {time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()

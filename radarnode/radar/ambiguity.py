@@ -1,0 +1,130 @@
+"""Velocity ambiguity, resolved as production radars resolve it, and flagged where it cannot be.
+
+A chirp sequence with repetition period T measures the radial speed only
+modulo 2·v_max, v_max = λ/(4T). Two things resolve it:
+
+* **Staggered ramps** (the ARS 408's AmbigState "staggered ramp"): a second
+  chirp sequence in the same cycle with another period T₂ aliases the same
+  speed differently. Of the candidates v₁ + 2k₁·v_max,1 within the sensor's
+  speed span, the one that a candidate v₂ + 2k₂·v_max,2 of the second
+  sequence meets within a tolerance is the speed (Chinese-remainder search;
+  the wrong candidates miss by at least the beat of the two lattices, e.g.
+  4.9 m/s for ``ars408_like``). Unique over a span of
+  2·v_max,1·p where T₂/T₁ = (p + 1)/p.
+* **Stationary candidates** (AmbigState 4): with the ego motion known, a
+  stationary reflector at azimuth θ has range rate −(v_x cosθ + v_y sinθ);
+  a detection that equals it modulo 2·v_max is unwrapped to it.
+
+Everything else keeps its measured (aliased) speed and is flagged
+ambiguous (AmbigState 1): never silently wrapped. All levels call the same
+functions on their detections, so aliasing and its resolution agree.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from radarnode.perception.types import AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, Detections
+from radarnode.radar.presets import RadarPreset
+
+#: largest mismatch (m/s) between the two sequences' unwrapped speeds that still counts as the same speed
+STAGGER_TOLERANCE_MPS = 1.0
+#: a detection within this many Doppler bins of the stationary hypothesis is a stationary candidate
+STATIONARY_TOLERANCE_BINS = 2.0
+_K = np.arange(-6, 7)          # wraps considered on each side (covers ±6·2·v_max)
+
+
+def stationary_range_rate(azimuth_rad: np.ndarray, sensor_velocity: tuple[float, float]) -> np.ndarray:
+    """Range rate of a stationary reflector seen from a sensor moving at ``sensor_velocity`` (x, y), m/s."""
+    vx, vy = sensor_velocity
+    return -(vx * np.cos(azimuth_rad) + vy * np.sin(azimuth_rad))
+
+
+def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple[float, float]) -> Detections:
+    """Unwrap detections that match the stationary hypothesis modulo 2·v_max; flag the rest of a single-ramp
+    radar ambiguous (``ambig_state`` of detections already resolved by staggered ramps is kept)."""
+    vmax = preset.max_unambiguous_speed_mps
+    vs = stationary_range_rate(det.azimuth_rad, sensor_velocity)
+    k = np.rint((vs - det.range_rate_mps) / (2 * vmax))
+    unwrapped = det.range_rate_mps + 2 * vmax * k
+    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.speed_resolution_mps
+    resolved = det.ambig_state == AMBIG_STAGGERED
+    out = det.take(np.arange(len(det)))
+    take = candidate & ~resolved
+    out.range_rate_mps = np.where(take, unwrapped, det.range_rate_mps)
+    out.ambig_state = np.where(take, AMBIG_STATIONARY, np.where(resolved, AMBIG_STAGGERED, AMBIG_AMBIGUOUS))
+    return out
+
+
+def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -> Detections:
+    """Pair the two sequences' detections (same range and angle cell) and recover each speed (module docstring).
+
+    Returns the first sequence's detections; the paired ones carry the resolved
+    speed and AmbigState 2, the others their measured speed and AmbigState 1.
+    """
+    seq2 = preset.second_sequence()
+    v1max, v2max = preset.max_unambiguous_speed_mps, seq2.max_unambiguous_speed_mps
+    lo, hi = preset.range_rate_span_mps
+    out = det1.take(np.arange(len(det1)))
+    out.ambig_state = np.full(len(det1), AMBIG_AMBIGUOUS, dtype=np.int64)
+    if len(det1) == 0 or len(det2) == 0:
+        return out
+    # pairs in the same range cell and beam: (n1, n2)
+    dr = np.abs(det1.range_m[:, None] - det2.range_m[None, :]) / preset.range_resolution_m
+    da = np.abs(np.sin(det1.azimuth_rad)[:, None] - np.sin(det2.azimuth_rad)[None, :]) / preset.angular_resolution_rad
+    near = (dr <= 1.5) & (da <= 1.0)
+    # every candidate of sequence 1 inside the span, against the nearest candidate of sequence 2: (n1, n2, K)
+    cand = det1.range_rate_mps[:, None, None] + 2 * v1max * _K[None, None, :]
+    inside = (cand >= lo) & (cand <= hi)
+    k2 = np.rint((cand - det2.range_rate_mps[None, :, None]) / (2 * v2max))
+    miss = np.abs(det2.range_rate_mps[None, :, None] + 2 * v2max * k2 - cand)
+    miss = np.where(inside & near[:, :, None], miss, np.inf)
+    flat = miss.reshape(len(det1), -1)
+    best = np.argmin(flat, axis=1)
+    err = flat[np.arange(len(det1)), best]
+    j, kk = np.divmod(best, _K.size)
+    ok = err <= STAGGER_TOLERANCE_MPS
+    # the speed: the mean of the two unwrapped estimates (each as accurate as the other)
+    v1 = det1.range_rate_mps + 2 * v1max * _K[kk]
+    v2 = det2.range_rate_mps[j] + 2 * v2max * k2[np.arange(len(det1)), j, kk]
+    out.range_rate_mps = np.where(ok, 0.5 * (v1 + v2), det1.range_rate_mps)
+    out.ambig_state = np.where(ok, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
+    return out
+
+
+def resolve(preset: RadarPreset, sequences: list[Detections], sensor_velocity: tuple[float, float]) -> Detections:
+    """The detections of one cycle with their speeds resolved and ``ambig_state`` filled truthfully.
+
+    ``sequences`` holds one Detections per chirp sequence of the preset (two
+    with staggered ramps). A single ramp cannot tell v from v ± 2·v_max: its
+    moving detections are flagged ambiguous, whatever their speed.
+    """
+    if preset.stagger_chirp_period_s > 0:
+        if len(sequences) != 2:
+            raise ValueError(f"sequences: {len(sequences)} given; preset {preset.name} has two chirp sequences")
+        det = resolve_staggered(sequences[0], sequences[1], preset)
+    else:
+        det = sequences[0]
+    return flag_stationary(det, preset, sensor_velocity)
+
+
+def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth_rad: np.ndarray,
+                        sensor_velocity: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """What :func:`resolve` makes of a true range rate, for the object level (which has no per-sequence data).
+
+    Staggered ramps: the true speed inside the span (AmbigState 2), else the
+    first sequence's alias (1). A single ramp: the alias, unwrapped to the
+    stationary hypothesis where it matches (4), else flagged ambiguous (1).
+    Arrays broadcast; ``sensor_velocity`` may hold arrays (e.g. one per cycle).
+    """
+    v = np.asarray(range_rate_mps, dtype=np.float64)
+    vmax = preset.max_unambiguous_speed_mps
+    alias = np.mod(v + vmax, 2 * vmax) - vmax
+    if preset.stagger_chirp_period_s > 0:
+        lo, hi = preset.range_rate_span_mps
+        inside = (v >= lo) & (v <= hi)
+        return np.where(inside, v, alias), np.where(inside, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
+    vs = stationary_range_rate(azimuth_rad, sensor_velocity)
+    unwrapped = alias + 2 * vmax * np.rint((vs - alias) / (2 * vmax))
+    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.speed_resolution_mps
+    return np.where(candidate, unwrapped, alias), np.where(candidate, AMBIG_STATIONARY, AMBIG_AMBIGUOUS).astype(np.int64)

@@ -1,0 +1,129 @@
+"""Velocity ambiguity as the real radar has it, at every level (issue 9 items 3 and 4): staggered ramps on
+ars408_like, stationary candidates, AmbigState filled truthfully, never a silent wrap."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from radarnode.dsp.chain import DspChain
+from radarnode.perception.types import (AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, DYN_MOVING,
+                                        DYN_ONCOMING, Detections)
+from radarnode.radar import ambiguity, detection_model
+from radarnode.radar.models import make_model
+from radarnode.radar.object_model import RuntimeConfig
+from radarnode.radar.presets import PRESETS
+from radarnode.radar.scatterers import point_targets
+from radarnode.scene.world import Scene
+from tests.helpers import scenario
+
+ARS = PRESETS["ars408_like"]
+LEVELS = ("object", "detection", "signal")
+
+
+def _det(v, az=0.0, r=50.0):
+    v = np.atleast_1d(np.asarray(v, dtype=np.float64))
+    return Detections(np.full(v.size, r), v, np.full(v.size, az), np.zeros(v.size), np.full(v.size, 30.0),
+                      np.zeros(v.size, dtype=np.int64))
+
+
+def test_ars408_like_unambiguous_span_reaches_the_data_sheet():
+    lo, hi = ARS.range_rate_span_mps
+    assert (lo, hi) == pytest.approx((-400 / 3.6, 200 / 3.6))
+    vmax1 = ARS.max_unambiguous_speed_mps
+    vmax2 = ARS.second_sequence().max_unambiguous_speed_mps
+    assert vmax1 == pytest.approx(19.47, abs=0.01) and vmax2 < vmax1
+    # the two lattices of 2·v_max coincide again only after 7 wraps of the first: 273 m/s > the span
+    assert 7 * 2 * vmax1 == pytest.approx(8 * 2 * vmax2, rel=1e-9)
+    assert 7 * 2 * vmax1 > hi - lo
+
+
+@pytest.mark.parametrize("v", [-111.0, -80.0, -45.0, -19.5, -19.4, 0.0, 19.4, 19.5, 38.9, 55.5])
+def test_staggered_ramps_recover_every_speed_of_the_span(v):
+    """Just below, at and above ±v_max and 2·v_max, and the span's ends: the pair gives the true speed."""
+    seq2 = ARS.second_sequence()
+    alias = [np.mod(v + p.max_unambiguous_speed_mps, 2 * p.max_unambiguous_speed_mps) - p.max_unambiguous_speed_mps
+             for p in (ARS, seq2)]
+    out = ambiguity.resolve_staggered(_det(alias[0] + 0.02), _det(alias[1] - 0.03), ARS)
+    assert out.ambig_state[0] == AMBIG_STAGGERED
+    assert out.range_rate_mps[0] == pytest.approx(v, abs=0.05)
+
+
+@pytest.mark.parametrize("v", [-125.0, 60.0, 2 * 55.6])
+def test_speeds_beyond_the_span_are_flagged_not_wrapped_silently(v):
+    seq2 = ARS.second_sequence()
+    alias = [np.mod(v + p.max_unambiguous_speed_mps, 2 * p.max_unambiguous_speed_mps) - p.max_unambiguous_speed_mps
+             for p in (ARS, seq2)]
+    out = ambiguity.resolve(ARS, [_det(alias[0]), _det(alias[1])], (0.0, 0.0))
+    assert out.ambig_state[0] != AMBIG_STAGGERED
+    rep, state = ambiguity.apparent_range_rate(ARS, np.array([v]), np.array([0.0]), (0.0, 0.0))
+    assert state[0] == AMBIG_AMBIGUOUS
+
+
+def test_single_ramp_stationary_candidates_unwrap_and_the_rest_is_ambiguous():
+    p = PRESETS["mimo12"]
+    vmax = p.max_unambiguous_speed_mps
+    ego = 36.1                                   # 130 km/h: a post ahead closes faster than v_max
+    post = -ego * np.cos(0.2)
+    alias = np.mod(post + vmax, 2 * vmax) - vmax
+    out = ambiguity.resolve(p, [_det([alias, 10.0], az=0.2)], (ego, 0.0))
+    assert out.ambig_state.tolist() == [AMBIG_STATIONARY, AMBIG_AMBIGUOUS]
+    assert out.range_rate_mps[0] == pytest.approx(post, abs=1e-9)
+    assert out.range_rate_mps[1] == 10.0         # measured, flagged, not guessed
+
+
+def _guardrail_road(ego_mps, actors=""):
+    return scenario(actors, ego=f"{{speed_mps: {ego_mps}}}", radar="{preset: ars408_like, output: clusters}",
+                    road="{lanes: 2, lane_width_m: 3.5, ego_lane: 0, guardrails: {left_offset_m: 1.0, "
+                         "right_offset_m: 1.0, post_spacing_m: 4.0, rcs_dbsm: -5.0}}", duration=2.0, seed=3)
+
+
+@pytest.mark.parametrize("level", LEVELS)
+def test_motorway_speed_on_a_guardrail_road_gives_no_moving_object(level):
+    """Ego at 130 km/h (36.1 m/s, beyond ars408_like's single-ramp ±19.5 m/s): posts stay stationary."""
+    sc = _guardrail_road(130 / 3.6)
+    model = make_model(level, Scene(sc), sc.radar.model, np.random.default_rng(5), sc.signal, clusters_wanted=True)
+    cfg = RuntimeConfig(max_distance_m=250.0)
+    moving = seen = 0
+    for k in range(12):
+        frame, _ = model.step(k * sc.period_s, cfg)
+        cl = frame.clusters
+        # posts stand 1 m beyond the road edges (y = −2.75 and +6.25 m); false alarms fall anywhere
+        on_rail = (np.abs(cl.dist_lat_m + 2.75) < 1.0) | (np.abs(cl.dist_lat_m - 6.25) < 1.0)
+        seen += int(on_rail.sum())
+        moving += int((on_rail & np.isin(cl.dyn_prop, (DYN_MOVING, DYN_ONCOMING))).sum())
+        moving += int(np.isin(frame.objects.dyn_prop, (DYN_MOVING, DYN_ONCOMING)).sum())
+    assert seen > 50
+    assert moving == 0
+
+
+@pytest.mark.parametrize("level", LEVELS)
+def test_oncoming_car_at_45_mps_is_reported_at_its_true_speed(level):
+    sc = _guardrail_road(20.0, "  - {id: car, class: car, x_m: 120.0, y_m: 3.5, speed_mps: 45.0, "
+                               "heading_deg: 180.0}")
+    model = make_model(level, Scene(sc), sc.radar.model, np.random.default_rng(6), sc.signal, clusters_wanted=True)
+    cfg = RuntimeConfig(max_distance_m=250.0)
+    found = []
+    for k in range(10):
+        frame, view = model.step(k * sc.period_s, cfg)
+        det = model.info.detections
+        truth = view.vx_mps[0] * np.cos(view.azimuth_rad[0]) + view.vy_mps[0] * np.sin(view.azimuth_rad[0])
+        near = det.take(np.abs(det.range_m - view.range_m[0]) < 3.0)
+        hit = near.take(np.abs(near.range_rate_mps - truth) < 1.0)
+        found.append(len(hit) > 0 and bool(np.all(hit.ambig_state == AMBIG_STAGGERED)))
+        # nothing near the car claims a wrapped speed of it (one or two wraps of the first ramp)
+        for k_wrap in (1, 2):
+            wrapped = truth + 2 * k_wrap * ARS.max_unambiguous_speed_mps
+            assert not np.any(np.abs(near.range_rate_mps - wrapped) < 1.0)
+    assert sum(found) >= 7          # Pd of a car at 120 m; every detection of it at its true speed
+    assert truth < -2 * ARS.max_unambiguous_speed_mps      # −65 m/s: beyond two wraps of one ramp
+
+
+def test_detection_level_aliases_like_the_signal_level():
+    """One ramp: +32.3 m/s beyond mimo12's ±32.4? no — v_max + 5 folds to −v_max + 5 at both levels."""
+    p = PRESETS["mimo12"]
+    vmax = p.max_unambiguous_speed_mps
+    det = detection_model.detect(p, point_targets([60.0], [0.0], [vmax + 5.0], 20.0), np.random.default_rng(1),
+                                 DspChain(p).statistic)
+    j = int(np.argmin(np.abs(det.range_m - 60.0)))
+    assert det.range_rate_mps[j] == pytest.approx(-vmax + 5.0, abs=2 * p.speed_resolution_mps)
