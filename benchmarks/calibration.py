@@ -28,7 +28,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from radarnode.dsp.chain import DspChain, DspConfig  # noqa: E402
+from radarnode.radar.chain import DspChain, DspConfig  # noqa: E402
 from radarnode.dsp.spectra import noncoherent_power, range_doppler  # noqa: E402
 from radarnode.radar import detection_model, equation  # noqa: E402
 from radarnode.radar.models import make_model  # noqa: E402

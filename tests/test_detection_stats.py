@@ -10,7 +10,7 @@ import pytest
 import scipy.stats
 
 from radarnode.dsp import detection_stats as ds
-from radarnode.dsp.chain import DspChain, DspConfig
+from radarnode.radar.chain import DspChain, DspConfig
 from radarnode.dsp.spectra import noncoherent_power, range_doppler, window
 from radarnode.errors import ConfigError
 from radarnode.radar import equation

@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from radarnode.dsp.chain import DspChain
+from radarnode.radar.chain import DspChain
 from radarnode.radar import detection_model, equation
 from radarnode.radar.presets import PRESETS
 from radarnode.radar.scatterers import point_targets

@@ -8,7 +8,7 @@ import warnings
 import numpy as np
 import pytest
 
-from radarnode.dsp.chain import DspChain
+from radarnode.radar.chain import DspChain
 from radarnode.radar import detection_model
 from radarnode.radar.presets import PRESETS
 from radarnode.radar.scatterers import Scatterers, point_targets

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode import validate
-from radarnode.dsp.chain import DspConfig
+from radarnode.radar.chain import DspConfig
 
 
 @dataclass(frozen=True)
