@@ -37,7 +37,7 @@ import math
 import numpy as np
 import scipy.spatial
 
-from radarnode.dsp.detection_stats import DetectionStatistic, straddle_gain
+from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
 from radarnode.radar.calibration import CHAIN_EFFICIENCY, DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION
@@ -76,7 +76,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     Parameters
     ----------
     statistic : DetectionStatistic
-        The chain's detection test (``radarnode.dsp.chain.DspChain(preset, config).statistic``).
+        The chain's detection test (``radarnode.radar.chain.DspChain(preset, config).statistic``).
     snr_db : float, optional
         Per-sample, per-channel SNR of every scatterer, as the signal level takes it.
     """
@@ -97,9 +97,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     n_a = k_el + 2
     cell = ((ri % n_r) * m + (vi % m)) * n_a + (ai % n_a)
     # coherent sum within a cell, each scatterer weighted by its straddle amplitude
-    gain = np.sqrt(statistic.window_gain * straddle_gain(statistic.range_window, rb - ri)
-                   * straddle_gain(statistic.doppler_window, vb - vi))
-    amp = np.sqrt(rho) * gain
+    amp = np.sqrt(statistic.energy(rho, rb - ri, vb - vi))
     uniq, inv = np.unique(cell, return_inverse=True)
     inv = inv.ravel()
     field = np.zeros(uniq.size, dtype=np.complex128)
