@@ -15,6 +15,7 @@ relative to the road direction, positive to the left (counter-clockwise).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -23,7 +24,7 @@ import yaml
 
 from radarnode import validate
 from radarnode.errors import FieldError, ScenarioError
-from radarnode.dsp.chain import DspConfig
+from radarnode.radar.chain import DspConfig
 from radarnode.radar.options import Impairments, SignalOptions
 from radarnode.radar.presets import RadarPreset, get_preset
 
@@ -130,9 +131,9 @@ class RadarSetup:
         if self.road_boundaries is not None:
             validate.boolean("road_boundaries", self.road_boundaries)
 
-    @property
+    @functools.cached_property
     def model(self) -> RadarPreset:
-        """The preset with the scenario's overrides applied."""
+        """The preset with the scenario's overrides applied (built once: the period is read every cycle)."""
         return get_preset(self.preset).with_overrides(self.overrides)
 
 
