@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from radarnode.dsp.chain import DspChain
+from radarnode.radar.chain import DspChain
 from radarnode.perception.types import (AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, DYN_MOVING,
                                         DYN_ONCOMING, Detections)
 from radarnode.radar import ambiguity, detection_model
@@ -127,3 +127,33 @@ def test_detection_level_aliases_like_the_signal_level():
                                  DspChain(p).statistic)
     j = int(np.argmin(np.abs(det.range_m - 60.0)))
     assert det.range_rate_mps[j] == pytest.approx(-vmax + 5.0, abs=2 * p.speed_resolution_mps)
+
+
+def _both_levels(p, scat, seed=2):
+    from radarnode.radar.signal_model import synthesize
+    chain = DspChain(p)
+    sig = chain.process(synthesize(p, scat, np.random.default_rng(seed)))
+    ana = detection_model.detect(p, scat, np.random.default_rng(seed), chain.statistic)
+    return sig, ana
+
+
+def test_range_just_inside_and_past_the_unambiguous_range_is_never_negative():
+    p = PRESETS["mimo12"]
+    r_max = p.unambiguous_range_m                                   # 112.5 m
+    scat = point_targets([r_max - 0.2, r_max + 0.1, r_max + 30.0, 2 * r_max - 0.3], [0.0, 20.0, -20.0, 40.0],
+                         [0.0, 3.0, -3.0, 6.0], 30.0)
+    for det in _both_levels(p, scat):
+        assert np.all(det.range_m >= 0.0) and np.all(det.range_m < r_max)
+        # each alias where the radar puts it: R mod R_max, within a bin (bins 255.5 and 0.2 are neighbours)
+        for r, v in ((r_max - 0.2, 0.0), (r_max + 0.1, 3.0), (30.0, -3.0), (r_max - 0.3, 6.0)):
+            d = np.abs(np.mod(det.range_m - np.mod(r, r_max) + r_max / 2, r_max) - r_max / 2)
+            assert np.any((d < p.range_resolution_m) & (np.abs(det.range_rate_mps - v) < 0.5)), (r, v)
+
+
+def test_angle_ambiguity_of_a_sparse_array_at_both_levels():
+    """Element spacing λ (grating lobes): a target at 40° (d·sinθ = 0.643) is seen at asin(−0.357) = −20.9°."""
+    p = PRESETS["mimo12"].with_overrides({"element_spacing_wl": 1.0})
+    scat = point_targets([40.0], [40.0], [2.0], 30.0)
+    for det in _both_levels(p, scat):
+        j = int(np.argmin(np.abs(det.range_m - 40.0)))
+        assert np.degrees(det.azimuth_rad[j]) == pytest.approx(np.degrees(np.arcsin(0.643 - 1.0)), abs=0.5)

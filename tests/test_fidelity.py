@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from radarnode.consumer.assembler import CycleAssembler
-from radarnode.radar.models import AutoModel, shares_a_cell
+from radarnode.radar.models import AutoModel, conflicting_actors, make_model
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.radar.presets import PRESETS
 from radarnode.radar.scatterers import point_targets
@@ -43,11 +43,15 @@ def test_every_level_feeds_the_same_wire_and_consumer(level, output):
         assert len(last.clusters) >= 2
 
 
-def test_auto_picks_the_signal_level_when_scatterers_share_a_cell():
+def test_conflicting_actors_are_those_within_the_chains_resolution():
     p = PRESETS["mimo12"]
     apart = point_targets([20.0, 40.0], [0.0, 10.0], [1.0, 2.0])
-    together = point_targets([40.0, 40.05], [10.0, 10.2], [2.0, 2.0])
-    assert not shares_a_cell(p, apart) and shares_a_cell(p, together)
+    together = point_targets([40.0, 40.45], [10.0, 10.3], [2.0, 2.0])       # pedestrians 0.45 m apart
+    assert not conflicting_actors(p, apart, 2).any()
+    assert conflicting_actors(p, together, 2).all()
+    # same range and angle but 10 Doppler bins apart: resolved, no conflict
+    moving = point_targets([40.0, 40.0], [10.0, 10.0], [2.0, 2.0 + 10 * p.speed_resolution_mps])
+    assert not conflicting_actors(p, moving, 2).any()
 
 
 def test_auto_counts_its_choices_and_uses_signal_for_impairments():
@@ -62,6 +66,73 @@ def test_auto_counts_its_choices_and_uses_signal_for_impairments():
     model = AutoModel(Scene(sc), sc.radar.model, np.random.default_rng(0), imp)
     model.step(0.0, cfg)
     assert model.choices["signal"] == 1
+
+
+def _auto_and(level, text, radar, frames, seed=3, ego="{speed_mps: 0.0}"):
+    """Run ``auto`` and ``level`` on the same scene: per level the model and, per frame, (frame, view, detections)."""
+    sc = scenario(text, radar=radar, ego=ego, duration=frames * 0.072 + 1, seed=seed)
+    cfg = RuntimeConfig(max_distance_m=sc.radar.model.max_range_m, clusters=False)
+    out = {}
+    for name in ("auto", level):
+        model = make_model(name, Scene(sc), sc.radar.model, np.random.default_rng(seed), sc.signal)
+        rows = []
+        for k in range(frames):
+            frame, view = model.step(k * sc.period_s, cfg)
+            rows.append((frame, view, model.info.detections))
+        out[name] = (model, rows)
+    return out
+
+
+def test_auto_renders_two_pedestrians_side_by_side_as_the_chain_does():
+    """0.45 m apart at 30 m: one peak for the chain; auto sends them through the detection level, which merges
+    them, and reports one object as the signal level does."""
+    text = """
+  - {id: a, class: pedestrian, x_m: 30.0, y_m: 0.0, speed_mps: 0.0}
+  - {id: b, class: pedestrian, x_m: 30.0, y_m: 0.45, speed_mps: 0.0}
+"""
+    out = _auto_and("signal", text, "{preset: mimo12}", 12)
+    auto, rows = out["auto"]
+    assert auto.choices["detection"] == 12 and auto.choices["object"] == 0
+    near = [int(np.sum(np.abs(d.range_m - 30.0) < 1.0)) for _, _, d in rows]
+    near_sig = [int(np.sum(np.abs(d.range_m - 30.0) < 1.0)) for _, _, d in out["signal"][1]]
+    assert max(near) <= 1 and max(near_sig) <= 1
+    assert len(rows[-1][0].objects) == len(out["signal"][1][-1][0].objects) == 1
+
+
+def test_auto_switching_levels_keeps_ids_and_never_empties_a_frame():
+    """Two cars side by side, then one pulls away: auto moves them from the detection to the object level
+    mid-run; the one tracker keeps the IDs and reports objects in every frame after confirmation."""
+    text = """
+  - {id: a, class: car, x_m: 40.0, y_m: -1.2, speed_mps: 2.0}
+  - {id: b, class: car, x_m: 40.0, y_m: 1.2, speed_mps: 2.0, accel: [{t_s: 1.5, accel_mps2: 2.0}]}
+"""
+    sc = scenario(text, radar="{preset: mimo12}", ego="{speed_mps: 0.0}", duration=6.0, seed=4)
+    cfg = RuntimeConfig(max_distance_m=100.0, clusters=False)
+    model = AutoModel(Scene(sc), sc.radar.model, np.random.default_rng(4), sc.signal)
+    levels, ids = [], []
+    for k in range(70):
+        frame, _ = model.step(k * sc.period_s, cfg)
+        levels.append(model.info.level)
+        ids.append(set(frame.objects.id.tolist()))
+    assert "detection" in levels and "object" in levels                 # the switch happened
+    first = next(i for i, s in enumerate(ids) if s)
+    assert all(ids[i] for i in range(first, len(ids)))                  # never an empty frame
+    switch = levels.index("object", levels.index("detection"))
+    assert ids[switch - 1] <= ids[switch]                               # the IDs before survive the switch
+
+
+def test_auto_pedestrian_near_the_range_limit_is_detected_as_often_as_at_signal_level():
+    """A pedestrian at 92 m on mimo12, near the threshold: auto (object level here) and the signal level detect
+    it with the same law, so their detection rates agree within sampling error."""
+    text = "  - {id: p, class: pedestrian, x_m: 92.0, y_m: 0.0, speed_mps: 0.0}"
+    frames = 150
+    out = _auto_and("signal", text, "{preset: mimo12}", frames)
+    rate = {}
+    for name, (_, rows) in out.items():
+        rate[name] = np.mean([bool(np.any(np.abs(d.range_m - v.range_m[0]) < 1.0)) for _, v, d in rows])
+    assert out["auto"][0].choices["object"] == frames
+    assert 0.05 < rate["signal"] < 0.95                                  # the interesting regime
+    assert abs(rate["auto"] - rate["signal"]) < 3 * np.sqrt(0.25 / frames) * np.sqrt(2) + 0.05
 
 
 def test_signal_options_in_scenario_files_are_validated(tmp_path):

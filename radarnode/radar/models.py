@@ -1,27 +1,27 @@
 """The fidelity levels behind one interface, and ``auto``.
 
 Every model has ``step(t_s, config, sensor_velocity_est) -> (RadarFrame, SensorView)``.
-The detection and signal levels share the scatterer generation and the
-perception step (clusters and the object tracker); only how scatterers become
-detections differs. ``auto`` picks per frame the cheapest level that keeps the
-scene's accuracy: the signal level where the scene asks for RF impairments or
-where two scatterers of different actors share a resolution cell (only the
-signal level resolves or merges them as the radar would), the detection
-level where a cluster list is sent (the object level has no per-scatterer
-detections), the object level otherwise.
+The detection and signal levels share the scatterer generation (with the
+actors' Swerling fluctuation), the velocity-ambiguity resolution
+(:mod:`radarnode.radar.ambiguity`) and the perception step (clusters and the
+object tracker); only how scatterers become detections differs. ``auto``
+(:class:`AutoModel`) renders each actor at the cheapest level that keeps the
+chain's answer and feeds one tracker.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.spatial
 
-from radarnode.dsp.chain import DspChain
+from radarnode.radar.chain import DspChain
 from radarnode.perception.tracker import ObjectTracker, clusters_from_detections
-from radarnode.perception.types import Detections, RadarFrame
+from radarnode.perception.types import ClusterList, Detections, RadarFrame
 from radarnode.radar import ambiguity, detection_model
+from radarnode.radar.calibration import RESOLUTION
 from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
@@ -139,54 +139,98 @@ class SignalModel(ScattererModel):
         return det
 
 
-def shares_a_cell(preset: RadarPreset, scat: Scatterers) -> bool:
-    """True when scatterers of two different actors fall in one range–Doppler–angle resolution cell."""
+def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> np.ndarray:
+    """Actors with a scatterer within the chain's resolution (plus a bin of margin) of another actor's or of a
+    post's, in range, Doppler and angle at once (where they appear, aliasing included): shape (n_actors,) bool.
+
+    Those are the actors whose detections the object level cannot give: the
+    chain merges or splits them (:data:`radarnode.radar.calibration.RESOLUTION`).
+    """
+    out = np.zeros(n_actors, dtype=bool)
     if len(scat) < 2:
-        return False
-    key = np.stack([np.rint(scat.range_m / preset.range_resolution_m),
-                    np.rint(scat.range_rate_mps / preset.speed_resolution_mps),
-                    np.rint(np.sin(scat.azimuth_rad) / preset.angular_resolution_rad)], axis=1).astype(np.int64)
-    _, inv = np.unique(key, axis=0, return_inverse=True)
-    inv = inv.ravel()
-    lo = np.full(inv.max() + 1, np.iinfo(np.int64).max)
-    hi = np.full(inv.max() + 1, np.iinfo(np.int64).min)
-    np.minimum.at(lo, inv, scat.actor_index)
-    np.maximum.at(hi, inv, scat.actor_index)
-    return bool(np.any(lo != hi))
+        return out
+    p = preset
+    rb, vb, u = detection_model.apparent_positions(p, scat)
+    res = np.asarray(RESOLUTION, dtype=np.float64) + np.array([1.0, 1.0, 0.5])
+    beam = 1.0 / p.num_virtual
+    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    box = np.array([n_r / res[0], p.num_chirps / res[1], p.num_virtual / res[2]])
+    pts = np.stack([rb / res[0], np.mod(vb, p.num_chirps) / res[1], np.mod(u / beam, p.num_virtual) / res[2]], axis=1)
+    pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
+    if pairs.size == 0:
+        return out
+    a, b = scat.actor_index[pairs[:, 0]], scat.actor_index[pairs[:, 1]]
+    other = a != b
+    for side in (a[other], b[other]):
+        out[side[side >= 0]] = True
+    return out
 
 
 class AutoModel:
-    """Per frame, the cheapest level the scene needs (see the module docstring); counts the choices."""
+    """``auto``: each actor at the cheapest level that keeps the chain's answer, one tracker for all.
+
+    Per frame and per actor: the object level's detection of it (the chain's
+    Pd law, its measured accuracy and the same velocity aliasing, by
+    construction and checked by ``benchmarks/calibration.py``) unless its
+    scatterers come within the chain's measured resolution of another actor's
+    or of a guardrail post's — there the detection level renders them, because
+    the chain merges or splits what lies that close. Posts and clutter go
+    through the detection level when a cluster list is sent. RF impairments
+    exist only in the time-domain signal: a scene that asks for them runs the
+    signal level throughout. Because both parts feed one tracker, a change of
+    level never drops a track, swaps an ID or empties a frame.
+    """
 
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                  options: SignalOptions = SignalOptions(), clusters_wanted: bool = False) -> None:
         self.object = ObjectModel(scene, preset, rng, options)
         self.detection = DetectionModel(scene, preset, rng, options)
         self.signal = SignalModel(scene, preset, rng, options)
+        self.scene = scene
         self.options = options
         self.clusters_wanted = clusters_wanted
         self.preset = preset
+        self.tracker = ObjectTracker()
+        self.cycle = 0
         self.choices = {"object": 0, "detection": 0, "signal": 0}
+        self.actor_frames = {"object": 0, "detection": 0}
         self.info = StepInfo()
 
     def step(self, t_s, config, sensor_velocity_est=None):
         if self.options.impairments.any:
-            level = "signal"
-        else:
-            view = self.detection.scene.view(t_s)
-            scat = self.detection.scatterers(t_s, view, config)
-            if shares_a_cell(self.preset, scat):
-                level = "signal"
-            elif self.clusters_wanted:
-                level = "detection"
-            else:
-                level = "object"
+            self.choices["signal"] += 1
+            out = self.signal.step(t_s, config, sensor_velocity_est)
+            self.info = self.signal.info
+            return out
+        t0 = time.perf_counter()
+        view = self.scene.view(t_s)
+        scat = self.detection.scatterers(t_s, view, config)
+        conflict = conflicting_actors(self.preset, scat, self.scene.n)
+        need = np.where(scat.actor_index >= 0, conflict[np.maximum(scat.actor_index, 0)], self.clusters_wanted)
+        # the object level: kinematics, Pd and noise of every actor; its detections of the simple actors
+        self.object.step(t_s, dataclasses.replace(config, clusters=False), sensor_velocity_est)
+        det_o = self.object.info.detections
+        parts = [det_o.take(~conflict[det_o.actor_index])]
+        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
+        if need.any():
+            sub = scat.take(need)
+            parts.append(ambiguity.resolve(self.preset, [self.detection.detections(sub, config, seq)
+                                                         for seq in self.detection.sequences()], sv))
+        det = Detections.concat(parts)
+        det = det.take(det.range_m <= config.max_distance_m)
+        level = "detection" if need.any() else "object"
         self.choices[level] += 1
-        model = getattr(self, level)
-        out = model.step(t_s, config, sensor_velocity_est)
-        self.info = getattr(model, "info", StepInfo(level=level))
-        self.info.level = level
-        return out
+        self.actor_frames["detection"] += int(conflict.sum())
+        self.actor_frames["object"] += int(self.scene.n - conflict.sum())
+        t1 = time.perf_counter()
+        clusters = clusters_from_detections(det, self.preset.near_range_m, sv) if config.clusters else \
+            ClusterList.empty(0)
+        objects = self.tracker.step(t_s, det, sv)
+        self.info = StepInfo(level=level, scatterers=scat, detections=det,
+                             seconds={"radar": t1 - t0, "perception": time.perf_counter() - t1})
+        frame = RadarFrame(t_s, self.cycle, objects, clusters)
+        self.cycle += 1
+        return frame, view
 
 
 def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,

@@ -35,6 +35,7 @@ from radarnode.perception.types import (
 from radarnode.perception.types import Detections
 from radarnode.perception.tracker import cluster_dyn_prop
 from radarnode.radar import ambiguity, equation
+from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import CHAIN_EFFICIENCY, FALSE_ALARMS_PER_PFA_CELL
 from radarnode.radar.options import SignalOptions
 from radarnode.radar.presets import RadarPreset
@@ -126,7 +127,6 @@ class ObjectModel:
 
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                  options: SignalOptions = SignalOptions()) -> None:
-        from radarnode.dsp.chain import DspChain
         self.scene = scene
         self.preset = preset
         self.rng = rng
