@@ -111,10 +111,12 @@ def test_oncoming_car_at_45_mps_is_reported_at_its_true_speed(level):
         near = det.take(np.abs(det.range_m - view.range_m[0]) < 3.0)
         hit = near.take(np.abs(near.range_rate_mps - truth) < 1.0)
         found.append(len(hit) > 0 and bool(np.all(hit.ambig_state == AMBIG_STAGGERED)))
-        # nothing near the car claims a wrapped speed of it (one or two wraps of the first ramp)
-        for k_wrap in (1, 2):
+        # a detection near the car at a wrapped speed of it (one to four wraps of the first ramp) is never
+        # passed off as resolved: it carries AmbigState "ambiguous"
+        for k_wrap in (1, 2, 3, 4):
             wrapped = truth + 2 * k_wrap * ARS.max_unambiguous_speed_mps
-            assert not np.any(np.abs(near.range_rate_mps - wrapped) < 1.0)
+            at = np.abs(near.range_rate_mps - wrapped) < 1.0
+            assert np.all(near.ambig_state[at] == AMBIG_AMBIGUOUS)
     assert sum(found) >= 7          # Pd of a car at 120 m; every detection of it at its true speed
     assert truth < -2 * ARS.max_unambiguous_speed_mps      # −65 m/s: beyond two wraps of one ramp
 

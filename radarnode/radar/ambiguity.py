@@ -52,6 +52,7 @@ def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple
     out = det.take(np.arange(len(det)))
     take = candidate & ~resolved
     out.range_rate_mps = np.where(take, unwrapped, det.range_rate_mps)
+    out.range_m = _recouple(preset, det, out.range_rate_mps)
     out.ambig_state = np.where(take, AMBIG_STATIONARY, np.where(resolved, AMBIG_STAGGERED, AMBIG_AMBIGUOUS))
     return out
 
@@ -88,8 +89,16 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
     v1 = det1.range_rate_mps + 2 * v1max * _K[kk]
     v2 = det2.range_rate_mps[j] + 2 * v2max * k2[np.arange(len(det1)), j, kk]
     out.range_rate_mps = np.where(ok, 0.5 * (v1 + v2), det1.range_rate_mps)
+    out.range_m = _recouple(preset, det1, out.range_rate_mps)
     out.ambig_state = np.where(ok, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
     return out
+
+
+def _recouple(preset: RadarPreset, det: Detections, range_rate_mps: np.ndarray) -> np.ndarray:
+    """Range corrected for the new speed: the chain took the coupling out with the aliased one."""
+    n_range = preset.num_samples if preset.complex_sampling else preset.num_samples // 2
+    shift = (range_rate_mps - det.range_rate_mps) * preset.range_rate_coupling_s
+    return np.mod(det.range_m - shift, n_range * preset.range_resolution_m)
 
 
 def resolve(preset: RadarPreset, sequences: list[Detections], sensor_velocity: tuple[float, float]) -> Detections:

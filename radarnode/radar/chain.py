@@ -139,10 +139,11 @@ class DspChain:
             r_bins = r_bins.copy()
             r_bins[top] = refine_ml(np.transpose(rd[:, d[top], :], (1, 0, 2)), r_bins[top],
                                     window(cfg.range_window, n))
-        # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative range)
-        r_bins = np.mod(r_bins, n)
-        range_m = r_bins * p.range_resolution_m
         speed = (d - m // 2 + dd) * p.speed_resolution_mps          # positive: opening
+        # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative
+        # range); coupling and migration to mid-frame are taken out (RadarPreset.range_rate_coupling_s)
+        range_m = np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s,
+                         n * p.range_resolution_m)
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         fd = 2.0 * speed / p.wavelength_m
         snap = rd[:, d, r].T * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
@@ -152,7 +153,7 @@ class DspChain:
         # which a strong target's sidelobes inflate
         sigma2 = stat.noise_floor(power)
         energy = np.maximum(power[d, r] / sigma2 - c, 1e-30)
-        delta_r = r_bins - np.rint(r_bins)
+        delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))
         rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
         if d.size:   # every angle peak of a cell is a detection, sharing the cell's energy by its beam power
             row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db)

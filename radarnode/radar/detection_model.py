@@ -109,6 +109,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     c_v = np.bincount(inv, weights=amp ** 2 * vb, minlength=uniq.size) / wsafe
     c_u = np.bincount(inv, weights=amp ** 2 * u, minlength=uniq.size) / wsafe
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
+    # what the chain's coupling correction with the aliased speed leaves in the range (RadarPreset.range_rate_coupling_s)
+    c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.speed_resolution_mps),
+                          minlength=uniq.size) / wsafe
     lo = np.full(uniq.size, np.iinfo(np.int64).max)
     hi = np.full(uniq.size, np.iinfo(np.int64).min)
     np.minimum.at(lo, inv, scat.actor_index)
@@ -133,8 +136,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
     er, ev, ea = CHAIN_EFFICIENCY
     nz = rng.standard_normal((3, idx.size))
-    est_r = np.mod(c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0], n_r) \
-        * p.range_resolution_m
+    est_r = np.mod((c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
+                   * p.range_resolution_m + c_alias[idx] * p.range_rate_coupling_s, n_r * p.range_resolution_m)
     est_v = (c_v[idx] + ev * equation.crb_speed_mps(p, snr_peak) / p.speed_resolution_mps * nz[1]) \
         * p.speed_resolution_mps
     sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)

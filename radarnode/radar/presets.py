@@ -137,6 +137,19 @@ class RadarPreset:
         return self.wavelength_m / (4.0 * self.frame_chirp_period_s)
 
     @property
+    def range_rate_coupling_s(self) -> float:
+        """Metres of apparent range per m/s of range rate in a processed frame.
+
+        Two effects move a moving target's range peak: the Doppler shift inside
+        a chirp adds 2v·T_c/λ bins to the beat frequency (range–Doppler
+        coupling), and the peak sits where the target is at the middle of the
+        frame, T_frame/2 after the cycle's time stamp (range migration). The
+        chain subtracts both, so a range refers to the frame's start like the
+        scene's truth.
+        """
+        return 2.0 * self.chirp_period_s * self.range_resolution_m / self.wavelength_m + 0.5 * self.integration_time_s
+
+    @property
     def range_rate_span_mps(self) -> tuple[float, float]:
         """(lowest, highest) range rate the sensor reports: the data sheet's, else ±v_max."""
         v = self.max_unambiguous_speed_mps
