@@ -200,7 +200,14 @@ class ObjectTracker:
         vr_prior = vx0 * ux + vy0 * uy
         x0[:, 2] = vx0 + (z[idx, 2] - vr_prior) * ux
         x0[:, 3] = vy0 + (z[idx, 2] - vr_prior) * uy
-        p0 = np.tile(np.diag([1.0, 1.0, 4.0, 4.0]), (k, 1, 1))
+        # initial covariance: the position as measured; the velocity's radial part as measured, its tangential
+        # part from the stationary prior (2 m/s). A looser position (it was 1 m) let a new track of a guardrail
+        # post take the next post 4 m on, and leave at a false speed.
+        p0 = np.zeros((k, 4, 4))
+        p0[:, 0, 0] = p0[:, 1, 1] = self.r_cov[0, 0]
+        u = np.stack([ux, uy], axis=1)
+        p0[:, 2:4, 2:4] = (self.r_cov[2, 2] * u[:, :, None] * u[:, None, :]
+                           + 4.0 * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
         self.x = np.concatenate([self.x, x0])
         self.p = np.concatenate([self.p, p0])
         self.hist = np.concatenate([self.hist, np.ones(k, dtype=np.uint8)])
