@@ -63,8 +63,13 @@ def pfa_table(quick: bool) -> None:
     print()
 
 
-def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10) -> str:
-    """Point targets at one integrated SNR, spread so that none shares a cell; Doppler offsets cover a bin."""
+def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10, rcs_fix: np.ndarray | None = None
+                ) -> str:
+    """Point targets at one integrated SNR, spread so that none shares a cell; Doppler offsets cover a bin.
+
+    The RCS is set from the position relative to the ego's origin first, then corrected by what the
+    sensor (mounted ahead of it) sees at t = 0 (``rcs_fix``, dB per target): see :func:`calibrated`.
+    """
     rng = np.random.default_rng(seed)
     lines = []
     for k in range(n_targets):
@@ -72,6 +77,8 @@ def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10) ->
         az = math.radians(-40.0 + 80.0 * ((k * 7) % n_targets) / n_targets)
         v = (-20 + 4 * k + (k + 0.5) / n_targets) * P.speed_resolution_mps
         rcs = rho_db - float(equation.snr_db(P, r, 0.0, azimuth_rad=az))
+        if rcs_fix is not None:
+            rcs += float(rcs_fix[k])
         x, y = r * math.cos(az), r * math.sin(az)
         heading = math.degrees(math.atan2(y, x)) if v >= 0 else math.degrees(math.atan2(-y, -x))
         lines.append(f"  - {{id: p{k}, class: point, swerling: {swerling}, rcs_dbsm: {rcs:.3f}, x_m: {x:.3f}, "
@@ -88,8 +95,17 @@ actors:
 """ + "\n".join(lines) + "\n"
 
 
-def run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> dict:
+def calibrated(rho_db: float, swerling: int, seed: int):
+    """The point scene with every target at integrated SNR ``rho_db`` as the sensor sees it at t = 0."""
     sc = parse_scenario(point_scene(rho_db, swerling, seed))
+    scene = Scene(sc)
+    v = scene.view(0.0)
+    fix = rho_db - equation.snr_db(P, v.range_m, scene.rcs_dbsm, azimuth_rad=v.azimuth_rad)
+    return parse_scenario(point_scene(rho_db, swerling, seed, rcs_fix=fix))
+
+
+def run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> dict:
+    sc = calibrated(rho_db, swerling, seed)
     scene = Scene(sc)
     model = make_model(level, scene, P, np.random.default_rng(seed), sc.signal, clusters_wanted=True)
     cfg = RuntimeConfig(max_distance_m=P.max_range_m)
@@ -131,9 +147,10 @@ def snr_at(pd: np.ndarray, grid: np.ndarray, target: float) -> float:
 
 def pd_tables(quick: bool) -> None:
     stat = DspChain(P).statistic
-    grid = np.arange(8.0, 24.01, 1.0) if not quick else np.arange(8.0, 24.01, 2.0)
     frames = 30 if not quick else 12
     for swerling in (0, 1):
+        top = 24.0 if swerling == 0 else 32.0
+        grid = np.arange(12.0, top + 0.01, 1.0) if not quick else np.arange(12.0, top + 0.01, 2.0)
         print(f"### Pd against integrated SNR ρ, point targets, Swerling {swerling} ({frames} frames × 10 targets "
               "per point)\n")
         print("| ρ dB | theory | " + " | ".join(LEVELS) + " |")
@@ -243,10 +260,13 @@ def resolution_table(quick: bool) -> None:
 
 
 def main() -> None:
+    global LEVELS
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution"))
+    ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     args = ap.parse_args()
+    LEVELS = tuple(lv for lv in args.levels.split(",") if lv)
     t0 = time.perf_counter()
     print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, `python benchmarks/calibration.py"
           f"{' --quick' if args.quick else ''}`\n")
