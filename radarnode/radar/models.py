@@ -174,8 +174,9 @@ class AutoModel:
     construction and checked by ``benchmarks/calibration.py``) unless its
     scatterers come within the chain's measured resolution of another actor's
     or of a guardrail post's — there the detection level renders them, because
-    the chain merges or splits what lies that close. Posts and clutter go
-    through the detection level when a cluster list is sent. RF impairments
+    the chain merges or splits what lies that close. Posts and clutter always
+    go through the detection level (the object level has no model of them,
+    and the chain reports them as clusters and stationary objects). RF impairments
     exist only in the time-domain signal: a scene that asks for them runs the
     signal level throughout. Because both parts feed one tracker, a change of
     level never drops a track, swaps an ID or empties a frame.
@@ -206,7 +207,9 @@ class AutoModel:
         view = self.scene.view(t_s)
         scat = self.detection.scatterers(t_s, view, config)
         conflict = conflicting_actors(self.preset, scat, self.scene.n)
-        need = np.where(scat.actor_index >= 0, conflict[np.maximum(scat.actor_index, 0)], self.clusters_wanted)
+        # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
+        # as clusters and its tracker as stationary objects)
+        need = np.where(scat.actor_index >= 0, conflict[np.maximum(scat.actor_index, 0)], True)
         # the object level: kinematics, Pd and noise of every actor; its detections of the simple actors
         self.object.step(t_s, dataclasses.replace(config, clusters=False), sensor_velocity_est)
         det_o = self.object.info.detections
