@@ -211,7 +211,7 @@ def resolution_table(quick: bool) -> None:
     chain = DspChain(P)
     stat = chain.statistic
     rho = 30.0
-    seps = np.arange(1.0, 4.01, 0.25)
+    seps = np.arange(0.25, 4.01, 0.25)
     print(f"### Resolution: two equal point targets at ρ = {rho:.0f} dB, random phases ({trials} trials per point)\n")
     print("| separation | range: signal | range: detection | Doppler: signal | Doppler: detection | "
           "angle: signal | angle: detection |")

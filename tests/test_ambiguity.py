@@ -42,7 +42,7 @@ def test_ars408_like_unambiguous_span_reaches_the_data_sheet():
 def test_staggered_ramps_recover_every_speed_of_the_span(v):
     """Just below, at and above ±v_max and 2·v_max, and the span's ends: the pair gives the true speed."""
     seq2 = ARS.second_sequence()
-    alias = [np.mod(v + p.max_unambiguous_speed_mps, 2 * p.max_unambiguous_speed_mps) - p.max_unambiguous_speed_mps
+    alias = [np.mod(v + p.alias_speed_mps, 2 * p.alias_speed_mps) - p.alias_speed_mps
              for p in (ARS, seq2)]
     out = ambiguity.resolve_staggered(_det(alias[0] + 0.02), _det(alias[1] - 0.03), ARS)
     assert out.ambig_state[0] == AMBIG_STAGGERED
@@ -52,7 +52,7 @@ def test_staggered_ramps_recover_every_speed_of_the_span(v):
 @pytest.mark.parametrize("v", [-125.0, 60.0, 2 * 55.6])
 def test_speeds_beyond_the_span_are_flagged_not_wrapped_silently(v):
     seq2 = ARS.second_sequence()
-    alias = [np.mod(v + p.max_unambiguous_speed_mps, 2 * p.max_unambiguous_speed_mps) - p.max_unambiguous_speed_mps
+    alias = [np.mod(v + p.alias_speed_mps, 2 * p.alias_speed_mps) - p.alias_speed_mps
              for p in (ARS, seq2)]
     out = ambiguity.resolve(ARS, [_det(alias[0]), _det(alias[1])], (0.0, 0.0))
     assert out.ambig_state[0] != AMBIG_STAGGERED
@@ -62,7 +62,7 @@ def test_speeds_beyond_the_span_are_flagged_not_wrapped_silently(v):
 
 def test_single_ramp_stationary_candidates_unwrap_and_the_rest_is_ambiguous():
     p = PRESETS["mimo12"]
-    vmax = p.max_unambiguous_speed_mps
+    vmax = p.alias_speed_mps
     ego = 36.1                                   # 130 km/h: a post ahead closes faster than v_max
     post = -ego * np.cos(0.2)
     alias = np.mod(post + vmax, 2 * vmax) - vmax
@@ -114,7 +114,7 @@ def test_oncoming_car_at_45_mps_is_reported_at_its_true_speed(level):
         # a detection near the car at a wrapped speed of it (one to four wraps of the first ramp) is never
         # passed off as resolved: it carries AmbigState "ambiguous"
         for k_wrap in (1, 2, 3, 4):
-            wrapped = truth + 2 * k_wrap * ARS.max_unambiguous_speed_mps
+            wrapped = truth + 2 * k_wrap * ARS.alias_speed_mps
             at = np.abs(near.range_rate_mps - wrapped) < 1.0
             assert np.all(near.ambig_state[at] == AMBIG_AMBIGUOUS)
     assert sum(found) >= 7          # Pd of a car at 120 m; every detection of it at its true speed
@@ -124,7 +124,7 @@ def test_oncoming_car_at_45_mps_is_reported_at_its_true_speed(level):
 def test_detection_level_aliases_like_the_signal_level():
     """One ramp: +32.3 m/s beyond mimo12's ±32.4? no — v_max + 5 folds to −v_max + 5 at both levels."""
     p = PRESETS["mimo12"]
-    vmax = p.max_unambiguous_speed_mps
+    vmax = p.alias_speed_mps
     det = detection_model.detect(p, point_targets([60.0], [0.0], [vmax + 5.0], 20.0), np.random.default_rng(1),
                                  DspChain(p).statistic)
     j = int(np.argmin(np.abs(det.range_m - 60.0)))

@@ -43,11 +43,11 @@ def stationary_range_rate(azimuth_rad: np.ndarray, sensor_velocity: tuple[float,
 def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple[float, float]) -> Detections:
     """Unwrap detections that match the stationary hypothesis modulo 2·v_max; flag the rest of a single-ramp
     radar ambiguous (``ambig_state`` of detections already resolved by staggered ramps is kept)."""
-    vmax = preset.max_unambiguous_speed_mps
+    vmax = preset.alias_speed_mps
     vs = stationary_range_rate(det.azimuth_rad, sensor_velocity)
     k = np.rint((vs - det.range_rate_mps) / (2 * vmax))
     unwrapped = det.range_rate_mps + 2 * vmax * k
-    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.speed_resolution_mps
+    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.doppler_bin_mps
     resolved = det.ambig_state == AMBIG_STAGGERED
     out = det.take(np.arange(len(det)))
     take = candidate & ~resolved
@@ -64,7 +64,7 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
     speed and AmbigState 2, the others their measured speed and AmbigState 1.
     """
     seq2 = preset.second_sequence()
-    v1max, v2max = preset.max_unambiguous_speed_mps, seq2.max_unambiguous_speed_mps
+    v1max, v2max = preset.alias_speed_mps, seq2.alias_speed_mps
     lo, hi = preset.range_rate_span_mps
     out = det1.take(np.arange(len(det1)))
     out.ambig_state = np.full(len(det1), AMBIG_AMBIGUOUS, dtype=np.int64)
@@ -127,7 +127,7 @@ def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth
     Arrays broadcast; ``sensor_velocity`` may hold arrays (e.g. one per cycle).
     """
     v = np.asarray(range_rate_mps, dtype=np.float64)
-    vmax = preset.max_unambiguous_speed_mps
+    vmax = preset.alias_speed_mps
     alias = np.mod(v + vmax, 2 * vmax) - vmax
     if preset.stagger_chirp_period_s > 0:
         lo, hi = preset.range_rate_span_mps
@@ -135,5 +135,5 @@ def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth
         return np.where(inside, v, alias), np.where(inside, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
     vs = stationary_range_rate(azimuth_rad, sensor_velocity)
     unwrapped = alias + 2 * vmax * np.rint((vs - alias) / (2 * vmax))
-    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.speed_resolution_mps
+    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.doppler_bin_mps
     return np.where(candidate, unwrapped, alias), np.where(candidate, AMBIG_STATIONARY, AMBIG_AMBIGUOUS).astype(np.int64)

@@ -39,7 +39,7 @@ class DspConfig:
     doa_fft_size: int = 256
     doa_floor_db: float = 9.0
     doa_secondary_snr_db: float = 12.0   # a cell's second angle peak must stand this far above the beam noise
-    range_ml: bool = True          # maximum-likelihood range refinement of the strongest peaks
+    range_ml: bool = True          # maximum-likelihood range and Doppler refinement of the strongest peaks
     range_ml_max_peaks: int = 32
     max_detections: int = 1000
 
@@ -57,6 +57,10 @@ class DspConfig:
         validate.boolean("range_ml", self.range_ml)
         validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
+
+
+#: a wrap-count hypothesis must raise the beam peak by this factor (2 dB) over "no wrap" to be taken
+TDM_HYPOTHESIS_MARGIN = 10.0 ** (2.0 / 10.0)
 
 
 @functools.lru_cache(maxsize=16)
@@ -102,7 +106,10 @@ class DspChain:
         fix = np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)       # (hyp, channel)
         trial = snap[:, None, :] * fix[None, :, :]                                       # (n, hyp, channel)
         peak = self.doa.spectrum(trial).max(axis=-1)                                      # (n, hyp)
+        # another wrap count only where it beats "no wrap" clearly: at low SNR noise alone lifts a wrong
+        # hypothesis's peak by a dB or two, and taking it would scatter the azimuth of unaliased targets
         best = np.argmax(peak, axis=1)
+        best = np.where(peak[np.arange(peak.shape[0]), best] > peak[:, 0] * TDM_HYPOTHESIS_MARGIN, best, 0)
         return trial[np.arange(snap.shape[0]), best]
 
     def process(self, cube: np.ndarray, decimation: int = 1, power_reduction_db: float = 0.0) -> Detections:
@@ -139,13 +146,18 @@ class DspChain:
             r_bins = r_bins.copy()
             r_bins[top] = refine_ml(np.transpose(rd[:, d[top], :], (1, 0, 2)), r_bins[top],
                                     window(cfg.range_window, n))
-        speed = (d - m // 2 + dd) * p.speed_resolution_mps          # positive: opening
+            # the same along Doppler: the (−1)^m shift is part of the data, so the peak stays at index d
+            d_bins = (d + dd).astype(np.float64)
+            d_bins[top] = refine_ml(np.transpose(rd[:, :, r[top]], (2, 0, 1)), d_bins[top],
+                                    window(cfg.doppler_window, m))
+            dd = d_bins - d
+        speed = (d - m // 2 + dd) * p.doppler_bin_mps               # positive: opening (λ at mid-sweep)
         # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative
         # range); coupling and migration to mid-frame are taken out (RadarPreset.range_rate_coupling_s)
         range_m = np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s,
                          n * p.range_resolution_m)
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
-        fd = 2.0 * speed / p.wavelength_m
+        fd = 2.0 * speed / p.centre_wavelength_m
         snap = rd[:, d, r].T * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
         if p.num_tx > 1 and d.size:
             snap = self._tdm_hypotheses(snap)

@@ -64,7 +64,7 @@ def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarra
     n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
     m = p.num_chirps
     rb = np.mod(scat.range_m / p.range_resolution_m, n_r)
-    vb = np.mod(scat.range_rate_mps / p.speed_resolution_mps + m / 2, m) - m / 2
+    vb = np.mod(scat.range_rate_mps / p.doppler_bin_mps + m / 2, m) - m / 2
     u = np.mod(p.element_spacing_wl * np.sin(scat.azimuth_rad) + 0.5, 1.0) - 0.5
     return rb, vb, u
 
@@ -110,7 +110,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     c_u = np.bincount(inv, weights=amp ** 2 * u, minlength=uniq.size) / wsafe
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
     # what the chain's coupling correction with the aliased speed leaves in the range (RadarPreset.range_rate_coupling_s)
-    c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.speed_resolution_mps),
+    c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.doppler_bin_mps),
                           minlength=uniq.size) / wsafe
     lo = np.full(uniq.size, np.iinfo(np.int64).max)
     hi = np.full(uniq.size, np.iinfo(np.int64).min)
@@ -138,8 +138,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     nz = rng.standard_normal((3, idx.size))
     est_r = np.mod((c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
                    * p.range_resolution_m + c_alias[idx] * p.range_rate_coupling_s, n_r * p.range_resolution_m)
-    est_v = (c_v[idx] + ev * equation.crb_speed_mps(p, snr_peak) / p.speed_resolution_mps * nz[1]) \
-        * p.speed_resolution_mps
+    est_v = (c_v[idx] + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]) \
+        * p.doppler_bin_mps
     sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
     est_az = np.arcsin(sin_t) + ea * equation.crb_azimuth_rad(p, snr_peak, np.arcsin(sin_t)) * nz[2]
     est_az = np.clip(est_az, -math.pi / 2, math.pi / 2)
@@ -203,7 +203,7 @@ def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.ran
     m = p.num_chirps
     n_fa = int(rng.poisson(statistic.cfar.pfa * n_r * m * FALSE_ALARMS_PER_PFA_CELL))
     fr = rng.uniform(0, n_r, n_fa) * p.range_resolution_m
-    fv = rng.uniform(-m / 2, m / 2, n_fa) * p.speed_resolution_mps
+    fv = rng.uniform(-m / 2, m / 2, n_fa) * p.doppler_bin_mps
     faz = np.arcsin(np.clip(rng.uniform(-0.5, 0.5, n_fa) / p.element_spacing_wl, -1.0, 1.0))
     # Gamma(N) past the threshold: the excess is nearly exponential with unit mean
     x = statistic.threshold_mean() + rng.exponential(1.0, n_fa)
