@@ -52,11 +52,34 @@ class Scatterers(_Columns):
         r = np.maximum(self.range_m, 1e-9)
         return (self.x_m * self.vx_mps + self.y_m * self.vy_mps) / r
 
-    @classmethod
-    def concat(cls, parts: list[Scatterers]) -> Scatterers:
+    def require_finite(self) -> None:
+        """Raise if any float field holds a NaN or an infinity.
+
+        One NaN scatterer turns a whole signal-level cube into NaN, and every
+        detection of the frame vanishes without a word; this names the culprit
+        instead. Every float field is checked (positions, velocities, RCS), in
+        field order; the message names the field, the first bad scatterer's
+        index and ``actor_index``, its value, and how many entries are bad.
+
+        Raises
+        ------
+        radarnode.errors.ConfigError
+        """
         import dataclasses
-        return cls(**{f.name: np.concatenate([getattr(p, f.name) for p in parts])
-                      for f in dataclasses.fields(cls)})
+
+        from radarnode.errors import ConfigError
+
+        for f in dataclasses.fields(self):
+            if f.name in self.INT_FIELDS:
+                continue
+            values = np.asarray(getattr(self, f.name), dtype=np.float64)
+            bad = ~np.isfinite(values)
+            if bad.any():
+                i = int(np.flatnonzero(bad)[0])
+                raise ConfigError(
+                    f"field '{f.name}' of scatterer {i} (actor_index {int(self.actor_index[i])}): value "
+                    f"{float(values[i])!r} is not allowed; expected a finite number "
+                    f"({int(bad.sum())} of {values.size} entries of {f.name} are not finite)")
 
 
 def point_targets(range_m, azimuth_deg, range_rate_mps, rcs_dbsm=10.0) -> Scatterers:

@@ -1,0 +1,207 @@
+"""Signal level: synthesis + processing time and accuracy at every ego speed, time domain against RD domain.
+
+Scene: ``scenarios/highway_mimo12.yaml`` (mimo12, 12 channels × 256 chirps × 256
+samples, ~300 scatterers: cars, trucks, guardrail posts moving at −ego speed,
+road clutter), scatterers built as the signal level builds them
+(``scene_scatterers``), the ego speed set to each value of the table.
+
+* Speed: per ego speed, per dtype, the median over ``--frames`` frames of
+  ``synthesize`` + ``DspChain.process`` (time domain) and ``synthesize_rd`` +
+  ``DspChain.process_rd`` (range–Doppler domain), and, measured in the same
+  run, the floor: numpy's matrix product of the shape the old single-product
+  synthesis had, (channel·chirp × scatterer)·(scatterer × sample), plus
+  ``range_doppler`` of a cube of that size. The ratio column is row / floor.
+* Accuracy: a point target at an integrated SNR ρ = 20 dB (the convention of
+  ``radarnode.radar.equation.snr_db``: the matched filter over every sample,
+  chirp and channel; per sample and channel that is ρ − 10·log10(N·M·C)),
+  radial speed −(ego speed) like the guardrail posts, 50 m, 10° azimuth;
+  ``--trials`` noise draws per path. Range error is against the truth at the
+  frame's start (the chain takes coupling and migration out, with the speed it
+  measured: beyond the alias speed that is the aliased one, hence −40 cm);
+  range-rate error is wrapped to ±``alias_speed_mps`` (beyond it the speed
+  aliases, as on the real radar). Bias, standard deviation and RMSE over the
+  Cramér–Rao bound (``equation.crb_range_m``/``crb_speed_mps`` at ρ); misses
+  are trials without a detection within the gate.
+
+Run: ``.venv/bin/python benchmarks/signal_speed.py [--frames N] [--trials N] [--blas-threads N]``.
+OpenBLAS is limited to ``--blas-threads`` threads (default 1, set before numpy
+is imported; ``default`` leaves OpenBLAS its own choice): on a shared two-core
+machine its idle worker threads spin after every threaded product and take the
+core the noise thread needs. Measured, median over the 12 speeds, 1 thread →
+OpenBLAS's choice: RD path 39 → 40 ms (complex64), 41 → 50 ms (complex128);
+time-domain path 96 → 109 ms (complex64); only the floor's single large
+product gains (complex64 28 → 16 ms). Prints Markdown tables.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+
+
+def _blas_threads(argv: list[str]) -> str:
+    for i, a in enumerate(argv):
+        if a == "--blas-threads" and i + 1 < len(argv):
+            return argv[i + 1]
+        if a.startswith("--blas-threads="):
+            return a.split("=", 1)[1]
+    return "1"
+
+
+# before numpy is imported anywhere ("default": leave OpenBLAS to choose)
+if _blas_threads(sys.argv) != "default":
+    os.environ["OPENBLAS_NUM_THREADS"] = _blas_threads(sys.argv)
+
+import argparse  # noqa: E402
+import dataclasses  # noqa: E402
+import math  # noqa: E402
+import statistics  # noqa: E402
+import time  # noqa: E402
+from pathlib import Path  # noqa: E402
+
+import numpy as np  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from radarnode.dsp.spectra import range_doppler  # noqa: E402
+from radarnode.radar import equation  # noqa: E402
+from radarnode.radar.chain import DspChain  # noqa: E402
+from radarnode.radar.scatterers import point_targets, scene_scatterers  # noqa: E402
+from radarnode.radar.signal_model import num_range_samples, synthesize, synthesize_rd  # noqa: E402
+from radarnode.scene.scenario import load_scenario  # noqa: E402
+from radarnode.scene.world import Scene  # noqa: E402
+
+EGO_SPEEDS_MPS = (0.0, 10.0, 20.0, 28.0, 28.6, 29.0, 30.0, 32.0, 40.0, 50.0, 60.0, 70.0)
+DTYPES = (("complex64", np.complex64), ("complex128", np.complex128))
+RHO_DB = 20.0
+GATE_RANGE_M, GATE_RATE_MPS = 1.5, 1.0      # beyond v_max the chain's coupling correction shifts the range ~0.4 m
+
+
+def highway_frames(ego_mps: float, frames: int):
+    """(preset, [Scatterers per frame]) of the highway scene at one ego speed."""
+    sc = load_scenario(ROOT / "scenarios" / "highway_mimo12.yaml")
+    sc = dataclasses.replace(sc, ego=dataclasses.replace(sc.ego, speed_mps=ego_mps))
+    scene = Scene(sc)
+    p = sc.radar.model
+    o = sc.signal
+    rng = np.random.default_rng(sc.seed)
+    out = []
+    for k in range(frames):
+        t = 0.5 + k * sc.period_s
+        out.append(scene_scatterers(scene, t, scene.view(t), p, p.max_range_m, o.scatterer_spacing_m, rng,
+                                    o.clutter_density_per_m2, o.clutter_rcs_dbsm))
+    return p, out
+
+
+def _median_ms(fn, runs) -> float:
+    fn(runs[0])                                   # warm-up: caches, allocator
+    times = []
+    for arg in runs:
+        t0 = time.perf_counter()
+        fn(arg)
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times)
+
+
+def floor_ms(p, k: int, dtype, reps: int = 7) -> float:
+    """Old single product (C·M × K)·(K × N) plus range_doppler of a cube of that size, median."""
+    rng = np.random.default_rng(0)
+    c, m, n = p.num_virtual, p.num_chirps, num_range_samples(p)
+    left = (rng.standard_normal((c * m, k)) + 1j * rng.standard_normal((c * m, k))).astype(dtype)
+    right = (rng.standard_normal((k, n)) + 1j * rng.standard_normal((k, n))).astype(dtype)
+
+    def run(_):
+        cube = (left @ right).reshape(c, m, n)
+        range_doppler(cube)
+    return _median_ms(run, list(range(reps)))
+
+
+def speed_table(frames: int) -> list[str]:
+    lines = ["| ego speed | scatterers | dtype | floor: product + FFTs | time domain: synthesize + process | ratio "
+             "| RD domain: synthesize_rd + process_rd | ratio |",
+             "|---:|---:|---|---:|---:|---:|---:|---:|"]
+    for ego in EGO_SPEEDS_MPS:
+        p, scats = highway_frames(ego, frames)
+        chain = DspChain(p)
+        k = int(statistics.median(len(s) for s in scats))
+        for name, dt in DTYPES:
+            rng = np.random.default_rng(1)
+            fl = floor_ms(p, k, dt)
+            td = _median_ms(lambda s: chain.process(synthesize(p, s, rng, dtype=dt)), scats)
+            rd = _median_ms(lambda s: chain.process_rd(synthesize_rd(p, s, rng, dtype=dt)), scats)
+            lines.append(f"| {ego:g} m/s | {k} | {name} | {fl:.1f} ms | {td:.1f} ms | {td / fl:.2f} "
+                         f"| {rd:.1f} ms | {rd / fl:.2f} |")
+        print(lines[-2], lines[-1], sep="\n", file=sys.stderr, flush=True)
+    return lines
+
+
+def _errors(p, chain, path: str, v_mps: float, trials: int) -> np.ndarray:
+    """(range error, wrapped range-rate error) of the detection nearest the truth, one row per trial; NaN when
+    none lies within the gate (a miss: at ρ = 20 dB the chain detects the target in ~80 % of the frames)."""
+    r0, az = 50.0, 10.0
+    n, m, c = num_range_samples(p), p.num_chirps, p.num_virtual
+    snr_sample = RHO_DB - 10.0 * math.log10(n * m * c)
+    scat = point_targets([r0], [az], [v_mps], 0.0)
+    vmax = p.alias_speed_mps                      # the chain's Doppler wraps at λ_c/(4T), λ_c at mid-sweep
+    out = np.full((trials, 2), np.nan)
+    for i in range(trials):
+        rng = np.random.default_rng(1000 + i)
+        if path == "td":
+            det = chain.process(synthesize(p, scat, rng, snr_db=snr_sample))
+        else:
+            det = chain.process_rd(synthesize_rd(p, scat, rng, snr_db=snr_sample))
+        if len(det):
+            dv = (det.range_rate_mps - v_mps + vmax) % (2.0 * vmax) - vmax
+            dr = det.range_m - r0
+            cost = np.abs(dr) / GATE_RANGE_M + np.abs(dv) / GATE_RATE_MPS
+            j = int(np.argmin(cost))
+            if cost[j] <= 1.0:
+                out[i] = dr[j], dv[j]
+    return out
+
+
+def accuracy_table(trials: int) -> list[str]:
+    p = highway_frames(0.0, 1)[0]
+    chain = DspChain(p)
+    crb_r = float(equation.crb_range_m(p, RHO_DB))
+    crb_v = float(equation.crb_speed_mps(p, RHO_DB))
+    lines = [f"Point target, ρ = {RHO_DB:g} dB, 50 m, 10°, radial speed −(ego speed); {trials} trials a cell; "
+             f"CRB: range {100 * crb_r:.2f} cm, range rate {100 * crb_v:.2f} cm/s.", "",
+             "| radial speed | path | range bias | range std | range RMSE/CRB | rate bias | rate std "
+             "| rate RMSE/CRB | missed |",
+             "|---:|---|---:|---:|---:|---:|---:|---:|---:|"]
+    for ego in EGO_SPEEDS_MPS:
+        for path, label in (("td", "time domain"), ("rd", "RD domain")):
+            e = _errors(p, chain, path, -ego, trials)
+            ok = e[~np.isnan(e[:, 0])]
+            bias, std = ok.mean(axis=0), ok.std(axis=0)
+            rmse = np.sqrt(np.mean(ok ** 2, axis=0))
+            lines.append(f"| {-ego:g} m/s | {label} | {100 * bias[0]:+.2f} cm | {100 * std[0]:.2f} cm "
+                         f"| {rmse[0] / crb_r:.2f} | {100 * bias[1]:+.2f} cm/s | {100 * std[1]:.2f} cm/s "
+                         f"| {rmse[1] / crb_v:.2f} | {trials - len(ok)} |")
+        print(lines[-2], lines[-1], sep="\n", file=sys.stderr, flush=True)
+    return lines
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--frames", type=int, default=5, help="frames per speed and path (median)")
+    ap.add_argument("--trials", type=int, default=50, help="noise draws per speed and path (accuracy; 0: none)")
+    ap.add_argument("--blas-threads", default="1",
+                    help="OpenBLAS threads, set before numpy is imported ('default': OpenBLAS's own choice)")
+    args = ap.parse_args()
+    t0 = time.perf_counter()
+    speed = speed_table(args.frames)
+    acc = accuracy_table(args.trials) if args.trials > 0 else []
+    print(f"## Signal level: synthesis + processing, highway_mimo12.yaml, median of {args.frames} frames, "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
+    print("\n".join(speed))
+    if acc:
+        print("\n## Accuracy at every speed\n")
+        print("\n".join(acc))
+    print(f"\n(run time {time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
