@@ -141,6 +141,7 @@ def test_signal_options_in_scenario_files_are_validated(tmp_path):
     base = (SCENARIOS / "highway_mimo12.yaml").read_text()
     for bad, fragment in [
         ("signal: {dtype: complex32}", "signal.dtype"),
+        ("signal: {domain: frequency}", "signal.domain"),
         ("signal: {impairments: {adc_bits: 40}}", "signal.impairments.adc_bits"),
         ("signal: {dsp: {cfar: gocfar}}", "signal.dsp.cfar"),
         ("signal: {scatterer_spacing_m: .nan}", "signal.scatterer_spacing_m"),

@@ -164,7 +164,8 @@ class DspChain:
         # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
         # which a strong target's sidelobes inflate
         sigma2 = stat.noise_floor(power)
-        energy = np.maximum(power[d, r] / sigma2 - c, 1e-30)
+        with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
+            energy = np.minimum(np.maximum(power[d, r] / sigma2 - c, 1e-30), 1e300)
         delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))
         rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
         if d.size:   # every angle peak of a cell is a detection, sharing the cell's energy by its beam power

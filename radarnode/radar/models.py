@@ -17,6 +17,7 @@ import time
 import numpy as np
 import scipy.spatial
 
+from radarnode.errors import ConfigError
 from radarnode.radar.chain import DspChain
 from radarnode.perception.tracker import ObjectTracker, clusters_from_detections
 from radarnode.perception.types import ClusterList, Detections, RadarFrame
@@ -26,7 +27,7 @@ from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
 from radarnode.radar.options import SignalOptions
-from radarnode.radar.signal_model import decimation_for, synthesize
+from radarnode.radar.signal_model import decimation_for, synthesize, synthesize_rd
 from radarnode.scene.world import Scene, SensorView
 
 FIDELITY_LEVELS = ("object", "detection", "signal", "auto")
@@ -124,13 +125,30 @@ class SignalModel(ScattererModel):
 
     def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
         o = self.options
-        far = float(np.max(scat.range_m)) if len(scat) else 0.0
-        dec = decimation_for(preset, max(far, 1.0)) if o.decimate else 1
-        cube = synthesize(preset, scat, self.rng, snr_db=o.snr_db, power_reduction_db=config.power_reduction_db,
-                          dtype=o.complex_dtype, impairments=o.impairments, decimation=dec)
-        if self.keep_cube and preset is self.preset:
-            self.info.cube = cube
-        det = self.chains[preset.chirp_period_s].process(cube, dec, config.power_reduction_db)
+        chain = self.chains[preset.chirp_period_s]
+        cfg = o.dsp
+        # the windowed range–Doppler spectrum straight from the scatterers where that path is exact (Hann
+        # windows, no RF impairment, migration within its series; a kept cube needs the time domain)
+        rd_path = (o.domain != "time" and not self.keep_cube and not o.impairments.any
+                   and cfg.range_window == cfg.doppler_window == "hann")
+        if rd_path:
+            try:
+                rd = synthesize_rd(preset, scat, self.rng, snr_db=o.snr_db, power_reduction_db=config.power_reduction_db,
+                                   dtype=o.complex_dtype)
+            except ConfigError:
+                if o.domain == "range_doppler":
+                    raise
+                rd_path = False
+        if rd_path:
+            det = chain.process_rd(rd, config.power_reduction_db)
+        else:
+            far = float(np.max(scat.range_m)) if len(scat) else 0.0
+            dec = decimation_for(preset, max(far, 1.0)) if o.decimate else 1
+            cube = synthesize(preset, scat, self.rng, snr_db=o.snr_db, power_reduction_db=config.power_reduction_db,
+                              dtype=o.complex_dtype, impairments=o.impairments, decimation=dec)
+            if self.keep_cube and preset is self.preset:
+                self.info.cube = cube
+            det = chain.process(cube, dec, config.power_reduction_db)
         # the signal chain cannot know the truth; tag each detection with the nearest scatterer for evaluation
         if len(det) and len(scat):
             d2 = ((det.x_m[:, None] - scat.x_m[None, :]) ** 2 + (det.y_m[:, None] - scat.y_m[None, :]) ** 2)
@@ -238,7 +256,6 @@ class AutoModel:
 
 def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                options: SignalOptions = SignalOptions(), clusters_wanted: bool = False):
-    from radarnode.errors import ConfigError
     if level == "object":
         return ObjectModel(scene, preset, rng, options)
     if level == "detection":

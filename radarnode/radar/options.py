@@ -55,6 +55,9 @@ class SignalOptions:
     clutter_density_per_m2: float = 0.0
     clutter_rcs_dbsm: float = -20.0
     decimate: bool = True
+    #: signal level: "auto" synthesises the range–Doppler spectrum directly where that is exact (Hann windows,
+    #: no impairment), else the time-domain cube; "time" always the cube; "range_doppler" never falls back
+    domain: str = "auto"
     dsp: DspConfig = DspConfig()
     impairments: Impairments = Impairments()
 
@@ -66,6 +69,7 @@ class SignalOptions:
         validate.number("clutter_density_per_m2", self.clutter_density_per_m2, lo=0.0, hi=1.0)
         validate.number("clutter_rcs_dbsm", self.clutter_rcs_dbsm, lo=-60.0, hi=20.0)
         validate.boolean("decimate", self.decimate)
+        validate.choice("domain", self.domain, ("auto", "time", "range_doppler"))
 
     @property
     def complex_dtype(self):
