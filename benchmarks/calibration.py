@@ -73,9 +73,11 @@ def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10, rc
     rng = np.random.default_rng(seed)
     lines = []
     for k in range(n_targets):
-        r = 15.0 + 9.0 * k
+        # 30–102 m and under 0.75 m/s: over a run a target drifts less than 2 m, 0.6 dB of SNR at 30 m;
+        # the Doppler offsets still cover a bin
+        r = 30.0 + 8.0 * k
         az = math.radians(-40.0 + 80.0 * ((k * 7) % n_targets) / n_targets)
-        v = (-20 + 4 * k + (k + 0.5) / n_targets) * P.speed_resolution_mps
+        v = (-2 + k % 5 + (k + 0.5) / n_targets) * P.speed_resolution_mps
         rcs = rho_db - float(equation.snr_db(P, r, 0.0, azimuth_rad=az))
         if rcs_fix is not None:
             rcs += float(rcs_fix[k])

@@ -9,7 +9,7 @@ import pytest
 
 from radarnode.perception.types import DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED
 from radarnode.radar import equation
-from radarnode.radar.calibration import CHAIN_EFFICIENCY
+from radarnode.radar.calibration import chain_efficiency
 from radarnode.radar.object_model import ObjectModel, RuntimeConfig, in_fov, visible_fraction
 from radarnode.radar.presets import PRESETS
 from radarnode.scene.world import Scene
@@ -83,7 +83,7 @@ def test_target_outside_the_fov_and_behind_a_truck_is_not_reported():
 
 def test_noise_follows_the_cramer_rao_bound_at_the_chains_efficiency():
     # a pedestrian (a point-sized actor: no extent floor) far away; its range error spread is what the signal
-    # chain achieves, CHAIN_EFFICIENCY times the Cramér–Rao bound at its SNR
+    # chain achieves, chain_efficiency() times the Cramér–Rao bound at its SNR
     sc = scenario("  - {id: a, class: pedestrian, x_m: 60.0, lane: 1, speed_mps: 20.0}", duration=40.0, seed=4)
     frames = _run(sc, 400)
     err, expected = [], []
@@ -94,7 +94,7 @@ def test_noise_follows_the_cramer_rao_bound_at_the_chains_efficiency():
         if m.any():
             err.append(np.hypot(ol.dist_long_m[m], ol.dist_lat_m[m])[0] - view.range_m[0])
             snr = equation.snr_db(p, view.range_m[:1], sc.actors[0].rcs, azimuth_rad=view.azimuth_rad[:1])
-            expected.append(CHAIN_EFFICIENCY[0] * equation.crb_range_m(p, snr)[0])
+            expected.append(chain_efficiency(snr)[0][0] * equation.crb_range_m(p, snr)[0])
     err = np.array(err)
     assert len(err) > 300
     assert abs(err.mean()) < 4 * np.std(err) / math.sqrt(len(err)) + 1e-3

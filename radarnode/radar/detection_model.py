@@ -18,7 +18,7 @@ What the signal chain does to scatterers, without the signal:
    against the exact CA-CFAR threshold; in a detected cell every angle peak
    within the chain's DOA floor is a detection;
 5. the estimates carry noise at the chain's measured efficiency times the
-   Cramér–Rao bound of the peak's integrated SNR (:data:`CHAIN_EFFICIENCY`);
+   Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
 6. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
 
@@ -40,7 +40,7 @@ import scipy.spatial
 from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
-from radarnode.radar.calibration import CHAIN_EFFICIENCY, DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION
+from radarnode.radar.calibration import DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION, chain_efficiency
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers
 
@@ -134,7 +134,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     measured = np.maximum(stat_rd[rd_inv[keep]] - statistic.n_channels, 1e-30) * share   # energy estimate
     rho_peak = c_rho[idx]
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
-    er, ev, ea = CHAIN_EFFICIENCY
+    er, ev, ea = chain_efficiency(snr_peak)
     nz = rng.standard_normal((3, idx.size))
     est_r = np.mod((c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
                    * p.range_resolution_m + c_alias[idx] * p.range_rate_coupling_s, n_r * p.range_resolution_m)

@@ -36,7 +36,7 @@ from radarnode.perception.types import Detections
 from radarnode.perception.tracker import cluster_dyn_prop
 from radarnode.radar import ambiguity, equation
 from radarnode.radar.chain import DspChain
-from radarnode.radar.calibration import CHAIN_EFFICIENCY, FALSE_ALARMS_PER_PFA_CELL
+from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
 from radarnode.radar.options import SignalOptions
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
@@ -190,7 +190,7 @@ class ObjectModel:
         u, z = draws["u"], draws["z"]
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
-        er, ev, ea = CHAIN_EFFICIENCY
+        er, ev, ea = chain_efficiency(snr)
         ext = self.extended
         sig_r = np.hypot(er * equation.crb_range_m(p, snr), np.where(ext, p.range_sigma_floor_m, 0.0))
         sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
@@ -379,7 +379,7 @@ class ObjectModel:
             g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
             hit = rng.random(g_r.shape) < self.statistic.pd_of_snr(g_snr, 1)
             g_r, g_az, g_snr, g_rcs = g_r[hit], g_az[hit], g_snr[hit], g_rcs[hit]
-            er, ev, ea = CHAIN_EFFICIENCY         # posts are point targets: the chain's accuracy, no floor
+            er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
             gs_r = er * equation.crb_range_m(p, g_snr)
             gs_az = ea * equation.crb_azimuth_rad(p, g_snr, g_az)
             gs_v = ev * equation.crb_speed_mps(p, g_snr)
