@@ -12,7 +12,7 @@ Prints Markdown tables:
 4. resolution: probability that two equal point targets come out as two, against their separation in range
    bins, Doppler bins and beamwidths, signal against detection level, and the 50 % point of each.
 
-Run: ``python benchmarks/calibration.py [--quick]`` (about 6 minutes; ``--quick`` about 2).
+Run: ``python benchmarks/calibration.py [--quick]`` (about 8 minutes; ``--quick`` about 2).
 """
 
 from __future__ import annotations
@@ -149,7 +149,7 @@ def snr_at(pd: np.ndarray, grid: np.ndarray, target: float) -> float:
 
 def pd_tables(quick: bool) -> None:
     stat = DspChain(P).statistic
-    frames = 30 if not quick else 12
+    frames = 80 if not quick else 12
     for swerling in (0, 1):
         top = 24.0 if swerling == 0 else 32.0
         grid = np.arange(12.0, top + 0.01, 1.0) if not quick else np.arange(12.0, top + 0.01, 2.0)
