@@ -62,17 +62,18 @@ def test_speed_at_and_beyond_vmax_aliases(dtype):
 
 
 def test_azimuth_at_the_fov_edge_at_85_and_at_90_degrees():
-    """The element pattern (two-way cos²θ here) attenuates a target at ±85° by 21 dB, and one at ±90° to nothing:
-    a strong reflector at +85° is reported on its own side, never at −90°, and one at ±90° is not reported."""
+    """The element pattern (two-way cos²θ here) attenuates a target at ±85° by 21 dB, and one at ±90° to nothing.
+    At ±85° a λ/2 array is at the edge of its spatial frequency (d·sinθ = ±0.498 of ±0.5): noise may put the
+    peak on either side of the wrap, which is why the radar levels report nothing outside the field of view
+    (tests/test_ambiguity.py); here the chain alone is checked for what it can promise."""
     az = [60.0, 85.0, -85.0, 90.0, -89.99]
     rng_m = [20.0, 30.0, 40.0, 50.0, 60.0]
     det, ana = _process(point_targets(rng_m, az, [0.0, 2.0, -2.0, 1.0, -1.0], [10.0, 30.0, 30.0, 30.0, 30.0]))
     for d in (det, ana):
         assert abs(math.degrees(_nearest(d, 20.0).azimuth_rad[0]) - 60.0) < 1.0
-        for r, a in ((30.0, 85.0), (40.0, -85.0)):
+        for r in (30.0, 40.0):
             near = d.take(np.abs(d.range_m - r) < P.range_resolution_m)
-            assert len(near) >= 1 and np.all(np.sign(near.azimuth_rad) == np.sign(a))
-            assert np.all(np.abs(np.degrees(near.azimuth_rad) - a) < 5.0)
+            assert len(near) >= 1 and np.all(np.abs(np.degrees(near.azimuth_rad)) > 75.0)
         for r in (50.0, 60.0):
             assert not np.any(np.abs(d.range_m - r) < P.range_resolution_m)
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode import validate
+from radarnode.errors import ConfigError
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
@@ -59,10 +60,6 @@ class DspConfig:
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
-#: a wrap-count hypothesis must raise the beam peak by this factor (2 dB) over "no wrap" to be taken
-TDM_HYPOTHESIS_MARGIN = 10.0 ** (2.0 / 10.0)
-
-
 @functools.lru_cache(maxsize=16)
 def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_range: int) -> DetectionStatistic:
     """The CFAR and detection statistic of a chain (built once per configuration and cube shape)."""
@@ -90,7 +87,7 @@ class DspChain:
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
 
-    def _tdm_hypotheses(self, snap: np.ndarray) -> np.ndarray:
+    def _tdm_hypotheses(self, snap: np.ndarray, sigma2: float) -> np.ndarray:
         """Undo the TDM phase of an aliased speed: each snapshot under the N_tx hypotheses of its wrap count.
 
         With N_tx transmitters in TDM, a speed that aliases by k·2·v_max leaves a
@@ -106,10 +103,14 @@ class DspChain:
         fix = np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)       # (hyp, channel)
         trial = snap[:, None, :] * fix[None, :, :]                                       # (n, hyp, channel)
         peak = self.doa.spectrum(trial).max(axis=-1)                                      # (n, hyp)
-        # another wrap count only where it beats "no wrap" clearly: at low SNR noise alone lifts a wrong
-        # hypothesis's peak by a dB or two, and taking it would scatter the azimuth of unaliased targets
+        # another wrap count only where it beats "no wrap" by more than noise can: the beam peak's power
+        # fluctuates by about 2/√SNR of itself, so the margin is three times that (2 dB at a beam SNR of
+        # 20 dB, 0.7 dB at 30 dB). A fixed 2 dB kept the wrong hypothesis of a 3-transmitter array (its
+        # staircase costs only ~1.5 dB) at every SNR; none at all scattered weak unaliased targets.
         best = np.argmax(peak, axis=1)
-        best = np.where(peak[np.arange(peak.shape[0]), best] > peak[:, 0] * TDM_HYPOTHESIS_MARGIN, best, 0)
+        beam_snr = peak[:, 0] / (snap.shape[1] * max(sigma2, np.finfo(np.float64).tiny))
+        margin = 1.0 + 6.0 / np.sqrt(np.maximum(beam_snr, 1.0))
+        best = np.where(peak[np.arange(peak.shape[0]), best] > peak[:, 0] * margin, best, 0)
         return trial[np.arange(snap.shape[0]), best]
 
     def process(self, cube: np.ndarray, decimation: int = 1, power_reduction_db: float = 0.0) -> Detections:
@@ -128,10 +129,16 @@ class DspChain:
         and straddle losses at the interpolated position divided out.
         """
         p, cfg = self.preset, self.config
+        if rd.ndim != 3 or rd.shape[0] != p.num_virtual or rd.shape[1] != p.num_chirps:
+            raise ConfigError(f"rd: shape {rd.shape} is not allowed; expected (channel, doppler, range) with "
+                              f"{p.num_virtual} channels and {p.num_chirps} Doppler bins for preset {p.name}")
         c, m, n = rd.shape
         stat = self.statistic if (m, n) == (len(self.statistic.doppler_window), len(self.statistic.range_window)) \
             else detection_statistic(cfg, c, m, n)
         power = noncoherent_power(rd)
+        if not np.all(np.isfinite(power)):
+            raise ConfigError(f"rd: {int(np.sum(~np.isfinite(power)))} range–Doppler cells are NaN or infinite; "
+                              "expected a finite spectrum (check the cube's samples)")
         res = stat.cfar(power)
         d, r = local_maxima(power, res.mask)
         if d.size > cfg.max_detections:
@@ -159,20 +166,20 @@ class DspChain:
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         fd = 2.0 * speed / p.centre_wavelength_m
         snap = rd[:, d, r].T * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
-        if p.num_tx > 1 and d.size:
-            snap = self._tdm_hypotheses(snap)
         # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
         # which a strong target's sidelobes inflate
         sigma2 = stat.noise_floor(power)
+        if p.num_tx > 1 and d.size:
+            snap = self._tdm_hypotheses(snap, sigma2)
         with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
             energy = np.minimum(np.maximum(power[d, r] / sigma2 - c, 1e-30), 1e300)
         delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))
         rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
-        if d.size:   # every angle peak of a cell is a detection, sharing the cell's energy by its beam power
+        if d.size and c > 1:   # every angle peak of a cell is a detection, sharing the cell's energy
             row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db)
             range_m, speed, rho = range_m[row], speed[row], rho[row] * 10.0 ** (rel_db / 10.0)
-        else:
-            sin_t = np.zeros(0)
+        else:                  # one channel measures no angle: boresight (a scanning radar adds its beam angle)
+            sin_t = np.zeros(d.size)
         snr = 10.0 * np.log10(rho)
         azimuth = np.arcsin(sin_t)
         rcs = snr - equation.snr_db(p, range_m, 0.0, power_reduction_db, azimuth)

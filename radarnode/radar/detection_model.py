@@ -38,6 +38,7 @@ import numpy as np
 import scipy.spatial
 
 from radarnode.dsp.detection_stats import DetectionStatistic
+from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
 from radarnode.radar.calibration import DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION, chain_efficiency
@@ -82,6 +83,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     """
     p = preset
     scat.require_finite()
+    for name, value in (("snr_db", snr_db), ("power_reduction_db", power_reduction_db)):
+        if value is not None and not np.isfinite(value):
+            raise ConfigError(f"{name}: value {value!r} is not allowed; expected a finite number")
     n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
     m, k_el = p.num_chirps, p.num_virtual
     k = len(scat)

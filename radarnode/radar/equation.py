@@ -17,6 +17,10 @@ import numpy as np
 from radarnode.radar.presets import BOLTZMANN_J_PER_K, REFERENCE_TEMPERATURE_K, RadarPreset
 
 
+#: stop-band rejection of a real-sampling receiver's anti-alias filter, dB
+ANTI_ALIAS_REJECTION_DB = 80.0
+
+
 def snr_db(preset: RadarPreset, range_m: np.ndarray, rcs_dbsm: np.ndarray,
            power_reduction_db: float = 0.0, azimuth_rad: np.ndarray | None = None) -> np.ndarray:
     """The integrated SNR ρ of a target: the one SNR definition of radarnode.
@@ -54,6 +58,10 @@ def snr_db(preset: RadarPreset, range_m: np.ndarray, rcs_dbsm: np.ndarray,
         - preset.noise_figure_db - preset.system_loss_db
     )
     out = const_db + np.asarray(rcs_dbsm, dtype=np.float64) - 40.0 * np.log10(r)
+    if not preset.complex_sampling:
+        # a real-sampling receiver's anti-alias filter: beat frequencies past Nyquist would fold back to a
+        # wrong (possibly very short) range; the filter suppresses them instead
+        out = out - np.where(r > preset.unambiguous_range_m, ANTI_ALIAS_REJECTION_DB, 0.0)
     if azimuth_rad is not None:
         out = out + pattern_db(preset, azimuth_rad)
     return out

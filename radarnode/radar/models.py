@@ -23,7 +23,7 @@ from radarnode.perception.tracker import ObjectTracker, clusters_from_detections
 from radarnode.perception.types import ClusterList, Detections, RadarFrame
 from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.calibration import RESOLUTION
-from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo
+from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo, in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
 from radarnode.radar.options import SignalOptions
@@ -31,6 +31,15 @@ from radarnode.radar.signal_model import decimation_for, synthesize, synthesize_
 from radarnode.scene.world import Scene, SensorView
 
 FIDELITY_LEVELS = ("object", "detection", "signal", "auto")
+
+
+def reportable(preset: RadarPreset, det: Detections, config: RuntimeConfig) -> np.ndarray:
+    """Detections the radar reports: inside its field of view as it measured them and within MaxDistance.
+
+    A λ/2 array cannot tell +88° from −92°; what lies outside the sectors is
+    discarded, as the object level never sees it.
+    """
+    return in_fov(preset, det.range_m, det.azimuth_rad) & (det.range_m <= config.max_distance_m)
 
 
 class ScattererModel:
@@ -72,7 +81,7 @@ class ScattererModel:
         t1 = time.perf_counter()
         sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
         det = ambiguity.resolve(self.preset, [self.detections(scat, config, seq) for seq in self.sequences()], sv)
-        det = det.take(det.range_m <= config.max_distance_m)
+        det = det.take(reportable(self.preset, det, config))
         t2 = time.perf_counter()
         clusters = clusters_from_detections(det, self.preset.near_range_m, sv)
         objects = self.tracker.step(t_s, det, sv)
@@ -238,7 +247,7 @@ class AutoModel:
             parts.append(ambiguity.resolve(self.preset, [self.detection.detections(sub, config, seq)
                                                          for seq in self.detection.sequences()], sv))
         det = Detections.concat(parts)
-        det = det.take(det.range_m <= config.max_distance_m)
+        det = det.take(reportable(self.preset, det, config))
         level = "detection" if need.any() else "object"
         self.choices[level] += 1
         self.actor_frames["detection"] += int(conflict.sum())

@@ -96,6 +96,8 @@ class RadarPreset:
         for f in ("num_chirps", "num_samples", "num_tx", "num_rx"):
             validate.integer(f, getattr(self, f), lo=1, hi=1 << 16)
         validate.boolean("complex_sampling", self.complex_sampling)
+        if self.num_chirps % 2:
+            raise FieldError("num_chirps", self.num_chirps, "an even number (the Doppler FFT puts zero speed at M/2)")
         validate.number("element_pattern_exponent", self.element_pattern_exponent, lo=0.0, hi=20.0)
         validate.number("stagger_chirp_period_s", self.stagger_chirp_period_s, lo=0.0, hi=1.0)
         if self.stagger_chirp_period_s and abs(self.stagger_chirp_period_s - self.chirp_period_s) < 1e-3 * self.chirp_period_s:
@@ -281,8 +283,10 @@ PRESETS: dict[str, RadarPreset] = {
     ),
     "scanning_ka": RadarPreset(
         name="scanning_ka", source="seed 002",
+        # 1024 real samples: 512 range bins of 0.75 m reach 384 m, past the 250 m it must cover (512 samples
+        # reached only 192 m, and farther targets aliased into the near range)
         carrier_hz=39e9, bandwidth_hz=200e6, chirp_period_s=50e-6,
-        num_chirps=64, num_samples=512, num_tx=1, num_rx=1, element_spacing_wl=0.5 * 115,
+        num_chirps=64, num_samples=1024, num_tx=1, num_rx=1, element_spacing_wl=0.5 * 115,
         complex_sampling=False, cycle_period_s=0.1,
         min_range_m=5.0, max_range_m=250.0, fov=(FovSector(250.0, 45.0),), near_range_m=250.0,
         tx_power_dbm=17.8, antenna_gain_dbi=30.0, noise_figure_db=8.0, system_loss_db=6.0, pfa=1e-6,
