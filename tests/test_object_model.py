@@ -9,6 +9,7 @@ import pytest
 
 from radarnode.perception.types import DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED
 from radarnode.radar import equation
+from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import chain_efficiency
 from radarnode.radar.object_model import ObjectModel, RuntimeConfig, in_fov, visible_fraction
 from radarnode.radar.presets import PRESETS
@@ -56,7 +57,7 @@ def test_radar_equation_falls_with_r4_and_pd_rises_with_snr():
     p = PRESETS["ars408_like"]
     s = equation.snr_db(p, np.array([50.0, 100.0]), np.array([10.0, 10.0]))
     assert s[0] - s[1] == pytest.approx(40 * math.log10(2))
-    pd = equation.detection_probability(np.array([0.0, 10.0, 20.0]), 1e-6)
+    pd = DspChain(p).statistic.pd_of_snr(np.array([0.0, 15.0, 30.0]), 1)
     assert np.all(np.diff(pd) > 0) and pd[2] > 0.85 and pd[0] < 0.01
 
 

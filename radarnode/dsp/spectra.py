@@ -29,12 +29,6 @@ def window(name: str, n: int, dtype: str = "float64") -> np.ndarray:
     return w
 
 
-def window_gains(name: str, n: int) -> tuple[float, float]:
-    """Coherent gain Σw and noise gain Σw² of a window (to convert FFT power to SNR)."""
-    w = window(name, n)
-    return float(w.sum()), float((w * w).sum())
-
-
 def range_doppler(cube: np.ndarray, *, range_window: str = "hann", doppler_window: str = "hann",
                   num_range_bins: int | None = None, workers: int = -1) -> np.ndarray:
     """Range FFT over samples, then Doppler FFT over chirps.

@@ -1,4 +1,4 @@
-"""Radar equation, detection probability and Cramér–Rao bounds, vectorised.
+"""Radar equation (with the element pattern and the anti-alias filter) and Cramér–Rao bounds, vectorised.
 
 All functions take numpy arrays (any shape, broadcast together) and return
 arrays of the broadcast shape; none loops in Python.
@@ -6,7 +6,8 @@ arrays of the broadcast shape; none loops in Python.
 References
 ----------
 Richards, *Fundamentals of Radar Signal Processing*, 2nd ed.: eq. 2.17 (radar
-equation with coherent dwell), eq. 6.30 (Swerling 1 detection probability).
+equation with coherent dwell). The detection probability is the signal chain's
+(:mod:`radarnode.dsp.detection_stats`).
 DESIGN.md section 8: Cramér–Rao bounds for range, radial speed and azimuth.
 """
 
@@ -71,16 +72,6 @@ def pattern_db(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
     """Two-way element-pattern gain, dB: 2q·10·log10(cos θ); −120 dB at and beyond ±90° (behind the antenna)."""
     c = np.cos(np.asarray(azimuth_rad, dtype=np.float64))
     return 2.0 * preset.element_pattern_exponent * 10.0 * np.log10(np.maximum(c, 1e-6))
-
-
-def detection_probability(snr_db_: np.ndarray, pfa: float) -> np.ndarray:
-    """Swerling 1 detection probability for one look: Pd = Pfa^(1 / (1 + SNR)).
-
-    Swerling 1 (slow Rayleigh fluctuation) suits cars and pedestrians seen over
-    a few degrees of aspect; it is the closed form, so it costs nothing per target.
-    """
-    snr = 10.0 ** (np.asarray(snr_db_, dtype=np.float64) / 10.0)
-    return np.power(pfa, 1.0 / (1.0 + snr))
 
 
 def crb_range_m(preset: RadarPreset, snr_db_: np.ndarray) -> np.ndarray:
