@@ -97,8 +97,9 @@ def fluctuate(scene: Scene, scat: Scatterers, rng: np.random.Generator) -> Scatt
     """Swerling 1 actors: one exponential power factor per actor and frame, shared by all its scatterers.
 
     Guardrail posts and clutter (actor −1) fluctuate each on its own (Swerling 1
-    per post). One draw per actor and one per scatterer, always, so the random
-    stream does not depend on which actors are visible.
+    per post). One draw per actor of the scene whether it is visible or not, then
+    one per scatterer. With ``signal.snr_db`` stated the amplitudes ignore the
+    RCS, so nothing fluctuates.
     """
     per_actor = rng.exponential(1.0, max(scene.n, 1))
     per_point = rng.exponential(1.0, len(scat))
