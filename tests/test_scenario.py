@@ -59,6 +59,19 @@ def test_negative_size(tmp_path):
     _fails(tmp_path, GOOD.replace("length_m: 4.0", "length_m: -4.0"), ":10:", "actors[0].length_m", "-4.0", "(0,")
 
 
+def test_swerling_case(tmp_path):
+    _fails(tmp_path, GOOD.replace("    x_m: 30.0", "    x_m: 30.0\n    swerling: 2"), ":10:", "actors[0].swerling",
+           "2", "0")
+    p = tmp_path / "ok.yaml"
+    p.write_text(GOOD.replace("    x_m: 30.0", "    x_m: 30.0\n    swerling: 0"))
+    assert load_scenario(p).actors[0].swerling_case == 0
+
+
+def test_stagger_period_override(tmp_path):
+    _fails(tmp_path, GOOD.replace("  preset: ars408_like", "  preset: ars408_like\n  overrides: {stagger_chirp_period_s: 25.0e-6}"),
+           "stagger_chirp_period_s", "different from chirp_period_s")
+
+
 def test_unknown_class(tmp_path):
     _fails(tmp_path, GOOD.replace("class: car", "class: tank"), ":8:", "actors[0].class", "'tank'", "pedestrian")
 
