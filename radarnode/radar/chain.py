@@ -147,8 +147,9 @@ class DspChain:
         dd, dr = interpolate(power, d, r, cfg.range_window if cfg.range_window == cfg.doppler_window else "")
         r_bins = r + dr
         if cfg.range_ml and d.size:
-            # the strongest peaks get the maximum-likelihood refinement (within ~1.2× the CRB at 20 dB,
-            # against ~2.7× for the three-bin interpolator); the rest keep the interpolated position
+            # the strongest peaks get the maximum-likelihood refinement (window divided out, fine periodogram:
+            # 1.6–2× the CRB on point targets at 20–30 dB, BENCHMARKS.md; the three-bin interpolator alone is
+            # ~2.7× in range); the rest keep the interpolated position
             top = np.argsort(power[d, r])[::-1][: cfg.range_ml_max_peaks]
             r_bins = r_bins.copy()
             r_bins[top] = refine_ml(np.transpose(rd[:, d[top], :], (1, 0, 2)), r_bins[top],
