@@ -40,14 +40,20 @@ def stationary_range_rate(azimuth_rad: np.ndarray, sensor_velocity: tuple[float,
     return -(vx * np.cos(azimuth_rad) + vy * np.sin(azimuth_rad))
 
 
+def _stationary_unwrap(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth_rad: np.ndarray,
+                       sensor_velocity: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """A measured range rate moved by whole wraps (2·v_max) next to the stationary hypothesis, and whether it
+    then matches it (within STATIONARY_TOLERANCE_BINS Doppler bins)."""
+    vmax = preset.alias_speed_mps
+    vs = stationary_range_rate(azimuth_rad, sensor_velocity)
+    unwrapped = range_rate_mps + 2 * vmax * np.rint((vs - range_rate_mps) / (2 * vmax))
+    return unwrapped, np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.doppler_bin_mps
+
+
 def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple[float, float]) -> Detections:
     """Unwrap detections that match the stationary hypothesis modulo 2·v_max; flag the rest of a single-ramp
     radar ambiguous (``ambig_state`` of detections already resolved by staggered ramps is kept)."""
-    vmax = preset.alias_speed_mps
-    vs = stationary_range_rate(det.azimuth_rad, sensor_velocity)
-    k = np.rint((vs - det.range_rate_mps) / (2 * vmax))
-    unwrapped = det.range_rate_mps + 2 * vmax * k
-    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.doppler_bin_mps
+    unwrapped, candidate = _stationary_unwrap(preset, det.range_rate_mps, det.azimuth_rad, sensor_velocity)
     resolved = det.ambig_state == AMBIG_STAGGERED
     out = det.take(np.arange(len(det)))
     take = candidate & ~resolved
@@ -96,9 +102,8 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
 
 def _recouple(preset: RadarPreset, det: Detections, range_rate_mps: np.ndarray) -> np.ndarray:
     """Range corrected for the new speed: the chain took the coupling out with the aliased one."""
-    n_range = preset.num_samples if preset.complex_sampling else preset.num_samples // 2
     shift = (range_rate_mps - det.range_rate_mps) * preset.range_rate_coupling_s
-    return np.mod(det.range_m - shift, n_range * preset.range_resolution_m)
+    return np.mod(det.range_m - shift, preset.unambiguous_range_m)
 
 
 def resolve(preset: RadarPreset, sequences: list[Detections], sensor_velocity: tuple[float, float]) -> Detections:
@@ -133,7 +138,5 @@ def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth
         lo, hi = preset.range_rate_span_mps
         inside = (v >= lo) & (v <= hi)
         return np.where(inside, v, alias), np.where(inside, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
-    vs = stationary_range_rate(azimuth_rad, sensor_velocity)
-    unwrapped = alias + 2 * vmax * np.rint((vs - alias) / (2 * vmax))
-    candidate = np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.doppler_bin_mps
+    unwrapped, candidate = _stationary_unwrap(preset, alias, azimuth_rad, sensor_velocity)
     return np.where(candidate, unwrapped, alias), np.where(candidate, AMBIG_STATIONARY, AMBIG_AMBIGUOUS).astype(np.int64)

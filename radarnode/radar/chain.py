@@ -70,18 +70,13 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
     return DetectionStatistic(cfar, w_r, w_d)
 
 
-def range_bins(preset: RadarPreset) -> int:
-    """Range bins of the map: N with complex (IQ) sampling, N/2 with real sampling."""
-    return preset.num_samples if preset.complex_sampling else preset.num_samples // 2
-
-
 class DspChain:
     """Processes cubes of one preset; windows, CFAR and steering are built once."""
 
     def __init__(self, preset: RadarPreset, config: DspConfig = DspConfig()) -> None:
         self.preset = preset
         self.config = config
-        self.statistic = detection_statistic(config, preset.num_virtual, preset.num_chirps, range_bins(preset))
+        self.statistic = detection_statistic(config, preset.num_virtual, preset.num_chirps, preset.num_range_bins)
         self.cfar = self.statistic.cfar
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))

@@ -62,7 +62,7 @@ def hann_straddle(delta: np.ndarray) -> np.ndarray:
 def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½))."""
     p = preset
-    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    n_r = p.num_range_bins
     m = p.num_chirps
     rb = np.mod(scat.range_m / p.range_resolution_m, n_r)
     vb = np.mod(scat.range_rate_mps / p.doppler_bin_mps + m / 2, m) - m / 2
@@ -86,7 +86,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     for name, value in (("snr_db", snr_db), ("power_reduction_db", power_reduction_db)):
         if value is not None and not np.isfinite(value):
             raise ConfigError(f"{name}: value {value!r} is not allowed; expected a finite number")
-    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    n_r = p.num_range_bins
     m, k_el = p.num_chirps, p.num_virtual
     k = len(scat)
     az = scat.azimuth_rad
@@ -203,7 +203,7 @@ def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.ran
                  power_reduction_db: float = 0.0) -> Detections:
     """Poisson false alarms at the chain's rate, uniform over the map, with the statistic's tail as SNR."""
     p = preset
-    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    n_r = p.num_range_bins
     m = p.num_chirps
     n_fa = int(rng.poisson(statistic.cfar.pfa * n_r * m * FALSE_ALARMS_PER_PFA_CELL))
     fr = rng.uniform(0, n_r, n_fa) * p.range_resolution_m

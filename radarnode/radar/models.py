@@ -181,7 +181,7 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> 
     rb, vb, u = detection_model.apparent_positions(p, scat)
     res = np.asarray(RESOLUTION, dtype=np.float64) + np.array([1.0, 1.0, 0.5])
     beam = 1.0 / p.num_virtual
-    n_r = p.num_samples if p.complex_sampling else p.num_samples // 2
+    n_r = p.num_range_bins
     box = np.array([n_r / res[0], p.num_chirps / res[1], p.num_virtual / res[2]])
     pts = np.stack([rb / res[0], np.mod(vb, p.num_chirps) / res[1], np.mod(u / beam, p.num_virtual) / res[2]], axis=1)
     pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")

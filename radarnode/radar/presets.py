@@ -123,10 +123,14 @@ class RadarPreset:
         return SPEED_OF_LIGHT_MPS / (2.0 * self.bandwidth_hz)
 
     @property
+    def num_range_bins(self) -> int:
+        """Range bins of a processed frame: N with complex (IQ) sampling, N/2 with real sampling."""
+        return self.num_samples if self.complex_sampling else self.num_samples // 2
+
+    @property
     def unambiguous_range_m(self) -> float:
         """Range of the last FFT bin: N·ΔR with complex (IQ) sampling, N/2·ΔR with real sampling."""
-        bins = self.num_samples if self.complex_sampling else self.num_samples // 2
-        return bins * self.range_resolution_m
+        return self.num_range_bins * self.range_resolution_m
 
     @property
     def frame_chirp_period_s(self) -> float:
@@ -209,8 +213,7 @@ class RadarPreset:
     @property
     def num_cells(self) -> int:
         """Range–Doppler cells tested by CFAR in one frame (sets the false-alarm count)."""
-        bins = self.num_samples if self.complex_sampling else self.num_samples // 2
-        return bins * self.num_chirps
+        return self.num_range_bins * self.num_chirps
 
     @property
     def max_half_fov_rad(self) -> float:

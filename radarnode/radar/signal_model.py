@@ -109,7 +109,7 @@ _RD_MIN_TIER = 8                       # RD synthesis: fewer scatterers than thi
 
 def num_range_samples(preset: RadarPreset) -> int:
     """IQ samples per chirp in the model: N with complex sampling, N/2 for real sampling (same range axis)."""
-    return preset.num_samples if preset.complex_sampling else preset.num_samples // 2
+    return preset.num_range_bins
 
 
 def decimation_for(preset: RadarPreset, max_range_m: float) -> int:
