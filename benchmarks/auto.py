@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 from radarnode.radar.models import make_model  # noqa: E402
 from radarnode.radar.object_model import RuntimeConfig, in_fov  # noqa: E402
-from radarnode.scene.scenario import load_scenario  # noqa: E402
+from radarnode.radar.setup import load_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
 
 LEVELS = ("object", "detection", "signal", "auto")
@@ -34,9 +34,9 @@ GATE_M = 2.5
 def run(path: Path, level: str, frames: int) -> dict:
     sc = load_scenario(path)
     scene = Scene(sc)
-    p = sc.radar.model
+    p = radar_config(sc).preset
     clusters = sc.radar.output == "clusters"
-    model = make_model(level, scene, p, np.random.default_rng(sc.seed), sc.signal, clusters_wanted=clusters)
+    model = make_model(level, scene, p, np.random.default_rng(sc.seed), radar_config(sc).signal, clusters_wanted=clusters)
     cfg = RuntimeConfig(max_distance_m=p.max_range_m, clusters=clusters)
     times, reported, trials, extra = [], 0, 0, 0
     visible = ~scene.is_guardrail

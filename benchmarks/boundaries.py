@@ -21,7 +21,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from radarnode.radar import equation  # noqa: E402
-from radarnode.scene.scenario import parse_scenario  # noqa: E402
+from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
 from radarnode.wire.node import EgoMotionSender, RadarNode  # noqa: E402
 from radarnode.wire.runner import SimulatedClock, run_node  # noqa: E402
 
@@ -55,7 +55,7 @@ actors:
             lx, ly = node.scene.road_line(o.t_s, d, 120.0)
             x = np.linspace(max(b.range_start_m, 5.0), max(min(b.range_end_m, 60.0), 6.0), 12)
             err.append(float(np.max(np.abs(b.y_at(x) - np.interp(x, lx, ly)))))
-    snr = float(equation.snr_db(sc.radar.model, np.array([50.0]), np.array([rcs]))[0])
+    snr = float(equation.snr_db(radar_config(sc).preset, np.array([50.0]), np.array([rcs]))[0])
     return np.array(err), snr
 
 

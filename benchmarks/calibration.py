@@ -36,7 +36,7 @@ from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
 from radarnode.radar.presets import PRESETS  # noqa: E402
 from radarnode.radar.scatterers import point_targets  # noqa: E402
 from radarnode.radar.signal_model import synthesize  # noqa: E402
-from radarnode.scene.scenario import parse_scenario  # noqa: E402
+from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
 
 P = PRESETS["mimo12"]
@@ -109,7 +109,7 @@ def calibrated(rho_db: float, swerling: int, seed: int):
 def run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> dict:
     sc = calibrated(rho_db, swerling, seed)
     scene = Scene(sc)
-    model = make_model(level, scene, P, np.random.default_rng(seed), sc.signal, clusters_wanted=True)
+    model = make_model(level, scene, P, np.random.default_rng(seed), radar_config(sc).signal, clusters_wanted=True)
     cfg = RuntimeConfig(max_distance_m=P.max_range_m)
     hits = trials = false = 0
     err = []

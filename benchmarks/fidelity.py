@@ -17,7 +17,6 @@ Run: ``python benchmarks/fidelity.py [--frames N]``. Prints Markdown tables.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import math
 import statistics
 import sys
@@ -32,7 +31,7 @@ sys.path.insert(0, str(ROOT))
 from radarnode.radar import equation  # noqa: E402
 from radarnode.radar.models import make_model  # noqa: E402
 from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
-from radarnode.scene.scenario import load_scenario  # noqa: E402
+from radarnode.radar.setup import load_scenario, radar_config, with_signal  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
 
 GATE_RANGE_M, GATE_SPEED_MPS, GATE_AZ_DEG = 1.5, 1.5, 5.0
@@ -52,10 +51,10 @@ def _estimates(level: str, model, frame):
 
 def accuracy(path: Path, level: str, frames: int, dtype: str = "complex128") -> dict:
     sc = load_scenario(path)
-    sc = dataclasses.replace(sc, signal=dataclasses.replace(sc.signal, dtype=dtype))
+    sc = with_signal(sc, dtype=dtype)
     scene = Scene(sc)
-    p = sc.radar.model
-    model = make_model(level, scene, p, np.random.default_rng(sc.seed), sc.signal)
+    p = radar_config(sc).preset
+    model = make_model(level, scene, p, np.random.default_rng(sc.seed), radar_config(sc).signal)
     cfg = RuntimeConfig(max_distance_m=p.max_range_m)
     err, crb, hits, trials, false = [], [], 0, 0, 0
     for k in range(frames):
@@ -91,9 +90,9 @@ def accuracy(path: Path, level: str, frames: int, dtype: str = "complex128") -> 
 
 def speed(path: Path, level: str, frames: int, dtype: str = "complex128") -> dict:
     sc = load_scenario(path)
-    sc = dataclasses.replace(sc, signal=dataclasses.replace(sc.signal, dtype=dtype))
-    p = sc.radar.model
-    model = make_model(level, Scene(sc), p, np.random.default_rng(sc.seed), sc.signal,
+    sc = with_signal(sc, dtype=dtype)
+    p = radar_config(sc).preset
+    model = make_model(level, Scene(sc), p, np.random.default_rng(sc.seed), radar_config(sc).signal,
                        clusters_wanted=sc.radar.output == "clusters")
     cfg = RuntimeConfig(max_distance_m=p.max_range_m, clusters=sc.radar.output == "clusters")
     times, scat = [], []

@@ -69,7 +69,7 @@ from radarnode.radar import equation  # noqa: E402
 from radarnode.radar.chain import DspChain  # noqa: E402
 from radarnode.radar.scatterers import point_targets, scene_scatterers  # noqa: E402
 from radarnode.radar.signal_model import num_range_samples, synthesize, synthesize_rd  # noqa: E402
-from radarnode.scene.scenario import load_scenario  # noqa: E402
+from radarnode.radar.setup import load_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
 
 EGO_SPEEDS_MPS = (0.0, 10.0, 20.0, 28.0, 28.6, 29.0, 30.0, 32.0, 40.0, 50.0, 60.0, 70.0)
@@ -83,8 +83,8 @@ def highway_frames(ego_mps: float, frames: int):
     sc = load_scenario(ROOT / "scenarios" / "highway_mimo12.yaml")
     sc = dataclasses.replace(sc, ego=dataclasses.replace(sc.ego, speed_mps=ego_mps))
     scene = Scene(sc)
-    p = sc.radar.model
-    o = sc.signal
+    p = radar_config(sc).preset
+    o = radar_config(sc).signal
     rng = np.random.default_rng(sc.seed)
     out = []
     for k in range(frames):

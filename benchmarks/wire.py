@@ -26,7 +26,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from radarnode.scene.scenario import parse_scenario  # noqa: E402
+from radarnode.radar.setup import parse_scenario  # noqa: E402
 from radarnode.wire import ars408 as P  # noqa: E402
 from radarnode.wire.busload import bus_load  # noqa: E402
 from radarnode.wire.node import RadarNode  # noqa: E402

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from radarnode.scene.scenario import parse_scenario
+from radarnode.radar.setup import parse_scenario
 
 
 def scenario(actors_yaml: str = "", *, ego: str = "{speed_mps: 20.0}", radar: str = "{preset: ars408_like}",

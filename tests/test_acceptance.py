@@ -7,7 +7,7 @@ import dataclasses
 import pytest
 
 from radarnode.consumer.evaluate import simulate
-from radarnode.scene.scenario import load_scenario
+from radarnode.radar.setup import load_scenario
 from tests.conftest import SCENARIOS
 
 

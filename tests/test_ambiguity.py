@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from radarnode.radar.setup import radar_config
 from radarnode.radar.chain import DspChain
 from radarnode.perception.types import (AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, DYN_MOVING,
                                         DYN_ONCOMING, Detections)
@@ -82,7 +83,7 @@ def _guardrail_road(ego_mps, actors=""):
 def test_motorway_speed_on_a_guardrail_road_gives_no_moving_object(level):
     """Ego at 130 km/h (36.1 m/s, beyond ars408_like's single-ramp ±19.5 m/s): posts stay stationary."""
     sc = _guardrail_road(130 / 3.6)
-    model = make_model(level, Scene(sc), sc.radar.model, np.random.default_rng(5), sc.signal, clusters_wanted=True)
+    model = make_model(level, Scene(sc), radar_config(sc).preset, np.random.default_rng(5), radar_config(sc).signal, clusters_wanted=True)
     cfg = RuntimeConfig(max_distance_m=250.0)
     moving = seen = 0
     for k in range(12):
@@ -104,7 +105,7 @@ def test_motorway_speed_on_a_guardrail_road_gives_no_moving_object(level):
 def test_oncoming_car_at_45_mps_is_reported_at_its_true_speed(level):
     sc = _guardrail_road(20.0, "  - {id: car, class: car, x_m: 120.0, y_m: 3.5, speed_mps: 45.0, "
                                "heading_deg: 180.0}")
-    model = make_model(level, Scene(sc), sc.radar.model, np.random.default_rng(6), sc.signal, clusters_wanted=True)
+    model = make_model(level, Scene(sc), radar_config(sc).preset, np.random.default_rng(6), radar_config(sc).signal, clusters_wanted=True)
     cfg = RuntimeConfig(max_distance_m=250.0)
     found = []
     for k in range(10):

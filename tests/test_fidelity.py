@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from radarnode.consumer.assembler import CycleAssembler
+from radarnode.radar.setup import radar_config
 from radarnode.radar.models import AutoModel, conflicting_actors, make_model
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.radar.presets import PRESETS
@@ -58,12 +59,13 @@ def test_auto_counts_its_choices_and_uses_signal_for_impairments():
     import dataclasses
     sc = scenario(TRAFFIC, radar="{preset: mimo12}", duration=1.0)
     cfg = RuntimeConfig(max_distance_m=100.0, clusters=False)
-    model = AutoModel(Scene(sc), sc.radar.model, np.random.default_rng(0), sc.signal)
+    rc = radar_config(sc)
+    model = AutoModel(Scene(sc), rc.preset, np.random.default_rng(0), rc.signal)
     for k in range(5):
         model.step(k * 0.072, cfg)
     assert model.choices["object"] == 5
-    imp = dataclasses.replace(sc.signal, impairments=dataclasses.replace(sc.signal.impairments, adc_bits=10))
-    model = AutoModel(Scene(sc), sc.radar.model, np.random.default_rng(0), imp)
+    imp = dataclasses.replace(rc.signal, impairments=dataclasses.replace(rc.signal.impairments, adc_bits=10))
+    model = AutoModel(Scene(sc), rc.preset, np.random.default_rng(0), imp)
     model.step(0.0, cfg)
     assert model.choices["signal"] == 1
 
@@ -71,10 +73,11 @@ def test_auto_counts_its_choices_and_uses_signal_for_impairments():
 def _auto_and(level, text, radar, frames, seed=3, ego="{speed_mps: 0.0}"):
     """Run ``auto`` and ``level`` on the same scene: per level the model and, per frame, (frame, view, detections)."""
     sc = scenario(text, radar=radar, ego=ego, duration=frames * 0.072 + 1, seed=seed)
-    cfg = RuntimeConfig(max_distance_m=sc.radar.model.max_range_m, clusters=False)
+    cfg = RuntimeConfig(max_distance_m=radar_config(sc).preset.max_range_m, clusters=False)
     out = {}
     for name in ("auto", level):
-        model = make_model(name, Scene(sc), sc.radar.model, np.random.default_rng(seed), sc.signal)
+        rc = radar_config(sc)
+        model = make_model(name, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
         rows = []
         for k in range(frames):
             frame, view = model.step(k * sc.period_s, cfg)
@@ -108,7 +111,8 @@ def test_auto_switching_levels_keeps_ids_and_never_empties_a_frame():
 """
     sc = scenario(text, radar="{preset: mimo12}", ego="{speed_mps: 0.0}", duration=6.0, seed=4)
     cfg = RuntimeConfig(max_distance_m=100.0, clusters=False)
-    model = AutoModel(Scene(sc), sc.radar.model, np.random.default_rng(4), sc.signal)
+    rc = radar_config(sc)
+    model = AutoModel(Scene(sc), rc.preset, np.random.default_rng(4), rc.signal)
     levels, ids = [], []
     for k in range(70):
         frame, _ = model.step(k * sc.period_s, cfg)
@@ -137,7 +141,7 @@ def test_auto_pedestrian_near_the_range_limit_is_detected_as_often_as_at_signal_
 
 def test_signal_options_in_scenario_files_are_validated(tmp_path):
     from radarnode.errors import ScenarioError
-    from radarnode.scene.scenario import load_scenario
+    from radarnode.radar.setup import load_scenario
     base = (SCENARIOS / "highway_mimo12.yaml").read_text()
     for bad, fragment in [
         ("signal: {dtype: complex32}", "signal.dtype"),

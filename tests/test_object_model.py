@@ -9,6 +9,7 @@ import pytest
 
 from radarnode.perception.types import DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED
 from radarnode.radar import equation
+from radarnode.radar.setup import radar_config
 from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import chain_efficiency
 from radarnode.radar.object_model import ObjectModel, RuntimeConfig, in_fov, visible_fraction
@@ -18,7 +19,7 @@ from tests.helpers import scenario
 
 
 def _run(sc, cycles, truth_velocity=True):
-    preset = sc.radar.model
+    preset = radar_config(sc).preset
     model = ObjectModel(Scene(sc), preset, np.random.default_rng(sc.seed))
     cfg = RuntimeConfig(max_distance_m=preset.max_range_m)
     out = []
@@ -88,7 +89,7 @@ def test_noise_follows_the_cramer_rao_bound_at_the_chains_efficiency():
     sc = scenario("  - {id: a, class: pedestrian, x_m: 60.0, lane: 1, speed_mps: 20.0}", duration=40.0, seed=4)
     frames = _run(sc, 400)
     err, expected = [], []
-    p = sc.radar.model
+    p = radar_config(sc).preset
     for frame, view in frames:
         ol = frame.objects
         m = ol.meas_state != 3   # measured this cycle, not coasted

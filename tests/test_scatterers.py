@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from radarnode.radar.setup import radar_config
 from radarnode.radar.scatterers import actor_scatterers, scene_scatterers
 from radarnode.scene.world import Scene
 from tests.helpers import scenario
@@ -35,7 +36,7 @@ def test_small_actors_are_one_point_and_hidden_ones_are_dropped():
 """, radar="{preset: mimo12}")
     scene = Scene(sc)
     view = scene.view(0.0)
-    scat = scene_scatterers(scene, 0.0, view, sc.radar.model, 112.5)
+    scat = scene_scatterers(scene, 0.0, view, radar_config(sc).preset, 112.5)
     assert (scat.actor_index == 0).sum() == 1
     assert (scat.actor_index == 1).sum() >= 3
     assert (scat.actor_index == 2).sum() == 0        # behind the truck

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from radarnode.errors import ScenarioError
-from radarnode.scene.scenario import load_scenario
+from radarnode.radar.setup import load_scenario
 from tests.conftest import SCENARIOS
 
 GOOD = """name: t

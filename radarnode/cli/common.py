@@ -11,7 +11,8 @@ import numpy as np
 
 from radarnode.consumer.assembler import ClusterCycle, ConsumerStats, ObjectCycle
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
-from radarnode.scene.scenario import Scenario, load_scenario
+from radarnode.radar.setup import load_scenario
+from radarnode.scene.scenario import Scenario
 
 
 def add_scenario_argument(parser) -> None:

@@ -12,7 +12,6 @@ scenario instead. Needs matplotlib (``pip install 'radarnode[image]'``).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 from collections import defaultdict, deque
@@ -25,6 +24,7 @@ from radarnode.dsp.spectra import noncoherent_power, range_doppler
 from radarnode.errors import ConfigError
 from radarnode.perception.boundaries import RoadBoundaryEstimator
 from radarnode.perception.views import direct_perspective
+from radarnode.radar.setup import radar_config, with_signal
 from radarnode.radar.models import SignalModel
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.scene.world import Scene
@@ -67,11 +67,11 @@ class Renderer:
     """Runs the signal level cycle by cycle and draws the four views of any cycle."""
 
     def __init__(self, scenario, k: float) -> None:
-        self.scenario = dataclasses.replace(scenario, signal=dataclasses.replace(scenario.signal, decimate=False))
-        self.preset = self.scenario.radar.model
+        self.scenario = with_signal(scenario, decimate=False)
+        self.preset = radar_config(self.scenario).preset
         self.scene = Scene(self.scenario)
         self.model = SignalModel(self.scene, self.preset, np.random.default_rng(self.scenario.seed),
-                                 self.scenario.signal, keep_cube=True)
+                                 radar_config(self.scenario).signal, keep_cube=True)
         self.boundaries = RoadBoundaryEstimator()
         self.tracks: dict[int, deque] = defaultdict(lambda: deque(maxlen=TRAIL_CYCLES))
         self.k = k

@@ -14,7 +14,7 @@ import math
 
 from radarnode.consumer.evaluate import simulate
 from radarnode.errors import ConfigError
-from radarnode.scene.scenario import load_scenario
+from radarnode.radar.setup import load_scenario
 
 
 def add_subparser(sub) -> None:

@@ -14,19 +14,14 @@ relative to the road direction, positive to the left (counter-clockwise).
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import yaml
 
 from radarnode import validate
 from radarnode.errors import FieldError, ScenarioError
-from radarnode.radar.chain import DspConfig
-from radarnode.radar.options import Impairments, SignalOptions
-from radarnode.radar.presets import RadarPreset, get_preset
+from radarnode.schema import Schema, Source, build
 
 #: class name -> (ARS 408 Obj_Class code, default length m, default width m, default RCS dBsm)
 ACTOR_CLASSES: dict[str, tuple[int, float, float, float]] = {
@@ -114,10 +109,10 @@ class RadarSetup:
     road_boundaries: bool | None = None    # publish 0x690/0x691; None: when the road has guardrails
 
     def __post_init__(self) -> None:
-        get_preset(self.preset)
+        # preset and overrides are the radar package's to check (radarnode.radar.setup), like the `signal` options
+        validate.text("preset", self.preset)
         if not isinstance(self.overrides, dict):
             raise FieldError("overrides", self.overrides, "a mapping of preset field to value")
-        _ = self.model  # validates the overrides against the preset
         validate.integer("sensor_id", self.sensor_id, lo=0, hi=7)
         validate.integer("bitrate", self.bitrate, lo=10_000, hi=1_000_000)
         validate.choice("output", self.output, OUTPUT_TYPES)
@@ -130,11 +125,6 @@ class RadarSetup:
         validate.number("bus_load_limit", self.bus_load_limit, lo=0.0, hi=1.0, lo_open=True)
         if self.road_boundaries is not None:
             validate.boolean("road_boundaries", self.road_boundaries)
-
-    @functools.cached_property
-    def model(self) -> RadarPreset:
-        """The preset with the scenario's overrides applied (built once: the period is read every cycle)."""
-        return get_preset(self.preset).with_overrides(self.overrides)
 
 
 @dataclass(frozen=True)
@@ -331,13 +321,16 @@ class Scenario:
     description: str = ""
     cycle_period_s: float | None = None
     fidelity: str = "object"
-    signal: SignalOptions = SignalOptions()
+    #: the signal-level options as written; validated and built by radarnode.radar.setup
+    signal: dict = field(default_factory=dict)
     ecu: EcuSpec = EcuSpec()
     radar: RadarSetup = RadarSetup()
     ego: Ego = Ego()
     road: Road = Road()
     actors: tuple[Actor, ...] = ()
     source: str = "<memory>"
+    #: line of every dotted field path in the source file, for errors found after loading
+    lines: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         validate.text("name", self.name)
@@ -347,6 +340,8 @@ class Scenario:
         if self.cycle_period_s is not None:
             validate.number("cycle_period_s", self.cycle_period_s, lo=0.005, hi=10.0)
         validate.choice("fidelity", self.fidelity, FIDELITIES)
+        if not isinstance(self.signal, dict):
+            raise FieldError("signal", self.signal, "a mapping of signal-level options")
         ids = [a.id for a in self.actors]
         dup = sorted({i for i in ids if ids.count(i) > 1})
         if dup:
@@ -360,7 +355,10 @@ class Scenario:
 
     @property
     def period_s(self) -> float:
-        return self.cycle_period_s if self.cycle_period_s is not None else self.radar.model.cycle_period_s
+        if self.cycle_period_s is None:
+            raise ScenarioError(f"{self.source}: the cycle period comes from the radar preset; load the scenario "
+                                "with radarnode.radar.setup.load_scenario, which fills it in")
+        return self.cycle_period_s
 
     @property
     def num_cycles(self) -> int:
@@ -377,109 +375,21 @@ class Scenario:
 # Loader
 # ---------------------------------------------------------------------------
 
-#: YAML key -> dataclass field where they differ
-_ALIASES = {Actor: {"class": "object_class"}}
-#: fields that hold nested dataclasses, or tuples of them
-_NESTED: dict[type, dict[str, tuple[type, bool]]] = {
-    Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False), "actors": (Actor, True),
-               "signal": (SignalOptions, False), "ecu": (EcuSpec, False)},
-    EcuSpec: {"expect": (Expectation, False)},
-    SignalOptions: {"dsp": (DspConfig, False), "impairments": (Impairments, False)},
-    RadarSetup: {"mount": (Mount, False)},
-    Road: {"guardrails": (Guardrails, False)},
-    Ego: {"accel": (AccelStep, True)},
-    Actor: {"accel": (AccelStep, True), "waypoints": (Waypoint, True)},
-}
+SCHEMA = Schema(
+    aliases={Actor: {"class": "object_class"}},
+    nested={
+        Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False),
+                   "actors": (Actor, True), "ecu": (EcuSpec, False)},
+        EcuSpec: {"expect": (Expectation, False)},
+        RadarSetup: {"mount": (Mount, False)},
+        Road: {"guardrails": (Guardrails, False)},
+        Ego: {"accel": (AccelStep, True)},
+        Actor: {"accel": (AccelStep, True), "waypoints": (Waypoint, True)},
+    })
 
 
-class _Source:
-    """A parsed YAML document with the line of every node, keyed by its dotted path."""
-
-    def __init__(self, path: str, text: str) -> None:
-        self.path = path
-        self.lines: dict[str, int] = {}
-        try:
-            node = yaml.compose(text, Loader=yaml.SafeLoader)
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            where = f":{mark.line + 1}" if mark is not None else ""
-            raise ScenarioError(f"{path}{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
-        if node is None:
-            raise ScenarioError(f"{path}: the file is empty; expected a mapping with name, duration_s and seed")
-        self.data = self._convert(node, "")
-
-    def _convert(self, node: yaml.Node, path: str) -> object:
-        self.lines[path] = node.start_mark.line + 1
-        if isinstance(node, yaml.MappingNode):
-            out = {}
-            for key_node, value_node in node.value:
-                key = key_node.value
-                child = f"{path}.{key}" if path else str(key)
-                if key in out:
-                    raise ScenarioError(f"{self.path}:{key_node.start_mark.line + 1}: field '{child}' appears twice")
-                self.lines[child] = key_node.start_mark.line + 1
-                out[key] = self._convert(value_node, child)
-            return out
-        if isinstance(node, yaml.SequenceNode):
-            return [self._convert(v, f"{path}[{i}]") for i, v in enumerate(node.value)]
-        loader = yaml.SafeLoader("")
-        return loader.construct_object(node, deep=True)
-
-    def error(self, path: str, message: str) -> ScenarioError:
-        line = self._line(path)
-        where = f"{self.path}:{line}" if line else self.path
-        return ScenarioError(f"{where}: {message}")
-
-    def _line(self, path: str) -> int | None:
-        while path:
-            if path in self.lines:
-                return self.lines[path]
-            path = path.rsplit(".", 1)[0] if "." in path else path.split("[")[0] if "[" in path else ""
-        return None
-
-
-def _build(cls: type, data: object, path: str, src: _Source, extra: dict | None = None):
-    where = path or "top level"
-    if not isinstance(data, dict):
-        raise src.error(path, f"field '{where}': value {data!r} is not allowed; expected a mapping")
-    aliases = _ALIASES.get(cls, {})
-    inverse = {v: k for k, v in aliases.items()}
-    fields = {f.name: f for f in dataclasses.fields(cls) if f.name != "source"}
-    allowed = sorted(inverse.get(n, n) for n in fields)
-    kwargs = dict(extra or {})
-    for key, value in data.items():
-        name = aliases.get(key, key)
-        child = f"{path}.{key}" if path else str(key)
-        if name not in fields or not isinstance(key, str):
-            raise src.error(child, f"unknown field '{child}'; allowed here: {', '.join(allowed)}")
-        nested = _NESTED.get(cls, {}).get(name)
-        if nested is not None and value is not None:
-            sub, many = nested
-            if many:
-                if not isinstance(value, list):
-                    raise src.error(child, f"field '{child}': value {value!r} is not allowed; expected a list")
-                value = tuple(_build(sub, v, f"{child}[{i}]", src) for i, v in enumerate(value))
-            else:
-                value = _build(sub, value, child, src)
-        kwargs[name] = value
-    for name, f in fields.items():
-        required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
-        if required and name not in kwargs:
-            key = inverse.get(name, name)
-            raise src.error(path, f"missing required field '{(path + '.') if path else ''}{key}' in {where}")
-    try:
-        return cls(**kwargs)
-    except FieldError as exc:
-        key = inverse.get(exc.field.split(".")[0], exc.field.split(".")[0])
-        rest = exc.field[len(exc.field.split(".")[0]):]
-        child = (f"{path}.{key}" if path else key) + rest
-        raise src.error(child, f"field '{child}': value {exc.value!r} is not allowed; expected {exc.allowed}") from None
-    except TypeError as exc:  # pragma: no cover - defensive: a field the schema does not describe
-        raise src.error(path, f"{where}: {exc}") from None
-
-
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario file.
+def read_scenario(path: str | Path) -> Scenario:
+    """Read a scenario file and validate the scene (the radar options are checked by radarnode.radar.setup).
 
     Raises
     ------
@@ -491,15 +401,15 @@ def load_scenario(path: str | Path) -> Scenario:
         text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError(f"{p}: cannot read scenario file: {exc.strerror}") from None
-    src = _Source(str(p), text)
-    return _build(Scenario, src.data, "", src, extra={"source": str(p)})
+    src = Source(str(p), text)
+    return build(Scenario, src.data, "", src, SCHEMA, extra={"source": str(p), "lines": src.lines})
 
 
-def parse_scenario(text: str, name: str = "<string>") -> Scenario:
-    """Validate a scenario given as YAML text (used by tests and tools)."""
-    src = _Source(name, text)
-    return _build(Scenario, src.data, "", src, extra={"source": name})
+def read_scenario_text(text: str, name: str = "<string>") -> Scenario:
+    """Like :func:`read_scenario` for YAML text."""
+    src = Source(name, text)
+    return build(Scenario, src.data, "", src, SCHEMA, extra={"source": name, "lines": src.lines})
 
 
 __all__ = ["ACTOR_CLASSES", "Actor", "AccelStep", "Ego", "Guardrails", "Mount", "RadarSetup", "Road",
-           "Scenario", "Waypoint", "load_scenario", "parse_scenario"]
+           "Scenario", "Waypoint", "read_scenario", "read_scenario_text"]

@@ -22,6 +22,7 @@ import numpy as np
 
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import RadarFrame
+from radarnode.radar.setup import radar_config
 from radarnode.radar.models import make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
@@ -84,7 +85,7 @@ class RadarNode:
         self.scenario = scenario
         self.db = database if database is not None else load_database()
         setup = scenario.radar
-        self.preset = setup.model
+        self.preset = radar_config(scenario).preset
         self.period_s = scenario.period_s
         self.bitrate = setup.bitrate
         self.bus_load_limit = setup.bus_load_limit
@@ -96,7 +97,7 @@ class RadarNode:
         self.scene = Scene(scenario)
         self.fidelity = fidelity or scenario.fidelity
         self.model = make_model(self.fidelity, self.scene, self.preset, np.random.default_rng(scenario.seed),
-                                scenario.signal, clusters_wanted=setup.output == "clusters")
+                                radar_config(scenario).signal, clusters_wanted=setup.output == "clusters")
         self.counters: Counter = Counter()
         self.saturated: Counter = Counter()
         self.codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in self.db.messages

@@ -1,0 +1,123 @@
+"""Frozen dataclasses from YAML: the one loader the scenario and the radar options share.
+
+A :class:`Source` keeps the parsed document and the line of every node; :func:`build` turns a mapping into a
+validated dataclass, following a :class:`Schema` (which fields hold nested dataclasses, YAML aliases, fields
+the file never sets). Unknown keys and missing required fields are found from the dataclass definitions, and
+a :class:`FieldError` raised by a dataclass becomes a :class:`ScenarioError` naming the file, the line, the
+dotted field path, the value and what is allowed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import yaml
+
+from radarnode.errors import FieldError, ScenarioError
+
+
+@dataclass(frozen=True)
+class Schema:
+    """How YAML maps onto a family of dataclasses."""
+
+    #: class -> {field: (nested class, is a list)}
+    nested: dict = field(default_factory=dict)
+    #: class -> {YAML key: dataclass field} where they differ
+    aliases: dict = field(default_factory=dict)
+    #: fields the loader fills itself, never read from the file
+    internal: frozenset = frozenset({"source", "lines"})
+
+
+class Source:
+    """A parsed YAML document with the line of every node, keyed by its dotted path."""
+
+    def __init__(self, path: str, text: str) -> None:
+        self.path = path
+        self.lines: dict[str, int] = {}
+        try:
+            node = yaml.compose(text, Loader=yaml.SafeLoader)
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            where = f":{mark.line + 1}" if mark is not None else ""
+            raise ScenarioError(f"{path}{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+        if node is None:
+            raise ScenarioError(f"{path}: the file is empty; expected a mapping with name, duration_s and seed")
+        self.data = self._convert(node, "")
+
+    @classmethod
+    def of_lines(cls, path: str, lines: dict[str, int]) -> Source:
+        """A source already parsed: its name and the line of each dotted path (to name lines in later errors)."""
+        src = cls.__new__(cls)
+        src.path, src.lines, src.data = path, dict(lines), None
+        return src
+
+    def _convert(self, node: yaml.Node, path: str) -> object:
+        self.lines[path] = node.start_mark.line + 1
+        if isinstance(node, yaml.MappingNode):
+            out = {}
+            for key_node, value_node in node.value:
+                key = key_node.value
+                child = f"{path}.{key}" if path else str(key)
+                if key in out:
+                    raise ScenarioError(f"{self.path}:{key_node.start_mark.line + 1}: field '{child}' appears twice")
+                self.lines[child] = key_node.start_mark.line + 1
+                out[key] = self._convert(value_node, child)
+            return out
+        if isinstance(node, yaml.SequenceNode):
+            return [self._convert(v, f"{path}[{i}]") for i, v in enumerate(node.value)]
+        loader = yaml.SafeLoader("")
+        return loader.construct_object(node, deep=True)
+
+    def error(self, path: str, message: str) -> ScenarioError:
+        line = self._line(path)
+        where = f"{self.path}:{line}" if line else self.path
+        return ScenarioError(f"{where}: {message}")
+
+    def _line(self, path: str) -> int | None:
+        while path:
+            if path in self.lines:
+                return self.lines[path]
+            path = path.rsplit(".", 1)[0] if "." in path else path.split("[")[0] if "[" in path else ""
+        return None
+
+
+def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra: dict | None = None):
+    """Build dataclass ``cls`` from the parsed mapping ``data`` found at dotted ``path``; errors name file and line."""
+    where = path or "top level"
+    if not isinstance(data, dict):
+        raise src.error(path, f"field '{where}': value {data!r} is not allowed; expected a mapping")
+    aliases = schema.aliases.get(cls, {})
+    inverse = {v: k for k, v in aliases.items()}
+    fields = {f.name: f for f in dataclasses.fields(cls) if f.name not in schema.internal}
+    allowed = sorted(inverse.get(n, n) for n in fields)
+    kwargs = dict(extra or {})
+    for key, value in data.items():
+        name = aliases.get(key, key)
+        child = f"{path}.{key}" if path else str(key)
+        if name not in fields or not isinstance(key, str):
+            raise src.error(child, f"unknown field '{child}'; allowed here: {', '.join(allowed)}")
+        nested = schema.nested.get(cls, {}).get(name)
+        if nested is not None and value is not None:
+            sub, many = nested
+            if many:
+                if not isinstance(value, list):
+                    raise src.error(child, f"field '{child}': value {value!r} is not allowed; expected a list")
+                value = tuple(build(sub, v, f"{child}[{i}]", src, schema) for i, v in enumerate(value))
+            else:
+                value = build(sub, value, child, src, schema)
+        kwargs[name] = value
+    for name, f in fields.items():
+        required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
+        if required and name not in kwargs:
+            key = inverse.get(name, name)
+            raise src.error(path, f"missing required field '{(path + '.') if path else ''}{key}' in {where}")
+    try:
+        return cls(**kwargs)
+    except FieldError as exc:
+        key = inverse.get(exc.field.split(".")[0], exc.field.split(".")[0])
+        rest = exc.field[len(exc.field.split(".")[0]):]
+        child = (f"{path}.{key}" if path else key) + rest
+        raise src.error(child, f"field '{child}': value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+    except TypeError as exc:  # pragma: no cover - defensive: a field the schema does not describe
+        raise src.error(path, f"{where}: {exc}") from None
