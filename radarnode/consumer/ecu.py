@@ -27,6 +27,10 @@ from radarnode.wire.e2e import E2EProtector
 
 ACC_STATUS, FCW_STATUS = 0x6A0, 0x6A1
 VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones still count in the path
+#: a stationary object in the path is a collision candidate, whatever its class, when it reflects like a vehicle
+#: (a car's rear ≈ 10 dBsm; a guardrail post, a pedestrian ≈ −5) and has been tracked for this many cycles
+OBSTACLE_RCS_DBSM = 5.0
+OBSTACLE_MIN_AGE = 4
 
 
 @dataclass
@@ -143,7 +147,8 @@ class Ecu:
                 road_user[i] = True            # coasting: it was a road user when selected
                 continue
             dyn, cls = int(ol.dyn_prop[k]), int(ol.obj_class[k])
-            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or cls in VEHICLE_CLASSES
+            obstacle = float(ol.rcs_dbsm[k]) >= OBSTACLE_RCS_DBSM and t.age >= OBSTACLE_MIN_AGE
+            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or cls in VEHICLE_CLASSES or obstacle
         cand = np.flatnonzero(ok & road_user)
         if cand.size == 0:
             return None

@@ -34,6 +34,9 @@ GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
 CONFIRM_HITS, CONFIRM_WINDOW = 2, 3
 COAST_CYCLES = 3
 MOVING_THRESHOLD_MPS = 1.0
+SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
+RCS_GAIN = 0.2                # exponential average of the RCS in power
+VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 
 
@@ -155,7 +158,7 @@ class ObjectTracker:
         self.ids = np.zeros(0, dtype=np.int64)
         self.was_moving = np.zeros(0, dtype=bool)
         self.size = np.zeros((0, 2))
-        self.rcs = np.zeros(0)
+        self.power = np.zeros(0)      # RCS in m², averaged in power
         self.tag = np.zeros(0, dtype=np.int64)
         self.last_t: float | None = None
 
@@ -173,8 +176,13 @@ class ObjectTracker:
             ti, gi = np.array(pairs).T
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], self.r_cov)
             hit[ti], used[gi] = True, True
-            self.size[ti] = 0.8 * self.size[ti] + 0.2 * np.stack([groups.length_m[gi], groups.width_m[gi]], 1)
-            self.rcs[ti] = 0.8 * self.rcs[ti] + 0.2 * groups.rcs_dbsm[gi]
+            # extent: what the detections spanned over the last cycles (a decaying maximum: one cycle sees only a
+            # part of a body, and a far one is a single detection until its parts are resolved)
+            seen = np.stack([groups.length_m[gi], groups.width_m[gi]], 1)
+            self.size[ti] = np.maximum(SIZE_DECAY * self.size[ti], seen)
+            # RCS averaged in power, not in dB: a fluctuating (Swerling 1) target's mean of log power lies
+            # 2.5 dB below its mean power, and its mean power is its RCS
+            self.power[ti] = (1.0 - RCS_GAIN) * self.power[ti] + RCS_GAIN * 10.0 ** (groups.rcs_dbsm[gi] / 10.0)
             self.tag[ti] = groups.actor_index[gi]
         self.hist = ((self.hist << 1) | hit).astype(np.uint8)
         self.misses = np.where(hit, 0, self.misses + 1)
@@ -216,7 +224,7 @@ class ObjectTracker:
         self.ids = np.concatenate([self.ids, np.full(k, -1, dtype=np.int64)])
         self.was_moving = np.concatenate([self.was_moving, np.zeros(k, dtype=bool)])
         self.size = np.concatenate([self.size, np.stack([groups.length_m[idx], groups.width_m[idx]], 1)])
-        self.rcs = np.concatenate([self.rcs, groups.rcs_dbsm[idx]])
+        self.power = np.concatenate([self.power, 10.0 ** (groups.rcs_dbsm[idx] / 10.0)])
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
 
     def _assign_ids(self, idx: np.ndarray) -> None:
@@ -227,7 +235,7 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "rcs", "tag"):
+        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:
@@ -252,7 +260,8 @@ class ObjectTracker:
         dyn = np.where(angle > np.radians(135), DYN_ONCOMING, np.where(angle > np.radians(45), DYN_CROSSING_MOVING,
                                                                         DYN_MOVING))
         ol.dyn_prop = np.where(moving, dyn, np.where(self.was_moving[idx], DYN_STOPPED, DYN_STATIONARY))
-        ol.rcs_dbsm = self.rcs[idx]
+        rcs = 10.0 * np.log10(np.maximum(self.power[idx], 1e-12))
+        ol.rcs_dbsm = rcs
         p = self.p[idx]
         ol.dist_long_sigma_m, ol.dist_lat_sigma_m = np.sqrt(p[:, 0, 0]), np.sqrt(p[:, 1, 1])
         ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps = np.sqrt(p[:, 2, 2]), np.sqrt(p[:, 3, 3])
@@ -266,7 +275,7 @@ class ObjectTracker:
         ol.arel_long_mps2 = np.zeros(n)
         ol.arel_lat_mps2 = np.zeros(n)
         length, width = np.maximum(self.size[idx, 0], 0.2), np.maximum(self.size[idx, 1], 0.2)
-        ol.obj_class = classify(length, width, self.rcs[idx], moving)
+        ol.obj_class = classify(length, width, rcs, moving)
         ol.orientation_rad = np.where(moving, np.arctan2(gy, gx), 0.0)
         ol.length_m, ol.width_m = length, width
         ol.actor_index = self.tag[idx].copy()
@@ -274,11 +283,18 @@ class ObjectTracker:
 
 
 def classify(length_m, width_m, rcs_dbsm, moving) -> np.ndarray:
-    """A coarse ARS 408 class from extent and RCS (point, car, truck, pedestrian, wide)."""
+    """A coarse ARS 408 class from extent and RCS (point, car, truck, pedestrian, wide).
+
+    Extent first (a truck's length, a car's, a wide structure's width); where the body is not resolved (one
+    detection at range), the RCS: a vehicle's rear returns 5 dBsm or more (a car about 10, a truck about
+    20), a pedestrian or a guardrail post about −5. Truck needs the extent or 17 dBsm.
+    """
     extent = np.maximum(length_m, width_m)
+    small = np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2,
+                     np.where(rcs_dbsm >= VEHICLE_RCS_DBSM, 1, np.where((rcs_dbsm < 3.0) & moving, 3, 0)))
     return np.where(extent > 8.0, 2,
-                    np.where(extent > 1.2, np.where(width_m > 3.0, 6, 1),
-                             np.where((rcs_dbsm < 3.0) & moving, 3, 0))).astype(np.int64)
+                    np.where(extent > 1.2, np.where(width_m > 3.0, 6, np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2, 1)),
+                             small)).astype(np.int64)
 
 
 def cluster_dyn_prop(range_rate_mps: np.ndarray, azimuth_rad: np.ndarray, sensor_velocity) -> np.ndarray:
