@@ -7,9 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from radarnode.consumer.acc import STATE_ACTIVE, STATE_FAULT, STATE_OFF, Acc, AccSettings, Target, in_path, \
+from radarnode.consumer.acc import STATE_ACTIVE, STATE_FAULT, STATE_OFF, Acc, AccSettings, Target, \
     iso15622_limits
 from radarnode.consumer.fcw import LEVEL_NONE, LEVEL_WARNING, Fcw, required_deceleration, time_to_collision
+from radarnode.consumer.path import in_path
 from radarnode.errors import FieldError
 
 
@@ -80,6 +81,27 @@ def test_ego_path_follows_the_yaw_rate():
     assert in_path(x, y, 20.0, 0.0, 1.6).tolist() == [True, False, False]
     # turning left at κ = 0.004: at 50 m the path is 5 m to the left
     assert in_path(x, y, 20.0, 0.08, 1.6).tolist() == [False, True, False]
+
+
+def test_the_path_turns_about_the_rear_axle_not_the_sensor():
+    from radarnode.consumer.path import SensorMount, path_offset_m
+    # exact circle: a point on it has no offset, at any distance
+    kappa = 0.004
+    phi = np.linspace(0.01, 0.5, 20)
+    assert np.abs(path_offset_m(np.sin(phi) / kappa, (1 - np.cos(phi)) / kappa, kappa)).max() < 1e-9
+    assert np.abs(path_offset_m(np.sin(phi) / -kappa, (1 - np.cos(phi)) / -kappa, -kappa)).max() < 1e-9
+    # the sensor 3.7 m ahead of the rear axle: at 60 m ahead of the sensor the rear axle's circle lies
+    # κ·(63.7)²/2 = 8.1 m to the left, not κ·60²/2 = 7.2 m; a point 7.2 m left at 60 m is 0.9 m off the path
+    mount = SensorMount(3.7, 0.0, 0.0)
+    x, y = np.array([60.0]), np.array([(1 - np.cos(kappa * 63.7)) / kappa])
+    assert in_path(x, y, 20.0, 0.08, 0.5, mount=mount)[0]
+    assert not in_path(x, y - 0.9, 20.0, 0.08, 0.5, mount=mount)[0]
+    assert in_path(x, y - 0.9, 20.0, 0.08, 0.5)[0]          # what a sensor-centred path wrongly keeps
+    # a corner radar turned 45° left at the front-left corner: a point on the vehicle axis 30 m ahead
+    corner = SensorMount(3.7, 0.8, 45.0)
+    r = np.hypot(30.0 - 3.7 + 0.0, 0.8)
+    ang = math.atan2(-0.8, 30.0 - 3.7) - math.radians(45.0)
+    assert in_path(np.array([r * math.cos(ang)]), np.array([r * math.sin(ang)]), 20.0, 0.0, 0.5, mount=corner)[0]
 
 
 def test_acc_standby_below_the_operating_speed():

@@ -17,6 +17,7 @@ from radarnode.cli.common import add_scenario_argument, format_boundaries, forma
 from radarnode.consumer.acc import STATE_NAMES, AccSettings
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.path import SensorMount
 from radarnode.consumer.evaluate import EgoActuator
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
@@ -68,7 +69,8 @@ def cmd(args) -> int:
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     spec = scenario.ecu
     ecu = Ecu(AccSettings(enabled=spec.acc_enabled or args.closed_loop, set_speed_mps=spec.set_speed_mps,
-                          time_gap_s=spec.time_gap_s), sensor_id=scenario.radar.sensor_id, period_s=node.period_s)
+                          time_gap_s=spec.time_gap_s), sensor_id=scenario.radar.sensor_id, period_s=node.period_s,
+              mount=SensorMount.of(scenario.radar.mount))
     actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
     if actuator is not None:
         actuator.at(0.0)

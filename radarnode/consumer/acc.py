@@ -69,22 +69,6 @@ class Target:
     lead_accel_mps2: float
 
 
-def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: float, half_width_m: float,
-            boundaries: dict | None = None) -> np.ndarray:
-    """Which points lie in the ego's predicted path (a circle of curvature yaw rate / speed)."""
-    kappa = yaw_rate_rps / ego_speed_mps if ego_speed_mps > 1.0 else 0.0
-    centre = 0.5 * kappa * x * x
-    inside = (x > 0.0) & (np.abs(y - centre) <= half_width_m)
-    if boundaries:
-        # where the radar reports both road edges, the path may not leave the road
-        left, right = boundaries.get("left"), boundaries.get("right")
-        if left is not None and left.valid:
-            inside &= y < left.y_at(x)
-        if right is not None and right.valid:
-            inside &= y > right.y_at(x)
-    return inside
-
-
 class Acc:
     """The ACC state machine and controller; call :meth:`step` once per radar cycle."""
 

@@ -15,7 +15,8 @@ from dataclasses import dataclass
 import can
 import numpy as np
 
-from radarnode.consumer.acc import Acc, AccSettings, Target, in_path
+from radarnode.consumer.acc import Acc, AccSettings, Target
+from radarnode.consumer.path import SensorMount, in_path
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.tracking import Tracker
@@ -52,12 +53,13 @@ class Ecu:
     """ACC and FCW on the decoded object list of one radar."""
 
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
-                 period_s: float = 0.072, timeout_cycles: int = 3) -> None:
+                 period_s: float = 0.072, timeout_cycles: int = 3, mount: SensorMount = SensorMount()) -> None:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self.acc = Acc(acc)
         self.fcw = Fcw(fcw)
         self.sensor_id = sensor_id
+        self.mount = mount              # the radar's calibrated position on the ego: the path turns about the rear axle
         self.period_s = period_s
         self.timeout_s = timeout_cycles * period_s
         self.last_cycle_t: float | None = None
@@ -135,7 +137,7 @@ class Ecu:
         x = np.array([t.x[0] for t in tracks])
         y = np.array([t.x[1] for t in tracks])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                     self.boundaries)
+                     self.boundaries, self.mount)
         road_user = np.zeros(len(tracks), dtype=bool)
         for i, t in enumerate(tracks):
             if cluster_strength is not None:
@@ -152,10 +154,14 @@ class Ecu:
         cand = np.flatnonzero(ok & road_user)
         if cand.size == 0:
             return None
-        i = int(cand[np.argmin(x[cand])])
+        xv, yv = self.mount.to_vehicle(x, y)
+        i = int(cand[np.argmin(xv[cand])])
         t = tracks[i]
-        ax = t.x[4] if t.x.size == 6 else 0.0
-        return Target(t.id, t.meas_id, float(t.x[0]), float(t.x[1]), float(t.x[2]), float(ax + self.ego_accel_mps2))
+        vx, _ = self.mount.rotate(t.x[2], t.x[3])
+        ax, _ = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
+        # distance ahead of the sensor along the vehicle's axis, lateral from the vehicle's centre line
+        return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]), float(vx),
+                      float(ax + self.ego_accel_mps2))
 
     def _decide(self, t_s, tracks, ol, by_id, radar_ok: bool, cluster_strength=None) -> EcuOutput:
         dt = self.period_s if self._last_out_t is None else t_s - self._last_out_t

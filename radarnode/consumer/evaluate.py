@@ -21,6 +21,7 @@ import numpy as np
 from radarnode.consumer.acc import AccSettings, iso15622_limits
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.path import SensorMount
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.scene.scenario import Scenario
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -74,7 +75,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     vehicle = EgoMotionSender(scene, scenario.radar.sensor_id)
     period = node.period_s
     ecu = Ecu(AccSettings(enabled=spec.acc_enabled, set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s),
-              sensor_id=scenario.radar.sensor_id, period_s=period)
+              sensor_id=scenario.radar.sensor_id, period_s=period,
+              mount=SensorMount.of(scenario.radar.mount))
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     lead = next((i for i, a in enumerate(scenario.actors) if a.id == spec.expect.lead), None)
     res = ScenarioResult(scenario.name, scenario.seed)
@@ -101,13 +103,13 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             for m in ecu.frames(decision):
                 assembler.on_message_received(m)       # the ECU's frames, decoded and E2E-checked
         # truth
-        view = out.view
         ego_state = scene.ego_state(t)
         gap = ttc = math.inf
         if lead is not None:
-            ahead = view.x_m[lead] > 0.0 and abs(view.y_m[lead]) < 2.0     # in the ego lane, ahead
-            gap = float(view.x_m[lead]) if ahead else math.inf
-            closing = -float(view.vx_mps[lead])
+            # along the ego's lane (a bend too): ahead and within 2 m of the lane centre
+            lane_gap, lateral, closing = scene.lane_gap(t, lead)
+            ahead = lane_gap > 0.0 and abs(lateral) < 2.0
+            gap = lane_gap if ahead else math.inf
             ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
         res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)
         warning = decision is not None and decision.warning_level == LEVEL_WARNING

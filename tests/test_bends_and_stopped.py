@@ -1,0 +1,71 @@
+"""ADAS on roads that are not straight (issue 10) and stopped vehicles at every level (issue 15).
+
+The sensor sits 3.7 m ahead of the rear axle; the ECU knows it (``radar.mount`` reaches it as a calibrated
+``SensorMount``) and predicts the path about the rear axle. Judged as ``radarnode report`` judges: the TTC at
+the warning is measured along the ego's lane.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+
+from radarnode.consumer.evaluate import simulate
+from radarnode.radar.setup import load_scenario
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+
+
+def _at(name: str, x_m: float, seed: int):
+    sc = load_scenario(SCENARIOS / f"{name}.yaml")
+    lead = dataclasses.replace(sc.actors[0], x_m=x_m)
+    return dataclasses.replace(sc, actors=(lead,), seed=seed, duration_s=min(sc.duration_s, x_m / 20.0 + 1.0))
+
+
+@pytest.mark.parametrize("name", ["bend_left_stopped_outer_lane", "bend_right_stopped_outer_lane"])
+@pytest.mark.parametrize("x_m", [50.0, 80.0, 110.0, 140.0])
+def test_a_car_stopped_in_the_outer_lane_of_a_250_m_bend_draws_no_warning(name, x_m):
+    for seed in (1, 2):
+        r = simulate(_at(name, x_m, seed), fidelity="object")
+        assert r.warning_time_s is None, (name, x_m, seed, r.warning_time_s)
+
+
+@pytest.mark.parametrize("x_m", [80.0, 110.0, 140.0])
+def test_a_car_stopped_in_the_own_lane_of_a_250_m_bend_is_warned_in_time(x_m):
+    for seed in (1, 2):
+        r = simulate(_at("bend_left_stopped_own_lane", x_m, seed), fidelity="object")
+        assert r.warning_time_s is not None and r.ttc_at_warning_s >= 2.1, (x_m, seed, r.ttc_at_warning_s)
+
+
+def test_the_judge_measures_the_ttc_along_the_bend():
+    # before, a lead on a bend was "not ahead" (more than 2 m off the sensor's axis): the TTC at the warning
+    # was infinite and passed any minimum
+    r = simulate(_at("bend_left_stopped_own_lane", 110.0, 1), fidelity="object")
+    assert 2.0 < r.ttc_at_warning_s < 4.0 and r.min_gap_m < 10.0
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+@pytest.mark.parametrize("name", ["ncap_ccrs_10kmh_full", "ncap_ccrs_10kmh_left50", "ncap_ccrs_50kmh_full",
+                                  "ncap_ccrs_50kmh_right50", "nhtsa_lead_stopped"])
+def test_a_stopped_car_in_the_path_is_warned_at_every_level(name, level):
+    sc = load_scenario(SCENARIOS / f"{name}.yaml")
+    r = simulate(sc, fidelity=level)
+    assert r.passed, (name, level, r.reasons)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["ncap_ccrs_10kmh_right50", "ncap_ccrs_50kmh_left50", "nhtsa_lead_stopped"])
+def test_a_stopped_car_in_the_path_is_warned_at_signal_level(name):
+    r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity="signal")
+    assert r.passed, (name, r.reasons)
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_a_car_stopped_beside_the_path_and_guardrails_draw_no_warning(level):
+    for name in ("no_fcw_adjacent_stopped", "guardrail_traffic"):
+        sc = load_scenario(SCENARIOS / f"{name}.yaml")
+        r = simulate(sc, fidelity=level)
+        assert r.warning_time_s is None or not sc.ecu.expect.no_fcw, (name, level, r.warning_time_s)
+        assert r.passed, (name, level, r.reasons)
