@@ -37,6 +37,10 @@ MOVING_THRESHOLD_MPS = 1.0
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
+#: the smallest body of a vehicle class (length, width, m): a radar sees the faces towards it, and a car seen
+#: from behind at range is one detection; its class says the body is at least this big
+#: (rows: ARS 408 class code 0…6; point, pedestrian, bicycle and wide keep what was measured)
+MIN_BODY_M = np.array([[0.0, 0.0], [3.8, 1.6], [8.0, 2.3], [0.0, 0.0], [1.8, 0.7], [0.0, 0.0], [0.0, 0.0]])
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 
 
@@ -276,6 +280,8 @@ class ObjectTracker:
         ol.arel_lat_mps2 = np.zeros(n)
         length, width = np.maximum(self.size[idx, 0], 0.2), np.maximum(self.size[idx, 1], 0.2)
         ol.obj_class = classify(length, width, rcs, moving)
+        body = MIN_BODY_M[ol.obj_class]
+        length, width = np.maximum(length, body[:, 0]), np.maximum(width, body[:, 1])
         ol.orientation_rad = np.where(moving, np.arctan2(gy, gx), 0.0)
         ol.length_m, ol.width_m = length, width
         ol.actor_index = self.tag[idx].copy()

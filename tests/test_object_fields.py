@@ -1,0 +1,45 @@
+"""Objects built from their detections (issue 15): RCS, class and size at every level."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from helpers import scenario
+from radarnode.radar.models import make_model
+from radarnode.radar.object_model import RuntimeConfig
+from radarnode.radar.setup import radar_config
+from radarnode.scene.world import Scene
+
+CAR = "  - {id: a, class: car, x_m: 36.0, lane: 1, speed_mps: 20.0}"
+POINT = "  - {id: a, class: point, x_m: 34.0, lane: 1, speed_mps: 20.0, rcs_dbsm: 10.0}"
+
+
+def _fields(actor: str, level: str, duration: float = 3.0, seed: int = 1):
+    sc = scenario(actor, duration=duration, seed=seed)
+    rc = radar_config(sc)
+    model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
+    cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+    rows = []
+    for k in range(sc.num_cycles):
+        frame, _ = model.step(k * sc.period_s, cfg)
+        ol = frame.objects
+        for j in np.flatnonzero(ol.actor_index == 0)[:1]:
+            rows.append((int(ol.obj_class[j]), ol.rcs_dbsm[j], ol.length_m[j], ol.width_m[j]))
+    assert len(rows) >= 0.6 * sc.num_cycles, f"{level}: the actor was an object in {len(rows)} cycles"
+    a = np.array(rows)
+    return a[:, 0].astype(int), a[:, 1], a[:, 2], a[:, 3]
+
+
+@pytest.mark.parametrize("level", ["object", "detection", "signal"])
+def test_a_point_target_of_known_rcs_is_reported_within_1_db(level):
+    _, rcs, _, _ = _fields(POINT, level, duration=2.0 if level == "signal" else 3.0)
+    assert abs(np.median(rcs) - 10.0) <= 1.0, np.median(rcs)
+
+
+@pytest.mark.parametrize("level", ["object", "detection", "signal"])
+def test_a_car_at_30_m_is_a_car_of_a_car_s_rcs_and_width(level):
+    cls, rcs, length, width = _fields(CAR, level, duration=2.0 if level == "signal" else 3.0)
+    assert np.mean((cls == 1) | (cls == 2)) >= 0.9, np.bincount(cls, minlength=7)
+    assert abs(np.median(rcs) - 10.0) <= 2.0, np.median(rcs)
+    assert abs(np.median(width) - 1.8) <= 0.5 and np.median(length) >= 3.0, (np.median(length), np.median(width))
