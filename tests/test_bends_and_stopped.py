@@ -69,3 +69,33 @@ def test_a_car_stopped_beside_the_path_and_guardrails_draw_no_warning(level):
         r = simulate(sc, fidelity=level)
         assert r.warning_time_s is None or not sc.ecu.expect.no_fcw, (name, level, r.warning_time_s)
         assert r.passed, (name, level, r.reasons)
+
+
+def test_acc_on_a_250_m_bend_follows_its_lead_and_never_the_truck_in_the_outer_lane():
+    sc = load_scenario(SCENARIOS / "acc_follow_bend_250.yaml")
+    r = simulate(sc)
+    assert r.passed, r.reasons
+    # the judge can fail: the same run, judged as if the truck were the one to follow
+    e = dataclasses.replace(sc.ecu.expect, acc_follows="truck", never_target=("lead",))
+    r = simulate(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, expect=e)))
+    assert not r.passed and any("lead selected as the target" in x for x in r.reasons), r.reasons
+
+
+def test_an_expectation_names_actors_that_exist(tmp_path):
+    from radarnode.errors import ScenarioError
+    p = tmp_path / "x.yaml"
+    p.write_text((SCENARIOS / "acc_follow_bend_250.yaml").read_text().replace("never_target: [truck]",
+                                                                              "never_target: [lorry]"))
+    with pytest.raises(ScenarioError, match=r"ecu.expect.never_target.*'lorry'.*lead, truck"):
+        load_scenario(p)
+
+
+def test_a_warning_after_the_impact_does_not_count():
+    sc = load_scenario(SCENARIOS / "ncap_ccrb_12m.yaml")
+    r = simulate(sc)
+    assert r.impact_time_s is not None and r.warning_time_s < r.impact_time_s and r.passed
+    # the judge: the same run with the warning moved to one cycle after the impact fails
+    from radarnode.consumer.evaluate import _judge
+    late = dataclasses.replace(r, warning_time_s=r.impact_time_s + 0.072, reasons=[], passed=True)
+    _judge(sc, late)
+    assert not late.passed and any("after the impact" in x for x in late.reasons), late.reasons

@@ -53,6 +53,7 @@ class ScenarioResult:
     name: str
     seed: int
     warning_time_s: float | None = None
+    impact_time_s: float | None = None      # the lead's gap closed (in the ego lane)
     ttc_at_warning_s: float | None = None
     min_ttc_s: float = math.inf
     min_gap_m: float = math.inf
@@ -81,7 +82,9 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     lead = next((i for i, a in enumerate(scenario.actors) if a.id == spec.expect.lead), None)
     res = ScenarioResult(scenario.name, scenario.seed)
     prev_a = None
-    tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap")}
+    prev_gap = math.inf
+    tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap",
+                          "target")}
     for k in range(scenario.num_cycles):
         t = k * period
         if actuator is not None:
@@ -112,6 +115,16 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             gap = lane_gap if ahead else math.inf
             ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
         res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)
+        if lead is not None:
+            if res.impact_time_s is None and 0.0 < prev_gap and lane_gap <= 0.0 and abs(lateral) < 2.0:
+                res.impact_time_s = t
+            prev_gap = lane_gap
+        # which actor the ECU selected: its object ID, looked up in this cycle's object list (truth tags)
+        target_actor = -1
+        if decision is not None and decision.target is not None:
+            ol = out.frame.objects
+            hit = np.flatnonzero(ol.id == decision.target.object_id)
+            target_actor = int(ol.actor_index[hit[0]]) if hit.size else -1
         warning = decision is not None and decision.warning_level == LEVEL_WARNING
         if warning and res.warning_time_s is None:
             res.warning_time_s, res.ttc_at_warning_s = t, ttc
@@ -133,7 +146,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                          ("request", decision.accel_request_mps2 if decision else 0.0),
                          ("warning", decision.warning_level if decision else 0),
                          ("state", decision.acc_state if decision else 0),
-                         ("time_gap", gap / ego_state.speed_mps if ego_state.speed_mps > 0.5 else math.inf)):
+                         ("time_gap", gap / ego_state.speed_mps if ego_state.speed_mps > 0.5 else math.inf),
+                         ("target", target_actor)):
             tr[key].append(val)
     res.trace = {k: np.asarray(v) for k, v in tr.items()}
     res.final_time_gap_s = float(res.trace["time_gap"][-1]) if len(res.trace["t"]) else None
@@ -151,6 +165,22 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
             res.reasons.append(f"warning at TTC {res.ttc_at_warning_s:.2f} s < {e.fcw_ttc_min_s} s")
     if e.fcw_required and res.warning_time_s is None:
         res.reasons.append("no FCW warning")
+    elif e.fcw_required and res.impact_time_s is not None and res.warning_time_s >= res.impact_time_s:
+        res.reasons.append(f"FCW warning at t = {res.warning_time_s:.2f} s, after the impact at "
+                           f"{res.impact_time_s:.2f} s")
+    names = [a.id for a in scenario.actors]
+    targets = res.trace["target"]
+    for a in e.never_target:
+        n = int(np.sum(targets == names.index(a)))
+        if n:
+            res.reasons.append(f"{a} selected as the target in {n} cycles")
+    if e.acc_follows is not None:
+        after = res.trace["t"] >= (e.gap_settle_s if e.gap_settle_s is not None else 2.0)
+        share = float(np.mean(targets[after] == names.index(e.acc_follows))) if after.any() else 0.0
+        others = sorted({names[i] for i in targets[after] if i >= 0 and i != names.index(e.acc_follows)})
+        if share < 0.95 or others:
+            res.reasons.append(f"ACC followed {e.acc_follows} in {share:.0%} of the cycles"
+                               + (f", also {', '.join(others)}" if others else ""))
     if e.no_fcw and res.warning_time_s is not None:
         res.reasons.append(f"FCW warning at t = {res.warning_time_s:.2f} s")
     if e.gap_settle_s is not None:

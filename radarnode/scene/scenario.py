@@ -276,6 +276,8 @@ class Expectation:
     gap_settle_s: float | None = None      # ACC: time gap within ±gap_tolerance of the setting from then on
     gap_tolerance: float = 0.1
     min_gap_m: float | None = None         # the gap to the lead never below this
+    acc_follows: str | None = None         # ACC's target is this actor (from gap_settle_s, else 2 s): ≥ 95 % of cycles
+    never_target: tuple[str, ...] = ()     # actors ACC and FCW must never select (adjacent lane, roadside)
 
     def __post_init__(self) -> None:
         if self.lead is not None:
@@ -289,6 +291,11 @@ class Expectation:
         validate.number("gap_tolerance", self.gap_tolerance, lo=0.0, hi=1.0, lo_open=True)
         if self.min_gap_m is not None:
             validate.number("min_gap_m", self.min_gap_m, lo=0.0, hi=500.0)
+        if self.acc_follows is not None:
+            validate.text("acc_follows", self.acc_follows)
+        if not isinstance(self.never_target, (tuple, list)) or not all(isinstance(a, str) for a in self.never_target):
+            raise FieldError("never_target", self.never_target, "a list of actor ids")
+        object.__setattr__(self, "never_target", tuple(self.never_target))
 
 
 @dataclass(frozen=True)
@@ -346,9 +353,11 @@ class Scenario:
         dup = sorted({i for i in ids if ids.count(i) > 1})
         if dup:
             raise FieldError("actors", dup, "unique actor ids")
-        lead = self.ecu.expect.lead
-        if lead is not None and lead not in ids:
-            raise FieldError("ecu.expect.lead", lead, "the id of one of the actors: " + ", ".join(ids))
+        e = self.ecu.expect
+        for name, named in (("lead", [e.lead]), ("acc_follows", [e.acc_follows]), ("never_target", e.never_target)):
+            for a in named:
+                if a is not None and a not in ids:
+                    raise FieldError(f"ecu.expect.{name}", a, "the id of one of the actors: " + ", ".join(ids))
         for i, a in enumerate(self.actors):
             if a.lane is not None and a.lane >= self.road.lanes:
                 raise FieldError(f"actors[{i}].lane", a.lane, f"a lane index in [0, {self.road.lanes - 1}]")
