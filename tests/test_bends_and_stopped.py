@@ -99,3 +99,19 @@ def test_a_warning_after_the_impact_does_not_count():
     late = dataclasses.replace(r, warning_time_s=r.impact_time_s + 0.072, reasons=[], passed=True)
     _judge(sc, late)
     assert not late.passed and any("after the impact" in x for x in late.reasons), late.reasons
+
+
+def test_the_ecu_settings_of_a_scenario_reach_the_ecu():
+    from radarnode.consumer.evaluate import make_ecu
+    sc = load_scenario(SCENARIOS / "nhtsa_lead_stopped.yaml")
+    spec = dataclasses.replace(sc.ecu, path_half_width_m=1.2, fcw_ttc_warn_s=2.2, fcw_decel_warn_mps2=6.0,
+                               acc_min_speed_mps=5.0)
+    ecu = make_ecu(dataclasses.replace(sc, ecu=spec), 0.072)
+    assert (ecu.acc.settings.path_half_width_m, ecu.acc.settings.min_speed_mps) == (1.2, 5.0)
+    assert (ecu.fcw.settings.ttc_warn_s, ecu.fcw.settings.decel_warn_mps2) == (2.2, 6.0)
+    assert ecu.mount.x_m == sc.radar.mount.x_m
+    # a later threshold warns later: TTC at the warning follows the setting
+    early = simulate(sc)
+    late = simulate(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, fcw_ttc_warn_s=2.2,
+                                                                      fcw_decel_warn_mps2=9.0)))
+    assert late.ttc_at_warning_s < early.ttc_at_warning_s - 0.3, (early.ttc_at_warning_s, late.ttc_at_warning_s)

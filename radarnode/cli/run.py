@@ -14,11 +14,9 @@ import can
 
 from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
     scenario_from_args, stop_on_signals
-from radarnode.consumer.acc import STATE_NAMES, AccSettings
+from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
-from radarnode.consumer.ecu import Ecu
-from radarnode.consumer.path import SensorMount
-from radarnode.consumer.evaluate import EgoActuator
+from radarnode.consumer.evaluate import EgoActuator, make_ecu
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -68,9 +66,7 @@ def cmd(args) -> int:
     every = args.every or (1 if tty else max(1, round(1.0 / node.period_s)))
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     spec = scenario.ecu
-    ecu = Ecu(AccSettings(enabled=spec.acc_enabled or args.closed_loop, set_speed_mps=spec.set_speed_mps,
-                          time_gap_s=spec.time_gap_s), sensor_id=scenario.radar.sensor_id, period_s=node.period_s,
-              mount=SensorMount.of(scenario.radar.mount))
+    ecu = make_ecu(scenario, node.period_s, acc_enabled=spec.acc_enabled or args.closed_loop)
     actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
     if actuator is not None:
         actuator.at(0.0)

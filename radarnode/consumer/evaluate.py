@@ -21,8 +21,8 @@ import numpy as np
 from radarnode.consumer.acc import AccSettings, iso15622_limits
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.fcw import LEVEL_WARNING, FcwSettings
 from radarnode.consumer.path import SensorMount
-from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.scene.scenario import Scenario
 from radarnode.wire.node import EgoMotionSender, RadarNode
 
@@ -67,6 +67,18 @@ class ScenarioResult:
     trace: dict = field(default_factory=dict)
 
 
+def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = None) -> Ecu:
+    """The consumer ECU a scenario describes (``ecu``), with the radar's mount as calibrated into it."""
+    spec = scenario.ecu
+    acc = AccSettings(enabled=spec.acc_enabled if acc_enabled is None else acc_enabled,
+                      set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s,
+                      path_half_width_m=spec.path_half_width_m, min_speed_mps=spec.acc_min_speed_mps)
+    fcw = FcwSettings(ttc_warn_s=spec.fcw_ttc_warn_s, ttc_prewarn_s=max(4.0, spec.fcw_ttc_warn_s),
+                      decel_warn_mps2=spec.fcw_decel_warn_mps2)
+    return Ecu(acc, fcw, sensor_id=scenario.radar.sensor_id, period_s=period_s,
+               mount=SensorMount.of(scenario.radar.mount))
+
+
 def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     """Run ``scenario`` in simulated time and return the ECU's figures."""
     spec = scenario.ecu
@@ -75,9 +87,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     actuator = EgoActuator(scene, spec.actuator_lag_s, scenario.ego.speed_mps) if spec.closed_loop else None
     vehicle = EgoMotionSender(scene, scenario.radar.sensor_id)
     period = node.period_s
-    ecu = Ecu(AccSettings(enabled=spec.acc_enabled, set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s),
-              sensor_id=scenario.radar.sensor_id, period_s=period,
-              mount=SensorMount.of(scenario.radar.mount))
+    ecu = make_ecu(scenario, period)
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     lead = next((i for i, a in enumerate(scenario.actors) if a.id == spec.expect.lead), None)
     res = ScenarioResult(scenario.name, scenario.seed)

@@ -307,6 +307,10 @@ class EcuSpec:
     time_gap_s: float = 1.5
     closed_loop: bool = False
     actuator_lag_s: float = 0.3
+    acc_min_speed_mps: float = 0.0         # below it ACC waits in standby (0: stop and go)
+    path_half_width_m: float = 1.6         # the predicted path's half-width
+    fcw_ttc_warn_s: float = 2.8            # FCW warns at a TTC at or below this …
+    fcw_decel_warn_mps2: float = 4.0       # … or when avoiding the collision needs this deceleration
     expect: Expectation = Expectation()
 
     def __post_init__(self) -> None:
@@ -316,6 +320,10 @@ class EcuSpec:
             raise FieldError("time_gap_s", self.time_gap_s, "one of 1.0, 1.5, 2.0 s (ISO 15622 settings)")
         validate.boolean("closed_loop", self.closed_loop)
         validate.number("actuator_lag_s", self.actuator_lag_s, lo=0.01, hi=5.0)
+        validate.number("acc_min_speed_mps", self.acc_min_speed_mps, lo=0.0, hi=30.0)
+        validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
+        validate.number("fcw_ttc_warn_s", self.fcw_ttc_warn_s, lo=0.5, hi=10.0)
+        validate.number("fcw_decel_warn_mps2", self.fcw_decel_warn_mps2, lo=1.0, hi=10.0)
 
 
 @dataclass(frozen=True)
