@@ -2,8 +2,8 @@
 
 :class:`Ecu` is fed by a :class:`~radarnode.consumer.assembler.CycleAssembler` (``on_cycle``), reads the
 ego's speed and yaw rate from the same bus (0x300/0x301, as the radar does), and after every radar cycle
-produces the ACC request, the FCW level and the two status frames AccStatus 0x6A0 and FcwStatus 0x6A1
-(``dbc/radarnode.dbc``, E2E Profile 2). When no complete radar cycle has arrived for ``timeout_cycles``
+produces the ACC request, the FCW level and the two status frames AccStatus 0x6C0 and FcwStatus 0x6C1
+(``dbc/radarnode.dbc``, E2E Profile 2; one ECU per bus, so these IDs do not move with the sensor ID). When no complete radar cycle has arrived for ``timeout_cycles``
 cycle periods the radar is unavailable: ACC goes to fault and releases its request (:meth:`Ecu.tick`).
 """
 
@@ -20,12 +20,12 @@ from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.tracking import Tracker
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED
-from radarnode.wire.ars408 import shifted
+from radarnode.wire import ids
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.dbc import load_own_database
 from radarnode.wire.e2e import E2EProtector
 
-ACC_STATUS, FCW_STATUS = 0x6A0, 0x6A1
+ACC_STATUS, FCW_STATUS = ids.ACC_STATUS, ids.FCW_STATUS
 VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones still count in the path
 
 
@@ -186,7 +186,7 @@ class Ecu:
         ts = out.t_s if timestamp is None else timestamp
         msgs = []
         for base, payload in ((ACC_STATUS, acc), (FCW_STATUS, fcw)):
-            fid = shifted(base, self.sensor_id)
-            msgs.append(can.Message(arbitration_id=fid, data=self._e2e.protect(fid, payload.tobytes()),
+            msgs.append(can.Message(arbitration_id=ids.own_id(base), data=self._e2e.protect(ids.e2e_key(base),
+                                                                                            payload.tobytes()),
                                     is_extended_id=False, timestamp=ts, check=False))
         return msgs
