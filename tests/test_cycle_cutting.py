@@ -284,8 +284,8 @@ def test_fuzz_over_a_hundred_thousand_frames():
     rng = np.random.default_rng(2024)
     toggles = {k: _cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=int(rng.integers(2)),
                        RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=int(rng.integers(2)))
-               for k in range(50, 3000, 250)}
-    cycles = _node_cycles(3000, toggles=toggles, seed=7)
+               for k in range(50, 3400, 250)}
+    cycles = _node_cycles(3400, toggles=toggles, seed=7)
     stream, counts = _fuzz(cycles, rng, garbage_per_cycle=24)
     assert len(stream) >= 100_000
     asm, extra = _check_fuzz(cycles, stream, counts)
