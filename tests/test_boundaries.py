@@ -8,7 +8,7 @@ import pytest
 
 from radarnode.consumer.assembler import CycleAssembler
 from radarnode.perception.boundaries import RoadBoundaryEstimator
-from radarnode.wire import ars408 as P
+from radarnode.wire import ids
 from radarnode.wire.dbc import load_own_database
 from radarnode.wire.e2e import E2EChecker, E2EProtector
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -29,16 +29,17 @@ def test_own_dbc_messages_are_in_the_free_range_with_cycle_times_and_start_value
 
 def test_e2e_profile2_round_trip_and_failures():
     tx, rx = E2EProtector(), E2EChecker()
-    frames = [tx.protect(0x690, bytes([0, 0xA0, 1, 2, 3, 4, 5, 6])) for _ in range(40)]
+    left, right = ids.e2e_key(ids.ROAD_BOUNDARY_LEFT), ids.e2e_key(ids.ROAD_BOUNDARY_RIGHT)
+    frames = [tx.protect(left, bytes([0, 0xA0, 1, 2, 3, 4, 5, 6])) for _ in range(40)]
     assert [f[1] & 0xF for f in frames[:17]] == list(range(16)) + [0]     # counter wraps at 16
     assert all(f[1] & 0xF0 == 0xA0 for f in frames)                       # the rest of byte 1 is kept
-    assert all(rx.check(0x690, f) for f in frames[:10])
-    assert not rx.check(0x690, frames[9])                                  # repeated
+    assert all(rx.check(left, f) for f in frames[:10])
+    assert not rx.check(left, frames[9])                                   # repeated
     bad = bytearray(frames[10])
     bad[5] ^= 0x10
-    assert not rx.check(0x690, bytes(bad))                                 # corrupted
-    assert not rx.check(0x691, frames[11])                                 # wrong Data ID (other message)
-    assert rx.check(0x690, frames[13])                                     # two lost
+    assert not rx.check(left, bytes(bad))                                  # corrupted
+    assert not rx.check(right, frames[11])                                 # wrong Data ID (other message)
+    assert rx.check(left, frames[13])                                      # two lost
     assert (rx.stats.ok, rx.stats.crc_errors, rx.stats.repeated, rx.stats.lost) == (11, 2, 1, 3)
 
 
@@ -83,7 +84,7 @@ def test_no_guardrail_no_boundary_frames():
     sc = scenario("  - {id: lead, class: car, x_m: 40.0, lane: 1, speed_mps: 22.0}")
     out = RadarNode(sc).cycle(0.0)
     assert out.boundaries is None
-    assert not any(m.arbitration_id in (0x690, 0x691) for m in out.messages)
+    assert not any(ids.split_own_id(m.arbitration_id) for m in out.messages)
 
 
 def test_consumer_decodes_boundaries_and_drops_corrupted_frames():
@@ -95,7 +96,7 @@ def test_consumer_decodes_boundaries_and_drops_corrupted_frames():
     corrupted = 0
     stream = []
     for m in frames:
-        if m.arbitration_id == P.ROAD_BOUNDARY_RIGHT and corrupted < 3:
+        if m.arbitration_id == ids.ROAD_BOUNDARY_RIGHT and corrupted < 3:
             data = bytearray(m.data)
             data[3] ^= 0xFF
             m = can.Message(arbitration_id=m.arbitration_id, data=bytes(data), is_extended_id=False)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import can
 import numpy as np
 import pytest
@@ -154,3 +157,78 @@ def test_ecu_tracks_cluster_lists_too():
     # the lead's rear is 45 − 2.25 − 3.7 = 39 m ahead at the start and closes at 1 m/s
     assert late[-1].target.distance_m == pytest.approx(39.05 - 60 * 0.072, abs=1.5)
     assert late[-1].target.rel_speed_mps == pytest.approx(-1.0, abs=0.5)
+
+
+def _assembled(n=90):
+    """(t, decoded object cycle, ego speed, yaw rate) per cycle of the following scene."""
+    asm = CycleAssembler()
+    out = []
+    for t, msgs in _cycles(n):
+        for m in msgs:
+            asm.on_message_received(m)
+        (cycle,) = asm.drain()
+        out.append((t, cycle, asm.ego_speed_mps, asm.ego_yaw_rate_dps))
+    return out
+
+
+def _run_ecu(feed):
+    """Feed (t, cycle, speed, yaw) to a fresh ECU; returns it and the decision per cycle (None: refused)."""
+    ecu = Ecu(AccSettings(set_speed_mps=30.0, time_gap_s=1.5))
+    decisions = []
+    for t, cycle, speed, yaw in feed:
+        ecu.set_ego(t, speed, yaw)
+        decisions.append(ecu.on_cycle(t, cycle))
+    return ecu, decisions
+
+
+@pytest.mark.parametrize("bad, counter", [(-1e9, "time_jumps"), (1e300, "rejected_time"), (float("nan"), "rejected_time"),
+                                          (float("inf"), "rejected_time"), (-float("inf"), "rejected_time"),
+                                          (1e6, "time_jumps")])
+def test_ecu_skips_a_stray_timestamp_and_keeps_its_tracks(bad, counter):
+    cycles = _assembled()
+    feed = [(bad if k == 40 else t, c, v, w) for k, (t, c, v, w) in enumerate(cycles)]
+    ecu, dec = _run_ecu(feed)
+    st = ecu.stats
+    assert dec[40] is None and getattr(st, counter) == 1
+    assert st.internal_errors == 0 and st.time_resyncs == 0 and st.cycles == len(cycles) - 1
+    assert all(d is not None for i, d in enumerate(dec) if i != 40)
+    # a single stray time leaves the tracks alone: the same track is followed before and after
+    before, after = dec[39].target, dec[41:]
+    assert before is not None and all(d.target is not None and d.target.track_id == before.track_id for d in after)
+    assert after[-1].target.distance_m == pytest.approx(cycles[-1][1].objects.dist_long_m.min() - 2.25, abs=3.0)
+    assert ecu.ego_accel_mps2 == pytest.approx(0.0, abs=0.05)          # no acceleration made up from the jump
+
+
+@pytest.mark.parametrize("shift_s, label", [(600.0, "10-minute gap"), (-1e9, "clock restarted far back"),
+                                            (-2.5, "clock 2.5 s back")])
+def test_ecu_restarts_tracking_on_a_new_time_base(shift_s, label):
+    cycles = _assembled()
+    feed = [(t + (shift_s if k >= 40 else 0.0), c, v, w) for k, (t, c, v, w) in enumerate(cycles)]
+    ecu, dec = _run_ecu(feed)
+    st = ecu.stats
+    assert dec[40] is None and st.time_jumps == 1 and st.time_resyncs == 1, label
+    assert st.rejected_time == 0 and st.internal_errors == 0
+    assert dec[39].target is not None and all(d is not None for d in dec[41:])
+    # tracking starts again on the new time base: confirmed within a few cycles and held to the end
+    assert all(d.target is not None for d in dec[45:]), label
+    assert max(t.age for t in ecu.tracker.tracks) < len(cycles) - 41            # born after the restart
+    assert all(np.isfinite(t.x).all() and np.isfinite(t.p).all() for t in ecu.tracker.tracks)
+
+
+def test_ecu_guards_its_other_inputs():
+    cycles = _assembled(30)
+    ecu, dec = _run_ecu(cycles)
+    assert ecu.tick(float("nan")) is None and ecu.stats.rejected_time == 1
+    ecu.set_ego(cycles[-1][0] + 0.072, float("nan"), 0.0)
+    ecu.set_ego(float("inf"), 20.0, 0.0)
+    assert ecu.stats.bad_ego == 2 and math.isfinite(ecu.ego_speed_mps)
+    t, cycle, _, _ = cycles[-1]
+    broken = dataclasses.replace(cycle, objects=cycle.objects.take(np.arange(len(cycle.objects))))
+    broken.objects.dist_long_m[0] = np.nan
+    d = ecu.on_cycle(t + 0.072, broken)
+    assert d is not None and ecu.stats.bad_measurements == 1 and ecu.stats.internal_errors == 0
+    with pytest.raises(TypeError, match="Ecu.on_cycle cycle: value of type str is not allowed"):
+        ecu.on_cycle(t + 0.144, "not a cycle")
+    for name, kwargs in (("period_s", {"period_s": float("nan")}), ("max_gap_s", {"max_gap_s": 0.01})):
+        with pytest.raises(ValueError, match=f"Ecu {name}: value"):
+            Ecu(**kwargs)

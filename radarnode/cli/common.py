@@ -94,7 +94,7 @@ def format_cycle(cycle: ObjectCycle | ClusterCycle, t_s: float | None = None, ma
 
 
 def format_boundaries(boundaries: dict) -> str:
-    """One line with the decoded road boundaries (radarnode's 0x690/0x691)."""
+    """One line with the decoded road boundaries (radarnode's RoadBoundary_Left/Right, 0x680/0x681 + 8 × SensorID)."""
     parts = []
     for side in ("left", "right"):
         b = boundaries.get(side)

@@ -83,11 +83,17 @@ def cmd(args) -> int:
 
         def on_cycle(out) -> None:
             cycle = assembler.get(timeout=1.0)
-            if cycle is None:
-                decision = ecu.tick(out.t_s)
-            else:
+            # a cycle that waited for its next header (learning the layout) comes with this one
+            cycles = [cycle] + assembler.drain() if cycle is not None else []
+            decision = None
+            if cycles:
                 ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
-                decision = ecu.on_cycle(out.t_s, cycle)
+                for c in cycles:
+                    decision = ecu.on_cycle(out.t_s, c) or decision
+                cycle = cycles[-1]
+                decoded.extend(cycles[:-1])
+            else:
+                decision = ecu.tick(out.t_s)
             if decision is not None:
                 for m in ecu.frames(decision):
                     consumer_bus.send(m)             # the ECU's status frames, on the same bus

@@ -7,18 +7,43 @@ one :class:`ObjectCycle` or :class:`ClusterCycle` per well-formed cycle. A
 cycle is well-formed when the header's count of general frames arrived and
 every other group (quality, extended) arrived for exactly the same IDs or not
 at all. Everything else is counted in :class:`ConsumerStats` and skipped; the
-listener never raises on bad traffic.
+listener never raises on bad traffic. A cycle is delivered whole or counted as
+dropped (``incomplete_cycles``), never in part.
 
-A cycle ends when all groups the radar announced in RadarState (0x201) are
-complete, when the next header arrives, or on :meth:`CycleAssembler.flush`
-(end of a log, or a time-out).
+Where a cycle ends is decided from the cycles' own frames, never from one
+RadarState 0x201 (a stray or forged one must not strip groups):
+
+* a cycle is complete as soon as the header's count of frames arrived in every
+  group of the expected *layout*; the layout is learned from the cycles
+  themselves: every group seen in any of the last ``LAYOUT_MEMORY`` complete
+  cycles (all groups until the first cycle is seen). A group the node stopped
+  sending therefore drops out after ``LAYOUT_MEMORY`` cycles, each of them
+  delivered at the next header instead of at once;
+* RadarState's SendQuality/SendExtInfo bits can only *add* groups to the
+  layout, for ``LAYOUT_MEMORY`` headers (so a configuration change that adds a
+  group is waited for); bits that are off are ignored;
+* otherwise the cycle ends at the next header, after ``cycle_timeout_s`` of
+  silence on the cycle (checked by :meth:`CycleAssembler.get` and
+  :meth:`CycleAssembler.expire`, in wall-clock time of arrival), or on
+  :meth:`CycleAssembler.flush` (end of a log).
+
+Frames of a group that arrive after their cycle was delivered are counted as
+``late_frames`` and put their group back into the layout at once.
+
+IDs are looked up in this consumer's ID plan (:mod:`radarnode.wire.ids`): the
+ARS 408 IDs of its sensor, its sensor's own messages, the ECU's; frames of the
+other seven sensors are counted in ``other_sensor_frames``, never decoded as
+this sensor's.
 """
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import logging
 import queue
+import threading
+import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -26,9 +51,10 @@ import can
 import cantools
 import numpy as np
 
+from radarnode.perception.boundaries import Boundary
 from radarnode.perception.types import ClusterList, ObjectList
 from radarnode.wire import ars408 as P
-from radarnode.perception.boundaries import Boundary
+from radarnode.wire import ids
 from radarnode.wire.dbc import load_database, load_own_database
 from radarnode.wire.e2e import E2EChecker
 
@@ -65,12 +91,15 @@ class ConsumerStats:
     object_cycles: int = 0
     cluster_cycles: int = 0
     incomplete_cycles: int = 0      # started but not well-formed: dropped
+    timed_out_cycles: int = 0       # closed after cycle_timeout_s of silence (delivered or dropped)
     lost_cycles: int = 0            # gaps in MeasCounter
     counter_resets: int = 0         # MeasCounter went backwards: sensor restart
     unknown_id: int = 0
+    other_sensor_frames: int = 0    # frames of another sensor ID (its ARS 408 or own messages): not ours
     wrong_dlc: int = 0
     decode_errors: int = 0
     orphan_frames: int = 0          # list frames with no header before them
+    late_frames: int = 0            # list frames of a group that came after their cycle was delivered
     duplicate_frames: int = 0       # exact repeats, ignored
     conflicting_frames: int = 0     # same object ID twice with different content
     unexpected_ids: int = 0         # quality/extended for an ID the general group lacks
@@ -83,7 +112,7 @@ class ConsumerStats:
     e2e_repeated: int = 0           # own frames whose alive counter did not advance: dropped
 
     def dropped(self) -> int:
-        return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames
+        return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
                 + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
                 + self.e2e_errors + self.e2e_repeated)
 
@@ -91,18 +120,30 @@ class ConsumerStats:
         return dataclasses.asdict(self)
 
 
+LAYOUT_MEMORY = 3            # cycles: how long a group stays expected after it was last seen or announced
+CYCLE_TIMEOUT_S = 0.1        # silence after which a waiting cycle is closed (longer than a 72-ms cycle)
+GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED), "cl": (P.CLUSTER_GENERAL, P.CLUSTER_QUALITY)}
+GENERAL = {"obj": P.OBJ_GENERAL, "cl": P.CLUSTER_GENERAL}
+HEADERS = {P.OBJ_STATUS: "obj", P.CLUSTER_STATUS: "cl"}
+LIST_KIND = {g: kind for kind, groups in GROUPS.items() for g in groups}
+
+
 class _Pending:
     """Frames of one cycle that is being assembled."""
 
-    def __init__(self, kind: str, expected: int, meas_counter: int, timestamp: float, n_near: int = 0) -> None:
+    def __init__(self, kind: str, expected: int, meas_counter: int, timestamp: float, header: bytes,
+                 n_near: int = 0) -> None:
         self.kind = kind
         self.expected = expected
         self.meas_counter = meas_counter
         self.timestamp = timestamp
+        self.header = header
         self.n_near = n_near
         self.groups: dict[int, dict[int, tuple[bytes, dict]]] = {}
         self.order: list[int] = []
         self.bad = False
+        self.early = False             # delivered as soon as the layout was complete
+        self.arrival = time.monotonic()
 
 
 class CycleAssembler(can.Listener):
@@ -111,7 +152,8 @@ class CycleAssembler(can.Listener):
     Parameters
     ----------
     sensor_id : int
-        Which radar to listen to (its IDs are shifted by 0x10 × sensor_id).
+        Which radar to listen to (0..7): its ARS 408 IDs are shifted by 0x10 × sensor_id, its own
+        messages sit at 0x680 + 8 × sensor_id + slot (:mod:`radarnode.wire.ids`).
     database : cantools Database, optional
         Defaults to the project's ARS 408 DBC.
     on_cycle : callable, optional
@@ -119,13 +161,22 @@ class CycleAssembler(can.Listener):
     maxsize : int
         Size of the internal queue read by :meth:`get`; when full, the oldest
         cycle is discarded (and counted) so a slow reader never stalls the bus.
+    cycle_timeout_s : float
+        A cycle still waiting for groups is closed after this much silence on it (wall clock).
     """
 
     def __init__(self, sensor_id: int = 0, database: cantools.database.can.Database | None = None,
-                 on_cycle: Callable[[ObjectCycle | ClusterCycle], None] | None = None, maxsize: int = 10_000) -> None:
+                 on_cycle: Callable[[ObjectCycle | ClusterCycle], None] | None = None, maxsize: int = 10_000,
+                 cycle_timeout_s: float = CYCLE_TIMEOUT_S) -> None:
+        if isinstance(sensor_id, bool) or not isinstance(sensor_id, int) or not 0 <= sensor_id < ids.NUM_SENSORS:
+            raise ValueError(f"sensor_id: value {sensor_id!r} is not allowed; expected an integer 0..7")
+        if not (isinstance(cycle_timeout_s, (int, float)) and 0.0 < cycle_timeout_s < float("inf")):
+            raise ValueError(f"cycle_timeout_s: value {cycle_timeout_s!r} is not allowed; expected a finite "
+                             "number of seconds > 0")
         self.db = database if database is not None else load_database()
         self.sensor_id = sensor_id
         self.on_cycle = on_cycle
+        self.cycle_timeout_s = float(cycle_timeout_s)
         self.stats = ConsumerStats()
         self.radar_state: dict | None = None
         self.version: dict | None = None
@@ -133,24 +184,49 @@ class CycleAssembler(can.Listener):
         self.ego_yaw_rate_dps: float | None = None
         self.queue_overflow = 0
         self._queue: queue.Queue = queue.Queue(maxsize=maxsize)
+        self._lock = threading.RLock()
         self._pending: _Pending | None = None
+        self._last_done: _Pending | None = None
         self._last_counter: dict[str, int] = {}
         self._stride: dict[str, int] = {}
+        # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
+        self._seen_layouts: dict[str, collections.deque] = {k: collections.deque(maxlen=LAYOUT_MEMORY)
+                                                            for k in GROUPS}
+        self._announced: dict[str, dict[int, int]] = {k: {} for k in GROUPS}
         self._messages = {m.frame_id: m for m in self.db.messages}
         self._own = {m.frame_id: m for m in load_own_database().messages}
+        self._routes = self._id_plan(sensor_id)
         self.e2e = E2EChecker()
         #: latest decoded road boundaries: {"left": Boundary, "right": Boundary}
         self.road_boundaries: dict[str, Boundary] = {}
         #: latest decoded AccStatus / FcwStatus signals, by message name
         self.ecu_status: dict[str, dict] = {}
 
+    def _id_plan(self, sensor_id: int) -> dict[int, tuple[str, int]]:
+        """CAN ID -> ('ars', base ID) | ('own', template ID) | ('other', CAN ID) for this consumer's sensor."""
+        routes: dict[int, tuple[str, int]] = {}
+        for other in range(ids.NUM_SENSORS):
+            if other == sensor_id:
+                continue
+            for base in self._messages:
+                routes[P.shifted(base, other)] = ("other", base)
+            for tmpl in self._own:
+                if ids.is_sensor_message(tmpl):
+                    routes[ids.own_id(tmpl, other)] = ("other", tmpl)
+        for base in self._messages:                  # the unshifted 0x008 belongs to every sensor
+            routes[P.shifted(base, sensor_id)] = ("ars", base)
+        for tmpl in self._own:
+            routes[ids.own_id(tmpl, sensor_id)] = ("own", tmpl)
+        return routes
+
     # --- can.Listener ---------------------------------------------------------
     def on_message_received(self, msg: can.Message) -> None:
-        try:
-            self._handle(msg)
-        except Exception:  # noqa: BLE001 - a listener must survive any frame
-            self.stats.decode_errors += 1
-            logger.debug("frame %r could not be handled", msg, exc_info=True)
+        with self._lock:
+            try:
+                self._handle(msg)
+            except Exception:  # noqa: BLE001 - a listener must survive any frame
+                self.stats.decode_errors += 1
+                logger.debug("frame %r could not be handled", msg, exc_info=True)
 
     def on_error(self, exc: Exception) -> None:
         logger.warning("bus error in consumer: %s", exc)
@@ -160,11 +236,24 @@ class CycleAssembler(can.Listener):
 
     # --- reading cycles ----------------------------------------------------------
     def get(self, timeout: float | None = None) -> ObjectCycle | ClusterCycle | None:
-        """The next assembled cycle, or None after ``timeout`` seconds."""
-        try:
-            return self._queue.get(timeout=timeout)
-        except queue.Empty:
-            return None
+        """The next assembled cycle, or None after ``timeout`` seconds.
+
+        While waiting, a cycle that has been silent for ``cycle_timeout_s`` is closed (:meth:`expire`).
+        """
+        deadline = None if timeout is None else time.monotonic() + max(timeout, 0.0)
+        while True:
+            step = self.cycle_timeout_s / 2
+            if deadline is not None:
+                step = min(step, max(deadline - time.monotonic(), 0.0))
+            try:
+                return self._queue.get(timeout=step) if step > 0 else self._queue.get_nowait()
+            except queue.Empty:
+                self.expire()
+                try:
+                    return self._queue.get_nowait()
+                except queue.Empty:
+                    if deadline is not None and time.monotonic() >= deadline:
+                        return None
 
     def drain(self) -> list[ObjectCycle | ClusterCycle]:
         """Every cycle assembled so far."""
@@ -185,9 +274,24 @@ class CycleAssembler(can.Listener):
 
     def flush(self) -> None:
         """Close the cycle being assembled (end of data or time-out)."""
-        if self._pending is not None:
-            self._finish(self._pending)
-            self._pending = None
+        with self._lock:
+            if self._pending is not None:
+                p, self._pending = self._pending, None
+                self._finish(p)
+
+    def expire(self, now: float | None = None) -> bool:
+        """Close the cycle being assembled when nothing arrived for it for ``cycle_timeout_s``.
+
+        ``now`` is ``time.monotonic()`` by default. Returns True when a cycle was closed.
+        """
+        with self._lock:
+            p = self._pending
+            now = time.monotonic() if now is None else now
+            if p is None or not now - p.arrival > self.cycle_timeout_s:
+                return False
+            self.stats.timed_out_cycles += 1
+            self.flush()
+            return True
 
     # --- internals ----------------------------------------------------------------
     def _handle(self, msg: can.Message) -> None:
@@ -195,14 +299,18 @@ class CycleAssembler(can.Listener):
         if msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id:
             self.stats.errors_frames += 1
             return
-        base = msg.arbitration_id - 0x10 * self.sensor_id if msg.arbitration_id != P.COLL_DET_RELAY else 0x008
-        message = self._messages.get(base)
-        if message is None:
-            if base in self._own:
-                self._own_frame(base, msg)
-                return
+        route = self._routes.get(msg.arbitration_id)
+        if route is None:
             self.stats.unknown_id += 1
             return
+        kind, base = route
+        if kind == "other":
+            self.stats.other_sensor_frames += 1
+            return
+        if kind == "own":
+            self._own_frame(base, msg)
+            return
+        message = self._messages[base]
         data = bytes(msg.data)
         if len(data) != message.length:
             self.stats.wrong_dlc += 1
@@ -212,14 +320,15 @@ class CycleAssembler(can.Listener):
         except (cantools.database.DecodeError, ValueError, KeyError):
             self.stats.decode_errors += 1
             return
-        if base in (P.OBJ_STATUS, P.CLUSTER_STATUS):
-            self._header(base, values, msg.timestamp)
-        elif base in (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED, P.CLUSTER_GENERAL, P.CLUSTER_QUALITY):
+        if base in HEADERS:
+            self._header(base, values, data, msg.timestamp)
+        elif base in LIST_KIND:
             self._list_frame(base, values, data)
         else:
             self.stats.status_frames += 1
             if base == P.RADAR_STATE:
                 self.radar_state = values
+                self._announce(values)
             elif base == P.VERSION_ID:
                 self.version = values
             elif base == P.SPEED_INFO:
@@ -228,38 +337,57 @@ class CycleAssembler(can.Listener):
             elif base == P.YAW_RATE_INFO:
                 self.ego_yaw_rate_dps = values["RadarDevice_YawRate"]
 
-    def _own_frame(self, base: int, msg: can.Message) -> None:
-        """radarnode's own E2E-protected messages: checked, then decoded."""
-        message = self._own[base]
+    def _own_frame(self, template: int, msg: can.Message) -> None:
+        """radarnode's own E2E-protected messages: checked with this sensor's Data ID, then decoded."""
+        message = self._own[template]
         data = bytes(msg.data)
         if len(data) != message.length:
             self.stats.wrong_dlc += 1
             return
         before = (self.e2e.stats.crc_errors, self.e2e.stats.repeated)
-        if not self.e2e.check(msg.arbitration_id, data):
+        if not self.e2e.check(ids.e2e_key(template, self.sensor_id), data):
             self.stats.e2e_errors += self.e2e.stats.crc_errors - before[0]
             self.stats.e2e_repeated += self.e2e.stats.repeated - before[1]
             return
         v = message.decode(data, decode_choices=False)
-        if base not in (P.ROAD_BOUNDARY_LEFT, P.ROAD_BOUNDARY_RIGHT):
+        if template not in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT):
             # the consumer ECU's AccStatus / FcwStatus, as another ECU on the bus would read them
             self.ecu_status[message.name] = v
             self.stats.ecu_frames += 1
             return
-        prefix, side = ("RBL", "left") if base == P.ROAD_BOUNDARY_LEFT else ("RBR", "right")
+        prefix, side = ("RBL", "left") if template == ids.ROAD_BOUNDARY_LEFT else ("RBR", "right")
         self.road_boundaries[side] = Boundary(
             bool(v[f"{prefix}_Valid"]), v[f"{prefix}_LatOffset"], np.radians(v[f"{prefix}_Heading"]),
             v[f"{prefix}_Curvature"], v[f"{prefix}_RangeStart"], v[f"{prefix}_RangeEnd"],
             v[f"{prefix}_Confidence"] / 7.0)
         self.stats.boundary_frames += 1
 
-    def _header(self, base: int, values: dict, timestamp: float) -> None:
+    def _announce(self, state: dict) -> None:
+        """RadarState can add groups to the expected layout (for LAYOUT_MEMORY headers), never remove any."""
+        if int(state["RadarState_SendQualityCfg"]):
+            self._announced["obj"][P.OBJ_QUALITY] = LAYOUT_MEMORY
+            self._announced["cl"][P.CLUSTER_QUALITY] = LAYOUT_MEMORY
+        if int(state["RadarState_SendExtInfoCfg"]):
+            self._announced["obj"][P.OBJ_EXTENDED] = LAYOUT_MEMORY
+
+    def expected_groups(self, kind: str) -> set[int]:
+        """Groups a cycle of ``kind`` ('obj' or 'cl') must hold before it is delivered without waiting."""
+        seen = self._seen_layouts[kind]
+        groups = set().union(*seen) if seen else set(GROUPS[kind])
+        return groups | {GENERAL[kind]} | set(self._announced[kind])
+
+    def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
+        kind = HEADERS[base]
+        for known in (self._pending, self._last_done):
+            if known is not None and known.kind == kind and known.header == data:
+                self.stats.duplicate_frames += 1     # the same header again: not a new cycle
+                return
         self.flush()
-        if base == P.OBJ_STATUS:
-            kind, n, n_near, counter = "obj", int(values["Obj_NofObjects"]), 0, int(values["Obj_MeasCounter"])
+        if kind == "obj":
+            n, n_near, counter = int(values["Obj_NofObjects"]), 0, int(values["Obj_MeasCounter"])
         else:
             n_near = int(values["Cluster_NofClustersNear"])
-            kind, counter = "cl", int(values["Cluster_MeasCounter"])
+            counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
         last = self._last_counter.get(kind)
         if last is not None:
@@ -275,16 +403,22 @@ class CycleAssembler(can.Listener):
                 if gap > stride:
                     self.stats.lost_cycles += gap // stride - 1
         self._last_counter[kind] = counter
-        self._pending = _Pending(kind, n, counter, timestamp, n_near)
+        announced = self._announced[kind]
+        for g in list(announced):
+            announced[g] -= 1
+            if announced[g] < 0:
+                del announced[g]
+        self._pending = _Pending(kind, n, counter, timestamp, data, n_near)
         self._maybe_complete()
 
     def _list_frame(self, base: int, values: dict, data: bytes) -> None:
         pending = self._pending
-        kind = "obj" if base in (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED) else "cl"
-        if pending is None or pending.kind != kind:
-            self.stats.orphan_frames += 1
-            return
+        kind = LIST_KIND[base]
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
+        if pending is None or pending.kind != kind:
+            self._stray_list_frame(kind, base, oid, data)
+            return
+        pending.arrival = time.monotonic()
         group = pending.groups.setdefault(base, {})
         if oid in group:
             if group[oid][0] == data:
@@ -293,62 +427,74 @@ class CycleAssembler(can.Listener):
                 self.stats.conflicting_frames += 1
                 pending.bad = True
             return
-        general = P.OBJ_GENERAL if kind == "obj" else P.CLUSTER_GENERAL
-        if base == general:
+        if base == GENERAL[kind]:
             if len(group) >= pending.expected:
                 self.stats.extra_frames += 1
                 pending.bad = True
                 return
             pending.order.append(oid)
-        elif oid not in pending.groups.get(general, {}):
-            self.stats.unexpected_ids += 1
-            pending.bad = True
-            return
         group[oid] = (data, values)
         self._maybe_complete()
 
-    def _expected_groups(self, kind: str) -> list[int] | None:
-        """Groups the radar announced in RadarState, or None when no RadarState was seen yet."""
-        st = self.radar_state
-        if st is None:
-            return None
-        quality = bool(st["RadarState_SendQualityCfg"])
-        if kind == "obj":
-            return ([P.OBJ_GENERAL] + ([P.OBJ_QUALITY] if quality else [])
-                    + ([P.OBJ_EXTENDED] if st["RadarState_SendExtInfoCfg"] else []))
-        return [P.CLUSTER_GENERAL] + ([P.CLUSTER_QUALITY] if quality else [])
+    def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
+        """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
+        done = self._last_done
+        if done is not None and done.kind == kind:
+            prior = done.groups.get(base, {}).get(oid)
+            if prior is not None and prior[0] == data:
+                self.stats.duplicate_frames += 1
+                return
+            if base not in done.groups and oid in done.groups.get(GENERAL[kind], {}):
+                # a group the layout did not expect, for an object of the last cycle: expect it again
+                self.stats.late_frames += 1
+                self._announced[kind][base] = LAYOUT_MEMORY
+                return
+        self.stats.orphan_frames += 1
 
     def _maybe_complete(self) -> None:
         p = self._pending
-        expected = self._expected_groups(p.kind)
-        if expected is None or p.bad:
+        if p.bad:
             return
-        if all(len(p.groups.get(g, {})) == p.expected for g in expected):
-            self._finish(p)
+        general = p.groups.get(GENERAL[p.kind], {})
+        if len(general) != p.expected:
+            return
+        for g in self.expected_groups(p.kind):
+            if len(p.groups.get(g, ())) != p.expected:
+                return
+        if all(set(group) == set(general) for group in p.groups.values()):
+            p.early = True
             self._pending = None
+            self._finish(p)
 
     def _finish(self, p: _Pending) -> None:
-        general_id = P.OBJ_GENERAL if p.kind == "obj" else P.CLUSTER_GENERAL
+        general_id = GENERAL[p.kind]
         general = p.groups.get(general_id, {})
-        others = [g for g in p.groups if g != general_id]
-        complete = (not p.bad and len(general) == p.expected
-                    and all(set(p.groups[g]) == set(general) for g in others))
+        unexpected = sum(len(set(group) - set(general)) for g, group in p.groups.items() if g != general_id)
+        self.stats.unexpected_ids += unexpected
+        complete = (not p.bad and not unexpected and len(general) == p.expected
+                    and all(set(group) == set(general) for group in p.groups.values()))
+        present = {g for g, group in p.groups.items() if group}
+        seen = self._seen_layouts[p.kind]
         if not complete:
             self.stats.incomplete_cycles += 1
+            if p.expected and seen:
+                seen[-1] = seen[-1] | present        # evidence that a group exists, never that it does not
             return
+        if p.expected:
+            seen.append(frozenset(present))
+        self._last_done = p
         rows = [general[i][1] for i in p.order]
         if p.kind == "obj":
             q = p.groups.get(P.OBJ_QUALITY)
             e = p.groups.get(P.OBJ_EXTENDED)
             ol = P.objects_from_signals(rows, [q[i][1] if q else None for i in p.order],
                                         [e[i][1] if e else None for i in p.order])
-            cycle: ObjectCycle | ClusterCycle = ObjectCycle(p.meas_counter, p.timestamp, ol, q is not None,
-                                                            e is not None)
+            cycle: ObjectCycle | ClusterCycle = ObjectCycle(p.meas_counter, p.timestamp, ol, bool(q), bool(e))
             self.stats.object_cycles += 1
         else:
             q = p.groups.get(P.CLUSTER_QUALITY)
             cl = P.clusters_from_signals(rows, [q[i][1] if q else None for i in p.order], p.n_near)
-            cycle = ClusterCycle(p.meas_counter, p.timestamp, cl, q is not None)
+            cycle = ClusterCycle(p.meas_counter, p.timestamp, cl, bool(q))
             self.stats.cluster_cycles += 1
         self.stats.cycles += 1
         if self._queue.full():

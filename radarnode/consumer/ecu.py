@@ -2,13 +2,21 @@
 
 :class:`Ecu` is fed by a :class:`~radarnode.consumer.assembler.CycleAssembler` (``on_cycle``), reads the
 ego's speed and yaw rate from the same bus (0x300/0x301, as the radar does), and after every radar cycle
-produces the ACC request, the FCW level and the two status frames AccStatus 0x6A0 and FcwStatus 0x6A1
-(``dbc/radarnode.dbc``, E2E Profile 2). When no complete radar cycle has arrived for ``timeout_cycles``
+produces the ACC request, the FCW level and the two status frames AccStatus 0x6C0 and FcwStatus 0x6C1
+(``dbc/radarnode.dbc``, E2E Profile 2; one ECU per bus, so these IDs do not move with the sensor ID). When no complete radar cycle has arrived for ``timeout_cycles``
 cycle periods the radar is unavailable: ACC goes to fault and releases its request (:meth:`Ecu.tick`).
+
+Every time the ECU is given is checked before it reaches the tracker (:attr:`Ecu.stats` counts what was refused):
+a timestamp that is not a finite number or lies beyond ±1e11 s is refused; one that runs backwards or jumps
+ahead by more than ``max_gap_s`` skips its cycle, and when the next cycle continues from the skipped one (a
+new time base: a restarted clock, a long pause) tracking restarts there, while a single stray timestamp
+leaves the tracks as they were. No exception from the data escapes :meth:`Ecu.on_cycle`.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import logging
 import math
 from dataclasses import dataclass
 
@@ -21,17 +29,37 @@ from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.tracking import Tracker
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED
-from radarnode.wire.ars408 import shifted
+from radarnode.wire import ids
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.dbc import load_own_database
 from radarnode.wire.e2e import E2EProtector
 
-ACC_STATUS, FCW_STATUS = 0x6A0, 0x6A1
+logger = logging.getLogger(__name__)
+
+ACC_STATUS, FCW_STATUS = ids.ACC_STATUS, ids.FCW_STATUS
 VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones still count in the path
 #: a stationary object in the path is a collision candidate, whatever its class, when it reflects like a vehicle
 #: (a car's rear ≈ 10 dBsm; a guardrail post, a pedestrian ≈ −5) and has been tracked for this many cycles
 OBSTACLE_RCS_DBSM = 5.0
 OBSTACLE_MIN_AGE = 4
+MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
+MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
+
+
+@dataclass
+class EcuStats:
+    """What the ECU refused or repaired, besides the cycles it used."""
+
+    cycles: int = 0                  # radar cycles tracked
+    rejected_time: int = 0           # timestamps that are NaN, infinite or beyond ±MAX_TIME_S: refused
+    time_jumps: int = 0              # cycles skipped: time ran backwards or jumped ahead by more than max_gap_s
+    time_resyncs: int = 0            # a new time base confirmed by the next cycle: tracking restarted
+    bad_measurements: int = 0        # list entries with a non-finite value: left out
+    bad_ego: int = 0                 # ego-motion inputs with a non-finite time or value: ignored
+    internal_errors: int = 0         # the tracker failed on a cycle: tracks restarted (should stay 0)
+
+    def as_dict(self) -> dict[str, int]:
+        return dataclasses.asdict(self)
 
 
 @dataclass
@@ -53,9 +81,19 @@ class Ecu:
     """ACC and FCW on the decoded object list of one radar."""
 
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
-                 period_s: float = 0.072, timeout_cycles: int = 3, mount: SensorMount = SensorMount()) -> None:
+                 period_s: float = 0.072, timeout_cycles: int = 3, max_gap_s: float = MAX_GAP_S,
+                 mount: SensorMount = SensorMount()) -> None:
+        for name, value in (("period_s", period_s), ("max_gap_s", max_gap_s)):
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
+                raise ValueError(f"Ecu {name}: value {value!r} is not allowed; expected a finite number of seconds > 0")
+        if max_gap_s < period_s:
+            raise ValueError(f"Ecu max_gap_s: value {max_gap_s!r} is not allowed; expected at least period_s "
+                             f"({period_s!r} s)")
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
+        self.max_gap_s = float(max_gap_s)
+        self.stats = EcuStats()
+        self._candidate_t: float | None = None     # a skipped cycle's time: a new time base if the next follows it
         self.acc = Acc(acc)
         self.fcw = Fcw(fcw)
         self.sensor_id = sensor_id
@@ -75,25 +113,100 @@ class Ecu:
         self.boundaries: dict | None = None
         self._last_out_t: float | None = None
 
+    @staticmethod
+    def _finite_time(t_s) -> float | None:
+        """``t_s`` as a float when it is a usable time, else None."""
+        try:
+            t = float(t_s)
+        except (TypeError, ValueError, OverflowError):
+            return None
+        return t if math.isfinite(t) and abs(t) <= MAX_TIME_S else None
+
     def set_ego(self, t_s: float, speed_mps: float | None, yaw_rate_dps: float | None) -> None:
-        """Ego motion as read from the bus; the acceleration is differentiated (and smoothed)."""
+        """Ego motion as read from the bus; the acceleration is differentiated (and smoothed).
+
+        A non-finite time, speed or yaw rate is ignored (counted in ``stats.bad_ego``); after a backwards step
+        or a gap longer than ``max_gap_s`` the differentiation starts again instead of using that step.
+        """
         if speed_mps is None:
             return
-        if self._prev_speed is not None and t_s > self._prev_speed[0]:
-            a = (speed_mps - self._prev_speed[1]) / (t_s - self._prev_speed[0])
+        t = self._finite_time(t_s)
+        yaw = 0.0 if yaw_rate_dps is None else yaw_rate_dps
+        if t is None or not (math.isfinite(speed_mps) and math.isfinite(yaw)):
+            self.stats.bad_ego += 1
+            return
+        if self._prev_speed is not None and 0.0 < t - self._prev_speed[0] <= self.max_gap_s:
+            a = (speed_mps - self._prev_speed[1]) / (t - self._prev_speed[0])
             self.ego_accel_mps2 += 0.5 * (a - self.ego_accel_mps2)
-        self._prev_speed = (t_s, speed_mps)
+        self._prev_speed = (t, speed_mps)
         self.ego_speed_mps = speed_mps
-        self.ego_yaw_rate_rps = math.radians(yaw_rate_dps or 0.0)
+        self.ego_yaw_rate_rps = math.radians(yaw)
 
-    def on_cycle(self, t_s: float, cycle: ObjectCycle | ClusterCycle) -> EcuOutput:
-        """A complete radar cycle (object or cluster list) arrived at ``t_s``."""
-        if isinstance(cycle, ClusterCycle):
-            return self._on_clusters(t_s, cycle)
+    def _accept_time(self, t_s) -> float | None:
+        """The cycle's time if tracking may use it, else None (counted); restarts tracking on a new time base."""
+        t = self._finite_time(t_s)
+        if t is None:
+            self.stats.rejected_time += 1
+            return None
+        last = self.last_cycle_t
+        if last is None or 0.0 <= t - last <= self.max_gap_s:
+            self._candidate_t = None
+            return t
+        cand = self._candidate_t
+        if cand is not None and 0.0 <= t - cand <= self.max_gap_s:
+            # two cycles in a row on another time base: the old tracks' time is gone, start again
+            self.stats.time_resyncs += 1
+            self._restart_tracking()
+            return t
+        self._candidate_t = t
+        self.stats.time_jumps += 1
+        return None
+
+    def _restart_tracking(self) -> None:
+        self.tracker = Tracker("objects", "imm")
+        self.cluster_tracker = Tracker("clusters", "ca")
+        self.last_cycle_t = None
+        self._last_out_t = None
+        self._prev_speed = None
+        self._candidate_t = None
+
+    def on_cycle(self, t_s: float, cycle: ObjectCycle | ClusterCycle) -> EcuOutput | None:
+        """A complete radar cycle (object or cluster list) arrived at ``t_s``.
+
+        Returns the decision, or None when the cycle was refused (a timestamp that is not a usable time, runs
+        backwards or jumps; see the module docstring and :attr:`stats`).
+        """
+        if not isinstance(cycle, (ObjectCycle, ClusterCycle)):
+            raise TypeError(f"Ecu.on_cycle cycle: value of type {type(cycle).__name__} is not allowed; expected "
+                            "an ObjectCycle or a ClusterCycle")
+        t = self._accept_time(t_s)
+        if t is None:
+            return None
+        try:
+            out = self._on_clusters(t, cycle) if isinstance(cycle, ClusterCycle) else self._on_objects(t, cycle)
+        except (np.linalg.LinAlgError, ValueError, ArithmeticError) as exc:
+            # the guards above should make this unreachable; if not, restart rather than fail every cycle
+            self.stats.internal_errors += 1
+            logger.warning("ECU: tracking failed on the cycle at t=%r (%s); tracks restarted", t, exc)
+            self._restart_tracking()
+            return None
+        self.stats.cycles += 1
+        return out
+
+    def _finite_rows(self, z: np.ndarray) -> np.ndarray:
+        ok = np.isfinite(z).all(axis=1)
+        self.stats.bad_measurements += int(np.count_nonzero(~ok))
+        return ok
+
+    def _on_objects(self, t_s: float, cycle: ObjectCycle) -> EcuOutput:
         ol = cycle.objects
         n = len(ol)
         z = np.stack([ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps], axis=1) if n else \
             np.zeros((0, 4))
+        ok = self._finite_rows(z)
+        if not ok.all():
+            ol, z = ol.take(np.flatnonzero(ok)), z[ok]
+            n = len(ol)
         sig = np.stack([ol.dist_long_sigma_m, ol.dist_lat_sigma_m, ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps],
                        axis=1) if n else np.zeros((0, 4))
         sig = np.where(np.isfinite(sig), np.maximum(sig, [0.1, 0.1, 0.1, 0.3]), [0.5, 0.5, 0.3, 0.8])
@@ -109,6 +222,10 @@ class Ecu:
         cl = cycle.clusters
         n = len(cl)
         z = np.stack([cl.dist_long_m, cl.dist_lat_m], axis=1) if n else np.zeros((0, 2))
+        ok = self._finite_rows(z)
+        if not ok.all():
+            cl, z = cl.take(np.flatnonzero(ok)), z[ok]
+            n = len(cl)
         sig = np.stack([cl.dist_long_sigma_m, cl.dist_lat_sigma_m], axis=1) if n else np.zeros((0, 2))
         sig = np.where(np.isfinite(sig), np.maximum(sig, 0.2), 0.5)
         r = np.zeros((n, 2, 2))
@@ -124,12 +241,18 @@ class Ecu:
         return self._decide(t_s, tracks, None, {}, radar_ok=True, cluster_strength=strong)
 
     def tick(self, t_s: float) -> EcuOutput | None:
-        """Call between cycles (e.g. on a timer): reports the radar unavailable after the time-out."""
-        if self.last_cycle_t is not None and t_s - self.last_cycle_t <= self.timeout_s:
+        """Call between cycles (e.g. on a timer): reports the radar unavailable after the time-out.
+
+        A time that is not usable (NaN, infinite, beyond ±1e11 s) is refused and counted."""
+        t = self._finite_time(t_s)
+        if t is None:
+            self.stats.rejected_time += 1
             return None
-        if self._last_out_t is not None and t_s - self._last_out_t < self.period_s:
+        if self.last_cycle_t is not None and 0.0 <= t - self.last_cycle_t <= self.timeout_s:
             return None
-        return self._decide(t_s, [], None, {}, radar_ok=False)
+        if self._last_out_t is not None and 0.0 <= t - self._last_out_t < self.period_s:
+            return None
+        return self._decide(t, [], None, {}, radar_ok=False)
 
     def _select(self, tracks, ol, by_id, cluster_strength=None) -> Target | None:
         if not tracks:
@@ -165,6 +288,8 @@ class Ecu:
 
     def _decide(self, t_s, tracks, ol, by_id, radar_ok: bool, cluster_strength=None) -> EcuOutput:
         dt = self.period_s if self._last_out_t is None else t_s - self._last_out_t
+        if not 0.0 <= dt <= self.max_gap_s:
+            dt = self.period_s           # the ACC's rate limits need a sane step; the time itself was checked
         self._last_out_t = t_s
         target = self._select(tracks, ol, by_id, cluster_strength) if radar_ok else None
         accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
@@ -197,7 +322,7 @@ class Ecu:
         ts = out.t_s if timestamp is None else timestamp
         msgs = []
         for base, payload in ((ACC_STATUS, acc), (FCW_STATUS, fcw)):
-            fid = shifted(base, self.sensor_id)
-            msgs.append(can.Message(arbitration_id=fid, data=self._e2e.protect(fid, payload.tobytes()),
+            msgs.append(can.Message(arbitration_id=ids.own_id(base), data=self._e2e.protect(ids.e2e_key(base),
+                                                                                            payload.tobytes()),
                                     is_extended_id=False, timestamp=ts, check=False))
         return msgs

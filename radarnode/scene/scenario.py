@@ -106,7 +106,7 @@ class RadarSetup:
     max_distance_m: float | None = None
     radar_power: int = 0
     bus_load_limit: float = 0.8
-    road_boundaries: bool | None = None    # publish 0x690/0x691; None: when the road has guardrails
+    road_boundaries: bool | None = None    # publish RoadBoundary_Left/Right (0x680/0x681 + 8 × sensor_id); None: when the road has guardrails
 
     def __post_init__(self) -> None:
         # preset and overrides are the radar package's to check (radarnode.radar.setup), like the `signal` options

@@ -19,8 +19,7 @@ CLUSTER_STATUS, CLUSTER_GENERAL, CLUSTER_QUALITY = 0x600, 0x701, 0x702
 OBJ_STATUS, OBJ_GENERAL, OBJ_QUALITY, OBJ_EXTENDED, OBJ_WARNING = 0x60A, 0x60B, 0x60C, 0x60D, 0x60E
 VERSION_ID = 0x700
 COLL_DET_RELAY = 0x008          # the one ID that is not shifted by the sensor ID
-# radarnode's own messages (dbc/radarnode.dbc), shifted like the radar's
-ROAD_BOUNDARY_LEFT, ROAD_BOUNDARY_RIGHT = 0x690, 0x691
+# radarnode's own messages (dbc/radarnode.dbc) are not shifted like these: see radarnode.wire.ids
 
 INTERFACE_VERSION = 1
 FIRMWARE_VERSION = (4, 30, 2)

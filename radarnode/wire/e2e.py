@@ -3,7 +3,9 @@
 Byte 0 is the CRC-8 (polynomial 0x2F, cantools' ``compute_profile2_crc``)
 over bytes 1..n−1 followed by the Data ID; the low nibble of byte 1 is the
 alive counter, advancing by one per sent frame modulo 16; the Data ID for
-counter value c is taken from a 16-entry list, here ``(frame_id + 17·c) mod 256``.
+counter value c is taken from a 16-entry list, here ``(key + 17·c) mod 256``.
+The key names the message and the sensor (:func:`radarnode.wire.ids.e2e_key`),
+not the CAN ID, so a frame of another sensor or message fails the check.
 """
 
 from __future__ import annotations
@@ -13,23 +15,23 @@ from dataclasses import dataclass, field
 from cantools.autosar.end_to_end import compute_profile2_crc
 
 
-def data_id(frame_id: int, counter: int) -> int:
-    """The Data ID of ``frame_id`` for alive-counter value ``counter`` (DataIDList[counter])."""
-    return (frame_id + 17 * (counter & 0xF)) & 0xFF
+def data_id(key: int, counter: int) -> int:
+    """The Data ID of the message with E2E key ``key`` for alive-counter value ``counter`` (DataIDList[counter])."""
+    return (key + 17 * (counter & 0xF)) & 0xFF
 
 
 class E2EProtector:
-    """Sender side: stamps counter and CRC into payloads, one counter per frame ID."""
+    """Sender side: stamps counter and CRC into payloads, one counter per E2E key (message and sensor)."""
 
     def __init__(self) -> None:
         self._counter: dict[int, int] = {}
 
-    def protect(self, frame_id: int, payload: bytes) -> bytes:
-        counter = self._counter.get(frame_id, 0)
-        self._counter[frame_id] = (counter + 1) & 0xF
+    def protect(self, key: int, payload: bytes) -> bytes:
+        counter = self._counter.get(key, 0)
+        self._counter[key] = (counter + 1) & 0xF
         data = bytearray(payload)
         data[1] = (data[1] & 0xF0) | counter
-        data[0] = compute_profile2_crc(bytes(data), data_id(frame_id, counter))
+        data[0] = compute_profile2_crc(bytes(data), data_id(key, counter))
         return bytes(data)
 
 
@@ -52,17 +54,17 @@ class E2EChecker:
     def __init__(self) -> None:
         self.stats = E2EStats()
 
-    def check(self, frame_id: int, payload: bytes) -> bool:
-        """True when the frame may be used."""
+    def check(self, key: int, payload: bytes) -> bool:
+        """True when the frame may be used; ``key`` is the E2E key of the message expected on its ID."""
         if len(payload) < 2:
             self.stats.crc_errors += 1
             return False
         counter = payload[1] & 0xF
-        if compute_profile2_crc(payload, data_id(frame_id, counter)) != payload[0]:
+        if compute_profile2_crc(payload, data_id(key, counter)) != payload[0]:
             self.stats.crc_errors += 1
             return False
-        last = self.stats.last_counter.get(frame_id)
-        self.stats.last_counter[frame_id] = counter
+        last = self.stats.last_counter.get(key)
+        self.stats.last_counter[key] = counter
         if last is not None:
             delta = (counter - last) & 0xF
             if delta == 0:

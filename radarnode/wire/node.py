@@ -28,6 +28,7 @@ from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
 from radarnode.wire import ars408 as P
+from radarnode.wire import ids
 from radarnode.wire.busload import frame_bits
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.dbc import load_database, load_own_database
@@ -215,7 +216,9 @@ class RadarNode:
 
     def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float]
                          ) -> list[tuple[int, np.ndarray]]:
-        """Update the road-boundary estimate and encode 0x690/0x691 (E2E protected)."""
+        """Update the road-boundary estimate and encode RoadBoundary_Left/Right (E2E protected).
+
+        Returns (CAN ID, payload) pairs: 0x680/0x681 + 8 × SensorID (``radarnode.wire.ids``)."""
         cl = frame.clusters
         dt = 0.0 if self._last_t is None else t_s - self._last_t
         r = np.maximum(cl.range_m, 1e-6)
@@ -224,20 +227,23 @@ class RadarNode:
                                              self._yaw_rate_estimate(t_s))
         self.last_boundaries = (left, right)
         out = []
-        for base, prefix, b in ((P.ROAD_BOUNDARY_LEFT, "RBL", left), (P.ROAD_BOUNDARY_RIGHT, "RBR", right)):
+        sensor = self.config.sensor_id
+        for base, prefix, b in ((ids.ROAD_BOUNDARY_LEFT, "RBL", left), (ids.ROAD_BOUNDARY_RIGHT, "RBR", right)):
             payload = self.own_codecs[base].encode({
                 f"{prefix}_CRC": 0, f"{prefix}_Counter": 0, f"{prefix}_Valid": int(b.valid),
                 f"{prefix}_Confidence": round(7 * b.confidence), f"{prefix}_LatOffset": b.offset_m,
                 f"{prefix}_Heading": math.degrees(b.heading_rad), f"{prefix}_Curvature": b.curvature_1pm,
                 f"{prefix}_RangeStart": 4 * math.floor(b.range_start_m / 4), f"{prefix}_RangeEnd": b.range_end_m})[0]
-            protected = self._e2e.protect(P.shifted(base, self.config.sensor_id), payload.tobytes())
-            out.append((base, np.frombuffer(protected, dtype=np.uint8)))
+            protected = self._e2e.protect(ids.e2e_key(base, sensor), payload.tobytes())
+            out.append((ids.own_id(base, sensor), np.frombuffer(protected, dtype=np.uint8)))
         return out
 
     # --- output -------------------------------------------------------------
     def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
-        return can.Message(arbitration_id=P.shifted(base_id, self.config.sensor_id), is_extended_id=False,
-                           data=payload.tobytes(), timestamp=t, check=False)
+        # ARS 408 messages are shifted by 0x10 × SensorID; own messages arrive here with their final ID
+        can_id = base_id if ids.split_own_id(base_id) is not None else P.shifted(base_id, self.config.sensor_id)
+        return can.Message(arbitration_id=can_id, is_extended_id=False, data=payload.tobytes(), timestamp=t,
+                           check=False)
 
     def _status_frames(self, t_s: float) -> list[tuple[int, np.ndarray]]:
         cfg = self.config
