@@ -33,7 +33,7 @@ from radarnode.perception.types import (
     AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
-from radarnode.perception.tracker import cluster_dyn_prop
+from radarnode.perception.tracker import MIN_BODY_M, RCS_GAIN, classify, cluster_dyn_prop
 from radarnode.radar import ambiguity, equation
 from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
@@ -226,10 +226,41 @@ class ObjectModel:
             "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
+            **self._reported_body(view, rng_m, az, rcs_eff, snr, z),
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
-            "length": np.maximum(sc.length_m + p.size_sigma_m * z[:, 7], 0.2),
-            "width": np.maximum(sc.width_m + 0.5 * p.size_sigma_m * z[:, 8], 0.2),
         }
+
+    def _reported_body(self, view, rng_m, az, rcs_eff, snr, z) -> dict[str, np.ndarray]:
+        """RCS, extent and class as the detection-level tracker reports them (``radarnode.perception.tracker``),
+        drawn instead of copied from the truth, so that every level classes a body by the same rules.
+
+        RCS: the power average over the cycles (relative spread √(g/(2−g)) for a fluctuating target, the
+        amplitude noise 10^(−ρ/20)·√2 for a steady one). Extent: the faces the radar sees (the rear or front
+        where the sensor is beyond the body's ends, a side where it is beside them), each projected on the
+        sensor's axes and measured only where it spans more than a resolution cell (range bins along x, the
+        beam's cross-range width along y); the class from extent, RCS and motion; at least the class's body.
+        """
+        p, sc = self.preset, self.scene
+        steady = sc.swerling == 0
+        spread = np.where(steady, math.sqrt(2.0) * 10.0 ** (-snr / 20.0), math.sqrt(RCS_GAIN / (2.0 - RCS_GAIN)))
+        rcs = rcs_eff + 10.0 * np.log10(np.maximum(1.0 + spread * z[:, 9], 0.05))
+        h = view.orientation_rad
+        ch, sh = np.cos(h), np.sin(h)
+        cx, cy = view.centre_x_m, view.centre_y_m
+        L, W = sc.length_m, sc.width_m
+        end_seen = np.abs(ch * cx + sh * cy) > L / 2.0           # sensor beyond the front or the rear
+        side_seen = np.abs(-sh * cx + ch * cy) > W / 2.0        # sensor beside the body
+        ext_x = np.where(side_seen, np.abs(L * ch), 0.0) + np.where(end_seen, np.abs(W * sh), 0.0)
+        ext_y = np.where(side_seen, np.abs(L * sh), 0.0) + np.where(end_seen, np.abs(W * ch), 0.0)
+        ext_x = np.where(ext_x > 2.0 * p.range_resolution_m, ext_x, 0.0)
+        ext_y = np.where(ext_y > rng_m * p.angular_resolution_rad, ext_y, 0.0)
+        length = np.maximum(ext_x + p.size_sigma_m * z[:, 7], 0.2)
+        width = np.maximum(ext_y + 0.5 * p.size_sigma_m * z[:, 8], 0.2)
+        ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
+        cls = classify(length, width, rcs, ground >= MOVING_THRESHOLD_MPS)
+        body = MIN_BODY_M[cls]
+        return {"rcs_obj": rcs, "obj_class": cls, "length": np.maximum(length, body[..., 0]),
+                "width": np.maximum(width, body[..., 1])}
 
     def _track_flags(self, det: np.ndarray, fov: np.ndarray) -> dict[str, np.ndarray]:
         """The tracker's bookkeeping for a chunk of cycles, from its state before the chunk.
@@ -348,14 +379,14 @@ class ObjectModel:
             id=self.obj_id[idx].copy(),
             dist_long_m=st[:, 0], dist_lat_m=st[:, 1], vrel_long_mps=st[:, 2], vrel_lat_mps=st[:, 3],
             dyn_prop=self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view),
-            rcs_dbsm=ch["rcs_rep"][i, idx],
+            rcs_dbsm=ch["rcs_obj"][i, idx],
             dist_long_sigma_m=ch["sig_long"][i, idx], dist_lat_sigma_m=ch["sig_lat"][i, idx],
             vrel_long_sigma_mps=ch["sig_vlong"][i, idx], vrel_lat_sigma_mps=ch["sig_vlat"][i, idx],
             arel_long_sigma_mps2=self._half[:n], arel_lat_sigma_mps2=self._half[:n],
             orientation_sigma_rad=self._five_deg[:n],
             meas_state=ch["meas_state"][i, idx], prob_of_exist=ch["prob_of_exist"][i, idx],
             arel_long_mps2=ch["arel_long"][i, idx], arel_lat_mps2=ch["arel_lat"][i, idx],
-            obj_class=self.scene.class_code[idx], orientation_rad=view.orientation_rad[idx],
+            obj_class=ch["obj_class"][i, idx], orientation_rad=view.orientation_rad[idx],
             length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
 
     def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
