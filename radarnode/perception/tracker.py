@@ -37,6 +37,7 @@ MOVING_THRESHOLD_MPS = 1.0
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
+WALK_MAX_MPS, BICYCLE_MAX_MPS = 3.0, 9.0
 #: the smallest body of a vehicle class (length, width, m): a radar sees the faces towards it, and a car seen
 #: from behind at range is one detection; its class says the body is at least this big
 #: (rows: ARS 408 class code 0…6; point, pedestrian, bicycle and wide keep what was measured)
@@ -279,7 +280,7 @@ class ObjectTracker:
         ol.arel_long_mps2 = np.zeros(n)
         ol.arel_lat_mps2 = np.zeros(n)
         length, width = np.maximum(self.size[idx, 0], 0.2), np.maximum(self.size[idx, 1], 0.2)
-        ol.obj_class = classify(length, width, rcs, moving)
+        ol.obj_class = classify(length, width, rcs, speed, moving)
         body = MIN_BODY_M[ol.obj_class]
         length, width = np.maximum(length, body[:, 0]), np.maximum(width, body[:, 1])
         ol.orientation_rad = np.where(moving, np.arctan2(gy, gx), 0.0)
@@ -288,16 +289,21 @@ class ObjectTracker:
         return ol
 
 
-def classify(length_m, width_m, rcs_dbsm, moving) -> np.ndarray:
-    """A coarse ARS 408 class from extent and RCS (point, car, truck, pedestrian, wide).
+def classify(length_m, width_m, rcs_dbsm, ground_speed_mps, moving) -> np.ndarray:
+    """An ARS 408 class from extent, RCS and speed over ground (point, car, truck, pedestrian, motorcycle,
+    bicycle, wide).
 
     Extent first (a truck's length, a car's, a wide structure's width); where the body is not resolved (one
-    detection at range), the RCS: a vehicle's rear returns 5 dBsm or more (a car about 10, a truck about
-    20), a pedestrian or a guardrail post about −5. Truck needs the extent or 17 dBsm.
+    detection at range), the RCS: a vehicle's rear returns 5 dBsm or more (a car about 10, a truck about 20);
+    below that a moving object is told by its speed — a pedestrian walks below 3 m/s, a bicycle rides below
+    9 m/s, faster is a motorcycle; a weak stationary one is a point (a post, a sign's edge, a pedestrian who
+    stands).
     """
     extent = np.maximum(length_m, width_m)
+    v = np.asarray(ground_speed_mps, dtype=np.float64)
+    weak_moving = np.where(v < WALK_MAX_MPS, 3, np.where(v < BICYCLE_MAX_MPS, 5, 4))
     small = np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2,
-                     np.where(rcs_dbsm >= VEHICLE_RCS_DBSM, 1, np.where((rcs_dbsm < 3.0) & moving, 3, 0)))
+                     np.where(rcs_dbsm >= VEHICLE_RCS_DBSM, 1, np.where(moving, weak_moving, 0)))
     return np.where(extent > 8.0, 2,
                     np.where(extent > 1.2, np.where(width_m > 3.0, 6, np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2, 1)),
                              small)).astype(np.int64)

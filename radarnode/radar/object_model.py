@@ -257,7 +257,7 @@ class ObjectModel:
         length = np.maximum(ext_x + p.size_sigma_m * z[:, 7], 0.2)
         width = np.maximum(ext_y + 0.5 * p.size_sigma_m * z[:, 8], 0.2)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
-        cls = classify(length, width, rcs, ground >= MOVING_THRESHOLD_MPS)
+        cls = classify(length, width, rcs, ground, ground >= MOVING_THRESHOLD_MPS)
         body = MIN_BODY_M[cls]
         return {"rcs_obj": rcs, "obj_class": cls, "length": np.maximum(length, body[..., 0]),
                 "width": np.maximum(width, body[..., 1])}
