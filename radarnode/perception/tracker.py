@@ -62,14 +62,17 @@ class Groups:
         return int(self.x_m.shape[0])
 
 
-def group_detections(det: Detections, eps_m: float = 2.5, eps_mps: float = 1.5) -> Groups:
-    """DBSCAN over (x, y, radial speed) scaled by (eps_m, eps_m, eps_mps); a group per cluster."""
+def group_detections(det: Detections, eps_m: float = 2.5, eps_mps: float = 1.5, eps_long_m: float = 4.5) -> Groups:
+    """DBSCAN over (x, y, radial speed) scaled by (eps_long_m, eps_m, eps_mps); a group per cluster.
+
+    Longer along x than across: the side of a truck or a bus comes out as detections 3–4 m apart (its
+    reflection points merge within a resolution cell), lanes are 3.5 m apart."""
     n = len(det)
     if n == 0:
         z = np.zeros(0)
         return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64))
     x, y = det.x_m, det.y_m
-    labels = dbscan(np.stack([x / eps_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
+    labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
     g = labels.max() + 1
     power = 10.0 ** (det.snr_db / 10.0)
     wsum = np.bincount(labels, weights=power, minlength=g)
