@@ -115,3 +115,30 @@ def test_the_ecu_settings_of_a_scenario_reach_the_ecu():
     late = simulate(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, fcw_ttc_warn_s=2.2,
                                                                       fcw_decel_warn_mps2=9.0)))
     assert late.ttc_at_warning_s < early.ttc_at_warning_s - 0.3, (early.ttc_at_warning_s, late.ttc_at_warning_s)
+
+
+def test_prewarning_time_before_impact_and_the_lvd_ttc_can_be_required():
+    sc = load_scenario(SCENARIOS / "ncap_ccrb_12m.yaml")
+    r = simulate(sc)
+    before = r.impact_time_s - r.warning_time_s
+    assert r.prewarning_time_s is not None and r.prewarning_time_s <= r.warning_time_s
+    from radarnode.consumer.evaluate import _judge
+    for need, ok in ((before - 0.2, True), (before + 0.2, False)):
+        e = dataclasses.replace(sc.ecu.expect, fcw_before_impact_s=round(need, 2), fcw_prewarning=True)
+        res = dataclasses.replace(r, reasons=[], passed=True)
+        _judge(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, expect=e)), res)
+        assert res.passed == ok, (need, before, res.reasons)
+    # NHTSA LVD: the TTC counts the lead's deceleration, so it is shorter than the constant-speed one
+    lvd = load_scenario(SCENARIOS / "nhtsa_lead_decelerating.yaml")
+    with_decel = simulate(lvd)
+    const = simulate(dataclasses.replace(lvd, ecu=dataclasses.replace(
+        lvd.ecu, expect=dataclasses.replace(lvd.ecu.expect, ttc_with_lead_decel=False))))
+    assert with_decel.warning_time_s == const.warning_time_s
+    assert with_decel.ttc_at_warning_s < const.ttc_at_warning_s - 0.1
+    assert with_decel.passed and with_decel.ttc_at_warning_s >= 2.4
+
+
+def test_an_expectation_with_nothing_to_check_says_so():
+    sc = load_scenario(SCENARIOS / "ncap_ccrs.yaml")
+    bare = dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, expect=type(sc.ecu.expect)(lead="target")))
+    assert simulate(sc).checked and not simulate(bare).checked

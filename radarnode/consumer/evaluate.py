@@ -21,7 +21,7 @@ import numpy as np
 from radarnode.consumer.acc import AccSettings, iso15622_limits
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.ecu import Ecu
-from radarnode.consumer.fcw import LEVEL_WARNING, FcwSettings
+from radarnode.consumer.fcw import LEVEL_PREWARNING, LEVEL_WARNING, FcwSettings, time_to_collision
 from radarnode.consumer.path import SensorMount
 from radarnode.scene.scenario import Scenario
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -54,6 +54,8 @@ class ScenarioResult:
     seed: int
     warning_time_s: float | None = None
     impact_time_s: float | None = None      # the lead's gap closed (in the ego lane)
+    prewarning_time_s: float | None = None  # the first cycle with FCW at prewarning level or above
+    checked: bool = True                    # False: the scenario's expectation states nothing to check
     ttc_at_warning_s: float | None = None
     min_ttc_s: float = math.inf
     min_gap_m: float = math.inf
@@ -120,10 +122,13 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         gap = ttc = math.inf
         if lead is not None:
             # along the ego's lane (a bend too): ahead and within 2 m of the lane centre
-            lane_gap, lateral, closing = scene.lane_gap(t, lead)
+            lane_gap, lateral, closing, lead_v, lead_a = scene.lane_gap(t, lead)
             ahead = lane_gap > 0.0 and abs(lateral) < 2.0
             gap = lane_gap if ahead else math.inf
-            ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
+            if spec.expect.ttc_with_lead_decel and math.isfinite(gap):
+                ttc = time_to_collision(gap, lead_v + closing, lead_v, ego_state.accel_mps2, lead_a)
+            else:
+                ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
         res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)
         if lead is not None:
             if res.impact_time_s is None and 0.0 < prev_gap and lane_gap <= 0.0 and abs(lateral) < 2.0:
@@ -138,6 +143,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         warning = decision is not None and decision.warning_level == LEVEL_WARNING
         if warning and res.warning_time_s is None:
             res.warning_time_s, res.ttc_at_warning_s = t, ttc
+        if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
+            res.prewarning_time_s = t
         # closed loop: the ego follows the request through a first-order lag
         if actuator is not None:
             actuator.apply(decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0,
@@ -178,6 +185,16 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
     elif e.fcw_required and res.impact_time_s is not None and res.warning_time_s >= res.impact_time_s:
         res.reasons.append(f"FCW warning at t = {res.warning_time_s:.2f} s, after the impact at "
                            f"{res.impact_time_s:.2f} s")
+    if e.fcw_before_impact_s is not None:
+        if res.warning_time_s is None:
+            res.reasons.append("no FCW warning")
+        elif res.impact_time_s is not None and res.impact_time_s - res.warning_time_s < e.fcw_before_impact_s:
+            res.reasons.append(f"FCW warning {res.impact_time_s - res.warning_time_s:.2f} s before the impact "
+                               f"< {e.fcw_before_impact_s} s")
+    if e.fcw_prewarning and (res.prewarning_time_s is None or res.warning_time_s is not None
+                             and res.prewarning_time_s >= res.warning_time_s):
+        res.reasons.append("no prewarning before the warning")
+    res.checked = e.checks
     names = [a.id for a in scenario.actors]
     targets = res.trace["target"]
     for a in e.never_target:

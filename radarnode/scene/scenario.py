@@ -276,8 +276,18 @@ class Expectation:
     gap_settle_s: float | None = None      # ACC: time gap within ±gap_tolerance of the setting from then on
     gap_tolerance: float = 0.1
     min_gap_m: float | None = None         # the gap to the lead never below this
+    fcw_before_impact_s: float | None = None   # the warning comes at least this long before the truth's impact
+    fcw_prewarning: bool = False           # a prewarning (level 1) comes before the warning
+    ttc_with_lead_decel: bool = False      # fcw_ttc_min_s on the TTC that counts the lead's deceleration (LVD)
     acc_follows: str | None = None         # ACC's target is this actor (from gap_settle_s, else 2 s): ≥ 95 % of cycles
     never_target: tuple[str, ...] = ()     # actors ACC and FCW must never select (adjacent lane, roadside)
+
+    @property
+    def checks(self) -> bool:
+        """Whether anything is to be checked (a lead alone only names the actor figures are measured to)."""
+        return any((self.fcw_ttc_min_s is not None, self.fcw_required, self.no_fcw, self.gap_settle_s is not None,
+                    self.min_gap_m is not None, self.fcw_before_impact_s is not None, self.fcw_prewarning,
+                    self.acc_follows is not None, bool(self.never_target)))
 
     def __post_init__(self) -> None:
         if self.lead is not None:
@@ -291,6 +301,10 @@ class Expectation:
         validate.number("gap_tolerance", self.gap_tolerance, lo=0.0, hi=1.0, lo_open=True)
         if self.min_gap_m is not None:
             validate.number("min_gap_m", self.min_gap_m, lo=0.0, hi=500.0)
+        if self.fcw_before_impact_s is not None:
+            validate.number("fcw_before_impact_s", self.fcw_before_impact_s, lo=0.0, hi=20.0)
+        validate.boolean("fcw_prewarning", self.fcw_prewarning)
+        validate.boolean("ttc_with_lead_decel", self.ttc_with_lead_decel)
         if self.acc_follows is not None:
             validate.text("acc_follows", self.acc_follows)
         if not isinstance(self.never_target, (tuple, list)) or not all(isinstance(a, str) for a in self.never_target):

@@ -160,18 +160,19 @@ class Scene:
         speed = float(st.vx_mps[0])
         return EgoState(float(x[0]), float(y[0]), float(psi[0]), speed, float(st.ax_mps2[0]), self.kappa * speed)
 
-    def lane_gap(self, t_s: float, i: int) -> tuple[float, float, float]:
+    def lane_gap(self, t_s: float, i: int) -> tuple[float, float, float, float, float]:
         """Actor ``i`` against the ego in road coordinates, as a test judge measures a lead on any road.
 
         Returns the gap along the ego's lane from the sensor to the actor's rear end (m), the actor's lateral
-        offset from the centre of the ego's lane (m, left positive) and the closing speed along the lane
-        (m/s, positive closing).
+        offset from the centre of the ego's lane (m, left positive), the closing speed along the lane
+        (m/s, positive closing), and the actor's speed and acceleration along the lane (m/s, m/s²).
         """
         e, a = self._ego.state(t_s), self._movers.state(t_s)
         scale = 1.0 - self.kappa * float(e.y_m[0])          # arc length along the ego's lane per unit of s
         gap = (float(a.x_m[i]) - float(e.x_m[0])) * scale - self.mount[0] - self.length_m[i] / 2.0
         closing = (float(e.vx_mps[0]) - float(a.vx_mps[i])) * scale
-        return gap, float(a.y_m[i]) - float(e.y_m[0]), closing
+        return (gap, float(a.y_m[i]) - float(e.y_m[0]), closing, float(a.vx_mps[i]) * scale,
+                float(a.ax_mps2[i]) * scale)
 
     # --- the sensor's view -------------------------------------------------
     def sensor_pose(self, ego: EgoState) -> tuple[float, float, float, float, float]:
