@@ -142,3 +142,18 @@ def test_an_expectation_with_nothing_to_check_says_so():
     sc = load_scenario(SCENARIOS / "ncap_ccrs.yaml")
     bare = dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, expect=type(sc.ecu.expect)(lead="target")))
     assert simulate(sc).checked and not simulate(bare).checked
+
+
+def test_the_ecu_outputs_carry_its_processing_latency():
+    sc = load_scenario(SCENARIOS / "nhtsa_lead_stopped.yaml")
+    lag = simulate(sc)
+    zero = simulate(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, processing_latency_s=0.0)))
+    assert lag.latency_s == 0.02 and zero.latency_s == 0.0
+    assert abs((lag.warning_time_s - zero.warning_time_s) - 0.02) < 1e-9
+    assert abs((zero.ttc_at_warning_s - lag.ttc_at_warning_s) - 0.02) < 0.01
+    # in closed loop the request acts a latency later: ACC still settles, on a different trajectory
+    acc = load_scenario(SCENARIOS / "acc_cut_in.yaml")
+    slow = simulate(dataclasses.replace(acc, ecu=dataclasses.replace(acc.ecu, processing_latency_s=0.1)))
+    fast = simulate(dataclasses.replace(acc, ecu=dataclasses.replace(acc.ecu, processing_latency_s=0.0)))
+    assert slow.passed and fast.passed, (slow.reasons, fast.reasons)
+    assert slow.trace["speed"][-1] != fast.trace["speed"][-1]

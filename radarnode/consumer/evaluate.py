@@ -55,6 +55,7 @@ class ScenarioResult:
     warning_time_s: float | None = None
     impact_time_s: float | None = None      # the lead's gap closed (in the ego lane)
     prewarning_time_s: float | None = None  # the first cycle with FCW at prewarning level or above
+    latency_s: float = 0.0                  # the ECU's processing latency applied to its outputs
     checked: bool = True                    # False: the scenario's expectation states nothing to check
     ttc_at_warning_s: float | None = None
     min_ttc_s: float = math.inf
@@ -95,6 +96,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     res = ScenarioResult(scenario.name, scenario.seed)
     prev_a = None
     prev_gap = math.inf
+    latency, request = spec.processing_latency_s, 0.0
+    res.latency_s = latency
     tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap",
                           "target")}
     for k in range(scenario.num_cycles):
@@ -115,7 +118,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         if decision is None:
             decision = ecu.tick(t)
         if decision is not None:
-            for m in ecu.frames(decision):
+            for m in ecu.frames(decision, timestamp=t + latency):
                 assembler.on_message_received(m)       # the ECU's frames, decoded and E2E-checked
         # truth
         ego_state = scene.ego_state(t)
@@ -141,14 +144,20 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             hit = np.flatnonzero(ol.id == decision.target.object_id)
             target_actor = int(ol.actor_index[hit[0]]) if hit.size else -1
         warning = decision is not None and decision.warning_level == LEVEL_WARNING
+        # the ECU's outputs exist from t + latency: the warning is judged then (TTC shorter by the latency)
         if warning and res.warning_time_s is None:
-            res.warning_time_s, res.ttc_at_warning_s = t, ttc
+            res.warning_time_s, res.ttc_at_warning_s = t + latency, ttc - latency
         if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
-            res.prewarning_time_s = t
+            res.prewarning_time_s = t + latency
         # closed loop: the ego follows the request through a first-order lag
         if actuator is not None:
-            actuator.apply(decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0,
-                           period)
+            # the previous request holds until this cycle's is out, latency after the cycle
+            new = decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0
+            lat = min(latency, period)
+            if lat > 0.0:
+                actuator.apply(request, lat)
+            actuator.apply(new, period - lat)
+            request = new
         accel = ego_state.accel_mps2
         jerk = abs(accel - prev_a) / period if prev_a is not None else 0.0
         res.peak_jerk_mps3 = max(res.peak_jerk_mps3, jerk)

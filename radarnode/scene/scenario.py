@@ -321,6 +321,9 @@ class EcuSpec:
     time_gap_s: float = 1.5
     closed_loop: bool = False
     actuator_lag_s: float = 0.3
+    #: from a radar cycle's arrival to the ECU's frames and request (one 10–20 ms task of a production ADAS
+    #: ECU; 20 ms: a 10 ms task that the cycle just missed, plus its run)
+    processing_latency_s: float = 0.02
     acc_min_speed_mps: float = 0.0         # below it ACC waits in standby (0: stop and go)
     path_half_width_m: float = 1.6         # the predicted path's half-width
     fcw_ttc_warn_s: float = 2.8            # FCW warns at a TTC at or below this …
@@ -334,6 +337,7 @@ class EcuSpec:
             raise FieldError("time_gap_s", self.time_gap_s, "one of 1.0, 1.5, 2.0 s (ISO 15622 settings)")
         validate.boolean("closed_loop", self.closed_loop)
         validate.number("actuator_lag_s", self.actuator_lag_s, lo=0.01, hi=5.0)
+        validate.number("processing_latency_s", self.processing_latency_s, lo=0.0, hi=0.5)
         validate.number("acc_min_speed_mps", self.acc_min_speed_mps, lo=0.0, hi=30.0)
         validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
         validate.number("fcw_ttc_warn_s", self.fcw_ttc_warn_s, lo=0.5, hi=10.0)
