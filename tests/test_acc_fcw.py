@@ -113,3 +113,43 @@ def test_acc_standby_below_the_operating_speed():
     reqs = [acc.step(0.072, 3.0, None, True) for _ in range(40)]
     assert acc.state == STATE_STANDBY and reqs[-1] == 0.0
     assert np.max(np.abs(np.diff(reqs))) <= 5.0 * 0.072 + 1e-9      # ramps out within the jerk limit
+
+
+def test_stop_and_go_stops_holds_without_creep_and_resumes():
+    from radarnode.consumer.acc import AUTO_RESUME_S, HOLD_MPS2
+    acc = Acc(AccSettings(set_speed_mps=20.0, standstill_gap_m=4.0))
+    # standing 4.2 m behind a stopped lead: hold the brake, never creep
+    for _ in range(100):
+        assert acc.step(0.072, 0.0, Target(1, 1, 4.2, 0.0, 0.0, 0.0), True) == HOLD_MPS2
+    assert acc.standstill and acc.standstill_s > AUTO_RESUME_S
+    # the lead drives off after a long standstill: only the driver resumes
+    assert acc.step(0.072, 0.0, Target(1, 1, 6.0, 0.0, 2.0, 0.0), True) == HOLD_MPS2
+    acc.confirm_resume()
+    assert acc.step(0.072, 0.0, Target(1, 1, 6.5, 0.0, 2.0, 0.0), True) > HOLD_MPS2
+    assert not acc.standstill
+    # a short standstill resumes by itself
+    acc = Acc(AccSettings(set_speed_mps=20.0))
+    acc.step(0.072, 0.0, Target(1, 1, 4.2, 0.0, 0.0, 0.0), True)
+    assert acc.standstill
+    acc.step(0.072, 0.0, Target(1, 1, 5.0, 0.0, 2.0, 0.0), True)
+    assert not acc.standstill
+
+
+def test_take_over_request_when_the_lead_needs_more_than_acc_may_brake():
+    acc = Acc(AccSettings())
+    acc.step(0.072, 25.0, Target(1, 1, 60.0, 0.0, -5.0, 0.0), True)
+    assert not acc.take_over                 # 5 m/s closing over 60 m: ACC's own business
+    acc.step(0.072, 25.0, Target(1, 1, 20.0, 0.0, -15.0, 0.0), True)
+    assert acc.take_over                     # 15 m/s over 20 m needs ~6 m/s²: beyond ISO 15622's 3.5
+
+
+def test_stop_and_go_scenario_holds_the_standstill_behind_the_lead():
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import load_scenario
+    from pathlib import Path
+    r = simulate(load_scenario(Path(__file__).resolve().parents[1] / "scenarios" / "acc_stop_and_go.yaml"))
+    assert r.passed, r.reasons
+    t, v, gap = r.trace["t"], r.trace["speed"], r.trace["gap"]
+    standing = (t > 15.0) & (t < 18.0)          # the lead stands until 18 s
+    assert np.all(v[standing] == 0.0) and np.all(np.abs(gap[standing] - 4.0) < 0.5)
+    assert v[-1] > 10.0                          # and it drove on after the lead

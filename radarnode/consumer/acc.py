@@ -23,6 +23,14 @@ from radarnode.scene.scenario import ACC_TIME_GAPS_S
 
 STATE_OFF, STATE_STANDBY, STATE_ACTIVE, STATE_FAULT = 0, 1, 2, 3
 STATE_NAMES = ("off", "standby", "active", "fault")
+LEAD_STOPPED_MPS = 0.5        # a lead slower than this is stopped
+STOP_APPROACH_MPS = 5.0       # below this the ego brakes to stop exactly at the standstill gap behind a stopped lead
+STANDSTILL_MPS = 0.1          # the ego is standing
+STOP_DECEL_MPS2 = 1.0         # the stopping curve's deceleration behind a stopped lead
+STOP_GAIN = 1.0               # 1/s, speed error to acceleration on that curve
+STOP_RESPONSE_S = 0.5         # the brakes' response (actuator lag, ECU latency, jerk limit) in the stopping room
+HOLD_MPS2 = -1.5              # brake request while holding the standstill
+AUTO_RESUME_S = 3.0           # ISO 22179: after a longer standstill only the driver resumes
 
 
 @dataclass(frozen=True)
@@ -77,6 +85,14 @@ class Acc:
         self.state = STATE_ACTIVE if settings.enabled else STATE_OFF
         self.request = 0.0
         self.fault = False
+        self.standstill = False          # holding the ego at a standstill behind a stopped lead
+        self.standstill_s = 0.0          # how long it has held
+        self.resume_confirmed = False    # the driver's resume (needed after AUTO_RESUME_S of standstill)
+        self.take_over = False           # the required deceleration exceeds ACC's authority: driver must brake
+
+    def confirm_resume(self) -> None:
+        """The driver confirms driving off (the resume button or a tap on the accelerator, ISO 22179)."""
+        self.resume_confirmed = True
 
     def step(self, dt: float, ego_speed_mps: float, target: Target | None, radar_ok: bool) -> float:
         """The acceleration request (m/s²) for this cycle."""
@@ -99,12 +115,43 @@ class Acc:
         self.state = STATE_ACTIVE
         a_min, a_max, jerk = iso15622_limits(ego_speed_mps)
         want = s.k_speed * (s.set_speed_mps - ego_speed_mps)
+        self.take_over = False
         if target is not None:
+            lead_v = ego_speed_mps + target.rel_speed_mps
             # the time gap is the setting; the standstill gap only matters at low speed
             d_des = max(s.standstill_gap_m, s.time_gap_s * ego_speed_mps)
             gap = (s.k_gap * (target.distance_m - d_des) + s.k_rel_speed * target.rel_speed_mps
                    + 0.5 * target.lead_accel_mps2)
+            if lead_v < LEAD_STOPPED_MPS and ego_speed_mps < STOP_APPROACH_MPS:
+                # behind a stopped lead: close to the standstill gap on a comfortable stopping curve,
+                # v = √(2·a·room), and stop there (the gap loop alone creeps: its speed term and its gap term
+                # cancel near the lead)
+                # (never accelerating towards it; the room counts what the ego covers while the brakes respond)
+                room = max(target.distance_m - s.standstill_gap_m - ego_speed_mps * STOP_RESPONSE_S, 0.0)
+                v_curve = math.sqrt(2.0 * STOP_DECEL_MPS2 * room)
+                gap = min(STOP_GAIN * (v_curve - ego_speed_mps), 0.0) if room > 0.2 else -2.0 * STOP_DECEL_MPS2
             want = min(want, gap)
+            # what avoiding the lead needs beyond ACC's authority is the driver's: take-over request
+            closing = -target.rel_speed_mps
+            if closing > 0 and target.distance_m > 0:
+                need = target.lead_accel_mps2 - closing ** 2 / (2.0 * max(target.distance_m - 1.0, 0.1))
+                self.take_over = need < a_min
+        else:
+            lead_v = math.inf
+        # standstill: hold the brake (no creep); drive off when the lead has, automatically after a short stop,
+        # with the driver's confirmation after a long one (ISO 22179)
+        if self.standstill:
+            self.standstill_s += max(dt, 0.0)
+            lead_gone = target is None or lead_v > LEAD_STOPPED_MPS + 0.5
+            if lead_gone and (self.standstill_s <= AUTO_RESUME_S or self.resume_confirmed):
+                self.standstill, self.standstill_s, self.resume_confirmed = False, 0.0, False
+            else:
+                self.request = HOLD_MPS2
+                return self.request
+        elif ego_speed_mps < STANDSTILL_MPS and target is not None and lead_v < LEAD_STOPPED_MPS:
+            self.standstill, self.standstill_s, self.resume_confirmed = True, 0.0, False
+            self.request = HOLD_MPS2
+            return self.request
         want = min(max(want, a_min), a_max)
         if dt > 0:
             step = jerk * dt

@@ -27,6 +27,9 @@ from radarnode.scene.scenario import Scenario
 from radarnode.wire.node import EgoMotionSender, RadarNode
 
 
+STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
+
+
 class EgoActuator:
     """Closed loop: the ego follows the ACC request through a first-order lag (time constant ``lag_s``)."""
 
@@ -97,6 +100,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     prev_a = None
     prev_gap = math.inf
     latency, request = spec.processing_latency_s, 0.0
+    moving_for, lead_v, prev_speed = 0.0, 0.0, scenario.ego.speed_mps
     res.latency_s = latency
     tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap",
                           "target")}
@@ -149,6 +153,11 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             res.warning_time_s, res.ttc_at_warning_s = t + latency, ttc - latency
         if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
             res.prewarning_time_s = t + latency
+        # the driver confirms driving off after a long standstill, a reaction time after the lead has left
+        if lead is not None and ecu.acc.standstill:
+            moving_for = moving_for + period if lead_v > 1.0 else 0.0
+            if moving_for >= spec.driver_reaction_s:
+                ecu.acc.confirm_resume()
         # closed loop: the ego follows the request through a first-order lag
         if actuator is not None:
             # the previous request holds until this cycle's is out, latency after the cycle
@@ -160,14 +169,18 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             request = new
         accel = ego_state.accel_mps2
         jerk = abs(accel - prev_a) / period if prev_a is not None else 0.0
-        res.peak_jerk_mps3 = max(res.peak_jerk_mps3, jerk)
+        if ego_state.speed_mps >= STANDSTILL_JUDGE_MPS and prev_speed >= STANDSTILL_JUDGE_MPS:
+            res.peak_jerk_mps3 = max(res.peak_jerk_mps3, jerk)
         prev_a = accel
         res.peak_decel_mps2 = min(res.peak_decel_mps2, accel)
         res.peak_accel_mps2 = max(res.peak_accel_mps2, accel)
-        if actuator is not None:
+        # ISO 15622's limits while driving; the instant the wheels stop (the deceleration ends with the speed)
+        # is the vehicle's, not the controller's
+        if actuator is not None and ego_state.speed_mps >= STANDSTILL_JUDGE_MPS and prev_speed >= STANDSTILL_JUDGE_MPS:
             lo, hi, jerk_max = iso15622_limits(ego_state.speed_mps)
             if accel < lo - 0.05 or accel > hi + 0.05 or jerk > jerk_max + 0.05:
                 res.iso_limits_ok = False
+        prev_speed = ego_state.speed_mps
         for key, val in (("t", t), ("gap", gap), ("ttc", ttc), ("speed", ego_state.speed_mps), ("accel", accel),
                          ("request", decision.accel_request_mps2 if decision else 0.0),
                          ("warning", decision.warning_level if decision else 0),
