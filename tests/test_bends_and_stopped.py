@@ -157,3 +157,11 @@ def test_the_ecu_outputs_carry_its_processing_latency():
     fast = simulate(dataclasses.replace(acc, ecu=dataclasses.replace(acc.ecu, processing_latency_s=0.0)))
     assert slow.passed and fast.passed, (slow.reasons, fast.reasons)
     assert slow.trace["speed"][-1] != fast.trace["speed"][-1]
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+@pytest.mark.parametrize("name", ["ncap_ccrb_12m", "ncap_ccrb_40m", "nhtsa_lead_decelerating"])
+def test_the_lead_track_survives_hard_braking(name, level):
+    r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity=level)
+    tracks = r.trace["target_track"][r.trace["target"] == 0]
+    assert tracks.size > 10 and len(set(tracks.tolist())) == 1, sorted(set(tracks.tolist()))

@@ -103,7 +103,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     moving_for, lead_v, prev_speed = 0.0, 0.0, scenario.ego.speed_mps
     res.latency_s = latency
     tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap",
-                          "target")}
+                          "target", "target_track")}
     for k in range(scenario.num_cycles):
         t = k * period
         if actuator is not None:
@@ -186,7 +186,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                          ("warning", decision.warning_level if decision else 0),
                          ("state", decision.acc_state if decision else 0),
                          ("time_gap", gap / ego_state.speed_mps if ego_state.speed_mps > 0.5 else math.inf),
-                         ("target", target_actor)):
+                         ("target", target_actor),
+                         ("target_track", decision.target.track_id if decision and decision.target else -1)):
             tr[key].append(val)
     res.trace = {k: np.asarray(v) for k, v in tr.items()}
     res.final_time_gap_s = float(res.trace["time_gap"][-1]) if len(res.trace["t"]) else None

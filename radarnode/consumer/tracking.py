@@ -123,15 +123,23 @@ def mahalanobis2(x, p, z, r, h) -> np.ndarray:
     return np.einsum("nmi,nmij,nmj->nm", nu, np.linalg.inv(s), nu)
 
 
+ID_GATE_FACTOR = 25.0      # a measurement with the track's object ID: accepted within 5σ of the wider gate
+
+
 def associate(d2: np.ndarray, gate: float, track_ids: np.ndarray | None = None,
               meas_ids: np.ndarray | None = None) -> list[tuple[int, int]]:
-    """Global nearest neighbour inside the gate; equal IDs (object lists) win when inside the gate."""
+    """Global nearest neighbour inside the gate; equal IDs (object lists) win.
+
+    The radar keeps an object's ID while it tracks it, so a measurement with the track's ID is accepted inside
+    a gate ``ID_GATE_FACTOR`` times wider (5σ instead of the χ² 99.9 % point): a lead that brakes hard moves
+    away from the constant-velocity prediction by more than its reported σ, and must not be dropped and
+    re-created. Beyond that the ID is not trusted (it may have been reused for another object)."""
     if d2.size == 0:
         return []
     cost = np.where(d2 <= gate, d2, np.inf)
     if track_ids is not None and meas_ids is not None:
         same = track_ids[:, None] == meas_ids[None, :]
-        cost = np.where(same & np.isfinite(cost), cost - 1e6, cost)
+        cost = np.where(same & (d2 <= ID_GATE_FACTOR * gate), np.minimum(d2, 1e6) - 1e6, cost)
     finite = np.where(np.isfinite(cost), cost, 1e12)
     rows, cols = scipy.optimize.linear_sum_assignment(finite)
     return [(int(i), int(j)) for i, j in zip(rows, cols) if np.isfinite(cost[i, j])]

@@ -331,6 +331,10 @@ class ObjectModel:
             self._assign_ids(np.flatnonzero(new))
         predicted = self.state.copy()
         predicted[:, 0:2] += predicted[:, 2:4] * dt
+        # the tracker models acceleration (it reports it in Obj_3_Extended): a braking lead's speed is
+        # predicted with it, so the smoothed speed does not lag by a·dt·(1−g)/g
+        predicted[:, 2] += ch["arel_long"][i] * dt
+        predicted[:, 3] += ch["arel_lat"][i] * dt
         # velocity of a continuing track is smoothed like a tracker would (the lateral part is poorly measured)
         tracked = (self.alive & ~new)[:, None]
         smoothed = meas.copy()
