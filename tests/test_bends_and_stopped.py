@@ -8,6 +8,7 @@ the warning is measured along the ego's lane.
 from __future__ import annotations
 
 import dataclasses
+import math
 from pathlib import Path
 
 import pytest
@@ -165,3 +166,31 @@ def test_the_lead_track_survives_hard_braking(name, level):
     r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity=level)
     tracks = r.trace["target_track"][r.trace["target"] == 0]
     assert tracks.size > 10 and len(set(tracks.tolist())) == 1, sorted(set(tracks.tolist()))
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+@pytest.mark.parametrize("name", ["lane_change_to_stopped", "lane_change_past_stopped"])
+def test_an_ego_lane_change_towards_and_away_from_a_stopped_car(name, level):
+    for seed in (1, 2):
+        r = simulate(dataclasses.replace(load_scenario(SCENARIOS / f"{name}.yaml"), seed=seed), fidelity=level)
+        assert r.passed, (name, level, seed, r.reasons)
+
+
+def test_a_lane_change_moves_and_turns_the_ego_and_is_checked(tmp_path):
+    from radarnode.errors import ScenarioError
+    from radarnode.scene.world import Scene
+    sc = load_scenario(SCENARIOS / "lane_change_to_stopped.yaml")
+    scene = Scene(sc)
+    before, mid, after = (scene.ego_state(t) for t in (0.5, 2.5, 5.0))
+    assert before.y_m == 0.0 and abs(after.y_m - 3.5) < 1e-9 and abs(mid.y_m - 1.75) < 1e-9
+    # the heading and yaw rate of a cosine step: peak heading atan(dy·π/(2T)/v) at mid-manoeuvre
+    assert abs(mid.heading_rad - math.atan(3.5 * math.pi / 6.0 / 20.0)) < 1e-3
+    assert scene.ego_state(1.75).yaw_rate_rps > 0.02 and scene.ego_state(3.25).yaw_rate_rps < -0.02
+    assert after.heading_rad == 0.0 and after.yaw_rate_rps == 0.0
+    text = (SCENARIOS / "lane_change_to_stopped.yaml").read_text()
+    for bad, msg in (("to_lane: 1}", "to_lane: 2}"), ("to_lane: 1}", "to_lane: 1, by_m: 3.5}"),
+                     ("duration_s: 3.0", "duration_s: 0.1")):
+        p = tmp_path / "lane_change.yaml"
+        p.write_text(text.replace(bad, msg))
+        with pytest.raises(ScenarioError, match=r"ego.lane_change"):
+            load_scenario(p)

@@ -79,12 +79,12 @@ class ScattererModel:
         view = self.scene.view(t_s)
         scat = self.scatterers(t_s, view, config)
         t1 = time.perf_counter()
-        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
+        sv, yaw = ego_motion(self.scene, t_s, view, sensor_velocity_est)
         det = ambiguity.resolve(self.preset, [self.detections(scat, config, seq) for seq in self.sequences()], sv)
         det = det.take(reportable(self.preset, det, config))
         t2 = time.perf_counter()
         clusters = clusters_from_detections(det, self.preset.near_range_m, sv)
-        objects = self.tracker.step(t_s, det, sv)
+        objects = self.tracker.step(t_s, det, sv, yaw)
         t3 = time.perf_counter()
         self.info.level, self.info.scatterers, self.info.detections = self.level, scat, det
         self.info.seconds = {"scene": t1 - t0, "radar": t2 - t1, "perception": t3 - t2}
@@ -239,10 +239,11 @@ class AutoModel:
         # as clusters and its tracker as stationary objects)
         need = np.where(scat.actor_index >= 0, conflict[np.maximum(scat.actor_index, 0)], True)
         # the object level: kinematics, Pd and noise of every actor; its detections of the simple actors
-        self.object.step(t_s, dataclasses.replace(config, clusters=False), sensor_velocity_est)
+        sv, yaw = ego_motion(self.scene, t_s, view, sensor_velocity_est)
+        self.object.step(t_s, dataclasses.replace(config, clusters=False),
+                         None if sensor_velocity_est is None else sv)
         det_o = self.object.info.detections
         parts = [det_o.take(~conflict[det_o.actor_index])]
-        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
         if need.any():
             sub = scat.take(need)
             parts.append(ambiguity.resolve(self.preset, [self.detection.detections(sub, config, seq)
@@ -256,12 +257,22 @@ class AutoModel:
         t1 = time.perf_counter()
         clusters = clusters_from_detections(det, self.preset.near_range_m, sv) if config.clusters else \
             ClusterList.empty(0)
-        objects = self.tracker.step(t_s, det, sv)
+        objects = self.tracker.step(t_s, det, sv, yaw)
         self.info = StepInfo(level=level, scatterers=scat, detections=det,
                              seconds={"radar": t1 - t0, "perception": time.perf_counter() - t1})
         frame = RadarFrame(t_s, self.cycle, objects, clusters)
         self.cycle += 1
         return frame, view
+
+
+def ego_motion(scene: Scene, t_s: float, view: SensorView, estimate) -> tuple[tuple[float, float], float]:
+    """The sensor's velocity (sensor axes) and the ego's yaw rate as the radar knows them: from the ego-motion
+    input, ``(vx, vy)`` or ``(vx, vy, yaw_rate_rps)``, or from the truth when there is none."""
+    if estimate is None:
+        return (view.sensor_vx_mps, view.sensor_vy_mps), scene.ego_state(t_s).yaw_rate_rps
+    if len(estimate) == 3:
+        return (estimate[0], estimate[1]), float(estimate[2])
+    return (estimate[0], estimate[1]), 0.0
 
 
 def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,

@@ -316,6 +316,8 @@ class ObjectModel:
         The physics of the next ``CHUNK_CYCLES`` cycles is computed in one
         vectorised pass and reused while the configuration stays the same.
         """
+        if sensor_velocity_est is not None and len(sensor_velocity_est) == 3:
+            sensor_velocity_est = (sensor_velocity_est[0], sensor_velocity_est[1])   # (the yaw rate: truth here)
         ch, i = self._row(t_s, config)
         view = ch["view"].row(i)
         detected = ch["detected"][i]

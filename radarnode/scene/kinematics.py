@@ -9,6 +9,7 @@ movers at one time is a handful of numpy operations.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -72,8 +73,13 @@ class MoverTable:
     waypoints : sequence of n sequences of Waypoint (a mover with waypoints ignores the rest)
     """
 
-    def __init__(self, x0_m, y0_m, speed_mps, heading_rad, accel, waypoints) -> None:
+    def __init__(self, x0_m, y0_m, speed_mps, heading_rad, accel, waypoints, lateral=None) -> None:
         n = len(x0_m)
+        # lateral manoeuvres (t0, duration, dy) of profile movers: a cosine step of dy over the duration
+        lat = [(math.inf, 1.0, 0.0) if m is None else m for m in (lateral or [None] * n)]
+        self.lat_t0 = np.array([m[0] for m in lat], dtype=np.float64)
+        self.lat_dur = np.array([m[1] for m in lat], dtype=np.float64)
+        self.lat_dy = np.array([m[2] for m in lat], dtype=np.float64)
         self.n = n
         spd = [_speed_knots(float(speed_mps[i]), accel[i]) for i in range(n)]
         k = max([len(s) for s in spd] + [len(w) for w in waypoints] + [1])
@@ -129,6 +135,13 @@ class MoverTable:
         sy = self.y0 + dist * self.sin_h
         svx, svy = v * self.cos_h, v * self.sin_h
         sax, say = a * self.cos_h, a * self.sin_h
+        if np.any(self.lat_dy != 0.0):
+            u = np.clip((t_s - self.lat_t0) / self.lat_dur, 0.0, 1.0)
+            inside = (u > 0.0) & (u < 1.0)
+            w = np.pi / self.lat_dur
+            sy = sy + self.lat_dy * 0.5 * (1.0 - np.cos(np.pi * u))
+            svy = svy + np.where(inside, self.lat_dy * 0.5 * w * np.sin(np.pi * u), 0.0)
+            say = say + np.where(inside, self.lat_dy * 0.5 * w * w * np.cos(np.pi * u), 0.0)
         if not self.is_path.any():
             return MoverState(sx, sy, svx, svy, sax, say)
         # waypoint movers: before the first waypoint they wait at it

@@ -174,16 +174,40 @@ class Road:
 
 
 @dataclass(frozen=True)
+class LaneChange:
+    """A lateral manoeuvre: from ``t_s`` over ``duration_s`` to lane ``to_lane`` (or by ``by_m``), a cosine step."""
+
+    t_s: float
+    duration_s: float = 4.0
+    to_lane: int | None = None
+    by_m: float | None = None
+
+    def __post_init__(self) -> None:
+        validate.number("t_s", self.t_s, lo=0.0, hi=86_400.0)
+        validate.number("duration_s", self.duration_s, lo=0.5, hi=30.0)
+        if (self.to_lane is None) == (self.by_m is None):
+            raise FieldError("to_lane", self.to_lane, "exactly one of to_lane (a lane index) or by_m (metres, left "
+                             "positive)")
+        if self.to_lane is not None:
+            validate.integer("to_lane", self.to_lane, lo=0, hi=9)
+        if self.by_m is not None:
+            validate.number("by_m", self.by_m, lo=-20.0, hi=20.0)
+
+
+@dataclass(frozen=True)
 class Ego:
-    """The vehicle carrying the radar; it keeps to the centre of the ego lane."""
+    """The vehicle carrying the radar: in its lane, ``y_m`` off the lane centre, with an optional lane change."""
 
     speed_mps: float = 0.0
     accel: tuple[AccelStep, ...] = ()
     length_m: float = 4.7
     width_m: float = 1.9
+    y_m: float = 0.0                       # lateral offset from the centre of the ego lane (left positive)
+    lane_change: LaneChange | None = None
 
     def __post_init__(self) -> None:
         validate.number("speed_mps", self.speed_mps, lo=0.0, hi=100.0)
+        validate.number("y_m", self.y_m, lo=-3.0, hi=3.0)
         validate.number("length_m", self.length_m, lo=0.0, hi=30.0, lo_open=True)
         validate.number("width_m", self.width_m, lo=0.0, hi=5.0, lo_open=True)
         _check_profile(self.accel)
@@ -386,6 +410,9 @@ class Scenario:
             for a in named:
                 if a is not None and a not in ids:
                     raise FieldError(f"ecu.expect.{name}", a, "the id of one of the actors: " + ", ".join(ids))
+        lc = self.ego.lane_change
+        if lc is not None and lc.to_lane is not None and lc.to_lane >= self.road.lanes:
+            raise FieldError("ego.lane_change.to_lane", lc.to_lane, f"a lane index in [0, {self.road.lanes - 1}]")
         for i, a in enumerate(self.actors):
             if a.lane is not None and a.lane >= self.road.lanes:
                 raise FieldError(f"actors[{i}].lane", a.lane, f"a lane index in [0, {self.road.lanes - 1}]")
@@ -400,6 +427,14 @@ class Scenario:
     @property
     def num_cycles(self) -> int:
         return int(math.floor(self.duration_s / self.period_s + 1e-9))
+
+    def ego_lateral(self) -> tuple[float, float, float] | None:
+        """The ego's lane change as (start, duration, lateral step in metres), or None."""
+        lc = self.ego.lane_change
+        if lc is None:
+            return None
+        dy = lc.by_m if lc.by_m is not None else self.road.lane_center_y_m(lc.to_lane) - self.ego.y_m
+        return lc.t_s, lc.duration_s, dy
 
     def actor_y_m(self, actor: Actor) -> float:
         if actor.y_m is not None:
@@ -420,7 +455,7 @@ SCHEMA = Schema(
         EcuSpec: {"expect": (Expectation, False)},
         RadarSetup: {"mount": (Mount, False)},
         Road: {"guardrails": (Guardrails, False)},
-        Ego: {"accel": (AccelStep, True)},
+        Ego: {"accel": (AccelStep, True), "lane_change": (LaneChange, False)},
         Actor: {"accel": (AccelStep, True), "waypoints": (Waypoint, True)},
     })
 
@@ -449,4 +484,4 @@ def read_scenario_text(text: str, name: str = "<string>") -> Scenario:
 
 
 __all__ = ["ACTOR_CLASSES", "Actor", "AccelStep", "Ego", "Guardrails", "Mount", "RadarSetup", "Road",
-           "Scenario", "Waypoint", "read_scenario", "read_scenario_text"]
+           "LaneChange", "Scenario", "Waypoint", "read_scenario", "read_scenario_text"]

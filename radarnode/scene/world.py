@@ -89,8 +89,9 @@ class DynamicEgo:
     answers ``state(t)`` like a :class:`MoverTable` of one mover.
     """
 
-    def __init__(self, speed_mps: float) -> None:
+    def __init__(self, speed_mps: float, lateral: MoverTable | None = None) -> None:
         self.t0, self.s0, self.v0, self.a0 = 0.0, 0.0, speed_mps, 0.0
+        self.lateral = lateral        # the scenario's lateral motion (offset, lane change): kept in closed loop
 
     def set(self, t_s: float, s_m: float, v_mps: float, a_mps2: float) -> None:
         self.t0, self.s0, self.v0, self.a0 = t_s, s_m, v_mps, a_mps2
@@ -101,7 +102,11 @@ class DynamicEgo:
         v = np.maximum(self.v0 + self.a0 * dt, 0.0)
         x = self.s0 + self.v0 * dt + 0.5 * self.a0 * dt * dt
         z = np.zeros_like(x)
-        return MoverState(x, z, v, z.copy(), np.full_like(x, self.a0), z.copy())
+        if self.lateral is None:
+            return MoverState(x, z, v, z.copy(), np.full_like(x, self.a0), z.copy())
+        lat = self.lateral.state(t_s)
+        return MoverState(x, lat.y_m.reshape(x.shape), v, lat.vy_mps.reshape(x.shape), np.full_like(x, self.a0),
+                          lat.ay_mps2.reshape(x.shape))
 
 
 class Scene:
@@ -113,7 +118,8 @@ class Scene:
         actors = scenario.actors
         self.actors = actors
         self.n = len(actors)
-        self._ego = MoverTable([0.0], [0.0], [scenario.ego.speed_mps], [0.0], [scenario.ego.accel], [()])
+        self._ego = MoverTable([0.0], [scenario.ego.y_m], [scenario.ego.speed_mps], [0.0], [scenario.ego.accel], [()],
+                               [scenario.ego_lateral()])
         self.dynamic_ego: DynamicEgo | None = None
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
@@ -133,7 +139,7 @@ class Scene:
 
     def drive_ego(self) -> DynamicEgo:
         """Hand the ego to a closed loop: from now on its motion is set from outside."""
-        self.dynamic_ego = DynamicEgo(self.scenario.ego.speed_mps)
+        self.dynamic_ego = DynamicEgo(self.scenario.ego.speed_mps, self._ego)
         self._ego = self.dynamic_ego
         return self.dynamic_ego
 
@@ -154,11 +160,23 @@ class Scene:
         vx, vy = _rot(psi, st.vx_mps * scale, st.vy_mps)
         return x, y, psi, vx, vy
 
+    def _ego_pose(self, st: MoverState) -> tuple[np.ndarray, ...]:
+        """World position, heading, world velocity, speed, acceleration and yaw rate of the ego's rear axle.
+
+        The heading is the road's plus the angle of the ego's own lateral motion (an offset or a lane change);
+        the yaw rate is the road's κ·v plus that angle's rate, d/dt atan(v_y / v_s).
+        """
+        x, y, psi, vxw, vyw = self._world_motion(st)
+        v_s = st.vx_mps * (1.0 - self.kappa * st.y_m)
+        v_d = st.vy_mps
+        heading = psi + np.arctan2(v_d, np.maximum(v_s, 1e-6))
+        speed = np.hypot(v_s, v_d)
+        turn = np.where(speed > 0.1, (st.ay_mps2 * v_s - v_d * st.ax_mps2) / np.maximum(speed * speed, 1e-2), 0.0)
+        return x, y, heading, vxw, vyw, speed, st.ax_mps2, self.kappa * v_s + turn
+
     def ego_state(self, t_s: float) -> EgoState:
-        st = self._ego.state(t_s)
-        x, y, psi, vx, vy = self._world_motion(st)
-        speed = float(st.vx_mps[0])
-        return EgoState(float(x[0]), float(y[0]), float(psi[0]), speed, float(st.ax_mps2[0]), self.kappa * speed)
+        x, y, heading, _, _, speed, accel, yaw = self._ego_pose(self._ego.state(t_s))
+        return EgoState(float(x[0]), float(y[0]), float(heading[0]), float(speed[0]), float(accel[0]), float(yaw[0]))
 
     def lane_gap(self, t_s: float, i: int) -> tuple[float, float, float, float, float]:
         """Actor ``i`` against the ego in road coordinates, as a test judge measures a lead on any road.
@@ -196,14 +214,11 @@ class Scene:
         """
         t = np.asarray(times_s, dtype=np.float64)
         est = self._ego.state(t)                                   # (T, 1)
-        ex, ey, epsi, evx_w, evy_w = self._world_motion(est)
-        ex, ey, epsi = ex[:, 0], ey[:, 0], epsi[:, 0]
-        espeed, eacc = est.vx_mps[:, 0], est.ax_mps2[:, 0]
-        w = self.kappa * espeed
+        ex, ey, epsi, evx_w, evy_w, _, eacc, w = (a[:, 0] for a in self._ego_pose(est))
         mx, my, myaw = self.mount
         ox, oy = _rot(epsi, np.float64(mx), np.float64(my))
         px, py, psi_s = ex + ox, ey + oy, epsi + myaw
-        svx, svy = espeed * np.cos(epsi) - w * oy, espeed * np.sin(epsi) + w * ox
+        svx, svy = evx_w - w * oy, evy_w + w * ox
         st = self._movers.state(t)                                 # (T, n)
         ax_, ay_, _, avx, avy = self._world_motion(st)
         speed = np.hypot(avx, avy)
@@ -212,7 +227,7 @@ class Scene:
         if self.kappa == 0.0:
             # straight road: the road frame is the world frame, the profiles' accelerations are exact
             aax, aay = st.ax_mps2, st.ay_mps2
-            eax, eay = eacc, np.zeros_like(eacc)
+            eax, eay = eacc, est.ay_mps2[:, 0]
         else:
             # curved road: central differences of the world velocity (centripetal terms included)
             tm = np.maximum(t - h_s, 0.0)

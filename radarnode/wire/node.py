@@ -289,7 +289,7 @@ class RadarNode:
                                 power_reduction_db=3.0 * cfg.radar_power, high_sensitivity=cfg.rcs_threshold == 1,
                                 clusters=cfg.output_type == P.OUTPUT_CLUSTERS or self.boundaries is not None)
         sensor_velocity = self._sensor_velocity_estimate(t_s)
-        frame, view = self.model.step(t_s, runtime, sensor_velocity)
+        frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),))
         own = self._boundary_frames(frame, t_s, sensor_velocity) if self.boundaries is not None else []
         self._last_t = t_s
         out: list[tuple[int, np.ndarray]] = []
