@@ -25,9 +25,10 @@ def _at(name: str, x_m: float, seed: int):
     return dataclasses.replace(sc, actors=(lead,), seed=seed, duration_s=min(sc.duration_s, x_m / 20.0 + 1.0))
 
 
-@pytest.mark.parametrize("name", ["bend_left_stopped_outer_lane", "bend_right_stopped_outer_lane"])
+@pytest.mark.parametrize("name", ["bend_r250_left_stopped_outer_lane", "bend_r250_right_stopped_outer_lane",
+                                  "bend_r500_left_stopped_inner_lane", "bend_r250_right_stopped_inner_lane"])
 @pytest.mark.parametrize("x_m", [50.0, 80.0, 110.0, 140.0])
-def test_a_car_stopped_in_the_outer_lane_of_a_250_m_bend_draws_no_warning(name, x_m):
+def test_a_car_stopped_in_the_next_lane_of_a_bend_draws_no_warning(name, x_m):
     for seed in (1, 2):
         r = simulate(_at(name, x_m, seed), fidelity="object")
         assert r.warning_time_s is None, (name, x_m, seed, r.warning_time_s)
@@ -36,14 +37,14 @@ def test_a_car_stopped_in_the_outer_lane_of_a_250_m_bend_draws_no_warning(name, 
 @pytest.mark.parametrize("x_m", [80.0, 110.0, 140.0])
 def test_a_car_stopped_in_the_own_lane_of_a_250_m_bend_is_warned_in_time(x_m):
     for seed in (1, 2):
-        r = simulate(_at("bend_left_stopped_own_lane", x_m, seed), fidelity="object")
+        r = simulate(_at("bend_r250_left_stopped_own_lane", x_m, seed), fidelity="object")
         assert r.warning_time_s is not None and r.ttc_at_warning_s >= 2.1, (x_m, seed, r.ttc_at_warning_s)
 
 
 def test_the_judge_measures_the_ttc_along_the_bend():
     # before, a lead on a bend was "not ahead" (more than 2 m off the sensor's axis): the TTC at the warning
     # was infinite and passed any minimum
-    r = simulate(_at("bend_left_stopped_own_lane", 110.0, 1), fidelity="object")
+    r = simulate(_at("bend_r250_left_stopped_own_lane", 110.0, 1), fidelity="object")
     assert 2.0 < r.ttc_at_warning_s < 4.0 and r.min_gap_m < 10.0
 
 

@@ -98,20 +98,26 @@ def group_detections(det: Detections, eps_m: float = 2.5, eps_mps: float = 1.5, 
     return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags)
 
 
-def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, yaw_rate_rps: float = 0.0
-            ) -> tuple[np.ndarray, np.ndarray]:
+def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, yaw_rate_rps: float = 0.0,
+            sensor_velocity: tuple[float, float] = (0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
     """Constant-velocity prediction of states (n, 4) = [x, y, vx, vy] and covariances (n, 4, 4).
 
-    The sensor frame turns with the ego by ``yaw_rate_rps·dt``: positions and velocities are rotated by minus
-    that angle, so a stationary object stays where it is on the ground while the ego turns or changes lane.
+    The velocity is relative to the sensor (the object's over ground minus the sensor's). The sensor frame
+    turns with the ego by θ = ``yaw_rate_rps``·dt: positions are rotated by −θ, and so is the object's
+    velocity over ground, while the sensor's own velocity stays what it is in its own axes:
+    v' = R(−θ)(v + u) − u. A stationary object then stays where it is on the ground while the ego turns or
+    changes lane.
     """
     f, q = transition("cv", dt, accel_sigma ** 2)
     a = -yaw_rate_rps * dt
-    if a:
-        c, s = np.cos(a), np.sin(a)
-        rot = np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, c, -s], [0, 0, s, c]])
-        f = rot @ f
-    return x @ f.T, f @ p @ f.T + q
+    if not a:
+        return x @ f.T, f @ p @ f.T + q
+    c, s = np.cos(a), np.sin(a)
+    rot = np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, c, -s], [0, 0, s, c]])
+    u = np.array([0.0, 0.0, sensor_velocity[0], sensor_velocity[1]])
+    moved = x @ f.T                                  # p + v·dt, v
+    f = rot @ f
+    return (moved + u) @ rot.T - u, f @ p @ f.T + q
 
 
 def measure(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -187,7 +193,8 @@ class ObjectTracker:
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
         if len(self.x):
-            self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps)
+            self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps,
+                                     sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])))
         z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
         pairs = associate(self.x, self.p, z, self.r_cov)
         hit = np.zeros(len(self.x), dtype=bool)
