@@ -93,8 +93,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     res = ScenarioResult(scenario.name, scenario.seed)
     prev_a = None
     prev_gap = math.inf
-    tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap",
-                          "target")}
+    tr = {k: [] for k in ("t", "gap", "ttc", "rel_speed", "speed", "accel", "request", "warning", "state",
+                          "time_gap", "target")}
     for k in range(scenario.num_cycles):
         t = k * period
         if actuator is not None:
@@ -118,12 +118,14 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # truth
         ego_state = scene.ego_state(t)
         gap = ttc = math.inf
+        rel_speed = math.nan
         if lead is not None:
             # along the ego's lane (a bend too): ahead and within 2 m of the lane centre
             lane_gap, lateral, closing = scene.lane_gap(t, lead)
             ahead = lane_gap > 0.0 and abs(lateral) < 2.0
             gap = lane_gap if ahead else math.inf
             ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
+            rel_speed = -closing if ahead else math.nan      # lead minus ego, negative when closing
         res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)
         if lead is not None:
             if res.impact_time_s is None and 0.0 < prev_gap and lane_gap <= 0.0 and abs(lateral) < 2.0:
@@ -152,7 +154,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             lo, hi, jerk_max = iso15622_limits(ego_state.speed_mps)
             if accel < lo - 0.05 or accel > hi + 0.05 or jerk > jerk_max + 0.05:
                 res.iso_limits_ok = False
-        for key, val in (("t", t), ("gap", gap), ("ttc", ttc), ("speed", ego_state.speed_mps), ("accel", accel),
+        for key, val in (("t", t), ("gap", gap), ("ttc", ttc), ("rel_speed", rel_speed), ("speed", ego_state.speed_mps),
+                         ("accel", accel),
                          ("request", decision.accel_request_mps2 if decision else 0.0),
                          ("warning", decision.warning_level if decision else 0),
                          ("state", decision.acc_state if decision else 0),
