@@ -71,6 +71,10 @@ def report_figure(scenario, result, plt=None):
                            color="g", alpha=0.2,
                            label=f"limit: time gap {spec.time_gap_s} s ± {e.gap_tolerance:.0%} after {e.gap_settle_s} s")
     a_gap.set_ylabel("gap, m")
+    if not finite.any():          # an adjacent-lane or no-lead scenario: say so instead of an empty panel
+        for ax in (a_gap, a_rel):
+            ax.text(0.5, 0.5, (f"actor '{e.lead}' never ahead in the ego lane" if e.lead else "no lead actor in expect.lead"), transform=ax.transAxes,
+                    ha="center", va="center", color="0.4")
     a_rel.plot(t, tr["rel_speed"], color="k", label="lead − ego")
     a_rel.axhline(0.0, color="0.6", linewidth=0.8)
     a_rel.set_ylabel("relative speed, m/s")
@@ -86,6 +90,9 @@ def report_figure(scenario, result, plt=None):
         a_ttc.plot([result.warning_time_s], [min(result.ttc_at_warning_s, TTC_SHOWN_S)], "o", color="r",
                    label=f"TTC at warning {result.ttc_at_warning_s:.2f} s")
     a_ttc.set_ylim(0.0, TTC_SHOWN_S)
+    if not np.any(ttc <= TTC_SHOWN_S) and finite.any():
+        a_ttc.text(0.5, 0.5, f"TTC above {TTC_SHOWN_S:.0f} s throughout", transform=a_ttc.transAxes, ha="center",
+                   va="center", color="0.4")
     a_ttc.set_ylabel("TTC, s")
     a_speed.plot(t, tr["speed"], color="k", label="ego speed")
     if spec.acc_enabled:
