@@ -73,8 +73,8 @@ def report_figure(scenario, result, plt=None):
     a_gap.set_ylabel("gap, m")
     if not finite.any():          # an adjacent-lane or no-lead scenario: say so instead of an empty panel
         for ax in (a_gap, a_rel):
-            ax.text(0.5, 0.5, (f"actor '{e.lead}' never ahead in the ego lane" if e.lead else "no lead actor in expect.lead"), transform=ax.transAxes,
-                    ha="center", va="center", color="0.4")
+            note = f"actor '{e.lead}' never ahead in the ego lane" if e.lead else "no expect.lead actor"
+            ax.text(0.5, 0.5, note, transform=ax.transAxes, ha="center", va="center", color="0.4")
     a_rel.plot(t, tr["rel_speed"], color="k", label="lead − ego")
     a_rel.axhline(0.0, color="0.6", linewidth=0.8)
     a_rel.set_ylabel("relative speed, m/s")
