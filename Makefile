@@ -11,7 +11,7 @@ $(VENV)/.installed: pyproject.toml
 	$(VENV)/bin/python -m pip install --quiet -e '.[test]'
 	touch $@
 
-.PHONY: install run test bench
+.PHONY: install run test bench dbc
 install: $(VENV)/.installed
 
 run: $(VENV)/.installed
@@ -22,3 +22,7 @@ test: $(VENV)/.installed
 
 bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/wire.py
+
+# the whole-bus DBC is generated from dbc/ars408.dbc and dbc/radarnode.dbc (tests/test_bus_dbc.py checks it)
+dbc: $(VENV)/.installed
+	$(VENV)/bin/python -m radarnode.wire.busdbc > dbc/radarnode_bus.dbc.tmp && mv dbc/radarnode_bus.dbc.tmp dbc/radarnode_bus.dbc

@@ -136,8 +136,12 @@ wait $CONSUMER
     assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
     lines = [json.loads(x) for x in (tmp_path / "cycles.jsonl").read_text().splitlines()]
     assert len(lines) == 20
-    counters = [x["meas_counter"] for x in lines]
+    counters = [x["cycle_counter"] for x in lines]
     assert counters == list(range(counters[0], counters[0] + 20))
+    assert all(x["sensor_id"] == 0 for x in lines)
+    stamps = [x["timestamp"] for x in lines]
+    steps = sorted(b - a for a, b in zip(stamps, stamps[1:]))
+    assert steps[0] > 0 and 0.06 < steps[len(steps) // 2] < 0.085          # in order, 72-ms cycles (median)
     assert any(o["obj_class"] == 1 and 40 < o["dist_long_m"] < 70 for x in lines[5:] for o in x["objects"])
     assert "sent 34 cycles" in (tmp_path / "node.err").read_text()
 

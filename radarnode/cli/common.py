@@ -1,15 +1,21 @@
-"""Helpers shared by the subcommands: scenario loading, stop handling, tables, progress."""
+"""Helpers shared by the subcommands: scenario loading, stop handling, tables, progress, atomic output, bit rate."""
 
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import json
+import os
 import signal
 import sys
+import tempfile
 import threading
+from pathlib import Path
 
 import numpy as np
 
 from radarnode.consumer.assembler import ClusterCycle, ConsumerStats, ObjectCycle
+from radarnode.errors import ConfigError
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
 from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario
@@ -114,21 +120,129 @@ def format_stats(stats: ConsumerStats) -> str:
     return "consumer: " + ", ".join(f"{k}={v}" for k, v in shown.items())
 
 
-class Progress:
-    """A one-line progress bar on stderr, only when stderr is a terminal."""
+def progress(total: int | None, label: str, unit: str = "cycle"):
+    """A tqdm progress bar on stderr, shown only when stderr is a terminal (never in piped output or logs).
 
-    def __init__(self, total: int, label: str) -> None:
-        self.total = max(total, 1)
-        self.label = label
-        self.enabled = sys.stderr.isatty()
+    tqdm rather than a hand-written bar: it measures the rate and the time left, redraws at most ~10 times a
+    second whatever the loop's speed, adapts to the terminal width and to resizes, and leaves a clean line when
+    closed or interrupted. ``total`` None shows a running count without a bar.
+    """
+    from tqdm import tqdm
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, disable=not sys.stderr.isatty(),
+                dynamic_ncols=True, leave=False)
 
-    def update(self, done: int) -> None:
-        if self.enabled and (done % 10 == 0 or done == self.total):
-            width = 30
-            filled = int(width * done / self.total)
-            sys.stderr.write(f"\r{self.label} [{'#' * filled}{'.' * (width - filled)}] {done}/{self.total}")
-            sys.stderr.flush()
 
-    def close(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\n")
+@contextlib.contextmanager
+def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline: str | None = None):
+    """Write ``path`` through a temporary name in the same directory, renamed over it only on success.
+
+    A reader never sees a half-written file: an exception (or Ctrl-C) removes the temporary file and leaves
+    any earlier ``path`` untouched. Yields the open file; ``option`` names the option in error messages.
+    """
+    target = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
+    except OSError as exc:
+        raise ConfigError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        with os.fdopen(fd, mode, newline=newline, **({} if "b" in mode else {"encoding": "utf-8"})) as f:
+            yield f
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike, option: str):
+    """Like :func:`atomic_output`, for writers that want a file name (matplotlib's savefig): yields the
+    temporary path, renamed to ``path`` on success, removed on failure. The last two suffixes are kept
+    (``.blf``, ``.log.gz``) so writers that choose the format by suffix (python-can, matplotlib) still do."""
+    target = Path(path)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part" + "".join(target.suffixes[-2:]),
+                                   dir=target.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise ConfigError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+    try:
+        yield tmp
+        os.chmod(tmp, 0o666 & ~_umask())
+        os.replace(tmp, target)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+@dataclasses.dataclass(frozen=True)
+class Bitrate:
+    """The CAN bit rate in force and where it came from (for the bus-load budget's message)."""
+
+    bit_s: int
+    source: str
+
+    def __str__(self) -> str:
+        return f"{self.bit_s} bit/s ({self.source})"
+
+
+def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_config: bool = True,
+                    context: str | None = None) -> Bitrate:
+    """The bit rate for the bus-load budget, as python-can would open the bus.
+
+    In order: ``-b/--bitrate`` on the command line; python-can's configuration — the environment
+    (``CAN_BITRATE``, or ``bitrate`` in the JSON of ``CAN_CONFIG``), then its configuration files
+    (``~/can.conf``, ``/etc/can.conf``, ``~/.can``, ``~/.canrc``; section ``[default]``), the same sources and
+    precedence as ``can.util.load_config``; last the scenario's ``radar.bitrate`` (500 kbit/s unless the
+    scenario says otherwise). ``use_can_config=False`` skips python-can's configuration (``radarnode log``
+    opens no bus, so its output must not depend on the machine it runs on).
+
+    Raises ConfigError naming the source when the value is not an integer in 10 000..1 000 000 bit/s.
+    """
+    import can.util
+
+    candidates: list[tuple[object, str]] = []
+    if cli_bitrate is not None:
+        candidates.append((cli_bitrate, "command line -b/--bitrate"))
+    elif use_can_config:
+        suffix = f"_{context}" if context else ""
+        env = os.environ.get(f"CAN_BITRATE{suffix}")
+        if env:
+            candidates.append((env, f"python-can environment CAN_BITRATE{suffix}"))
+        else:
+            try:
+                env_json = json.loads(os.environ.get(f"CAN_CONFIG{suffix}", "{}"))
+            except ValueError:
+                env_json = {}
+            if isinstance(env_json, dict) and "bitrate" in env_json:
+                candidates.append((env_json["bitrate"], f"python-can environment CAN_CONFIG{suffix}"))
+            else:
+                found = None
+                for name in can.util.CONFIG_FILES:      # later files override earlier ones, as ConfigParser.read
+                    f = os.path.expanduser(name)
+                    if os.path.isfile(f):
+                        with contextlib.suppress(OSError, ValueError):
+                            value = can.util.load_file_config(f, context or "default").get("bitrate")
+                            if value:
+                                found = (value, f"python-can config file {f}")
+                if found:
+                    candidates.append(found)
+    if not candidates:
+        return Bitrate(int(scenario_bitrate), "scenario radar.bitrate")
+    value, source = candidates[0]
+    try:
+        bit_s = int(str(value).strip())
+    except ValueError:
+        bit_s = None
+    if bit_s is None or not 10_000 <= bit_s <= 1_000_000:
+        raise ConfigError(f"{source}: bit rate value {value!r} is not allowed; expected an integer "
+                          "10000..1000000 bit/s")
+    return Bitrate(bit_s, source)

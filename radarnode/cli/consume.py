@@ -20,22 +20,33 @@ def add_subparser(sub) -> None:
     p.add_argument("--sensor-id", type=int, default=0, choices=range(8), help="radar sensor ID (default 0)")
     p.add_argument("--count", type=int, default=0, help="stop after this many cycles (0: until Ctrl-C)")
     p.add_argument("--timeout", type=float, default=0.0, help="stop after this many seconds without a cycle")
-    p.add_argument("--json", action="store_true", help="one JSON object per cycle instead of tables")
+    p.add_argument("--json", action="store_true", help="one JSON object per cycle (timestamp, sensor_id, cycle_counter, objects or "
+                        "clusters) instead of tables")
     p.set_defaults(func=cmd)
 
 
-def cycle_to_json(cycle) -> str:
+def _f(v, digits: int = 3):
+    """A finite float rounded for JSON, None for NaN (JSON has no NaN)."""
+    v = float(v)
+    return round(v, digits) if np.isfinite(v) else None
+
+
+def cycle_to_json(cycle, sensor_id: int = 0) -> str:
+    """One line of JSON for one decoded cycle: when (the header frame's timestamp, s), which sensor, which cycle
+    (the header's MeasCounter), and every object or cluster with units in the field names."""
+    head = {"timestamp": cycle.timestamp, "sensor_id": sensor_id, "cycle_counter": cycle.meas_counter}
     if isinstance(cycle, ObjectCycle):
         ol = cycle.objects
-        rows = [{"id": int(ol.id[k]), "dist_long_m": round(float(ol.dist_long_m[k]), 3),
-                 "dist_lat_m": round(float(ol.dist_lat_m[k]), 3), "vrel_long_mps": float(ol.vrel_long_mps[k]),
-                 "vrel_lat_mps": float(ol.vrel_lat_mps[k]), "dyn_prop": int(ol.dyn_prop[k]),
-                 "obj_class": int(ol.obj_class[k])} for k in range(len(ol))]
-        return json.dumps({"type": "objects", "meas_counter": cycle.meas_counter, "objects": rows})
+        rows = [{"id": int(ol.id[k]), "dist_long_m": _f(ol.dist_long_m[k]), "dist_lat_m": _f(ol.dist_lat_m[k]),
+                 "vrel_long_mps": _f(ol.vrel_long_mps[k]), "vrel_lat_mps": _f(ol.vrel_lat_mps[k]),
+                 "dyn_prop": int(ol.dyn_prop[k]), "obj_class": int(ol.obj_class[k]), "rcs_dbsm": _f(ol.rcs_dbsm[k], 1),
+                 "length_m": _f(ol.length_m[k], 1), "width_m": _f(ol.width_m[k], 1)} for k in range(len(ol))]
+        return json.dumps({**head, "type": "objects", "objects": rows})
     cl = cycle.clusters
-    rows = [{"id": int(cl.id[k]), "dist_long_m": float(np.round(cl.dist_long_m[k], 3)),
-             "dist_lat_m": float(np.round(cl.dist_lat_m[k], 3))} for k in range(len(cl))]
-    return json.dumps({"type": "clusters", "meas_counter": cycle.meas_counter, "clusters": rows})
+    rows = [{"id": int(cl.id[k]), "dist_long_m": _f(cl.dist_long_m[k]), "dist_lat_m": _f(cl.dist_lat_m[k]),
+             "vrel_long_mps": _f(cl.vrel_long_mps[k]), "vrel_lat_mps": _f(cl.vrel_lat_mps[k]),
+             "dyn_prop": int(cl.dyn_prop[k]), "rcs_dbsm": _f(cl.rcs_dbsm[k], 1)} for k in range(len(cl))]
+    return json.dumps({**head, "type": "clusters", "clusters": rows})
 
 
 def cmd(args) -> int:
@@ -54,7 +65,7 @@ def cmd(args) -> int:
                     continue
                 last = time.monotonic()
                 n += 1
-                print(cycle_to_json(cycle) if args.json else format_cycle(cycle), flush=True)
+                print(cycle_to_json(cycle, args.sensor_id) if args.json else format_cycle(cycle), flush=True)
                 if args.count and n >= args.count:
                     break
         finally:

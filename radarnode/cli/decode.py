@@ -1,45 +1,222 @@
-"""``radarnode decode FILE``: read any python-can log and print the radar cycles it holds."""
+"""``radarnode decode FILE``: read any python-can log and print the radar cycles it holds.
+
+``--format text`` (default) prints the assembled object or cluster lists, the
+consumer's counters and a per-object summary. ``--format json`` writes one
+JSON object per CAN frame (JSON Lines), ``--format csv`` one row per frame:
+timestamp, channel, CAN ID, sensor ID, cycle counter, message name, DLC, data
+and every decoded signal with its unit, decoded with ``dbc/radarnode_bus.dbc``
+(every sensor ID, radarnode's own messages and the ECU's). The cycle counter
+of a frame is the MeasCounter of the latest object or cluster list header of
+its sensor (of ``--sensor-id``, default 0, for the ECU's frames and 0x008);
+empty before the first header. ``-o FILE`` writes under a temporary name and
+renames it when complete.
+"""
 
 from __future__ import annotations
 
+import contextlib
+import csv
+import json
+import math
+import struct
+import sys
+
 import can
 
-from radarnode.cli.common import format_cycle, format_stats
+from radarnode.cli.common import atomic_output, format_cycle, format_stats, progress
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
 from radarnode.errors import ConfigError
 from radarnode.perception.types import CLASS_NAMES
+from radarnode.wire.busdbc import frame_table
+
+FORMATS = ("text", "json", "csv")
+FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
+COUNTER_SIGNALS = {"Obj_0_Status": "Obj_MeasCounter", "Cluster_0_Status": "Cluster_MeasCounter"}
 
 
 def add_subparser(sub) -> None:
-    p = sub.add_parser("decode", help="decode radar cycles from a CAN log file", description=__doc__)
+    p = sub.add_parser("decode", help="decode radar cycles (or every frame, as JSON/CSV) from a CAN log file",
+                       description=__doc__)
     p.add_argument("file", help="log file (.blf .asc .log .csv .trc …)")
-    p.add_argument("--sensor-id", type=int, default=0, choices=range(8), help="radar sensor ID (default 0)")
-    p.add_argument("--summary", action="store_true", help="only the per-object summary, no per-cycle tables")
-    p.add_argument("--max-cycles", type=int, default=0, help="print at most this many cycles (0: all)")
+    p.add_argument("--format", default="text", metavar="{text,json,csv}",
+                   help="text: cycles and summary (default); json: one JSON object per frame; csv: one row per frame")
+    p.add_argument("-o", "--output", help="write to this file instead of standard output")
+    p.add_argument("--sensor-id", type=int, default=None, choices=range(8),
+                   help="radar sensor ID (text: whose cycles, default 0; json/csv: only this sensor's frames and "
+                        "the ECU's, default every frame)")
+    p.add_argument("--summary", action="store_true", help="text: only the per-object summary, no per-cycle tables")
+    p.add_argument("--max-cycles", type=int, default=0, help="text: print at most this many cycles (0: all)")
     p.set_defaults(func=cmd)
 
 
-def cmd(args) -> int:
+def _open_reader(path: str):
     try:
-        reader = can.LogReader(args.file)
+        return can.LogReader(path)
     except (ValueError, OSError) as exc:
-        raise ConfigError(f"argument FILE: cannot read {args.file!r}: {exc}") from None
-    assembler = CycleAssembler(sensor_id=args.sensor_id)
-    cycles = []
+        raise ConfigError(f"argument FILE: cannot read {path!r}: {exc}") from None
+
+
+def _frames(path: str):
+    """The log's frames; a log that breaks off mid-way is a one-line error naming the file (errors of the
+    code that consumes the frames, a broken pipe or a full disk, are not this generator's and pass through)."""
+    reader = _open_reader(path)
     try:
-        for cycle in assembler.feed(reader):
-            cycles.append(cycle)
-            if not args.summary and (not args.max_cycles or len(cycles) <= args.max_cycles):
-                print(format_cycle(cycle))
-    except (ValueError, OSError, EOFError) as exc:
-        raise ConfigError(f"argument FILE: {args.file!r} is not a readable log: {exc}") from None
+        it = iter(reader)
+        while True:
+            try:
+                msg = next(it)
+            except StopIteration:
+                return
+            except (ValueError, OSError, EOFError, struct.error) as exc:
+                raise ConfigError(f"argument FILE: {path!r} is not a readable log: {exc}") from None
+            yield msg
     finally:
         if hasattr(reader, "stop"):
             reader.stop()
-    print(format_stats(assembler.stats))
+
+
+def _number(v):
+    """A JSON/CSV-friendly number: ints stay ints, floats lose the binary noise of scale × raw + offset."""
+    if isinstance(v, float):
+        return float(f"{v:.12g}") if math.isfinite(v) else None
+    return int(v) if isinstance(v, int) else v
+
+
+class FrameDecoder:
+    """Frame -> record with sensor ID and cycle counter, decoded with the whole-bus DBC."""
+
+    def __init__(self, sensor_id: int | None) -> None:
+        self.table = frame_table()
+        self.only = sensor_id
+        self.default_sensor = 0 if sensor_id is None else sensor_id
+        self.counters: dict[int, int] = {}
+        self.frames = self.unknown = self.errors = self.skipped = 0
+
+    def record(self, msg: can.Message) -> dict | None:
+        if msg.is_error_frame or msg.is_remote_frame:
+            self.skipped += 1
+            return None
+        info = self.table.get(msg.arbitration_id) if not msg.is_extended_id else None
+        sensor = info.sensor_id if info is not None else None
+        if self.only is not None and sensor is not None and sensor != self.only:
+            return None
+        self.frames += 1
+        rec = {"timestamp": msg.timestamp, "channel": msg.channel, "can_id": msg.arbitration_id,
+               "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
+               "dlc": msg.dlc, "data": bytes(msg.data).hex().upper(), "signals": {}}
+        if info is None:
+            self.unknown += 1
+        else:
+            try:
+                values = info.message.decode(bytes(msg.data), decode_choices=False, scaling=True)
+            except Exception as exc:  # noqa: BLE001 - cantools raises several kinds on a bad frame
+                self.errors += 1
+                rec["error"] = str(exc)
+                values = {}
+            for sig in info.message.signals:
+                if sig.name not in values:
+                    continue           # a multiplexed signal of another multiplexer value
+                v = values[sig.name]
+                entry = {"value": _number(v), "unit": sig.unit or ""}
+                if sig.choices and v in sig.choices:
+                    entry["label"] = str(sig.choices[v])
+                rec["signals"][sig.name] = entry
+            counter_signal = COUNTER_SIGNALS.get(info.base_name)
+            if counter_signal is not None and counter_signal in values:
+                self.counters[sensor] = int(values[counter_signal])
+        rec["cycle_counter"] = self.counters.get(sensor if sensor is not None else self.default_sensor)
+        return rec
+
+
+def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
+    """(signal name, column header) for every signal of the messages the log holds, in DBC order."""
+    cols: dict[str, str] = {}
+    for can_id in sorted(arbitration_ids):
+        info = table.get(can_id)
+        if info is None:
+            continue
+        for sig in info.message.signals:
+            cols.setdefault(sig.name, f"{sig.name} [{sig.unit}]" if sig.unit else sig.name)
+    return list(cols.items())
+
+
+def _write_machine(args, out) -> FrameDecoder:
+    decoder = FrameDecoder(args.sensor_id)
+    if args.format == "csv":
+        # a first pass for the columns: only the signals of messages that occur, not the whole DBC's ~200
+        with contextlib.closing(_frames(args.file)) as reader:
+            present = {m.arbitration_id for m in reader if not (m.is_error_frame or m.is_remote_frame)}
+        columns = _signal_columns(decoder.table, present)
+        writer = csv.writer(out, lineterminator="\n")
+        writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
+    bar = progress(None, f"decoding {args.file}", unit="frame")
+    try:
+        with contextlib.closing(_frames(args.file)) as reader:
+            for msg in reader:
+                bar.update(1)
+                rec = decoder.record(msg)
+                if rec is None:
+                    continue
+                if args.format == "json":
+                    out.write(json.dumps(rec, ensure_ascii=False) + "\n")
+                    continue
+                sig = rec["signals"]
+                row = [repr(rec["timestamp"]), "" if rec["channel"] is None else rec["channel"],
+                       f"0x{rec['can_id']:03X}", "" if rec["sensor_id"] is None else rec["sensor_id"],
+                       "" if rec["cycle_counter"] is None else rec["cycle_counter"], rec["message"] or "",
+                       rec["dlc"], rec["data"]]
+                row += ["" if name not in sig or sig[name]["value"] is None else sig[name]["value"]
+                        for name, _ in columns]
+                writer.writerow(row)
+    finally:
+        bar.close()
+    return decoder
+
+
+def _write_text(args, out) -> None:
+    sensor = 0 if args.sensor_id is None else args.sensor_id
+    assembler = CycleAssembler(sensor_id=sensor)
+    cycles = []
+    bar = progress(None, f"decoding {args.file}", unit="frame")
+
+    def counted(reader):
+        for msg in reader:
+            bar.update(1)
+            yield msg
+
+    try:
+        with contextlib.closing(_frames(args.file)) as reader:
+            for cycle in assembler.feed(counted(reader)):
+                cycles.append(cycle)
+                if not args.summary and (not args.max_cycles or len(cycles) <= args.max_cycles):
+                    out.write(format_cycle(cycle) + "\n")
+    finally:
+        bar.close()
+    out.write(format_stats(assembler.stats) + "\n")
     objects = summarize_objects([c for c in cycles if isinstance(c, ObjectCycle)])
     for oid, d in sorted(objects.items(), key=lambda kv: -kv[1]["cycles"]):
         cls = CLASS_NAMES[d["obj_class"]] if d["obj_class"] >= 0 else "-"
-        print(f"object {oid:3d} {cls:10s} in {d['cycles']:5d} cycles, median {d['dist_long_m']:7.1f} m long "
-              f"{d['dist_lat_m']:6.1f} m lat")
+        out.write(f"object {oid:3d} {cls:10s} in {d['cycles']:5d} cycles, median {d['dist_long_m']:7.1f} m long "
+                  f"{d['dist_lat_m']:6.1f} m lat\n")
+
+
+def cmd(args) -> int:
+    if args.format not in FORMATS:
+        raise ConfigError(f"option --format: value {args.format!r} is not allowed; expected one of "
+                          f"{', '.join(FORMATS)}")
+    if args.max_cycles < 0:
+        raise ConfigError(f"option --max-cycles: value {args.max_cycles} is not allowed; expected an integer >= 0")
+    reader = _open_reader(args.file)            # a missing or unknown file fails before any output is created
+    if hasattr(reader, "stop"):
+        reader.stop()
+    write = _write_text if args.format == "text" else _write_machine
+    if args.output is None:
+        result = write(args, sys.stdout)
+    else:
+        with atomic_output(args.output, "--output", newline="" if args.format == "csv" else None) as out:
+            result = write(args, out)
+    if result is not None:
+        where = f" to {args.output}" if args.output else ""
+        print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "
+              f"decodable, {result.skipped} error/remote frames skipped", file=sys.stderr)
     return 0

@@ -31,6 +31,7 @@ from radarnode.scene.world import Scene
 
 TRAIL_CYCLES = 15
 LATERAL_VIEW_M = 30.0     # the road and its surroundings, not the whole ±60° fan
+COLOUR_LABEL = "power, dB re. peak (R⁴ removed)"
 
 
 def add_subparser(sub) -> None:
@@ -110,14 +111,21 @@ class Renderer:
         fig.clf()
         a1, a2, a3, a4 = fig.subplots(1, 4)
         vmax = rdp.max()
-        a1.imshow(rdp.T, origin="lower", aspect="auto", cmap="viridis", vmin=vmax - 50, vmax=vmax,
-                  extent=[speeds[0], speeds[-1], 0, ranges[-1]])
-        a1.scatter(det.range_rate_mps, det.range_m, s=20, facecolors="none", edgecolors="r")
+        # colour in dB relative to the strongest cell of the view, R⁴ spreading taken out (so a target's colour
+        # says its RCS, not its range)
+        im = a1.imshow(rdp.T - vmax, origin="lower", aspect="auto", cmap="viridis", vmin=-50, vmax=0,
+                       extent=[speeds[0], speeds[-1], 0, ranges[-1]])
+        fig.colorbar(im, ax=a1, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
+        a1.scatter(det.range_rate_mps, det.range_m, s=20, facecolors="none", edgecolors="r", label="detections")
+        a1.legend(loc="upper right", fontsize=7)
         top = min(ranges[-1], p.max_range_m)
-        a1.set(xlabel="range rate, m/s", ylabel="range, m", title="range–Doppler", ylim=(0, top))
+        a1.set(xlabel="range rate, m/s (negative closing)", ylabel="range, m", title="range–Doppler", ylim=(0, top))
         vmax = img.max()
-        a2.pcolormesh(np.degrees(az), ranges, img.T, cmap="viridis", vmin=vmax - 45, vmax=vmax, shading="auto")
-        a2.scatter(np.degrees(det.azimuth_rad), det.range_m, s=20, facecolors="none", edgecolors="r")
+        pm = a2.pcolormesh(np.degrees(az), ranges, img.T - vmax, cmap="viridis", vmin=-45, vmax=0, shading="auto")
+        fig.colorbar(pm, ax=a2, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
+        a2.scatter(np.degrees(det.azimuth_rad), det.range_m, s=20, facecolors="none", edgecolors="r",
+                   label="detections")
+        a2.legend(loc="upper right", fontsize=7)
         a2.set(xlabel="azimuth, ° (left positive)", ylabel="range, m", title="range–azimuth (polar form)",
                ylim=(0, top))
         a2.invert_xaxis()
@@ -125,7 +133,8 @@ class Renderer:
         lat, lon = rr * np.sin(aa), rr * np.cos(aa)
         for ax, persp in ((a3, False), (a4, True)):
             x_img, y_img = (direct_perspective(lat, lon, self.k, top) if persp else (lat, lon))
-            ax.pcolormesh(x_img, y_img, img, cmap="viridis", vmin=vmax - 45, vmax=vmax, shading="gouraud")
+            pm = ax.pcolormesh(x_img, y_img, img - vmax, cmap="viridis", vmin=-45, vmax=0, shading="gouraud")
+            fig.colorbar(pm, ax=ax, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
             self._overlay(ax, det, frame, boundaries, top, persp)
             ax.set(xlabel="lateral, m (left on the left)", ylabel="longitudinal, m",
                    title=(f"direct perspective, k={self.k}" if persp else "bird's eye (Cartesian)"))
@@ -138,24 +147,31 @@ class Renderer:
         def tf(lat, lon):
             return direct_perspective(lat, lon, self.k, range_max) if persp else (np.asarray(lat), np.asarray(lon))
 
-        ax.scatter(*tf(det.y_m, det.x_m), s=12, facecolors="none", edgecolors="r", linewidths=0.8)
+        ax.scatter(*tf(det.y_m, det.x_m), s=12, facecolors="none", edgecolors="r", linewidths=0.8, label="detections")
         ol = frame.objects
+        first = {"objects": True, "tracks": True, "road boundary": True}
+
+        def label(name):          # one legend entry per kind of overlay
+            shown, first[name] = first[name], False
+            return name if shown else "_nolegend_"
+
         for k in range(len(ol)):
             x0, y0 = ol.dist_long_m[k], ol.dist_lat_m[k]
             L, W = max(ol.length_m[k], 0.5), max(ol.width_m[k], 0.5)
             bx = np.array([x0, x0 + L, x0 + L, x0, x0])
             by = np.array([y0 - W / 2, y0 - W / 2, y0 + W / 2, y0 + W / 2, y0 - W / 2])
-            ax.plot(*tf(by, bx), color="w", linewidth=1.0)
+            ax.plot(*tf(by, bx), color="w", linewidth=1.0, label=label("objects"))
             trail = np.array(self.tracks.get(int(ol.id[k]), []))
             # trails of road users only (not of the point-like guardrail posts the tracker also follows)
             if (len(trail) > 1 and ol.dyn_prop[k] in (0, 2, 6) and 1 <= ol.obj_class[k] <= 5
                     and np.max(np.hypot(*np.diff(trail, axis=0).T)) < 4.0):   # no re-associated jumps
-                ax.plot(*tf(trail[:, 1], trail[:, 0]), color="orange", linewidth=0.8)
+                ax.plot(*tf(trail[:, 1], trail[:, 0]), color="orange", linewidth=0.8, label=label("tracks"))
         xs = np.linspace(0.0, range_max, 60)
         for b in boundaries:
             if b.valid:
                 xb = xs[(xs >= b.range_start_m) & (xs <= b.range_end_m)]
-                ax.plot(*tf(b.y_at(xb), xb), color="c", linewidth=1.5)
+                ax.plot(*tf(b.y_at(xb), xb), color="c", linewidth=1.5, label=label("road boundary"))
+        ax.legend(loc="upper right", fontsize=7, facecolor="0.3", labelcolor="w", framealpha=0.7)
 
 
 def _matplotlib():

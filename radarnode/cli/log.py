@@ -3,7 +3,8 @@
 The writer is python-can's, chosen by the file suffix (.blf, .asc, .log, .csv,
 …). The vehicle's 0x300/0x301 frames are included, as a bus capture would
 have them. Ctrl-C ends the run after the current cycle and closes the file,
-so it is always complete and readable.
+so it is always complete and readable; the file is written under a temporary
+name and renamed when closed, so a failed run leaves no partial file.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import sys
 
 import can
 
-from radarnode.cli.common import Progress, add_scenario_argument, scenario_from_args, stop_on_signals
+from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
 from radarnode.errors import ConfigError
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
@@ -25,37 +26,44 @@ def add_subparser(sub) -> None:
     p.add_argument("--channel", default="can0", help="channel name written into the log (default can0)")
     p.add_argument("--start-time", type=float, default=0.0, help="timestamp of the first frame, s (default 0)")
     p.add_argument("--no-ego-motion", action="store_true", help="leave out the vehicle's 0x300/0x301 frames")
+    p.add_argument("-b", "--bitrate", type=int,
+                   help="bit rate of the logged bus for the bus-load budget, bit/s (default: the scenario's "
+                        "radar.bitrate; python-can's configuration is not read, as no bus is opened)")
     p.set_defaults(func=cmd)
 
 
 def cmd(args) -> int:
+    import dataclasses
     scenario = scenario_from_args(args)
+    bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate, use_can_config=False)
+    if bitrate.bit_s != scenario.radar.bitrate:
+        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
     node = RadarNode(scenario)
     vehicle = None if args.no_ego_motion else EgoMotionSender(node.scene, scenario.radar.sensor_id)
-    try:
-        writer = can.Logger(args.output)
-    except (ValueError, OSError) as exc:
-        raise ConfigError(f"option --output: cannot write {args.output!r}: {exc}; "
-                          "allowed suffixes: .asc .blf .csv .log .mf4 .trc .txt") from None
-    progress = Progress(scenario.num_cycles, f"logging {scenario.name}")
-    done = [0]
+    with atomic_path(args.output, "--output") as tmp:      # no partial file if the run fails
+        try:
+            writer = can.Logger(tmp)
+        except (ValueError, OSError) as exc:
+            reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
+            raise ConfigError(f"option --output: cannot write {args.output!r}: {reason}; "
+                              "allowed suffixes: .asc .blf .csv .log .mf4 .trc .txt") from None
+        bar = progress(scenario.num_cycles, f"logging {scenario.name}")
 
-    def on_cycle(out) -> None:
-        done[0] += 1
-        progress.update(done[0])
+        def on_cycle(out) -> None:
+            bar.update(1)
 
-    def write(msg: can.Message) -> None:
-        msg.channel = args.channel
-        writer.on_message_received(msg)
+        def write(msg: can.Message) -> None:
+            msg.channel = args.channel
+            writer.on_message_received(msg)
 
-    try:
-        with stop_on_signals() as stop:
-            stats = run_node(node, clock=SimulatedClock(args.start_time), sinks=[write], vehicle=vehicle,
-                             on_cycle=on_cycle, stop=stop)
-    finally:
-        writer.stop()
-        progress.close()
+        try:
+            with stop_on_signals() as stop:
+                stats = run_node(node, clock=SimulatedClock(args.start_time), sinks=[write], vehicle=vehicle,
+                                 on_cycle=on_cycle, stop=stop)
+        finally:
+            writer.stop()
+            bar.close()
     interrupted = stats.cycles < scenario.num_cycles
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "
-          f"to {args.output}", file=sys.stderr)
+          f"to {args.output}; bus-load budget {100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr)
     return 0

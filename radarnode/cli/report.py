@@ -5,13 +5,27 @@ Per scenario: warning time, TTC at the warning (constant-speed TTC to the
 minimum TTC and gap, peak deceleration and jerk of the ego (closed loop), the
 final time gap, and pass or fail against the scenario's ``ecu.expect``.
 ``--seeds N`` repeats each scenario with seeds 1…N and counts the passes.
+``--junit FILE`` also writes JUnit XML (one test suite per scenario, one test
+case per scenario and seed, the failed expectations as the failure message)
+for a CI system to render; ``--plots DIR`` draws one PNG per scenario and seed
+(gap, relative speed, TTC, ego speed and acceleration over time, with the FCW
+and braking instants and the pass/fail limits; needs matplotlib). Files are
+written under a temporary name and renamed when complete.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import datetime
 import math
+import os
+import socket
+import sys
+import time
+import xml.etree.ElementTree as ET
+from pathlib import Path
 
+from radarnode.cli.common import atomic_output, atomic_path, progress
 from radarnode.consumer.evaluate import simulate
 from radarnode.errors import ConfigError
 from radarnode.radar.setup import load_scenario
@@ -24,6 +38,9 @@ def add_subparser(sub) -> None:
     p.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"), help="radar model level")
     p.add_argument("--min-passes", type=int, default=None,
                    help="exit 1 when a scenario passes in fewer seeds than this (default: all of them)")
+    p.add_argument("--junit", metavar="FILE", help="also write JUnit XML for a CI system to FILE")
+    p.add_argument("--plots", metavar="DIR",
+                   help="draw one PNG per scenario and seed into DIR (created if missing; needs matplotlib)")
     p.set_defaults(func=cmd)
 
 
@@ -33,27 +50,135 @@ def _fmt(v, unit: str, digits: int = 2) -> str:
     return f"{v:.{digits}f} {unit}"
 
 
+def _figures(r) -> str:
+    return (f"warning at {_fmt(r.warning_time_s, 's')}, TTC at warning {_fmt(r.ttc_at_warning_s, 's')}, "
+            f"min TTC {_fmt(r.min_ttc_s, 's')}, min gap {_fmt(r.min_gap_m, 'm', 1)}, "
+            f"peak decel {_fmt(r.peak_decel_mps2, 'm/s²')}, peak jerk {_fmt(r.peak_jerk_mps3, 'm/s³')}, "
+            f"final time gap {_fmt(r.final_time_gap_s, 's')}")
+
+
+def junit_xml(suites: list[tuple[str, str, list[tuple[object, float]]]], min_passes: dict[str, int]) -> ET.ElementTree:
+    """JUnit XML: ``suites`` is [(scenario name, scenario file, [(ScenarioResult, seconds)])]."""
+    root = ET.Element("testsuites", name="radarnode report")
+    total = failures = 0
+    elapsed = 0.0
+    stamp = datetime.datetime.now().isoformat(timespec="seconds")
+    for name, path, runs in suites:
+        n_fail = sum(not r.passed for r, _ in runs)
+        secs = sum(s for _, s in runs)
+        suite = ET.SubElement(root, "testsuite", name=name, tests=str(len(runs)), failures=str(n_fail),
+                              errors="0", skipped="0", time=f"{secs:.3f}", timestamp=stamp,
+                              hostname=socket.gethostname())
+        props = ET.SubElement(suite, "properties")
+        ET.SubElement(props, "property", name="scenario_file", value=path)
+        ET.SubElement(props, "property", name="passes", value=str(len(runs) - n_fail))
+        ET.SubElement(props, "property", name="min_passes", value=str(min_passes[name]))
+        for r, s in runs:
+            case = ET.SubElement(suite, "testcase", classname=f"radarnode.report.{name}", name=f"{name} seed {r.seed}",
+                                 file=path, time=f"{s:.3f}")
+            if not r.passed:
+                fail = ET.SubElement(case, "failure", message="; ".join(r.reasons), type="ExpectationNotMet")
+                fail.text = "\n".join(r.reasons) + "\n" + _figures(r)
+            ET.SubElement(case, "system-out").text = _figures(r)
+        total += len(runs)
+        failures += n_fail
+        elapsed += secs
+    root.set("tests", str(total))
+    root.set("failures", str(failures))
+    root.set("errors", "0")
+    root.set("time", f"{elapsed:.3f}")
+    ET.indent(root)
+    return ET.ElementTree(root)
+
+
+def _plot_dir(path: str) -> Path:
+    d = Path(path)
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise ConfigError(f"option --plots: value {path!r} is not allowed; expected a directory (it is a file)") \
+            from None
+    except OSError as exc:
+        raise ConfigError(f"option --plots: cannot create directory {path!r}: {exc.strerror or exc}") from None
+    if not os.access(d, os.W_OK):
+        raise ConfigError(f"option --plots: cannot write into directory {path!r}: permission denied")
+    return d
+
+
+def _matplotlib():
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise ConfigError("option --plots needs matplotlib: pip install 'radarnode[image]'") from None
+    return plt
+
+
 def cmd(args) -> int:
     if args.seeds < 1:
         raise ConfigError(f"option --seeds: value {args.seeds} is not allowed; expected an integer >= 1")
     need = args.seeds if args.min_passes is None else args.min_passes
     if not 1 <= need <= args.seeds:
         raise ConfigError(f"option --min-passes: value {need} is not allowed; expected 1..{args.seeds}")
+    plt = _matplotlib() if args.plots else None
+    plot_dir = _plot_dir(args.plots) if args.plots else None
+    if args.junit and Path(args.junit).is_dir():
+        raise ConfigError(f"option --junit: value {args.junit!r} is not allowed; expected a file name (it is a "
+                          "directory)")
+    if args.junit and not Path(args.junit).parent.is_dir():     # fail now, not after the runs
+        raise ConfigError(f"option --junit: cannot write {args.junit!r}: no such directory "
+                          f"{str(Path(args.junit).parent)!r}")
+    scenarios = [(path, load_scenario(path)) for path in args.scenarios]     # every file checked before any run
+    bar = progress(len(scenarios) * args.seeds, "report", unit="run")
+
+    def out(line: str) -> None:
+        bar.write(line, file=sys.stdout) if not bar.disable else print(line, flush=True)
+
     short = 0
-    print("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
-          "final time gap | result |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
-    for path in args.scenarios:
-        sc = load_scenario(path)
-        passes = 0
-        for seed in range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed]:
-            r = simulate(dataclasses.replace(sc, seed=seed), fidelity=args.fidelity)
-            passes += r.passed
-            verdict = "pass" if r.passed else "FAIL: " + "; ".join(r.reasons)
-            print(f"| {sc.name} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
-                  f"{_fmt(r.min_ttc_s, 's')} | {_fmt(r.min_gap_m, 'm', 1)} | {_fmt(r.peak_decel_mps2, 'm/s²')} | "
-                  f"{_fmt(r.peak_jerk_mps3, 'm/s³')} | {_fmt(r.final_time_gap_s, 's')} | {verdict} |", flush=True)
-        if args.seeds > 1:
-            print(f"| {sc.name} | | | | | | | | | {passes} of {args.seeds} seeds pass |")
-        short += passes < need
+    suites = []
+    written = []
+    out("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
+        "final time gap | result |")
+    out("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    try:
+        for path, sc in scenarios:
+            passes = 0
+            runs = []
+            for seed in range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed]:
+                run_sc = dataclasses.replace(sc, seed=seed)
+                t0 = time.perf_counter()
+                r = simulate(run_sc, fidelity=args.fidelity)
+                runs.append((r, time.perf_counter() - t0))
+                bar.update(1)
+                passes += r.passed
+                verdict = "pass" if r.passed else "FAIL: " + "; ".join(r.reasons)
+                out(f"| {sc.name} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
+                    f"{_fmt(r.min_ttc_s, 's')} | {_fmt(r.min_gap_m, 'm', 1)} | {_fmt(r.peak_decel_mps2, 'm/s²')} | "
+                    f"{_fmt(r.peak_jerk_mps3, 'm/s³')} | {_fmt(r.final_time_gap_s, 's')} | {verdict} |")
+                if plot_dir is not None:
+                    from radarnode.cli.plots import report_figure
+                    target = plot_dir / f"{sc.name}_seed{seed}.png"
+                    fig = report_figure(run_sc, r, plt)
+                    try:
+                        with atomic_path(target, "--plots") as tmp:
+                            fig.savefig(tmp, dpi=90)
+                    except OSError as exc:
+                        raise ConfigError(f"option --plots: cannot write {str(target)!r}: {exc}") from None
+                    finally:
+                        plt.close(fig)
+                    written.append(target)
+            if args.seeds > 1:
+                out(f"| {sc.name} | | | | | | | | | {passes} of {args.seeds} seeds pass |")
+            short += passes < need
+            suites.append((sc.name, str(path), runs))
+    finally:
+        bar.close()
+    if args.junit:
+        tree = junit_xml(suites, {name: need for name, _, _ in suites})
+        with atomic_output(args.junit, "--junit", mode="wb") as f:
+            tree.write(f, encoding="utf-8", xml_declaration=True)
+        print(f"wrote {args.junit}: {sum(len(r) for _, _, r in suites)} test cases", file=sys.stderr)
+    if written:
+        print(f"wrote {len(written)} plots to {plot_dir}", file=sys.stderr)
     return 1 if short else 0

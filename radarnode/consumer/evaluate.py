@@ -102,8 +102,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     latency, request = spec.processing_latency_s, 0.0
     moving_for, lead_v, prev_speed = 0.0, 0.0, scenario.ego.speed_mps
     res.latency_s = latency
-    tr = {k: [] for k in ("t", "gap", "ttc", "speed", "accel", "request", "warning", "state", "time_gap",
-                          "target", "target_track")}
+    tr = {k: [] for k in ("t", "gap", "ttc", "rel_speed", "speed", "accel", "request", "warning", "state",
+                          "time_gap", "target", "target_track")}
     for k in range(scenario.num_cycles):
         t = k * period
         if actuator is not None:
@@ -127,6 +127,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # truth
         ego_state = scene.ego_state(t)
         gap = ttc = math.inf
+        rel_speed = math.nan
         if lead is not None:
             # along the ego's lane (a bend too): ahead and within 2 m of the lane centre
             lane_gap, lateral, closing, lead_v, lead_a = scene.lane_gap(t, lead)
@@ -136,6 +137,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                 ttc = time_to_collision(gap, lead_v + closing, lead_v, ego_state.accel_mps2, lead_a)
             else:
                 ttc = gap / closing if closing > 0.1 and math.isfinite(gap) else math.inf
+            rel_speed = -closing if ahead else math.nan      # lead minus ego, negative when closing
         res.min_gap_m, res.min_ttc_s = min(res.min_gap_m, gap), min(res.min_ttc_s, ttc)
         if lead is not None:
             if res.impact_time_s is None and 0.0 < prev_gap and lane_gap <= 0.0 and abs(lateral) < 2.0:
@@ -181,7 +183,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             if accel < lo - 0.05 or accel > hi + 0.05 or jerk > jerk_max + 0.05:
                 res.iso_limits_ok = False
         prev_speed = ego_state.speed_mps
-        for key, val in (("t", t), ("gap", gap), ("ttc", ttc), ("speed", ego_state.speed_mps), ("accel", accel),
+        for key, val in (("t", t), ("gap", gap), ("ttc", ttc), ("rel_speed", rel_speed),
+                         ("speed", ego_state.speed_mps), ("accel", accel),
                          ("request", decision.accel_request_mps2 if decision else 0.0),
                          ("warning", decision.warning_level if decision else 0),
                          ("state", decision.acc_state if decision else 0),

@@ -12,6 +12,7 @@ from radarnode.errors import WireError
 
 ARS408_DBC = "ars408.dbc"
 RADARNODE_DBC = "radarnode.dbc"
+BUS_DBC = "radarnode_bus.dbc"       # generated from the two above by radarnode.wire.busdbc
 
 
 def dbc_path(name: str = ARS408_DBC) -> Path:
@@ -43,3 +44,10 @@ def _load(p: str) -> cantools.database.can.Database:
         return cantools.database.load_file(str(p), strict=True)
     except (OSError, cantools.database.UnsupportedDatabaseFormatError) as exc:
         raise WireError(f"{p}: cannot load DBC: {exc}") from None
+
+
+@functools.lru_cache(maxsize=None)
+def load_bus_database() -> cantools.database.can.Database:
+    """The whole bus in one file (``dbc/radarnode_bus.dbc``): every sensor ID's ARS 408 and own messages and
+    the ECU's, generated from the two files above (:mod:`radarnode.wire.busdbc`)."""
+    return _load(str(dbc_path(BUS_DBC)))

@@ -1,0 +1,164 @@
+"""Machine-readable outputs: ``decode --format json|csv`` and ``consume --json``, parsed with the standard
+library and checked against the frames of the log, decoded independently with cantools."""
+
+from __future__ import annotations
+
+import csv
+import json
+import subprocess
+import sys
+import threading
+import time
+import uuid
+
+import can
+import pytest
+
+from radarnode.wire.dbc import load_database, load_own_database
+from tests.conftest import ROOT, SCENARIOS
+
+CLI = [sys.executable, "-m", "radarnode"]
+
+
+def run(*args, timeout=120, **kw):
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT, **kw)
+
+
+def _log(tmp_path, suffix=".blf", sensor_id=0, duration="1.5", scenario="highway_cut_in.yaml"):
+    text = (SCENARIOS / scenario).read_text().replace("sensor_id: 0", f"sensor_id: {sensor_id}")
+    sc = tmp_path / f"s{sensor_id}.yaml"
+    sc.write_text(text)
+    out = tmp_path / f"s{sensor_id}{suffix}"
+    r = run("log", str(sc), "-o", str(out), "--duration", duration)
+    assert r.returncode == 0, r.stderr
+    return out
+
+
+def _reference(path, sensor_id=0):
+    """(frame, message of the separate DBCs, decoded values, MeasCounter of the latest header) per data frame."""
+    ars, own = load_database(), load_own_database()
+    rows, counter = [], None
+    for msg in can.LogReader(str(path)):
+        fid = msg.arbitration_id
+        if 0x680 <= fid < 0x6C0:
+            m = own.get_message_by_frame_id(fid - 8 * sensor_id)
+        elif fid >= 0x6C0 and fid < 0x700:
+            m = own.get_message_by_frame_id(fid)
+        else:
+            m = ars.get_message_by_frame_id(fid - 0x10 * sensor_id)
+        values = m.decode(msg.data, decode_choices=False)
+        if m.name == "Obj_0_Status":
+            counter = values["Obj_MeasCounter"]
+        rows.append((msg, m, values, counter))
+    return rows
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".log"])
+def test_decode_json_is_every_frame_with_its_signals_units_sensor_and_cycle(tmp_path, suffix):
+    log = _log(tmp_path, suffix)
+    out = tmp_path / "frames.jsonl"
+    r = run("decode", str(log), "--format", "json", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    records = [json.loads(line) for line in out.read_text().splitlines()]
+    ref = _reference(log)
+    assert len(records) == len(ref) > 200
+    for rec, (msg, m, values, counter) in zip(records, ref):
+        assert rec["timestamp"] == pytest.approx(msg.timestamp, abs=1e-6)
+        assert rec["can_id"] == msg.arbitration_id and rec["message"] == m.name and rec["sensor_id"] == 0
+        assert rec["data"] == msg.data.hex().upper() and rec["dlc"] == msg.dlc
+        assert rec["cycle_counter"] == counter
+        assert set(rec["signals"]) == set(values)
+        for name, v in values.items():
+            assert rec["signals"][name]["value"] == pytest.approx(v, abs=1e-9), name
+            assert rec["signals"][name]["unit"] == (m.get_signal_by_name(name).unit or "")
+    obj = next(r for r in records if r["message"] == "Obj_1_General")
+    assert obj["signals"]["Obj_DistLong"]["unit"] == "m" and obj["signals"]["Obj_DynProp"]["label"] in (
+        "Moving", "Stationary", "Oncoming", "Stopped")
+    names = {rec["message"] for rec in records}
+    assert {"Obj_0_Status", "Obj_1_General", "RoadBoundary_Left", "SpeedInformation"} <= names
+    assert "decoded" in r.stderr and "0 of unknown ID" in r.stderr
+
+
+def test_decode_csv_has_a_row_per_frame_and_a_column_per_signal_with_its_unit(tmp_path):
+    log = _log(tmp_path, ".asc")
+    out = tmp_path / "frames.csv"
+    r = run("decode", str(log), "--format", "csv", "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    with out.open(newline="") as f:
+        rows = list(csv.DictReader(f))
+    ref = _reference(log)
+    assert len(rows) == len(ref)
+    header = list(rows[0])
+    assert header[:8] == ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
+    assert "Obj_DistLong [m]" in header and "Obj_VrelLong [m/s]" in header and "Obj_ID" in header
+    # only signals of messages that occur: no cluster columns in an object-list log
+    assert not any(h.startswith("Cluster_") for h in header)
+    n_general = 0
+    for row, (msg, m, values, counter) in zip(rows, ref):
+        assert int(row["can_id"], 16) == msg.arbitration_id and row["message"] == m.name
+        assert float(row["timestamp"]) == pytest.approx(msg.timestamp, abs=1e-6)
+        assert row["cycle_counter"] == ("" if counter is None else str(counter))
+        if m.name == "Obj_1_General":
+            n_general += 1
+            assert float(row["Obj_DistLong [m]"]) == pytest.approx(values["Obj_DistLong"], abs=1e-9)
+            assert int(row["Obj_ID"]) == values["Obj_ID"]
+            assert row["RadarDevice_Speed [m/s]"] == ""        # another message's column stays empty
+    assert n_general > 50
+
+
+def test_decode_json_of_another_sensor_names_it_and_filters_by_it(tmp_path):
+    log = _log(tmp_path, ".log", sensor_id=3, duration="1")
+    r = run("decode", str(log), "--format", "json")
+    assert r.returncode == 0, r.stderr
+    records = [json.loads(line) for line in r.stdout.splitlines()]
+    assert records and all(x["sensor_id"] == 3 for x in records)
+    general = [x for x in records if x["message"] == "Obj_1_General"]
+    assert general and all(x["can_id"] == 0x63B for x in general)
+    left = [x for x in records if x["message"] == "RoadBoundary_Left"]
+    assert left and all(x["can_id"] == 0x680 + 8 * 3 for x in left)
+    r = run("decode", str(log), "--format", "json", "--sensor-id", "1")
+    assert r.returncode == 0 and r.stdout == ""          # none of sensor 1's frames
+
+
+def test_decode_errors_are_named_and_leave_no_partial_file(tmp_path):
+    log = _log(tmp_path, ".log", duration="1")
+    r = run("decode", str(log), "--format", "xml")
+    assert r.returncode == 2
+    assert r.stderr.strip() == "error: option --format: value 'xml' is not allowed; expected one of text, json, csv"
+    r = run("decode", str(log), "--format", "csv", "-o", str(tmp_path / "no" / "such" / "dir.csv"))
+    assert r.returncode == 2 and r.stderr.startswith("error: option --output: cannot write")
+    lines = log.read_text().splitlines()
+    bad = tmp_path / "bad.log"
+    bad.write_text("\n".join(lines[:60] + ["(0.5) can0 60B#zz"] + lines[60:]) + "\n")
+    out = tmp_path / "frames.jsonl"
+    r = run("decode", str(bad), "--format", "json", "-o", str(out))
+    assert r.returncode == 2 and "error: argument FILE: " in r.stderr and "bad.log" in r.stderr
+    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["bad.log", "s0.log", "s0.yaml"]
+
+
+def test_consume_json_carries_timestamp_sensor_and_cycle_counter(tmp_path, capsys):
+    from radarnode.cli.main import main
+    log = _log(tmp_path, ".blf", sensor_id=2, duration="1")
+    frames = list(can.LogReader(str(log)))
+    headers = [(m.timestamp, load_database().decode_message(0x60A, m.data)["Obj_MeasCounter"])
+               for m in frames if m.arbitration_id == 0x60A + 0x20]
+    channel = f"consume-{uuid.uuid4().hex}"
+
+    def send():
+        with can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as bus:   # the log's times
+            time.sleep(0.5)
+            for m in frames:
+                bus.send(m)
+
+    sender = threading.Thread(target=send, daemon=True)
+    sender.start()
+    rc = main(["consume", "-i", "virtual", "-c", channel, "--sensor-id", "2", "--json", "--timeout", "2"])
+    sender.join()
+    assert rc == 0
+    lines = [json.loads(x) for x in capsys.readouterr().out.splitlines()]
+    assert len(lines) >= len(headers) - 1 > 10
+    by_counter = dict((c, t) for t, c in headers)
+    for x in lines:
+        assert x["sensor_id"] == 2 and x["type"] == "objects"
+        assert x["timestamp"] == pytest.approx(by_counter[x["cycle_counter"]], abs=1e-6)
+    assert [x["cycle_counter"] for x in lines] == [c for _, c in headers][:len(lines)]

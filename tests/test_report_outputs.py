@@ -1,0 +1,136 @@
+"""``report --junit`` (JUnit XML, read back with xml.etree) and ``report --plots``; the pictures' scales and units."""
+
+from __future__ import annotations
+
+import re
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from tests.conftest import ROOT, SCENARIOS
+
+CLI = [sys.executable, "-m", "radarnode"]
+UNIT = re.compile(r", (m|m/s|s|m/s²|°)( \(.*\))?$")
+
+
+def run(*args, timeout=300, **kw):
+    return subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=timeout, cwd=ROOT, **kw)
+
+
+@pytest.fixture(scope="module")
+def strict(tmp_path_factory):
+    """nhtsa_lead_stopped with an impossible TTC limit: a scenario that fails for a known reason."""
+    text = (SCENARIOS / "nhtsa_lead_stopped.yaml").read_text()
+    assert "fcw_ttc_min_s: 2.1" in text
+    path = tmp_path_factory.mktemp("strict") / "strict.yaml"
+    path.write_text(text.replace("fcw_ttc_min_s: 2.1", "fcw_ttc_min_s: 9.0").replace(
+        "name: nhtsa_lead_stopped", "name: strict_lead_stopped"))
+    return path
+
+
+def test_junit_has_a_case_per_scenario_and_seed_and_the_failed_expectation(tmp_path, strict):
+    junit = tmp_path / "ci" / "report.xml"
+    junit.parent.mkdir()
+    plots = tmp_path / "plots"
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), str(strict), "--seeds", "2", "--min-passes", "1",
+            "--junit", str(junit), "--plots", str(plots))
+    assert r.returncode == 1, r.stderr                     # strict passes in 0 of 2 seeds
+    root = ET.parse(junit).getroot()
+    assert root.tag == "testsuites" and root.get("tests") == "4" and root.get("failures") == "2"
+    suites = {s.get("name"): s for s in root.findall("testsuite")}
+    assert set(suites) == {"nhtsa_lead_stopped", "strict_lead_stopped"}
+    good, bad = suites["nhtsa_lead_stopped"], suites["strict_lead_stopped"]
+    assert [c.get("name") for c in good.findall("testcase")] == ["nhtsa_lead_stopped seed 1",
+                                                                 "nhtsa_lead_stopped seed 2"]
+    assert good.get("failures") == "0" and not good.findall("testcase/failure")
+    failures = bad.findall("testcase/failure")
+    assert len(failures) == 2 and bad.get("failures") == "2"
+    # the message is what the table says failed, for the same seed
+    for case in bad.findall("testcase"):
+        seed = case.get("name").rsplit(" ", 1)[1]
+        row = next(line for line in r.stdout.splitlines() if line.startswith(f"| strict_lead_stopped | {seed} |"))
+        reason = row.split("FAIL: ")[1].rstrip(" |")
+        assert case.find("failure").get("message") == reason
+        assert re.fullmatch(r"warning at TTC \d+\.\d\d s < 9\.0 s", reason)
+        assert float(case.get("time")) > 0 and case.get("classname") == "radarnode.report.strict_lead_stopped"
+    props = {p.get("name"): p.get("value") for p in bad.findall("properties/property")}
+    assert props["passes"] == "0" and props["min_passes"] == "1" and props["scenario_file"] == str(strict)
+    # one picture per scenario and seed, and nothing half-written
+    pngs = sorted(p.name for p in plots.iterdir())
+    assert pngs == ["nhtsa_lead_stopped_seed1.png", "nhtsa_lead_stopped_seed2.png",
+                    "strict_lead_stopped_seed1.png", "strict_lead_stopped_seed2.png"]
+    for p in plots.iterdir():
+        assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 30_000
+    assert sorted(x.name for x in junit.parent.iterdir()) == ["report.xml"]
+    assert "wrote 4 plots" in r.stderr and "4 test cases" in r.stderr
+
+
+def test_report_output_options_are_checked_before_any_run(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("x")
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--plots", str(afile))
+    assert r.returncode == 2 and r.stderr.startswith("error: option --plots: value") and "| nhtsa" not in r.stdout
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--junit", str(tmp_path))
+    assert r.returncode == 2 and r.stderr.startswith("error: option --junit: value")
+    r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--junit", str(tmp_path / "no" / "dir.xml"))
+    assert r.returncode == 2 and "error: option --junit: cannot write" in r.stderr
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["afile"]
+
+
+def test_report_figure_has_units_limits_and_the_instants(strict):
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from radarnode.cli.plots import instants, report_figure
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import load_scenario
+    sc = load_scenario(strict)
+    res = simulate(sc)
+    fig = report_figure(sc, res, plt)
+    try:
+        axes = fig.axes
+        assert [a.get_ylabel().split(",")[0] for a in axes] == ["gap", "relative speed", "TTC", "ego speed",
+                                                                "acceleration"]
+        for a in axes:
+            assert UNIT.search(a.get_ylabel()), a.get_ylabel()
+        assert axes[-1].get_xlabel() == "time, s"
+        ttc_labels = [line.get_label() for line in axes[2].get_lines()]
+        assert "limit: warn at TTC ≥ 9.0 s" in ttc_labels
+        assert f"TTC at warning {res.ttc_at_warning_s:.2f} s" in ttc_labels
+        marks = instants(res)
+        assert marks["FCW warning"] == res.warning_time_s is not None
+        assert marks["lead braking"] is None and marks["braking"] is None     # a stopped lead, open loop
+        vlines = [line.get_xdata()[0] for line in axes[0].get_lines() if line.get_label().startswith("FCW warning")]
+        assert vlines == [pytest.approx(res.warning_time_s)]
+        assert "FAIL: warning at TTC" in fig._suptitle.get_text()
+    finally:
+        plt.close(fig)
+
+
+def test_image_views_carry_colour_bars_in_db_and_units():
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from radarnode.cli.image import Renderer
+    from radarnode.radar.setup import load_scenario
+    r = Renderer(load_scenario(SCENARIOS / "point_targets_mimo12.yaml"), 2.5)
+    frame, bnd = r.step(0.0)
+    fig = plt.figure(figsize=(22, 6))
+    try:
+        r.draw(fig, 0.0, frame, bnd)
+        views = [a for a in fig.axes if a.get_title()]
+        bars = [a for a in fig.axes if not a.get_title()]
+        assert [a.get_title().split(" ")[0] for a in views] == ["range–Doppler", "range–azimuth", "bird's",
+                                                              "direct"]
+        assert len(bars) == 4 and all("dB" in b.get_ylabel() for b in bars)
+        for a in views:
+            assert UNIT.search(a.get_xlabel()) and UNIT.search(a.get_ylabel()), (a.get_xlabel(), a.get_ylabel())
+            assert a.get_legend() is not None and "detections" in [t.get_text() for t in a.get_legend().get_texts()]
+    finally:
+        plt.close(fig)
