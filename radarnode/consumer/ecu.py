@@ -42,6 +42,7 @@ VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones s
 #: (a car's rear ≈ 10 dBsm; a guardrail post, a pedestrian ≈ −5) and has been tracked for this many cycles
 OBSTACLE_RCS_DBSM = 5.0
 OBSTACLE_MIN_AGE = 4
+ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
 
@@ -111,6 +112,9 @@ class Ecu:
         self._fcw_codec = MessageCodec(db.get_message_by_frame_id(FCW_STATUS))
         self._e2e = E2EProtector()
         self.boundaries: dict | None = None
+        self._in_path: dict[int, int] = {}      # consecutive cycles each track has been in the predicted path
+        self._out_path: dict[int, int] = {}
+        self._target_id: int | None = None
         self._last_out_t: float | None = None
 
     @staticmethod
@@ -165,6 +169,7 @@ class Ecu:
     def _restart_tracking(self) -> None:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
+        self._in_path, self._out_path, self._target_id = {}, {}, None
         self.last_cycle_t = None
         self._last_out_t = None
         self._prev_speed = None
@@ -274,12 +279,24 @@ class Ecu:
             dyn, cls = int(ol.dyn_prop[k]), int(ol.obj_class[k])
             obstacle = float(ol.rcs_dbsm[k]) >= OBSTACLE_RCS_DBSM and t.age >= OBSTACLE_MIN_AGE
             road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or cls in VEHICLE_CLASSES or obstacle
-        cand = np.flatnonzero(ok & road_user)
+        # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
+        # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
+        # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
+        # the target at its edge, does not switch)
+        ids = [t.id for t in tracks]
+        self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
+        self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
+        steady = np.array([self._in_path[tid] >= ENTER_CYCLES or (tid == self._target_id
+                                                                    and self._out_path[tid] < EXIT_CYCLES)
+                           for tid in ids])
+        cand = np.flatnonzero(steady & road_user)
         if cand.size == 0:
+            self._target_id = None
             return None
         xv, yv = self.mount.to_vehicle(x, y)
         i = int(cand[np.argmin(xv[cand])])
         t = tracks[i]
+        self._target_id = t.id
         vx, _ = self.mount.rotate(t.x[2], t.x[3])
         ax, _ = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
         # distance ahead of the sensor along the vehicle's axis, lateral from the vehicle's centre line

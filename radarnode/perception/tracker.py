@@ -62,11 +62,12 @@ class Groups:
         return int(self.x_m.shape[0])
 
 
-def group_detections(det: Detections, eps_m: float = 2.5, eps_mps: float = 1.5, eps_long_m: float = 4.5) -> Groups:
+def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, eps_long_m: float = 4.5) -> Groups:
     """DBSCAN over (x, y, radial speed) scaled by (eps_long_m, eps_m, eps_mps); a group per cluster.
 
     Longer along x than across: the side of a truck or a bus comes out as detections 3–4 m apart (its
-    reflection points merge within a resolution cell), lanes are 3.5 m apart."""
+    reflection points merge within a resolution cell), lanes are 3.5 m apart (1.25 eps: never one group), a car's
+    rear and its side on a bend some 2 m (one group)."""
     n = len(det)
     if n == 0:
         z = np.zeros(0)
@@ -219,7 +220,7 @@ class ObjectTracker:
         newly = ~self.confirmed & (recent >= CONFIRM_HITS)
         self.confirmed |= newly
         self._assign_ids(np.flatnonzero(newly))
-        self._delete((self.misses > COAST_CYCLES) | (~self.confirmed & (self.misses > 0)))
+        self._delete((self.misses > COAST_CYCLES) | (~self.confirmed & (self.misses > 0)) | self._duplicates())
         return self._object_list(sensor_velocity)
 
     def _initiate(self, groups, z, idx, sensor_velocity) -> None:
@@ -253,6 +254,19 @@ class ObjectTracker:
         self.size = np.concatenate([self.size, np.stack([groups.length_m[idx], groups.width_m[idx]], 1)])
         self.power = np.concatenate([self.power, 10.0 ** (groups.rcs_dbsm[idx] / 10.0)])
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
+
+    def _duplicates(self, eps_m: float = 2.8, eps_long_m: float = 4.5, eps_mps: float = 1.0) -> np.ndarray:
+        """Tracks that are parts of an older track's body: within the grouping distance of it and moving with
+        it (one body split into two groups for a few cycles leaves two tracks that would never meet again)."""
+        n = len(self.x)
+        if n < 2:
+            return np.zeros(n, dtype=bool)
+        dx = (self.x[:, None, 0] - self.x[None, :, 0]) / eps_long_m
+        dy = (self.x[:, None, 1] - self.x[None, :, 1]) / eps_m
+        dv = np.hypot(self.x[:, None, 2] - self.x[None, :, 2], self.x[:, None, 3] - self.x[None, :, 3]) / eps_mps
+        close = (dx * dx + dy * dy <= 1.0) & (dv <= 1.0)
+        older = np.arange(n)[None, :] < np.arange(n)[:, None]        # column j was created before row i
+        return (close & older).any(axis=1)
 
     def _assign_ids(self, idx: np.ndarray) -> None:
         used = set(self.ids[self.ids >= 0].tolist())
