@@ -153,3 +153,17 @@ def test_stop_and_go_scenario_holds_the_standstill_behind_the_lead():
     standing = (t > 15.0) & (t < 18.0)          # the lead stands until 18 s
     assert np.all(v[standing] == 0.0) and np.all(np.abs(gap[standing] - 4.0) < 0.5)
     assert v[-1] > 10.0                          # and it drove on after the lead
+
+
+def test_take_over_and_standstill_go_on_the_wire():
+    from radarnode.consumer.ecu import Ecu, EcuOutput
+    from radarnode.wire.dbc import load_own_database
+    ecu = Ecu()
+    db = load_own_database()
+    for tor, still in ((True, False), (False, True), (False, False)):
+        out = EcuOutput(1.0, -2.0, STATE_ACTIVE, 0, 0, 3.0, -1.0, Target(1, 1, 20.0, 0.0, -3.0, 0.0), True,
+                        take_over=tor, standstill=still)
+        acc = ecu.frames(out)[0]
+        sig = db.decode_message(acc.arbitration_id, acc.data)
+        assert (sig["ACC_TakeOverRequest"], sig["ACC_Standstill"]) == (int(tor), int(still))
+        assert abs(sig["ACC_AccelRequest"] + 2.0) < 0.03 and abs(sig["ACC_Distance"] - 20.0) < 0.06

@@ -76,6 +76,8 @@ class EcuOutput:
     required_decel_mps2: float
     target: Target | None
     radar_ok: bool
+    take_over: bool = False        # the driver must brake: the target needs more than ACC's authority
+    standstill: bool = False       # ACC holds the ego at a standstill
 
 
 class Ecu:
@@ -318,7 +320,8 @@ class Ecu:
             level = self.fcw.step(None, v, 0.0, 0.0, 0.0)
         fault = (0 if radar_ok else 1)
         out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
-                        target, radar_ok)
+                        target, radar_ok,
+                        self.acc.take_over and self.acc.settings.enabled, self.acc.standstill)
         self.outputs.append(out)
         return out
 
@@ -330,7 +333,8 @@ class Ecu:
             "ACC_TargetID": tgt.track_id % 255 if tgt else 255,
             "ACC_Distance": tgt.distance_m if tgt else 0.0, "ACC_RelSpeed": tgt.rel_speed_mps if tgt else 0.0,
             "ACC_TimeGap": min(Acc.time_gap(tgt.distance_m, self.ego_speed_mps), 6.35) if tgt else 6.35,
-            "ACC_AccelRequest": out.accel_request_mps2})[0]
+            "ACC_AccelRequest": out.accel_request_mps2, "ACC_TakeOverRequest": int(out.take_over),
+            "ACC_Standstill": int(out.standstill)})[0]
         fcw = self._fcw_codec.encode({
             "FCW_CRC": 0, "FCW_Counter": 0, "FCW_WarningLevel": out.warning_level,
             "FCW_TargetID": tgt.track_id % 255 if tgt else 255, "FCW_TTC": min(out.ttc_s, 25.5),
