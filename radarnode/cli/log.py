@@ -15,6 +15,8 @@ import can
 
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
 from radarnode.errors import ConfigError
+from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
+from radarnode.consumer.evaluate import make_ecu
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
 
@@ -26,6 +28,9 @@ def add_subparser(sub) -> None:
     p.add_argument("--channel", default="can0", help="channel name written into the log (default can0)")
     p.add_argument("--start-time", type=float, default=0.0, help="timestamp of the first frame, s (default 0)")
     p.add_argument("--no-ego-motion", action="store_true", help="leave out the vehicle's 0x300/0x301 frames")
+    p.add_argument("--ecu", action="store_true",
+                   help="also run the consumer ECU on the frames and log its AccStatus/FcwStatus, stamped when it "
+                        "produces them (the scenario's ecu.processing_latency_s after the cycle)")
     p.add_argument("-b", "--bitrate", type=int,
                    help="bit rate of the logged bus for the bus-load budget, bit/s (default: the scenario's "
                         "radar.bitrate; python-can's configuration is not read, as no bus is opened)")
@@ -48,13 +53,34 @@ def cmd(args) -> int:
             raise ConfigError(f"option --output: cannot write {args.output!r}: {reason}; "
                               "allowed suffixes: .asc .blf .csv .log .mf4 .trc .txt") from None
         bar = progress(scenario.num_cycles, f"logging {scenario.name}")
-
-        def on_cycle(out) -> None:
-            bar.update(1)
+        ecu = make_ecu(scenario, node.period_s) if args.ecu else None
+        assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id) if args.ecu else None
+        ecu_frames = [0]
 
         def write(msg: can.Message) -> None:
             msg.channel = args.channel
             writer.on_message_received(msg)
+            if assembler is not None:
+                assembler.on_message_received(msg)
+
+        def on_cycle(out) -> None:
+            bar.update(1)
+            if ecu is None:
+                return
+            # the ECU decides on what it decoded from the logged frames, as it would on the bus
+            ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+            decision = None
+            for cycle in assembler.drain():
+                if isinstance(cycle, ObjectCycle):
+                    decision = ecu.on_cycle(out.t_s, cycle)
+            if decision is None:
+                decision = ecu.tick(out.t_s)
+            if decision is not None:
+                stamp = args.start_time + out.t_s + scenario.ecu.processing_latency_s
+                for m in ecu.frames(decision, timestamp=stamp):
+                    m.channel = args.channel
+                    writer.on_message_received(m)
+                    ecu_frames[0] += 1
 
         try:
             with stop_on_signals() as stop:
@@ -64,6 +90,8 @@ def cmd(args) -> int:
             writer.stop()
             bar.close()
     interrupted = stats.cycles < scenario.num_cycles
+    if args.ecu:
+        print(f"consumer ECU: {ecu_frames[0]} AccStatus/FcwStatus frames logged", file=sys.stderr)
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "
           f"to {args.output}; bus-load budget {100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr)
     return 0

@@ -1,0 +1,33 @@
+"""`radarnode log --ecu`: the consumer ECU's decisions in the log, next to the radar's frames (issue 10 item 9)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import can
+
+from radarnode.cli.main import main
+from radarnode.consumer.evaluate import simulate
+from radarnode.radar.setup import load_scenario
+from radarnode.wire.dbc import load_own_database
+from radarnode.wire.ids import FCW_STATUS
+
+SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "nhtsa_lead_stopped.yaml"
+
+
+def test_the_logged_ecu_frames_carry_the_warning_when_report_sees_it(tmp_path):
+    out = tmp_path / "run.blf"
+    assert main(["log", str(SCENARIO), "-o", str(out), "--ecu"]) == 0
+    db = load_own_database()
+    fcw = [(m.timestamp, db.decode_message(m.arbitration_id, m.data, decode_choices=False))
+           for m in can.LogReader(str(out))
+           if m.arbitration_id == FCW_STATUS]
+    sc = load_scenario(SCENARIO)
+    assert len(fcw) == sc.num_cycles
+    first = next(t for t, s in fcw if s["FCW_WarningLevel"] == 2)
+    r = simulate(sc)
+    assert abs(first - r.warning_time_s) < 1e-6           # the same decision, stamped when it was produced
+    # without --ecu the log holds no ECU frame
+    plain = tmp_path / "plain.blf"
+    assert main(["log", str(SCENARIO), "-o", str(plain)]) == 0
+    assert not any(m.arbitration_id == FCW_STATUS for m in can.LogReader(str(plain)))
