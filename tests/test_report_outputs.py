@@ -134,3 +134,24 @@ def test_image_views_carry_colour_bars_in_db_and_units():
             assert a.get_legend() is not None and "detections" in [t.get_text() for t in a.get_legend().get_texts()]
     finally:
         plt.close(fig)
+
+
+def test_nothing_to_check_is_said_and_skipped_not_passed(tmp_path, capsys):
+    import xml.etree.ElementTree as ET
+    from radarnode.cli.main import main
+    scen = SCENARIOS / "highway_cut_in.yaml"
+    junit = tmp_path / "r.xml"
+    assert main(["report", str(scen), "--junit", str(junit)]) == 0
+    assert "nothing to check" in capsys.readouterr().out
+    case = ET.parse(junit).getroot().find(".//testcase")
+    assert case.find("skipped") is not None and case.find("failure") is None
+
+
+def test_ecu_settings_from_the_command_line_are_used_and_checked(capsys):
+    from radarnode.cli.main import main
+    scen = str(SCENARIOS / "nhtsa_lead_stopped.yaml")
+    assert main(["report", scen]) == 0
+    assert main(["report", scen, "--fcw-ttc-warn", "2.2", "--fcw-decel-warn", "9"]) == 1   # warns too late
+    assert "warning at TTC" in capsys.readouterr().out
+    assert main(["report", scen, "--fcw-ttc-warn", "20"]) == 2
+    assert "option --fcw-ttc-warn: value 20.0 is not allowed" in capsys.readouterr().err
