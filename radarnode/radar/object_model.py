@@ -33,7 +33,7 @@ from radarnode.perception.types import (
     AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
-from radarnode.perception.tracker import cluster_dyn_prop
+from radarnode.perception.tracker import accel_sigma_mps2, cluster_dyn_prop, orientation_sigma_rad
 from radarnode.radar import ambiguity, equation
 from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
@@ -145,11 +145,6 @@ class ObjectModel:
         self.cycle = 0
         self.period_s = scene.scenario.period_s
         self._cache: dict | None = None
-        # constant σ fields of the object list, shared read-only by every cycle
-        self._half = np.full(max(n, 1), 0.5)
-        self._five_deg = np.full(max(n, 1), math.radians(5.0))
-        self._half.setflags(write=False)
-        self._five_deg.setflags(write=False)
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
         self._drawn_upto = -1
         # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own stream
@@ -216,17 +211,25 @@ class ObjectModel:
         p_exist = 1.0 - np.exp(np.maximum(hits, 1) * np.log1p(-np.minimum(pd, 0.999999)))
         c, s = np.cos(az), np.sin(az)
         lat = p.lateral_speed_sigma_mps
+        # the object's own σ: position and velocity from this cycle's accuracy, grown while coasting;
+        # acceleration as the slope of its velocities, heading from its two ends (radarnode.perception.tracker)
+        sig_long, sig_lat = sx * coast, sy * coast
+        sig_vlong = np.sqrt((c * sig_v) ** 2 * c2 + (s * lat) ** 2)
+        sig_vlat = np.sqrt((s * sig_v) ** 2 * c2 + (c * lat) ** 2)
+        sig_along = accel_sigma_mps2(sig_vlong, self.period_s) * coast
+        sig_alat = accel_sigma_mps2(sig_vlat, self.period_s) * coast
+        sig_orient = orientation_sigma_rad(np.sqrt(0.5 * (sig_long ** 2 + sig_lat ** 2)), sc.length_m)
         return {**flags,
-            "sig_long": sx * coast, "sig_lat": sy * coast,
-            "sig_vlong": np.sqrt((c * sig_v) ** 2 * c2 + (s * lat) ** 2),
-            "sig_vlat": np.sqrt((s * sig_v) ** 2 * c2 + (c * lat) ** 2),
+            "sig_long": sig_long, "sig_lat": sig_lat, "sig_vlong": sig_vlong, "sig_vlat": sig_vlat,
+            "sig_along": sig_along, "sig_alat": sig_alat, "sig_orient": sig_orient,
+            "orientation": view.orientation_rad + sig_orient * z[:, 9],
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
             "k0": k0, "times": times, "config": config, "view": view, "fov": fov,
             "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
-            "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
+            "arel_long": view.ax_mps2 + sig_along * z[:, 5], "arel_lat": view.ay_mps2 + sig_alat * z[:, 6],
             "length": np.maximum(sc.length_m + p.size_sigma_m * z[:, 7], 0.2),
             "width": np.maximum(sc.width_m + 0.5 * p.size_sigma_m * z[:, 8], 0.2),
         }
@@ -351,11 +354,11 @@ class ObjectModel:
             rcs_dbsm=ch["rcs_rep"][i, idx],
             dist_long_sigma_m=ch["sig_long"][i, idx], dist_lat_sigma_m=ch["sig_lat"][i, idx],
             vrel_long_sigma_mps=ch["sig_vlong"][i, idx], vrel_lat_sigma_mps=ch["sig_vlat"][i, idx],
-            arel_long_sigma_mps2=self._half[:n], arel_lat_sigma_mps2=self._half[:n],
-            orientation_sigma_rad=self._five_deg[:n],
+            arel_long_sigma_mps2=ch["sig_along"][i, idx], arel_lat_sigma_mps2=ch["sig_alat"][i, idx],
+            orientation_sigma_rad=ch["sig_orient"][i, idx],
             meas_state=ch["meas_state"][i, idx], prob_of_exist=ch["prob_of_exist"][i, idx],
             arel_long_mps2=ch["arel_long"][i, idx], arel_lat_mps2=ch["arel_lat"][i, idx],
-            obj_class=self.scene.class_code[idx], orientation_rad=view.orientation_rad[idx],
+            obj_class=self.scene.class_code[idx], orientation_rad=ch["orientation"][i, idx],
             length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
 
     def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
