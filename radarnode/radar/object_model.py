@@ -229,7 +229,9 @@ class ObjectModel:
             "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
-            "arel_long": view.ax_mps2 + sig_along * z[:, 5], "arel_lat": view.ay_mps2 + sig_alat * z[:, 6],
+            # the acceleration reported keeps the model's small noise: drawn with σ_alat (about 1 m/s² from the
+            # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
+            "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
             "length": np.maximum(sc.length_m + p.size_sigma_m * z[:, 7], 0.2),
             "width": np.maximum(sc.width_m + 0.5 * p.size_sigma_m * z[:, 8], 0.2),
         }

@@ -356,22 +356,26 @@ class RadarNode:
         return CycleOutput(t_s, messages, frame, view, int(np.sum(frame_bits(dlcs))), dropped,
                            boundaries=(self.last_boundaries if own else None))
 
-    def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0) -> None:
-        """Flag that cycle ``t_s`` was not ready in time and was not sent (nor were ``skipped`` cycles after it).
+    def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0, computed: bool = True) -> None:
+        """Flag cycles not sent because they could not be ready on their deadline.
 
-        The ARS 408 reports faults in RadarState, and of its error bits (Voltage, Temperature, Interference,
-        Persistent, Temporary) a cycle lost to load is a temporary one: Temporary_Error ("Temporary error
-        active" in the DBC) is set in every RadarState of the next second, and one goes out with the next
-        cycle sent. ``cycles_missed_deadline`` counts every cycle not sent, and
-        MeasCounter moves on by the cycles skipped, so a consumer counts them as lost.
+        ``computed``: cycle ``t_s`` was computed and was ``late_s`` late (its MeasCounter is used); otherwise
+        ``skipped`` cycles from ``t_s`` on were not computed at all (MeasCounter moves on by as many), so a
+        consumer counts every one of them as lost. The ARS 408 reports faults in RadarState, and of its error
+        bits (Voltage, Temperature, Interference, Persistent, Temporary) a cycle lost to load is a temporary
+        one: Temporary_Error ("Temporary error active" in the DBC) is set in every RadarState of the next
+        second, and one goes out with the next cycle sent. ``cycles_missed_deadline`` counts them all.
         """
-        self.counters["cycles_missed_deadline"] += 1 + skipped
-        self._meas_counter = (self._meas_counter + skipped) & 0xFFFF
-        self._fault_until_s = t_s + (1 + skipped) * self.period_s + STATUS_PERIOD_S
+        lost = (1 if computed else 0) + skipped
+        if not computed:
+            self._meas_counter = (self._meas_counter + skipped) & 0xFFFF
+        self.counters["cycles_missed_deadline"] += lost
+        self._fault_until_s = t_s + lost * self.period_s + STATUS_PERIOD_S
         self._status_now = True
-        self._warn_once("deadline", "cycle at t=%.3f s was ready %.1f ms after its deadline: not sent (%d more "
-                        "skipped to stay on the schedule); flagged in RadarState_Temporary_Error and counted in "
-                        "cycles_missed_deadline (warned once)", t_s, 1e3 * late_s, skipped)
+        self._warn_once("deadline", "cycle at t=%.3f s %s: not sent (%d cycle(s)); flagged in "
+                        "RadarState_Temporary_Error and counted in cycles_missed_deadline (warned once)", t_s,
+                        f"went out of its tolerance, {1e3 * late_s:.1f} ms after its deadline" if computed else
+                        f"could not be computed before its deadline (by {1e3 * late_s:.1f} ms)", lost)
 
     def _warn_once(self, key: str, fmt: str, *args) -> None:
         if key not in self._warned:

@@ -12,10 +12,11 @@ k−1 has been sent) takes effect in cycle k; one received after that, in cycle 
 effect one to two periods after it arrives — the real sensor also applies what it received when it starts a
 measurement cycle. In simulated time the same rule holds, with no wait between cycles.
 
-A cycle that is not ready ``RealTimeClock.tolerance_s`` after its deadline is not sent late: it is dropped
-and flagged (``RadarNode.missed_deadline``: a counter, MeasCounter moves on, RadarState's Temporary_Error),
-and the runner resumes with the first cycle whose deadline leaves the time a cycle takes to compute, so
-the cycles that do go out stay on the grid.
+A cycle that cannot go out within ``RealTimeClock.tolerance_s`` (2 ms) of its deadline — computed too late,
+or the process woken too late by the operating system — is not sent late: it is dropped
+and flagged (``RadarNode.missed_deadline``: a counter, MeasCounter moves on, RadarState's Temporary_Error).
+When the model is slower than the cycle, the runner skips (and flags) the cycles whose deadline would pass
+before they could be computed, so the cycles that do go out stay on the grid.
 
 A stop request (Ctrl-C in the CLI) ends the run between cycles, so a log never ends in the middle of a cycle.
 """
@@ -204,7 +205,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
     k = 0
     pending = prepare(0) if n_cycles and not stopped() else None
     origin = clock.now()            # real time: the schedule starts when the first cycle is ready
-    costs = deque([origin], maxlen=8)   # the time the last cycles took to compute
+    costs: deque[float] = deque(maxlen=8)   # what the last cycles took to compute (the first, warming up, not)
     while pending is not None:
         out = pending
         pending = None
@@ -214,14 +215,9 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         if stopped():
             break
         if late > clock.tolerance_s:
-            # not ready in time: dropped and flagged, never sent late; resume on the grid, with a cycle
-            # whose deadline leaves the time a cycle takes (the median of the last few: one slow cycle is
-            # no reason to skip more)
-            cost = statistics.median(costs)
-            nxt = max(k + 1, math.ceil((clock.now() + cost - origin) / period - 1e-9))
-            node.missed_deadline(out.t_s, late, skipped=min(nxt, n_cycles) - (k + 1))
-            stats.missed += min(nxt, n_cycles) - k
-            k = nxt
+            # not ready in time: dropped and flagged, never sent late
+            node.missed_deadline(out.t_s, late)
+            stats.missed += 1
         else:
             if clock.realtime:
                 stats.cycle_start_s.append(clock.now() - origin)
@@ -232,7 +228,18 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             stats.bits += out.bits
             if on_cycle is not None:
                 on_cycle(out)
-            k += 1
+        k += 1
+        if clock.realtime and len(costs) >= 3:
+            # a model slower than the cycle: skip the cycles whose deadline comes before a cycle could be
+            # computed (the median of the last few: one slow cycle is no reason to skip), so the ones that go
+            # out stay on the grid and none is computed in vain
+            ready = clock.now() + statistics.median(costs)
+            first = max(k, math.ceil((ready - origin) / period - 1e-9))
+            if first > k:
+                skipped = min(first, n_cycles) - k
+                node.missed_deadline(k * period, ready - (origin + k * period), skipped=skipped, computed=False)
+                stats.missed += skipped
+                k = first
         if k < n_cycles and not stopped():
             begin = clock.now()
             pending = prepare(k)
