@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -11,6 +12,7 @@ import sys
 import time
 
 import cantools
+import numpy as np
 import pytest
 
 from tests.conftest import ROOT, SCENARIOS
@@ -135,15 +137,21 @@ wait $CONSUMER
                        cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
     lines = [json.loads(x) for x in (tmp_path / "cycles.jsonl").read_text().splitlines()]
-    assert len(lines) == 20
+    node_err = (tmp_path / "node.err").read_text()
+    sent = int(re.search(r"sent (\d+) cycles", node_err).group(1))
+    missed = int(m.group(1)) if (m := re.search(r"cycles_missed_deadline=(\d+)", node_err)) else 0
+    # in real time a cycle that cannot go out on its deadline (a loaded machine) is dropped and counted, and
+    # MeasCounter moves on: every gap the consumer sees is one the node counted
+    assert sent + missed == 34
+    assert len(lines) == min(20, sent)
     counters = [x["cycle_counter"] for x in lines]
-    assert counters == list(range(counters[0], counters[0] + 20))
+    gaps = np.diff(counters) - 1
+    assert (gaps >= 0).all() and gaps.sum() <= missed
     assert all(x["sensor_id"] == 0 for x in lines)
     stamps = [x["timestamp"] for x in lines]
     steps = sorted(b - a for a, b in zip(stamps, stamps[1:]))
     assert steps[0] > 0 and 0.06 < steps[len(steps) // 2] < 0.085          # in order, 72-ms cycles (median)
     assert any(o["obj_class"] == 1 and 40 < o["dist_long_m"] < 70 for x in lines[5:] for o in x["objects"])
-    assert "sent 34 cycles" in (tmp_path / "node.err").read_text()
 
 
 def test_bad_cli_option_names_the_option():

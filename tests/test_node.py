@@ -192,3 +192,41 @@ def test_same_scenario_and_seed_give_identical_frames():
     a, b, c = frames(5), frames(5), frames(6)
     assert a == b
     assert a != c
+
+
+def _status_neighbours(ids: list[int]) -> tuple[set, set, int]:
+    """Around each RadarState of a sequence of sensor frame IDs: the frames right before it, the two after it,
+    and how many there are."""
+    before, after = set(), set()
+    at = [i for i, x in enumerate(ids) if x == P.RADAR_STATE]
+    for i in at:
+        before.add(ids[i - 1] if i else None)
+        after.add(tuple(ids[i + 1:i + 3]))
+    return before, after, len(at)
+
+
+def test_status_frames_go_before_a_header_as_in_the_capture(reference_dir):
+    """RadarState and VersionID go out once a second between two cycles: after the last frame of one cycle's
+    last group, right before the next header — never inside a group. Checked on the capture, then on radarnode
+    in simulated time."""
+    capture = [(m.timestamp, m.arbitration_id) for m in can.LogReader(str(reference_dir / "candump-ars408-parked.log"))]
+    ids = [i for _, i in capture]
+    before, after, n = _status_neighbours(ids)
+    follow = [ids[i + 1:i + 3] for i, x in enumerate(ids) if x == P.RADAR_STATE]
+    # the capture's pattern: 0x201, 0x700, then the header, in all but one of its 38 seconds
+    assert n >= 30 and sum(f == [P.VERSION_ID, P.OBJ_STATUS] for f in follow) >= n - 1
+    stamps = [t for t, i in capture if i == P.RADAR_STATE]
+    assert np.allclose(np.diff(stamps), 1.0, atol=0.01)
+
+    node = RadarNode(scenario(TRAFFIC, duration=4.0))
+    frames = []
+    run_node(node, clock=SimulatedClock(), sinks=[frames.append], vehicle=EgoMotionSender(node.scene))
+    sensor_ids = {P.RADAR_STATE, P.VERSION_ID, P.OBJ_STATUS, P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED}
+    ours = [m.arbitration_id for m in frames if m.arbitration_id in sensor_ids]
+    before, after, n = _status_neighbours(ours)
+    assert n == 4
+    assert after == {(P.VERSION_ID, P.OBJ_STATUS)}
+    # the frame before is the last of the previous cycle's last group (or nothing, at the start)
+    assert before <= {None, P.OBJ_EXTENDED}
+    times = [m.timestamp for m in frames if m.arbitration_id == P.RADAR_STATE]
+    assert np.allclose(np.diff(times), 1.0, atol=node.period_s)

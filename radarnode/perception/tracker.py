@@ -43,6 +43,20 @@ WALK_MAX_MPS, BICYCLE_MAX_MPS = 3.0, 9.0
 #: (rows: ARS 408 class code 0…6; point, pedestrian, bicycle and wide keep what was measured)
 MIN_BODY_M = np.array([[0.0, 0.0], [3.8, 1.6], [8.0, 2.3], [0.0, 0.0], [1.8, 0.7], [0.0, 0.0], [0.0, 0.0]])
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
+ACCEL_WINDOW = 8              # cycles over which an object's acceleration is the slope of its velocity
+
+
+def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window: int = ACCEL_WINDOW) -> np.ndarray:
+    """σ of an acceleration estimated as the least-squares slope of ``window`` velocities ``period_s`` apart,
+    each with σ ``speed_sigma_mps``: σ_v · √(12 / (N (N² − 1))) / T (the slope's variance of a straight-line fit)."""
+    n = window
+    return np.asarray(speed_sigma_mps) * math.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
+
+
+def orientation_sigma_rad(position_sigma_m: np.ndarray, length_m: np.ndarray) -> np.ndarray:
+    """σ of a body's heading taken from its two ends, ``length_m`` apart, each placed with σ ``position_sigma_m``
+    across the body: atan(√2 σ / L); a body shorter than 0.5 m counts as 0.5 m."""
+    return np.arctan(math.sqrt(2.0) * np.asarray(position_sigma_m) / np.maximum(length_m, 0.5))
 
 
 @dataclass
@@ -144,11 +158,19 @@ def innovation(x, p, z, r_cov):
 
 
 def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, int]]:
-    """Global nearest neighbour on the squared Mahalanobis distance, inside the gate."""
+    """Global nearest neighbour on the squared Mahalanobis distance, inside the gate.
+
+    ``r_cov`` is one measurement covariance (3, 3) or one per measurement (m, 3, 3)."""
     if x.shape[0] == 0 or z.shape[0] == 0:
         return []
-    nu, s, _ = innovation(x, p, z, r_cov)
-    d2 = np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s), nu)
+    r_cov = np.asarray(r_cov)
+    if r_cov.ndim == 3:     # one covariance per measurement (m, 3, 3)
+        nu, s, _ = innovation(x, p, z, 0.0)
+        s = s[:, None] + r_cov[None]
+        d2 = np.einsum("nmi,nmij,nmj->nm", nu, np.linalg.inv(s), nu)
+    else:
+        nu, s, _ = innovation(x, p, z, r_cov)
+        d2 = np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s), nu)
     cost = np.where(d2 <= gate, d2, 1e9)
     rows, cols = scipy.optimize.linear_sum_assignment(cost)
     return [(int(i), int(j)) for i, j in zip(rows, cols) if cost[i, j] < 1e9]
@@ -169,11 +191,16 @@ class ObjectTracker:
 
     Parameters
     ----------
-    sigma_pos_m, sigma_vr_mps : measurement noise of a detection group
+    sigma_pos_m, sigma_vr_mps : measurement noise of a detection group (position, range rate)
+    sigma_az_rad : the group's bearing noise; across the line of sight it adds range × σ_az to the
+        position noise, so a far object is placed less well sideways than a near one
     """
 
-    def __init__(self, sigma_pos_m: float = 0.5, sigma_vr_mps: float = 0.3, max_objects: int = 100) -> None:
+    def __init__(self, sigma_pos_m: float = 0.5, sigma_vr_mps: float = 0.3, max_objects: int = 100,
+                 sigma_az_rad: float = math.radians(0.3)) -> None:
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
+        self.sigma_az_rad = sigma_az_rad
+        self.last_dt = 0.0
         self.max_objects = max_objects
         self.x = np.zeros((0, 4))
         self.p = np.zeros((0, 4, 4))
@@ -193,16 +220,19 @@ class ObjectTracker:
         groups = group_detections(det)
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
+        if dt > 0:
+            self.last_dt = dt
         if len(self.x):
             self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps,
                                      sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])))
         z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
-        pairs = associate(self.x, self.p, z, self.r_cov)
+        r_cov = self._measurement_cov(z)
+        pairs = associate(self.x, self.p, z, r_cov)
         hit = np.zeros(len(self.x), dtype=bool)
         used = np.zeros(len(groups), dtype=bool)
         if pairs:
             ti, gi = np.array(pairs).T
-            self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], self.r_cov)
+            self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
             hit[ti], used[gi] = True, True
             # extent: what the detections spanned over the last cycles (a decaying maximum: one cycle sees only a
             # part of a body, and a far one is a single detection until its parts are resolved)
@@ -215,7 +245,7 @@ class ObjectTracker:
         self.hist = ((self.hist << 1) | hit).astype(np.uint8)
         self.misses = np.where(hit, 0, self.misses + 1)
         new_tracks = np.flatnonzero(~used)
-        self._initiate(groups, z, new_tracks, sensor_velocity)
+        self._initiate(groups, z, new_tracks, sensor_velocity, r_cov)
         recent = np.unpackbits(self.hist[:, None], axis=1)[:, -CONFIRM_WINDOW:].sum(axis=1)
         newly = ~self.confirmed & (recent >= CONFIRM_HITS)
         self.confirmed |= newly
@@ -223,7 +253,17 @@ class ObjectTracker:
         self._delete((self.misses > COAST_CYCLES) | (~self.confirmed & (self.misses > 0)) | self._duplicates())
         return self._object_list(sensor_velocity)
 
-    def _initiate(self, groups, z, idx, sensor_velocity) -> None:
+    def _measurement_cov(self, z: np.ndarray) -> np.ndarray:
+        """Measurement covariances (m, 3, 3) of the groups: the position noise plus range × σ_az across the
+        line of sight."""
+        r = np.hypot(z[:, 0], z[:, 1])
+        u = np.stack([z[:, 0], z[:, 1]], axis=1) / np.maximum(r, 1e-3)[:, None]
+        perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
+        cov = np.repeat(self.r_cov[None], len(z), axis=0)
+        cov[:, :2, :2] += (r * self.sigma_az_rad)[:, None, None] ** 2 * perp[:, :, None] * perp[:, None, :]
+        return cov
+
+    def _initiate(self, groups, z, idx, sensor_velocity, r_cov) -> None:
         if idx.size == 0:
             return
         k = idx.size
@@ -240,7 +280,7 @@ class ObjectTracker:
         # part from the stationary prior (2 m/s). A looser position (it was 1 m) let a new track of a guardrail
         # post take the next post 4 m on, and leave at a false speed.
         p0 = np.zeros((k, 4, 4))
-        p0[:, 0, 0] = p0[:, 1, 1] = self.r_cov[0, 0]
+        p0[:, 0:2, 0:2] = r_cov[idx, 0:2, 0:2]
         u = np.stack([ux, uy], axis=1)
         p0[:, 2:4, 2:4] = (self.r_cov[2, 2] * u[:, :, None] * u[:, None, :]
                            + 4.0 * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
@@ -306,9 +346,9 @@ class ObjectTracker:
         p = self.p[idx]
         ol.dist_long_sigma_m, ol.dist_lat_sigma_m = np.sqrt(p[:, 0, 0]), np.sqrt(p[:, 1, 1])
         ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps = np.sqrt(p[:, 2, 2]), np.sqrt(p[:, 3, 3])
-        ol.arel_long_sigma_mps2 = np.full(n, 2.0)
-        ol.arel_lat_sigma_mps2 = np.full(n, 2.0)
-        ol.orientation_sigma_rad = np.full(n, math.radians(10.0))
+        # acceleration (reported as zero: a constant-velocity filter) known as well as the slope of the velocities
+        ol.arel_long_sigma_mps2 = accel_sigma_mps2(ol.vrel_long_sigma_mps, self.last_dt)
+        ol.arel_lat_sigma_mps2 = accel_sigma_mps2(ol.vrel_lat_sigma_mps, self.last_dt)
         fresh = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1) <= CONFIRM_HITS
         ol.meas_state = np.where(self.misses[idx] > 0, MEAS_PREDICTED, np.where(fresh, MEAS_NEW, MEAS_MEASURED))
         hits = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1)
@@ -320,6 +360,12 @@ class ObjectTracker:
         body = MIN_BODY_M[ol.obj_class]
         length, width = np.maximum(length, body[:, 0]), np.maximum(width, body[:, 1])
         ol.orientation_rad = np.where(moving, np.arctan2(gy, gx), 0.0)
+        # heading of a moving object from its velocity's direction, of a standing one from its two ends
+        across = np.sqrt(np.maximum(uy * uy * pv[:, 0, 0] - 2 * ux * uy * pv[:, 0, 1] + ux * ux * pv[:, 1, 1], 0.0))
+        from_velocity = np.arctan2(across, np.maximum(speed, 1e-9))
+        pos = np.sqrt(0.5 * (p[:, 0, 0] + p[:, 1, 1]))
+        ol.orientation_sigma_rad = np.where(moving, np.minimum(from_velocity, math.pi),
+                                            orientation_sigma_rad(pos, length))
         ol.length_m, ol.width_m = length, width
         ol.actor_index = self.tag[idx].copy()
         return ol

@@ -33,7 +33,8 @@ from radarnode.perception.types import (
     AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
-from radarnode.perception.tracker import MIN_BODY_M, RCS_GAIN, classify, cluster_dyn_prop
+from radarnode.perception.tracker import (MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify, cluster_dyn_prop,
+                                          orientation_sigma_rad)
 from radarnode.radar import ambiguity, equation
 from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
@@ -145,11 +146,6 @@ class ObjectModel:
         self.cycle = 0
         self.period_s = scene.scenario.period_s
         self._cache: dict | None = None
-        # constant σ fields of the object list, shared read-only by every cycle
-        self._half = np.full(max(n, 1), 0.5)
-        self._five_deg = np.full(max(n, 1), math.radians(5.0))
-        self._half.setflags(write=False)
-        self._five_deg.setflags(write=False)
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
         self._drawn_upto = -1
         # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own stream
@@ -216,10 +212,18 @@ class ObjectModel:
         p_exist = 1.0 - np.exp(np.maximum(hits, 1) * np.log1p(-np.minimum(pd, 0.999999)))
         c, s = np.cos(az), np.sin(az)
         lat = p.lateral_speed_sigma_mps
+        # the object's own σ: position and velocity from this cycle's accuracy, grown while coasting;
+        # acceleration as the slope of its velocities, heading from its two ends (radarnode.perception.tracker)
+        sig_long, sig_lat = sx * coast, sy * coast
+        sig_vlong = np.sqrt((c * sig_v) ** 2 * c2 + (s * lat) ** 2)
+        sig_vlat = np.sqrt((s * sig_v) ** 2 * c2 + (c * lat) ** 2)
+        sig_along = accel_sigma_mps2(sig_vlong, self.period_s) * coast
+        sig_alat = accel_sigma_mps2(sig_vlat, self.period_s) * coast
+        sig_orient = orientation_sigma_rad(np.sqrt(0.5 * (sig_long ** 2 + sig_lat ** 2)), sc.length_m)
         return {**flags,
-            "sig_long": sx * coast, "sig_lat": sy * coast,
-            "sig_vlong": np.sqrt((c * sig_v) ** 2 * c2 + (s * lat) ** 2),
-            "sig_vlat": np.sqrt((s * sig_v) ** 2 * c2 + (c * lat) ** 2),
+            "sig_long": sig_long, "sig_lat": sig_lat, "sig_vlong": sig_vlong, "sig_vlat": sig_vlat,
+            "sig_along": sig_along, "sig_alat": sig_alat, "sig_orient": sig_orient,
+            "orientation": view.orientation_rad + sig_orient * z[:, 9],
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
             "k0": k0, "times": times, "config": config, "view": view, "fov": fov,
@@ -227,6 +231,8 @@ class ObjectModel:
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
             **self._reported_body(view, rng_m, az, rcs_eff, snr, z),
+            # the acceleration reported keeps the model's small noise: drawn with σ_alat (about 1 m/s² from the
+            # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
         }
 
@@ -243,7 +249,7 @@ class ObjectModel:
         p, sc = self.preset, self.scene
         steady = sc.swerling == 0
         spread = np.where(steady, math.sqrt(2.0) * 10.0 ** (-snr / 20.0), math.sqrt(RCS_GAIN / (2.0 - RCS_GAIN)))
-        rcs = rcs_eff + 10.0 * np.log10(np.maximum(1.0 + spread * z[:, 9], 0.05))
+        rcs = rcs_eff + 10.0 * np.log10(np.maximum(1.0 + spread * z[:, 10], 0.05))
         h = view.orientation_rad
         ch, sh = np.cos(h), np.sin(h)
         cx, cy = view.centre_x_m, view.centre_y_m
@@ -380,7 +386,6 @@ class ObjectModel:
     def _object_list(self, ch: dict, i: int, idx: np.ndarray, view: SensorView, detected: np.ndarray,
                      new: np.ndarray, sensor_velocity_est) -> ObjectList:
         st = self.state[idx]
-        n = idx.size
         return ObjectList(
             id=self.obj_id[idx].copy(),
             dist_long_m=st[:, 0], dist_lat_m=st[:, 1], vrel_long_mps=st[:, 2], vrel_lat_mps=st[:, 3],
@@ -388,11 +393,11 @@ class ObjectModel:
             rcs_dbsm=ch["rcs_obj"][i, idx],
             dist_long_sigma_m=ch["sig_long"][i, idx], dist_lat_sigma_m=ch["sig_lat"][i, idx],
             vrel_long_sigma_mps=ch["sig_vlong"][i, idx], vrel_lat_sigma_mps=ch["sig_vlat"][i, idx],
-            arel_long_sigma_mps2=self._half[:n], arel_lat_sigma_mps2=self._half[:n],
-            orientation_sigma_rad=self._five_deg[:n],
+            arel_long_sigma_mps2=ch["sig_along"][i, idx], arel_lat_sigma_mps2=ch["sig_alat"][i, idx],
+            orientation_sigma_rad=ch["sig_orient"][i, idx],
             meas_state=ch["meas_state"][i, idx], prob_of_exist=ch["prob_of_exist"][i, idx],
             arel_long_mps2=ch["arel_long"][i, idx], arel_lat_mps2=ch["arel_lat"][i, idx],
-            obj_class=ch["obj_class"][i, idx], orientation_rad=view.orientation_rad[idx],
+            obj_class=ch["obj_class"][i, idx], orientation_rad=ch["orientation"][i, idx],
             length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
 
     def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,

@@ -117,6 +117,7 @@ class RadarNode:
         self._next_status_s = 0.0
         self._status_now = True
         self._meas_counter = 0
+        self._fault_until_s = -math.inf   # RadarState_Temporary_Error is set until then (a missed deadline)
         self._warned: set[str] = set()
 
     # --- input ------------------------------------------------------------
@@ -250,7 +251,8 @@ class RadarNode:
         state = self.codecs[P.RADAR_STATE].encode({
             "RadarState_NVMwriteStatus": int(cfg.nvm_write_ok), "RadarState_NVMReadStatus": 1,
             "RadarState_MaxDistanceCfg": cfg.max_distance_m, "RadarState_Voltage_Error": 0,
-            "RadarState_Temporary_Error": 0, "RadarState_Temperature_Error": 0, "RadarState_Interference": 0,
+            "RadarState_Temporary_Error": int(t_s < self._fault_until_s),
+            "RadarState_Temperature_Error": 0, "RadarState_Interference": 0,
             "RadarState_Persistent_Error": 0, "RadarState_RadarPowerCfg": cfg.radar_power,
             "RadarState_SensorID": cfg.sensor_id, "RadarState_SortIndex": cfg.sort_index,
             "RadarState_CtrlRelayCfg": int(cfg.ctrl_relay), "RadarState_OutputTypeCfg": cfg.output_type,
@@ -353,6 +355,27 @@ class RadarNode:
         self.counters["frames"] += len(messages)
         return CycleOutput(t_s, messages, frame, view, int(np.sum(frame_bits(dlcs))), dropped,
                            boundaries=(self.last_boundaries if own else None))
+
+    def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0, computed: bool = True) -> None:
+        """Flag cycles not sent because they could not be ready on their deadline.
+
+        ``computed``: cycle ``t_s`` was computed and was ``late_s`` late (its MeasCounter is used); otherwise
+        ``skipped`` cycles from ``t_s`` on were not computed at all (MeasCounter moves on by as many), so a
+        consumer counts every one of them as lost. The ARS 408 reports faults in RadarState, and of its error
+        bits (Voltage, Temperature, Interference, Persistent, Temporary) a cycle lost to load is a temporary
+        one: Temporary_Error ("Temporary error active" in the DBC) is set in every RadarState of the next
+        second, and one goes out with the next cycle sent. ``cycles_missed_deadline`` counts them all.
+        """
+        lost = (1 if computed else 0) + skipped
+        if not computed:
+            self._meas_counter = (self._meas_counter + skipped) & 0xFFFF
+        self.counters["cycles_missed_deadline"] += lost
+        self._fault_until_s = t_s + lost * self.period_s + STATUS_PERIOD_S
+        self._status_now = True
+        self._warn_once("deadline", "cycle at t=%.3f s %s: not sent (%d cycle(s)); flagged in "
+                        "RadarState_Temporary_Error and counted in cycles_missed_deadline (warned once)", t_s,
+                        f"went out of its tolerance, {1e3 * late_s:.1f} ms after its deadline" if computed else
+                        f"could not be computed before its deadline (by {1e3 * late_s:.1f} ms)", lost)
 
     def _warn_once(self, key: str, fmt: str, *args) -> None:
         if key not in self._warned:

@@ -1,16 +1,33 @@
-"""Pacing a node: simulated time (as fast as possible) or real time (frames paced to the cycle).
+"""Pacing a node: simulated time (as fast as possible) or real time (frames on the deadline).
 
-The runner owns the loop: each cycle it lets received frames reach the node,
-adds the vehicle's ego-motion frames if asked, asks the node for the cycle's
-frames and hands them to the sinks (a bus's ``send``, a log writer, both).
-A stop request (Ctrl-C in the CLI) ends the run between cycles, so a log
-never ends in the middle of a cycle.
+The runner owns the loop. Cycle k has the deadline ``k × period`` (scenario time); in real time that is
+measured from the moment the first cycle is ready. The node computes each cycle *ahead* of its deadline:
+right after cycle k−1 has gone out it takes the input received so far, adds the vehicle's ego-motion frames
+if asked, computes cycle k, then waits for k's deadline — receiving input meanwhile, which therefore
+takes effect in cycle k+1 — and sends the frames on the deadline. So the period does not depend on what a
+scene costs, as long as a cycle costs less than a period.
+
+Which cycle an input affects: a frame received before the node starts computing cycle k (i.e. before cycle
+k−1 has been sent) takes effect in cycle k; one received after that, in cycle k+1. Input therefore takes
+effect one to two periods after it arrives — the real sensor also applies what it received when it starts a
+measurement cycle. In simulated time the same rule holds, with no wait between cycles.
+
+A cycle that cannot go out within ``RealTimeClock.tolerance_s`` (2 ms) of its deadline — computed too late,
+or the process woken too late by the operating system — is not sent late: it is dropped
+and flagged (``RadarNode.missed_deadline``: a counter, MeasCounter moves on, RadarState's Temporary_Error).
+When the model is slower than the cycle, the runner skips (and flags) the cycles whose deadline would pass
+before they could be computed, so the cycles that do go out stay on the grid.
+
+A stop request (Ctrl-C in the CLI) ends the run between cycles, so a log never ends in the middle of a cycle.
 """
 
 from __future__ import annotations
 
+import math
+import statistics
 import threading
 import time
+from collections import deque
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
@@ -21,16 +38,23 @@ from radarnode.wire.node import CycleOutput, EgoMotionSender, RadarNode
 
 Sink = Callable[[can.Message], None]
 
+DEADLINE_TOLERANCE_S = 0.002   # a cycle ready later than this after its deadline is dropped and flagged
+_SLEEP_MARGIN_S = 0.002        # stop polling the bus this long before a deadline, then sleep to it …
+_SPIN_S = 0.0005               # … and spin the last half millisecond (a sleep's wake-up is late under load)
+
 
 @dataclass
 class RunStats:
-    """What a run did, for the end-of-run summary and the benchmark."""
+    """What a run did, for the end-of-run summary and the benchmarks."""
 
-    cycles: int = 0
+    cycles: int = 0                 # cycles sent
     frames: int = 0
     bits: int = 0
     duration_s: float = 0.0
-    cycle_start_s: list[float] = field(default_factory=list)   # wall-clock start of every cycle (real time)
+    missed: int = 0                 # cycles not sent because they were not ready in time (real time)
+    cycle_start_s: list[float] = field(default_factory=list)   # real time: send time of every cycle sent,
+    #                                                            from the schedule's origin (s)
+    send_error_s: list[float] = field(default_factory=list)    # real time: send time minus deadline (s)
 
     def bus_load(self, bitrate: int) -> float:
         return self.bits / (bitrate * self.duration_s) if self.duration_s > 0 else 0.0
@@ -40,6 +64,7 @@ class SimulatedClock:
     """Scenario time, no waiting; frame timestamps are ``epoch_s`` + scenario time."""
 
     realtime = False
+    tolerance_s = math.inf
 
     def __init__(self, epoch_s: float = 0.0) -> None:
         self.epoch_s = epoch_s
@@ -47,39 +72,69 @@ class SimulatedClock:
     def start(self) -> None:
         pass
 
+    def now(self) -> float:
+        return 0.0
+
     def wait_until(self, t_s: float, poll: Callable[[float], None] | None) -> None:
-        if poll is not None:
-            poll(0.0)
+        pass
 
     def timestamp(self, t_s: float) -> float:
         return self.epoch_s + t_s
 
 
 class RealTimeClock:
-    """Wall-clock pacing against absolute deadlines (no drift); timestamps are wall-clock."""
+    """Wall-clock pacing against absolute deadlines (no drift); timestamps are wall-clock.
+
+    Parameters
+    ----------
+    tolerance_s : float
+        How late after its deadline a cycle may still be sent; a later one is dropped and flagged.
+    timer, sleep, wall : callables, optional
+        Monotonic seconds, sleeping, and wall-clock seconds (``time.perf_counter``, ``time.sleep``,
+        ``time.time``); replaceable so that tests can drive the clock without waiting.
+    """
 
     realtime = True
 
-    def __init__(self) -> None:
+    def __init__(self, tolerance_s: float = DEADLINE_TOLERANCE_S, *, timer: Callable[[], float] = time.perf_counter,
+                 sleep: Callable[[float], None] = time.sleep, wall: Callable[[], float] = time.time) -> None:
+        if not tolerance_s >= 0.0:
+            raise ValueError(f"tolerance_s: value {tolerance_s!r} is not allowed; expected a number >= 0")
+        self.tolerance_s = tolerance_s
+        self._timer, self._sleep, self._wall = timer, sleep, wall
+        self._spin = timer is time.perf_counter      # an injected timer does not advance by itself
         self._t0 = 0.0
         self._wall0 = 0.0
 
     def start(self) -> None:
-        self._t0 = time.perf_counter()
-        self._wall0 = time.time()
+        self._t0 = self._timer()
+        self._wall0 = self._wall()
+
+    def now(self) -> float:
+        """Seconds since ``start``."""
+        return self._timer() - self._t0
 
     def wait_until(self, t_s: float, poll: Callable[[float], None] | None) -> None:
+        """Return at ``t_s`` seconds after ``start``, letting ``poll(timeout)`` receive until just before."""
         while True:
-            remaining = self._t0 + t_s - time.perf_counter()
+            remaining = t_s - self.now()
             if remaining <= 0.0:
                 return
-            if poll is not None:
-                poll(min(remaining, 0.05))
-            else:
-                time.sleep(min(remaining, 0.05))
+            if poll is not None and remaining > 1.05 * _SLEEP_MARGIN_S:
+                # the bus's timeout is coarse; the last milliseconds are slept, not polled
+                poll(min(remaining - _SLEEP_MARGIN_S, 0.05))
+                continue
+            if not self._spin:
+                self._sleep(remaining)
+                return
+            if remaining > _SPIN_S:
+                self._sleep(remaining - _SPIN_S)
+            while self.now() < t_s:
+                pass
+            return
 
     def timestamp(self, t_s: float) -> float:
-        return self._wall0 + (time.perf_counter() - self._t0)
+        return self._wall0 + self.now()
 
 
 def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: Iterable[Sink],
@@ -92,18 +147,21 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
     Parameters
     ----------
     recv : callable(timeout_s) -> Message or None, optional
-        Source of received frames (e.g. ``bus.recv``); drained before every cycle
-        and, in real time, while waiting for the next one.
+        Source of received frames (e.g. ``bus.recv``); drained before every cycle is computed and, in real
+        time, while waiting for a deadline (see the module docstring for which cycle they affect).
     vehicle : EgoMotionSender, optional
-        Sends 0x300/0x301 before each cycle; the node receives them directly too
-        (a python-can bus does not deliver a sender's own frames back to it).
+        Sends 0x300/0x301 for each cycle just before the node computes it; the node receives them directly
+        too (a python-can bus does not deliver a sender's own frames back to it). Both clocks put the same
+        frames in the same order on the wire, so real time and simulated time give the same payloads.
+    on_cycle : callable(CycleOutput), optional
+        Called after each cycle sent (not for a cycle dropped at its deadline).
     """
     sinks = list(sinks)
     stats = RunStats()
     period = node.period_s
     total = node.scenario.duration_s if duration_s is None else duration_s
     n_cycles = int(total / period + 1e-9)
-    current_t = [0.0]
+    rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
 
     def poll(timeout: float) -> None:
         if recv is None:
@@ -112,38 +170,79 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             return
         msg = recv(timeout)
         while msg is not None:
-            node.receive(msg, current_t[0])
+            node.receive(msg, rx_t[0])
             msg = recv(0.0)
 
-    clock.start()
-    wall0 = time.perf_counter()
-    for k in range(n_cycles):
-        if stop is not None and stop.is_set():
-            break
+    def send(messages: list[can.Message]) -> None:
+        for m in messages:
+            if clock.realtime:
+                m.timestamp = clock.timestamp(0.0)
+            for sink in sinks:
+                sink(m)
+
+    def prepare(k: int) -> CycleOutput:
+        """Take the input received so far, send the vehicle's frames, compute cycle k."""
         t = k * period
-        clock.wait_until(t, poll)
-        current_t[0] = t
-        if clock.realtime:
-            stats.cycle_start_s.append(time.perf_counter() - wall0)
-        messages: list[can.Message] = []
+        if recv is not None:
+            poll(0.0)
+        after = 0.0
         if vehicle is not None:
             ego_frames = vehicle.frames(t, clock.timestamp(t))
             for m in ego_frames:
                 node.receive(m, t)
-            messages += ego_frames
-        # the radar's frames follow the vehicle's on the wire
-        after = sum(frame_time_s(len(m.data), node.bitrate, worst_case=False) for m in messages)
+            send(ego_frames)
+            stats.frames += len(ego_frames)
+            # the radar's frames follow the vehicle's on the wire
+            after = sum(frame_time_s(len(m.data), node.bitrate, worst_case=False) for m in ego_frames)
         out = node.cycle(t, clock.timestamp(t) + after)
-        messages += out.messages
-        for m in messages:
+        rx_t[0] = t
+        return out
+
+    def stopped() -> bool:
+        return stop is not None and stop.is_set()
+
+    clock.start()
+    k = 0
+    pending = prepare(0) if n_cycles and not stopped() else None
+    origin = clock.now()            # real time: the schedule starts when the first cycle is ready
+    costs: deque[float] = deque(maxlen=8)   # what the last cycles took to compute (the first, warming up, not)
+    while pending is not None:
+        out = pending
+        pending = None
+        deadline = origin + k * period
+        clock.wait_until(deadline, poll if recv is not None else None)
+        late = clock.now() - deadline
+        if stopped():
+            break
+        if late > clock.tolerance_s:
+            # not ready in time: dropped and flagged, never sent late
+            node.missed_deadline(out.t_s, late)
+            stats.missed += 1
+        else:
             if clock.realtime:
-                m.timestamp = clock.timestamp(t)
-            for sink in sinks:
-                sink(m)
-        stats.cycles += 1
-        stats.frames += len(messages)
-        stats.bits += out.bits
-        if on_cycle is not None:
-            on_cycle(out)
-    stats.duration_s = stats.cycles * period
+                stats.cycle_start_s.append(clock.now() - origin)
+                stats.send_error_s.append(late)
+            send(out.messages)
+            stats.cycles += 1
+            stats.frames += len(out.messages)
+            stats.bits += out.bits
+            if on_cycle is not None:
+                on_cycle(out)
+        k += 1
+        if clock.realtime and len(costs) >= 3:
+            # a model slower than the cycle: skip the cycles whose deadline comes before a cycle could be
+            # computed (the median of the last few: one slow cycle is no reason to skip), so the ones that go
+            # out stay on the grid and none is computed in vain
+            ready = clock.now() + statistics.median(costs)
+            first = max(k, math.ceil((ready - origin) / period - 1e-9))
+            if first > k:
+                skipped = min(first, n_cycles) - k
+                node.missed_deadline(k * period, ready - (origin + k * period), skipped=skipped, computed=False)
+                stats.missed += skipped
+                k = first
+        if k < n_cycles and not stopped():
+            begin = clock.now()
+            pending = prepare(k)
+            costs.append(clock.now() - begin)
+    stats.duration_s = min(k, n_cycles) * period
     return stats

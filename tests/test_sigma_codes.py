@@ -1,0 +1,90 @@
+"""The σ codes of Obj_2_Quality 0x60C follow each object's own estimate: they grow with range and while an
+object coasts, at the object and the detection level (issue 13). Read back from the frames on the wire."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from radarnode.wire import ars408 as P
+from radarnode.wire.node import EgoMotionSender, RadarNode
+from radarnode.wire.runner import SimulatedClock, run_node
+from tests.helpers import scenario
+
+RMS = ["Obj_DistLong_rms", "Obj_DistLat_rms", "Obj_VrelLong_rms", "Obj_VrelLat_rms", "Obj_ArelLong_rms",
+       "Obj_ArelLat_rms", "Obj_Orientation_rms"]
+# a near and a far car at about the same small azimuth, neither hiding the other, both moving with the ego
+NEAR_FAR = """
+  - {id: near, class: car, x_m: 30.0, y_m: -0.8, speed_mps: 20.0}
+  - {id: far, class: car, x_m: 150.0, y_m: 4.0, speed_mps: 20.0}
+"""
+
+
+def _wire_objects(sc, level: str, db) -> list[dict]:
+    """One dict per object and cycle: the decoded 0x60B and 0x60C fields, with the cycle's index."""
+    node = RadarNode(sc, fidelity=level)
+    frames: list = []
+    run_node(node, clock=SimulatedClock(), sinks=[frames.append], vehicle=EgoMotionSender(node.scene))
+    rows, general, k = [], {}, -1
+    for m in frames:
+        if m.arbitration_id == P.OBJ_STATUS:
+            k += 1
+            general = {}
+        elif m.arbitration_id == P.OBJ_GENERAL:
+            g = db.decode_message(P.OBJ_GENERAL, m.data, decode_choices=False)
+            general[g["Obj_ID"]] = g
+        elif m.arbitration_id == P.OBJ_QUALITY:
+            q = db.decode_message(P.OBJ_QUALITY, m.data, decode_choices=False)
+            rows.append({**general[q["Obj_ID"]], **q, "cycle": k})
+    return rows
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_sigma_codes_grow_with_range(db, level):
+    sc = scenario(NEAR_FAR, ego="{speed_mps: 20.0}", duration=3.0, seed=3)
+    rows = [r for r in _wire_objects(sc, level, db) if r["cycle"] >= 14 and r["Obj_MeasState"] != 3]
+    near = [r for r in rows if 20 < r["Obj_DistLong"] < 40]
+    far = [r for r in rows if 130 < r["Obj_DistLong"] < 170]
+    assert len(near) > 10 and len(far) > 10, (len(near), len(far))
+    med = {name: (np.median([r[name] for r in near]), np.median([r[name] for r in far])) for name in RMS}
+    # across the line of sight (range × azimuth noise) and what is derived from it: clearly larger far away
+    assert med["Obj_DistLat_rms"][1] >= med["Obj_DistLat_rms"][0] + 2, med["Obj_DistLat_rms"]
+    assert med["Obj_Orientation_rms"][1] > med["Obj_Orientation_rms"][0], med["Obj_Orientation_rms"]
+    # along it, a car's accuracy at 150 m is still that of its body (the floor), but never better far away
+    for name in RMS:
+        assert med[name][1] >= med[name][0], (name, med[name])
+
+
+
+# a weak target near the edge of the range: detected in most cycles, coasted through the misses
+WEAK = "  - {id: p, class: pedestrian, x_m: 45.0, y_m: 0.5, speed_mps: 1.0}"
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_sigma_codes_grow_while_an_object_coasts(db, level):
+    sc = scenario(WEAK, ego="{speed_mps: 0.0}", radar="{preset: ars408_like, radar_power: 3}", duration=12.0,
+                  seed=2)
+    rows = _wire_objects(sc, level, db)
+    by_id: dict[int, list[dict]] = {}
+    for r in rows:
+        by_id.setdefault(r["Obj_ID"], []).append(r)
+    pairs = []      # (last measured cycle, last cycle of the coasting run that follows it) of one object
+    for track in by_id.values():
+        for j, (prev, cur) in enumerate(zip(track, track[1:])):
+            if cur["cycle"] == prev["cycle"] + 1 and prev["Obj_MeasState"] != 3 and cur["Obj_MeasState"] == 3:
+                end = j + 1
+                while (end + 1 < len(track) and track[end + 1]["Obj_MeasState"] == 3
+                       and track[end + 1]["cycle"] == track[end]["cycle"] + 1):
+                    end += 1
+                pairs.append((prev, track[end]))
+    assert len(pairs) >= 3, f"{level}: {len(pairs)} coasting runs"
+    for prev, cur in pairs:
+        assert all(cur[name] >= prev[name] for name in RMS), [(prev[n], cur[n]) for n in RMS]
+        assert sum(cur[name] for name in RMS) > sum(prev[name] for name in RMS)
+    if level == "object":      # σ × (1 + misses): at least one code step per field the radar measures
+        for name in ("Obj_DistLong_rms", "Obj_DistLat_rms", "Obj_VrelLong_rms", "Obj_ArelLong_rms",
+                     "Obj_ArelLat_rms", "Obj_Orientation_rms"):
+            assert all(cur[name] > prev[name] for prev, cur in pairs), name
+    else:                      # the filter's covariance grows with every prediction: along the line of sight
+        for name in ("Obj_VrelLong_rms", "Obj_ArelLong_rms"):
+            assert all(cur[name] > prev[name] for prev, cur in pairs), name
