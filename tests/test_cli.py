@@ -99,7 +99,10 @@ def test_log_interrupted_is_complete_and_readable(tmp_path):
     out = tmp_path / "long.blf"
     p = subprocess.Popen([*CLI, "log", DEFAULT, "-o", str(out), "--duration", "80000"], cwd=ROOT,
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    time.sleep(4.0)
+    # interrupt once the log (still under its temporary name) holds some cycles, however loaded the machine
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline and sum(f.stat().st_size for f in tmp_path.iterdir()) < 200_000:
+        time.sleep(0.2)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=60)
     assert p.returncode == 0, err
