@@ -145,3 +145,14 @@ def test_log_says_which_bit_rate_its_budget_used(tmp_path):
     assert r.returncode == 2
     assert r.stderr.strip() == ("error: command line -b/--bitrate: bit rate value 5 is not allowed; expected an "
                                 "integer 10000..1000000 bit/s")
+
+
+def test_node_takes_its_budget_bit_rate_from_python_can_configuration(monkeypatch, capsys):
+    from radarnode.cli.main import main
+    monkeypatch.setenv("CAN_BITRATE", "250000")
+    scen = str(SCENARIOS / "highway_cut_in.yaml")
+    assert main(["node", scen, "-i", "virtual", "-c", "habits-bitrate", "--fast", "--duration", "0.3"]) == 0
+    assert "of 250000 bit/s (python-can environment CAN_BITRATE)" in capsys.readouterr().err
+    assert main(["node", scen, "-i", "virtual", "-c", "habits-bitrate", "--fast", "--duration", "0.3",
+                 "-b", "125000"]) == 0
+    assert "of 125000 bit/s (command line -b/--bitrate)" in capsys.readouterr().err

@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from radarnode.cli.common import add_scenario_argument, scenario_from_args, stop_on_signals
+from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals
 from radarnode.wire.bus import add_bus_arguments, open_bus
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
@@ -30,13 +30,16 @@ def add_subparser(sub) -> None:
 
 def cmd(args) -> int:
     scenario = scenario_from_args(args)
-    if args.bitrate:
-        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=args.bitrate))
+    # the budget's bit rate as python-can opens the bus: -b, CAN_BITRATE/can.conf, else the scenario's
+    bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)
+    if bitrate.bit_s != scenario.radar.bitrate:
+        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
     node = RadarNode(scenario)
     vehicle = EgoMotionSender(node.scene, scenario.radar.sensor_id) if args.send_ego_motion else None
     with open_bus(args) as bus, stop_on_signals() as stop:
         print(f"radarnode node: {scenario.name} on {bus.channel_info}, sensor {node.config.sensor_id}, "
-              f"{scenario.num_cycles} cycles of {node.period_s * 1e3:.0f} ms", file=sys.stderr, flush=True)
+              f"{scenario.num_cycles} cycles of {node.period_s * 1e3:.0f} ms; bus-load budget "
+              f"{100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr, flush=True)
         stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send],
                          recv=lambda timeout: bus.recv(timeout), vehicle=vehicle, stop=stop)
     print(f"sent {stats.cycles} cycles, {stats.frames} frames; " +
