@@ -68,6 +68,7 @@ def cmd(args) -> int:
     spec = scenario.ecu
     ecu = make_ecu(scenario, node.period_s, acc_enabled=spec.acc_enabled or args.closed_loop)
     actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
+    latency, held = spec.processing_latency_s, [0.0]
     if actuator is not None:
         actuator.at(0.0)
     warnings = []
@@ -102,7 +103,13 @@ def cmd(args) -> int:
                 elif decision.warning_level != LEVEL_WARNING and warnings and warnings[-1][1] == "on":
                     warnings.append((out.t_s, "off"))
             if actuator is not None:
-                actuator.apply(decision.accel_request_mps2 if decision is not None else 0.0, node.period_s)
+                # as in report: the previous request holds until the ECU's output is out, latency after the cycle
+                new = decision.accel_request_mps2 if decision is not None else 0.0
+                lat = min(latency, node.period_s)
+                if lat > 0.0:
+                    actuator.apply(held[0], lat)
+                actuator.apply(new, node.period_s - lat)
+                held[0] = new
                 actuator.at(out.t_s + node.period_s)
             if cycle is None:
                 return
