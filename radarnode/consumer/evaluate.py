@@ -44,6 +44,9 @@ class EgoActuator:
 
     def apply(self, request_mps2: float, dt_s: float) -> None:
         a_new = self.a_mps2 + (request_mps2 - self.a_mps2) * (1.0 - math.exp(-dt_s / self.lag_s))
+        if self.v_mps <= 0.0 and a_new <= 0.0:
+            self.a_mps2 = 0.0        # standing, brakes applied: the car does not roll backwards
+            return
         self.s_m += self.v_mps * dt_s + 0.5 * a_new * dt_s * dt_s
         self.v_mps = max(self.v_mps + a_new * dt_s, 0.0)
         self.a_mps2 = a_new if self.v_mps > 0 else 0.0
@@ -201,9 +204,14 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
 
 def _judge(scenario: Scenario, res: ScenarioResult) -> None:
     e = scenario.ecu.expect
+    if res.impact_time_s is not None:
+        res.min_gap_m = 0.0                     # the gap closed, whatever the 72-ms samples showed
     if e.fcw_ttc_min_s is not None:
         if res.warning_time_s is None:
             res.reasons.append("no FCW warning")
+        elif res.impact_time_s is not None and res.warning_time_s >= res.impact_time_s:
+            res.reasons.append(f"FCW warning at t = {res.warning_time_s:.2f} s, after the impact at "
+                               f"{res.impact_time_s:.2f} s")
         elif not (res.ttc_at_warning_s is not None and res.ttc_at_warning_s >= e.fcw_ttc_min_s):
             res.reasons.append(f"warning at TTC {res.ttc_at_warning_s:.2f} s < {e.fcw_ttc_min_s} s")
     if e.fcw_required and res.warning_time_s is None:
