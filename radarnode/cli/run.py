@@ -68,7 +68,7 @@ def cmd(args) -> int:
     spec = scenario.ecu
     ecu = make_ecu(scenario, node.period_s, acc_enabled=spec.acc_enabled or args.closed_loop)
     actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
-    latency, held = spec.processing_latency_s, [0.0]
+    latency, held = spec.processing_latency_s, [0.0, 0.0]     # the request held, the driver's watch
     if actuator is not None:
         actuator.at(0.0)
     warnings = []
@@ -102,6 +102,12 @@ def cmd(args) -> int:
                     warnings.append((out.t_s, "on"))
                 elif decision.warning_level != LEVEL_WARNING and warnings and warnings[-1][1] == "on":
                     warnings.append((out.t_s, "off"))
+            if actuator is not None and ecu.acc.standstill:
+                # the driver confirms driving off a reaction time after seeing the target leave (as in report)
+                leaving = decision is not None and decision.target is not None and decision.target.rel_speed_mps > 1.0
+                held[1] = held[1] + node.period_s if leaving else 0.0
+                if held[1] >= spec.driver_reaction_s:
+                    ecu.acc.confirm_resume()
             if actuator is not None:
                 # as in report: the previous request holds until the ECU's output is out, latency after the cycle
                 new = decision.accel_request_mps2 if decision is not None else 0.0
