@@ -40,8 +40,9 @@ ACC_STATUS, FCW_STATUS = ids.ACC_STATUS, ids.FCW_STATUS
 VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones still count in the path
 #: a stationary object in the path is a collision candidate, whatever its class, when it reflects like a vehicle
 #: (a car's rear ≈ 10 dBsm; a guardrail post, a pedestrian ≈ −5) and has been tracked for this many cycles
-OBSTACLE_RCS_DBSM = 5.0
+OBSTACLE_RCS_DBSM = 0.0          # of the track's power-averaged RCS: a car ≈ 10, a motorcycle ≈ 3, merged posts ≈ −2
 OBSTACLE_MIN_AGE = 4
+RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
@@ -117,6 +118,8 @@ class Ecu:
         self._in_path: dict[int, int] = {}      # consecutive cycles each track has been in the predicted path
         self._out_path: dict[int, int] = {}
         self._target_id: int | None = None
+        self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
+        self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._last_out_t: float | None = None
 
     @staticmethod
@@ -172,6 +175,7 @@ class Ecu:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id = {}, {}, None
+        self._rcs_power, self._obstacles = {}, set()
         self.last_cycle_t = None
         self._last_out_t = None
         self._prev_speed = None
@@ -278,14 +282,27 @@ class Ecu:
             if k is None:
                 road_user[i] = True            # coasting: it was a road user when selected
                 continue
-            dyn, cls = int(ol.dyn_prop[k]), int(ol.obj_class[k])
-            obstacle = float(ol.rcs_dbsm[k]) >= OBSTACLE_RCS_DBSM and t.age >= OBSTACLE_MIN_AGE
-            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or cls in VEHICLE_CLASSES or obstacle
+            dyn = int(ol.dyn_prop[k])
+            # a stationary object counts by what it reflects over its track's life (power average: one
+            # fade of a fluctuating car must not drop it; two merged guardrail posts stay near −2 dBsm), once
+            # tracked OBSTACLE_MIN_AGE cycles; once it qualified it stays a candidate (latched)
+            rcs = float(ol.rcs_dbsm[k])
+            if math.isfinite(rcs):
+                old = self._rcs_power.get(t.id)
+                p = 10.0 ** (rcs / 10.0)
+                self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
+            mean_rcs = 10.0 * math.log10(max(self._rcs_power.get(t.id, 1e-12), 1e-12))
+            if t.age >= OBSTACLE_MIN_AGE and mean_rcs >= OBSTACLE_RCS_DBSM:
+                self._obstacles.add(t.id)
+            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or t.id in self._obstacles
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
         # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
         # the target at its edge, does not switch)
         ids = [t.id for t in tracks]
+        alive = set(ids)
+        self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
+        self._obstacles &= alive
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
         steady = np.array([self._in_path[tid] >= ENTER_CYCLES or (tid == self._target_id

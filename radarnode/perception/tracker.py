@@ -37,6 +37,7 @@ MOVING_THRESHOLD_MPS = 1.0
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
+BODY_MIN_RCS_DBSM = 0.0       # an extended group weaker than this is not classed as a vehicle
 WALK_MAX_MPS, BICYCLE_MAX_MPS = 3.0, 9.0
 #: the smallest body of a vehicle class (length, width, m): a radar sees the faces towards it, and a car seen
 #: from behind at range is one detection; its class says the body is at least this big
@@ -386,9 +387,10 @@ def classify(length_m, width_m, rcs_dbsm, ground_speed_mps, moving) -> np.ndarra
     weak_moving = np.where(v < WALK_MAX_MPS, 3, np.where(v < BICYCLE_MAX_MPS, 5, 4))
     small = np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2,
                      np.where(rcs_dbsm >= VEHICLE_RCS_DBSM, 1, np.where(moving, weak_moving, 0)))
-    return np.where(extent > 8.0, 2,
-                    np.where(extent > 1.2, np.where(width_m > 3.0, 6, np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2, 1)),
-                             small)).astype(np.int64)
+    # an extent with the RCS of a few posts (merged guardrail reflections, ≈ −2 dBsm) is no vehicle body
+    body = np.where(rcs_dbsm >= TRUCK_RCS_DBSM, 2, np.where(rcs_dbsm >= BODY_MIN_RCS_DBSM, 1, 0))
+    return np.where((extent > 8.0) & (rcs_dbsm >= BODY_MIN_RCS_DBSM), 2,
+                    np.where(extent > 1.2, np.where(width_m > 3.0, 6, body), small)).astype(np.int64)
 
 
 def cluster_dyn_prop(range_rate_mps: np.ndarray, azimuth_rad: np.ndarray, sensor_velocity) -> np.ndarray:
