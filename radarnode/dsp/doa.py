@@ -61,30 +61,59 @@ class FftBeamformer(Doa):
         return self._refine(p, np.arange(p.shape[0]), k)
 
     def estimate_peaks(self, snapshots: np.ndarray, floor_db: float = 9.0, noise_power: float | None = None,
-                       secondary_snr_db: float = 12.0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Every spectral peak within ``floor_db`` of each snapshot's strongest.
+                       secondary_snr_db: float = 12.0, max_sources: int = 4
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The sources of each snapshot, strongest first, found one at a time (CLEAN).
 
         Several sources in one range–Doppler cell (two guardrails at the same
-        range, a car beside a truck) come out as several peaks. The floor stays
-        above the −13 dB sidelobes of the uniform taper. With ``noise_power``
-        (per element), a peak other than the strongest must also stand
-        ``secondary_snr_db`` above the beam's noise (K·noise_power): the angle
-        spectrum of a noise cell has several peaks within 9 dB, and without
-        this test one false alarm would become several detections.
+        range, a car beside a truck) come out as several peaks. The strongest
+        beam peak is a source; its steering vector, scaled by its least-squares
+        amplitude, is taken out of the snapshot and the residual's strongest
+        peak is the next candidate: a source when it lies within ``floor_db`` of
+        the first and, with ``noise_power`` (per element), ``secondary_snr_db``
+        above the beam's noise (K·noise_power). Taking each source out first
+        keeps its sidelobes (−13 dB for the uniform taper) and its noise from
+        becoming sources of their own, however strong it is; a second source's
+        angle is measured on the residual, free of the first one's lobe.
 
-        Returns (row, sin_azimuth, relative_power_db), each of shape (n_peaks,).
+        Returns (row, sin_azimuth, relative_power_db), each of shape (n_peaks,), rows in order.
         """
-        snapshots = np.atleast_2d(snapshots)
-        p = np.where(self.valid[None, :], self.spectrum(snapshots), 0.0)
-        peak = (p >= np.roll(p, 1, axis=1)) & (p > np.roll(p, -1, axis=1))
-        top = p.max(axis=1, keepdims=True)
-        strong = peak & (p >= top * 10.0 ** (-floor_db / 10.0)) & (p > 0)
-        if noise_power is not None:
-            loud = p >= self.num_elements * noise_power * 10.0 ** (secondary_snr_db / 10.0)
-            strong &= loud | (p >= top)
-        rows, k = np.nonzero(strong)
-        rel = 10.0 * np.log10(p[rows, k] / top[rows, 0])
-        return rows, self._refine(p, rows, k), rel
+        x = np.atleast_2d(snapshots).astype(np.complex128)
+        n, k_el = x.shape
+        elements = np.arange(k_el)
+        resid = x.copy()
+        idx = np.arange(n)
+        top = np.zeros(n)
+        rows, sins, pows = [], [], []
+        for step in range(max_sources):                       # a loop over sources, not over snapshots
+            if idx.size == 0:
+                break
+            p = np.where(self.valid[None, :], self.spectrum(resid[idx]), 0.0)
+            k = np.argmax(p, axis=1)
+            pk = p[np.arange(idx.size), k]
+            if step == 0:
+                top[idx] = pk
+                ok = pk > 0
+            else:
+                ok = (pk >= top[idx] * 10.0 ** (-floor_db / 10.0)) & (pk > 0)
+                if noise_power is not None:
+                    ok &= pk >= k_el * noise_power * 10.0 ** (secondary_snr_db / 10.0)
+            idx, p, k, pk = idx[ok], p[ok], k[ok], pk[ok]
+            if idx.size == 0:
+                break
+            sin_t = self._refine(p, np.arange(idx.size), k)
+            steer = np.exp(2j * np.pi * self.spacing_wl * sin_t[:, None] * elements[None, :])
+            amp = (steer.conj() * resid[idx]).sum(axis=1) / k_el
+            resid[idx] -= amp[:, None] * steer
+            rows.append(idx)
+            sins.append(sin_t)
+            pows.append(pk)
+        if not rows:
+            return np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0)
+        row, sin_t, pk = np.concatenate(rows), np.concatenate(sins), np.concatenate(pows)
+        order = np.argsort(row, kind="stable")
+        row, sin_t, pk = row[order], sin_t[order], pk[order]
+        return row, sin_t, 10.0 * np.log10(pk / top[row])
 
     def _refine(self, p: np.ndarray, rows: np.ndarray, k: np.ndarray) -> np.ndarray:
         n = self.n_fft

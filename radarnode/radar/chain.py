@@ -17,7 +17,7 @@ from radarnode.errors import ConfigError
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
-from radarnode.dsp.peaks import interpolate, local_maxima, refine_ml
+from radarnode.dsp.peaks import PatchFit, interpolate, local_maxima, patch_halves
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
@@ -41,7 +41,8 @@ class DspConfig:
     doa_floor_db: float = 9.0
     doa_secondary_snr_db: float = 12.0   # a cell's second angle peak must stand this far above the beam noise
     range_ml: bool = True          # maximum-likelihood range and Doppler refinement of the strongest peaks
-    range_ml_max_peaks: int = 32
+    range_ml_max_peaks: int = 128
+    ml_patch_half: int = 12        # its patch: ±12 bins each way where no other peak is near
     max_detections: int = 1000
 
     def __post_init__(self) -> None:
@@ -57,6 +58,7 @@ class DspConfig:
         validate.number("doa_secondary_snr_db", self.doa_secondary_snr_db, lo=0.0, hi=60.0)
         validate.boolean("range_ml", self.range_ml)
         validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
+        validate.integer("ml_patch_half", self.ml_patch_half, lo=1, hi=32)
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
@@ -81,6 +83,16 @@ class DspChain:
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
+        self._patch_fits: dict[tuple[int, int], PatchFit] = {}
+
+    def _patch_fit(self, m: int, n: int) -> PatchFit:
+        """The patch fit for maps of m Doppler × n range bins (built once per shape)."""
+        if (m, n) not in self._patch_fits:
+            cfg = self.config
+            half = min(cfg.ml_patch_half, (min(m, n) - 1) // 2)
+            self._patch_fits[(m, n)] = PatchFit(window(cfg.doppler_window, m), window(cfg.range_window, n),
+                                                max(half, 1))
+        return self._patch_fits[(m, n)]
 
     def _tdm_hypotheses(self, snap: np.ndarray, sigma2: float) -> np.ndarray:
         """Undo the TDM phase of an aliased speed: each snapshot under the N_tx hypotheses of its wrap count.
@@ -103,7 +115,8 @@ class DspChain:
         # 20 dB, 0.7 dB at 30 dB). A fixed 2 dB kept the wrong hypothesis of a 3-transmitter array (its
         # staircase costs only ~1.5 dB) at every SNR; none at all scattered weak unaliased targets.
         best = np.argmax(peak, axis=1)
-        beam_snr = peak[:, 0] / (snap.shape[1] * max(sigma2, np.finfo(np.float64).tiny))
+        with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
+            beam_snr = peak[:, 0] / (snap.shape[1] * max(sigma2, np.finfo(np.float64).tiny))
         margin = 1.0 + 6.0 / np.sqrt(np.maximum(beam_snr, 1.0))
         best = np.where(peak[np.arange(peak.shape[0]), best] > peak[:, 0] * margin, best, 0)
         return trial[np.arange(snap.shape[0]), best]
@@ -140,20 +153,19 @@ class DspChain:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
             d, r = d[keep], r[keep]
         dd, dr = interpolate(power, d, r, cfg.range_window if cfg.range_window == cfg.doppler_window else "")
-        r_bins = r + dr
+        snap = rd[:, d, r].T                                            # (detection, channel): the peak cell
         if cfg.range_ml and d.size:
-            # the strongest peaks get the maximum-likelihood refinement (window divided out, fine periodogram:
-            # 1.6–2× the CRB on point targets at 20–30 dB, BENCHMARKS.md; the three-bin interpolator alone is
-            # ~2.7× in range); the rest keep the interpolated position
+            # the strongest peaks get the joint maximum-likelihood fit over a patch of cells around them
+            # (radarnode.dsp.peaks.PatchFit: ~1.1-1.2× the CRB where the three-bin interpolator is ~2.7× in range
+            # and ~1.5× at best after it); its snapshot holds the patch's energy, so the angle gains too. A patch
+            # stops short of another peak's main lobe.
             top = np.argsort(power[d, r])[::-1][: cfg.range_ml_max_peaks]
-            r_bins = r_bins.copy()
-            r_bins[top] = refine_ml(np.transpose(rd[:, d[top], :], (1, 0, 2)), r_bins[top],
-                                    window(cfg.range_window, n))
-            # the same along Doppler: the (−1)^m shift is part of the data, so the peak stays at index d
-            d_bins = (d + dd).astype(np.float64)
-            d_bins[top] = refine_ml(np.transpose(rd[:, :, r[top]], (2, 0, 1)), d_bins[top],
-                                    window(cfg.doppler_window, m))
-            dd = d_bins - d
+            fit = self._patch_fit(m, n)
+            half = patch_halves(d, r, top, (m, n), fit.max_half)
+            fd, fr, s_top = fit(rd, d[top], r[top], dd[top], dr[top], half)
+            dd, dr, snap = dd.copy(), dr.copy(), snap.copy()
+            dd[top], dr[top], snap[top] = fd, fr, s_top
+        r_bins = r + dr
         speed = (d - m // 2 + dd) * p.doppler_bin_mps               # positive: opening (λ at mid-sweep)
         # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative
         # range); coupling and migration to mid-frame are taken out (RadarPreset.range_rate_coupling_s)
@@ -161,7 +173,7 @@ class DspChain:
                          n * p.range_resolution_m)
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         fd = 2.0 * speed / p.centre_wavelength_m
-        snap = rd[:, d, r].T * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
+        snap = snap * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
         # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
         # which a strong target's sidelobes inflate
         sigma2 = stat.noise_floor(power)
