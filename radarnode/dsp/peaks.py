@@ -3,16 +3,25 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.ndimage
 
 
 def local_maxima(power: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Cells of ``mask`` that are the maximum of their 3×3 neighbourhood (both axes wrap: both FFTs are circular).
 
-    Returns (doppler_index, range_index), each of shape (n,).
+    Only the masked cells (the CFAR's few hundred) are compared with their eight neighbours.
+    Returns (doppler_index, range_index), each of shape (n,), in row-major order.
     """
-    peak = power >= scipy.ndimage.maximum_filter(power, size=3, mode="wrap")
-    return np.nonzero(mask & peak)
+    d, r = np.nonzero(mask)
+    if d.size == 0:
+        return d, r
+    m, n = power.shape
+    centre = power[d, r]
+    peak = np.ones(d.size, dtype=bool)
+    for dd in (-1, 0, 1):                      # eight neighbours, not a loop over cells
+        for dr in (-1, 0, 1):
+            if dd or dr:
+                peak &= centre >= power[(d + dd) % m, (r + dr) % n]
+    return d[peak], r[peak]
 
 
 def interpolate(power: np.ndarray, d: np.ndarray, r: np.ndarray, window: str = "hann"
@@ -161,7 +170,7 @@ class PatchFit:
     """
 
     #: alternate searches: (half-span, points) of each round's grid around the current estimate, bins
-    ROUNDS = ((0.5, 17), (1.0 / 16.0, 9), (1.0 / 64.0, 9))
+    ROUNDS = ((0.5, 9), (1.0 / 16.0, 5), (1.0 / 64.0, 5))
 
     #: patch sizes computed together: a peak's patch is embedded in the smallest of these that holds it
     BUCKETS = (2, 5, 12, 32)
