@@ -2,22 +2,21 @@
 
 Reads any python-can log (.blf .asc .log .csv .mf4 .trc …: ``radarnode log``'s, a bench capture, the real
 ARS 408's) and writes what its frames carry in Foxglove's schemas: the decoded objects, clusters, road
-boundaries and the ECU's AccStatus/FcwStatus, and every raw frame. With the log's scenario (and the seed and
+boundaries and the ECU's AccStatus/FcwStatus, and every raw frame. With the log's scenario (and the
 ``--start-time`` it was logged with) the ego and the ground truth go on topics of their own, evaluated at the
-time of each decoded cycle. The range–Doppler map is not in a log: ``radarnode log --fidelity signal -o
-run.mcap`` has it.
+scenario time of each decoded cycle (the truth does not depend on the seed, only the radar's noise does).
+The range–Doppler map is not in a log: ``radarnode log --fidelity signal -o run.mcap`` has it.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 from pathlib import Path
 
 import can
 
 from radarnode.cli.common import atomic_path, progress
-from radarnode.cli.foxglove import is_mcap, scenario_metadata, summary
+from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import ConfigError, FieldError
 
 
@@ -27,7 +26,6 @@ def add_subparser(sub) -> None:
     p.add_argument("log", help="python-can log file (.blf .asc .log .csv .mf4 .trc …)")
     p.add_argument("-o", "--output", required=True, help="MCAP file to write (.mcap)")
     p.add_argument("--scenario", help="the scenario the log was rendered from: adds the ego and the ground truth")
-    p.add_argument("--seed", type=int, help="the seed the log was rendered with (default: the scenario's)")
     p.add_argument("--start-time", type=float, default=0.0,
                    help="timestamp of the scenario's start in the log, s (log --start-time; default 0)")
     p.add_argument("--sensor-id", type=int, default=0, help="the radar whose frames are decoded (default 0)")
@@ -36,28 +34,22 @@ def add_subparser(sub) -> None:
 
 def cmd(args) -> int:
     from radarnode import validate
-    from radarnode.viz.recorder import FoxgloveRecorder, foxglove_module
+    from radarnode.viz.recorder import FoxgloveRecorder
     if not is_mcap(args.output):
         raise ConfigError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
                           ".mcap")
     try:
         validate.integer("--sensor-id", args.sensor_id, lo=0, hi=7)
         validate.number("--start-time", args.start_time, lo=-1e11, hi=1e11)
-        if args.seed is not None:
-            validate.integer("--seed", args.seed, lo=0)
     except FieldError as exc:
         raise ConfigError(f"option {exc.field}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
-    if args.seed is not None and not args.scenario:
-        raise ConfigError("option --seed: value given without --scenario; expected it only with --scenario")
     if not Path(args.log).is_file():
         raise ConfigError(f"argument LOG: {args.log!r} is not a file; expected a python-can log file")
-    foxglove_module()                       # a clear error before anything is read when foxglove-sdk is missing
+    require_foxglove("--output", args.output)     # before anything is read
     scenario = None
     if args.scenario:
         from radarnode.radar.setup import load_scenario
         scenario = load_scenario(args.scenario)
-        if args.seed is not None:
-            scenario = dataclasses.replace(scenario, seed=args.seed)
     try:
         reader = can.LogReader(args.log)
     except (ValueError, OSError) as exc:

@@ -23,6 +23,15 @@ def is_mcap(path: str) -> bool:
     return Path(path).suffix.lower() == ".mcap"
 
 
+def require_foxglove(option: str, value) -> None:
+    """A usage error naming the option when foxglove-sdk is not installed, before any work is done."""
+    try:
+        import foxglove  # noqa: F401
+    except ImportError:
+        raise ConfigError(f"option {option}: value {value!r} needs foxglove-sdk, which is not installed; expected "
+                          "it installed: pip install 'radarnode[foxglove]'") from None
+
+
 def add_live_arguments(parser) -> None:
     g = parser.add_argument_group("Foxglove live view (needs radarnode[foxglove])")
     g.add_argument("--foxglove", action="store_true",
@@ -124,6 +133,7 @@ def live_view(args, node, virtual_channel: str | None = None):
     if not getattr(args, "foxglove", False):
         yield _NoLiveView()
         return
+    require_foxglove("--foxglove", True)
     port = args.foxglove_port
     if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
         raise ConfigError(f"option --foxglove-port: value {port!r} is not allowed; expected an integer 0..65535 "

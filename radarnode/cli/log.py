@@ -14,7 +14,7 @@ import sys
 import can
 
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
-from radarnode.cli.foxglove import is_mcap, mcap_writer, summary
+from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import ConfigError
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.evaluate import make_ecu
@@ -42,7 +42,9 @@ def add_subparser(sub) -> None:
 def cmd(args) -> int:
     import dataclasses
     scenario = scenario_from_args(args)
-    args.ecu = args.ecu or is_mcap(args.output)     # a run to watch in Foxglove shows the ECU's decisions too
+    if is_mcap(args.output):        # for Foxglove (needs foxglove-sdk): a run to watch shows the ECU's decisions too
+        require_foxglove("--output", args.output)
+        args.ecu = True
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate, use_can_config=False)
     if bitrate.bit_s != scenario.radar.bitrate:
         scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))

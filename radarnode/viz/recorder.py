@@ -27,6 +27,7 @@ import can
 
 from radarnode.consumer.assembler import ClusterCycle, CycleAssembler, ObjectCycle
 from radarnode.errors import ConfigError
+from radarnode.viz import TOPICS
 from radarnode.viz import messages as M
 from radarnode.wire import ids
 from radarnode.wire.dbc import load_bus_database, load_database, load_own_database
@@ -75,6 +76,8 @@ class FoxgloveRecorder(can.Listener):
         own = load_own_database()
         self._ecu = {ids.ACC_STATUS: ("/ecu/acc", own.get_message_by_frame_id(ids.ACC_STATUS)),
                      ids.FCW_STATUS: ("/ecu/fcw", own.get_message_by_frame_id(ids.FCW_STATUS))}
+        self._json_schemas = {"/can/frames": M.CAN_FRAME_SCHEMA, "/ego/state": M.EGO_STATE_SCHEMA,
+                              **{topic: M.signal_schema(message) for topic, message in self._ecu.values()}}
         self._sides = {ids.own_id(ids.ROAD_BOUNDARY_LEFT, sensor_id): "left",
                        ids.own_id(ids.ROAD_BOUNDARY_RIGHT, sensor_id): "right"}
         prob = load_database().get_message_by_name("Obj_2_Quality").get_signal_by_name("Obj_ProbOfExist")
@@ -98,7 +101,13 @@ class FoxgloveRecorder(can.Listener):
 
     def serve(self, host: str = "127.0.0.1", port: int = 8765, name: str = "radarnode"):
         """Serve the topics live over Foxglove's WebSocket protocol; returns the server (``.port`` is the port
-        bound, useful with ``port=0``)."""
+        bound, useful with ``port=0``).
+
+        Every topic's channel is created first, so a client is told all of them when it connects: a channel
+        created while a client subscribes can lose that subscription in foxglove-sdk ("Unknown channel ID").
+        """
+        for topic in TOPICS:
+            self._channel(topic)
         self._server = self._fg.start_server(name=name, host=host, port=port, context=self.context)
         return self._server
 
@@ -142,8 +151,7 @@ class FoxgloveRecorder(can.Listener):
             if stats.ecu_frames != before[1] and msg.arbitration_id in self._ecu:
                 topic, message = self._ecu[msg.arbitration_id]
                 values = self._assembler.ecu_status[message.name]
-                self._publish(topic, msg.timestamp, lambda: M.signal_record(message, values, msg.timestamp),
-                              schema=M.signal_schema(message))
+                self._publish(topic, msg.timestamp, lambda: M.signal_record(message, values, msg.timestamp))
 
     def on_error(self, exc: Exception) -> None:
         logger.warning("bus error in the Foxglove recorder: %s", exc)
@@ -196,9 +204,12 @@ class FoxgloveRecorder(can.Listener):
             self._publish("/radar/clusters", t, lambda: M.clusters_cloud(cycle.clusters, t,
                                                                          mount_z_m=self._mount_z_m))
         if self._truth_from_cycles and self._scene is not None:
-            t_s = t - self._start_time_s
-            if -1e-6 <= t_s <= self._scene.scenario.duration_s + 1e-6:
-                t_s = min(max(t_s, 0.0), self._scene.scenario.duration_s)
+            # the node computed cycle k at k periods; its header goes out a little later (after the ego's frames
+            # and RadarState), so the cycle's scenario time is the grid point just before the header
+            sc = self._scene.scenario
+            k = math.floor((t - self._start_time_s) / sc.period_s + 0.25)
+            if 0 <= k <= int(sc.duration_s / sc.period_s + 1e-9):
+                t_s = k * sc.period_s
                 self._publish_scene(t_s, t, self._scene.view(t_s))
 
     def _publish_scene(self, t_s: float, t_wire: float, view) -> None:
@@ -212,34 +223,31 @@ class FoxgloveRecorder(can.Listener):
         self._publish("/ego/state", t_wire, lambda: {
             "timestamp": float(t_wire), "speed_mps": ego.speed_mps, "accel_mps2": ego.accel_mps2,
             "yaw_rate_dps": math.degrees(ego.yaw_rate_rps), "x_m": ego.x_m, "y_m": ego.y_m,
-            "heading_deg": math.degrees(ego.heading_rad), "wire_speed_mps": wire_v, "wire_yaw_rate_dps": wire_yaw},
-            schema=M.EGO_STATE_SCHEMA)
+            "heading_deg": math.degrees(ego.heading_rad), "wire_speed_mps": wire_v, "wire_yaw_rate_dps": wire_yaw})
         self._publish("/ground_truth/actors", t_wire, lambda: M.truth_update(scene, view, t_wire,
                                                                              mount_z_m=self._mount_z_m))
         self._publish("/ground_truth/road", t_wire, lambda: M.road_update(scene, t_s, t_wire, range_m=ROAD_RANGE_M,
                                                                           mount_z_m=self._mount_z_m))
 
     # --- channels ------------------------------------------------------------------------------------------------
-    def _channel(self, topic: str, sample, schema: dict | None):
+    def _channel(self, topic: str):
+        """The channel of ``topic`` (created on first use, with the schema of :data:`TOPICS`)."""
         ch = self._channels.get(topic)
         if ch is None:
-            if isinstance(sample, dict):
-                ch = self._fg.Channel(topic, schema=schema or M.CAN_FRAME_SCHEMA, context=self.context)
-            else:
+            schema_name = TOPICS[topic][0]
+            if schema_name.startswith("foxglove."):
                 from foxglove import channels
-                ch = getattr(channels, f"{type(sample).__name__}Channel")(topic, context=self.context)
+                ch = getattr(channels, f"{schema_name.split('.', 1)[1]}Channel")(topic, context=self.context)
+            else:
+                ch = self._fg.Channel(topic, schema=self._json_schemas[topic], context=self.context)
             self._channels[topic] = ch
         return ch
 
-    def _publish(self, topic: str, t_s: float, build: Callable[[], object], schema: dict | None = None) -> None:
+    def _publish(self, topic: str, t_s: float, build: Callable[[], object]) -> None:
         """Build and log one message on ``topic`` at ``t_s`` — skipped (not even built) while a live channel has
         no subscriber."""
-        ch = self._channels.get(topic)
-        if ch is not None and not ch.has_sinks():
-            return
-        msg = build()
-        ch = self._channel(topic, msg, schema)
+        ch = self._channel(topic)
         if not ch.has_sinks():
             return
-        ch.log(msg, log_time=_ns(t_s))
+        ch.log(build(), log_time=_ns(t_s))
         self.counts[topic] += 1
