@@ -188,12 +188,16 @@ class FoxgloveRecorder(can.Listener):
             info = getattr(node.model, "info", None)
             rd = getattr(info, "rd_power", None)
             if rd is not None:
-                preset = node.preset
-                image, scales = M.range_doppler_image(rd, preset.range_resolution_m,
-                                                      min(preset.max_range_m, node.config.max_distance_m), t_wire)
-                self._publish("/radar/range_doppler", t_wire, lambda: image)
-                self._publish("/radar/range_doppler/annotations", t_wire,
-                              lambda: M.range_doppler_annotations(scales, preset.doppler_bin_mps, t_wire))
+                preset, built = node.preset, {}
+
+                def image():          # built only when someone listens (a live view may have no client)
+                    built["image"], built["scales"] = M.range_doppler_image(
+                        rd, preset.range_resolution_m, min(preset.max_range_m, node.config.max_distance_m), t_wire)
+                    return built["image"]
+                self._publish("/radar/range_doppler", t_wire, image)
+                if built:
+                    self._publish("/radar/range_doppler/annotations", t_wire,
+                                  lambda: M.range_doppler_annotations(built["scales"], preset.doppler_bin_mps, t_wire))
 
     def _on_decoded_cycle(self, cycle: ObjectCycle | ClusterCycle) -> None:
         t = cycle.timestamp
