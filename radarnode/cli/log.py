@@ -14,6 +14,7 @@ import sys
 import can
 
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
+from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import ConfigError
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.evaluate import make_ecu
@@ -24,7 +25,8 @@ from radarnode.wire.runner import SimulatedClock, run_node
 def add_subparser(sub) -> None:
     p = sub.add_parser("log", help="render a scenario to a CAN log file", description=__doc__)
     add_scenario_argument(p)
-    p.add_argument("-o", "--output", required=True, help="log file; the suffix picks the format (.blf .asc .log .csv)")
+    p.add_argument("-o", "--output", required=True,
+                   help="log file; the suffix picks the format (.blf .asc .log .csv; .mcap: Foxglove, with --ecu)")
     p.add_argument("--channel", default="can0", help="channel name written into the log (default can0)")
     p.add_argument("--start-time", type=float, default=0.0, help="timestamp of the first frame, s (default 0)")
     p.add_argument("--no-ego-motion", action="store_true", help="leave out the vehicle's 0x300/0x301 frames")
@@ -40,6 +42,9 @@ def add_subparser(sub) -> None:
 def cmd(args) -> int:
     import dataclasses
     scenario = scenario_from_args(args)
+    if is_mcap(args.output):        # for Foxglove (needs foxglove-sdk): a run to watch shows the ECU's decisions too
+        require_foxglove("--output", args.output)
+        args.ecu = True
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate, use_can_config=False)
     if bitrate.bit_s != scenario.radar.bitrate:
         scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
@@ -47,11 +52,11 @@ def cmd(args) -> int:
     vehicle = None if args.no_ego_motion else EgoMotionSender(node.scene, scenario.radar.sensor_id)
     with atomic_path(args.output, "--output") as tmp:      # no partial file if the run fails
         try:
-            writer = can.Logger(tmp)
+            writer = mcap_writer(tmp, scenario, node) if is_mcap(args.output) else can.Logger(tmp)
         except (ValueError, OSError) as exc:
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
             raise ConfigError(f"option --output: cannot write {args.output!r}: {reason}; "
-                              "allowed suffixes: .asc .blf .csv .log .mf4 .trc .txt") from None
+                              "allowed suffixes: .asc .blf .csv .log .mcap .mf4 .trc .txt") from None
         bar = progress(scenario.num_cycles, f"logging {scenario.name}")
         ecu = make_ecu(scenario, node.period_s) if args.ecu else None
         assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id) if args.ecu else None
@@ -65,6 +70,8 @@ def cmd(args) -> int:
 
         def on_cycle(out) -> None:
             bar.update(1)
+            if hasattr(writer, "on_node_cycle"):       # .mcap: the ego and the ground truth beside the frames
+                writer.on_node_cycle(out)
             if ecu is None:
                 return
             # the ECU decides on what it decoded from the logged frames, as it would on the bus
@@ -90,6 +97,8 @@ def cmd(args) -> int:
             writer.stop()
             bar.close()
     interrupted = stats.cycles < scenario.num_cycles
+    if is_mcap(args.output):
+        print(summary(writer, args.output), file=sys.stderr)
     if args.ecu:
         print(f"consumer ECU: {ecu_frames[0]} AccStatus/FcwStatus frames logged", file=sys.stderr)
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "

@@ -7,12 +7,12 @@ import logging
 import sys
 
 from radarnode import __version__
-from radarnode.cli import consume, decode, image, log, node, report, run
+from radarnode.cli import consume, decode, export, image, log, node, report, run
 from radarnode.errors import RadarnodeError
 
 logger = logging.getLogger(__name__)
 
-SUBCOMMANDS = (run, node, consume, log, decode, image, report)
+SUBCOMMANDS = (run, node, consume, log, decode, export, image, report)
 
 
 def _add_global_options(parser: argparse.ArgumentParser, after: bool) -> None:

@@ -11,6 +11,7 @@ import dataclasses
 import sys
 
 from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals
+from radarnode.cli.foxglove import add_live_arguments, live_view
 from radarnode.wire.bus import add_bus_arguments, open_bus
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
@@ -25,6 +26,7 @@ def add_subparser(sub) -> None:
     mode.add_argument("--fast", dest="fast", action="store_true", help="simulated time, as fast as possible")
     p.add_argument("--send-ego-motion", action="store_true",
                    help="also send the scenario ego's 0x300/0x301 (when no vehicle ECU does)")
+    add_live_arguments(p)
     p.set_defaults(func=cmd, fast=False)
 
 
@@ -36,12 +38,13 @@ def cmd(args) -> int:
         scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
     node = RadarNode(scenario)
     vehicle = EgoMotionSender(node.scene, scenario.radar.sensor_id) if args.send_ego_motion else None
-    with open_bus(args) as bus, stop_on_signals() as stop:
+    with open_bus(args) as bus, stop_on_signals() as stop, live_view(args, node) as live:
         print(f"radarnode node: {scenario.name} on {bus.channel_info}, sensor {node.config.sensor_id}, "
               f"{scenario.num_cycles} cycles of {node.period_s * 1e3:.0f} ms; bus-load budget "
               f"{100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr, flush=True)
-        stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send],
-                         recv=lambda timeout: bus.recv(timeout), vehicle=vehicle, stop=stop)
+        stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send, *live.sinks],
+                         recv=live.tap(lambda timeout: bus.recv(timeout)), vehicle=vehicle, stop=stop,
+                         on_cycle=live.on_node_cycle)
     print(f"sent {stats.cycles} cycles, {stats.frames} frames; " +
           ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())), file=sys.stderr)
     return 0

@@ -14,6 +14,7 @@ import can
 
 from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
     scenario_from_args, stop_on_signals
+from radarnode.cli.foxglove import add_live_arguments, live_view
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.evaluate import EgoActuator, make_ecu
@@ -36,6 +37,7 @@ def add_subparser(sub) -> None:
     p.add_argument("--closed-loop", action="store_true",
                    help="the ego follows the consumer's ACC request (first-order actuator lag); its speed and yaw "
                         "rate go back to the node as 0x300/0x301")
+    add_live_arguments(p)
     p.set_defaults(func=cmd, fast=False)
 
 
@@ -77,12 +79,14 @@ def cmd(args) -> int:
           f"{'simulated' if args.fast else 'real'} time, python-can virtual bus {channel}")
     with can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as node_bus, \
             can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as consumer_bus, \
-            stop_on_signals() as stop:
+            stop_on_signals() as stop, live_view(args, node, channel) as live:
         notifier = can.Notifier(consumer_bus, [assembler], timeout=0.01)
         shown = [0]
         decoded = []
 
         def on_cycle(out) -> None:
+            if live.on_node_cycle is not None:          # --foxglove: the ego and the truth of this cycle
+                live.on_node_cycle(out)
             cycle = assembler.get(timeout=1.0)
             # a cycle that waited for its next header (learning the layout) comes with this one
             cycles = [cycle] + assembler.drain() if cycle is not None else []

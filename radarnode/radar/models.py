@@ -18,6 +18,7 @@ import numpy as np
 import scipy.spatial
 
 from radarnode.errors import ConfigError
+from radarnode.dsp.spectra import noncoherent_power, range_doppler
 from radarnode.radar.chain import DspChain
 from radarnode.perception.tracker import ObjectTracker, clusters_from_detections
 from radarnode.perception.types import ClusterList, Detections, RadarFrame
@@ -128,6 +129,8 @@ class DetectionModel(ScattererModel):
 
 class SignalModel(ScattererModel):
     level = "signal"
+    #: keep the range–Doppler power map of every cycle in ``info.rd_power`` (for a viewer; off: it costs a pass)
+    keep_rd = False
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
@@ -158,7 +161,13 @@ class SignalModel(ScattererModel):
                               dtype=o.complex_dtype, impairments=o.impairments, decimation=dec)
             if self.keep_cube and preset is self.preset:
                 self.info.cube = cube
-            det = chain.process(cube, dec, config.power_reduction_db)
+            if self.keep_rd:
+                rd = range_doppler(cube, range_window=cfg.range_window, doppler_window=cfg.doppler_window)
+                det = chain.process_rd(rd, config.power_reduction_db)
+            else:
+                det = chain.process(cube, dec, config.power_reduction_db)
+        if self.keep_rd and preset is self.preset:
+            self.info.rd_power = noncoherent_power(rd)
         # the signal chain cannot know the truth; tag each detection with the nearest scatterer for evaluation
         if len(det) and len(scat):
             d2 = ((det.x_m[:, None] - scat.x_m[None, :]) ** 2 + (det.y_m[:, None] - scat.y_m[None, :]) ** 2)

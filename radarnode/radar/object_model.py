@@ -69,6 +69,9 @@ class StepInfo:
     detections: Detections | None = None
     cube: np.ndarray | None = None
     seconds: dict = field(default_factory=dict)
+    #: signal level with ``keep_rd`` set: the non-coherent range–Doppler power of the cycle's first chirp sequence,
+    #: shape (doppler, range), Doppler fftshifted (bin M/2 is zero speed), range bins of ``range_resolution_m``
+    rd_power: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
