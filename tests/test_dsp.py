@@ -171,3 +171,20 @@ def test_patch_stops_short_of_the_next_peak():
     half = patch_halves(d, r, np.arange(5), (128, 256), 8)
     # 5 bins to the next peak: 2; alone: 8; range bins 254 and 2 are 4 apart across the wrap: 1
     assert half.tolist() == [2, 2, 8, 1, 1]
+
+
+def test_patch_fit_of_several_peaks_at_once_equals_one_at_a_time():
+    from radarnode.dsp.peaks import PatchFit
+    m = n = 64
+    rng = np.random.default_rng(8)
+    amp = np.exp(2j * np.pi * rng.random(3))
+    rd = sum(_tone_map(m, n, xd, xr, amp * a) for xd, xr, a in ((10.3, 20.2, 1.0), (40.6, 45.1, 0.5), (12.0, 50.7, 2.0)))
+    rd = rd + _tone_map(m, n, 0.0, 0.0, np.zeros(3), rng, noise=1.0)
+    d, r = np.array([10, 41, 12]), np.array([20, 45, 51])
+    half = np.array([12, 3, 12])
+    fit = PatchFit(window("hann", m), window("hann", n), 12)
+    together = fit(rd, d, r, np.zeros(3), np.zeros(3), half)
+    for i in range(3):
+        alone = fit(rd, d[i:i + 1], r[i:i + 1], np.zeros(1), np.zeros(1), half[i:i + 1])
+        for a, b in zip(together, alone):
+            assert np.allclose(a[i], b[0], rtol=1e-9, atol=1e-12)

@@ -173,7 +173,7 @@ class PatchFit:
     ROUNDS = ((0.5, 9), (1.0 / 16.0, 5), (1.0 / 64.0, 5))
 
     #: patch sizes computed together: a peak's patch is embedded in the smallest of these that holds it
-    BUCKETS = (2, 5, 12, 32)
+    BUCKETS = (3, 12, 32)
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         if not (isinstance(max_half, (int, np.integer)) and 1 <= max_half <= 32):
@@ -232,17 +232,21 @@ class PatchFit:
         by_d = np.ascontiguousarray(patch.transpose(1, 2, 0, 3)).reshape(k, j, c * j)      # (K, J_d, C·J_r)
         by_r = np.ascontiguousarray(patch.transpose(1, 3, 0, 2)).reshape(k, j, c * j)      # (K, J_r, C·J_d)
         inv_d, inv_r = axis_d.inverse[halves], axis_r.inverse[halves]                    # (K, J, J)
-        gd = axis_d.response(fd[:, None]) @ inv_d                                      # R⁻¹h (Hermitian R⁻¹)
+        gd = (axis_d.response(fd)[:, None, :] @ inv_d)[:, 0]                           # R⁻¹h (Hermitian R⁻¹)
         for span, points in self.ROUNDS:
             grid = np.linspace(-span, span, points)
             # range with the Doppler template fixed (the patch collapsed over Doppler), then Doppler likewise;
-            # u = R⁻¹v once, so each candidate costs its template and one product: Σ_c |h^H u_c|² / h^H R⁻¹ h
-            u = (gd.conj() @ by_d).reshape(k, c, j) @ inv_r                                # (K, C, J_r)
-            fr = self._search(axis_r, u, fr, grid, halves)
-            gr = axis_r.response(fr[:, None]) @ inv_r
-            v = (gr.conj() @ by_r).reshape(k, c, j)                                        # (K, C, J_d)
-            fd = self._search(axis_d, v @ inv_d, fd, grid, halves)
-            gd = axis_d.response(fd[:, None]) @ inv_d
+            # u = R⁻¹v once, so each candidate costs its template and one product: Σ_c |h^H u_c|² / h^H R⁻¹ h.
+            # Each collapse uses the other axis' best grid template (within half a step of its estimate)
+            u = (gd[:, None, :].conj() @ by_d).reshape(k, c, j) @ inv_r                      # (K, C, J_r)
+            fr, hr = self._search(axis_r, u, fr, grid, halves)
+            v = ((hr[:, None, :] @ inv_r).conj() @ by_r).reshape(k, c, j)                    # (K, C, J_d)
+            fd, hd = self._search(axis_d, v @ inv_d, fd, grid, halves)
+            gd = (hd[:, None, :] @ inv_d)[:, 0]
+        # the snapshot with both templates at the final estimates
+        gr = (axis_r.response(fr)[:, None, :] @ inv_r)
+        v = (gr.conj() @ by_r).reshape(k, c, j)
+        gd = (axis_d.response(fd)[:, None, :] @ inv_d)
         s = (v @ gd[:, 0, :, None].conj())[..., 0]                                       # (K, C)
         nd = axis_d.norm(fd[:, None], halves)
         nr = axis_r.norm(fr[:, None], halves)
@@ -252,7 +256,7 @@ class PatchFit:
     def _search(axis: _PatchAxis, u: np.ndarray, start: np.ndarray, grid: np.ndarray, halves: np.ndarray
                 ) -> np.ndarray:
         """The offset on ``start`` + ``grid`` that maximises Σ_c |h^H u_c|²/h^H R⁻¹ h (u = R⁻¹v), refined by a
-        parabola through the best grid point and its neighbours."""
+        parabola through the best grid point and its neighbours; and the best grid point's template h."""
         cand = np.clip(start[:, None] + grid[None, :], -1.0, 1.0)                   # (K, P)
         h = axis.response(cand)                                                      # (K, P, J)
         s = u @ np.swapaxes(h, 1, 2).conj()                                          # (K, C, P)
@@ -264,7 +268,7 @@ class PatchFit:
         with np.errstate(divide="ignore", invalid="ignore"):
             frac = np.where(den < 0, 0.5 * (o_m - o_p) / den, 0.0)
         step = grid[1] - grid[0]
-        return np.clip(cand[rows, best] + np.clip(frac, -1.0, 1.0) * step, -1.0, 1.0)
+        return np.clip(cand[rows, best] + np.clip(frac, -1.0, 1.0) * step, -1.0, 1.0), h[rows, best]
 
 
 def patch_halves(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[int, int], max_half: int
