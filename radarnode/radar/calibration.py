@@ -17,7 +17,7 @@ RESOLUTION = (1.7, 1.8, 0.7)
 #: RMSE of the chain's estimates over the Cramér–Rao bound (range, range rate, azimuth) on point targets,
 #: measured at the integrated SNRs of EFFICIENCY_SNR_DB and interpolated in between (held beyond)
 EFFICIENCY_SNR_DB = (20.0, 30.0)
-CHAIN_EFFICIENCY_AT = ((1.22, 1.24, 1.09), (1.21, 1.21, 1.12))
+CHAIN_EFFICIENCY_AT = ((1.18, 1.19, 1.07), (1.18, 1.19, 1.10))
 
 
 def chain_efficiency(snr_db: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
