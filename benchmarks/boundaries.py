@@ -1,7 +1,7 @@
 """Road-boundary accuracy against guardrail return strength, SNR and road curvature (seed 002: ≤ 1.5 m).
 
-A two-lane road with guardrails 1 m beyond both edges, the ego at 22 m/s
-behind a car; ``ars408_like`` radar at the object level, 140 cycles per row
+A two-lane road with guardrails 1.13 m beyond both edges (off the Hough grid's 0.25-m steps, which would
+flatter the search), the ego at 22 m/s behind a car; ``ars408_like`` radar at the object level, 140 cycles per row
 (the first 10, while the accumulator fills, are left out). The error of a
 cycle is the largest |y_estimated(x) − y_true(x)| over 5–60 m ahead (or the
 valid range, if shorter); a cycle without a valid boundary counts as
@@ -36,7 +36,7 @@ seed: 3
 radar: {{preset: ars408_like, overrides: {{tx_power_dbm: {tx_dbm}}}}}
 ego: {{speed_mps: 22.0}}
 road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, curvature_1pm: {curvature},
-        guardrails: {{left_offset_m: 1.0, right_offset_m: 1.0, rcs_dbsm: {rcs}}}}}
+        guardrails: {{left_offset_m: 1.13, right_offset_m: 1.13, rcs_dbsm: {rcs}}}}}
 actors:
   - {{id: lead, class: car, x_m: 40.0, lane: 0, speed_mps: 22.0}}
 """)
