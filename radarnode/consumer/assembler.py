@@ -5,8 +5,8 @@ feed it frames from a log reader). It decodes every frame with the cantools
 database, checks the DLC, joins the frames of a cycle by object ID, and emits
 one :class:`ObjectCycle` or :class:`ClusterCycle` per well-formed cycle. A
 cycle is well-formed when the header's count of general frames arrived and
-every other group (quality, extended) arrived for exactly the same IDs or not
-at all. Everything else is counted in :class:`ConsumerStats` and skipped; the
+every other group (quality, extended, collision warning) arrived for exactly
+the same IDs or not at all. Everything else is counted in :class:`ConsumerStats` and skipped; the
 listener never raises on bad traffic. A cycle is delivered whole or counted as
 dropped (``incomplete_cycles``), never in part.
 
@@ -16,9 +16,14 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 * a cycle is complete as soon as the header's count of frames arrived in every
   group of the expected *layout*; the layout is learned from the cycles
   themselves: every group seen in any of the last ``LAYOUT_MEMORY`` complete
-  cycles (all groups until the first cycle is seen). A group the node stopped
+  cycles (0x60B, 0x60C, 0x60D until the first cycle is seen). A group the node stopped
   sending therefore drops out after ``LAYOUT_MEMORY`` cycles, each of them
   delivered at the next header instead of at once;
+* Obj_4_Warning 0x60E is a group like the others (one frame per object, after
+  0x60D) but is not expected before a cycle showed it: it comes only with
+  collision detection, and CollDetState 0x408 with Active set (sent before the
+  header every cycle while it is on) adds it to the layout for
+  ``LAYOUT_MEMORY`` headers, as RadarState does for the groups below;
 * RadarState's SendQuality/SendExtInfo bits can only *add* groups to the
   layout, for ``LAYOUT_MEMORY`` headers (so a configuration change that adds a
   group is waited for); bits that are off are ignored;
@@ -33,7 +38,11 @@ Frames of a group that arrive after their cycle was delivered are counted as
 IDs are looked up in this consumer's ID plan (:mod:`radarnode.wire.ids`): the
 ARS 408 IDs of its sensor, its sensor's own messages, the ECU's; frames of the
 other seven sensors are counted in ``other_sensor_frames``, never decoded as
-this sensor's.
+this sensor's. The sensor's configuration replies (FilterState 0x203/0x204,
+CollDetState 0x408, CollDetRegionState 0x402, CollDetRelayCtrl 0x008) are
+counted in ``config_state_frames`` and kept as last decoded
+(:attr:`CycleAssembler.filter_state`, :attr:`CycleAssembler.coll_det_regions`, …);
+they never cut a cycle.
 """
 
 from __future__ import annotations
@@ -70,6 +79,9 @@ class ObjectCycle:
     objects: ObjectList
     has_quality: bool
     has_extended: bool
+    has_warning: bool = False
+    #: Obj_4_Warning's Obj_CollDetRegionBitfield per object (bit r: it warns in region r), when the cycle had 0x60E
+    collision_regions: np.ndarray | None = None
 
 
 @dataclass
@@ -105,6 +117,7 @@ class ConsumerStats:
     unexpected_ids: int = 0         # quality/extended for an ID the general group lacks
     extra_frames: int = 0           # more general frames than the header announced
     status_frames: int = 0          # RadarState, VersionID, ego motion, configuration
+    config_state_frames: int = 0    # the sensor's replies: FilterState 0x203/0x204, CollDet 0x408/0x402, relay 0x008
     errors_frames: int = 0          # CAN error and remote frames
     boundary_frames: int = 0        # radarnode's road-boundary frames accepted
     ecu_frames: int = 0             # AccStatus / FcwStatus frames accepted
@@ -122,7 +135,13 @@ class ConsumerStats:
 
 LAYOUT_MEMORY = 3            # cycles: how long a group stays expected after it was last seen or announced
 CYCLE_TIMEOUT_S = 0.1        # silence after which a waiting cycle is closed (longer than a 72-ms cycle)
-GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED), "cl": (P.CLUSTER_GENERAL, P.CLUSTER_QUALITY)}
+GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED, P.OBJ_WARNING),
+          "cl": (P.CLUSTER_GENERAL, P.CLUSTER_QUALITY)}
+# the layout expected before any cycle was seen: Obj_4_Warning only comes with collision detection, which
+# CollDetState 0x408 announces, so it is not waited for by default
+INITIAL_GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED), "cl": GROUPS["cl"]}
+CONFIG_STATE = (P.FILTER_STATE_HEADER, P.FILTER_STATE_CFG, P.COLL_DET_STATE, P.COLL_DET_REGION_STATE,
+                P.COLL_DET_RELAY)
 GENERAL = {"obj": P.OBJ_GENERAL, "cl": P.CLUSTER_GENERAL}
 HEADERS = {P.OBJ_STATUS: "obj", P.CLUSTER_STATUS: "cl"}
 LIST_KIND = {g: kind for kind, groups in GROUPS.items() for g in groups}
@@ -201,6 +220,13 @@ class CycleAssembler(can.Listener):
         self.road_boundaries: dict[str, Boundary] = {}
         #: latest decoded AccStatus / FcwStatus signals, by message name
         self.ecu_status: dict[str, dict] = {}
+        #: the sensor's configuration replies, as last decoded: FilterState_Header, FilterState_Cfg by
+        #: (FilterState_Type, FilterState_Index), CollDetState, CollDetRegionState by region ID, CollDetRelayCtrl
+        self.filter_header: dict | None = None
+        self.filter_state: dict[tuple[int, int], dict] = {}
+        self.coll_det_state: dict | None = None
+        self.coll_det_regions: dict[int, dict] = {}
+        self.relay: dict | None = None
 
     def _id_plan(self, sensor_id: int) -> dict[int, tuple[str, int]]:
         """CAN ID -> ('ars', base ID) | ('own', template ID) | ('other', CAN ID) for this consumer's sensor."""
@@ -324,6 +350,8 @@ class CycleAssembler(can.Listener):
             self._header(base, values, data, msg.timestamp)
         elif base in LIST_KIND:
             self._list_frame(base, values, data)
+        elif base in CONFIG_STATE:
+            self._config_state(base, values)
         else:
             self.stats.status_frames += 1
             if base == P.RADAR_STATE:
@@ -362,6 +390,27 @@ class CycleAssembler(can.Listener):
             v[f"{prefix}_Confidence"] / 7.0)
         self.stats.boundary_frames += 1
 
+    def _config_state(self, base: int, v: dict) -> None:
+        """The sensor's answers to configuration: kept as last decoded. A FilterState_Header starts a new
+        filter table (the FilterState_Cfg frames that follow it fill it), a CollDetState a new region table (the
+        CollDetRegionState frames that follow it); CollDetState with Active set announces
+        Obj_4_Warning, like RadarState announces groups (it can only add a group, never remove one)."""
+        self.stats.config_state_frames += 1
+        if base == P.FILTER_STATE_HEADER:
+            self.filter_header = v
+            self.filter_state = {}
+        elif base == P.FILTER_STATE_CFG:
+            self.filter_state[(int(v["FilterState_Type"]), int(v["FilterState_Index"]))] = v
+        elif base == P.COLL_DET_STATE:
+            if int(v["CollDetState_Active"]):
+                self._announced["obj"][P.OBJ_WARNING] = LAYOUT_MEMORY
+            self.coll_det_state = v
+            self.coll_det_regions = {}
+        elif base == P.COLL_DET_REGION_STATE:
+            self.coll_det_regions[int(v["CollDetRegState_RegionID"])] = v
+        else:
+            self.relay = v
+
     def _announce(self, state: dict) -> None:
         """RadarState can add groups to the expected layout (for LAYOUT_MEMORY headers), never remove any."""
         if int(state["RadarState_SendQualityCfg"]):
@@ -373,7 +422,7 @@ class CycleAssembler(can.Listener):
     def expected_groups(self, kind: str) -> set[int]:
         """Groups a cycle of ``kind`` ('obj' or 'cl') must hold before it is delivered without waiting."""
         seen = self._seen_layouts[kind]
-        groups = set().union(*seen) if seen else set(GROUPS[kind])
+        groups = set().union(*seen) if seen else set(INITIAL_GROUPS[kind])
         return groups | {GENERAL[kind]} | set(self._announced[kind])
 
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
@@ -487,9 +536,13 @@ class CycleAssembler(can.Listener):
         if p.kind == "obj":
             q = p.groups.get(P.OBJ_QUALITY)
             e = p.groups.get(P.OBJ_EXTENDED)
+            w = p.groups.get(P.OBJ_WARNING)
             ol = P.objects_from_signals(rows, [q[i][1] if q else None for i in p.order],
                                         [e[i][1] if e else None for i in p.order])
-            cycle: ObjectCycle | ClusterCycle = ObjectCycle(p.meas_counter, p.timestamp, ol, bool(q), bool(e))
+            regions = np.array([int(w[i][1]["Obj_CollDetRegionBitfield"]) for i in p.order], dtype=np.int64) \
+                if w else None
+            cycle: ObjectCycle | ClusterCycle = ObjectCycle(p.meas_counter, p.timestamp, ol, bool(q), bool(e),
+                                                            bool(w), regions)
             self.stats.object_cycles += 1
         else:
             q = p.groups.get(P.CLUSTER_QUALITY)

@@ -41,6 +41,7 @@ Sink = Callable[[can.Message], None]
 DEADLINE_TOLERANCE_S = 0.002   # a cycle ready later than this after its deadline is dropped and flagged
 _SLEEP_MARGIN_S = 0.002        # stop polling the bus this long before a deadline, then sleep to it …
 _SPIN_S = 0.0005               # … and spin the last half millisecond (a sleep's wake-up is late under load)
+_DRAIN_S = 0.004               # real time: the longest a poll(0) spends on queued input before computing a cycle
 
 
 @dataclass
@@ -55,6 +56,7 @@ class RunStats:
     cycle_start_s: list[float] = field(default_factory=list)   # real time: send time of every cycle sent,
     #                                                            from the schedule's origin (s)
     send_error_s: list[float] = field(default_factory=list)    # real time: send time minus deadline (s)
+    rx_drain_cut: int = 0           # real time: polls that stopped with input still queued (a flooded bus)
 
     def bus_load(self, bitrate: int) -> float:
         return self.bits / (bitrate * self.duration_s) if self.duration_s > 0 else 0.0
@@ -164,13 +166,23 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
     rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
 
     def poll(timeout: float) -> None:
+        """Receive for up to ``timeout`` seconds: whatever is queued, then what arrives until then.
+
+        The time is bounded whatever arrives (a bus flooded faster than frames can be handled must not hold
+        the node past its deadline): in real time it drains for at most ``timeout`` (``_DRAIN_S`` when
+        ``timeout`` is 0) and what is left waits for the next poll (or is dropped by the bus's own queue). In
+        simulated time it drains everything queued, so that a run stays deterministic."""
         if recv is None:
             if timeout > 0:
                 time.sleep(timeout)
             return
+        end = time.perf_counter() + max(timeout, _DRAIN_S)
         msg = recv(timeout)
         while msg is not None:
             node.receive(msg, rx_t[0])
+            if clock.realtime and time.perf_counter() >= end:
+                stats.rx_drain_cut += 1
+                return
             msg = recv(0.0)
 
     def send(messages: list[can.Message]) -> None:
