@@ -27,7 +27,9 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 * RadarState's SendQuality/SendExtInfo bits can only *add* groups to the
   layout, for ``LAYOUT_MEMORY`` headers (so a configuration change that adds a
   group is waited for); bits that are off are ignored;
-* otherwise the cycle ends at the next header, after ``cycle_timeout_s`` of
+* otherwise the cycle ends at the next header of its kind (an object and a
+  cluster cycle are assembled side by side, so a stray header of the other
+  kind cuts nothing), after ``cycle_timeout_s`` of
   silence on the cycle (checked by :meth:`CycleAssembler.get` and
   :meth:`CycleAssembler.expire`, in wall-clock time of arrival), or on
   :meth:`CycleAssembler.flush` (end of a log).
@@ -204,8 +206,10 @@ class CycleAssembler(can.Listener):
         self.queue_overflow = 0
         self._queue: queue.Queue = queue.Queue(maxsize=maxsize)
         self._lock = threading.RLock()
-        self._pending: _Pending | None = None
-        self._last_done: _Pending | None = None
+        # one cycle being assembled per list kind: a header of the other kind (a switch of OutputType, or a stray
+        # frame that looks like one) does not cut the cycle in progress
+        self._pending: dict[str, _Pending] = {}
+        self._last_done: dict[str, _Pending] = {}
         self._last_counter: dict[str, int] = {}
         self._stride: dict[str, int] = {}
         # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
@@ -298,11 +302,13 @@ class CycleAssembler(can.Listener):
         self.flush()
         yield from self.drain()
 
-    def flush(self) -> None:
-        """Close the cycle being assembled (end of data or time-out)."""
+    def flush(self, kind: str | None = None) -> None:
+        """Close the cycle being assembled (of ``kind``, 'obj' or 'cl'; default both, the older first) — end of
+        data or time-out."""
         with self._lock:
-            if self._pending is not None:
-                p, self._pending = self._pending, None
+            waiting = [p for k, p in self._pending.items() if kind is None or k == kind]
+            for p in sorted(waiting, key=lambda p: p.arrival):
+                del self._pending[p.kind]
                 self._finish(p)
 
     def expire(self, now: float | None = None) -> bool:
@@ -311,13 +317,12 @@ class CycleAssembler(can.Listener):
         ``now`` is ``time.monotonic()`` by default. Returns True when a cycle was closed.
         """
         with self._lock:
-            p = self._pending
             now = time.monotonic() if now is None else now
-            if p is None or not now - p.arrival > self.cycle_timeout_s:
-                return False
-            self.stats.timed_out_cycles += 1
-            self.flush()
-            return True
+            silent = [p.kind for p in self._pending.values() if now - p.arrival > self.cycle_timeout_s]
+            for kind in silent:
+                self.stats.timed_out_cycles += 1
+                self.flush(kind)
+            return bool(silent)
 
     # --- internals ----------------------------------------------------------------
     def _handle(self, msg: can.Message) -> None:
@@ -427,11 +432,11 @@ class CycleAssembler(can.Listener):
 
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
         kind = HEADERS[base]
-        for known in (self._pending, self._last_done):
-            if known is not None and known.kind == kind and known.header == data:
+        for known in (self._pending.get(kind), self._last_done.get(kind)):
+            if known is not None and known.header == data:
                 self.stats.duplicate_frames += 1     # the same header again: not a new cycle
                 return
-        self.flush()
+        self.flush(kind)
         if kind == "obj":
             n, n_near, counter = int(values["Obj_NofObjects"]), 0, int(values["Obj_MeasCounter"])
         else:
@@ -457,14 +462,14 @@ class CycleAssembler(can.Listener):
             announced[g] -= 1
             if announced[g] < 0:
                 del announced[g]
-        self._pending = _Pending(kind, n, counter, timestamp, data, n_near)
-        self._maybe_complete()
+        self._pending[kind] = _Pending(kind, n, counter, timestamp, data, n_near)
+        self._maybe_complete(kind)
 
     def _list_frame(self, base: int, values: dict, data: bytes) -> None:
-        pending = self._pending
         kind = LIST_KIND[base]
+        pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
-        if pending is None or pending.kind != kind:
+        if pending is None:
             self._stray_list_frame(kind, base, oid, data)
             return
         pending.arrival = time.monotonic()
@@ -483,12 +488,12 @@ class CycleAssembler(can.Listener):
                 return
             pending.order.append(oid)
         group[oid] = (data, values)
-        self._maybe_complete()
+        self._maybe_complete(kind)
 
     def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
         """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
-        done = self._last_done
-        if done is not None and done.kind == kind:
+        done = self._last_done.get(kind)
+        if done is not None:
             prior = done.groups.get(base, {}).get(oid)
             if prior is not None and prior[0] == data:
                 self.stats.duplicate_frames += 1
@@ -500,8 +505,8 @@ class CycleAssembler(can.Listener):
                 return
         self.stats.orphan_frames += 1
 
-    def _maybe_complete(self) -> None:
-        p = self._pending
+    def _maybe_complete(self, kind: str) -> None:
+        p = self._pending[kind]
         if p.bad:
             return
         general = p.groups.get(GENERAL[p.kind], {})
@@ -512,7 +517,7 @@ class CycleAssembler(can.Listener):
                 return
         if all(set(group) == set(general) for group in p.groups.values()):
             p.early = True
-            self._pending = None
+            del self._pending[kind]
             self._finish(p)
 
     def _finish(self, p: _Pending) -> None:
@@ -531,7 +536,7 @@ class CycleAssembler(can.Listener):
             return
         if p.expected:
             seen.append(frozenset(present))
-        self._last_done = p
+        self._last_done[p.kind] = p
         rows = [general[i][1] for i in p.order]
         if p.kind == "obj":
             q = p.groups.get(P.OBJ_QUALITY)
