@@ -121,6 +121,7 @@ class ConsumerStats:
     status_frames: int = 0          # RadarState, VersionID, ego motion, configuration
     config_state_frames: int = 0    # the sensor's replies: FilterState 0x203/0x204, CollDet 0x408/0x402, relay 0x008
     errors_frames: int = 0          # CAN error and remote frames
+    bus_errors: int = 0             # frames the bus could not read (reported through on_error)
     boundary_frames: int = 0        # radarnode's road-boundary frames accepted
     ecu_frames: int = 0             # AccStatus / FcwStatus frames accepted
     e2e_errors: int = 0             # own frames with a wrong E2E CRC: dropped
@@ -129,7 +130,7 @@ class ConsumerStats:
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
                 + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
-                + self.e2e_errors + self.e2e_repeated)
+                + self.e2e_errors + self.e2e_repeated + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
@@ -259,7 +260,11 @@ class CycleAssembler(can.Listener):
                 logger.debug("frame %r could not be handled", msg, exc_info=True)
 
     def on_error(self, exc: Exception) -> None:
-        logger.warning("bus error in consumer: %s", exc)
+        """A frame the bus could not read (a notifier calls this): counted in ``bus_errors``, warned once, and
+        the notifier goes on receiving."""
+        self.stats.bus_errors += 1
+        if self.stats.bus_errors == 1:
+            logger.warning("bus error in consumer: %s (further ones are counted in bus_errors)", exc)
 
     def stop(self) -> None:
         self.flush()

@@ -533,6 +533,10 @@ class RadarNode:
                         f"went out of its tolerance, {1e3 * late_s:.1f} ms after its deadline" if computed else
                         f"could not be computed before its deadline (by {1e3 * late_s:.1f} ms)", lost)
 
+    def warn_once(self, key: str, fmt: str, *args) -> None:
+        """Log a warning the first time ``key`` comes up (per-frame trouble is counted, not logged each time)."""
+        self._warn_once(key, fmt, *args)
+
     def _warn_once(self, key: str, fmt: str, *args) -> None:
         if key not in self._warned:
             self._warned.add(key)

@@ -42,6 +42,8 @@ DEADLINE_TOLERANCE_S = 0.002   # a cycle ready later than this after its deadlin
 _SLEEP_MARGIN_S = 0.002        # stop polling the bus this long before a deadline, then sleep to it …
 _SPIN_S = 0.0005               # … and spin the last half millisecond (a sleep's wake-up is late under load)
 _DRAIN_S = 0.004               # real time: the longest a poll(0) spends on queued input before computing a cycle
+_MAX_UNREADABLE_IN_ROW = 64    # a poll gives up after this many frames in a row the bus could not read
+_UNREADABLE = object()         # what a poll got instead of a frame the bus could not read
 
 
 @dataclass
@@ -177,13 +179,31 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
                 time.sleep(timeout)
             return
         end = time.perf_counter() + max(timeout, _DRAIN_S)
-        msg = recv(timeout)
+        msg = receive(timeout)
+        unreadable_in_row = 0
         while msg is not None:
-            node.receive(msg, rx_t[0])
+            if msg is _UNREADABLE:
+                unreadable_in_row += 1
+                if unreadable_in_row >= _MAX_UNREADABLE_IN_ROW:     # a bus that only raises: try next time
+                    return
+            else:
+                unreadable_in_row = 0
+                node.receive(msg, rx_t[0])
             if clock.realtime and time.perf_counter() >= end:
                 stats.rx_drain_cut += 1
                 return
-            msg = recv(0.0)
+            msg = receive(0.0)
+
+    def receive(timeout: float) -> can.Message | object | None:
+        """One frame from the bus; one the bus cannot read (a corrupt datagram on udp_multicast, a frame
+        python-can's checks refuse) is counted in the node's ``rx_unreadable`` and skipped, never raised."""
+        try:
+            return recv(timeout)
+        except (can.CanError, ValueError, TypeError) as exc:
+            node.counters["rx_unreadable"] += 1
+            node.warn_once("rx_unreadable", "a frame the bus could not read was skipped (%s); counted in "
+                           "rx_unreadable, warned once", exc)
+            return _UNREADABLE
 
     def send(messages: list[can.Message]) -> None:
         for m in messages:
