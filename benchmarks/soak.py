@@ -7,8 +7,9 @@ only: nothing leaves the machine):
   ego's speed, some of them slowly oscillating, guardrails on both sides: object list, road boundaries and
   collision detection all busy), paced in real time by the runner, with the vehicle's 0x300/0x301;
 * **ECU**: a ``CycleAssembler`` that configures the sensor at start (a collision-detection region ahead,
-  collision detection on), records every cycle it assembles, and during the abuse phase sends one valid
-  FilterCfg (objects, Distance 0–60 m) and checks that it is answered and applied;
+  collision detection on), records every cycle it assembles, and half-way through the abuse phase sends a
+  valid FilterCfg (objects, Distance 0–60 m) — again every 0.5 s until FilterState answers it, as an ECU
+  does — and checks that it is applied;
 * **abuser** (abuse phase only): floods the node's inputs at a steady rate (default 4000 frames/s, about what a
   saturated 500 kbit/s bus carries) with malformed and useless frames on 0x200, 0x202, 0x300, 0x301, 0x400
   and 0x401 — wrong DLCs, refused values, out-of-range signals, remote and error frames, no-op configuration,
@@ -23,7 +24,10 @@ Figures, per phase (soak: the first ``--minutes``; abuse: the ``--abuse-seconds`
 * **drift**: receive time of the last header minus that of the first, against ``(k_last − k_first) × period``;
 * **frames lost**: the node's frames handed to the bus minus the frames of the node's IDs the ECU received;
   cycles lost (MeasCounter gaps the node did not flag as missed) and incomplete cycles;
-* **memory**: resident set size (VmRSS) of the node and the ECU at the start and at the end of the phase.
+* **memory**: resident set size (VmRSS) of the node and the ECU at the start and at the end of the phase;
+* **refused**: for each kind of bad frame, how many the abuser sent and how many the node counted; the
+  difference is what the kernel dropped before the node read it (its socket's receive buffer was full;
+  ``radarnode.wire.bus.enlarge_receive_buffer`` gives it 4 MiB, as ``radarnode node`` does).
 
 Run: ``python benchmarks/soak.py --minutes 10`` (I/O-paced: light on CPU). ``--json FILE`` also writes
 every figure. ``tests/test_soak.py`` runs a short version.
@@ -120,9 +124,12 @@ def role_node(args) -> int:
     from radarnode.wire.node import EgoMotionSender, RadarNode
     from radarnode.wire.runner import RealTimeClock, run_node
 
+    from radarnode.wire.bus import enlarge_receive_buffer
+
     sc = parse_scenario(scenario_yaml(args.total), "soak.yaml")
     node = RadarNode(sc)
     bus = can.Bus(interface="udp_multicast", channel=GROUP, receive_own_messages=False)
+    enlarge_receive_buffer(bus)             # as `radarnode node` opens it
     headers: list[tuple[float, float, bytes]] = []      # (perf_counter, wall clock, header payload)
     rss: list[tuple[float, int]] = []
     sent_node_frames = [0]
@@ -164,6 +171,7 @@ def role_ecu(args) -> int:
     import numpy as np
 
     from radarnode.consumer.assembler import CycleAssembler
+    from radarnode.wire.bus import enlarge_receive_buffer
     from radarnode.wire.dbc import load_database
 
     db = load_database()
@@ -175,6 +183,7 @@ def role_ecu(args) -> int:
         return can.Message(arbitration_id=m.frame_id, data=m.encode(values), is_extended_id=False)
 
     bus = can.Bus(interface="udp_multicast", channel=GROUP, receive_own_messages=False)
+    enlarge_receive_buffer(bus)             # as `radarnode consume` opens it
     asm = CycleAssembler(cycle_timeout_s=0.2)
     print("listening", flush=True)
     cycles = []                 # (header receive time, MeasCounter, objects, farthest object m, warning objects)
@@ -183,6 +192,7 @@ def role_ecu(args) -> int:
     configured = False
     valid_sent_at = None
     valid_answered_at = None
+    valid_tries = 0
     valid_at = None
     next_check = 0.0
     last = time.monotonic()
@@ -221,10 +231,13 @@ def role_ecu(args) -> int:
             next_check = now_w + 0.5
             if os.path.exists(args.valid_file):
                 valid_at = float(Path(args.valid_file).read_text())
-        if valid_sent_at is None and valid_at is not None and now_w >= valid_at:
+        # like an ECU, it sends the configuration again when no answer came within half a second
+        if valid_at is not None and now_w >= valid_at and valid_answered_at is None and (
+                valid_sent_at is None or now_w >= valid_sent_at + 0.5 * valid_tries):
             bus.send(frame("FilterCfg", FilterCfg_Valid=1, FilterCfg_Active=1, FilterCfg_Index=1, FilterCfg_Type=1,
                            FilterCfg_Min_Distance=0.0, FilterCfg_Max_Distance=VALID_FILTER_MAX_M))
-            valid_sent_at = now_w
+            valid_sent_at = now_w if valid_sent_at is None else valid_sent_at
+            valid_tries += 1
         if valid_sent_at is not None and valid_answered_at is None:
             f = asm.filter_state.get((1, 1))
             if f is not None and f["FilterState_Max_Distance"] == VALID_FILTER_MAX_M and f["FilterState_Active"]:
@@ -242,7 +255,7 @@ def role_ecu(args) -> int:
     drops = socket_drops(bus)
     bus.shutdown()
     json.dump({"socket_drops": drops, "cycles": cycles, "rss": rss, "stats": asm.stats.as_dict(), "node_frames": node_frames,
-               "valid_sent_at": valid_sent_at, "valid_answered_at": valid_answered_at,
+               "valid_sent_at": valid_sent_at, "valid_answered_at": valid_answered_at, "valid_tries": valid_tries,
                "coll_det_active": bool(asm.coll_det_state and asm.coll_det_state["CollDetState_Active"]),
                "recv_errors": recv_errors}, open(args.out, "w"))
     return 0
@@ -466,6 +479,7 @@ def run(args) -> dict:
         vs, va = e["valid_sent_at"], e["valid_answered_at"]
         after = [x for x in e["cycles"] if vs is not None and x[5] > (va or math.inf) + 2 * PERIOD_S]
         res["valid"] = {"sent": vs is not None, "answered_ms": (va - vs) * 1e3 if vs and va else None,
+                        "tries": e["valid_tries"],
                         "cycles_after": len(after),
                         "farthest_after_m": max((x[3] for x in after), default=None),
                         "farthest_before_m": max((x[3] for x in e["cycles"] if vs and x[5] < vs), default=None)}
@@ -502,7 +516,9 @@ def print_table(res: dict, command: str) -> None:
               f"FilterCfg; polls cut short with input queued: {node['rx_drain_cut']}")
         v = res["valid"]
         print(f"valid FilterCfg (objects, Distance 0–{VALID_FILTER_MAX_M:g} m) half-way through the flood: answered "
-              f"(FilterState) {v['answered_ms']:.0f} ms after it was sent; farthest object {v['farthest_before_m']:.1f} m "
+              f"(FilterState) {v['answered_ms']:.0f} ms after it was first sent ({v['tries']} "
+              f"{'try' if v['tries'] == 1 else 'tries'}, resent every 0.5 s until answered); farthest object "
+              f"{v['farthest_before_m']:.1f} m "
               f"before, {v['farthest_after_m']:.1f} m in the {v['cycles_after']} cycles after"
               if v["answered_ms"] is not None else f"valid FilterCfg during the flood: NOT answered ({v})")
 
