@@ -130,7 +130,10 @@ def role_node(args) -> int:
     node = RadarNode(sc)
     bus = can.Bus(interface="udp_multicast", channel=GROUP, receive_own_messages=False)
     enlarge_receive_buffer(bus)             # as `radarnode node` opens it
-    headers: list[tuple[float, float, bytes]] = []      # (perf_counter, wall clock, header payload)
+    # every header's send time goes straight to a file, so that the process's memory is the node's, not the
+    # benchmark's records
+    records = open(args.out + ".headers", "w", buffering=1 << 16)
+    header_codec = node.db.get_message_by_frame_id(0x60A)
     rss: list[tuple[float, int]] = []
     sent_node_frames = [0]
 
@@ -138,7 +141,8 @@ def role_node(args) -> int:
         if m.arbitration_id in NODE_TX:
             sent_node_frames[0] += 1
         if m.arbitration_id == 0x60A:
-            headers.append((time.perf_counter(), time.time(), bytes(m.data)))
+            p, w = time.perf_counter(), time.time()
+            records.write(f"{p!r} {w!r} {m.data[1] << 8 | m.data[2]}\n")     # Obj_MeasCounter: 15|16
         bus.send(m)
 
     next_rss = [0.0]
@@ -156,9 +160,11 @@ def role_node(args) -> int:
     rss.append((time.time(), rss_kb()))
     drops = socket_drops(bus)
     bus.shutdown()
-    header = node.db.get_message_by_frame_id(0x60A)
-    json.dump({"headers": [(p, w, int(header.decode(d)["Obj_MeasCounter"])) for p, w, d in headers],
-               "rss": rss, "counters": dict(node.counters), "cycles": stats.cycles, "missed": stats.missed,
+    records.close()
+    assert header_codec.decode(bytes([0, 0x12, 0x34, 0x10]))["Obj_MeasCounter"] == 0x1234   # the slice above
+    headers = [(float(p), float(w), int(k)) for p, w, k in
+               (line.split() for line in open(args.out + ".headers"))]
+    json.dump({"headers": headers, "rss": rss, "counters": dict(node.counters), "cycles": stats.cycles, "missed": stats.missed,
                "frames_node_ids": sent_node_frames[0], "rx_drain_cut": stats.rx_drain_cut,
                "period_s": node.period_s, "socket_drops": drops}, open(args.out, "w"))
     return 0
@@ -186,7 +192,9 @@ def role_ecu(args) -> int:
     enlarge_receive_buffer(bus)             # as `radarnode consume` opens it
     asm = CycleAssembler(cycle_timeout_s=0.2)
     print("listening", flush=True)
-    cycles = []                 # (header receive time, MeasCounter, objects, farthest object m, warning objects)
+    # per cycle: header receive time, MeasCounter, objects, farthest object (m), objects warning, when assembled;
+    # streamed to a file so that the process's memory is the consumer's, not the benchmark's records
+    records = open(args.out + ".cycles", "w", buffering=1 << 16)
     rss = [(time.time(), rss_kb())]
     node_frames = 0
     configured = False
@@ -244,16 +252,19 @@ def role_ecu(args) -> int:
                 valid_answered_at = now_w
         for c in asm.drain():
             ol = c.objects
-            cycles.append((c.timestamp, c.meas_counter, len(ol), float(np.max(ol.range_m, initial=0.0)),
-                           int(np.count_nonzero(c.collision_regions)) if c.collision_regions is not None else -1,
-                           now_w))
+            records.write(f"{c.timestamp!r} {c.meas_counter} {len(ol)} {float(np.max(ol.range_m, initial=0.0))!r} "
+                          f"{int(np.count_nonzero(c.collision_regions)) if c.collision_regions is not None else -1} "
+                          f"{now_w!r}\n")
     asm.flush()
     for c in asm.drain():
-        cycles.append((c.timestamp, c.meas_counter, len(c.objects), float(np.max(c.objects.range_m, initial=0.0)),
-                       -1, time.time()))
+        records.write(f"{c.timestamp!r} {c.meas_counter} {len(c.objects)} "
+                      f"{float(np.max(c.objects.range_m, initial=0.0))!r} -1 {time.time()!r}\n")
     rss.append((time.time(), rss_kb()))
     drops = socket_drops(bus)
     bus.shutdown()
+    records.close()
+    cycles = [(float(t), int(k), int(n), float(r), int(w), float(at)) for t, k, n, r, w, at in
+              (line.split() for line in open(args.out + ".cycles"))]
     json.dump({"socket_drops": drops, "cycles": cycles, "rss": rss, "stats": asm.stats.as_dict(), "node_frames": node_frames,
                "valid_sent_at": valid_sent_at, "valid_answered_at": valid_answered_at, "valid_tries": valid_tries,
                "coll_det_active": bool(asm.coll_det_state and asm.coll_det_state["CollDetState_Active"]),
@@ -403,6 +414,13 @@ def phase_figures(node: dict, ecu: dict, lo: float, hi: float) -> dict:
     gaps = np.diff(kk) - 1
     rss_n = [r for w, r in node["rss"] if lo - 6 <= w <= hi + 6]
     rss_e = [r for w, r in ecu["rss"] if lo - 6 <= w <= hi + 6]
+
+    def growth(samples):
+        """KiB per minute after the first minute of the phase (a straight-line fit), and RSS at one minute."""
+        pts = np.array([(w, r) for w, r in samples if lo + 60 <= w <= hi], dtype=float)
+        if len(pts) < 3:
+            return math.nan, math.nan
+        return float(np.polyfit(pts[:, 0] / 60.0, pts[:, 1], 1)[0]), float(pts[0, 1])
     return {"cycles_sent": int(sel.sum()), "cycles_received": int(csel.sum()),
             "err_med": _pct(err, 50), "err_p99": _pct(err, 99), "err_max": float(err.max()) if err.size else math.nan,
             "per_med": _pct(periods, 50), "per_p99": _pct(periods, 99),
@@ -410,7 +428,8 @@ def phase_figures(node: dict, ecu: dict, lo: float, hi: float) -> dict:
             "drift_ms": drift, "span_s": float(t[-1] - t[0]) if len(t) > 1 else 0.0,
             "gaps": int(gaps[gaps > 0].sum()) if gaps.size else 0,
             "rss_node": (rss_n[0], rss_n[-1]) if rss_n else (-1, -1),
-            "rss_ecu": (rss_e[0], rss_e[-1]) if rss_e else (-1, -1)}
+            "rss_ecu": (rss_e[0], rss_e[-1]) if rss_e else (-1, -1),
+            "rss_node_growth": growth(node["rss"]), "rss_ecu_growth": growth(ecu["rss"])}
 
 
 def udp_rcvbuf_errors() -> int:
@@ -467,7 +486,8 @@ def run(args) -> dict:
            "ecu": {k: e[k] for k in ("stats", "node_frames", "coll_det_active", "recv_errors")},
            "frames_lost": n["frames_node_ids"] - e["node_frames"], "udp_rcvbuf_errors": udp_rcvbuf_errors(),
            "socket_drops": {"node": n["socket_drops"], "ecu": e["socket_drops"]},
-           "load_average": (load_start, os.getloadavg()), "warnings": warnings}
+           "load_average": (load_start, os.getloadavg()), "warnings": warnings,
+           "rss_series": {"node": n["rss"], "ecu": e["rss"]}}
     if a:
         res["abuse"] = phase_figures(n, e, a["start"], a["end"] + 0.5)
         res["abuser"] = a
@@ -490,14 +510,20 @@ def print_table(res: dict, command: str) -> None:
     rows = [("soak", res["soak"])] + ([("abuse", res["abuse"])] if "abuse" in res else [])
     print(f"$ {command}")
     print("| phase | cycles sent | not sent (flagged) | send error median / p99 / max | "
-          "period median / p99 / max | drift | RSS node start → end | RSS ECU start → end |")
+          "period median / p99 / max | drift | RSS node start → [1 min →] end | RSS ECU start → [1 min →] end |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
+
+    def mem(r, who):
+        start, end = r[f"rss_{who}"]
+        slope, at1 = r[f"rss_{who}_growth"]
+        if math.isnan(slope):
+            return f"{start / 1024:.1f} → {end / 1024:.1f} MiB"
+        return f"{start / 1024:.1f} → {at1 / 1024:.1f} → {end / 1024:.1f} MiB ({slope:+.0f} KiB/min after 1 min)"
     for name, r in rows:
         print(f"| {name} ({r['span_s'] / 60:.1f} min) | {r['cycles_sent']} | {r['gaps']} | {r['err_med']:.2f} / "
               f"{r['err_p99']:.2f} / {r['err_max']:.2f} ms | {r['per_med']:.2f} / {r['per_p99']:.2f} / "
-              f"{r['per_max']:.2f} ms | {r['drift_ms']:+.2f} ms over {r['span_s']:.0f} s | "
-              f"{r['rss_node'][0] / 1024:.1f} → {r['rss_node'][1] / 1024:.1f} MiB | "
-              f"{r['rss_ecu'][0] / 1024:.1f} → {r['rss_ecu'][1] / 1024:.1f} MiB |")
+              f"{r['per_max']:.2f} ms | {r['drift_ms']:+.2f} ms over {r['span_s']:.0f} s | {mem(r, 'node')} | "
+              f"{mem(r, 'ecu')} |")
     st, node = res["ecu"]["stats"], res["node"]
     (l1, _, _), (l2, _, _) = res["load_average"]
     print(f"node: {node['cycles']} cycles sent, {node['missed']} not sent and flagged (Temporary_Error), "

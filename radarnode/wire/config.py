@@ -340,14 +340,9 @@ class CollisionDetection:
                 "CollDetRegState_NofObjects": min(int(self.last.inside_count[rid]), 255) if self.active else 0})))
         return out
 
-    def frames_bits_dlcs(self) -> list[int]:
+    def state_dlcs(self) -> list[int]:
         """The DLCs of what :meth:`state_payloads` returns (for the bus-load budget before it is computed)."""
         return [self._state.length] + [self._region_state.length] * len(self.regions)
-
-
-def region_bits_from_frames(rows: list[dict | None]) -> np.ndarray:
-    """Obj_CollDetRegionBitfield of each object from decoded Obj_4_Warning frames (-1 where absent)."""
-    return np.array([int(r["Obj_CollDetRegionBitfield"]) if r is not None else -1 for r in rows], dtype=np.int64)
 
 
 def inside_raw(dist_long_m: np.ndarray, dist_lat_m: np.ndarray, point1: tuple[float, float],
@@ -361,4 +356,4 @@ def inside_raw(dist_long_m: np.ndarray, dist_lat_m: np.ndarray, point1: tuple[fl
 
 
 __all__ = ["CollisionDetection", "Filter", "FILTER_NAMES", "ListFilters", "Region", "RegionResult",
-           "TYPE_CLUSTER", "TYPE_OBJECT", "inside_raw", "region_bits_from_frames"]
+           "TYPE_CLUSTER", "TYPE_OBJECT", "inside_raw"]

@@ -413,7 +413,7 @@ class RadarNode:
         self._reply_coll_det = False
         warnings = self.coll_det.active and cfg.output_type == P.OUTPUT_OBJECTS
         relay = self.coll_det.active and cfg.ctrl_relay
-        fixed = [len(p) for _, p in out + own] + [8] + (self.coll_det.frames_bits_dlcs() if coll_det_now else []) \
+        fixed = [len(p) for _, p in out + own] + [8] + (self.coll_det.state_dlcs() if coll_det_now else []) \
             + ([1] if relay else [])
         fixed_bits = int(np.sum(frame_bits(np.array(fixed, dtype=np.int64))))
         lifetime = self._lifetimes(frame.objects, t_s)

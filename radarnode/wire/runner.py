@@ -41,6 +41,7 @@ Sink = Callable[[can.Message], None]
 DEADLINE_TOLERANCE_S = 0.002   # a cycle ready later than this after its deadline is dropped and flagged
 _SLEEP_MARGIN_S = 0.002        # stop polling the bus this long before a deadline, then sleep to it …
 _SPIN_S = 0.0005               # … and spin the last half millisecond (a sleep's wake-up is late under load)
+KEEP_CYCLES = 50_000          # RunStats keeps the send times of this many cycles (an hour at 72 ms)
 _DRAIN_S = 0.004               # real time: the longest a poll(0) spends on queued input before computing a cycle
 _MAX_UNREADABLE_IN_ROW = 64    # a poll gives up after this many frames in a row the bus could not read
 _UNREADABLE = object()         # what a poll got instead of a frame the bus could not read
@@ -55,9 +56,9 @@ class RunStats:
     bits: int = 0
     duration_s: float = 0.0
     missed: int = 0                 # cycles not sent because they were not ready in time (real time)
-    cycle_start_s: list[float] = field(default_factory=list)   # real time: send time of every cycle sent,
-    #                                                            from the schedule's origin (s)
-    send_error_s: list[float] = field(default_factory=list)    # real time: send time minus deadline (s)
+    # real time, the last KEEP_CYCLES cycles sent (bounded, so that a node running for days does not grow):
+    cycle_start_s: deque = field(default_factory=lambda: deque(maxlen=KEEP_CYCLES))  # send time from the origin
+    send_error_s: deque = field(default_factory=lambda: deque(maxlen=KEEP_CYCLES))   # send time minus deadline
     rx_drain_cut: int = 0           # real time: polls that stopped with input still queued (a flooded bus)
 
     def bus_load(self, bitrate: int) -> float:
