@@ -36,7 +36,6 @@ every figure. ``tests/test_soak.py`` runs a short version.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import os

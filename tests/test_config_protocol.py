@@ -152,7 +152,7 @@ def _consumers_unharmed(bench: Bench) -> None:
 
 # --- FilterCfg 0x202 --------------------------------------------------------------------------------------------
 
-def _quantity(index: int, c: ObjectCycle, first_seen: dict) -> tuple[np.ndarray, np.ndarray]:
+def _quantity(index: int, c: ObjectCycle) -> tuple[np.ndarray, np.ndarray]:
     """The filter's quantity of each decoded object and where the filter applies to it (the consumer's view)."""
     ol = c.objects
     x, y, vx, vy = ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps
@@ -178,7 +178,7 @@ OBJECT_FILTERS = {
 def test_object_filter_is_answered_and_applied(bench, index):
     lo, hi, tol = OBJECT_FILTERS[index]
     before = bench.run(12)
-    outside = [q for c in _objects(before[-3:]) for q, a in zip(*_quantity(index, c, {})) if a and not
+    outside = [q for c in _objects(before[-3:]) for q, a in zip(*_quantity(index, c)) if a and not
                lo - tol <= q <= hi + tol]
     assert outside, "the scene has no object this filter would remove: the test would prove nothing"
     bench.send(filter_cfg(index, lo, hi))
@@ -199,7 +199,7 @@ def test_object_filter_is_answered_and_applied(bench, index):
     cycles = _objects([first, *after])
     assert len(cycles) == 40
     for c in cycles:
-        q, applies = _quantity(index, c, {})
+        q, applies = _quantity(index, c)
         assert np.all(~applies | ((q >= lo - tol) & (q <= hi + tol))), (c.meas_counter, q[applies])
     assert sum(len(c.objects) for c in cycles) > 0 or index == 8     # ProbExists <= 6: only objects that coast
     assert bench.nodes[0].counters["items_filtered"] > 0
