@@ -21,7 +21,9 @@ TRAFFIC = """
   - {id: c, class: motorcycle, x_m: 55.0, lane: 2, speed_mps: 25.0}
   - {id: d, class: car, x_m: 120.0, lane: 1, speed_mps: 28.0}
 """
-LIST_IDS = (P.OBJ_STATUS, P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED)
+LIST_IDS = (P.OBJ_STATUS, P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED, P.OBJ_WARNING)
+# the sensor's configuration replies: never part of a cycle
+REPLY_IDS = (P.FILTER_STATE_HEADER, P.FILTER_STATE_CFG, P.COLL_DET_STATE, P.COLL_DET_REGION_STATE, P.COLL_DET_RELAY)
 
 
 def _msg(can_id, data, ts=0.0, **kw) -> can.Message:
@@ -47,9 +49,11 @@ def _cfg(**fields) -> can.Message:
 
 
 def _node_cycles(n_cycles: int, radar: str = "{preset: ars408_like}", toggles: dict | None = None, seed: int = 1):
-    """Run a node; returns per cycle (frames, sent object list, SendQuality, SendExtInfo, MeasCounter).
+    """Run a node; returns per cycle (frames, sent object list, SendQuality, SendExtInfo, MeasCounter, the
+    Obj_4_Warning region bits sent or None).
 
-    ``toggles`` maps a cycle index to a RadarConfiguration frame the node receives before that cycle."""
+    ``toggles`` maps a cycle index to a configuration frame (or a list of them) the node receives before that
+    cycle."""
     sc = scenario(TRAFFIC, radar=radar, duration=n_cycles * 0.072 + 0.1, seed=seed)
     node = RadarNode(sc)
     vehicle = EgoMotionSender(node.scene)
@@ -61,22 +65,31 @@ def _node_cycles(n_cycles: int, radar: str = "{preset: ars408_like}", toggles: d
             node.receive(m, t)
         extra = []
         if toggles and k in toggles:
-            node.receive(toggles[k], t)
-            extra = [toggles[k]]
+            extra = toggles[k] if isinstance(toggles[k], list) else [toggles[k]]
+            for m in extra:
+                node.receive(m, t)
         res = node.cycle(t)
         counter = node.db.decode_message(P.OBJ_STATUS, next(m.data for m in res.messages
                                                                 if m.arbitration_id == P.OBJ_STATUS))["Obj_MeasCounter"]
+        warn = [node.db.decode_message(P.OBJ_WARNING, m.data) for m in res.messages if m.arbitration_id == P.OBJ_WARNING]
+        bits = {int(w["Obj_ID"]): int(w["Obj_CollDetRegionBitfield"]) for w in warn}
         out.append((extra + ego + res.messages, res.frame.objects, node.config.send_quality,
-                    node.config.send_ext_info, counter))
+                    node.config.send_ext_info, counter, bits if warn else None))
     return out
 
 
-def _intact(cycle, sent, quality: bool, ext: bool, counter: int) -> bool:
+def _intact(cycle, sent, quality: bool, ext: bool, counter: int, warn: dict | None = None) -> bool:
     """The delivered cycle holds what the node sent, object by object (frames reordered on the way may change
-    the list order, not the content)."""
+    the list order, not the content), collision-warning bits included."""
     got = cycle.objects
     n = len(sent)
     if not isinstance(cycle, ObjectCycle) or len(got) != n or cycle.meas_counter != counter:
+        return False
+    if warn is not None and n:
+        if cycle.collision_regions is None or {int(i): int(b) for i, b in zip(got.id, cycle.collision_regions)} \
+                != warn:
+            return False
+    elif cycle.has_warning:
         return False
     got, sent = got.take(np.argsort(got.id)), sent.take(np.argsort(sent.id))
     return (np.array_equal(got.id, sent.id)
@@ -160,7 +173,7 @@ def _garbage(rng: np.random.Generator, sensor: int, n: int, own_header: bytes | 
     ours = {P.shifted(b, sensor) for b in LIST_IDS}
     out = []
     for _ in range(n):
-        kind = rng.integers(9)
+        kind = rng.integers(10)
         ts = float(rng.choice([np.nan, -1e9, 1e300, rng.uniform(0, 1e4)]))
         if kind == 0:        # RadarState with random bits, or explicitly the groups switched off / on
             m = _radar_state(bool(rng.integers(2)), bool(rng.integers(2))) if rng.integers(2) else \
@@ -193,6 +206,10 @@ def _garbage(rng: np.random.Generator, sensor: int, n: int, own_header: bytes | 
             m = _msg(P.shifted(base, sensor), rng.integers(0, 256, dlc[base], dtype=np.uint8))
         elif kind == 7 and own_header is not None:    # the cycle's own header again
             m = _msg(P.shifted(P.OBJ_STATUS, sensor), own_header)
+        elif kind == 8:      # the sensor's configuration replies, random bytes, any DLC (a 0x408 may announce 0x60E)
+            base = int(rng.choice(REPLY_IDS))
+            length = dlc[base] if rng.integers(2) else int(rng.integers(0, 9))
+            m = _msg(P.shifted(base, sensor), rng.integers(0, 256, length, dtype=np.uint8))
         else:                # unknown IDs anywhere, standard and extended
             m = _msg(int(rng.integers(0, 0x800)), rng.integers(0, 256, int(rng.integers(0, 9)), dtype=np.uint8))
             if m.arbitration_id in ours:
@@ -210,22 +227,44 @@ def _bogus_cycle(rng: np.random.Generator, real_counter: int) -> tuple[list[can.
                                                           "Obj_InterfaceVersion": 1})
     frames = [_msg(P.OBJ_STATUS, header)]
     for _ in range(int(rng.integers(0, n)) if n else 0):
-        frames.append(_msg(int(rng.choice([P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED])),
+        frames.append(_msg(int(rng.choice([P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED, P.OBJ_WARNING])),
                            rng.integers(0, 256, 8, dtype=np.uint8)))
-        if frames[-1].arbitration_id == P.OBJ_QUALITY:
-            frames[-1].data = frames[-1].data[:7]
-            frames[-1].dlc = 7
+        length = {P.OBJ_QUALITY: 7, P.OBJ_WARNING: 4}.get(frames[-1].arbitration_id, 8)
+        frames[-1].data = frames[-1].data[:length]
+        frames[-1].dlc = length
     return frames, n == 0
 
 
-def _fuzz(cycles, rng: np.random.Generator, garbage_per_cycle: int = 12):
-    """Interleave the node's cycles with garbage between and inside them; returns (stream, counts)."""
-    stream, counts = [], {"garbage": 0, "bogus_empty": 0, "stray_state_off": 0}
-    for frames, *_ in cycles:
-        frames = list(frames)
+def _fuzz(cycles, rng: np.random.Generator, garbage_per_cycle: int = 12, gaps: bool = False):
+    """Interleave the node's cycles with garbage between and inside them; returns (stream, counts, the cycles
+    that must arrive intact).
+
+    ``gaps``: also leave out whole cycles (lost on the way) and single list frames of others (so those cycles
+    must *not* arrive), and give some of the node's own frames NaN, negative or backward timestamps."""
+    stream, counts = [], {"garbage": 0, "bogus_empty": 0, "stray_state_off": 0, "lost": 0, "truncated": 0,
+                          "bad_stamps": 0}
+    expected = []
+    for cycle in cycles:
+        frames = [_msg(m.arbitration_id, m.data, m.timestamp) for m in cycle[0]]
         h = next(i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_STATUS)
         header = bytes(frames[h].data)
         body = frames[h + 1:]
+        if gaps and rng.integers(40) == 0:                  # lost on the way, whole
+            counts["lost"] += 1
+            continue
+        lists = [i for i, m in enumerate(body) if m.arbitration_id in LIST_IDS]
+        # one list frame lost: the cycle must not arrive (with one object, a group of one frame lost whole is
+        # indistinguishable from a group not sent, so only cycles of two objects or more)
+        if gaps and sum(m.arbitration_id == P.OBJ_GENERAL for m in body) >= 2 and rng.integers(40) == 0:
+            del body[int(rng.choice(lists))]
+            counts["truncated"] += 1
+        else:
+            expected.append(cycle)
+        if gaps and rng.integers(10) == 0:                  # the node's own frames with absurd timestamps
+            own = frames[:h + 1] + body
+            for i in rng.choice(len(own), size=min(3, len(own)), replace=False):
+                own[i].timestamp = float(rng.choice([np.nan, -1.0, -1e9, own[i].timestamp - 3600.0]))
+            counts["bad_stamps"] += 1
         lists = [i for i, m in enumerate(body) if m.arbitration_id in LIST_IDS]
         if lists and rng.integers(2):                       # reorder the list frames, across groups too
             moved = [body[i] for i in rng.permutation(lists)]
@@ -253,18 +292,20 @@ def _fuzz(cycles, rng: np.random.Generator, garbage_per_cycle: int = 12):
         counts["stray_state_off"] += sum(m.arbitration_id == P.RADAR_STATE and len(m.data) == 8
                                          and not m.data[5] & 0x30 for m in inside + between)   # SendQuality/ExtInfo: bits 44, 45
         stream += between + frames[:h + 1] + body
-    return stream, counts
+    return stream, counts, expected
 
 
-def _check_fuzz(cycles, stream, counts):
+def _check_fuzz(expected, stream, counts):
     asm = CycleAssembler()
     got = list(asm.feed(stream))
-    matched, extra = _match(got, cycles)
+    matched, extra = _match(got, expected)
     st = asm.stats
     assert st.frames == len(stream) and st.decode_errors == 0               # nothing raised inside the listener
-    assert matched == len(cycles), f"{len(cycles) - matched} of {len(cycles)} well-formed cycles not intact"
+    assert matched == len(expected), f"{len(expected) - matched} of {len(expected)} well-formed cycles not intact"
     assert len(extra) <= counts["bogus_empty"] and all(len(c.objects) == 0 for c in extra)
     assert st.late_frames == 0 and st.dropped() > 0
+    assert st.lost_cycles >= counts["lost"]
+    assert st.incomplete_cycles >= counts["truncated"]
     return asm, len(extra)
 
 
@@ -274,21 +315,66 @@ def _check_fuzz(cycles, stream, counts):
 def test_fuzz_every_well_formed_cycle_arrives_intact(radar):
     rng = np.random.default_rng(13)
     cycles = _node_cycles(120, radar=radar)
-    stream, counts = _fuzz(cycles, rng)
+    stream, counts, expected = _fuzz(cycles, rng)
     assert counts["stray_state_off"] > 20 and counts["garbage"] > len(cycles) * 5
-    _check_fuzz(cycles, stream, counts)
+    _check_fuzz(expected, stream, counts)
+
+
+def _abuse_toggles(rng: np.random.Generator, n_cycles: int, start: int = 0) -> dict:
+    """Configuration changes every ~100 cycles: groups on and off, filters, collision detection on and off with
+    regions (so Obj_4_Warning comes and goes and cycles carry warning bits)."""
+    db = load_database()
+
+    def frame(name, **values):
+        m = db.get_message_by_name(name)
+        if not m.is_multiplexed():
+            values = {**{s.name: 0 for s in m.signals}, **values}
+        return _msg(m.frame_id, m.encode(values))
+
+    toggles = {}
+    for k in range(start, n_cycles, 100):
+        kind = 1 if k == start else int(rng.integers(4))
+        if kind == 0:
+            toggles[k] = _cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=int(rng.integers(2)),
+                              RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=int(rng.integers(2)))
+        elif kind == 1:
+            toggles[k] = [frame("CollDetRegionCfg", CollDetRegCfg_Activate=1, CollDetRegCfg_Coordinates_valid=1,
+                                CollDetRegCfg_RegionID=int(rng.integers(8)), CollDetRegCfg_Point1X=20.0,
+                                CollDetRegCfg_Point1Y=-4.0, CollDetRegCfg_Point2X=float(rng.uniform(40, 120)),
+                                CollDetRegCfg_Point2Y=4.0),
+                          frame("CollDetCfg", CollDetCfg_Activate=1, CollDetCfg_MinTime_valid=1,
+                                CollDetCfg_MinDetectTime=float(rng.choice([0.0, 0.5])))]
+        elif kind == 2:
+            toggles[k] = frame("CollDetCfg", CollDetCfg_Activate=int(rng.integers(2)),
+                               CollDetCfg_WarningReset=int(rng.integers(2)))
+        else:
+            toggles[k] = frame("FilterCfg", FilterCfg_Valid=1, FilterCfg_Active=int(rng.integers(2)),
+                               FilterCfg_Index=1, FilterCfg_Type=1, FilterCfg_Min_Distance=0.0,
+                               FilterCfg_Max_Distance=float(rng.uniform(30, 200)))
+    return toggles
+
+
+def test_fuzz_with_collision_warnings_gaps_and_bad_timestamps():
+    rng = np.random.default_rng(31)
+    toggles = _abuse_toggles(rng, 400, start=5)
+    cycles = _node_cycles(400, toggles=toggles, seed=3)
+    assert sum(c[5] is not None for c in cycles) > 100 and any(c[5] and any(c[5].values()) for c in cycles)
+    stream, counts, expected = _fuzz(cycles, rng, gaps=True)
+    assert counts["lost"] and counts["truncated"] and counts["bad_stamps"]
+    _check_fuzz(expected, stream, counts)
 
 
 @pytest.mark.slow
 def test_fuzz_over_a_hundred_thousand_frames():
+    """≥ 10⁵ frames: random IDs around the real ones, every DLC, random bytes, duplicates, gaps, reordering,
+    NaN/negative/backward timestamps, stray RadarState and configuration replies, bogus headers; the node's
+    configuration changing underneath (groups, filters, collision detection)."""
     rng = np.random.default_rng(2024)
-    toggles = {k: _cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=int(rng.integers(2)),
-                       RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=int(rng.integers(2)))
-               for k in range(50, 3400, 250)}
+    toggles = _abuse_toggles(rng, 3400, start=50)
     cycles = _node_cycles(3400, toggles=toggles, seed=7)
-    stream, counts = _fuzz(cycles, rng, garbage_per_cycle=24)
+    stream, counts, expected = _fuzz(cycles, rng, garbage_per_cycle=24, gaps=True)
     assert len(stream) >= 100_000
-    asm, extra = _check_fuzz(cycles, stream, counts)
+    asm, extra = _check_fuzz(expected, stream, counts)
     print(f"fuzz: {len(stream)} frames, {counts['garbage']} garbage, {counts['stray_state_off']} stray RadarState "
-          f"with both groups off, {len(cycles)} cycles intact, {extra} bogus empty cycles, "
-          f"stats {asm.stats.as_dict()}")
+          f"with both groups off, {len(expected)} cycles intact, {counts['lost']} lost and {counts['truncated']} "
+          f"truncated on the way, {extra} bogus empty cycles, stats {asm.stats.as_dict()}")

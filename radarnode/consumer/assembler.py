@@ -5,8 +5,8 @@ feed it frames from a log reader). It decodes every frame with the cantools
 database, checks the DLC, joins the frames of a cycle by object ID, and emits
 one :class:`ObjectCycle` or :class:`ClusterCycle` per well-formed cycle. A
 cycle is well-formed when the header's count of general frames arrived and
-every other group (quality, extended) arrived for exactly the same IDs or not
-at all. Everything else is counted in :class:`ConsumerStats` and skipped; the
+every other group (quality, extended, collision warning) arrived for exactly
+the same IDs or not at all. Everything else is counted in :class:`ConsumerStats` and skipped; the
 listener never raises on bad traffic. A cycle is delivered whole or counted as
 dropped (``incomplete_cycles``), never in part.
 
@@ -16,13 +16,20 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 * a cycle is complete as soon as the header's count of frames arrived in every
   group of the expected *layout*; the layout is learned from the cycles
   themselves: every group seen in any of the last ``LAYOUT_MEMORY`` complete
-  cycles (all groups until the first cycle is seen). A group the node stopped
+  cycles (0x60B, 0x60C, 0x60D until the first cycle is seen). A group the node stopped
   sending therefore drops out after ``LAYOUT_MEMORY`` cycles, each of them
   delivered at the next header instead of at once;
+* Obj_4_Warning 0x60E is a group like the others (one frame per object, after
+  0x60D) but is not expected before a cycle showed it: it comes only with
+  collision detection, and CollDetState 0x408 with Active set (sent before the
+  header every cycle while it is on) adds it to the layout for
+  ``LAYOUT_MEMORY`` headers, as RadarState does for the groups below;
 * RadarState's SendQuality/SendExtInfo bits can only *add* groups to the
   layout, for ``LAYOUT_MEMORY`` headers (so a configuration change that adds a
   group is waited for); bits that are off are ignored;
-* otherwise the cycle ends at the next header, after ``cycle_timeout_s`` of
+* otherwise the cycle ends at the next header of its kind (an object and a
+  cluster cycle are assembled side by side, so a stray header of the other
+  kind cuts nothing), after ``cycle_timeout_s`` of
   silence on the cycle (checked by :meth:`CycleAssembler.get` and
   :meth:`CycleAssembler.expire`, in wall-clock time of arrival), or on
   :meth:`CycleAssembler.flush` (end of a log).
@@ -33,7 +40,11 @@ Frames of a group that arrive after their cycle was delivered are counted as
 IDs are looked up in this consumer's ID plan (:mod:`radarnode.wire.ids`): the
 ARS 408 IDs of its sensor, its sensor's own messages, the ECU's; frames of the
 other seven sensors are counted in ``other_sensor_frames``, never decoded as
-this sensor's.
+this sensor's. The sensor's configuration replies (FilterState 0x203/0x204,
+CollDetState 0x408, CollDetRegionState 0x402, CollDetRelayCtrl 0x008) are
+counted in ``config_state_frames`` and kept as last decoded
+(:attr:`CycleAssembler.filter_state`, :attr:`CycleAssembler.coll_det_regions`, …);
+they never cut a cycle.
 """
 
 from __future__ import annotations
@@ -70,6 +81,9 @@ class ObjectCycle:
     objects: ObjectList
     has_quality: bool
     has_extended: bool
+    has_warning: bool = False
+    #: Obj_4_Warning's Obj_CollDetRegionBitfield per object (bit r: it warns in region r), when the cycle had 0x60E
+    collision_regions: np.ndarray | None = None
 
 
 @dataclass
@@ -105,7 +119,9 @@ class ConsumerStats:
     unexpected_ids: int = 0         # quality/extended for an ID the general group lacks
     extra_frames: int = 0           # more general frames than the header announced
     status_frames: int = 0          # RadarState, VersionID, ego motion, configuration
+    config_state_frames: int = 0    # the sensor's replies: FilterState 0x203/0x204, CollDet 0x408/0x402, relay 0x008
     errors_frames: int = 0          # CAN error and remote frames
+    bus_errors: int = 0             # frames the bus could not read (reported through on_error)
     boundary_frames: int = 0        # radarnode's road-boundary frames accepted
     ecu_frames: int = 0             # AccStatus / FcwStatus frames accepted
     e2e_errors: int = 0             # own frames with a wrong E2E CRC: dropped
@@ -114,7 +130,7 @@ class ConsumerStats:
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
                 + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
-                + self.e2e_errors + self.e2e_repeated)
+                + self.e2e_errors + self.e2e_repeated + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
@@ -122,7 +138,13 @@ class ConsumerStats:
 
 LAYOUT_MEMORY = 3            # cycles: how long a group stays expected after it was last seen or announced
 CYCLE_TIMEOUT_S = 0.1        # silence after which a waiting cycle is closed (longer than a 72-ms cycle)
-GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED), "cl": (P.CLUSTER_GENERAL, P.CLUSTER_QUALITY)}
+GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED, P.OBJ_WARNING),
+          "cl": (P.CLUSTER_GENERAL, P.CLUSTER_QUALITY)}
+# the layout expected before any cycle was seen: Obj_4_Warning only comes with collision detection, which
+# CollDetState 0x408 announces, so it is not waited for by default
+INITIAL_GROUPS = {"obj": (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED), "cl": GROUPS["cl"]}
+CONFIG_STATE = (P.FILTER_STATE_HEADER, P.FILTER_STATE_CFG, P.COLL_DET_STATE, P.COLL_DET_REGION_STATE,
+                P.COLL_DET_RELAY)
 GENERAL = {"obj": P.OBJ_GENERAL, "cl": P.CLUSTER_GENERAL}
 HEADERS = {P.OBJ_STATUS: "obj", P.CLUSTER_STATUS: "cl"}
 LIST_KIND = {g: kind for kind, groups in GROUPS.items() for g in groups}
@@ -185,8 +207,10 @@ class CycleAssembler(can.Listener):
         self.queue_overflow = 0
         self._queue: queue.Queue = queue.Queue(maxsize=maxsize)
         self._lock = threading.RLock()
-        self._pending: _Pending | None = None
-        self._last_done: _Pending | None = None
+        # one cycle being assembled per list kind: a header of the other kind (a switch of OutputType, or a stray
+        # frame that looks like one) does not cut the cycle in progress
+        self._pending: dict[str, _Pending] = {}
+        self._last_done: dict[str, _Pending] = {}
         self._last_counter: dict[str, int] = {}
         self._stride: dict[str, int] = {}
         # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
@@ -201,6 +225,13 @@ class CycleAssembler(can.Listener):
         self.road_boundaries: dict[str, Boundary] = {}
         #: latest decoded AccStatus / FcwStatus signals, by message name
         self.ecu_status: dict[str, dict] = {}
+        #: the sensor's configuration replies, as last decoded: FilterState_Header, FilterState_Cfg by
+        #: (FilterState_Type, FilterState_Index), CollDetState, CollDetRegionState by region ID, CollDetRelayCtrl
+        self.filter_header: dict | None = None
+        self.filter_state: dict[tuple[int, int], dict] = {}
+        self.coll_det_state: dict | None = None
+        self.coll_det_regions: dict[int, dict] = {}
+        self.relay: dict | None = None
 
     def _id_plan(self, sensor_id: int) -> dict[int, tuple[str, int]]:
         """CAN ID -> ('ars', base ID) | ('own', template ID) | ('other', CAN ID) for this consumer's sensor."""
@@ -229,7 +260,11 @@ class CycleAssembler(can.Listener):
                 logger.debug("frame %r could not be handled", msg, exc_info=True)
 
     def on_error(self, exc: Exception) -> None:
-        logger.warning("bus error in consumer: %s", exc)
+        """A frame the bus could not read (a notifier calls this): counted in ``bus_errors``, warned once, and
+        the notifier goes on receiving."""
+        self.stats.bus_errors += 1
+        if self.stats.bus_errors == 1:
+            logger.warning("bus error in consumer: %s (further ones are counted in bus_errors)", exc)
 
     def stop(self) -> None:
         self.flush()
@@ -272,11 +307,13 @@ class CycleAssembler(can.Listener):
         self.flush()
         yield from self.drain()
 
-    def flush(self) -> None:
-        """Close the cycle being assembled (end of data or time-out)."""
+    def flush(self, kind: str | None = None) -> None:
+        """Close the cycle being assembled (of ``kind``, 'obj' or 'cl'; default both, the older first) — end of
+        data or time-out."""
         with self._lock:
-            if self._pending is not None:
-                p, self._pending = self._pending, None
+            waiting = [p for k, p in self._pending.items() if kind is None or k == kind]
+            for p in sorted(waiting, key=lambda p: p.arrival):
+                del self._pending[p.kind]
                 self._finish(p)
 
     def expire(self, now: float | None = None) -> bool:
@@ -285,13 +322,12 @@ class CycleAssembler(can.Listener):
         ``now`` is ``time.monotonic()`` by default. Returns True when a cycle was closed.
         """
         with self._lock:
-            p = self._pending
             now = time.monotonic() if now is None else now
-            if p is None or not now - p.arrival > self.cycle_timeout_s:
-                return False
-            self.stats.timed_out_cycles += 1
-            self.flush()
-            return True
+            silent = [p.kind for p in self._pending.values() if now - p.arrival > self.cycle_timeout_s]
+            for kind in silent:
+                self.stats.timed_out_cycles += 1
+                self.flush(kind)
+            return bool(silent)
 
     # --- internals ----------------------------------------------------------------
     def _handle(self, msg: can.Message) -> None:
@@ -324,6 +360,8 @@ class CycleAssembler(can.Listener):
             self._header(base, values, data, msg.timestamp)
         elif base in LIST_KIND:
             self._list_frame(base, values, data)
+        elif base in CONFIG_STATE:
+            self._config_state(base, values)
         else:
             self.stats.status_frames += 1
             if base == P.RADAR_STATE:
@@ -362,6 +400,27 @@ class CycleAssembler(can.Listener):
             v[f"{prefix}_Confidence"] / 7.0)
         self.stats.boundary_frames += 1
 
+    def _config_state(self, base: int, v: dict) -> None:
+        """The sensor's answers to configuration: kept as last decoded. A FilterState_Header starts a new
+        filter table (the FilterState_Cfg frames that follow it fill it), a CollDetState a new region table (the
+        CollDetRegionState frames that follow it); CollDetState with Active set announces
+        Obj_4_Warning, like RadarState announces groups (it can only add a group, never remove one)."""
+        self.stats.config_state_frames += 1
+        if base == P.FILTER_STATE_HEADER:
+            self.filter_header = v
+            self.filter_state = {}
+        elif base == P.FILTER_STATE_CFG:
+            self.filter_state[(int(v["FilterState_Type"]), int(v["FilterState_Index"]))] = v
+        elif base == P.COLL_DET_STATE:
+            if int(v["CollDetState_Active"]):
+                self._announced["obj"][P.OBJ_WARNING] = LAYOUT_MEMORY
+            self.coll_det_state = v
+            self.coll_det_regions = {}
+        elif base == P.COLL_DET_REGION_STATE:
+            self.coll_det_regions[int(v["CollDetRegState_RegionID"])] = v
+        else:
+            self.relay = v
+
     def _announce(self, state: dict) -> None:
         """RadarState can add groups to the expected layout (for LAYOUT_MEMORY headers), never remove any."""
         if int(state["RadarState_SendQualityCfg"]):
@@ -373,16 +432,16 @@ class CycleAssembler(can.Listener):
     def expected_groups(self, kind: str) -> set[int]:
         """Groups a cycle of ``kind`` ('obj' or 'cl') must hold before it is delivered without waiting."""
         seen = self._seen_layouts[kind]
-        groups = set().union(*seen) if seen else set(GROUPS[kind])
+        groups = set().union(*seen) if seen else set(INITIAL_GROUPS[kind])
         return groups | {GENERAL[kind]} | set(self._announced[kind])
 
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
         kind = HEADERS[base]
-        for known in (self._pending, self._last_done):
-            if known is not None and known.kind == kind and known.header == data:
+        for known in (self._pending.get(kind), self._last_done.get(kind)):
+            if known is not None and known.header == data:
                 self.stats.duplicate_frames += 1     # the same header again: not a new cycle
                 return
-        self.flush()
+        self.flush(kind)
         if kind == "obj":
             n, n_near, counter = int(values["Obj_NofObjects"]), 0, int(values["Obj_MeasCounter"])
         else:
@@ -408,14 +467,14 @@ class CycleAssembler(can.Listener):
             announced[g] -= 1
             if announced[g] < 0:
                 del announced[g]
-        self._pending = _Pending(kind, n, counter, timestamp, data, n_near)
-        self._maybe_complete()
+        self._pending[kind] = _Pending(kind, n, counter, timestamp, data, n_near)
+        self._maybe_complete(kind)
 
     def _list_frame(self, base: int, values: dict, data: bytes) -> None:
-        pending = self._pending
         kind = LIST_KIND[base]
+        pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
-        if pending is None or pending.kind != kind:
+        if pending is None:
             self._stray_list_frame(kind, base, oid, data)
             return
         pending.arrival = time.monotonic()
@@ -434,12 +493,12 @@ class CycleAssembler(can.Listener):
                 return
             pending.order.append(oid)
         group[oid] = (data, values)
-        self._maybe_complete()
+        self._maybe_complete(kind)
 
     def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
         """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
-        done = self._last_done
-        if done is not None and done.kind == kind:
+        done = self._last_done.get(kind)
+        if done is not None:
             prior = done.groups.get(base, {}).get(oid)
             if prior is not None and prior[0] == data:
                 self.stats.duplicate_frames += 1
@@ -451,8 +510,8 @@ class CycleAssembler(can.Listener):
                 return
         self.stats.orphan_frames += 1
 
-    def _maybe_complete(self) -> None:
-        p = self._pending
+    def _maybe_complete(self, kind: str) -> None:
+        p = self._pending[kind]
         if p.bad:
             return
         general = p.groups.get(GENERAL[p.kind], {})
@@ -463,7 +522,7 @@ class CycleAssembler(can.Listener):
                 return
         if all(set(group) == set(general) for group in p.groups.values()):
             p.early = True
-            self._pending = None
+            del self._pending[kind]
             self._finish(p)
 
     def _finish(self, p: _Pending) -> None:
@@ -482,14 +541,18 @@ class CycleAssembler(can.Listener):
             return
         if p.expected:
             seen.append(frozenset(present))
-        self._last_done = p
+        self._last_done[p.kind] = p
         rows = [general[i][1] for i in p.order]
         if p.kind == "obj":
             q = p.groups.get(P.OBJ_QUALITY)
             e = p.groups.get(P.OBJ_EXTENDED)
+            w = p.groups.get(P.OBJ_WARNING)
             ol = P.objects_from_signals(rows, [q[i][1] if q else None for i in p.order],
                                         [e[i][1] if e else None for i in p.order])
-            cycle: ObjectCycle | ClusterCycle = ObjectCycle(p.meas_counter, p.timestamp, ol, bool(q), bool(e))
+            regions = np.array([int(w[i][1]["Obj_CollDetRegionBitfield"]) for i in p.order], dtype=np.int64) \
+                if w else None
+            cycle: ObjectCycle | ClusterCycle = ObjectCycle(p.meas_counter, p.timestamp, ol, bool(q), bool(e),
+                                                            bool(w), regions)
             self.stats.object_cycles += 1
         else:
             q = p.groups.get(P.CLUSTER_QUALITY)

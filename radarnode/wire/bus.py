@@ -8,10 +8,16 @@ from its configuration file (``~/can.conf``, ``can.ini``) and the environment
 from __future__ import annotations
 
 import argparse
+import logging
+import socket
 
 import can
 
 from radarnode.errors import ConfigError
+
+logger = logging.getLogger(__name__)
+
+UDP_RECEIVE_BUFFER_BYTES = 4 << 20   # udp_multicast: about 5000 datagrams, a second of a saturated 500 kbit/s bus
 
 
 def add_bus_arguments(parser: argparse.ArgumentParser, bitrate: bool = True) -> None:
@@ -55,6 +61,31 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
     """Open the bus the arguments describe; a bad interface or channel raises ConfigError."""
     kwargs = bus_kwargs(args)
     try:
-        return can.Bus(**kwargs)
+        bus = can.Bus(**kwargs)
     except (can.CanError, ValueError, OSError, ImportError, NotImplementedError) as exc:
         raise ConfigError(f"cannot open CAN bus {kwargs or '(from python-can config)'}: {exc}") from None
+    enlarge_receive_buffer(bus)
+    return bus
+
+
+def enlarge_receive_buffer(bus: can.BusABC, size: int = UDP_RECEIVE_BUFFER_BYTES) -> int | None:
+    """Give a ``udp_multicast`` bus's socket a receive buffer of ``size`` bytes; returns the size in force.
+
+    python-can leaves the operating system's default (about 200 KiB, some 250 datagrams: 50 ms of a saturated
+    500 kbit/s bus), so a process that is busy or descheduled for longer loses frames in the kernel. A CAN
+    controller's FIFO plays this role on a real bus. Other interfaces, or a python-can whose internals differ,
+    are left as they are (None)."""
+    sock = getattr(getattr(bus, "_multicast", None), "_socket", None)
+    if not isinstance(sock, socket.socket):
+        return None
+    for option in (getattr(socket, "SO_RCVBUFFORCE", None), socket.SO_RCVBUF):   # FORCE: beyond rmem_max (root)
+        if option is None:
+            continue
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, option, size)
+            break
+        except OSError:
+            continue
+    got = sock.getsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF)
+    logger.debug("udp_multicast receive buffer: %d bytes", got)
+    return got

@@ -2,12 +2,20 @@
 
 :class:`RadarNode` owns the radar model and turns each cycle into the ordered
 list of ARS 408-21 frames: RadarState 0x201 at start, once a second and after
-every configuration change; VersionID 0x700 once a second; then either the
-object list (0x60A, all 0x60B, all 0x60C if SendQuality, all 0x60D if
-SendExtInfo, one object order in every group) or the cluster list (0x600, all
-0x701, all 0x702 if SendQuality). It keeps a bus-load budget: when a cycle
-would not fit, the lowest-priority objects are dropped, counted, and warned
-about once. Pacing and I/O are the runner's job (``radarnode.wire.runner``).
+every configuration change; VersionID 0x700 once a second; the answers to
+configuration (FilterState 0x203 + 0x204 after a FilterCfg 0x202; CollDetState
+0x408 + one CollDetRegionState 0x402 per region after a CollDetCfg 0x400 or
+CollDetRegionCfg 0x401, and every cycle while collision detection is on); then
+either the object list (0x60A, all 0x60B, all 0x60C if SendQuality, all 0x60D
+if SendExtInfo, all 0x60E while collision detection is on, one object order in
+every group) or the cluster list (0x600, all 0x701, all 0x702 if SendQuality);
+CollDetRelayCtrl 0x008 while collision detection and CtrlRelay are on; then the
+node's own road-boundary frames. Configuration received before a cycle is
+computed applies to it, and a burst of configuration messages is answered once,
+with the state in force. The filters and collision detection are
+:mod:`radarnode.wire.config`. It keeps a bus-load budget: when a cycle would not
+fit, the lowest-priority objects are dropped, counted, and warned about once.
+Pacing and I/O are the runner's job (``radarnode.wire.runner``).
 """
 
 from __future__ import annotations
@@ -21,22 +29,27 @@ import can
 import numpy as np
 
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
-from radarnode.perception.types import RadarFrame
+from radarnode.perception.types import MEAS_NEW, RadarFrame
 from radarnode.radar.setup import radar_config
 from radarnode.radar.models import make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
+from radarnode.schema import Source
 from radarnode.wire import ars408 as P
 from radarnode.wire import ids
 from radarnode.wire.busload import frame_bits
 from radarnode.wire.codec import MessageCodec
+from radarnode.wire.config import MAX_OBJECT_ID, TYPE_CLUSTER, TYPE_NAMES, TYPE_OBJECT, CollisionDetection, ListFilters
 from radarnode.wire.dbc import load_database, load_own_database
 from radarnode.wire.e2e import E2EProtector
 
 logger = logging.getLogger(__name__)
 
 MOTION_TIMEOUT_S = 1.0     # ego-motion input older than this is "missing"
+MIN_MAX_DISTANCE_M = 10    # the smallest RadarCfg_MaxDistance accepted
+# what the node receives (base IDs, shifted by 0x10 x SensorID on the bus)
+RX_IDS = (P.RADAR_CFG, P.FILTER_CFG, P.SPEED_INFO, P.YAW_RATE_INFO, P.COLL_DET_CFG, P.COLL_DET_REGION_CFG)
 STATUS_PERIOD_S = 1.0      # RadarState and VersionID
 
 
@@ -90,10 +103,14 @@ class RadarNode:
         self.period_s = scenario.period_s
         self.bitrate = setup.bitrate
         self.bus_load_limit = setup.bus_load_limit
+        max_distance = setup.max_distance_m if setup.max_distance_m is not None else self.preset.max_range_m
+        if max_distance > self.preset.max_range_m + 1e-9:
+            raise Source.of_lines(scenario.source, scenario.lines).error(
+                "radar.max_distance_m", f"field 'radar.max_distance_m': value {max_distance:g} is not allowed; "
+                f"expected 2..{self.preset.max_range_m:g} m (what preset {self.preset.name} can see)")
         self.config = NodeConfig(
             output_type=P.OUTPUT_CODES[setup.output], send_quality=setup.send_quality,
-            send_ext_info=setup.send_ext_info,
-            max_distance_m=setup.max_distance_m if setup.max_distance_m is not None else self.preset.max_range_m,
+            send_ext_info=setup.send_ext_info, max_distance_m=max_distance,
             sort_index=P.SORT_CODES[setup.sort_index], radar_power=setup.radar_power, sensor_id=setup.sensor_id)
         self.scene = Scene(scenario)
         self.fidelity = fidelity or scenario.fidelity
@@ -104,6 +121,16 @@ class RadarNode:
         self.codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in self.db.messages
                        if not m.is_multiplexed()}
         self.own_codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in load_own_database().messages}
+        self._rx_messages = {base: self.db.get_message_by_frame_id(base) for base in RX_IDS}
+        self._rx_length = {base: m.length for base, m in self._rx_messages.items()}
+        #: the filters (FilterCfg 0x202) and collision detection (0x400/0x401) in force
+        self.filters = ListFilters(self.db)
+        self.coll_det = CollisionDetection(self.db)
+        self._reply_filters = False      # FilterState 0x203/0x204 due with the next cycle
+        self._reply_coll_det = False     # CollDetState 0x408 / CollDetRegionState 0x402 due with the next cycle
+        self._rx_t = 0.0                 # scenario time given to the frame being received
+        # when the model's tracker first reported each object ID (NaN: not reported last cycle), for Lifetime
+        self._born = np.full(MAX_OBJECT_ID + 1, np.nan)
         wants = setup.road_boundaries
         if wants is None:
             g = scenario.road.guardrails
@@ -122,19 +149,43 @@ class RadarNode:
 
     # --- input ------------------------------------------------------------
     def receive(self, msg: can.Message, t_s: float) -> None:
-        """Handle a received frame (configuration and ego motion); anything else is ignored."""
-        if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame:
+        """Handle a received frame: configuration (0x200, 0x202, 0x400, 0x401) and ego motion (0x300, 0x301).
+
+        Frames of other IDs (another sensor's, the node's own traffic) are not for this node and ignored.
+        What is for it but cannot be used is dropped and counted, never raised: error frames
+        (``rx_error_frames``), remote frames (``rx_remote_frames``), a wrong DLC (``rx_wrong_dlc``), a signal
+        outside its DBC range (``rx_out_of_range``, ``rx_invalid_speed_direction``); configuration values the
+        sensor refuses are counted in ``config_rejected`` (see :meth:`_refuse`).
+        """
+        self._rx_t = t_s
+        if msg.is_error_frame:
+            self.counters["rx_error_frames"] += 1
             return
+        if msg.is_extended_id:
+            return                       # a 29-bit ID is another message altogether
         base = msg.arbitration_id - 0x10 * self.config.sensor_id
-        if base not in (P.RADAR_CFG, P.SPEED_INFO, P.YAW_RATE_INFO):
+        if base not in RX_IDS:
             return
-        codec = self.codecs[base]
-        if len(msg.data) != codec.length:
+        if msg.is_remote_frame:
+            self.counters["rx_remote_frames"] += 1
+            return
+        length = self._rx_length[base]
+        if len(msg.data) != length:
             self.counters["rx_wrong_dlc"] += 1
-            self._warn_once(f"dlc{base}", "frame 0x%X has DLC %d, expected %d; dropped",
-                            msg.arbitration_id, len(msg.data), codec.length)
+            self._warn_once(f"dlc{base}", "frame 0x%X has DLC %d, expected %d; dropped (counted in rx_wrong_dlc, "
+                            "warned once)", msg.arbitration_id, len(msg.data), length)
             return
-        values = {k: float(v[0]) for k, v in codec.decode(np.frombuffer(bytes(msg.data), np.uint8)[None, :]).items()}
+        if base == P.FILTER_CFG:         # multiplexed: decoded by cantools
+            self.counters["rx_filter_cfg"] += 1
+            f, why = self.filters.configure(bytes(msg.data))
+            if why is not None:
+                self._refuse("filter", "FilterCfg: %s; the filter table is unchanged", why)
+            elif f is not None:
+                logger.debug("filter %s %s: active=%s [%g, %g]", TYPE_NAMES[f.type], f.name, f.active, f.min, f.max)
+            self._reply_filters = True
+            return
+        # one frame: cantools' compiled decoder (the vectorised codec pays numpy's per-call cost for every signal)
+        values = self._rx_messages[base].decode(bytes(msg.data), decode_choices=False, scaling=True)
         if base == P.SPEED_INFO:
             direction = int(values["RadarDevice_SpeedDirection"])
             if direction == 3:
@@ -144,12 +195,53 @@ class RadarNode:
             self._speed = (sign * values["RadarDevice_Speed"], t_s)
             self.counters["rx_speed"] += 1
         elif base == P.YAW_RATE_INFO:
-            self._yaw = (values["RadarDevice_YawRate"], t_s)
+            yaw = values["RadarDevice_YawRate"]
+            if not -327.68 - 1e-9 <= yaw <= 327.66 + 1e-9:       # raw 0xFFFF: beyond the DBC's range
+                self.counters["rx_out_of_range"] += 1
+                self._warn_once("yawrange", "YawRateInformation: %.2f deg/s is outside -327.68..327.66; dropped "
+                                "(counted in rx_out_of_range, warned once)", yaw)
+                return
+            self._yaw = (yaw, t_s)
             self.counters["rx_yaw_rate"] += 1
+        elif base == P.COLL_DET_CFG:
+            self.counters["rx_coll_det_cfg"] += 1
+            self.coll_det.configure(values)
+            self._reply_coll_det = True
+        elif base == P.COLL_DET_REGION_CFG:
+            self.counters["rx_coll_det_region_cfg"] += 1
+            why = self.coll_det.configure_region(values)
+            if why is not None:
+                self._refuse("region", "CollDetRegionCfg: %s; refused", why)
+            self._reply_coll_det = True
         else:
             self._apply_config(values)
 
+    def _refuse(self, what: str, fmt: str, *args) -> None:
+        """A configuration value the sensor does not accept: nothing changes, and it says so.
+
+        The ARS 408's RadarState has no "configuration refused" bit; of its error flags (Voltage, Temporary,
+        Temperature, Interference, Persistent) the one for a condition that clears by itself is
+        ``RadarState_Temporary_Error``: it is set in every RadarState of the next second, and a RadarState
+        goes out with the next cycle. The reply shows what is in force — RadarState echoes the MaxDistance
+        (and every other field) still in force, FilterState the filters, CollDetRegionState the regions — so an
+        ECU tells a refusal from a missed deadline (which sets the same flag) by the echo. Counted in
+        ``config_rejected`` and warned about once per kind.
+        """
+        self.counters["config_rejected"] += 1
+        self._fault_until_s = max(self._fault_until_s, self._rx_t + self.period_s + STATUS_PERIOD_S)
+        self._status_now = True
+        self._warn_once(f"refused-{what}", fmt + " (counted in config_rejected, RadarState_Temporary_Error set "
+                        "for 1 s; warned once)", *args)
+
     def _apply_config(self, v: dict[str, float]) -> None:
+        """RadarConfiguration 0x200: each field with its valid bit; a value the sensor refuses leaves the field
+        as it was (:meth:`_refuse`).
+
+        MaxDistance is honoured from 10 m up to what the preset can see (``max_range_m``, 250 m for
+        ``ars408_like``: the model cannot report farther); a larger value — the DBC allows 2046 m, the real
+        sensor's extended range 1200 m — is refused, not silently capped: RadarState keeps echoing the
+        MaxDistance in force and sets Temporary_Error for a second.
+        """
         cfg = self.config
         self.counters["rx_config"] += 1
 
@@ -158,17 +250,17 @@ class RadarNode:
                 return None
             value = int(round(v[name]))
             if allowed is not None and value not in allowed:
-                self.counters["config_rejected"] += 1
-                self._warn_once(f"cfg{name}", "RadarConfiguration: %s=%d is not allowed (allowed %d..%d); "
-                                "field ignored", name, value, allowed.start, allowed.stop - 1)
+                self._refuse(f"cfg{name}", "RadarConfiguration: %s=%d is not allowed (allowed %d..%d); field "
+                             "ignored", name, value, allowed.start, allowed.stop - 1)
                 return None
             return value
 
         if (x := take("RadarCfg_MaxDistance_valid", "RadarCfg_MaxDistance")) is not None:
-            if x < 10:
-                self.counters["config_rejected"] += 1
-                self._warn_once("cfgmaxd", "RadarConfiguration: MaxDistance=%d m is not allowed (10..2046 m); "
-                                "field ignored", x)
+            top = self.preset.max_range_m
+            if not MIN_MAX_DISTANCE_M <= x <= top + 1e-9:
+                self._refuse("cfgmaxd", "RadarConfiguration: MaxDistance=%d m is not allowed (allowed %d..%g m: "
+                             "what preset %s can see); MaxDistance stays %g m", x, MIN_MAX_DISTANCE_M, top,
+                             self.preset.name, cfg.max_distance_m)
             else:
                 cfg.max_distance_m = float(x)
         if (x := take("RadarCfg_SensorID_valid", "RadarCfg_SensorID", range(8))) is not None:
@@ -265,6 +357,18 @@ class RadarNode:
             "Version_ExtendedRange": 0, "Version_CountryCode": 0})[0]
         return [(P.RADAR_STATE, state), (P.VERSION_ID, version)]
 
+    def _lifetimes(self, ol, t_s: float) -> np.ndarray:
+        """Seconds since the model's tracker first reported each object (for the Lifetime filter), shape (n,).
+
+        An object is born when its ID was not in the previous cycle's list or its MeasState is "new"."""
+        slot = np.clip(ol.id, 0, MAX_OBJECT_ID)
+        born = self._born[slot]
+        new = np.isnan(born) | (ol.meas_state == MEAS_NEW)
+        born = np.where(new, t_s, born)
+        self._born[:] = np.nan
+        self._born[slot] = born
+        return t_s - born
+
     def _priority(self, ranges: np.ndarray, rcs: np.ndarray) -> np.ndarray:
         """Indices from most to least important: by RCS when SortIndex says so, else nearest first."""
         return np.argsort(-rcs, kind="stable") if self.config.sort_index == 2 else np.argsort(ranges, kind="stable")
@@ -300,12 +404,34 @@ class RadarNode:
             self._status_now = False
             while self._next_status_s <= t_s + 1e-9:
                 self._next_status_s += STATUS_PERIOD_S
-        fixed_bits = int(np.sum(frame_bits(np.array([len(p) for _, p in out + own] + [8], dtype=np.int64))))
-        dropped = 0
+        if self._reply_filters:
+            out += [(base, np.frombuffer(data, np.uint8)) for base, data in self.filters.state_payloads()]
+            self._reply_filters = False
+        # CollDetState and the regions' states go out right before the list header: every cycle while collision
+        # detection is on (a consumer learns from it that Obj_4_Warning follows), once after a change otherwise
+        coll_det_now = self.coll_det.active or self._reply_coll_det
+        self._reply_coll_det = False
+        warnings = self.coll_det.active and cfg.output_type == P.OUTPUT_OBJECTS
+        relay = self.coll_det.active and cfg.ctrl_relay
+        fixed = [len(p) for _, p in out + own] + [8] + (self.coll_det.state_dlcs() if coll_det_now else []) \
+            + ([1] if relay else [])
+        fixed_bits = int(np.sum(frame_bits(np.array(fixed, dtype=np.int64))))
+        lifetime = self._lifetimes(frame.objects, t_s)
+        dropped = filtered = 0
+        header_at = len(out)
+        evaluated = False
         if cfg.output_type == P.OUTPUT_OBJECTS:
             ol = frame.objects
-            keep = self._priority(ol.range_m, ol.rcs_dbsm)[:MAX_OBJECTS]
-            groups = [8] + ([7] if cfg.send_quality else []) + ([8] if cfg.send_ext_info else [])
+            mask = self.filters.object_mask(ol, lifetime)
+            filtered = int((~mask).sum())
+            keep = self._priority(ol.range_m, ol.rcs_dbsm)
+            keep = keep[mask[keep]][:MAX_OBJECTS]
+            cap = self.filters.max_count(TYPE_OBJECT)
+            if cap is not None and len(keep) > cap:
+                filtered += len(keep) - cap
+                keep = keep[:cap]
+            groups = [8] + ([7] if cfg.send_quality else []) + ([8] if cfg.send_ext_info else []) \
+                + ([4] if warnings else [])
             n_fit = self._fit(len(keep), groups, fixed_bits)
             dropped = len(keep) - n_fit
             ol = ol.take(keep[:n_fit])
@@ -316,13 +442,33 @@ class RadarNode:
                 "Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
                 "Obj_InterfaceVersion": P.INTERFACE_VERSION})[0]))
             if len(ol):
-                out += [(P.OBJ_GENERAL, row) for row in self.codecs[P.OBJ_GENERAL].encode(general)]
+                rows = self.codecs[P.OBJ_GENERAL].encode(general)
+                out += [(P.OBJ_GENERAL, row) for row in rows]
                 if cfg.send_quality:
                     out += [(P.OBJ_QUALITY, row) for row in self.codecs[P.OBJ_QUALITY].encode(quality)]
                 if cfg.send_ext_info:
                     out += [(P.OBJ_EXTENDED, row) for row in self.codecs[P.OBJ_EXTENDED].encode(extended)]
+            if warnings:
+                # the regions are tested on the positions as sent (decoded back from the frames)
+                sent = self.codecs[P.OBJ_GENERAL].decode(rows) if len(ol) else \
+                    {"Obj_DistLong": np.zeros(0), "Obj_DistLat": np.zeros(0)}
+                result = self.coll_det.evaluate(t_s, ol.id, sent["Obj_DistLong"], sent["Obj_DistLat"])
+                evaluated = True
+                if len(ol):
+                    out += [(P.OBJ_WARNING, row) for row in self.codecs[P.OBJ_WARNING].encode(
+                        {"Obj_ID": ol.id, "Obj_CollDetRegionBitfield": result.bits})]
         elif cfg.output_type == P.OUTPUT_CLUSTERS:
             cl = frame.clusters
+            mask = self.filters.cluster_mask(cl)
+            cap = self.filters.max_count(TYPE_CLUSTER)
+            if cap is not None and int(mask.sum()) > cap:      # keep the nearest, in near-before-far order
+                idx = np.flatnonzero(mask)
+                mask[:] = False
+                mask[np.sort(idx[np.argsort(cl.range_m[idx], kind="stable")[:cap]])] = True
+            filtered = int((~mask).sum())
+            if filtered:
+                cl = cl.take(mask)
+                cl.id = np.arange(len(cl), dtype=np.int64)
             groups = [8] + ([5] if cfg.send_quality else [])
             n_fit = self._fit(len(cl), groups, fixed_bits)
             dropped = len(cl) - n_fit
@@ -339,6 +485,17 @@ class RadarNode:
                 out += [(P.CLUSTER_GENERAL, row) for row in self.codecs[P.CLUSTER_GENERAL].encode(general)]
                 if cfg.send_quality:
                     out += [(P.CLUSTER_QUALITY, row) for row in self.codecs[P.CLUSTER_QUALITY].encode(quality)]
+        if coll_det_now:
+            if not evaluated:            # no object list this cycle: the regions see no objects
+                self.coll_det.evaluate(t_s, np.zeros(0, np.int64), np.zeros(0), np.zeros(0))
+            state = [(base, np.frombuffer(data, np.uint8))
+                     for base, data in self.coll_det.state_payloads(self._meas_counter)]
+            out[header_at:header_at] = state
+        if relay:
+            out.append((P.COLL_DET_RELAY, self.codecs[P.COLL_DET_RELAY].encode(
+                {"CollDetRelayCtrl_Param": self.coll_det.relay_bits()})[0]))
+        if filtered:
+            self.counters["items_filtered"] += filtered
         if dropped:
             self.counters["objects_dropped_busload"] += dropped
             self._warn_once("busload", "cycle at t=%.3f s does not fit %.0f %% of %d bit/s in %.1f ms: dropped %d "
@@ -376,6 +533,10 @@ class RadarNode:
                         "RadarState_Temporary_Error and counted in cycles_missed_deadline (warned once)", t_s,
                         f"went out of its tolerance, {1e3 * late_s:.1f} ms after its deadline" if computed else
                         f"could not be computed before its deadline (by {1e3 * late_s:.1f} ms)", lost)
+
+    def warn_once(self, key: str, fmt: str, *args) -> None:
+        """Log a warning the first time ``key`` comes up (per-frame trouble is counted, not logged each time)."""
+        self._warn_once(key, fmt, *args)
 
     def _warn_once(self, key: str, fmt: str, *args) -> None:
         if key not in self._warned:

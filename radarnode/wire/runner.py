@@ -41,6 +41,10 @@ Sink = Callable[[can.Message], None]
 DEADLINE_TOLERANCE_S = 0.002   # a cycle ready later than this after its deadline is dropped and flagged
 _SLEEP_MARGIN_S = 0.002        # stop polling the bus this long before a deadline, then sleep to it …
 _SPIN_S = 0.0005               # … and spin the last half millisecond (a sleep's wake-up is late under load)
+KEEP_CYCLES = 50_000          # RunStats keeps the send times of this many cycles (an hour at 72 ms)
+_DRAIN_S = 0.004               # real time: the longest a poll(0) spends on queued input before computing a cycle
+_MAX_UNREADABLE_IN_ROW = 64    # a poll gives up after this many frames in a row the bus could not read
+_UNREADABLE = object()         # what a poll got instead of a frame the bus could not read
 
 
 @dataclass
@@ -52,9 +56,10 @@ class RunStats:
     bits: int = 0
     duration_s: float = 0.0
     missed: int = 0                 # cycles not sent because they were not ready in time (real time)
-    cycle_start_s: list[float] = field(default_factory=list)   # real time: send time of every cycle sent,
-    #                                                            from the schedule's origin (s)
-    send_error_s: list[float] = field(default_factory=list)    # real time: send time minus deadline (s)
+    # real time, the last KEEP_CYCLES cycles sent (bounded, so that a node running for days does not grow):
+    cycle_start_s: deque = field(default_factory=lambda: deque(maxlen=KEEP_CYCLES))  # send time from the origin
+    send_error_s: deque = field(default_factory=lambda: deque(maxlen=KEEP_CYCLES))   # send time minus deadline
+    rx_drain_cut: int = 0           # real time: polls that stopped with input still queued (a flooded bus)
 
     def bus_load(self, bitrate: int) -> float:
         return self.bits / (bitrate * self.duration_s) if self.duration_s > 0 else 0.0
@@ -164,14 +169,42 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
     rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
 
     def poll(timeout: float) -> None:
+        """Receive for up to ``timeout`` seconds: whatever is queued, then what arrives until then.
+
+        The time is bounded whatever arrives (a bus flooded faster than frames can be handled must not hold
+        the node past its deadline): in real time it drains for at most ``timeout`` (``_DRAIN_S`` when
+        ``timeout`` is 0) and what is left waits for the next poll (or is dropped by the bus's own queue). In
+        simulated time it drains everything queued, so that a run stays deterministic."""
         if recv is None:
             if timeout > 0:
                 time.sleep(timeout)
             return
-        msg = recv(timeout)
+        end = time.perf_counter() + max(timeout, _DRAIN_S)
+        msg = receive(timeout)
+        unreadable_in_row = 0
         while msg is not None:
-            node.receive(msg, rx_t[0])
-            msg = recv(0.0)
+            if msg is _UNREADABLE:
+                unreadable_in_row += 1
+                if unreadable_in_row >= _MAX_UNREADABLE_IN_ROW:     # a bus that only raises: try next time
+                    return
+            else:
+                unreadable_in_row = 0
+                node.receive(msg, rx_t[0])
+            if clock.realtime and time.perf_counter() >= end:
+                stats.rx_drain_cut += 1
+                return
+            msg = receive(0.0)
+
+    def receive(timeout: float) -> can.Message | object | None:
+        """One frame from the bus; one the bus cannot read (a corrupt datagram on udp_multicast, a frame
+        python-can's checks refuse) is counted in the node's ``rx_unreadable`` and skipped, never raised."""
+        try:
+            return recv(timeout)
+        except (can.CanError, ValueError, TypeError) as exc:
+            node.counters["rx_unreadable"] += 1
+            node.warn_once("rx_unreadable", "a frame the bus could not read was skipped (%s); counted in "
+                           "rx_unreadable, warned once", exc)
+            return _UNREADABLE
 
     def send(messages: list[can.Message]) -> None:
         for m in messages:

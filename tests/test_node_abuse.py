@@ -1,0 +1,196 @@
+"""A node under bad and flooding input (issue 13, item 9): malformed and useless 0x200/0x202/0x300/0x301/0x400/0x401
+frames, remote and error frames, frames the bus cannot read. It keeps its cycle, counts exactly what it refused,
+a valid message among the flood still takes effect, and the consumer receives every cycle intact.
+
+The real-time version over udp_multicast (three processes, a flood of 4000 frames/s) is ``benchmarks/soak.py``;
+``tests/test_soak.py`` runs it briefly."""
+
+from __future__ import annotations
+
+from collections import Counter, deque
+
+import can
+import numpy as np
+import pytest
+
+from radarnode.consumer.assembler import CycleAssembler
+from radarnode.wire import ars408 as P
+from radarnode.wire.dbc import load_database
+from radarnode.wire.node import EgoMotionSender, RadarNode
+from radarnode.wire.runner import SimulatedClock, run_node
+from tests.helpers import scenario
+from tests.test_config_protocol import ACTORS, coll_det_cfg, filter_cfg, radar_cfg, region_cfg
+
+DLC = {0x200: 8, 0x202: 8, 0x300: 2, 0x301: 2, 0x400: 2, 0x401: 8}
+
+
+def _raw_filter(index: int, lo_raw: int, hi_raw: int, ftype: int = 1, valid: int = 1) -> bytes:
+    """A FilterCfg payload from raw 12-bit bounds (reaches values cantools would refuse to encode)."""
+    word = (valid << 1 | 1 << 2 | index << 3 | ftype << 7) << 56 | (lo_raw & 0xFFF) << 40 | (hi_raw & 0xFFF) << 24
+    return word.to_bytes(8, "big")
+
+
+def _abuse(rng: np.random.Generator, n: int, sensor: int = 0) -> tuple[list, Counter]:
+    """``n`` bad or useless frames for sensor ``sensor``'s inputs, and what the node must count for them."""
+    out, expect = [], Counter()
+    refused_200 = [dict(RadarCfg_OutputType_valid=1, RadarCfg_OutputType=3),
+                   dict(RadarCfg_RadarPower_valid=1, RadarCfg_RadarPower=6),
+                   dict(RadarCfg_MaxDistance_valid=1, RadarCfg_MaxDistance=1200),
+                   dict(RadarCfg_MaxDistance_valid=1, RadarCfg_MaxDistance=2),
+                   dict(RadarCfg_SortIndex_valid=1, RadarCfg_SortIndex=5),
+                   dict(RadarCfg_RCS_Threshold_Valid=1, RadarCfg_RCS_Threshold=4)]
+    refused_202 = [_raw_filter(15, 0, 1), _raw_filter(1, 4000, 10), _raw_filter(6, 0, 10, ftype=0),
+                   _raw_filter(8, 0, 4095), _raw_filter(8, 9, 9), _raw_filter(13, 0, 5, ftype=1, valid=1)[:7]]
+    shift = 0x10 * sensor
+
+    def msg(base, data, **kw):
+        return can.Message(arbitration_id=base + shift, data=data, is_extended_id=kw.pop("ext", False), **kw)
+
+    for _ in range(n):
+        kind = int(rng.integers(13))
+        base = int(rng.choice(list(DLC)))
+        if kind <= 2:
+            length = int(rng.choice([d for d in range(9) if d != DLC[base]]))
+            out.append(msg(base, bytes(rng.integers(0, 256, length, dtype=np.uint8))))
+            expect["rx_wrong_dlc"] += 1
+        elif kind == 3:
+            out.append(radar_cfg(sensor, **refused_200[int(rng.integers(len(refused_200)))]))
+            expect["config_rejected"] += 1
+            expect["rx_config"] += 1
+        elif kind == 4:                                    # a flood of no-op RadarConfiguration
+            out.append(radar_cfg(sensor))
+            expect["rx_config"] += 1
+        elif kind == 5:
+            data = refused_202[int(rng.integers(len(refused_202)))]
+            out.append(msg(P.FILTER_CFG, data))
+            expect["rx_wrong_dlc" if len(data) != 8 else "config_rejected"] += 1
+            expect["rx_filter_cfg"] += len(data) == 8
+        elif kind == 6:                                    # FilterCfg with Valid 0
+            out.append(msg(P.FILTER_CFG, _raw_filter(1, 0, 100, valid=0)))
+            expect["rx_filter_cfg"] += 1
+        elif kind == 7:                                    # speed direction 3 (reserved)
+            out.append(msg(P.SPEED_INFO, bytes([0xC0 | int(rng.integers(32)), int(rng.integers(256))])))
+            expect["rx_invalid_speed_direction"] += 1
+        elif kind == 8:                                    # yaw rate 0xFFFF, beyond the signal's range
+            out.append(msg(P.YAW_RATE_INFO, b"\xff\xff"))
+            expect["rx_out_of_range"] += 1
+        elif kind == 9:                                    # a region never given corners
+            out.append(region_cfg(int(rng.integers(5, 8)), coords=0, sensor=sensor))
+            expect["config_rejected"] += 1
+            expect["rx_coll_det_region_cfg"] += 1
+        elif kind == 10:
+            out.append(can.Message(arbitration_id=base + shift, is_remote_frame=True, dlc=DLC[base],
+                                   is_extended_id=False))
+            expect["rx_remote_frames"] += 1
+        elif kind == 11:
+            out.append(can.Message(is_error_frame=True))
+            expect["rx_error_frames"] += 1
+        else:                                              # not for this node: 29-bit IDs, another sensor's inputs
+            if rng.integers(2):
+                out.append(msg(base, bytes(8), ext=True))
+            else:
+                out.append(can.Message(arbitration_id=base + 0x10 * ((sensor + 1 + int(rng.integers(6))) % 8),
+                                       data=bytes(DLC[base]), is_extended_id=False))
+    return out, expect
+
+
+class _Unreadable:
+    """Stands for a datagram the bus cannot turn into a frame: ``recv`` raises on it."""
+
+
+def test_a_flooded_node_keeps_its_cycle_counts_what_it_refused_and_applies_a_valid_message():
+    rng = np.random.default_rng(408)
+    sc = scenario(ACTORS, duration=6.0)
+    node = RadarNode(sc)
+    n_cycles = sc.num_cycles
+    inbox: deque = deque()
+    expect = Counter()
+    per_cycle = 300                                         # ~4200 frames/s: a saturated 500 kbit/s bus
+    for k in range(n_cycles):
+        frames, e = _abuse(rng, per_cycle)
+        expect += e
+        if k == 2:                                          # the ECU's legitimate configuration, amid the flood
+            frames[150:150] = [region_cfg(0, (10.0, -2.0), (80.0, 2.0)), coll_det_cfg(1, min_time=0.5)]
+            expect.update(rx_coll_det_region_cfg=1, rx_coll_det_cfg=1)
+        if k == 40:
+            frames[100:100] = [filter_cfg(1, 0.0, 60.0)]
+            expect["rx_filter_cfg"] += 1
+        if k % 10 == 5:
+            frames.insert(7, _Unreadable())
+            expect["rx_unreadable"] += 1
+        inbox.append(frames)
+    polls = deque()
+
+    def recv(timeout):
+        # one cycle's worth of flood is queued before each cycle is computed
+        if not polls:
+            if not inbox:
+                return None
+            polls.extend(inbox.popleft())
+            polls.append(None)
+        m = polls.popleft()
+        if isinstance(m, _Unreadable):
+            raise can.CanOperationError("could not unpack received message")
+        return m
+
+    sent = []
+    asm = CycleAssembler()
+
+    def sink(m):
+        sent.append(m)
+        asm.on_message_received(m)
+
+    stats = run_node(node, clock=SimulatedClock(), sinks=[sink], recv=recv, vehicle=EgoMotionSender(node.scene))
+    asm.flush()
+    cycles = asm.drain()
+    # it keeps its cycle: every cycle computed and sent, and the consumer got every one whole
+    assert stats.cycles == n_cycles and stats.missed == 0
+    assert len(cycles) == n_cycles and asm.stats.incomplete_cycles == 0 and asm.stats.lost_cycles == 0
+    # it counted exactly what it refused
+    for key, value in expect.items():
+        assert node.counters[key] == value, (key, node.counters[key], value)
+    assert node.config.max_distance_m == 250.0 and node.config.output_type == P.OUTPUT_OBJECTS
+    assert not node.filters.filters.keys() - {(1, 1)}                   # nothing of the flood configured a filter
+    # refusals are flagged: every RadarState during the flood has Temporary_Error, and one goes out every cycle
+    db = load_database()
+    states = [db.decode_message(P.RADAR_STATE, m.data) for m in sent if m.arbitration_id == P.RADAR_STATE]
+    assert len(states) == n_cycles and all(s["RadarState_Temporary_Error"] == "Temporary error active"
+                                           for s in states)
+    # the valid messages took effect in the cycle computed after them: collision detection from cycle 2 on, the
+    # filter from cycle 40 on
+    assert all(c.has_warning for c in cycles[2:]) and not any(c.has_warning for c in cycles[:2])
+    assert any(c.collision_regions.any() for c in cycles[2:])
+    assert max(np.max(c.objects.range_m, initial=0) for c in cycles[:40]) > 60.2
+    assert all(np.all(c.objects.range_m <= 60.15) for c in cycles[40:])
+    assert asm.filter_state[(1, 1)]["FilterState_Max_Distance"] == 60.0
+    # a burst is answered once per cycle: one FilterState header per cycle, not one per FilterCfg received
+    headers = sum(m.arbitration_id == P.FILTER_STATE_HEADER for m in sent)
+    assert headers == n_cycles < node.counters["rx_filter_cfg"]
+
+
+def test_a_flood_for_another_sensor_changes_nothing():
+    rng = np.random.default_rng(7)
+    node = RadarNode(scenario(ACTORS, duration=1.0))
+    frames, _ = _abuse(rng, 3000, sensor=3)                 # its "other sensors" are 4..7, 0..1: not 0
+    frames = [m for m in frames if m.is_error_frame or P.unshifted(m.arbitration_id)[1] != 0]
+    frames += [filter_cfg(1, 0.0, 10.0, sensor=3), coll_det_cfg(1, sensor=3), region_cfg(0, (0, -5), (50, 5), sensor=3),
+               radar_cfg(3, RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=0)]
+    for m in frames:
+        node.receive(m, 0.0)
+    counted = {k: v for k, v in node.counters.items() if k != "rx_error_frames"}   # error frames have no ID
+    assert counted == {} and not node.filters.filters and not node.coll_det.active and node.config.send_quality
+
+
+@pytest.mark.parametrize("base", sorted(DLC))
+def test_every_dlc_and_random_bytes_on_every_input_never_raise(base):
+    rng = np.random.default_rng(base)
+    node = RadarNode(scenario(ACTORS, duration=1.0))
+    for length in range(9):
+        for _ in range(200):
+            node.receive(can.Message(arbitration_id=base, data=bytes(rng.integers(0, 256, length, dtype=np.uint8)),
+                                     is_extended_id=False), 0.0)
+    assert node.counters["rx_wrong_dlc"] == 8 * 200
+    out = node.cycle(0.0)                      # whatever random configuration it accepted, it still sends a cycle
+    # (random bytes may have moved it to another SensorID: its IDs move with it)
+    assert any(P.unshifted(m.arbitration_id)[0] in (P.OBJ_STATUS, P.CLUSTER_STATUS) for m in out.messages) or \
+        node.config.output_type == P.OUTPUT_NONE
