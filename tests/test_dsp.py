@@ -188,3 +188,10 @@ def test_patch_fit_of_several_peaks_at_once_equals_one_at_a_time():
         alone = fit(rd, d[i:i + 1], r[i:i + 1], np.zeros(1), np.zeros(1), half[i:i + 1])
         for a, b in zip(together, alone):
             assert np.allclose(a[i], b[0], rtol=1e-9, atol=1e-12)
+
+
+@pytest.mark.parametrize("name", ["hann", "hamming", "blackman", "boxcar", "blackmanharris"])
+@pytest.mark.parametrize("n", [8, 255, 256])
+def test_windows_are_scipys_dft_even_windows(name, n):
+    import scipy.signal
+    assert np.allclose(window(name, n), scipy.signal.get_window(name, n, fftbins=True), rtol=0, atol=1e-14)

@@ -21,8 +21,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.optimize
-import scipy.stats
 
 from radarnode.errors import ConfigError
 from radarnode.perception.motion import transition
@@ -141,6 +139,7 @@ def associate(d2: np.ndarray, gate: float, track_ids: np.ndarray | None = None,
         same = track_ids[:, None] == meas_ids[None, :]
         cost = np.where(same & (d2 <= ID_GATE_FACTOR * gate), np.minimum(d2, 1e6) - 1e6, cost)
     finite = np.where(np.isfinite(cost), cost, 1e12)
+    import scipy.optimize  # imported when first needed: a faster start
     rows, cols = scipy.optimize.linear_sum_assignment(finite)
     return [(int(i), int(j)) for i, j in zip(rows, cols) if np.isfinite(cost[i, j])]
 
@@ -166,6 +165,7 @@ def nees(x_est: np.ndarray, p_est: np.ndarray, x_true: np.ndarray) -> np.ndarray
 
 def nees_bounds(dim: int, runs: int, confidence: float = 0.95) -> tuple[float, float]:
     """Two-sided χ² bounds of the average NEES over ``runs`` Monte Carlo runs."""
+    import scipy.stats  # imported when first needed: a faster start
     lo, hi = scipy.stats.chi2.ppf([(1 - confidence) / 2, (1 + confidence) / 2], dim * runs)
     return lo / runs, hi / runs
 
@@ -178,6 +178,7 @@ def ospa(estimates: np.ndarray, truth: np.ndarray, c: float = 10.0, order: float
     if n == 0 or m == 0:
         return c
     d = np.minimum(np.linalg.norm(estimates[:, None, :] - truth[None, :, :], axis=2), c) ** order
+    import scipy.optimize  # imported when first needed: a faster start
     rows, cols = scipy.optimize.linear_sum_assignment(d)
     total = d[rows, cols].sum() + c ** order * abs(n - m)
     return float((total / max(n, m)) ** (1.0 / order))
@@ -194,6 +195,7 @@ def gospa(estimates: np.ndarray, truth: np.ndarray, c: float = 10.0, order: floa
     d = np.linalg.norm(estimates[:, None, :] - truth[None, :, :], axis=2) ** order
     # a pair farther than c is cheaper as one miss plus one false track
     cost = np.minimum(d, c ** order)
+    import scipy.optimize  # imported when first needed: a faster start
     rows, cols = scipy.optimize.linear_sum_assignment(cost)
     assigned = d[rows, cols] < c ** order
     total = d[rows, cols][assigned].sum() + c ** order / 2.0 * (n + m - 2 * int(assigned.sum()))
@@ -238,6 +240,7 @@ class Tracker:
         self.dim = 6 if model in ("ca", "imm") else 4
         self.h = measurement_matrix(self.dim, kind)
         m = self.h.shape[0]
+        import scipy.stats  # imported when first needed: a faster start
         self.gate = gate if gate is not None else float(scipy.stats.chi2.ppf(0.999, m))
         self.confirm = confirm
         self.max_coast = max_coast

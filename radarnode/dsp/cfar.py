@@ -28,7 +28,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage
 
 from radarnode.dsp import detection_stats as stats
 from radarnode.errors import ConfigError
@@ -147,6 +146,7 @@ class CellAveragingCfar(Cfar):
         outer = (2 * (gd + td) + 1, 2 * (gr + tr) + 1)
         inner = (2 * gd + 1, 2 * gr + 1)
         mode = ("wrap", "constant")
+        import scipy.ndimage  # imported when first needed: a faster start
         box_o = scipy.ndimage.uniform_filter(x, size=outer, mode=mode, cval=0.0) * (outer[0] * outer[1])
         box_i = scipy.ndimage.uniform_filter(x, size=inner, mode=mode, cval=0.0) * (inner[0] * inner[1])
         return np.maximum(box_o - box_i, 0.0)
@@ -184,6 +184,7 @@ class OrderedStatisticCfar(Cfar):
         # mirrored at the range edges: the order statistic ignores the few strong cells a mirrored target adds
         pad = self.guard[1] + self.train[1]
         padded = np.pad(power, ((0, 0), (pad, pad)), mode="symmetric")
+        import scipy.ndimage  # imported when first needed: a faster start
         ranked = scipy.ndimage.rank_filter(padded, self.k - 1, footprint=self.footprint, mode="wrap")
         return ranked[:, pad:padded.shape[1] - pad], self.alpha
 

@@ -3,9 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-import scipy.sparse
-import scipy.sparse.csgraph
-import scipy.spatial
 
 from radarnode.errors import ConfigError
 
@@ -33,13 +30,16 @@ def dbscan(points: np.ndarray, eps: float, min_samples: int = 1) -> np.ndarray:
     n = pts.shape[0]
     if n == 0:
         return np.zeros(0, dtype=np.int64)
+    import scipy.spatial  # imported when first needed: a faster start
     tree = scipy.spatial.cKDTree(pts)
     pairs = tree.query_pairs(eps, output_type="ndarray")
     counts = np.bincount(pairs.ravel(), minlength=n) + 1
     core = counts >= min_samples
     # core-core edges make clusters; a border point joins the cluster of one core neighbour
     cc = pairs[core[pairs[:, 0]] & core[pairs[:, 1]]]
+    import scipy.sparse  # imported when first needed: a faster start
     graph = scipy.sparse.coo_matrix((np.ones(len(cc)), (cc[:, 0], cc[:, 1])), shape=(n, n))
+    import scipy.sparse.csgraph  # imported when first needed: a faster start
     _, comp = scipy.sparse.csgraph.connected_components(graph, directed=False)
     labels = np.where(core, comp, -1)
     border = pairs[core[pairs[:, 0]] ^ core[pairs[:, 1]]]

@@ -58,9 +58,7 @@ import functools
 import math
 
 import numpy as np
-import scipy.optimize
 import scipy.special
-import scipy.stats
 
 from radarnode.errors import ConfigError
 
@@ -132,6 +130,7 @@ def ca_alpha(pfa: float, n_channels: int, eig: np.ndarray) -> float:
     hi = 1.0
     while f(hi) > 0:
         hi *= 2.0
+    import scipy.optimize  # imported when first needed: a faster start
     return float(scipy.optimize.brentq(f, 0.0, hi, xtol=1e-12, rtol=1e-12))
 
 
@@ -174,6 +173,7 @@ def os_alpha(pfa: float, n_channels: int, ranked: np.ndarray) -> float:
     hi = 1.0
     while f(hi) > 0:
         hi *= 2.0
+    import scipy.optimize  # imported when first needed: a faster start
     return float(scipy.optimize.brentq(f, 1e-9, hi, xtol=1e-12, rtol=1e-12))
 
 
@@ -213,11 +213,13 @@ def training_sum_quantiles(n_channels: int, eig: np.ndarray, count: int = Z_QUAN
     var = n_channels * np.sum(eig ** 2)
     shape, scale = mean * mean / var, var / mean
     u = (np.arange(count) + 0.5) / count
+    import scipy.stats  # imported when first needed: a faster start
     return scipy.stats.gamma.ppf(u, shape, scale=scale)
 
 
 def sf_swerling0(t: np.ndarray, energy: np.ndarray, n_channels: int) -> np.ndarray:
     """P(X > t) for a steady target of total energy ``energy`` (over σ²) in N channels."""
+    import scipy.stats  # imported when first needed: a faster start
     return scipy.stats.ncx2.sf(2.0 * np.asarray(t), 2 * n_channels, 2.0 * np.asarray(energy))
 
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.ndimage
 
 from radarnode.errors import ConfigError
 
@@ -88,6 +87,7 @@ def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_vo
     step_r = grid.rho_m[1] - grid.rho_m[0]
     step_t = np.degrees(grid.theta_rad[1] - grid.theta_rad[0]) if grid.theta_rad.size > 1 else 1.0
     size = (2 * max(int(round(suppress_theta_deg / step_t)), 0) + 1, 2 * max(int(round(suppress_rho_m / step_r)), 0) + 1)
+    import scipy.ndimage  # imported when first needed: a faster start
     local = acc >= scipy.ndimage.maximum_filter(acc, size=size, mode="nearest")
     ti, ri = np.nonzero(local & (acc >= min_votes))
     order = np.argsort(-acc[ti, ri], kind="stable")

@@ -12,11 +12,14 @@ import functools
 
 import numpy as np
 import scipy.fft
-import scipy.signal
 
 from radarnode.errors import ConfigError
 
+#: the windows, as cosine sums w[k] = Σ_j (−1)^j·a_j·cos(2πjk/n) (DFT-even: scipy's ``get_window(…, fftbins=True)``,
+#: which tests/test_dsp.py compares them with); a few DFT terms each, which the patch fit uses
 WINDOWS = ("hann", "hamming", "blackman", "boxcar", "blackmanharris")
+_COSINE_SUMS = {"hann": (0.5, 0.5), "hamming": (0.54, 0.46), "blackman": (0.42, 0.5, 0.08), "boxcar": (1.0,),
+                "blackmanharris": (0.35875, 0.48829, 0.14128, 0.01168)}
 
 
 @functools.lru_cache(maxsize=64)
@@ -24,7 +27,9 @@ def window(name: str, n: int, dtype: str = "float64") -> np.ndarray:
     """A symmetric-free (DFT-even) window of length ``n``, computed once per (name, n)."""
     if name not in WINDOWS:
         raise ConfigError(f"window: value {name!r} is not allowed; expected one of {', '.join(WINDOWS)}")
-    w = scipy.signal.get_window(name, n, fftbins=True).astype(dtype)
+    k = np.arange(n)
+    w = sum((-1) ** j * a * np.cos(2.0 * np.pi * j * k / n) for j, a in enumerate(_COSINE_SUMS[name]))
+    w = np.asarray(w, dtype=np.float64).astype(dtype)
     w.setflags(write=False)
     return w
 

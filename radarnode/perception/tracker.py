@@ -22,7 +22,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.optimize
 
 from radarnode.dsp.cluster import dbscan
 from radarnode.perception.motion import transition
@@ -173,6 +172,7 @@ def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, i
         nu, s, _ = innovation(x, p, z, r_cov)
         d2 = np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s), nu)
     cost = np.where(d2 <= gate, d2, 1e9)
+    import scipy.optimize  # imported when first needed: a faster start
     rows, cols = scipy.optimize.linear_sum_assignment(cost)
     return [(int(i), int(j)) for i, j in zip(rows, cols) if cost[i, j] < 1e9]
 

@@ -35,7 +35,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.spatial
 
 from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.errors import ConfigError
@@ -178,6 +177,7 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     res = np.asarray(RESOLUTION, dtype=np.float64)
     pts = np.stack([r / res[0], np.mod(v, m) / res[1], np.mod(a, n_beams) / res[2]], axis=1)
     box = np.array([n_r / res[0], m / res[1], n_beams / res[2]])      # every axis is circular
+    import scipy.spatial  # imported when first needed: a faster start
     tree = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box)
     pairs = tree.query_pairs(1.0 - 1e-9, p=np.inf, output_type="ndarray")
     if pairs.size == 0:

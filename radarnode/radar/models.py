@@ -15,7 +15,6 @@ import dataclasses
 import time
 
 import numpy as np
-import scipy.spatial
 
 from radarnode.errors import ConfigError
 from radarnode.dsp.spectra import noncoherent_power, range_doppler
@@ -193,6 +192,7 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> 
     n_r = p.num_range_bins
     box = np.array([n_r / res[0], p.num_chirps / res[1], p.num_virtual / res[2]])
     pts = np.stack([rb / res[0], np.mod(vb, p.num_chirps) / res[1], np.mod(u / beam, p.num_virtual) / res[2]], axis=1)
+    import scipy.spatial  # imported when first needed: a faster start
     pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
         return out
