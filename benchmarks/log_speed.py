@@ -1,0 +1,68 @@
+"""What users run: ``radarnode log SCENARIO --fidelity object -o FILE`` end to end (issue 13 item 10).
+
+Each row times the command as a user starts it — a new Python process, imports, model set-up, every cycle
+(object list, road boundaries and the cluster list where the scenario asks for them, encoding, the vehicle's
+0x300/0x301 frames) and the file written — as the median wall time of ``--runs`` runs. The real-time factor is
+the scenario's duration over that time. A first row, ``python -c "import radarnode.cli.main"``, is the start-up
+floor of every command. The last row is the issue's target case: ``highway_cut_in.yaml --duration 300``.
+
+Run: ``.venv/bin/python benchmarks/log_speed.py [--runs N] [--suffix .blf] [--only SUBSTRING]``. Prints a
+Markdown table.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from radarnode.radar.setup import load_scenario  # noqa: E402
+
+
+def wall(cmd: list[str], runs: int) -> float:
+    """Median wall time of a command, seconds (it must succeed)."""
+    times = []
+    for _ in range(runs):
+        t0 = time.perf_counter()
+        subprocess.run(cmd, check=True, capture_output=True)
+        times.append(time.perf_counter() - t0)
+    return statistics.median(times)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--runs", type=int, default=3)
+    ap.add_argument("--suffix", default=".blf")
+    ap.add_argument("--only", default="")
+    args = ap.parse_args()
+    py = sys.executable
+    start = wall([py, "-c", "import radarnode.cli.main"], args.runs)
+    print(f"### `radarnode log … --fidelity object -o x{args.suffix}`, median of {args.runs} runs\n")
+    print("| scenario | simulated | cycles | wall time | real-time factor |")
+    print("|---|---:|---:|---:|---:|")
+    print(f"| (start-up: `import radarnode.cli.main`) | - | - | {start:.2f} s | - |", flush=True)
+    cases = [(p, None) for p in sorted((ROOT / "scenarios").glob("*.yaml")) if args.only in p.stem]
+    cases.append((ROOT / "scenarios" / "highway_cut_in.yaml", 300.0))
+    with tempfile.TemporaryDirectory() as tmp:
+        out = str(Path(tmp) / f"x{args.suffix}")
+        for path, duration in cases:
+            sc = load_scenario(path)
+            sim = duration if duration is not None else sc.duration_s
+            cmd = [py, "-m", "radarnode", "log", str(path), "--fidelity", "object", "-o", out]
+            if duration is not None:
+                cmd += ["--duration", str(duration)]
+            t = wall(cmd, args.runs)
+            name = path.stem + (f" --duration {duration:g}" if duration is not None else "")
+            cycles = int(round(sim / sc.period_s))
+            print(f"| {name} | {sim:g} s | {cycles} | {t:.2f} s | {sim / t:.0f}× |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
