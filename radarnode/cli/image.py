@@ -81,6 +81,7 @@ class Renderer:
 
     def step(self, t_s: float):
         frame, view = self.model.step(t_s, self.cfg)
+        self.view = view                   # the ground truth, drawn beside what the radar reports
         det = self.model.info.detections
         yaw = self.scene.ego_state(t_s).yaw_rate_rps
         dt = 0.0 if self.t_prev is None else t_s - self.t_prev
@@ -141,6 +142,8 @@ class Renderer:
             half = LATERAL_VIEW_M * (self.k if persp else 1.0)
             ax.set_xlim(half, -half)           # left of the radar on the left
             ax.set_ylim(0, top)
+            if not persp:
+                ax.set_aspect("equal", adjustable="box")    # to scale: a metre is a metre both ways
         fig.suptitle(f"{self.scenario.name}, t = {t_s:.2f} s, {len(det)} detections, {len(frame.objects)} objects")
 
     def _overlay(self, ax, det, frame, boundaries, range_max, persp: bool) -> None:
@@ -149,7 +152,7 @@ class Renderer:
 
         ax.scatter(*tf(det.y_m, det.x_m), s=12, facecolors="none", edgecolors="r", linewidths=0.8, label="detections")
         ol = frame.objects
-        first = {"objects": True, "tracks": True, "road boundary": True}
+        first = {"objects": True, "tracks": True, "road boundary": True, "ground truth": True}
 
         def label(name):          # one legend entry per kind of overlay
             shown, first[name] = first[name], False
@@ -166,6 +169,15 @@ class Renderer:
             if (len(trail) > 1 and ol.dyn_prop[k] in (0, 2, 6) and 1 <= ol.obj_class[k] <= 5
                     and np.max(np.hypot(*np.diff(trail, axis=0).T)) < 4.0):   # no re-associated jumps
                 ax.plot(*tf(trail[:, 1], trail[:, 0]), color="orange", linewidth=0.8, label=label("tracks"))
+        # the ground truth: every actor's outline (centre, heading, length, width), guardrails left out
+        v, sc = self.view, self.scene
+        corners = np.array([[0.5, 0.5], [0.5, -0.5], [-0.5, -0.5], [-0.5, 0.5], [0.5, 0.5]])
+        for i in np.flatnonzero(~sc.is_guardrail):
+            c, s_ = math.cos(v.orientation_rad[i]), math.sin(v.orientation_rad[i])
+            lx, ly = corners[:, 0] * sc.length_m[i], corners[:, 1] * sc.width_m[i]
+            gx, gy = v.centre_x_m[i] + c * lx - s_ * ly, v.centre_y_m[i] + s_ * lx + c * ly
+            if 0.0 <= v.centre_x_m[i] <= range_max:
+                ax.plot(*tf(gy, gx), color="m", linewidth=1.0, linestyle="--", label=label("ground truth"))
         xs = np.linspace(0.0, range_max, 60)
         for b in boundaries:
             if b.valid:
