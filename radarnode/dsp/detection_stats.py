@@ -357,13 +357,16 @@ class DetectionStatistic:
         grid, table = self._pd_tables[swerling]
         return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
 
-    def draw(self, energy: np.ndarray, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    def draw(self, energy: np.ndarray, rng: np.random.Generator, interference: np.ndarray | float = 0.0
+             ) -> tuple[np.ndarray, np.ndarray]:
         """One draw of the test for steady targets of windowed energy ``energy``, shape (n,).
 
         The cell's statistic is X = |√E + n₀|² + Gamma(N − 1) (the signal's
         direction plus the N − 1 orthogonal noise dimensions), the threshold
-        α·Z/N_T with Z the training sum (a Gamma law with Z's exact mean and
-        variance). A fluctuating (Swerling 1) target is a steady one whose
+        α·(Z + I)/N_T with Z the training sum (a Gamma law with Z's exact mean and
+        variance) and I the other targets' energy in the training cells
+        (:meth:`ring_interference`; CA-CFAR only: an order statistic ignores a few
+        strong cells). A fluctuating (Swerling 1) target is a steady one whose
         energy was drawn from an exponential law first.
 
         Returns (detected, statistic), the statistic in units of σ² (the cell's
@@ -378,7 +381,125 @@ class DetectionStatistic:
         eig = self.eigenvalues
         mean, var = self.n_channels * eig.sum(), self.n_channels * np.sum(eig ** 2)
         z = rng.gamma(mean * mean / var, var / mean, n)
+        if self.cfar.name == "ca":
+            z = z + interference
         return x > self.alpha_ca * z / eig.size, x
+
+    def ring_interference(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
+                          energy: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+        """Signal energy (over σ², summed over channels) that targets put into each test cell's training ring.
+
+        A target of on-bin windowed energy E at (pos_d, pos_r) bins puts E·K_d(b − pos_d)·K_r(a − pos_r) into
+        the cell (b, a), K the window's power response relative to its peak (main lobe and sidelobes). The
+        ring of a cell is the box ±(guard + train) less the box ±guard, so its sum is a difference of two
+        separable box sums, tabulated once per window. This is what masks a weak target beside a strong one
+        (or beside a row of guardrail posts on the stationary Doppler line) in the CA-CFAR of the signal chain.
+
+        Parameters
+        ----------
+        cell_d, cell_r : int arrays, shape (C,)
+            The test cells (Doppler, range bins).
+        pos_d, pos_r, energy : arrays, shape (T,)
+            The targets' positions (bins, any real value) and on-bin windowed energies.
+        shape : (doppler bins, range bins) of the map; both axes are taken as circular.
+
+        Returns
+        -------
+        array, shape (C,)
+        """
+        (gd, gr), (td, tr) = self.cfar.guard, self.cfar.train
+        m, n = shape
+        cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
+        pos_d, pos_r = np.mod(np.asarray(pos_d, dtype=np.float64), m), np.mod(np.asarray(pos_r, dtype=np.float64), n)
+        energy = np.asarray(energy, dtype=np.float64)
+        out = np.zeros(cell_d.size)
+        if cell_d.size == 0 or pos_d.size == 0:
+            return out
+        # only the pairs within the tables' reach (a k-d tree on the circular map, axes scaled to that reach)
+        import scipy.spatial  # imported when first needed: a faster start
+        reach = np.array([gd + td + self.BOX_REACH, gr + tr + self.BOX_REACH], dtype=np.float64)
+        box = np.array([m, n], dtype=np.float64) / reach
+        cells = scipy.spatial.cKDTree(np.mod(np.stack([cell_d, cell_r], axis=1) / reach, box), boxsize=box)
+        targets = scipy.spatial.cKDTree(np.stack([pos_d, pos_r], axis=1) / reach % box, boxsize=box)
+        pairs = cells.sparse_distance_matrix(targets, 1.0, p=np.inf, output_type="ndarray")
+        if pairs.size == 0:
+            return out
+        i, j = pairs["i"], pairs["j"]
+        dd = np.mod(pos_d[j] - cell_d[i] + m / 2.0, m) - m / 2.0
+        dr = np.mod(pos_r[j] - cell_r[i] + n / 2.0, n) - n / 2.0
+        return np.bincount(i, weights=self.ring_kernel(dd, dr) * energy[j], minlength=cell_d.size)
+
+    def ring_kernel(self, delta_d: np.ndarray, delta_r: np.ndarray) -> np.ndarray:
+        """The share of a target's on-bin energy in the training ring of a cell ``delta`` bins from it (any
+        shape): the box ±(guard + train) less the box ±guard, each a product of two tabulated sums."""
+        (gd, gr), (td, tr) = self.cfar.guard, self.cfar.train
+        return (self._box_sum("d", gd + td, delta_d) * self._box_sum("r", gr + tr, delta_r)
+                - self._box_sum("d", gd, delta_d) * self._box_sum("r", gr, delta_r))
+
+    #: grids of :meth:`masking_factor`'s table: ρ in dB, interference over the noise's mean training sum (log10)
+    MASK_RHO_DB = np.arange(-10.0, 80.001, 1.0)
+    MASK_LOG_I = np.arange(-2.0, 7.001, 0.25)
+
+    def masking_factor(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:
+        """Pd with ``interference`` in the training ring over Pd without (:meth:`pd_interfered`), from a table
+        over ρ (1 dB) and log I (a quarter decade), interpolated bilinearly; 1 below 1 % of the noise's sum."""
+        tables = self.__dict__.setdefault("_mask_tables", {})
+        if swerling not in tables:
+            rho, log_i = np.meshgrid(self.MASK_RHO_DB, self.MASK_LOG_I, indexing="ij")
+            mean_z = self.n_channels * self.eigenvalues.sum()
+            with_i = self.pd_interfered(rho, 10.0 ** log_i * mean_z, swerling)
+            without = self.pd_interfered(self.MASK_RHO_DB, np.zeros(self.MASK_RHO_DB.size), swerling)
+            tables[swerling] = np.clip(with_i / np.maximum(without, 1e-300)[:, None], 0.0, 1.0)
+        table = tables[swerling]
+        mean_z = self.n_channels * self.eigenvalues.sum()
+        rel = np.asarray(interference, dtype=np.float64) / mean_z
+        x = np.clip(np.asarray(rho_db, dtype=np.float64), self.MASK_RHO_DB[0], self.MASK_RHO_DB[-1])
+        y = np.clip(np.log10(np.maximum(rel, 1e-300)), self.MASK_LOG_I[0], self.MASK_LOG_I[-1])
+        fx = (x - self.MASK_RHO_DB[0]) / (self.MASK_RHO_DB[1] - self.MASK_RHO_DB[0])
+        fy = (y - self.MASK_LOG_I[0]) / (self.MASK_LOG_I[1] - self.MASK_LOG_I[0])
+        i0 = np.minimum(np.floor(fx).astype(np.int64), table.shape[0] - 2)
+        j0 = np.minimum(np.floor(fy).astype(np.int64), table.shape[1] - 2)
+        ax, ay = fx - i0, fy - j0
+        f = ((1 - ax) * (1 - ay) * table[i0, j0] + ax * (1 - ay) * table[i0 + 1, j0]
+             + (1 - ax) * ay * table[i0, j0 + 1] + ax * ay * table[i0 + 1, j0 + 1])
+        return np.where(rel < 0.01, 1.0, f)
+
+    def pd_interfered(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:
+        """Pd of targets of integrated SNR ``rho_db`` whose training ring holds ``interference`` (same shape; over
+        σ², summed over channels): :meth:`pd_of_snr` with the threshold α·(Z + I)/N_T, the position within the
+        cell averaged over 3 × 3 straddle points. CA-CFAR only (an order statistic ignores a few strong cells)."""
+        rho_db = np.asarray(rho_db, dtype=np.float64)
+        interference = np.asarray(interference, dtype=np.float64)
+        if self.cfar.name != "ca":
+            return self.pd_of_snr(rho_db, swerling)
+        u = (np.arange(3) + 0.5) / 3 - 0.5
+        g = (straddle_gain(self.range_window, u)[:, None] * straddle_gain(self.doppler_window, u)[None, :]).ravel()
+        e = (10.0 ** (rho_db / 10.0) * self.window_gain)[..., None, None] * g                     # (..., 1, 9)
+        eig = self.eigenvalues
+        z = training_sum_quantiles(self.n_channels, eig)                                          # (Q,)
+        t = (self.alpha_ca / eig.size) * (z[:, None] + interference.reshape(-1)[None, :])        # (Q, K)
+        t = t.T.reshape(interference.shape + (z.size, 1))                                         # (..., Q, 1)
+        sf = sf_swerling0 if swerling == 0 else sf_swerling1
+        return sf(t, e, self.n_channels).mean(axis=(-2, -1))
+
+    #: the box sums are tabulated to this many bins beyond the box (Hann sidelobes there are below −75 dB)
+    BOX_REACH = 16
+
+    def _box_sum(self, axis: str, half: int, delta: np.ndarray) -> np.ndarray:
+        """Σ_{a=−half}^{half} K(a − δ), K the window's power response relative to on-bin; 0 far outside."""
+        key = (axis, half)
+        tables = self.__dict__.setdefault("_box_tables", {})
+        if key not in tables:
+            w = self.doppler_window if axis == "d" else self.range_window
+            span = half + self.BOX_REACH
+            grid = np.arange(-span, span + 1e-9, 1.0 / 32.0)
+            a = np.arange(-half, half + 1)
+            reach = 2 * half + self.BOX_REACH                       # |a − δ| never exceeds this
+            k = straddle_gain(w, np.arange(-reach, reach + 1e-9, 1.0 / 32.0))
+            idx = np.rint((a[None, :] - grid[:, None] + reach) * 32.0).astype(np.int64)
+            tables[key] = (grid, k[idx].sum(axis=1))
+        grid, table = tables[key]
+        return np.interp(delta, grid, table, left=0.0, right=0.0)
 
     def threshold_mean(self) -> float:
         """The mean threshold in units of σ²: α·E[Z]/N_T."""

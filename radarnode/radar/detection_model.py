@@ -15,8 +15,10 @@ What the signal chain does to scatterers, without the signal:
    strongest of them, as a weak tone inside a strong main lobe does;
 4. each range–Doppler cell is tested with the same statistic as the chain:
    :meth:`DetectionStatistic.draw` — the non-coherent sum of N channels
-   against the exact CA-CFAR threshold; in a detected cell every angle peak
-   within the chain's DOA floor is a detection;
+   against the exact CA-CFAR threshold, raised by the energy every scatterer
+   puts into the cell's training ring (:meth:`DetectionStatistic.ring_interference`:
+   the chain's masking of a weak target beside a strong one); in a detected
+   cell every angle peak within the chain's DOA floor is a detection;
 5. the estimates carry noise at the chain's measured efficiency times the
    Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
@@ -128,7 +130,11 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     rd_u, rd_inv = np.unique(rd[peak], return_inverse=True)
     rd_inv = rd_inv.ravel()
     e_rd = np.bincount(rd_inv, weights=energy[peak], minlength=rd_u.size)
-    hit_rd, stat_rd = statistic.draw(e_rd, rng)
+    # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
+    # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
+    interference = statistic.ring_interference(rd_u % m, rd_u // m, np.mod(vb, m), rb, statistic.energy(rho),
+                                               (m, n_r))
+    hit_rd, stat_rd = statistic.draw(e_rd, rng, interference)
     top = np.zeros(rd_u.size)
     np.maximum.at(top, rd_inv, energy[peak])
     idx = np.flatnonzero(peak)

@@ -185,6 +185,7 @@ class ObjectModel:
         stat = self.statistic
         pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
             np.where(sc.swerling == 0, stat.pd_of_snr(snr, 0), stat.pd_of_snr(snr, 1))
+        pd = pd * self._masking(view, rng_m, snr, observable)
         draws = self._draws(k0, times.size)
         u, z = draws["u"], draws["z"]
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
@@ -238,6 +239,33 @@ class ObjectModel:
             # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
         }
+
+    def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
+        """Pd factor (T, n) from the other actors' energy in each actor's CA-CFAR training ring.
+
+        As the chain masks a weak target beside a strong one at about the same range and speed, and the
+        detection level with it (:meth:`DetectionStatistic.ring_interference`): each actor's on-bin windowed
+        energy, at its apparent range and Doppler bin, enters every other actor's ring through the window's
+        response; the Pd with that interference over the Pd without it (both by
+        :meth:`DetectionStatistic.masking_factor`) scales the tabulated Pd, so an actor alone keeps it exactly.
+        Guardrail posts are not counted here (they are drawn per cycle with the cluster list).
+        """
+        p, stat, sc = self.preset, self.statistic, self.scene
+        if sc.n < 2 or stat.cfar.name != "ca":
+            return np.ones(snr.shape)
+        m, n_r = p.num_chirps, p.num_range_bins
+        c, s_ = np.cos(view.azimuth_rad), np.sin(view.azimuth_rad)
+        v_rad = view.vx_mps * c + view.vy_mps * s_
+        pos_d = np.mod(v_rad / p.doppler_bin_mps, m)
+        pos_r = np.mod(rng_m / p.range_resolution_m, n_r)
+        energy = np.where(observable, stat.energy(10.0 ** (snr / 10.0)), 0.0)                    # (T, n)
+        dd = np.mod(pos_d[:, None, :] - np.rint(pos_d)[:, :, None] + m / 2.0, m) - m / 2.0      # (T, i, j)
+        dr = np.mod(pos_r[:, None, :] - np.rint(pos_r)[:, :, None] + n_r / 2.0, n_r) - n_r / 2.0
+        interference = np.einsum("tij,tj->ti", stat.ring_kernel(dd, dr), energy)
+        if not (sc.swerling == 0).any():
+            return stat.masking_factor(snr, interference, 1)
+        return np.where(sc.swerling == 0, stat.masking_factor(snr, interference, 0),
+                        stat.masking_factor(snr, interference, 1))
 
     def _reported_body(self, view, rng_m, az, rcs_eff, snr, z) -> dict[str, np.ndarray]:
         """RCS, extent and class as the detection-level tracker reports them (``radarnode.perception.tracker``),
