@@ -183,11 +183,18 @@ def cmd(args) -> int:
                              "expected another file name")
     report = ReadReport(args.file, fmt)
     write = _write_text if args.format == "text" else _write_machine
+
+    def nothing_readable() -> None:
+        if report.damaged and report.frames == 0:        # not a log of this format: no output file at all
+            raise FileError(report.message("argument FILE"))
+
     if args.output is None:
         result = write(args, sys.stdout, report)
+        nothing_readable()
     else:
         with atomic_output(args.output, "--output", newline="" if args.format == "csv" else None) as out:
             result = write(args, out, report)
+            nothing_readable()
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "

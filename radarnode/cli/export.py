@@ -65,6 +65,8 @@ def cmd(args) -> int:
                 bar.close()
         finally:
             rec.close()
+        if report.damaged and report.frames == 0:          # not a log of this format: no output file at all
+            raise FileError(report.message("argument LOG"))
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
     if report.damaged:

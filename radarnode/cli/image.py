@@ -209,11 +209,11 @@ def cmd(args) -> int:
     if not 0.0 <= args.time <= scenario.duration_s:
         raise UsageError(f"option --time: value {args.time} is not allowed; expected a time in "
                          f"[0, {scenario.duration_s}] s (the scenario's duration)")
-    r = Renderer(scenario, args.k)
     period = scenario.period_s
     fig = plt.figure(figsize=(22, 6))
     try:
-        with atomic_path(args.output, "--output") as tmp:
+        with atomic_path(args.output, "--output") as tmp:         # an output that cannot be written fails first
+            r = Renderer(scenario, args.k)
             try:
                 if args.animate:
                     from matplotlib.animation import PillowWriter

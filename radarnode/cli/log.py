@@ -9,6 +9,7 @@ name and renamed when closed, so a failed run leaves no partial file.
 
 from __future__ import annotations
 
+import logging
 import sys
 
 import can
@@ -22,6 +23,8 @@ from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.evaluate import make_ecu
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
+
+logger = logging.getLogger(__name__)
 
 
 def add_subparser(sub) -> None:
@@ -97,6 +100,7 @@ def cmd(args) -> int:
 
         try:
             with stop_on_signals() as stop:
+                logger.info("logging %s to %s (as %s until it is complete)", scenario.name, args.output, tmp)
                 stats = run_node(node, clock=SimulatedClock(args.start_time), sinks=[write], vehicle=vehicle,
                                  on_cycle=on_cycle, stop=stop)
         finally:

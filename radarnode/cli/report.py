@@ -152,14 +152,18 @@ def cmd(args) -> int:
         raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {args.seeds}] "
                          "(at most --seeds)")
     plt = _matplotlib() if args.plots else None
-    plot_dir = _plot_dir(args.plots) if args.plots else None
+    if args.plots and Path(args.plots).is_file():
+        _plot_dir(args.plots)                                   # the error for a file, before anything is run
     if args.junit and Path(args.junit).is_dir():
         raise FileError(f"option --junit: value {args.junit!r} is not allowed; expected a file name (it is a "
-                          "directory)")
+                        "directory)")
     if args.junit and not Path(args.junit).parent.is_dir():     # fail now, not after the runs
         raise FileError(f"option --junit: cannot write {args.junit!r}: no such directory "
-                          f"{str(Path(args.junit).parent)!r}")
+                        f"{str(Path(args.junit).parent)!r}")
+    if args.junit and not os.access(Path(args.junit).parent, os.W_OK):
+        raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
     scenarios = [(path, _with_ecu_options(load_scenario(path), args)) for path in args.scenarios]   # checked first
+    plot_dir = _plot_dir(args.plots) if args.plots else None     # created once everything else is known good
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")
 
     def out(line: str) -> None:
