@@ -38,8 +38,8 @@ def cmd(args) -> int:
     if not is_mcap(args.output):
         raise UsageError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
                          ".mcap")
-    check_input_format(args.log, "argument LOG")
     require_foxglove("--output", args.output)     # before anything is read
+    check_input_format(args.log, "argument LOG")
     fmt = check_input(args.log, "argument LOG")
     scenario = None
     if args.scenario:

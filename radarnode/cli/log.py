@@ -18,7 +18,7 @@ from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
 from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
-from radarnode.wire.logfiles import check_output_format
+from radarnode.wire.logfiles import check_output_format, open_writer
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.evaluate import make_ecu
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -62,7 +62,7 @@ def cmd(args) -> int:
     vehicle = None if args.no_ego_motion else EgoMotionSender(node.scene, scenario.radar.sensor_id)
     with atomic_path(args.output, "--output") as tmp:      # no partial file if the run fails
         try:
-            writer = mcap_writer(tmp, scenario, node) if is_mcap(args.output) else can.Logger(tmp)
+            writer = mcap_writer(tmp, scenario, node) if is_mcap(args.output) else open_writer(tmp)
         except (ValueError, OSError) as exc:
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
             raise FileError(f"option --output: cannot write {args.output!r}: {reason}") from None
@@ -113,4 +113,5 @@ def cmd(args) -> int:
         print(f"consumer ECU: {ecu_frames[0]} AccStatus/FcwStatus frames logged", file=sys.stderr)
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "
           f"to {args.output}; bus-load budget {100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr)
-    return stop.exit_status      # 130/143 when a signal ended the run: the file is complete, the run is not
+    # 130/143 when a signal cut the run short: the file is complete, the run is not
+    return stop.exit_status if interrupted else 0

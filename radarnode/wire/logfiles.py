@@ -32,6 +32,7 @@ import os
 import re
 import struct
 import sys
+import time
 import zlib
 from collections.abc import Iterator
 from dataclasses import dataclass
@@ -61,6 +62,28 @@ def mf4_available() -> bool:
     """Whether python-can can write and read MF4 here (its optional dependency asammdf is installed)."""
     from can.io import mf4
     return getattr(mf4, "asammdf", None) is not None
+
+
+class _SqliteWriter(can.io.SqliteWriter):
+    """python-can's SqliteWriter, whose ``stop`` keeps every frame.
+
+    Its thread writes in batches of ``MAX_BUFFER_SIZE_BEFORE_WRITES`` (500); a ``stop`` that comes while more
+    than a batch waits in its queue ends the thread after the current batch and the rest is lost (a run
+    rendered faster than SQLite writes). Here ``stop`` waits until the thread has taken everything queued."""
+
+    def stop(self) -> None:
+        thread = getattr(self, "_writer_thread", None)
+        buffer = getattr(self, "buffer", None)
+        while buffer is not None and thread is not None and thread.is_alive() and not buffer.empty():
+            time.sleep(0.005)
+        super().stop()
+
+
+def open_writer(path: str):
+    """python-can's writer for the file's suffix (``can.Logger``), with :class:`_SqliteWriter` for ``.db``."""
+    if log_format(path) == ".db":
+        return _SqliteWriter(path)
+    return can.Logger(path)
 
 
 def log_format(path: str | os.PathLike) -> str:
@@ -456,4 +479,4 @@ class _WholeFrames:
 
 
 __all__ = ["FORMATS", "ReadReport", "check_input", "check_input_format", "check_output_format", "log_format", "mf4_available",
-           "read_frames"]
+           "open_writer", "read_frames"]
