@@ -6,9 +6,23 @@ what would have been allowed, so a user can fix the input without reading code.
 
 from __future__ import annotations
 
+#: the longest ``repr`` of a value an error message quotes (a whole file read as one string must not become the
+#: message)
+MAX_VALUE_REPR = 80
+
+
+def short_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
+    """``repr(value)``, cut to ``limit`` characters with an ellipsis, on one line."""
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
 
 class RadarnodeError(Exception):
-    """Base class of every error radarnode raises on purpose."""
+    """Base class of every error radarnode raises on purpose.
+
+    The command line exits with status 2 for a :class:`UsageError` (the command as typed cannot run) and 1 for
+    every other one (a file, a scenario, a bus, the run itself).
+    """
 
 
 class FieldError(RadarnodeError, ValueError):
@@ -22,7 +36,7 @@ class FieldError(RadarnodeError, ValueError):
         self.field = field
         self.value = value
         self.allowed = allowed
-        super().__init__(f"field '{field}': value {value!r} is not allowed; expected {allowed}")
+        super().__init__(f"field '{field}': value {short_repr(value)} is not allowed; expected {allowed}")
 
 
 class ScenarioError(RadarnodeError, ValueError):
@@ -31,6 +45,21 @@ class ScenarioError(RadarnodeError, ValueError):
 
 class ConfigError(RadarnodeError, ValueError):
     """A programmatic configuration (CLI option, preset override) is invalid."""
+
+
+class UsageError(ConfigError):
+    """The command line cannot run as typed: an option value outside what is allowed, a file name whose suffix
+    names no format radarnode reads or writes, an option that needs an optional extra that is not installed.
+    Found without opening any input (exit status 2)."""
+
+
+class FileError(RadarnodeError):
+    """A file named on the command line cannot be used: missing, a directory, unreadable, empty, damaged, of
+    another format than its suffix says, or an output that cannot be written (exit status 1)."""
+
+
+class BusError(RadarnodeError):
+    """A CAN bus cannot be opened or used (exit status 1)."""
 
 
 class WireError(RadarnodeError):

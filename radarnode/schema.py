@@ -10,11 +10,29 @@ dotted field path, the value and what is allowed.
 from __future__ import annotations
 
 import dataclasses
+import math
+import re
 from dataclasses import dataclass, field
 
 import yaml
 
-from radarnode.errors import FieldError, ScenarioError
+from radarnode.errors import FieldError, ScenarioError, short_repr
+
+
+class Loader(yaml.SafeLoader):
+    """PyYAML's safe loader (YAML 1.1) that also reads ``1e-5``, ``2E6`` and ``1.0e5`` as numbers.
+
+    YAML 1.1 only knows a float with a dot and a signed exponent (``1.0e-5``); what every other YAML and JSON
+    reader, and every user, takes for a number — ``1e-5``, ``1.0e5`` — it reads as a string, which a scenario
+    field then refuses ("expected a number"). This adds YAML 1.2's float pattern, so those are the numbers
+    meant. Quoted text (``"1e-5"``) stays a string.
+    """
+
+
+Loader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
+    list("-+0123456789."))
 
 
 @dataclass(frozen=True)
@@ -36,7 +54,7 @@ class Source:
         self.path = path
         self.lines: dict[str, int] = {}
         try:
-            node = yaml.compose(text, Loader=yaml.SafeLoader)
+            node = yaml.compose(text, Loader=Loader)
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             where = f":{mark.line + 1}" if mark is not None else ""
@@ -66,13 +84,16 @@ class Source:
             return out
         if isinstance(node, yaml.SequenceNode):
             return [self._convert(v, f"{path}[{i}]") for i, v in enumerate(node.value)]
-        loader = yaml.SafeLoader("")
+        loader = Loader("")
         return loader.construct_object(node, deep=True)
 
     def error(self, path: str, message: str) -> ScenarioError:
+        return ScenarioError(f"{self.where(path)}: {message}")
+
+    def where(self, path: str) -> str:
+        """``file:line`` of the dotted field path (or of the nearest enclosing field that has a line), else ``file``."""
         line = self._line(path)
-        where = f"{self.path}:{line}" if line else self.path
-        return ScenarioError(f"{where}: {message}")
+        return f"{self.path}:{line}" if line else self.path
 
     def _line(self, path: str) -> int | None:
         while path:
@@ -82,11 +103,24 @@ class Source:
         return None
 
 
+def quoted_number_hint(value: object) -> str:
+    """A hint for a number written as text (``"25"`` in quotes): the field wants the number itself."""
+    if isinstance(value, str):
+        try:
+            number = float(value.replace("_", ""))
+        except ValueError:
+            return ""
+        if math.isfinite(number):
+            return " (this is text: write the number without quotes)"
+    return ""
+
+
 def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra: dict | None = None):
     """Build dataclass ``cls`` from the parsed mapping ``data`` found at dotted ``path``; errors name file and line."""
     where = path or "top level"
     if not isinstance(data, dict):
-        raise src.error(path, f"field '{where}': value {data!r} is not allowed; expected a mapping")
+        what = "a mapping" if path else "a mapping of the scenario's fields (name, duration_s, seed, …)"
+        raise src.error(path, f"field '{where}': value {short_repr(data)} is not allowed; expected {what}")
     aliases = schema.aliases.get(cls, {})
     inverse = {v: k for k, v in aliases.items()}
     fields = {f.name: f for f in dataclasses.fields(cls) if f.name not in schema.internal}
@@ -102,7 +136,8 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
             sub, many = nested
             if many:
                 if not isinstance(value, list):
-                    raise src.error(child, f"field '{child}': value {value!r} is not allowed; expected a list")
+                    raise src.error(child, f"field '{child}': value {short_repr(value)} is not allowed; expected a "
+                                    "list")
                 value = tuple(build(sub, v, f"{child}[{i}]", src, schema) for i, v in enumerate(value))
             else:
                 value = build(sub, value, child, src, schema)
@@ -118,6 +153,7 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         key = inverse.get(exc.field.split(".")[0], exc.field.split(".")[0])
         rest = exc.field[len(exc.field.split(".")[0]):]
         child = (f"{path}.{key}" if path else key) + rest
-        raise src.error(child, f"field '{child}': value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+        raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
+                               f"{exc.allowed}{quoted_number_hint(exc.value)}") from None
     except TypeError as exc:  # pragma: no cover - defensive: a field the schema does not describe
         raise src.error(path, f"{where}: {exc}") from None

@@ -297,7 +297,7 @@ def test_signal_level_writes_the_range_doppler_map_as_an_image(tmp_path):
         assert f"{-(img.width // 2) * preset.doppler_bin_mps:+.1f} m/s" in labels
 
 
-def test_a_failed_mcap_log_leaves_no_file(tmp_path, monkeypatch):
+def test_a_failed_mcap_log_leaves_no_file(tmp_path, monkeypatch, capsys):
     from radarnode.viz.recorder import FoxgloveRecorder
 
     calls = [0]
@@ -311,8 +311,8 @@ def test_a_failed_mcap_log_leaves_no_file(tmp_path, monkeypatch):
 
     monkeypatch.setattr(FoxgloveRecorder, "on_node_cycle", failing)
     out = tmp_path / "run.mcap"
-    with pytest.raises(OSError):
-        main(["log", str(HIGHWAY), "--duration", "1", "-o", str(out)])
+    assert main(["log", str(HIGHWAY), "--duration", "1", "-o", str(out)]) == 1      # one error line, no traceback
+    assert capsys.readouterr().err.strip().splitlines()[-1] == "error: disk full"
     assert list(tmp_path.iterdir()) == []
 
 
@@ -334,16 +334,18 @@ def test_layout_file_is_current_and_reads_only_topics_the_recorder_writes():
 
 
 def test_bad_live_options_are_usage_errors(capsys):
-    assert main(["run", str(HIGHWAY), "--fast", "--duration", "0.2", "--quiet", "--foxglove",
-                 "--foxglove-port", "70000"]) == 2
-    assert "option --foxglove-port: value 70000 is not allowed; expected an integer 0..65535" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as exit_:            # refused as the command line is parsed
+        main(["run", str(HIGHWAY), "--fast", "--duration", "0.2", "--quiet", "--foxglove", "--foxglove-port", "70000"])
+    assert exit_.value.code == 2
+    assert "option --foxglove-port: value 70000 is not allowed; expected an integer in [0, 65535]" in \
+        capsys.readouterr().err
     import socket
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         s.listen()
         port = s.getsockname()[1]
         assert main(["run", str(HIGHWAY), "--fast", "--duration", "0.2", "--quiet", "--foxglove",
-                     "--foxglove-port", str(port)]) == 2
+                     "--foxglove-port", str(port)]) == 1          # a port in use: not the command line's fault
     err = capsys.readouterr().err
     assert f"option --foxglove-port: cannot serve the live view on 127.0.0.1:{port}" in err
     assert main(["export", str(HIGHWAY), "-o", "x.blf"]) == 2
@@ -435,7 +437,7 @@ def test_live_view_serves_object_messages_over_foxglove_websocket(command):
         assert e.frame_id == "radar" and e.id.startswith("object ")
         assert {"id", "class", "vrel_long_mps", "prob_of_exist"} <= set(meta(e))
         proc.send_signal(signal.SIGINT)                          # stops after the current cycle
-        assert proc.wait(timeout=30) == 0
+        assert proc.wait(timeout=30) == 130
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -126,14 +126,18 @@ def test_decode_errors_are_named_and_leave_no_partial_file(tmp_path):
     assert r.returncode == 2
     assert r.stderr.strip() == "error: option --format: value 'xml' is not allowed; expected one of text, json, csv"
     r = run("decode", str(log), "--format", "csv", "-o", str(tmp_path / "no" / "such" / "dir.csv"))
-    assert r.returncode == 2 and r.stderr.startswith("error: option --output: cannot write")
+    assert r.returncode == 1 and r.stderr.startswith("error: option --output: cannot write")
     lines = log.read_text().splitlines()
     bad = tmp_path / "bad.log"
     bad.write_text("\n".join(lines[:60] + ["(0.5) can0 60B#zz"] + lines[60:]) + "\n")
     out = tmp_path / "frames.jsonl"
+    # a damaged log: every readable frame decoded and written, the bad record named, exit status 1
     r = run("decode", str(bad), "--format", "json", "-o", str(out))
-    assert r.returncode == 2 and "error: argument FILE: " in r.stderr and "bad.log" in r.stderr
-    assert not out.exists() and sorted(p.name for p in tmp_path.iterdir()) == ["bad.log", "s0.log", "s0.yaml"]
+    assert r.returncode == 1
+    assert r.stderr.splitlines()[-1].startswith(f"error: argument FILE: '{bad}' is damaged: first bad record at "
+                                                "line 61: ")
+    assert len(out.read_text().splitlines()) == len(lines)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.log", "frames.jsonl", "s0.log", "s0.yaml"]
 
 
 def test_consume_json_carries_timestamp_sensor_and_cycle_counter(tmp_path, capsys):

@@ -71,11 +71,11 @@ def test_report_output_options_are_checked_before_any_run(tmp_path):
     afile = tmp_path / "afile"
     afile.write_text("x")
     r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--plots", str(afile))
-    assert r.returncode == 2 and r.stderr.startswith("error: option --plots: value") and "| nhtsa" not in r.stdout
+    assert r.returncode == 1 and r.stderr.startswith("error: option --plots: value") and "| nhtsa" not in r.stdout
     r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--junit", str(tmp_path))
-    assert r.returncode == 2 and r.stderr.startswith("error: option --junit: value")
+    assert r.returncode == 1 and r.stderr.startswith("error: option --junit: value")
     r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--junit", str(tmp_path / "no" / "dir.xml"))
-    assert r.returncode == 2 and "error: option --junit: cannot write" in r.stderr
+    assert r.returncode == 1 and "error: option --junit: cannot write" in r.stderr
     assert sorted(x.name for x in tmp_path.iterdir()) == ["afile"]
 
 

@@ -15,16 +15,18 @@ from pathlib import Path
 import numpy as np
 
 from radarnode.consumer.assembler import ClusterCycle, ConsumerStats, ObjectCycle
-from radarnode.errors import ConfigError
+from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
 from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario
 
 
 def add_scenario_argument(parser) -> None:
+    from radarnode.cli import options
     parser.add_argument("scenario", help="scenario file (YAML), e.g. scenarios/highway_cut_in.yaml")
-    parser.add_argument("--seed", type=int, help="override the scenario's seed")
-    parser.add_argument("--duration", type=float, help="override the scenario's duration in seconds")
+    parser.add_argument("--seed", type=options.SEED, help="override the scenario's seed (an integer >= 0)")
+    parser.add_argument("--duration", type=options.DURATION,
+                        help="override the scenario's duration in seconds, (0, 86400]")
     parser.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"),
                         help="radar model level (default: the scenario's)")
 
@@ -33,7 +35,7 @@ def scenario_from_args(args) -> Scenario:
     import dataclasses
 
     from radarnode import validate
-    from radarnode.errors import ConfigError, FieldError
+    from radarnode.errors import FieldError
     sc = load_scenario(args.scenario)
     try:
         if args.seed is not None:
@@ -44,22 +46,47 @@ def scenario_from_args(args) -> Scenario:
             sc = dataclasses.replace(sc, duration_s=validate.number("--duration", args.duration, lo=0.0,
                                                                       hi=86_400.0, lo_open=True))
     except FieldError as exc:
-        raise ConfigError(f"option {exc.field}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+        raise UsageError(f"option {exc.field}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
     return sc
+
+
+class Terminated(BaseException):
+    """SIGTERM (or another signal) asks the command to end: unwinds like KeyboardInterrupt does for SIGINT."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)
+
+
+class Stop(threading.Event):
+    """Set by SIGINT or SIGTERM; ``signum`` says which (None while not stopped by a signal)."""
+
+    signum: int | None = None
+
+    @property
+    def exit_status(self) -> int:
+        """0, or 128 + the signal that stopped the command (130 for SIGINT, 143 for SIGTERM), as a shell reports a
+        process the signal ended — here after the files were closed complete."""
+        return 128 + self.signum if self.signum else 0
 
 
 @contextlib.contextmanager
 def stop_on_signals():
-    """An Event set by Ctrl-C or SIGTERM, so loops can finish the current cycle and close files."""
-    stop = threading.Event()
+    """A :class:`Stop` event set by Ctrl-C or SIGTERM, so loops can finish the current cycle and close files.
+
+    A second signal gives up at once (KeyboardInterrupt for SIGINT, :class:`Terminated` for SIGTERM)."""
+    stop = Stop()
     if threading.current_thread() is not threading.main_thread():
         yield stop
         return
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
 
     def handler(signum, frame):
-        if stop.is_set():          # second Ctrl-C: give up at once
-            raise KeyboardInterrupt
+        if stop.is_set():          # a second signal: give up at once
+            if signum == signal.SIGINT:
+                raise KeyboardInterrupt
+            raise Terminated(signum)
+        stop.signum = signum
         stop.set()
 
     for s in previous:
@@ -132,23 +159,48 @@ def progress(total: int | None, label: str, unit: str = "cycle"):
                 dynamic_ncols=True, leave=False)
 
 
+def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple[Path, str]:
+    """A new empty temporary file beside ``path`` (created, closed): ``.<name>_<random>_part<suffixes>``.
+
+    Raises FileError naming the option when ``path`` is a directory or its directory cannot be written — before
+    any work is done, not at the rename."""
+    target = Path(path)
+    if target.is_dir():
+        raise FileError(f"option {option}: cannot write {str(path)!r}: it is a directory; expected a file name")
+    suffixes = target.suffixes[-2:] if target.suffix.lower() == ".gz" else target.suffixes[-1:]
+    suffix = "".join(suffixes) if keep_suffix else ""
+    # no dot in the random part, so that a writer choosing its format by suffix (python-can's .log.gz) sees the
+    # target's suffixes and only those
+    base = target.name[: len(target.name) - len("".join(suffixes))] if suffixes else target.name
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{base.replace('.', '_')}_", suffix="_part" + suffix,
+                                   dir=target.parent)
+        os.close(fd)
+    except OSError as exc:
+        raise FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+    return target, tmp
+
+
+def _commit(tmp: str, target: Path, option: str) -> None:
+    os.chmod(tmp, 0o666 & ~_umask())
+    try:
+        os.replace(tmp, target)
+    except OSError as exc:
+        raise FileError(f"option {option}: cannot write {str(target)!r}: {exc.strerror or exc}") from None
+
+
 @contextlib.contextmanager
 def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline: str | None = None):
     """Write ``path`` through a temporary name in the same directory, renamed over it only on success.
 
-    A reader never sees a half-written file: an exception (or Ctrl-C) removes the temporary file and leaves
-    any earlier ``path`` untouched. Yields the open file; ``option`` names the option in error messages.
+    A reader never sees a half-written file: an exception (or Ctrl-C, SIGTERM) removes the temporary file and
+    leaves any earlier ``path`` untouched. Yields the open file; ``option`` names the option in error messages.
     """
-    target = Path(path)
+    target, tmp = _temporary(path, option, keep_suffix=False)
     try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=target.parent)
-    except OSError as exc:
-        raise ConfigError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
-    try:
-        with os.fdopen(fd, mode, newline=newline, **({} if "b" in mode else {"encoding": "utf-8"})) as f:
+        with open(tmp, mode, newline=newline, **({} if "b" in mode else {"encoding": "utf-8"})) as f:
             yield f
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, target)
+        _commit(tmp, target, option)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -157,20 +209,13 @@ def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline
 
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike, option: str):
-    """Like :func:`atomic_output`, for writers that want a file name (matplotlib's savefig): yields the
-    temporary path, renamed to ``path`` on success, removed on failure. The last two suffixes are kept
-    (``.blf``, ``.log.gz``) so writers that choose the format by suffix (python-can, matplotlib) still do."""
-    target = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part" + "".join(target.suffixes[-2:]),
-                                   dir=target.parent)
-        os.close(fd)
-    except OSError as exc:
-        raise ConfigError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+    """Like :func:`atomic_output`, for writers that want a file name (python-can, matplotlib): yields the
+    temporary path, renamed to ``path`` on success, removed on failure. The temporary name ends in the target's
+    suffix (both of ``.log.gz``), so writers that choose the format by suffix still do."""
+    target, tmp = _temporary(path, option, keep_suffix=True)
     try:
         yield tmp
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, target)
+        _commit(tmp, target, option)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
@@ -205,7 +250,7 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
     scenario says otherwise). ``use_can_config=False`` skips python-can's configuration (``radarnode log``
     opens no bus, so its output must not depend on the machine it runs on).
 
-    Raises ConfigError naming the source when the value is not an integer in 10 000..1 000 000 bit/s.
+    Raises UsageError naming the source when the value is not an integer in 10 000..1 000 000 bit/s.
     """
     import can.util
 
@@ -243,6 +288,6 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
     except ValueError:
         bit_s = None
     if bit_s is None or not 10_000 <= bit_s <= 1_000_000:
-        raise ConfigError(f"{source}: bit rate value {value!r} is not allowed; expected an integer "
-                          "10000..1000000 bit/s")
+        raise UsageError(f"{source}: bit rate value {value!r} is not allowed; expected an integer "
+                         "10000..1000000 bit/s")
     return Bitrate(bit_s, source)

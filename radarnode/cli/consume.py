@@ -9,6 +9,7 @@ import time
 import can
 import numpy as np
 
+from radarnode.cli import options
 from radarnode.cli.common import format_cycle, format_stats, stop_on_signals
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.wire.bus import add_bus_arguments, open_bus
@@ -17,9 +18,10 @@ from radarnode.wire.bus import add_bus_arguments, open_bus
 def add_subparser(sub) -> None:
     p = sub.add_parser("consume", help="decode radar cycles from a CAN bus", description=__doc__)
     add_bus_arguments(p, bitrate=True)
-    p.add_argument("--sensor-id", type=int, default=0, choices=range(8), help="radar sensor ID (default 0)")
-    p.add_argument("--count", type=int, default=0, help="stop after this many cycles (0: until Ctrl-C)")
-    p.add_argument("--timeout", type=float, default=0.0, help="stop after this many seconds without a cycle")
+    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=0, help="radar sensor ID 0..7 (default 0)")
+    p.add_argument("--count", type=options.COUNT, default=0, help="stop after this many cycles (0: until Ctrl-C)")
+    p.add_argument("--timeout", type=options.TIMEOUT, default=0.0,
+                   help="stop after this many seconds without a cycle, up to 86400 (0: never, the default)")
     p.add_argument("--json", action="store_true", help="one JSON object per cycle (timestamp, sensor_id, cycle_counter, objects or "
                         "clusters) instead of tables")
     p.set_defaults(func=cmd)
@@ -41,6 +43,13 @@ def cycle_to_json(cycle, sensor_id: int = 0) -> str:
                  "vrel_long_mps": _f(ol.vrel_long_mps[k]), "vrel_lat_mps": _f(ol.vrel_lat_mps[k]),
                  "dyn_prop": int(ol.dyn_prop[k]), "obj_class": int(ol.obj_class[k]), "rcs_dbsm": _f(ol.rcs_dbsm[k], 1),
                  "length_m": _f(ol.length_m[k], 1), "width_m": _f(ol.width_m[k], 1)} for k in range(len(ol))]
+        regions = cycle.collision_regions
+        if regions is not None and len(regions) == len(rows):
+            # Obj_4_Warning 0x60E (collision detection on): the regions each object warns in, as a list and as
+            # the message's Obj_CollDetRegionBitfield
+            for row, bits in zip(rows, regions):
+                row["collision_regions"] = [r for r in range(8) if int(bits) >> r & 1]
+                row["coll_det_region_bitfield"] = int(bits)
         return json.dumps({**head, "type": "objects", "objects": rows})
     cl = cycle.clusters
     rows = [{"id": int(cl.id[k]), "dist_long_m": _f(cl.dist_long_m[k]), "dist_lat_m": _f(cl.dist_lat_m[k]),
@@ -71,4 +80,4 @@ def cmd(args) -> int:
         finally:
             notifier.stop()
     print(format_stats(assembler.stats), file=sys.stderr)
-    return 0
+    return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM

@@ -14,22 +14,23 @@ renames it when complete.
 
 from __future__ import annotations
 
-import contextlib
 import csv
 import json
 import math
-import struct
+import os
 import sys
 
 import can
 
+from radarnode.cli import options
 from radarnode.cli.common import atomic_output, format_cycle, format_stats, progress
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
-from radarnode.errors import ConfigError
+from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.busdbc import frame_table
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, read_frames
 
-FORMATS = ("text", "json", "csv")
+FORMATS_OUT = ("text", "json", "csv")
 FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
 COUNTER_SIGNALS = {"Obj_0_Status": "Obj_MeasCounter", "Cluster_0_Status": "Cluster_MeasCounter"}
 
@@ -37,42 +38,17 @@ COUNTER_SIGNALS = {"Obj_0_Status": "Obj_MeasCounter", "Cluster_0_Status": "Clust
 def add_subparser(sub) -> None:
     p = sub.add_parser("decode", help="decode radar cycles (or every frame, as JSON/CSV) from a CAN log file",
                        description=__doc__)
-    p.add_argument("file", help="log file (.blf .asc .log .csv .trc …)")
-    p.add_argument("--format", default="text", metavar="{text,json,csv}",
+    p.add_argument("file", help="log file (" + " ".join(FORMATS) + "; .mf4 with radarnode[mf4])")
+    p.add_argument("--format", default="text", choices=FORMATS_OUT,
                    help="text: cycles and summary (default); json: one JSON object per frame; csv: one row per frame")
     p.add_argument("-o", "--output", help="write to this file instead of standard output")
-    p.add_argument("--sensor-id", type=int, default=None, choices=range(8),
-                   help="radar sensor ID (text: whose cycles, default 0; json/csv: only this sensor's frames and "
+    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None,
+                   help="radar sensor ID 0..7 (text: whose cycles, default 0; json/csv: only this sensor's frames and "
                         "the ECU's, default every frame)")
     p.add_argument("--summary", action="store_true", help="text: only the per-object summary, no per-cycle tables")
-    p.add_argument("--max-cycles", type=int, default=0, help="text: print at most this many cycles (0: all)")
+    p.add_argument("--max-cycles", type=options.COUNT, default=0,
+                   help="text: print at most this many cycles (0: all)")
     p.set_defaults(func=cmd)
-
-
-def _open_reader(path: str):
-    try:
-        return can.LogReader(path)
-    except (ValueError, OSError) as exc:
-        raise ConfigError(f"argument FILE: cannot read {path!r}: {exc}") from None
-
-
-def _frames(path: str):
-    """The log's frames; a log that breaks off mid-way is a one-line error naming the file (errors of the
-    code that consumes the frames, a broken pipe or a full disk, are not this generator's and pass through)."""
-    reader = _open_reader(path)
-    try:
-        it = iter(reader)
-        while True:
-            try:
-                msg = next(it)
-            except StopIteration:
-                return
-            except (ValueError, OSError, EOFError, struct.error) as exc:
-                raise ConfigError(f"argument FILE: {path!r} is not a readable log: {exc}") from None
-            yield msg
-    finally:
-        if hasattr(reader, "stop"):
-            reader.stop()
 
 
 def _number(v):
@@ -140,40 +116,40 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
     return list(cols.items())
 
 
-def _write_machine(args, out) -> FrameDecoder:
+def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
     decoder = FrameDecoder(args.sensor_id)
     if args.format == "csv":
         # a first pass for the columns: only the signals of messages that occur, not the whole DBC's ~200
-        with contextlib.closing(_frames(args.file)) as reader:
-            present = {m.arbitration_id for m in reader if not (m.is_error_frame or m.is_remote_frame)}
+        first = ReadReport(report.path, report.fmt)
+        present = {m.arbitration_id for m in read_frames(args.file, first)
+                   if not (m.is_error_frame or m.is_remote_frame)}
         columns = _signal_columns(decoder.table, present)
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
     bar = progress(None, f"decoding {args.file}", unit="frame")
     try:
-        with contextlib.closing(_frames(args.file)) as reader:
-            for msg in reader:
-                bar.update(1)
-                rec = decoder.record(msg)
-                if rec is None:
-                    continue
-                if args.format == "json":
-                    out.write(json.dumps(rec, ensure_ascii=False) + "\n")
-                    continue
-                sig = rec["signals"]
-                row = [repr(rec["timestamp"]), "" if rec["channel"] is None else rec["channel"],
-                       f"0x{rec['can_id']:03X}", "" if rec["sensor_id"] is None else rec["sensor_id"],
-                       "" if rec["cycle_counter"] is None else rec["cycle_counter"], rec["message"] or "",
-                       rec["dlc"], rec["data"]]
-                row += ["" if name not in sig or sig[name]["value"] is None else sig[name]["value"]
-                        for name, _ in columns]
-                writer.writerow(row)
+        for msg in read_frames(args.file, report):
+            bar.update(1)
+            rec = decoder.record(msg)
+            if rec is None:
+                continue
+            if args.format == "json":
+                out.write(json.dumps(rec, ensure_ascii=False) + "\n")
+                continue
+            sig = rec["signals"]
+            row = [repr(rec["timestamp"]), "" if rec["channel"] is None else rec["channel"],
+                   f"0x{rec['can_id']:03X}", "" if rec["sensor_id"] is None else rec["sensor_id"],
+                   "" if rec["cycle_counter"] is None else rec["cycle_counter"], rec["message"] or "",
+                   rec["dlc"], rec["data"]]
+            row += ["" if name not in sig or sig[name]["value"] is None else sig[name]["value"]
+                    for name, _ in columns]
+            writer.writerow(row)
     finally:
         bar.close()
     return decoder
 
 
-def _write_text(args, out) -> None:
+def _write_text(args, out, report: ReadReport) -> None:
     sensor = 0 if args.sensor_id is None else args.sensor_id
     assembler = CycleAssembler(sensor_id=sensor)
     cycles = []
@@ -185,11 +161,10 @@ def _write_text(args, out) -> None:
             yield msg
 
     try:
-        with contextlib.closing(_frames(args.file)) as reader:
-            for cycle in assembler.feed(counted(reader)):
-                cycles.append(cycle)
-                if not args.summary and (not args.max_cycles or len(cycles) <= args.max_cycles):
-                    out.write(format_cycle(cycle) + "\n")
+        for cycle in assembler.feed(counted(read_frames(args.file, report))):
+            cycles.append(cycle)
+            if not args.summary and (not args.max_cycles or len(cycles) <= args.max_cycles):
+                out.write(format_cycle(cycle) + "\n")
     finally:
         bar.close()
     out.write(format_stats(assembler.stats) + "\n")
@@ -201,22 +176,30 @@ def _write_text(args, out) -> None:
 
 
 def cmd(args) -> int:
-    if args.format not in FORMATS:
-        raise ConfigError(f"option --format: value {args.format!r} is not allowed; expected one of "
-                          f"{', '.join(FORMATS)}")
-    if args.max_cycles < 0:
-        raise ConfigError(f"option --max-cycles: value {args.max_cycles} is not allowed; expected an integer >= 0")
-    reader = _open_reader(args.file)            # a missing or unknown file fails before any output is created
-    if hasattr(reader, "stop"):
-        reader.stop()
+    fmt = check_input(args.file, "argument FILE")     # a missing, empty or unknown file fails before any output
+    if args.output is not None:
+        if os.path.exists(args.output) and os.path.samefile(args.output, args.file):
+            raise UsageError(f"option --output: value {args.output!r} is not allowed: it is the log being decoded; "
+                             "expected another file name")
+    report = ReadReport(args.file, fmt)
     write = _write_text if args.format == "text" else _write_machine
+
+    def nothing_readable() -> None:
+        if report.damaged and report.frames == 0:        # not a log of this format: no output file at all
+            raise FileError(report.message("argument FILE"))
+
     if args.output is None:
-        result = write(args, sys.stdout)
+        result = write(args, sys.stdout, report)
+        nothing_readable()
     else:
         with atomic_output(args.output, "--output", newline="" if args.format == "csv" else None) as out:
-            result = write(args, out)
+            result = write(args, out, report)
+            nothing_readable()
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "
               f"decodable, {result.skipped} error/remote frames skipped", file=sys.stderr)
+    if report.damaged:
+        # everything readable was decoded (and written); the status says the log itself is not whole
+        raise FileError(report.message("argument FILE"))
     return 0

@@ -13,50 +13,40 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-import can
-
+from radarnode.cli import options
 from radarnode.cli.common import atomic_path, progress
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
-from radarnode.errors import ConfigError, FieldError
+from radarnode.errors import FileError, UsageError
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, read_frames
 
 
 def add_subparser(sub) -> None:
     p = sub.add_parser("export", help="write a CAN log (plus its scenario) as MCAP for Foxglove",
                        description=__doc__)
-    p.add_argument("log", help="python-can log file (.blf .asc .log .csv .mf4 .trc …)")
+    p.add_argument("log", help="python-can log file (" + " ".join(FORMATS) + "; .mf4 with radarnode[mf4])")
     p.add_argument("-o", "--output", required=True, help="MCAP file to write (.mcap)")
     p.add_argument("--scenario", help="the scenario the log was rendered from: adds the ego and the ground truth")
-    p.add_argument("--start-time", type=float, default=0.0,
+    p.add_argument("--start-time", type=options.START_TIME, default=0.0,
                    help="timestamp of the scenario's start in the log, s (log --start-time; default 0)")
-    p.add_argument("--sensor-id", type=int, default=0, help="the radar whose frames are decoded (default 0)")
+    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=0,
+                   help="the radar whose frames are decoded, 0..7 (default 0)")
     p.set_defaults(func=cmd)
 
 
 def cmd(args) -> int:
-    from radarnode import validate
     from radarnode.viz.recorder import FoxgloveRecorder
     if not is_mcap(args.output):
-        raise ConfigError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
-                          ".mcap")
-    try:
-        validate.integer("--sensor-id", args.sensor_id, lo=0, hi=7)
-        validate.number("--start-time", args.start_time, lo=-1e11, hi=1e11)
-    except FieldError as exc:
-        raise ConfigError(f"option {exc.field}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
-    if not Path(args.log).is_file():
-        raise ConfigError(f"argument LOG: {args.log!r} is not a file; expected a python-can log file")
+        raise UsageError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
+                         ".mcap")
     require_foxglove("--output", args.output)     # before anything is read
+    check_input_format(args.log, "argument LOG")
+    fmt = check_input(args.log, "argument LOG")
     scenario = None
     if args.scenario:
         from radarnode.radar.setup import load_scenario
         scenario = load_scenario(args.scenario)
-    try:
-        reader = can.LogReader(args.log)
-    except (ValueError, OSError) as exc:
-        raise ConfigError(f"argument LOG: cannot read {args.log!r}: {exc}; expected a python-can log (.asc .blf "
-                          ".csv .log .mf4 .trc …)") from None
     rec = FoxgloveRecorder(sensor_id=args.sensor_id)
-    frames = 0
+    report = ReadReport(args.log, fmt)
     with atomic_path(args.output, "--output") as tmp:
         try:
             meta, attachments = ({"log": Path(args.log).name}, [])
@@ -68,19 +58,18 @@ def cmd(args) -> int:
             rec.open_mcap(tmp, metadata=meta, attachments=attachments)
             bar = progress(None, f"exporting {Path(args.log).name}", unit="frame")
             try:
-                for msg in reader:
+                for msg in read_frames(args.log, report):
                     rec.on_message_received(msg)
-                    frames += 1
                     bar.update(1)
-            except Exception as exc:  # noqa: BLE001 - python-can's readers raise many kinds on a damaged file
-                raise ConfigError(f"argument LOG: {args.log!r} is damaged after {frames} frames: {exc}") from None
             finally:
                 bar.close()
         finally:
             rec.close()
-            stop = getattr(reader, "stop", None)
-            if stop is not None:
-                stop()
-    print(f"read {frames} frames from {args.log}", file=sys.stderr)
+        if report.damaged and report.frames == 0:          # not a log of this format: no output file at all
+            raise FileError(report.message("argument LOG"))
+    print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
+    if report.damaged:
+        # everything readable is in the MCAP; the status says the log itself is not whole
+        raise FileError(report.message("argument LOG"))
     return 0

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import can
 
-from radarnode.errors import ConfigError
+from radarnode.errors import BusError, UsageError
 
 DEFAULT_PORT = 8765          # Foxglove's usual WebSocket port
 HOST = "127.0.0.1"           # the live view is served on this machine only
@@ -28,8 +28,8 @@ def require_foxglove(option: str, value) -> None:
     try:
         import foxglove  # noqa: F401
     except ImportError:
-        raise ConfigError(f"option {option}: value {value!r} needs foxglove-sdk, which is not installed; expected "
-                          "it installed: pip install 'radarnode[foxglove]'") from None
+        raise UsageError(f"option {option}: value {value!r} needs foxglove-sdk, which is not installed; expected "
+                         "it installed: pip install 'radarnode[foxglove]'") from None
 
 
 def add_live_arguments(parser) -> None:
@@ -37,7 +37,8 @@ def add_live_arguments(parser) -> None:
     g.add_argument("--foxglove", action="store_true",
                    help="serve the run live over Foxglove's WebSocket protocol on localhost (in Foxglove: Open "
                         "connection → Foxglove WebSocket → ws://localhost:PORT)")
-    g.add_argument("--foxglove-port", type=int, default=DEFAULT_PORT, metavar="PORT",
+    from radarnode.cli.options import PORT
+    g.add_argument("--foxglove-port", type=PORT, default=DEFAULT_PORT, metavar="PORT",
                    help=f"port of the live view (default {DEFAULT_PORT}; 0: any free port, printed at the start)")
 
 
@@ -136,8 +137,8 @@ def live_view(args, node, virtual_channel: str | None = None):
     require_foxglove("--foxglove", True)
     port = args.foxglove_port
     if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
-        raise ConfigError(f"option --foxglove-port: value {port!r} is not allowed; expected an integer 0..65535 "
-                          "(0: any free port)")
+        raise UsageError(f"option --foxglove-port: value {port!r} is not allowed; expected an integer 0..65535 "
+                         "(0: any free port)")
     from radarnode.viz.recorder import FoxgloveRecorder
     rec = FoxgloveRecorder(sensor_id=node.config.sensor_id)
     rec.attach_node(node)
@@ -145,8 +146,8 @@ def live_view(args, node, virtual_channel: str | None = None):
         server = rec.serve(HOST, port)
     except Exception as exc:  # noqa: BLE001 - foxglove-sdk raises its own kinds for a port in use
         rec.close()
-        raise ConfigError(f"option --foxglove-port: cannot serve the live view on {HOST}:{port}: {exc}; "
-                          "expected a free port (0: any free port)") from None
+        raise BusError(f"option --foxglove-port: cannot serve the live view on {HOST}:{port}: {exc}; "
+                       "expected a free port (0: any free port)") from None
     live = LiveView(rec, server)
     try:
         if virtual_channel is not None:

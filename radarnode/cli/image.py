@@ -15,13 +15,15 @@ from __future__ import annotations
 import math
 import sys
 from collections import defaultdict, deque
+from pathlib import Path
 
 import numpy as np
 import scipy.fft
 
-from radarnode.cli.common import add_scenario_argument, scenario_from_args
+from radarnode.cli import options
+from radarnode.cli.common import add_scenario_argument, atomic_path, scenario_from_args
 from radarnode.dsp.spectra import noncoherent_power, range_doppler
-from radarnode.errors import ConfigError
+from radarnode.errors import FileError, UsageError
 from radarnode.perception.boundaries import RoadBoundaryEstimator
 from radarnode.perception.views import direct_perspective
 from radarnode.radar.setup import radar_config, with_signal
@@ -39,10 +41,12 @@ def add_subparser(sub) -> None:
                        description=__doc__)
     add_scenario_argument(p)
     p.add_argument("-o", "--output", required=True, help="PNG file to write (or GIF with --animate)")
-    p.add_argument("--time", type=float, default=0.0, help="scenario time of the frame, s (default 0)")
-    p.add_argument("--k", type=float, default=2.5, help="direct-perspective widening of the near edge (1.7, 2.5)")
+    p.add_argument("--time", type=options.number(lo=0.0, hi=86_400.0), default=0.0,
+                   help="scenario time of the frame, s (default 0; at most the scenario's duration)")
+    p.add_argument("--k", type=options.number(lo=1.0, hi=10.0), default=2.5,
+                   help="direct-perspective widening of the near edge, 1..10 (1.7, 2.5)")
     p.add_argument("--animate", action="store_true", help="render every --every-th cycle of the scenario as a GIF")
-    p.add_argument("--every", type=int, default=5, help="cycles between animation frames (default 5)")
+    p.add_argument("--every", type=options.POSITIVE_COUNT, default=5, help="cycles between animation frames (default 5)")
     p.set_defaults(func=cmd)
 
 
@@ -192,48 +196,63 @@ def _matplotlib():
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise ConfigError("radarnode image needs matplotlib: pip install 'radarnode[image]'") from None
+        raise UsageError("radarnode image needs matplotlib, which is not installed: pip install 'radarnode[image]'") \
+            from None
     return plt
+
+
+def _check_output(path: str, animate: bool, plt) -> None:
+    """The output's suffix must name a format the writer has, before the (slow) rendering starts."""
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if animate:
+        allowed = ["gif"]
+    else:
+        allowed = sorted(plt.figure().canvas.get_supported_filetypes())
+        plt.close("all")
+    if suffix not in allowed:
+        raise UsageError(f"option --output: value {path!r} is not allowed; expected a file name ending in "
+                         + " ".join("." + a for a in allowed) + (" (with --animate)" if animate else ""))
 
 
 def cmd(args) -> int:
     plt = _matplotlib()
+    _check_output(args.output, args.animate, plt)
     scenario = scenario_from_args(args)
     if not 0.0 <= args.time <= scenario.duration_s:
-        raise ConfigError(f"option --time: value {args.time} is not allowed; expected a time in "
-                          f"[0, {scenario.duration_s}] s")
-    if not 1.0 <= args.k <= 10.0:
-        raise ConfigError(f"option --k: value {args.k} is not allowed; expected a number in [1, 10]")
-    if args.every < 1:
-        raise ConfigError(f"option --every: value {args.every} is not allowed; expected an integer >= 1")
-    r = Renderer(scenario, args.k)
+        raise UsageError(f"option --time: value {args.time} is not allowed; expected a time in "
+                         f"[0, {scenario.duration_s}] s (the scenario's duration)")
     period = scenario.period_s
     fig = plt.figure(figsize=(22, 6))
     try:
-        if args.animate:
-            from matplotlib.animation import PillowWriter
-            writer = PillowWriter(fps=max(1, round(1.0 / (period * args.every))))
-            with writer.saving(fig, args.output, dpi=60):
-                n = 0
-                for k in range(scenario.num_cycles):
-                    frame, bnd = r.step(k * period)
-                    if k % args.every == 0:
-                        r.draw(fig, k * period, frame, bnd)
-                        writer.grab_frame()
-                        n += 1
-            print(f"wrote {args.output}: {n} frames", file=sys.stderr)
-            return 0
-        last = int(math.floor(args.time / period + 1e-9))
-        for k in range(last):
-            r.step(k * period)
-        frame, bnd = r.step(args.time)
-        r.draw(fig, args.time, frame, bnd)
-        fig.tight_layout()
-        fig.savefig(args.output, dpi=80)
-    except (OSError, ValueError) as exc:
-        raise ConfigError(f"option --output: cannot write {args.output!r}: {exc}") from None
+        with atomic_path(args.output, "--output") as tmp:         # an output that cannot be written fails first
+            r = Renderer(scenario, args.k)
+            try:
+                if args.animate:
+                    from matplotlib.animation import PillowWriter
+                    writer = PillowWriter(fps=max(1, round(1.0 / (period * args.every))))
+                    with writer.saving(fig, tmp, dpi=60):
+                        n = 0
+                        for k in range(scenario.num_cycles):
+                            frame, bnd = r.step(k * period)
+                            if k % args.every == 0:
+                                r.draw(fig, k * period, frame, bnd)
+                                writer.grab_frame()
+                                n += 1
+                else:
+                    last = int(math.floor(args.time / period + 1e-9))
+                    for k in range(last):
+                        r.step(k * period)
+                    frame, bnd = r.step(args.time)
+                    r.draw(fig, args.time, frame, bnd)
+                    fig.tight_layout()
+                    fig.savefig(tmp, dpi=80)
+            except OSError as exc:
+                raise FileError(f"option --output: cannot write {args.output!r}: {exc.strerror or exc}") from None
     finally:
         plt.close(fig)
+    if args.animate:
+        print(f"wrote {args.output}: {n} frames", file=sys.stderr)
+        return 0
     info = r.model.info
     cube = info.cube
     print(f"wrote {args.output}: {len(info.detections)} detections, {len(frame.objects)} objects, "

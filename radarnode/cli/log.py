@@ -9,31 +9,39 @@ name and renamed when closed, so a failed run leaves no partial file.
 
 from __future__ import annotations
 
+import logging
 import sys
 
 import can
 
+from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
 from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
-from radarnode.errors import ConfigError
+from radarnode.errors import FileError
+from radarnode.wire.logfiles import check_output_format, open_writer
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.consumer.evaluate import make_ecu
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
+
+logger = logging.getLogger(__name__)
 
 
 def add_subparser(sub) -> None:
     p = sub.add_parser("log", help="render a scenario to a CAN log file", description=__doc__)
     add_scenario_argument(p)
     p.add_argument("-o", "--output", required=True,
-                   help="log file; the suffix picks the format (.blf .asc .log .csv; .mcap: Foxglove, with --ecu)")
-    p.add_argument("--channel", default="can0", help="channel name written into the log (default can0)")
-    p.add_argument("--start-time", type=float, default=0.0, help="timestamp of the first frame, s (default 0)")
+                   help="log file; the suffix picks the format: .blf .asc .log .csv .trc .db, .asc.gz .log.gz .csv.gz "
+                        ".trc.gz, .mf4 (needs radarnode[mf4]), .mcap (Foxglove, with --ecu; needs radarnode[foxglove])")
+    p.add_argument("--channel", default="can0", type=options.name("a channel name"),
+                   help="channel name written into the log (default can0)")
+    p.add_argument("--start-time", type=options.START_TIME, default=0.0,
+                   help="timestamp of the first frame, s (default 0; up to 1e10, e.g. a Unix time)")
     p.add_argument("--no-ego-motion", action="store_true", help="leave out the vehicle's 0x300/0x301 frames")
     p.add_argument("--ecu", action="store_true",
                    help="also run the consumer ECU on the frames and log its AccStatus/FcwStatus, stamped when it "
                         "produces them (the scenario's ecu.processing_latency_s after the cycle)")
-    p.add_argument("-b", "--bitrate", type=int,
+    p.add_argument("-b", "--bitrate", type=options.BITRATE,
                    help="bit rate of the logged bus for the bus-load budget, bit/s (default: the scenario's "
                         "radar.bitrate; python-can's configuration is not read, as no bus is opened)")
     p.set_defaults(func=cmd)
@@ -41,10 +49,12 @@ def add_subparser(sub) -> None:
 
 def cmd(args) -> int:
     import dataclasses
-    scenario = scenario_from_args(args)
+    # what the command line alone decides comes first: a format nothing reads back is refused before the run
+    check_output_format(args.output, "--output", extra=(".mcap",))
     if is_mcap(args.output):        # for Foxglove (needs foxglove-sdk): a run to watch shows the ECU's decisions too
         require_foxglove("--output", args.output)
         args.ecu = True
+    scenario = scenario_from_args(args)
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate, use_can_config=False)
     if bitrate.bit_s != scenario.radar.bitrate:
         scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
@@ -52,11 +62,10 @@ def cmd(args) -> int:
     vehicle = None if args.no_ego_motion else EgoMotionSender(node.scene, scenario.radar.sensor_id)
     with atomic_path(args.output, "--output") as tmp:      # no partial file if the run fails
         try:
-            writer = mcap_writer(tmp, scenario, node) if is_mcap(args.output) else can.Logger(tmp)
+            writer = mcap_writer(tmp, scenario, node) if is_mcap(args.output) else open_writer(tmp)
         except (ValueError, OSError) as exc:
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
-            raise ConfigError(f"option --output: cannot write {args.output!r}: {reason}; "
-                              "allowed suffixes: .asc .blf .csv .log .mcap .mf4 .trc .txt") from None
+            raise FileError(f"option --output: cannot write {args.output!r}: {reason}") from None
         bar = progress(scenario.num_cycles, f"logging {scenario.name}")
         ecu = make_ecu(scenario, node.period_s) if args.ecu else None
         assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id) if args.ecu else None
@@ -91,6 +100,7 @@ def cmd(args) -> int:
 
         try:
             with stop_on_signals() as stop:
+                logger.info("logging %s to %s (as %s until it is complete)", scenario.name, args.output, tmp)
                 stats = run_node(node, clock=SimulatedClock(args.start_time), sinks=[write], vehicle=vehicle,
                                  on_cycle=on_cycle, stop=stop)
         finally:
@@ -103,4 +113,5 @@ def cmd(args) -> int:
         print(f"consumer ECU: {ecu_frames[0]} AccStatus/FcwStatus frames logged", file=sys.stderr)
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "
           f"to {args.output}; bus-load budget {100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr)
-    return 0
+    # 130/143 when a signal cut the run short: the file is complete, the run is not
+    return stop.exit_status if interrupted else 0

@@ -4,11 +4,14 @@ from __future__ import annotations
 
 import argparse
 import logging
+import signal
 import sys
 
 from radarnode import __version__
 from radarnode.cli import consume, decode, export, image, log, node, report, run
-from radarnode.errors import RadarnodeError
+from radarnode.cli.common import Terminated
+from radarnode.cli.options import Parser
+from radarnode.errors import RadarnodeError, UsageError
 
 logger = logging.getLogger(__name__)
 
@@ -28,7 +31,10 @@ def _add_global_options(parser: argparse.ArgumentParser, after: bool) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = argparse.ArgumentParser(prog="radarnode", description="ARS 408-21 compatible radar node emulator")
+    parser = Parser(prog="radarnode", description="ARS 408-21 compatible radar node emulator",
+                    epilog="exit status: 0 done; 1 a file, scenario, bus or run failed (or report: a scenario "
+                           "failed); 2 usage: the command line cannot run as typed; 130/143 stopped by "
+                           "SIGINT/SIGTERM (files written so far are complete)")
     parser.add_argument("--version", action="version", version=f"radarnode {__version__}")
     _add_global_options(parser, after=False)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
@@ -39,7 +45,25 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _terminate(signum, frame) -> None:
+    raise Terminated(signum)
+
+
 def main(argv: list[str] | None = None) -> int:
+    """Run one command; the exit status is 0 (done), 1 (a file, scenario, bus or the run failed), 2 (usage: the
+    command line cannot run as typed), 128 + the signal (130 SIGINT, 143 SIGTERM) when stopped."""
+    if not threading_main():
+        return _main(argv)
+    # SIGTERM unwinds like Ctrl-C (temporary files removed, finished files closed) instead of killing the
+    # process where it stands; commands that run until stopped install their own handler (stop_on_signals)
+    previous = signal.signal(signal.SIGTERM, _terminate)
+    try:
+        return _main(argv)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str] | None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     args.debug = args.debug or getattr(args, "debug_after", False)
@@ -54,10 +78,23 @@ def main(argv: list[str] | None = None) -> int:
         if args.debug:
             raise
         print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return 2 if isinstance(exc, UsageError) else 1
     except KeyboardInterrupt:
-        return 130
-    except BrokenPipeError:  # output piped into `head` and the like
+        return 128 + signal.SIGINT
+    except Terminated as exc:
+        return 128 + exc.signum
+    except BrokenPipeError:  # output piped into `head` and the like: end quietly
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
+    except OSError as exc:   # a write that failed mid-way (a full disk, a vanished directory): one line, not a trace
+        if args.debug:
+            raise
+        where = f": {exc.filename!r}" if exc.filename else ""
+        print(f"error: {exc.strerror or exc}{where}", file=sys.stderr)
+        return 1
+
+
+def threading_main() -> bool:
+    import threading
+    return threading.current_thread() is threading.main_thread()

@@ -45,6 +45,6 @@ def cmd(args) -> int:
         stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send, *live.sinks],
                          recv=live.tap(lambda timeout: bus.recv(timeout)), vehicle=vehicle, stop=stop,
                          on_cycle=live.on_node_cycle)
-    print(f"sent {stats.cycles} cycles, {stats.frames} frames; " +
+    print(f"{'interrupted: ' if stop.is_set() else ''}sent {stats.cycles} cycles, {stats.frames} frames; " +
           ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())), file=sys.stderr)
-    return 0
+    return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM

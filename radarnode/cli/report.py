@@ -25,24 +25,27 @@ import time
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
+from radarnode.cli import options
 from radarnode.cli.common import atomic_output, atomic_path, progress
 from radarnode.consumer.evaluate import simulate
-from radarnode.errors import ConfigError, FieldError
+from radarnode.errors import FieldError, FileError, UsageError
 from radarnode.radar.setup import load_scenario
 
 
 def add_subparser(sub) -> None:
     p = sub.add_parser("report", help="judge scenarios against their ACC/FCW expectations", description=__doc__)
     p.add_argument("scenarios", nargs="+", help="scenario files")
-    p.add_argument("--seeds", type=int, default=1, help="run each scenario with seeds 1..N (default 1)")
+    p.add_argument("--seeds", type=options.integer(lo=1, hi=10_000), default=1,
+                   help="run each scenario with seeds 1..N, N up to 10000 (default 1)")
     p.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"), help="radar model level")
-    p.add_argument("--min-passes", type=int, default=None,
+    p.add_argument("--min-passes", type=options.POSITIVE_COUNT, default=None,
                    help="exit 1 when a scenario passes in fewer seeds than this (default: all of them)")
     p.add_argument("--junit", metavar="FILE", help="also write JUnit XML for a CI system to FILE")
     p.add_argument("--plots", metavar="DIR",
                    help="draw one PNG per scenario and seed into DIR (created if missing; needs matplotlib)")
     for opt, field, what in ECU_OPTIONS:
-        p.add_argument(opt, type=float, default=None, metavar="X", help=f"{what} (overrides the scenario's ecu.{field})")
+        p.add_argument(opt, type=options.number(), default=None, metavar="X",
+                       help=f"{what} (overrides the scenario's ecu.{field})")
     p.set_defaults(func=cmd)
 
 
@@ -64,7 +67,7 @@ def _with_ecu_options(sc, args):
         return dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, **changes))
     except FieldError as exc:
         opt = next(o for o, f, _ in ECU_OPTIONS if f == exc.field)
-        raise ConfigError(f"option {opt}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+        raise UsageError(f"option {opt}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
 
 
 def _fmt(v, unit: str, digits: int = 2) -> str:
@@ -123,12 +126,12 @@ def _plot_dir(path: str) -> Path:
     try:
         d.mkdir(parents=True, exist_ok=True)
     except (FileExistsError, NotADirectoryError):
-        raise ConfigError(f"option --plots: value {path!r} is not allowed; expected a directory (it is a file)") \
+        raise FileError(f"option --plots: value {path!r} is not allowed; expected a directory (it is a file)") \
             from None
     except OSError as exc:
-        raise ConfigError(f"option --plots: cannot create directory {path!r}: {exc.strerror or exc}") from None
+        raise FileError(f"option --plots: cannot create directory {path!r}: {exc.strerror or exc}") from None
     if not os.access(d, os.W_OK):
-        raise ConfigError(f"option --plots: cannot write into directory {path!r}: permission denied")
+        raise FileError(f"option --plots: cannot write into directory {path!r}: permission denied")
     return d
 
 
@@ -138,25 +141,29 @@ def _matplotlib():
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
     except ImportError:
-        raise ConfigError("option --plots needs matplotlib: pip install 'radarnode[image]'") from None
+        raise UsageError("option --plots needs matplotlib, which is not installed: pip install 'radarnode[image]'") \
+            from None
     return plt
 
 
 def cmd(args) -> int:
-    if args.seeds < 1:
-        raise ConfigError(f"option --seeds: value {args.seeds} is not allowed; expected an integer >= 1")
     need = args.seeds if args.min_passes is None else args.min_passes
     if not 1 <= need <= args.seeds:
-        raise ConfigError(f"option --min-passes: value {need} is not allowed; expected 1..{args.seeds}")
+        raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {args.seeds}] "
+                         "(at most --seeds)")
     plt = _matplotlib() if args.plots else None
-    plot_dir = _plot_dir(args.plots) if args.plots else None
+    if args.plots and Path(args.plots).is_file():
+        _plot_dir(args.plots)                                   # the error for a file, before anything is run
     if args.junit and Path(args.junit).is_dir():
-        raise ConfigError(f"option --junit: value {args.junit!r} is not allowed; expected a file name (it is a "
-                          "directory)")
+        raise FileError(f"option --junit: value {args.junit!r} is not allowed; expected a file name (it is a "
+                        "directory)")
     if args.junit and not Path(args.junit).parent.is_dir():     # fail now, not after the runs
-        raise ConfigError(f"option --junit: cannot write {args.junit!r}: no such directory "
-                          f"{str(Path(args.junit).parent)!r}")
+        raise FileError(f"option --junit: cannot write {args.junit!r}: no such directory "
+                        f"{str(Path(args.junit).parent)!r}")
+    if args.junit and not os.access(Path(args.junit).parent, os.W_OK):
+        raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
     scenarios = [(path, _with_ecu_options(load_scenario(path), args)) for path in args.scenarios]   # checked first
+    plot_dir = _plot_dir(args.plots) if args.plots else None     # created once everything else is known good
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")
 
     def out(line: str) -> None:
@@ -193,7 +200,8 @@ def cmd(args) -> int:
                         with atomic_path(target, "--plots") as tmp:
                             fig.savefig(tmp, dpi=90)
                     except OSError as exc:
-                        raise ConfigError(f"option --plots: cannot write {str(target)!r}: {exc}") from None
+                        raise FileError(f"option --plots: cannot write {str(target)!r}: {exc.strerror or exc}") \
+                            from None
                     finally:
                         plt.close(fig)
                     written.append(target)

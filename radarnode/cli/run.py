@@ -12,6 +12,7 @@ import uuid
 
 import can
 
+from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
     scenario_from_args, stop_on_signals
 from radarnode.cli.foxglove import add_live_arguments, live_view
@@ -31,7 +32,7 @@ def add_subparser(sub) -> None:
     mode = p.add_mutually_exclusive_group()
     mode.add_argument("--realtime", dest="fast", action="store_false", help="pace cycles in real time (default)")
     mode.add_argument("--fast", dest="fast", action="store_true", help="simulated time, as fast as possible")
-    p.add_argument("--every", type=int, default=None,
+    p.add_argument("--every", type=options.POSITIVE_COUNT, default=None,
                    help="print every Nth cycle (default: every cycle on a terminal, one per second otherwise)")
     p.add_argument("--quiet", action="store_true", help="print only the summary")
     p.add_argument("--closed-loop", action="store_true",
@@ -57,14 +58,11 @@ def format_ecu(d, ego_speed_mps: float) -> str:
 
 
 def cmd(args) -> int:
-    from radarnode.errors import ConfigError
     scenario = scenario_from_args(args)
     node = RadarNode(scenario)
     vehicle = EgoMotionSender(node.scene, scenario.radar.sensor_id)
     channel = f"radarnode-{uuid.uuid4().hex}"
     tty = sys.stdout.isatty()
-    if args.every is not None and args.every < 1:
-        raise ConfigError(f"option --every: value {args.every} is not allowed; expected an integer >= 1")
     every = args.every or (1 if tty else max(1, round(1.0 / node.period_s)))
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     spec = scenario.ecu
@@ -160,4 +158,4 @@ def cmd(args) -> int:
         cls = CLASS_NAMES[d["obj_class"]] if d["obj_class"] >= 0 else "-"
         print(f"  object {oid:3d} {cls:10s} seen in {d['cycles']:4d} cycles, median at "
               f"{d['dist_long_m']:6.1f} m / {d['dist_lat_m']:5.1f} m")
-    return 0
+    return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM

@@ -12,8 +12,9 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
-from radarnode.errors import FieldError
+from radarnode.errors import FieldError, short_repr
 from radarnode.radar.chain import DspConfig
+from radarnode.radar.checks import check_scenario
 from radarnode.radar.options import Impairments, SignalOptions
 from radarnode.radar.presets import RadarPreset, get_preset
 from radarnode.scene.scenario import Scenario, read_scenario, read_scenario_text
@@ -40,7 +41,8 @@ def radar_config(scenario: Scenario) -> RadarConfig:
         preset = get_preset(scenario.radar.preset).with_overrides(scenario.radar.overrides)
     except FieldError as exc:
         child = f"radar.{exc.field}"
-        raise src.error(child, f"field '{child}': value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+        raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
+                               f"{exc.allowed}") from None
     signal = build(SignalOptions, scenario.signal, "signal", src, SIGNAL_SCHEMA)
     cfg = RadarConfig(preset=preset, signal=signal)
     object.__setattr__(scenario, "_radar_config", cfg)  # a cache on a frozen dataclass, like functools.cached_property
@@ -69,12 +71,12 @@ def load_scenario(path: str | Path) -> Scenario:
     ScenarioError
         With ``file:line: field 'a.b': value X is not allowed; expected ...``.
     """
-    return resolved(read_scenario(path))
+    return check_scenario(resolved(read_scenario(path)))      # what a tester gets wrong: radarnode.radar.checks
 
 
 def parse_scenario(text: str, name: str = "<string>") -> Scenario:
     """Like :func:`load_scenario` for YAML text (used by tests and tools)."""
-    return resolved(read_scenario_text(text, name))
+    return check_scenario(resolved(read_scenario_text(text, name)))
 
 
 __all__ = ["RadarConfig", "load_scenario", "parse_scenario", "radar_config", "resolved", "with_signal"]

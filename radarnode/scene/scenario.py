@@ -473,6 +473,9 @@ def read_scenario(path: str | Path) -> Scenario:
         text = p.read_text(encoding="utf-8")
     except OSError as exc:
         raise ScenarioError(f"{p}: cannot read scenario file: {exc.strerror}") from None
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{p}: not a scenario file: byte {exc.object[exc.start]:#04x} at offset {exc.start} is not "
+                            "UTF-8 text; expected a YAML scenario in UTF-8") from None
     src = Source(str(p), text)
     return build(Scenario, src.data, "", src, SCHEMA, extra={"source": str(p), "lines": src.lines})
 

@@ -13,7 +13,7 @@ import socket
 
 import can
 
-from radarnode.errors import ConfigError
+from radarnode.errors import BusError, UsageError
 
 logger = logging.getLogger(__name__)
 
@@ -25,9 +25,23 @@ def add_bus_arguments(parser: argparse.ArgumentParser, bitrate: bool = True) -> 
     group.add_argument("-i", "--interface", help="python-can interface, e.g. socketcan, virtual, udp_multicast")
     group.add_argument("-c", "--channel", help="channel, e.g. vcan0, 239.74.163.2")
     if bitrate:
-        group.add_argument("-b", "--bitrate", type=int, help="bit rate in bit/s (also used for the bus-load budget)")
+        group.add_argument("-b", "--bitrate", type=bitrate_option,
+                           help="bit rate in bit/s, 10000..1000000 (also used for the bus-load budget)")
     group.add_argument("--bus-kwargs", nargs="*", default=[], metavar="KEY=VALUE",
                        help="extra keyword arguments for can.Bus, e.g. receive_own_messages=True")
+
+
+def bitrate_option(text: str) -> int:
+    """argparse type of ``-b/--bitrate``: an integer 10000..1000000 bit/s, or one line naming the value."""
+    try:
+        value = int(text.strip(), 10)
+    except ValueError:
+        value = None
+    if value is None or not 10_000 <= value <= 1_000_000:
+        shown = text.strip() if text.strip().lstrip("+-").isdigit() else repr(text)
+        raise argparse.ArgumentTypeError(f"value {shown} is not allowed; expected an integer in [10000, 1000000] "
+                                         "bit/s")
+    return value
 
 
 def _parse_value(text: str) -> object:
@@ -45,7 +59,7 @@ def bus_kwargs(args: argparse.Namespace) -> dict:
     kwargs: dict = {}
     for item in getattr(args, "bus_kwargs", []) or []:
         if "=" not in item:
-            raise ConfigError(f"option --bus-kwargs: value {item!r} is not allowed; expected KEY=VALUE")
+            raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected KEY=VALUE")
         key, value = item.split("=", 1)
         kwargs[key] = _parse_value(value)
     if args.interface:
@@ -58,12 +72,21 @@ def bus_kwargs(args: argparse.Namespace) -> dict:
 
 
 def open_bus(args: argparse.Namespace) -> can.BusABC:
-    """Open the bus the arguments describe; a bad interface or channel raises ConfigError."""
+    """Open the bus the arguments describe.
+
+    Raises UsageError for an interface python-can does not know (or whose driver package is not installed) and
+    BusError when the interface cannot open the channel (a missing device, no permission, a bad address)."""
     kwargs = bus_kwargs(args)
+    what = kwargs or "(from python-can config)"
     try:
         bus = can.Bus(**kwargs)
-    except (can.CanError, ValueError, OSError, ImportError, NotImplementedError) as exc:
-        raise ConfigError(f"cannot open CAN bus {kwargs or '(from python-can config)'}: {exc}") from None
+    except (can.exceptions.CanInterfaceNotImplementedError, ImportError) as exc:
+        source = "option -i/--interface" if getattr(args, "interface", None) else "python-can configuration"
+        name = kwargs.get("interface", "(none)")
+        raise UsageError(f"{source}: interface {name!r} cannot be used here ({exc}); expected one of "
+                         f"{', '.join(sorted(can.interfaces.VALID_INTERFACES))} with its driver installed") from None
+    except (can.CanError, ValueError, TypeError, OSError, NotImplementedError) as exc:
+        raise BusError(f"cannot open CAN bus {what}: {exc}") from None
     enlarge_receive_buffer(bus)
     return bus
 

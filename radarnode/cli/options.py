@@ -1,0 +1,101 @@
+"""Checked option types for argparse, and the parser that prints one ``error: …`` line.
+
+Every numeric option is parsed by one of these types, so a value outside its domain (text, NaN, ±inf, out of
+range) is refused while the command line is parsed, before any file is read: one line naming the option, the
+value as typed and what is allowed, exit status 2 (a usage error).
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+import sys
+
+from radarnode import validate
+from radarnode.errors import FieldError
+from radarnode.wire.bus import bitrate_option
+
+
+class Parser(argparse.ArgumentParser):
+    """An ArgumentParser whose errors are one ``error: …`` line (exit status 2), like radarnode's own errors.
+
+    argparse prints the usage and ``prog: error: argument --x: …``; here it is ``error: option --x: value … is not
+    allowed; expected …`` (``argument X`` for a positional), so every usage error of every subcommand looks the
+    same. ``--help`` shows the usage.
+    """
+
+    def error(self, message: str) -> None:  # noqa: D102 - argparse's hook
+        if message.startswith("argument -"):
+            message = "option " + message[len("argument "):]
+        choice = re.search(r"invalid choice: (.*) \(choose from (.*)\)$", message)
+        if choice:
+            allowed = ", ".join(c.strip().strip("'") for c in choice.group(2).split(","))
+            message = message[:choice.start()] + f"value {choice.group(1)} is not allowed; expected one of {allowed}"
+        print(f"error: {message}", file=sys.stderr)
+        sys.exit(2)
+
+
+def _shown(text: str) -> str:
+    """The value as typed: a number bare, anything else quoted (so an empty or odd string is visible)."""
+    try:
+        float(text)
+    except ValueError:
+        return repr(text)
+    return text.strip()
+
+
+def number(*, lo: float | None = None, hi: float | None = None, lo_open: bool = False, hi_open: bool = False):
+    """An argparse type: a finite float in the interval, else an error naming the value and the interval."""
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = text
+        try:
+            return validate.number("", value, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open)
+        except FieldError as exc:
+            raise argparse.ArgumentTypeError(f"value {_shown(text)} is not allowed; expected {exc.allowed}") from None
+    parse.__name__ = "number"
+    return parse
+
+
+def integer(*, lo: int | None = None, hi: int | None = None):
+    """An argparse type: an integer (decimal) in [lo, hi]."""
+    def parse(text: str) -> int:
+        try:
+            value: object = int(text.strip(), 10)
+        except ValueError:
+            value = text
+        try:
+            return validate.integer("", value, lo=lo, hi=hi)
+        except FieldError as exc:
+            raise argparse.ArgumentTypeError(f"value {_shown(text)} is not allowed; expected {exc.allowed}") from None
+    parse.__name__ = "integer"
+    return parse
+
+
+def name(what: str, max_len: int = 64):
+    """An argparse type: a non-empty name without spaces or control characters (it goes into log lines)."""
+    def parse(text: str) -> str:
+        if not text or len(text) > max_len or any(c.isspace() or not c.isprintable() for c in text):
+            raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected {what}: 1 to {max_len} "
+                                             "printable characters without spaces")
+        return text
+    parse.__name__ = "name"
+    return parse
+
+
+#: bit rates a CAN controller runs at (python-can passes the value to the interface): one check for every -b
+BITRATE = bitrate_option
+#: a scenario seed, as the scenario's own ``seed`` field
+SEED = integer(lo=0, hi=2**63 - 1)
+#: a scenario duration override, as the scenario's own ``duration_s`` field
+DURATION = number(lo=0.0, hi=86_400.0, lo_open=True)
+#: a timestamp to start a log at (s since the epoch: up to the year 2286; 0 for scenario time)
+START_TIME = number(lo=0.0, hi=1e10)
+SENSOR_ID = integer(lo=0, hi=7)
+PORT = integer(lo=0, hi=65535)
+COUNT = integer(lo=0)
+POSITIVE_COUNT = integer(lo=1)
+#: seconds of silence before ``consume`` gives up (0: never); at most a day
+TIMEOUT = number(lo=0.0, hi=86_400.0)

@@ -1,0 +1,202 @@
+"""Checks of a loaded scenario for what a tester gets wrong, beyond the value checks of each field.
+
+Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenario file, with the file's lines:
+
+* **Conflicting motion** (error). An actor with ``waypoints`` moves along them; ``speed_mps``, ``heading_deg``,
+  ``x_m``, ``y_m`` or ``lane`` written beside them are not used. Where such a field agrees with the waypoints
+  (the speed or the direction of one of its segments, the first waypoint's position) it is
+  taken as the note the user meant it to be; where it disagrees the file says two different things and the
+  error names the field, its line and what the waypoints say.
+* **An actor on top of the ego at the start** (error): its box and the ego's (``ego.length_m`` ×
+  ``ego.width_m``, the rear axle 1 m ahead of the rear end, as the viewer draws it) intersect at t = 0. No radar
+  reports a car inside the car it sits on; the model's output would be meaningless.
+* **An actor the radar can never see** (warning): at no cycle of the scenario is the actor's nearest point or
+  its centre inside the preset's field of view (its sectors, its minimum range, ``radar.max_distance_m``).
+  Occlusion is not considered. A warning, not an error: an actor may be there for the ground truth or a
+  viewer, but usually the tester meant 100 m, not 1000 m. Guardrail actors are not checked (their posts, not
+  their box, are what the radar sees).
+
+Errors are :class:`ScenarioError` with ``file:line: field '…': …``; warnings go to this module's logger.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from radarnode.errors import ScenarioError
+from radarnode.scene.scenario import Actor, Scenario
+from radarnode.schema import Source
+
+logger = logging.getLogger(__name__)
+
+EGO_REAR_OVERHANG_M = 1.0      # rear end to rear axle, as radarnode.viz draws the ego
+OVERLAP_TOLERANCE_M = 0.01     # boxes that only touch do not overlap
+SPEED_TOLERANCE = (0.5, 0.05)  # m/s, or this fraction of the speed, whichever is larger
+HEADING_TOLERANCE_DEG = 5.0
+POSITION_TOLERANCE_M = 0.5
+CHUNK_CYCLES = 1024            # cycles evaluated at once when looking for the first sight of every actor
+
+
+def check_scenario(scenario: Scenario) -> Scenario:
+    """Raise ScenarioError for what cannot be meant, log a warning for what is probably not meant; returns the
+    scenario unchanged (so the loader can chain it)."""
+    src = Source.of_lines(scenario.source, scenario.lines)
+    for i, actor in enumerate(scenario.actors):
+        if actor.waypoints:
+            _check_waypoint_fields(scenario, src, i, actor)
+    if scenario.actors:
+        _check_overlap_at_start(scenario, src)
+        _check_visibility(scenario, src)
+    return scenario
+
+
+# --- conflicting motion fields ----------------------------------------------------------------------------
+
+
+def _given(scenario: Scenario, path: str) -> bool:
+    """Whether the file wrote this field (a scenario built in code has no lines, and no field counts as given)."""
+    return path in scenario.lines
+
+
+def _segments(actor: Actor) -> list[tuple[float, float]]:
+    """(speed m/s, direction rad) of every waypoint segment the actor moves on."""
+    out = []
+    for a, b in zip(actor.waypoints, actor.waypoints[1:]):
+        dx, dy = b.x_m - a.x_m, b.y_m - a.y_m
+        dist = math.hypot(dx, dy)
+        if dist > 1e-9:
+            out.append((dist / (b.t_s - a.t_s), math.atan2(dy, dx)))
+    return out
+
+
+def _check_waypoint_fields(scenario: Scenario, src: Source, i: int, actor: Actor) -> None:
+    """A field beside ``waypoints`` that matches one of their segments (the speed or the heading of a segment,
+    the first waypoint's position) is a note and accepted; one that matches none contradicts them."""
+    base = f"actors[{i}]"
+    w0 = actor.waypoints[0]
+    segments = _segments(actor)
+    why = "an actor with waypoints moves along them"
+
+    def conflict(key: str, value: object, says: str) -> ScenarioError:
+        return src.error(f"{base}.{key}", f"field '{base}.{key}': value {value!r} conflicts with "
+                                          f"'{base}.waypoints' ({why}: {says}); expected it left out, or equal")
+
+    if _given(scenario, f"{base}.speed_mps"):
+        v = actor.speed_mps
+        speeds = [seg[0] for seg in segments] + ([0.0] if len(segments) < len(actor.waypoints) - 1 else [])
+        if not any(abs(v - u) <= max(SPEED_TOLERANCE[0], SPEED_TOLERANCE[1] * max(v, u)) for u in speeds):
+            says = ("they move it at " + ", ".join(f"{u:.2f}" for u in speeds) + " m/s" if segments
+                    else "they never move it")
+            raise conflict("speed_mps", v, says)
+    if _given(scenario, f"{base}.heading_deg") and segments:
+        headings = [math.degrees(seg[1]) for seg in segments]
+        if not any(abs((actor.heading_deg - h + 180.0) % 360.0 - 180.0) <= HEADING_TOLERANCE_DEG for h in headings):
+            raise conflict("heading_deg", actor.heading_deg,
+                           "they head " + ", ".join(f"{h:.1f}" for h in headings) + "°")
+    if _given(scenario, f"{base}.x_m") and abs(actor.x_m - w0.x_m) > POSITION_TOLERANCE_M:
+        raise conflict("x_m", actor.x_m, f"it starts at the first waypoint, x_m {w0.x_m}")
+    for key in ("y_m", "lane"):
+        if _given(scenario, f"{base}.{key}"):
+            y = scenario.actor_y_m(actor)
+            if abs(y - w0.y_m) > POSITION_TOLERANCE_M:
+                raise conflict(key, getattr(actor, key), f"it starts at the first waypoint, y_m {w0.y_m}, and "
+                                                         f"{key} {getattr(actor, key)!r} is y {y:.2f} m")
+
+
+# --- an actor on top of the ego at t = 0 ----------------------------------------------------------------
+
+
+def _boxes_overlap(c1, h1, a1, c2, h2, a2, tol: float) -> bool:
+    """Separating-axis test of two rectangles (centre, half sizes (l, w), heading rad); True if they intersect
+    by more than ``tol`` along every axis."""
+    axes = [(math.cos(a), math.sin(a)) for a in (a1, a1 + math.pi / 2, a2, a2 + math.pi / 2)]
+    d = (c2[0] - c1[0], c2[1] - c1[1])
+    for ax in axes:
+        def radius(h, a):
+            u = (math.cos(a), math.sin(a))
+            v = (-math.sin(a), math.cos(a))
+            return h[0] * abs(u[0] * ax[0] + u[1] * ax[1]) + h[1] * abs(v[0] * ax[0] + v[1] * ax[1])
+        if abs(d[0] * ax[0] + d[1] * ax[1]) >= radius(h1, a1) + radius(h2, a2) - tol:
+            return False
+    return True
+
+
+def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
+    from radarnode.scene.world import Scene
+    scene = Scene(scenario)
+    view = scene.view(0.0)
+    mx, my, myaw = scene.mount
+    ego = scenario.ego
+    ego_c = (0.5 * ego.length_m - EGO_REAR_OVERHANG_M, 0.0)
+    ego_h = (0.5 * ego.length_m, 0.5 * ego.width_m)
+    c, s = math.cos(myaw), math.sin(myaw)
+    for i, actor in enumerate(scenario.actors):
+        # the actor's box in the ego frame (the sensor frame turned by the mount's yaw and moved by its position)
+        cx, cy = float(view.centre_x_m[i]), float(view.centre_y_m[i])
+        ex, ey = c * cx - s * cy + mx, s * cx + c * cy + my
+        heading = float(view.orientation_rad[i]) + myaw
+        half = (0.5 * actor.length, 0.5 * actor.width)
+        if actor.object_class == "guardrail":       # its posts run from x_m over length_m
+            ex, ey = ex + half[0] * math.cos(heading), ey + half[0] * math.sin(heading)
+        if _boxes_overlap(ego_c, ego_h, 0.0, (ex, ey), half, heading, OVERLAP_TOLERANCE_M):
+            base = f"actors[{i}]"
+            key = f"{base}.x_m" if f"{base}.x_m" in scenario.lines else f"{base}.waypoints" \
+                if actor.waypoints else base
+            front = ego.length_m - EGO_REAR_OVERHANG_M
+            raise src.error(key, f"actor '{actor.id}' ({base}) overlaps the ego at t = 0: its {actor.length:g} × "
+                                 f"{actor.width:g} m box centred at x {ex:.2f} m, y {ey + ego.y_m:.2f} m intersects "
+                                 f"the ego's (x {-EGO_REAR_OVERHANG_M:g} to {front:g} m, y {ego.y_m - ego_h[1]:.2f} "
+                                 f"to {ego.y_m + ego_h[1]:.2f} m); expected it clear of the ego, e.g. x_m >= "
+                                 f"{front + half[0] + 0.5:.1f} in the ego's lane")
+
+
+# --- an actor the radar can never see ----------------------------------------------------------------------
+
+
+def _check_visibility(scenario: Scenario, src: Source) -> None:
+    from radarnode.radar.setup import radar_config
+    from radarnode.scene.world import Scene
+    preset = radar_config(scenario).preset
+    max_m = preset.max_range_m if scenario.radar.max_distance_m is None else scenario.radar.max_distance_m
+    candidates = [i for i, a in enumerate(scenario.actors) if a.object_class != "guardrail"]
+    if not candidates:
+        return
+    scene = Scene(scenario)
+    n_cycles = max(scenario.num_cycles, 1)
+    seen = np.zeros(len(scenario.actors), dtype=bool)
+    seen[[i for i in range(len(scenario.actors)) if i not in candidates]] = True
+    closest = np.full(len(scenario.actors), np.inf)
+    closest_az = np.zeros(len(scenario.actors))
+    closest_t = np.zeros(len(scenario.actors))
+    for k0 in range(0, n_cycles, CHUNK_CYCLES):
+        times = np.arange(k0, min(k0 + CHUNK_CYCLES, n_cycles)) * scenario.period_s
+        v = scene.views(times)
+        for x, y in ((v.x_m, v.y_m), (v.centre_x_m, v.centre_y_m)):
+            rng, az = np.hypot(x, y), np.arctan2(y, x)
+            inside = np.zeros(rng.shape, dtype=bool)
+            for sector in preset.fov:
+                inside |= (rng <= min(sector.max_range_m, max_m)) & (np.abs(az) <= math.radians(sector.half_angle_deg))
+            seen |= (inside & (rng >= preset.min_range_m)).any(axis=0)
+        rng, az = v.range_m, v.azimuth_rad
+        k = np.argmin(rng, axis=0)
+        cols = np.arange(rng.shape[1])
+        better = rng[k, cols] < closest
+        closest = np.where(better, rng[k, cols], closest)
+        closest_az = np.where(better, az[k, cols], closest_az)
+        closest_t = np.where(better, times[k], closest_t)
+        if seen.all():
+            return
+    half = max(s.half_angle_deg for s in preset.fov)
+    for i in np.flatnonzero(~seen):
+        actor = scenario.actors[i]
+        base = f"actors[{i}]"
+        named = [f"ecu.expect.{k}" for k in ("lead", "acc_follows") if getattr(scenario.ecu.expect, k) == actor.id]
+        line = src.where(f"{base}.x_m" if f"{base}.x_m" in scenario.lines else base)
+        logger.warning("%s: actor '%s' (%s) is never in the radar's field of view during the scenario's %g s: "
+                       "preset %s sees %g–%g m within ±%g°, the actor comes no nearer than %.1f m (azimuth %.1f° at "
+                       "t = %.2f s), so the radar never reports it%s", line, actor.id, base, scenario.duration_s,
+                       preset.name, preset.min_range_m, max_m, half, closest[i], math.degrees(closest_az[i]),
+                       closest_t[i], f"; it is {' and '.join(named)}" if named else "")

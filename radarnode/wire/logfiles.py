@@ -1,0 +1,482 @@
+"""CAN log files: the formats radarnode writes and reads back, and a reader that survives a damaged file.
+
+Every format python-can writes is either written *and* read back, or refused before a run starts:
+
+========================  ===================================================  ============================
+suffix                    format (python-can class)                            notes
+========================  ===================================================  ============================
+``.blf``                  Vector Binary Logging Format (BLFWriter/BLFReader)
+``.asc``                  Vector ASCII (ASCWriter/ASCReader)                   ``.asc.gz`` too
+``.log``                  candump -L text (CanutilsLogWriter/Reader)           ``.log.gz`` too
+``.csv``                  python-can's CSV (CSVWriter/CSVReader)               ``.csv.gz`` too
+``.trc``                  PEAK PCAN-View trace 2.1 (TRCWriter/TRCReader)       ``.trc.gz`` too
+``.db``                   SQLite, table ``messages`` (SqliteWriter/Reader)
+``.mf4``                  ASAM MDF 4 (MF4Writer/MF4Reader)                     needs ``radarnode[mf4]``
+``.txt``                  python-can's Printer: a print-out no reader reads    refused
+========================  ===================================================  ============================
+
+python-can itself refuses ``.blf.gz`` and ``.db.gz``. :func:`read_frames` reads any of them and keeps going past
+damage: a record it cannot parse — a line of a text log that is cut off or garbled, a frame whose DLC does not
+match its data, a BLF object that is not where the file says — is skipped and counted, and reading resumes with
+the next line (text formats) or the next BLF object; a damaged compressed stream, SQLite or MDF file ends the
+reading there. :class:`ReadReport` says how many frames were read and where the first bad record is.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import gc
+import gzip
+import logging
+import os
+import re
+import struct
+import sys
+import time
+import zlib
+from collections.abc import Iterator
+from dataclasses import dataclass
+from pathlib import Path
+
+import can
+from can.io.asc import ASCReader
+from can.io.blf import BLFReader
+from can.io.canutils import CanutilsLogReader
+from can.io.csv import CSVReader
+from can.io.trc import TRCReader
+
+from radarnode.errors import FileError, UsageError
+
+TEXT_READERS = {".asc": ASCReader, ".csv": CSVReader, ".log": CanutilsLogReader, ".trc": TRCReader}
+#: every format radarnode writes and reads back; ``.mf4`` only with asammdf installed
+FORMATS = (".asc", ".blf", ".csv", ".db", ".log", ".trc", ".asc.gz", ".csv.gz", ".log.gz", ".trc.gz", ".mf4")
+MAX_BAD_WITHOUT_A_FRAME = 1000      # a file that yields only bad records is not a log of this format
+#: python-can's readers and the Message constructor raise these on a record they cannot parse
+RECORD_ERRORS = (ValueError, IndexError, KeyError, TypeError, struct.error, AttributeError, OverflowError,
+                 UnicodeError, can.CanError)
+
+logger = logging.getLogger(__name__)
+
+
+def mf4_available() -> bool:
+    """Whether python-can can write and read MF4 here (its optional dependency asammdf is installed)."""
+    from can.io import mf4
+    return getattr(mf4, "asammdf", None) is not None
+
+
+class _SqliteWriter(can.io.SqliteWriter):
+    """python-can's SqliteWriter, whose ``stop`` keeps every frame.
+
+    Its thread writes in batches of ``MAX_BUFFER_SIZE_BEFORE_WRITES`` (500); a ``stop`` that comes while more
+    than a batch waits in its queue ends the thread after the current batch and the rest is lost (a run
+    rendered faster than SQLite writes). Here ``stop`` waits until the thread has taken everything queued."""
+
+    def stop(self) -> None:
+        thread = getattr(self, "_writer_thread", None)
+        buffer = getattr(self, "buffer", None)
+        while buffer is not None and thread is not None and thread.is_alive() and not buffer.empty():
+            time.sleep(0.005)
+        super().stop()
+
+
+def open_writer(path: str):
+    """python-can's writer for the file's suffix (``can.Logger``), with :class:`_SqliteWriter` for ``.db``."""
+    if log_format(path) == ".db":
+        return _SqliteWriter(path)
+    return can.Logger(path)
+
+
+def log_format(path: str | os.PathLike) -> str:
+    """The format key of a file name: its suffix, lower case, with ``.gz`` the two last (``.log.gz``)."""
+    p = Path(path)
+    suffixes = [s.lower() for s in p.suffixes]
+    if suffixes and suffixes[-1] == ".gz":
+        return "".join(suffixes[-2:])
+    return suffixes[-1] if suffixes else ""
+
+
+def allowed_text(extra: tuple[str, ...] = ()) -> str:
+    shown = [f for f in FORMATS if f != ".mf4"] + [".mf4 (with radarnode[mf4])"] + list(extra)
+    return "a file name ending in " + " ".join(shown)
+
+
+def check_output_format(path: str, option: str, extra: tuple[str, ...] = ()) -> str:
+    """The format of an output log file, or a UsageError naming the option, the value and the formats allowed.
+
+    ``extra`` are further suffixes the command handles itself (``.mcap``). Called before any work is done."""
+    fmt = log_format(path)
+    if fmt in extra:
+        return fmt
+    if fmt == ".txt":
+        raise UsageError(f"option {option}: value {path!r} is not allowed: .txt is python-can's print-out, which no "
+                         f"reader reads back (use .asc or .log for text); expected {allowed_text(extra)}")
+    if fmt == ".mf4" and not mf4_available():
+        raise UsageError(f"option {option}: value {path!r} needs python-can's MF4 support (asammdf), which is not "
+                         "installed: pip install 'radarnode[mf4]'; or use .blf, .asc, .log, .csv, .trc or .db")
+    if fmt not in FORMATS:
+        raise UsageError(f"option {option}: value {path!r} is not allowed: no CAN log format has the suffix "
+                         f"{fmt or '(none)'!r}; expected {allowed_text(extra)}")
+    return fmt
+
+
+def check_input_format(path: str, what: str) -> str:
+    """The format of an input log file by its name, or a UsageError for a suffix no reader here knows.
+    ``what`` names the argument (``argument FILE``)."""
+    fmt = log_format(path)
+    if fmt not in FORMATS:
+        hint = " (.txt is python-can's print-out, which no reader reads)" if fmt == ".txt" else ""
+        raise UsageError(f"{what}: value {path!r} is not allowed{hint}; expected a CAN log file ending in "
+                         + " ".join(FORMATS))
+    if fmt == ".mf4" and not mf4_available():
+        raise UsageError(f"{what}: value {path!r} needs python-can's MF4 support (asammdf), which is not installed: "
+                         "pip install 'radarnode[mf4]'")
+    return fmt
+
+
+def check_input(path: str, what: str) -> str:
+    """The format of an input log file; UsageError for a suffix no reader knows (:func:`check_input_format`),
+    FileError for a file that is missing, a directory, unreadable or empty."""
+    fmt = check_input_format(path, what)
+    p = Path(path)
+    try:
+        st = p.stat()
+    except OSError as exc:
+        raise FileError(f"{what}: cannot read {path!r}: {exc.strerror or exc}") from None
+    if p.is_dir():
+        raise FileError(f"{what}: cannot read {path!r}: it is a directory; expected a CAN log file")
+    try:
+        with open(p, "rb"):
+            pass
+    except OSError as exc:
+        raise FileError(f"{what}: cannot read {path!r}: {exc.strerror or exc}") from None
+    if st.st_size == 0 and p.is_file():
+        raise FileError(f"{what}: {path!r} is empty; expected a CAN log ({fmt})")
+    return fmt
+
+
+@dataclass
+class ReadReport:
+    """What :func:`read_frames` made of a file."""
+
+    path: str
+    fmt: str
+    frames: int = 0
+    bad: int = 0                      # records skipped
+    first_bad: str | None = None      # where the first one is and why: "line 12: …", "byte 4096: …"
+    cut_short: str | None = None      # the reading ended early: where and why (the rest of the file was not read)
+
+    def skip(self, where: str, reason: object) -> None:
+        self.bad += 1
+        if self.first_bad is None:
+            self.first_bad = f"{where}: {_reason(reason)}"
+
+    def stop(self, where: str, reason: object) -> None:
+        self.cut_short = f"{where}: {_reason(reason)}"
+        if self.first_bad is None:
+            self.first_bad = self.cut_short
+
+    @property
+    def damaged(self) -> bool:
+        return self.bad > 0 or self.cut_short is not None
+
+    def message(self, what: str) -> str:
+        """One line for an ``error:``: what was read and where the damage starts."""
+        if self.frames == 0:
+            return (f"{what}: {self.path!r} holds no frame a {self.fmt} reader can read; first bad record at "
+                    f"{self.first_bad}")
+        parts = [f"{what}: {self.path!r} is damaged: first bad record at {self.first_bad}"]
+        if self.bad:
+            parts.append(f"{self.bad} bad record{'s' if self.bad != 1 else ''} skipped")
+        if self.cut_short is not None and self.cut_short != self.first_bad:
+            parts.append(f"reading ended at {self.cut_short}")
+        elif self.cut_short is not None:
+            parts.append("the rest of the file could not be read")
+        parts.append(f"{self.frames} frames read")
+        return "; ".join(parts)
+
+
+def _reason(exc: object) -> str:
+    if isinstance(exc, BaseException):
+        text = str(exc).strip() or type(exc).__name__
+        return text if len(text) <= 120 else text[:119] + "…"
+    return str(exc)
+
+
+def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
+    """The frames of a log file, skipping and counting (in ``report``) what cannot be read.
+
+    The file must have passed :func:`check_input`. Errors of the code that consumes the frames pass through.
+    """
+    fmt = report.fmt
+    base = fmt[:-3] if fmt.endswith(".gz") else fmt
+    if base in TEXT_READERS:
+        frames = _TextFrames(path, fmt, TEXT_READERS[base], report)
+    elif fmt == ".blf":
+        frames = _BlfFrames(path, report)
+    elif fmt == ".db":
+        frames = _WholeFrames(path, report, can.io.SqliteReader, "row")
+    elif fmt == ".mf4":
+        frames = _WholeFrames(path, report, can.io.MF4Reader, "frame")
+    else:                                  # pragma: no cover - check_input refuses it
+        raise UsageError(f"{path!r}: no reader for {fmt!r}")
+    for msg in frames:
+        problem = _frame_problem(msg)
+        if problem is not None:
+            report.skip(frames.where(), problem)
+            continue
+        report.frames += 1
+        yield msg
+
+
+def _frame_problem(msg: can.Message) -> str | None:
+    """Why a frame a reader produced cannot be on a CAN bus (a garbled or cut-off record), or None."""
+    if msg.is_error_frame:
+        return None
+    if msg.arbitration_id < 0 or msg.arbitration_id > (0x1FFFFFFF if msg.is_extended_id else 0x7FF):
+        return f"CAN ID 0x{msg.arbitration_id:X} is out of range"
+    if msg.is_remote_frame:
+        return None
+    n = len(msg.data)
+    if msg.is_fd:
+        return None if n <= 64 else f"{n} data bytes"
+    if not 0 <= msg.dlc <= 8 or n != msg.dlc:
+        return f"DLC {msg.dlc} with {n} data bytes"
+    return None
+
+
+# --- text formats: line by line, a bad line skipped --------------------------------------------------------
+
+
+class _StreamError(Exception):
+    """Reading the file itself failed (a damaged compressed stream, an I/O error): nothing after it is readable."""
+
+
+class _Lines:
+    """The lines of a text log for python-can's readers, counted; the preamble is replayed after a restart.
+
+    A last line without a line end is a record cut off (a truncated file): it is held back and reported instead
+    of being parsed into a wrong frame."""
+
+    def __init__(self, f, report: ReadReport, check=None) -> None:
+        self._f = f
+        self._report = report
+        self._check = check         # line -> None, or why the line is no record of the format
+        self.lineno = 0             # lines of the file handed out so far
+        self.replay: list[str] = []
+        self.recording: list[str] | None = []   # lines read before the first frame (headers), while recording
+
+    def __iter__(self):
+        return self
+
+    def __next__(self) -> str:
+        if self.replay:
+            return self.replay.pop(0)
+        try:
+            line = next(self._f)
+        except StopIteration:
+            raise
+        except (OSError, EOFError, zlib.error, gzip.BadGzipFile) as exc:
+            raise _StreamError(exc) from None
+        self.lineno += 1
+        if not line.endswith(("\n", "\r")) and line.strip():
+            self._report.skip(f"line {self.lineno}", "the line is cut off (no line end): the file is truncated")
+            raise StopIteration
+        problem = self._check(line) if self._check is not None else None
+        if problem is not None:
+            self._report.skip(f"line {self.lineno}", problem)
+            return next(self)
+        if self.recording is not None:
+            self.recording.append(line)
+        return line
+
+    def close(self) -> None:        # python-can's readers close their file when done; the caller closes this one
+        pass
+
+
+_ASC_LINE = re.compile(r"\s*($|//|date\s|base\s|(no\s+)?internal\s+events\s+logged|begin\s+triggerblock|"
+                       r"end\s+triggerblock|\d+\.\d+\s)", re.IGNORECASE)
+
+
+def _asc_line_problem(line: str) -> str | None:
+    """python-can's ASC reader passes over any line it does not know (events it does not parse); a line that is
+    none of the ASC grammar's — neither a header, a comment, a trigger block's start or end nor a timestamped
+    event — or that holds control characters or bytes that are not text, is damage, and reported as such."""
+    if "\ufffd" in line or any(c < " " and c not in "\t\r\n" for c in line):
+        return "not text (control characters or invalid UTF-8)"
+    if not _ASC_LINE.match(line):
+        return f"not an ASC line: {line.strip()[:40]!r}"
+    return None
+
+
+class _TrcWarnings(logging.Filter):
+    """python-can's TRC reader logs a line it cannot parse and goes on: counted as a bad record instead."""
+
+    def __init__(self, lines: _Lines, report: ReadReport) -> None:
+        super().__init__()
+        self.lines, self.report = lines, report
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.levelno >= logging.WARNING and "Failed to parse" in record.getMessage():
+            self.report.skip(f"line {self.lines.lineno}", record.getMessage())
+            return False
+        return True
+
+
+class _TextFrames:
+    def __init__(self, path: str, fmt: str, reader_cls, report: ReadReport) -> None:
+        self.path, self.fmt, self.reader_cls, self.report = path, fmt, reader_cls, report
+        self.lines: _Lines | None = None
+
+    def where(self) -> str:
+        return f"line {self.lines.lineno}" if self.lines is not None else "line ?"
+
+    def __iter__(self) -> Iterator[can.Message]:
+        report = self.report
+        opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8", errors="replace")) \
+            if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8", errors="replace"))
+        with opener() as f:
+            lines = self.lines = _Lines(f, report, _asc_line_problem if self.reader_cls is ASCReader else None)
+            trc_log = logging.getLogger("can.io.trc")
+            quiet = _TrcWarnings(lines, report)
+            trc_log.addFilter(quiet)
+            try:
+                preamble: list[str] = []
+                while True:
+                    before = lines.lineno
+                    try:
+                        for msg in self.reader_cls(lines):
+                            if lines.recording is not None:
+                                # the headers a restarted reader needs: the lines before the first frame's
+                                preamble, lines.recording = lines.recording[:-1], None
+                            yield msg
+                        return
+                    except _StreamError as exc:
+                        report.stop(f"line {lines.lineno + 1}", exc.__cause__ or exc.args[0])
+                        return
+                    except RECORD_ERRORS as exc:
+                        report.skip(f"line {lines.lineno}", exc)
+                        if lines.recording is not None:          # a bad line among the headers: not replayed
+                            preamble, lines.recording = lines.recording[:-1], lines.recording[:-1]
+                        if lines.lineno == before or (report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME):
+                            report.stop(f"line {lines.lineno}", "no progress past this line")
+                            return
+                        lines.replay = list(preamble)
+            finally:
+                trc_log.removeFilter(quiet)
+
+
+# --- BLF: object by object, resynchronised on the next object signature ------------------------------------
+
+
+class _BlfFrames:
+    def __init__(self, path: str, report: ReadReport) -> None:
+        self.path, self.report = path, report
+        self.pos = 0
+
+    def where(self) -> str:
+        return f"byte {self.pos}"
+
+    def __iter__(self) -> Iterator[can.Message]:
+        report = self.report
+        try:
+            reader = BLFReader(self.path)
+        except OSError as exc:
+            report.stop("byte 0", exc)
+            return
+        except Exception as exc:  # noqa: BLE001 - struct.error, BLFParseError: not a BLF header
+            report.stop("byte 0", f"not a BLF file ({_reason(exc)})")
+            return
+        f = reader.file
+        size = os.fstat(f.fileno()).st_size
+        try:
+            declared = int(reader.file_size)
+            resync_from = None
+            while True:
+                if resync_from is not None:
+                    nxt = _find_object(f, resync_from, size)
+                    if nxt is None:
+                        return
+                    f.seek(nxt)
+                    if hasattr(reader, "_tail"):
+                        reader._tail = b""         # the half object carried over from the damaged container
+                self.pos = f.tell()
+                try:
+                    for msg in reader:
+                        yield msg
+                        self.pos = f.tell()
+                    if 0 < size < declared:
+                        report.stop(f"byte {size}", f"the file ends after {size} bytes, its header says {declared}: "
+                                                    "it is truncated")
+                    return
+                except RECORD_ERRORS + (zlib.error, can.io.blf.BLFParseError) as exc:
+                    start = self.pos
+                    report.skip(f"byte {start}", exc)
+                    resync_from = start + 1
+                    if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+                        return
+        finally:
+            reader.stop()
+
+
+def _find_object(f, start: int, size: int) -> int | None:
+    """The offset of the next BLF object signature at or after ``start``, or None."""
+    f.seek(start)
+    chunk_size = 1 << 16
+    pos = start
+    carry = b""
+    while pos < size:
+        data = f.read(chunk_size)
+        if not data:
+            return None
+        buf = carry + data
+        i = buf.find(b"LOBJ")
+        if i >= 0:
+            return pos - len(carry) + i
+        carry = buf[-3:]
+        pos += len(data)
+    return None
+
+
+# --- SQLite and MDF: read until the first damage ------------------------------------------------------------
+
+
+class _WholeFrames:
+    def __init__(self, path: str, report: ReadReport, open_reader, unit: str) -> None:
+        self.path, self.report, self.open_reader, self.unit = path, report, open_reader, unit
+
+    def where(self) -> str:
+        return f"{self.unit} {self.report.frames + self.report.bad + 1}"
+
+    def __iter__(self) -> Iterator[can.Message]:
+        hook = sys.unraisablehook
+        sys.unraisablehook = lambda unraisable: None      # asammdf's __del__ complains about a file it could not open
+        reader = None
+        try:
+            try:
+                reader = self.open_reader(self.path)
+            except Exception as exc:  # noqa: BLE001 - sqlite3 and asammdf raise their own kinds on a file not theirs
+                self.report.stop(f"{self.unit} 1", f"cannot be read as {self.report.fmt} ({_reason(exc)})")
+            if reader is None:
+                gc.collect()            # the half-built reader goes now, while its complaints are silenced
+        finally:
+            sys.unraisablehook = hook
+        if reader is None:
+            return
+        try:
+            it = iter(reader)
+            while True:
+                try:
+                    msg = next(it)
+                except StopIteration:
+                    return
+                except Exception as exc:  # noqa: BLE001 - as above, on damage mid-way
+                    self.report.stop(self.where(), exc)
+                    return
+                yield msg
+        finally:
+            with contextlib.suppress(Exception):
+                reader.stop()
+
+
+__all__ = ["FORMATS", "ReadReport", "check_input", "check_input_format", "check_output_format", "log_format", "mf4_available",
+           "open_writer", "read_frames"]

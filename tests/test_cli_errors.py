@@ -1,0 +1,422 @@
+"""Errors, not tracebacks: every subcommand, fed bad option values and bad files, prints one ``error: …`` line
+naming the option or file, the value and what is allowed, exits 2 for a usage error (the command line alone
+is wrong) and 1 for the rest (a file, a scenario, a bus), and leaves no partial file.
+
+The commands run in-process through ``radarnode.cli.main.main`` (the console entry point), so the matrix of
+some 400 cases takes seconds; ``tests/test_cli.py`` runs the real executable.
+"""
+
+from __future__ import annotations
+
+import os
+import random
+import shutil
+import subprocess
+import sys
+import tempfile
+import uuid
+from pathlib import Path
+
+import pytest
+
+from radarnode.cli.main import build_parser, main
+from tests.conftest import ROOT, SCENARIOS
+
+SCENARIO = str(SCENARIOS / "stopped_vehicle.yaml")          # 15 s, one stopped car ahead
+
+
+def cli(capsys, *argv: str) -> tuple[int, str, str]:
+    """Run a command in-process: (exit status, stdout, stderr)."""
+    try:
+        rc = main([str(a) for a in argv])
+    except SystemExit as exc:           # argparse's usage errors
+        rc = exc.code
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+def one_error_line(err: str) -> str:
+    lines = [x for x in err.splitlines() if x.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("error: ") and "Traceback" not in err, err
+    return lines[0]
+
+
+@pytest.fixture(scope="module")
+def logs(tmp_path_factory):
+    """A small log of each kind the file cases need: a BLF and a candump log of 1 s."""
+    d = tmp_path_factory.mktemp("logs")
+    out = {}
+    for suffix in (".blf", ".log"):
+        out[suffix] = d / f"small{suffix}"
+        assert main(["log", SCENARIO, "-o", str(out[suffix]), "--duration", "1"]) == 0
+    return out
+
+
+# --- option values ---------------------------------------------------------------------------------------
+
+VALUES = ("nan", "inf", "-inf", "-1", "0", "1e300", "99999999999999999999", "1.5", "abc", "")
+INF = float("inf")
+
+
+def _options(logs_dir: str) -> list[tuple[list[str], str, type, float, float, bool]]:
+    """(the command before the option, option, int or float, lowest, highest, lowest excluded)."""
+    log, mcap, png, out = f"{logs_dir}/small.blf", f"{logs_dir}/x.mcap", f"{logs_dir}/x.png", f"{logs_dir}/x.blf"
+    scenario_opts = [("--seed", int, 0, 2**63 - 1, False), ("--duration", float, 0, 86_400, True)]
+    table = {
+        ("run", SCENARIO, "--fast"): scenario_opts + [("--every", int, 1, INF, False),
+                                                      ("--foxglove-port", int, 0, 65_535, False)],
+        ("node", SCENARIO, "-i", "virtual", "-c", "matrix", "--fast"):
+            scenario_opts + [("-b", int, 10_000, 1_000_000, False), ("--foxglove-port", int, 0, 65_535, False)],
+        ("consume", "-i", "virtual", "-c", "matrix"): [("--sensor-id", int, 0, 7, False), ("--count", int, 0, INF, False),
+                                                       ("--timeout", float, 0, 86_400, False),
+                                                       ("-b", int, 10_000, 1_000_000, False)],
+        ("log", SCENARIO, "-o", out): scenario_opts + [("--start-time", float, 0, 1e10, False),
+                                                       ("-b", int, 10_000, 1_000_000, False)],
+        ("decode", log): [("--sensor-id", int, 0, 7, False), ("--max-cycles", int, 0, INF, False)],
+        ("export", log, "-o", mcap): [("--start-time", float, 0, 1e10, False), ("--sensor-id", int, 0, 7, False)],
+        ("image", SCENARIO, "-o", png): scenario_opts + [("--time", float, 0, 15.0, False),
+                                                         ("--k", float, 1, 10, False),
+                                                         ("--every", int, 1, INF, False)],
+        ("report", SCENARIO): [("--seeds", int, 1, 10_000, False), ("--min-passes", int, 1, 1, False),
+                               ("--fcw-ttc-warn", float, 0.5, 10, False), ("--fcw-decel-warn", float, 1, 10, False),
+                               ("--acc-min-speed", float, 0, 30, False), ("--path-half-width", float, 0.5, 5, False),
+                               ("--ecu-latency", float, 0, 0.5, False)],
+    }
+    return [(list(cmd), opt, kind, lo, hi, lo_open) for cmd, opts in table.items() for opt, kind, lo, hi, lo_open in opts]
+
+
+def _allowed(text: str, kind: type, lo: float, hi: float, lo_open: bool) -> bool:
+    try:
+        v = int(text, 10) if kind is int else float(text)
+    except ValueError:
+        return False
+    if v != v or v in (INF, -INF):
+        return False
+    return (v > lo if lo_open else v >= lo) and v <= hi
+
+
+CASES = [(cmd, opt, kind, lo, hi, lo_open, value) for cmd, opt, kind, lo, hi, lo_open in _options("LOGS")
+         for value in VALUES]
+
+
+@pytest.mark.parametrize("cmd,option,kind,lo,hi,lo_open,value", CASES,
+                         ids=[f"{c[0]}-{o}-{v or 'empty'}" for c, o, _, _, _, _, v in CASES])
+def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, option, kind, lo, hi, lo_open,
+                                                             value):
+    d = str(logs[".blf"].parent)
+    cmd = [c.replace("LOGS", d) for c in cmd]
+    argv = [*cmd, f"{option}={value}"]          # "--x=-inf": a value that starts with a dash is a value
+    if _allowed(value, kind, lo, hi, lo_open):
+        build_parser().parse_args(argv)      # parses; not run (a run is not what this test is about)
+        return
+    before = sorted(os.listdir(d))
+    rc, _, err = cli(capsys, *argv)
+    line = one_error_line(err)
+    assert rc == 2, err
+    # the option, the value as typed, and what is allowed
+    name = option.lstrip("-")
+    assert f"option {option}" in line or f"/--{name}" in line or f"option -{name}" in line, line
+    assert "is not allowed" in line and "expected" in line, line
+    shown = repr(value) if value in ("abc", "") else None
+    assert shown is None or shown in line, line
+    assert sorted(os.listdir(d)) == before             # nothing written
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["run", SCENARIO, "--fidelity", "best"], "option --fidelity: value 'best' is not allowed; expected one of object"),
+    (["decode", "LOGS/small.blf", "--format", "xml"], "option --format: value 'xml' is not allowed; expected one of"),
+    (["log", SCENARIO, "-o", "LOGS/x.log", "--channel", ""], "option --channel: value '' is not allowed"),
+    (["log", SCENARIO, "-o", "LOGS/x.log", "--channel", "can 0"], "option --channel: value 'can 0' is not allowed"),
+    (["log", SCENARIO, "-o", "LOGS/x.txt"], "option --output: value 'LOGS/x.txt' is not allowed: .txt is"),
+    (["log", SCENARIO, "-o", "LOGS/x.unknown"], "option --output: value 'LOGS/x.unknown' is not allowed"),
+    (["log", SCENARIO, "-o", "LOGS/x.blf.gz"], "option --output: value 'LOGS/x.blf.gz' is not allowed"),
+    (["export", "LOGS/small.blf", "-o", "LOGS/x.blf"], "option --output: value 'LOGS/x.blf' is not allowed"),
+    (["image", SCENARIO, "-o", "LOGS/x.xyz"], "option --output: value 'LOGS/x.xyz' is not allowed"),
+    (["image", SCENARIO, "-o", "LOGS/x.png", "--animate"], "option --output: value 'LOGS/x.png' is not allowed"),
+    (["image", SCENARIO, "-o", "LOGS/x.png", "--time", "20"], "option --time: value 20.0 is not allowed"),
+    (["decode", "LOGS/small.txt"], "argument FILE: value 'LOGS/small.txt' is not allowed"),
+    (["decode", "LOGS/small.blf", "-o", "LOGS/small.blf"], "option --output: value 'LOGS/small.blf' is not allowed"),
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "novalue"], "option --bus-kwargs: value 'novalue'"),
+    (["node", SCENARIO, "-i", "no_such_interface", "-c", "x"], "option -i/--interface: interface 'no_such_interface'"),
+    (["consume", "-i", "no_such_interface", "-c", "x"], "option -i/--interface: interface 'no_such_interface'"),
+    (["report", SCENARIO, "--seeds", "2", "--min-passes", "3"], "option --min-passes: value 3 is not allowed"),
+    (["log", SCENARIO], "the following arguments are required: -o/--output"),
+    (["log", SCENARIO, "-o", "LOGS/x.log", "--no-such-option"], "unrecognized arguments: --no-such-option"),
+    (["frobnicate"], "argument COMMAND: value 'frobnicate' is not allowed; expected one of run, node"),
+])
+def test_other_usage_errors_are_one_line_and_exit_2(capsys, logs, argv, needle):
+    d = str(logs[".blf"].parent)
+    before = sorted(os.listdir(d))
+    rc, _, err = cli(capsys, *[a.replace("LOGS", d) for a in argv])
+    line = one_error_line(err)
+    assert rc == 2 and needle.replace("LOGS", d) in line, line
+    assert sorted(os.listdir(d)) == before
+
+
+def test_an_mf4_or_mcap_output_without_its_extra_is_refused_before_the_run(capsys, logs, monkeypatch):
+    import builtins
+
+    from can.io import mf4
+    monkeypatch.setattr(mf4, "asammdf", None)
+    d = logs[".blf"].parent
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", d / "x.mf4")
+    assert rc == 2 and "needs python-can's MF4 support (asammdf), which is not installed: pip install " \
+                       "'radarnode[mf4]'" in one_error_line(err)
+    rc, _, err = cli(capsys, "decode", d / "x.mf4")
+    assert rc == 2 and "radarnode[mf4]" in one_error_line(err)
+    real_import = builtins.__import__
+
+    def no_foxglove(name, *a, **kw):
+        if name == "foxglove" or name.startswith("foxglove."):
+            raise ImportError(name)
+        return real_import(name, *a, **kw)
+
+    monkeypatch.setattr(builtins, "__import__", no_foxglove)
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", d / "x.mcap")
+    assert rc == 2 and "needs foxglove-sdk, which is not installed" in one_error_line(err)
+    assert not list(d.glob("x.*")) and not list(d.glob(".x*"))
+
+
+# --- files -------------------------------------------------------------------------------------------------
+
+FILE_KINDS = ("missing", "directory", "unreadable", "empty", "truncated", "corrupted", "not-utf8", "wrong-format")
+
+
+def _bad_scenario(d: Path, kind: str) -> Path:
+    text = (SCENARIOS / "highway_cut_in.yaml").read_text()
+    p = d / f"{kind}.yaml"
+    if kind == "missing":
+        return p
+    if kind == "directory":
+        p.mkdir()
+    elif kind == "empty":
+        p.write_text("")
+    elif kind == "truncated":                         # cut in the middle of a waypoint
+        cut = text.index("{t_s: 4.0") + 12
+        p.write_text(text[:cut])
+    elif kind == "corrupted":
+        rnd = random.Random(7)
+        data = bytearray(text.encode())
+        for k in range(len(data) // 3, len(data) // 3 + 64):
+            data[k] = rnd.randrange(256)
+        p.write_bytes(bytes(data))
+    elif kind == "not-utf8":
+        p.write_bytes(text.replace("Three-lane", "Dreispurige Autobahn, Überholer").encode("latin-1"))
+    elif kind == "wrong-format":
+        shutil.copy(ROOT / "dbc" / "ars408.dbc", p)     # a text file of another kind
+    elif kind == "unreadable":
+        p.write_text(text)
+        p.chmod(0)
+    return p
+
+
+def _bad_log(d: Path, kind: str, good: Path, suffix: str) -> Path:
+    p = d / f"{kind}{suffix}"
+    data = good.read_bytes()
+    if kind == "missing":
+        return p
+    if kind == "directory":
+        p.mkdir()
+    elif kind == "empty":
+        p.write_bytes(b"")
+    elif kind == "truncated":
+        p.write_bytes(data[: len(data) * 2 // 3])
+    elif kind == "corrupted":
+        rnd = random.Random(11)
+        bad = bytearray(data)
+        for k in range(len(bad) // 3, len(bad) // 3 + 48):
+            bad[k] = rnd.randrange(256)
+        p.write_bytes(bytes(bad))
+    elif kind == "not-utf8":
+        p.write_bytes(data.replace(b"60B#", b"\xe9\xe90B#", 5) if suffix == ".log" else b"\xff\xfe" + data)
+    elif kind == "wrong-format":
+        p.write_bytes((SCENARIOS / "highway_cut_in.yaml").read_bytes())
+    elif kind == "unreadable":
+        p.write_bytes(data)
+        p.chmod(0)
+    return p
+
+
+def _drop_to_nobody() -> None:
+    os.setgroups([])
+    os.setgid(65534)
+    os.setuid(65534)
+
+
+def _interpreters() -> list[str]:
+    """This interpreter, and the system's of the same version (a virtual environment's may live where only root
+    can go, e.g. under /root)."""
+    v = f"{sys.version_info.major}.{sys.version_info.minor}"
+    return [sys.executable] + [p for p in (f"/usr/bin/python{v}", f"/usr/local/bin/python{v}") if os.path.isfile(p)]
+
+
+_UNPRIVILEGED: list = []
+
+
+def _unprivileged_python():
+    """(interpreter, environment) with which user nobody runs radarnode, or None."""
+    if _UNPRIVILEGED:
+        return _UNPRIVILEGED[0]
+    import site
+    path = os.pathsep.join([str(ROOT), *site.getsitepackages()])
+    found = None
+    for exe in _interpreters():
+        env = {**os.environ, "PYTHONPATH": path}
+        try:
+            r = subprocess.run([exe, "-c", "import radarnode.cli.main"], preexec_fn=_drop_to_nobody, cwd="/",
+                               capture_output=True, env=env, timeout=60)
+        except OSError:
+            continue
+        if r.returncode == 0:
+            found = (exe, env)
+            break
+    _UNPRIVILEGED.append(found)
+    return found
+
+
+def _run_unprivileged(argv: list[str], home: Path) -> tuple[int, str]:
+    """Run as a user that file permissions apply to (root reads any file): as nobody when we are root."""
+    exe, env = _unprivileged_python()
+    env = {**env, "HOME": str(home), "MPLCONFIGDIR": str(home)}
+    r = subprocess.run([exe, "-m", "radarnode", *argv], preexec_fn=_drop_to_nobody, cwd="/",
+                       capture_output=True, text=True, timeout=120, env=env)
+    return r.returncode, r.stderr
+
+
+@pytest.fixture(scope="module")
+def shared_dir():
+    """A directory every user can enter (pytest's tmp_path is root's alone), for the unprivileged runs."""
+    d = Path(tempfile.mkdtemp(prefix="radarnode-errors-"))
+    d.chmod(0o755)
+    yield d
+    for p in d.rglob("*"):
+        p.chmod(0o755 if p.is_dir() else 0o644)
+    shutil.rmtree(d, ignore_errors=True)
+
+
+def _run_case(capsys, argv: list[str], unprivileged: bool) -> tuple[int, str]:
+    if unprivileged and os.geteuid() == 0:
+        if _unprivileged_python() is None:
+            pytest.skip("as root every file is readable, and user nobody cannot run this interpreter")
+        home = Path(tempfile.mkdtemp(prefix="radarnode-home-"))
+        home.chmod(0o777)
+        try:
+            return _run_unprivileged(argv, home)
+        finally:
+            shutil.rmtree(home, ignore_errors=True)
+    rc, _, err = cli(capsys, *argv)
+    return rc, err
+
+
+SCENARIO_COMMANDS = {
+    "run": lambda sc, d: ["run", sc, "--fast", "--duration", "0.1", "--quiet"],
+    "node": lambda sc, d: ["node", sc, "-i", "virtual", "-c", f"errors-{uuid.uuid4().hex}", "--fast", "--duration", "0.1"],
+    "log": lambda sc, d: ["log", sc, "-o", f"{d}/out.blf", "--duration", "0.1"],
+    "image": lambda sc, d: ["image", sc, "-o", f"{d}/out.png"],
+    "report": lambda sc, d: ["report", sc, "--junit", f"{d}/out.xml"],
+    "export": lambda sc, d: ["export", f"{d}/good.blf", "-o", f"{d}/out.mcap", "--scenario", sc],
+}
+
+
+@pytest.mark.parametrize("kind", FILE_KINDS)
+@pytest.mark.parametrize("command", sorted(SCENARIO_COMMANDS))
+def test_a_bad_scenario_file_is_one_line_naming_it_exit_1(capsys, logs, shared_dir, command, kind):
+    if command in ("image", "export"):
+        pytest.importorskip("matplotlib" if command == "image" else "foxglove")
+    d = shared_dir / f"sc-{command}-{kind}"
+    d.mkdir()
+    d.chmod(0o777)                  # the outputs' directory is writable for the unprivileged runs too
+    shutil.copy(logs[".blf"], d / "good.blf")
+    (d / "good.blf").chmod(0o644)
+    path = _bad_scenario(d, kind)
+    before = sorted(x.name for x in d.iterdir())
+    rc, err = _run_case(capsys, SCENARIO_COMMANDS[command](str(path), d), kind == "unreadable")
+    line = one_error_line(err)
+    assert rc == 1, err
+    assert line.startswith(f"error: {path}"), line
+    assert sorted(x.name for x in d.iterdir()) == before          # no output, not even a temporary one
+
+
+LOG_COMMANDS = {
+    "decode": (lambda log, d: ["decode", log, "-o", f"{d}/out.jsonl", "--format", "json"], "out.jsonl"),
+    "export": (lambda log, d: ["export", log, "-o", f"{d}/out.mcap"], "out.mcap"),
+}
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".log"])
+@pytest.mark.parametrize("kind", FILE_KINDS)
+@pytest.mark.parametrize("command", sorted(LOG_COMMANDS))
+def test_a_bad_log_file_is_one_line_naming_it_exit_1(capsys, logs, shared_dir, command, kind, suffix):
+    if command == "export":
+        pytest.importorskip("foxglove")
+    d = shared_dir / f"log-{command}-{kind}{suffix}"
+    d.mkdir()
+    d.chmod(0o777)
+    path = _bad_log(d, kind, logs[suffix], suffix)
+    before = sorted(x.name for x in d.iterdir())
+    make, output = LOG_COMMANDS[command]
+    rc, err = _run_case(capsys, make(str(path), d), kind == "unreadable")
+    errors = [x for x in err.splitlines() if x.startswith("error:")]
+    assert "Traceback" not in err and len(errors) == 1 and err.strip().splitlines()[-1] == errors[0], err
+    line = errors[0]
+    assert rc == 1 and line.startswith("error: argument ") and repr(str(path)) in line, err
+    after = sorted(x.name for x in d.iterdir())
+    if "is damaged" in line:
+        # what was readable is decoded and written, complete; the error says where the damage starts
+        assert kind in ("truncated", "corrupted", "not-utf8") and "first bad record at" in line, line
+        assert after == sorted(before + [output]), (line, after)
+    else:
+        assert after == before and len(err.strip().splitlines()) == 1, (line, after)
+
+
+OUTPUT_COMMANDS = {
+    "log": (lambda out: ["log", SCENARIO, "-o", out, "--duration", "0.1"], "out.blf", "--output"),
+    "decode": (lambda out: ["decode", "LOG", "-o", out], "out.txt", "--output"),
+    "export": (lambda out: ["export", "LOG", "-o", out], "out.mcap", "--output"),
+    "image": (lambda out: ["image", SCENARIO, "-o", out], "out.png", "--output"),
+    "report-junit": (lambda out: ["report", SCENARIO, "--junit", out], "out.xml", "--junit"),
+    "report-plots": (lambda out: ["report", SCENARIO, "--plots", out], "plots", "--plots"),
+}
+
+
+@pytest.mark.parametrize("kind", ["missing-directory", "a-directory", "unwritable-directory", "a-file"])
+@pytest.mark.parametrize("command", sorted(OUTPUT_COMMANDS))
+def test_an_output_that_cannot_be_written_is_one_line_exit_1_before_the_work(capsys, logs, shared_dir, command,
+                                                                             kind):
+    if command == "export":
+        pytest.importorskip("foxglove")
+    if command.startswith("image") or command == "report-plots":
+        pytest.importorskip("matplotlib")
+    make, name, option = OUTPUT_COMMANDS[command]
+    if kind == "a-file" and command != "report-plots":
+        pytest.skip("only --plots wants a directory")
+    if kind == "missing-directory" and command == "report-plots":
+        pytest.skip("--plots creates the directory it is given")
+    d = shared_dir / f"out-{command}-{kind}"
+    d.mkdir()
+    d.chmod(0o755)
+    shutil.copy(logs[".blf"], d / "in.blf")
+    (d / "in.blf").chmod(0o644)
+    if kind == "missing-directory":
+        out = d / "no" / "such" / name
+    elif kind == "a-directory":
+        out = d / name
+        out.mkdir()
+        if command == "report-plots":
+            pytest.skip("--plots wants a directory")
+    elif kind == "unwritable-directory":
+        sub = d / "ro"
+        sub.mkdir()
+        sub.chmod(0o555)
+        out = sub / name
+    else:
+        out = d / name
+        out.write_text("a file")
+    argv = [str(d / "in.blf") if a == "LOG" else a for a in make(str(out))]
+    before = sorted(str(x.relative_to(d)) for x in d.rglob("*"))
+    rc, err = _run_case(capsys, argv, kind == "unwritable-directory")
+    line = one_error_line(err)
+    assert rc == 1, err
+    assert line.startswith(f"error: option {option}: ") and repr(str(out)) in line, line
+    assert sorted(str(x.relative_to(d)) for x in d.rglob("*")) == before

@@ -1,0 +1,242 @@
+"""Every log format both ways: what python-can writes is written by ``log`` and read back by ``decode``, or
+refused before the run; a truncated or corrupted log decodes what is readable and names the first bad record;
+SIGINT/SIGTERM leave every file complete (exit 130/143); a closed pipe ends quietly."""
+
+from __future__ import annotations
+
+import random
+import re
+import signal
+import subprocess
+import sys
+import time
+import uuid
+from pathlib import Path
+
+import can
+import pytest
+
+from radarnode.cli.main import main
+from radarnode.wire.logfiles import FORMATS, mf4_available
+from tests.conftest import ROOT, SCENARIOS
+
+CLI = [sys.executable, "-m", "radarnode"]
+SCENARIO = str(SCENARIOS / "stopped_vehicle.yaml")
+LONG = str(SCENARIOS / "highway_cut_in.yaml")
+WRITTEN = [f for f in FORMATS if f != ".mf4"] + [pytest.param(".mf4", marks=pytest.mark.skipif(
+    not mf4_available(), reason="MF4 needs python-can's asammdf extra: pip install 'radarnode[mf4]'"))]
+
+
+def cli(capsys, *argv) -> tuple[int, str, str]:
+    try:
+        rc = main([str(a) for a in argv])
+    except SystemExit as exc:
+        rc = exc.code
+    out, err = capsys.readouterr()
+    return rc, out, err
+
+
+@pytest.fixture(scope="module")
+def reference(tmp_path_factory):
+    """The frames of a 2-s log as BLF: what every other format must give back."""
+    path = tmp_path_factory.mktemp("reference") / "ref.blf"
+    assert main(["log", SCENARIO, "-o", str(path), "--duration", "2"]) == 0
+    return [(m.arbitration_id, bytes(m.data), round(m.timestamp, 5)) for m in can.LogReader(str(path))]
+
+
+def test_every_format_python_can_writes_is_read_back_or_refused(capsys, tmp_path):
+    """python-can's writer registry, suffix by suffix (plain and gzip): each is one radarnode reads back, or one
+    ``log`` refuses before the run with a usage error."""
+    from can.io.logger import MESSAGE_WRITERS
+    suffixes = sorted(MESSAGE_WRITERS) + [s + ".gz" for s in sorted(MESSAGE_WRITERS)]
+    refused = []
+    for suffix in suffixes:
+        if suffix in FORMATS:
+            continue
+        rc, _, err = cli(capsys, "log", SCENARIO, "-o", tmp_path / f"x{suffix}", "--duration", "0.1")
+        assert rc == 2 and err.startswith("error: option --output: value") and err.count("\n") == 1, (suffix, err)
+        refused.append(suffix)
+    assert ".txt" in refused and ".blf.gz" in refused
+    assert not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("suffix", WRITTEN)
+def test_log_and_decode_every_format(capsys, tmp_path, reference, suffix):
+    out = tmp_path / f"out{suffix}"
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", out, "--duration", "2")
+    assert rc == 0, err
+    assert [p.name for p in tmp_path.iterdir()] == [out.name]
+    rc, text, err = cli(capsys, "decode", out)
+    assert rc == 0 and "error" not in err, err
+    assert text.count("objects\n") == 27 and "consumer: frames=241, cycles=27" in text
+    assert "object   0 car" in text
+    frames = [(m.arbitration_id, bytes(m.data), round(m.timestamp, 5)) for m in can.LogReader(str(out))]
+    assert [f[:2] for f in frames] == [f[:2] for f in reference]
+    assert max(abs(a[2] - b[2]) for a, b in zip(frames, reference)) < 1e-4    # MF4 keeps times to ~0.2 µs
+
+
+def _damage(path: Path, how: str) -> Path:
+    data = path.read_bytes()
+    bad = path.with_name(f"{how}_{path.name}")
+    if how == "truncated":
+        cut = len(data) * 2 // 3
+        if data[cut - 1:cut] == b"\n":
+            cut -= 1                  # mid-line: a text log cut at a line end is a shorter log, not a damaged one
+        bad.write_bytes(data[:cut])
+    else:
+        rnd = random.Random(3)
+        b = bytearray(data)
+        for k in range(len(b) // 2, len(b) // 2 + 40):
+            b[k] = rnd.randrange(256)
+        bad.write_bytes(bytes(b))
+    return bad
+
+
+@pytest.mark.parametrize("how", ["truncated", "corrupted"])
+@pytest.mark.parametrize("suffix", WRITTEN)
+def test_a_damaged_log_decodes_what_is_readable_and_names_the_first_bad_record(capsys, tmp_path, suffix, how):
+    good = tmp_path / f"good{suffix}"
+    assert main(["log", LONG, "-o", str(good), "--duration", "4"]) == 0
+    capsys.readouterr()
+    total = sum(1 for _ in can.LogReader(str(good)))
+    bad = _damage(good, how)
+    out = tmp_path / "frames.jsonl"
+    rc, _, err = cli(capsys, "decode", bad, "--format", "json", "-o", out)
+    line = err.strip().splitlines()[-1]
+    text_format = suffix in (".asc", ".csv", ".log", ".trc")
+    if rc == 0:
+        # a format without checksums (SQLite, MDF, a compressed stream's data) cannot tell garbled bytes from
+        # data; then every record was read
+        assert how == "corrupted" and not text_format and suffix != ".blf", err
+        return
+    assert rc == 1 and "Traceback" not in err, err
+    assert line.startswith(f"error: argument FILE: '{bad}' ") and "first bad record at " in line, line
+    where = re.search(r"first bad record at (line|byte|row|frame) (\d+)", line)
+    assert where, line
+    if text_format:
+        # the bad line is where the damage is, and every other line was read
+        offset = len(bad.read_bytes()) if how == "truncated" else len(good.read_bytes()) // 2
+        first_bad_line = bad.read_bytes()[:offset].count(b"\n") + 1
+        assert where.group(1) == "line" and int(where.group(2)) == first_bad_line, (line, first_bad_line)
+        read = int(re.search(r"(\d+) frames read", line).group(1))
+        if how == "truncated":
+            # exactly the frames of the whole lines before the cut
+            data = good.read_bytes()
+            whole = tmp_path / f"whole{suffix}"
+            whole.write_bytes(data[: data.rfind(b"\n", 0, offset) + 1])
+            assert read == sum(1 for _ in can.LogReader(str(whole))), line
+        else:
+            touched = bad.read_bytes()[offset: offset + 40].count(b"\n") + 1
+            assert read >= total - touched - 1, (read, total)
+        assert len(out.read_text().splitlines()) >= read - 10
+    if suffix == ".blf" and "is damaged" in line:
+        assert out.exists() and len(out.read_text().splitlines()) > 0
+
+
+@pytest.mark.parametrize("suffix", WRITTEN + [".mcap"])
+def test_an_interrupted_log_is_complete_and_readable_in_every_format(capsys, tmp_path, suffix):
+    if suffix == ".mcap":
+        pytest.importorskip("foxglove")
+    sig = signal.SIGINT if (list(FORMATS) + [".mcap"]).index(suffix) % 2 == 0 else signal.SIGTERM
+    out = tmp_path / f"long{suffix}"
+    p = subprocess.Popen([*CLI, "log", LONG, "-o", str(out), "--duration", "80000", "-v"], cwd=ROOT,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        # the run has started (its signal handler is in place) once it says where it writes; interrupt it when the
+        # temporary file holds data (or, for formats written at the end, MF4 and MCAP, after a moment)
+        seen, started = "", None
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = p.stderr.readline()
+            seen += line
+            if "logging highway_cut_in to" in line:
+                started = time.monotonic()
+                break
+            assert line, seen
+        assert started is not None, seen
+        at_the_end = suffix in (".mf4", ".mcap")          # written when closed: nothing to watch grow
+        while time.monotonic() < deadline:
+            parts = list(tmp_path.glob(".long*_part*"))
+            # (20 kB: more than an empty SQLite file's pages)
+            if at_the_end and time.monotonic() - started > 2.0 or parts and parts[0].stat().st_size > 20_000:
+                break
+            time.sleep(0.1)
+        p.send_signal(sig)
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 128 + sig, seen + err
+    done = re.search(r"interrupted: wrote (\d+) frames in (\d+) complete cycles", err)
+    assert done, err
+    assert sorted(x.name for x in tmp_path.iterdir()) == [out.name]      # renamed: no temporary file left
+    if suffix == ".mcap":
+        from mcap.reader import make_reader
+        with out.open("rb") as f:
+            summary = make_reader(f).get_summary()      # a summary section: the file was closed complete
+        assert summary is not None and summary.statistics.message_count >= int(done.group(1))
+        return
+    rc, text, err = cli(capsys, "decode", out, "--summary")
+    assert rc == 0, err
+    cycles = int(re.search(r"cycles=(\d+)", text).group(1))
+    assert "incomplete_cycles" not in text and cycles == int(done.group(2))
+    assert cycles > 0 or at_the_end
+
+
+@pytest.mark.parametrize("command,ready,sig", [
+    ("run", "cycle     0", signal.SIGINT),
+    ("node", "radarnode node:", signal.SIGTERM),
+    ("consume", "listening on", signal.SIGINT),
+    ("node", "radarnode node:", signal.SIGINT),
+])
+def test_run_node_and_consume_stop_on_a_signal_with_130_or_143(command, ready, sig):
+    channel = f"signals-{uuid.uuid4().hex}"
+    argv = {"run": ["run", LONG, "--realtime", "--duration", "600"],
+            "node": ["node", LONG, "-i", "virtual", "-c", channel, "--duration", "600"],
+            "consume": ["consume", "-i", "virtual", "-c", channel]}[command]
+    p = subprocess.Popen([*CLI, *argv], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stream = p.stdout if command == "run" else p.stderr
+    seen = ""
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = stream.readline()
+            seen += line
+            if ready in line or not line:
+                break
+        assert ready in seen, seen
+        p.send_signal(sig)
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 128 + sig, seen + err
+    assert "Traceback" not in err
+    summary = {"run": "summary:", "node": "interrupted: sent", "consume": "consumer: frames="}[command]
+    assert summary in out + err
+
+
+@pytest.mark.parametrize("argv", [["decode", "LOG"], ["decode", "LOG", "--format", "json"],
+                                  ["decode", "LOG", "--format", "csv"],
+                                  ["run", LONG, "--fast", "--every", "1", "--duration", "20"]])
+def test_a_closed_pipe_ends_quietly(tmp_path, argv):
+    log = tmp_path / "big.log"
+    if "LOG" in argv:
+        assert main(["log", LONG, "-o", str(log), "--duration", "20"]) == 0
+    p = subprocess.Popen([*CLI, *[str(log) if a == "LOG" else a for a in argv]], cwd=ROOT, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE)
+    first = p.stdout.readline()
+    p.stdout.close()                       # as `| head -1` does
+    err = p.stderr.read().decode()
+    p.wait(timeout=120)
+    assert first and p.returncode == 0, err
+    assert err == "", err          # no traceback, no "Broken pipe", no "Exception ignored"
+
+
+def test_a_long_sqlite_log_keeps_every_frame(tmp_path):
+    """python-can's SqliteWriter drops what is still queued beyond one batch of 500 when stopped; radarnode's
+    waits for its thread to take everything (a run renders faster than SQLite writes)."""
+    db, blf = tmp_path / "long.db", tmp_path / "long.blf"
+    for out in (db, blf):
+        assert main(["log", LONG, "-o", str(out), "--duration", "10"]) == 0
+    assert sum(1 for _ in can.LogReader(str(db))) == sum(1 for _ in can.LogReader(str(blf))) > 2000

@@ -1,0 +1,225 @@
+"""Scenario checks (radarnode.radar.checks): numbers as the user meant them, actors on top of the ego, actors the
+radar can never see, motion fields that contradict the waypoints; and report's "nothing to check"."""
+
+from __future__ import annotations
+
+import logging
+
+import pytest
+
+from radarnode.errors import ScenarioError
+from radarnode.radar.setup import load_scenario, parse_scenario
+from tests.conftest import SCENARIOS
+
+HEAD = "name: checks\nduration_s: 10\nseed: 1\nego: {speed_mps: 20.0}\n"
+
+
+def _load(tmp_path, text: str):
+    p = tmp_path / "s.yaml"
+    p.write_text(text)
+    return p, load_scenario(p)
+
+
+def _error(tmp_path, text: str) -> tuple[str, str]:
+    p = tmp_path / "s.yaml"
+    p.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(p)
+    return str(p), str(info.value)
+
+
+@pytest.mark.parametrize("path", sorted(SCENARIOS.glob("*.yaml")), ids=lambda p: p.stem)
+def test_shipped_scenarios_pass_every_check_without_a_warning(path, caplog):
+    with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
+        load_scenario(path)
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
+@pytest.mark.parametrize("written,value", [("1e-5", 1e-5), ("1E-5", 1e-5), ("2e1", 20.0), ("1.0e1", 10.0),
+                                           ("+3e1", 30.0), ("-1e-3", -1e-3), (".5e1", 5.0), ("1.0e-5", 1e-5)])
+def test_numbers_yaml_1_1_reads_as_strings_are_the_numbers_meant(tmp_path, written, value):
+    """YAML 1.1 reads 1e-5 (no dot) and 1.0e1 (no sign in the exponent) as strings; the scenarios README writes
+    `pfa: 1e-5`. They are numbers here, as in YAML 1.2, JSON and every other reader; quoted text stays text."""
+    import yaml
+
+    from radarnode.schema import Loader
+    _, sc = _load(tmp_path, HEAD + f"actors:\n  - {{id: a, class: car, x_m: 50.0, rcs_dbsm: {written}}}\n")
+    assert sc.actors[0].rcs_dbsm == pytest.approx(value)
+    assert yaml.load(f"x: {written}", Loader=Loader)["x"] == pytest.approx(value)
+    assert yaml.load(f'x: "{written}"', Loader=Loader)["x"] == written
+    assert yaml.load("x: [1e3, 12, 1.5, .inf, 0x1F, abc, 1e, e5]", Loader=Loader)["x"][:5] == [1000.0, 12, 1.5,
+                                                                                              float("inf"), 31]
+    assert yaml.load("x: [1e, e5, 1e5x]", Loader=Loader)["x"] == ["1e", "e5", "1e5x"]
+
+
+def test_the_readme_example_pfa_1e_5_loads_and_reaches_the_preset(tmp_path):
+    from radarnode.radar.setup import radar_config
+    _, sc = _load(tmp_path, HEAD + "radar: {preset: mimo12, overrides: {tx_power_dbm: 5, pfa: 1e-5}}\n")
+    assert radar_config(sc).preset.pfa == 1e-5
+
+
+def test_a_number_in_quotes_is_named_as_text(tmp_path):
+    p, msg = _error(tmp_path, HEAD.replace("duration_s: 10", 'duration_s: "10"'))
+    assert msg == (f"{p}:2: field 'duration_s': value '10' is not allowed; expected a number in (0, 86400] (this is "
+                   "text: write the number without quotes)")
+
+
+def test_a_file_that_is_not_utf8_is_named_with_the_byte(tmp_path):
+    p = tmp_path / "latin1.yaml"
+    p.write_bytes((HEAD + "description: Überholer\n").encode("latin-1"))
+    with pytest.raises(ScenarioError, match=r"latin1\.yaml: not a scenario file: byte 0xdc at offset \d+ is not UTF-8 "
+                                            r"text; expected a YAML scenario in UTF-8"):
+        load_scenario(p)
+
+
+def test_a_value_read_from_a_whole_file_is_cut_in_the_message(tmp_path):
+    p = tmp_path / "csv.yaml"
+    p.write_text("timestamp,arbitration_id,extended,remote,error,dlc,data\n" + "0.0,0x300,0,0,0,2,AAA=\n" * 500)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(p)
+    assert len(str(info.value)) < 300 and "expected a mapping of the scenario's fields" in str(info.value)
+
+
+# --- an actor on top of the ego --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("actor", [
+    "{id: a, class: car, x_m: 2.0}",                        # inside the ego
+    "{id: a, class: car, x_m: 5.0}",                        # its rear overlaps the ego's front (3.7 m)
+    "{id: a, class: truck, x_m: -6.0}",                     # behind, reaching into the ego
+    "{id: a, class: pedestrian, x_m: 1.0, y_m: 0.5}",
+    "{id: a, class: car, x_m: 0.0, y_m: 1.5}",              # half a car to the side: still overlapping
+])
+def test_an_actor_overlapping_the_ego_at_the_start_is_an_error_naming_its_line(tmp_path, actor):
+    p, msg = _error(tmp_path, HEAD + f"actors:\n  - {{id: far, class: car, x_m: 60.0}}\n  - {actor}\n")
+    assert msg.startswith(f"{p}:7: actor 'a' (actors[1]) overlaps the ego at t = 0: "), msg
+    assert "expected it clear of the ego, e.g. x_m >= " in msg
+
+
+@pytest.mark.parametrize("actor", [
+    "{id: a, class: car, x_m: 6.5}",                        # just ahead of the ego's front (3.7 m + 2.25 m)
+    "{id: a, class: car, x_m: 0.0, lane: 0}",               # beside the ego, in the next lane
+    "{id: a, class: car, x_m: -8.0, speed_mps: 30.0}",      # behind, catching up
+])
+def test_an_actor_clear_of_the_ego_is_fine(tmp_path, actor):
+    _load(tmp_path, HEAD + f"actors:\n  - {actor}\n")
+
+
+def test_a_waypoint_actor_overlapping_the_ego_names_its_waypoints(tmp_path):
+    p, msg = _error(tmp_path, HEAD + "actors:\n  - id: w\n    class: car\n    waypoints:\n"
+                                     "      - {t_s: 0.0, x_m: 1.0, y_m: 0.0}\n      - {t_s: 5.0, x_m: 100.0, y_m: 0.0}\n")
+    assert msg.startswith(f"{p}:9: actor 'w' (actors[0]) overlaps the ego"), msg
+
+
+# --- an actor the radar can never see -------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("actor,reason", [
+    ("{id: far, class: car, x_m: 10000.0, speed_mps: 20.0}", "no nearer than 99"),    # 10 km, not 100 m
+    ("{id: side, class: car, x_m: 30.0, y_m: -200.0}", "azimuth"),                    # beside the road
+    ("{id: behind, class: car, x_m: -60.0, speed_mps: 20.0}", "azimuth 180.0°"),       # behind, never catches up
+])
+def test_an_actor_never_in_the_field_of_view_is_a_warning_with_its_line(tmp_path, caplog, actor, reason):
+    with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
+        p, sc = _load(tmp_path, HEAD + f"actors:\n  - {{id: lead, class: car, x_m: 60.0, speed_mps: 20.0}}\n"
+                                       f"  - {actor}\n")
+    assert len(sc.actors) == 2
+    (record,) = caplog.records
+    msg = record.getMessage()
+    assert msg.startswith(f"{p}:7: actor '{sc.actors[1].id}' (actors[1]) is never in the radar's field of view "
+                          "during the scenario's 10 s: preset ars408_like sees"), msg
+    assert reason in msg and "so the radar never reports it" in msg
+
+
+def test_an_actor_that_enters_the_field_of_view_later_is_no_warning(tmp_path, caplog):
+    """"Never seen" is over the whole run: a car overtaking from behind, one the ego closes in on, a pedestrian
+    stepping out from 40 m to the side."""
+    with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
+        _load(tmp_path, HEAD + "actors:\n"
+                               "  - {id: overtaker, class: car, x_m: -40.0, lane: 0, speed_mps: 30.0}\n"
+                               "  - {id: closing, class: car, x_m: 400.0, speed_mps: 5.0}\n"
+                               "  - id: walker\n    class: pedestrian\n"
+                               "    waypoints: [{t_s: 0.0, x_m: 120.0, y_m: -40.0}, {t_s: 9.0, x_m: 120.0, y_m: 0.0}]\n")
+    assert not caplog.records, [r.getMessage() for r in caplog.records]
+
+
+def test_the_radar_s_max_distance_counts(tmp_path, caplog):
+    with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
+        _load(tmp_path, HEAD + "radar: {max_distance_m: 100}\nactors:\n  - {id: a, class: car, x_m: 200.0, "
+                               "speed_mps: 20.0}\n")
+    assert "sees 0.2–100 m" in caplog.records[0].getMessage()
+
+
+def test_the_warning_shows_on_the_command_line(tmp_path):
+    import subprocess
+    import sys
+    from tests.conftest import ROOT
+    p = tmp_path / "far.yaml"
+    p.write_text(HEAD + "actors:\n  - {id: far, class: car, x_m: 10000.0, speed_mps: 20.0}\n")
+    r = subprocess.run([sys.executable, "-m", "radarnode", "run", str(p), "--fast", "--duration", "0.2", "--quiet"],
+                       capture_output=True, text=True, cwd=ROOT, timeout=120)
+    assert r.returncode == 0, r.stderr
+    assert f"WARNING radarnode.radar.checks: {p}:6: actor 'far' (actors[0]) is never in the radar's field of view" \
+        in r.stderr
+
+
+# --- conflicting motion fields ----------------------------------------------------------------------------------
+
+WAYPOINTS = "    waypoints:\n      - {t_s: 0.0, x_m: 20.0, y_m: 3.5}\n      - {t_s: 4.0, x_m: 144.0, y_m: 3.5}\n" \
+            "      - {t_s: 7.0, x_m: 236.0, y_m: 0.0}\n"
+
+
+@pytest.mark.parametrize("field,line,says", [
+    ("speed_mps: 25.0", 8, "value 25.0 conflicts with 'actors[0].waypoints' (an actor with waypoints moves along "
+                           "them: they move it at 31.00, 30.69 m/s); expected it left out, or equal"),
+    ("heading_deg: 90.0", 8, "value 90.0 conflicts with 'actors[0].waypoints' (an actor with waypoints moves along "
+                             "them: they head 0.0, -2.2°)"),
+    ("x_m: 50.0", 8, "value 50.0 conflicts with 'actors[0].waypoints' (an actor with waypoints moves along them: it "
+                     "starts at the first waypoint, x_m 20.0)"),
+    ("lane: 0", 8, "value 0 conflicts with 'actors[0].waypoints' (an actor with waypoints moves along them: it starts "
+                   "at the first waypoint, y_m 3.5, and lane 0 is y -3.50 m)"),
+])
+def test_motion_fields_that_contradict_the_waypoints_are_errors(tmp_path, field, line, says):
+    key = field.split(":")[0]
+    p, msg = _error(tmp_path, HEAD + f"actors:\n  - id: cutter\n    class: car\n    {field}\n" + WAYPOINTS)
+    assert msg.startswith(f"{p}:{line}: field 'actors[0].{key}': {says}"), msg
+
+
+@pytest.mark.parametrize("field", ["speed_mps: 31.0", "speed_mps: 30.7", "heading_deg: -2.0", "x_m: 20.0",
+                                   "y_m: 3.5", "lane: 2"])
+def test_motion_fields_that_agree_with_the_waypoints_are_taken_as_notes(tmp_path, field):
+    """highway_cut_in.yaml gives its cutter `speed_mps: 31.0` beside waypoints at 31 m/s: what the user meant."""
+    _, sc = _load(tmp_path, HEAD + f"actors:\n  - id: cutter\n    class: car\n    {field}\n" + WAYPOINTS)
+    assert len(sc.actors[0].waypoints) == 3
+
+
+def test_accel_beside_waypoints_stays_an_error(tmp_path):
+    _, msg = _error(tmp_path, HEAD + "actors:\n  - id: c\n    class: car\n    accel: [{t_s: 1.0, accel_mps2: -2.0}]\n"
+                    + WAYPOINTS)
+    assert "either accel or waypoints, not both" in msg
+
+
+def test_checks_run_on_scenarios_built_from_text_too():
+    with pytest.raises(ScenarioError, match="overlaps the ego"):
+        parse_scenario(HEAD + "actors:\n  - {id: a, class: car, x_m: 1.0}\n")
+
+
+# --- consume --json: Obj_4_Warning's regions ----------------------------------------------------------------------
+
+
+def test_consume_json_carries_the_collision_regions_when_the_cycle_has_them():
+    import json
+
+    import numpy as np
+
+    from radarnode.cli.consume import cycle_to_json
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import ObjectList
+    objects = ObjectList.empty(2)
+    objects.id[:] = [4, 9]
+    plain = json.loads(cycle_to_json(ObjectCycle(7, 1.5, objects, True, True)))
+    assert "collision_regions" not in plain["objects"][0]
+    warned = json.loads(cycle_to_json(ObjectCycle(7, 1.5, objects, True, True, has_warning=True,
+                                                  collision_regions=np.array([0b101, 0], dtype=np.uint8))))
+    assert warned["objects"][0]["collision_regions"] == [0, 2] and warned["objects"][0]["coll_det_region_bitfield"] == 5
+    assert warned["objects"][1]["collision_regions"] == []
