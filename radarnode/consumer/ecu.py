@@ -27,8 +27,9 @@ from radarnode.consumer.acc import Acc, AccSettings, Target
 from radarnode.consumer.path import SensorMount, in_path
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
+from radarnode.consumer.overhead import LandmarkMap
 from radarnode.consumer.tracking import Tracker
-from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED
+from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED, MEAS_PREDICTED
 from radarnode.wire import ids
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.dbc import load_own_database
@@ -44,6 +45,12 @@ OBSTACLE_RCS_DBSM = 0.0          # of the track's power-averaged RCS: a car ≈ 
 OBSTACLE_MIN_AGE = 4
 RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
+MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
+#: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
+#: seems to move away at v·(1 − cos atan(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
+OVERHEAD_HEIGHT_M = 8.0
+STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
+DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
 
@@ -86,7 +93,7 @@ class Ecu:
 
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
                  period_s: float = 0.072, timeout_cycles: int = 3, max_gap_s: float = MAX_GAP_S,
-                 mount: SensorMount = SensorMount()) -> None:
+                 mount: SensorMount = SensorMount(), wavelength_m: float = DEFAULT_WAVELENGTH_M) -> None:
         for name, value in (("period_s", period_s), ("max_gap_s", max_gap_s)):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
                 raise ValueError(f"Ecu {name}: value {value!r} is not allowed; expected a finite number of seconds > 0")
@@ -121,6 +128,14 @@ class Ecu:
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._last_out_t: float | None = None
+        if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
+            raise ValueError(f"Ecu wavelength_m: value {wavelength_m!r} is not allowed; expected the radar's carrier "
+                             "wavelength in metres (1e-4 … 1)")
+        self.wavelength_m = float(wavelength_m)
+        self._moved: set[int] = set()             # tracks seen moving over ground (beyond what elevation explains)
+        self._first_seen: set[int] = set()
+        self.landmarks = LandmarkMap(mount.z_m, self.wavelength_m)
+        self.odometry = (0.0, 0.0, 0.0)           # the ECU's own dead reckoning: x, y (m), heading (rad)
 
     @staticmethod
     def _finite_time(t_s) -> float | None:
@@ -176,6 +191,8 @@ class Ecu:
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id = {}, {}, None
         self._rcs_power, self._obstacles = {}, set()
+        self._moved, self._first_seen = set(), set()
+        self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.last_cycle_t = None
         self._last_out_t = None
         self._prev_speed = None
@@ -265,6 +282,13 @@ class Ecu:
             return None
         return self._decide(t, [], None, {}, radar_ok=False)
 
+    def _moving(self, ground_mps: float, range_m: float) -> bool:
+        """Whether a track moves over ground more than a stationary reflector up to OVERHEAD_HEIGHT_M above the
+        radar seems to: its Doppler is the ego's speed times cos(elevation), so at short range it seems to
+        move away slowly (a bridge at 10 m, at 36 m/s: 3.2 m/s)."""
+        el = math.atan2(OVERHEAD_HEIGHT_M, max(range_m, 0.1))
+        return ground_mps > MOVING_MPS + abs(self.ego_speed_mps) * (1.0 - math.cos(el))
+
     def _select(self, tracks, ol, by_id, cluster_strength=None) -> Target | None:
         if not tracks:
             return None
@@ -272,17 +296,43 @@ class Ecu:
         y = np.array([t.x[1] for t in tracks])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
                      self.boundaries, self.mount)
+        xv_all, yv_all = self.mount.to_vehicle(x, y)
+        ox, oy, oh = self.odometry
+        co, so = math.cos(oh), math.sin(oh)
+        # stationary objects never seen moving count only up to this speed (above it the overhead test cannot
+        # have its evidence before the warning distance: radarnode.consumer.overhead)
+        stationary_ok = self.ego_speed_mps <= self.fcw.settings.stationary_max_speed_mps
         road_user = np.zeros(len(tracks), dtype=bool)
         for i, t in enumerate(tracks):
+            vx, vy = self.mount.rotate(t.x[2], t.x[3])
+            ground = math.hypot(vx + self.ego_speed_mps, vy)
+            rng = math.hypot(t.x[0], t.x[1])
             if cluster_strength is not None:
-                ground = math.hypot(t.x[2] + self.ego_speed_mps, t.x[3])
                 road_user[i] = ground > 1.0 or cluster_strength.get(t.id, False)
                 continue
             k = by_id.get(t.meas_id)
-            if k is None:
-                road_user[i] = True            # coasting: it was a road user when selected
+            if k is None:                                   # coasting: as it was
+                lm = self.landmarks.by_track.get(t.id)
+                road_user[i] = not (lm is not None and lm.overhead) and (
+                    t.id in self._moved or (stationary_ok and t.id in self._obstacles))
                 continue
             dyn = int(ol.dyn_prop[k])
+            first = t.id not in self._first_seen
+            self._first_seen.add(t.id)
+            # seen moving: the radar says so and its speed over ground is more than elevation explains; a track
+            # the radar already reports as stopped when the ECU first sees it moved before (the radar's history)
+            if ((dyn in (DYN_MOVING, DYN_ONCOMING) and self._moving(ground, rng))
+                    or (first and dyn == DYN_STOPPED)):
+                self._moved.add(t.id)
+            landmark = None
+            if t.id not in self._moved and ground < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
+                # a stationary object: filed at its place with its RCS, for the overhead test
+                wx = ox + co * xv_all[i] - so * yv_all[i]
+                wy = oy + so * xv_all[i] + co * yv_all[i]
+                landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, oh, rng, float(ol.rcs_dbsm[k]))
+            elif t.id not in self._moved:
+                landmark = self.landmarks.by_track.get(t.id)
+            overhead = landmark is not None and landmark.overhead
             # a stationary object counts by what it reflects over its track's life (power average: one
             # fade of a fluctuating car must not drop it; two merged guardrail posts stay near −2 dBsm), once
             # tracked OBSTACLE_MIN_AGE cycles; once it qualified it stays a candidate (latched)
@@ -294,7 +344,8 @@ class Ecu:
             mean_rcs = 10.0 * math.log10(max(self._rcs_power.get(t.id, 1e-12), 1e-12))
             if t.age >= OBSTACLE_MIN_AGE and mean_rcs >= OBSTACLE_RCS_DBSM:
                 self._obstacles.add(t.id)
-            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or t.id in self._obstacles
+            # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
+            road_user[i] = not overhead and (t.id in self._moved or (stationary_ok and t.id in self._obstacles))
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
         # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
@@ -303,6 +354,9 @@ class Ecu:
         alive = set(ids)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
+        self._moved &= alive
+        self._first_seen &= alive
+        self.landmarks.forget(alive, ox, oy)
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
         steady = np.array([self._in_path[tid] >= ENTER_CYCLES or (tid == self._target_id
@@ -312,7 +366,7 @@ class Ecu:
         if cand.size == 0:
             self._target_id = None
             return None
-        xv, yv = self.mount.to_vehicle(x, y)
+        xv, yv = xv_all, yv_all
         i = int(cand[np.argmin(xv[cand])])
         t = tracks[i]
         self._target_id = t.id
@@ -327,6 +381,11 @@ class Ecu:
         if not 0.0 <= dt <= self.max_gap_s:
             dt = self.period_s           # the ACC's rate limits need a sane step; the time itself was checked
         self._last_out_t = t_s
+        # dead reckoning from the ego motion on the bus (places the landmarks of stationary objects)
+        ox, oy, oh = self.odometry
+        v, w = self.ego_speed_mps, self.ego_yaw_rate_rps
+        self.odometry = (ox + v * dt * math.cos(oh + 0.5 * w * dt), oy + v * dt * math.sin(oh + 0.5 * w * dt),
+                         oh + w * dt)
         target = self._select(tracks, ol, by_id, cluster_strength) if radar_ok else None
         accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
         v, lead_v = self.ego_speed_mps, None

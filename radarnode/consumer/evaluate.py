@@ -83,9 +83,12 @@ def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = Non
                       set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s,
                       path_half_width_m=spec.path_half_width_m, min_speed_mps=spec.acc_min_speed_mps)
     fcw = FcwSettings(ttc_warn_s=spec.fcw_ttc_warn_s, ttc_prewarn_s=max(4.0, spec.fcw_ttc_warn_s),
-                      decel_warn_mps2=spec.fcw_decel_warn_mps2)
+                      decel_warn_mps2=spec.fcw_decel_warn_mps2,
+                      stationary_max_speed_mps=spec.fcw_stationary_max_speed_mps)
+    # the radar's carrier, as the ECU has it calibrated for its sensor (the overhead test needs the wavelength)
+    from radarnode.radar.setup import radar_config
     return Ecu(acc, fcw, sensor_id=scenario.radar.sensor_id, period_s=period_s,
-               mount=SensorMount.of(scenario.radar.mount))
+               mount=SensorMount.of(scenario.radar.mount), wavelength_m=radar_config(scenario).preset.wavelength_m)
 
 
 def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:

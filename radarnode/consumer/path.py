@@ -22,21 +22,24 @@ MIN_SPEED_FOR_CURVATURE_MPS = 1.0
 
 @dataclass(frozen=True)
 class SensorMount:
-    """The radar's position on the ego from the rear-axle centre (x forward, y left, metres) and its yaw."""
+    """The radar's position on the ego from the rear-axle centre (x forward, y left, metres), its yaw, and its
+    height above the road (the overhead test predicts the road's reflection from it)."""
 
     x_m: float = 3.7
     y_m: float = 0.0
     yaw_deg: float = 0.0
+    z_m: float = 0.5
 
     def __post_init__(self) -> None:
         validate.number("mount x_m", self.x_m, lo=-10.0, hi=10.0)
         validate.number("mount y_m", self.y_m, lo=-5.0, hi=5.0)
         validate.number("mount yaw_deg", self.yaw_deg, lo=-180.0, hi=180.0)
+        validate.number("mount z_m", self.z_m, lo=0.0, hi=5.0)
 
     @classmethod
     def of(cls, mount) -> SensorMount:
-        """From anything with ``x_m``, ``y_m`` and ``yaw_deg`` (a scenario's ``radar.mount``)."""
-        return cls(float(mount.x_m), float(mount.y_m), float(mount.yaw_deg))
+        """From anything with ``x_m``, ``y_m``, ``yaw_deg`` and ``z_m`` (a scenario's ``radar.mount``)."""
+        return cls(float(mount.x_m), float(mount.y_m), float(mount.yaw_deg), float(getattr(mount, "z_m", 0.5)))
 
     def to_vehicle(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame positions to the vehicle frame."""

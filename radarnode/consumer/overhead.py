@@ -1,0 +1,210 @@
+"""Is a stationary object a bridge or a sign gantry? The two-ray signature of its RCS on the wire (issue 10).
+
+An ARS 408 measures no elevation. What it does report, every cycle, is the object's RCS — the power it receives,
+as if the object stood on boresight in free space. For a reflector at height h above the road the road's
+reflection makes that power swing with range (``radarnode.radar.elevation``): the two-way factor
+|1 + Γ·exp(−j·2π·2·h_r·h/(λ·R))|⁴ has nulls every Δ(1/R) = λ/(2·h_r·h) — for a radar at 0.5 m and a deck edge
+at 5 m, at 214, 183, 160, 142, 128 … m. A car's reflection centres spread over its height and the swings
+average out: its RCS stays flat. The ECU knows its radar's mount height (calibrated), its carrier and how it
+averages the RCS (in power, :data:`RCS_FILTER_GAIN` per cycle); so for every candidate height it can predict the
+RCS-vs-range pattern of the history it has recorded, and test the history against it (Diewald et al.,
+"Radar-interference-based bridge identification for collision avoidance systems", IEEE IV 2011):
+
+* the correlation ``corr`` of the recorded RCS (dB) with the predicted pattern (dB), and the regression slope
+  ``beta`` of the one on the other (1 for a true two-ray reflector with |Γ| ≈ 0.7; a flat, fluctuating car
+  correlates by chance and then with a small slope);
+* over the heights :data:`HEIGHT_MIN_M` … :data:`HEIGHT_MAX_M` (overhead clearances are at least 4 m), using
+  only the samples at which the pattern's phase moves by at most :data:`MAX_PHASE_STEP` of a lobe per cycle
+  (faster lobes are sampled too sparsely and averaged away by the sensor) and beyond :data:`MIN_RANGE_M` (where
+  the far scan sees a structure as one reflector);
+* the test is *mature* once the usable samples cover :data:`MIN_LOBES` lobes of a reflector at
+  :data:`REFERENCE_HEIGHT_M`; an object is overhead when, mature, ``corr ≥`` :data:`CORR_MIN` and ``beta`` lies in
+  [:data:`BETA_MIN`, :data:`BETA_MAX`] for some height. That decision is latched.
+
+Measured (``benchmarks/overhead_cue.py``): at 50 and 90 km/h bridges and gantries reach corr 0.6–0.9 with slope
+0.7–1.2 at their true height, stopped cars and trucks slope ≤ 0.45. At 130 km/h the lobes a sensor that averages
+its RCS can resolve (beyond ~116 m) are too few before a stationary object must be warned for (162 m): stopped
+trucks then fit as well as bridges, which is why the ECU warns for stationary objects never seen moving only up
+to ``fcw_stationary_max_speed_mps`` (``radarnode.consumer.ecu``).
+
+The samples of one object are kept per *landmark* — a place in the ECU's odometry frame — so that when the
+radar drops a track and creates another at the same place (as it does with wide structures) the history goes on.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.signal
+
+#: the sensor's RCS average: exponential in power, this gain per cycle (the ARS 408-like radar's tracker)
+RCS_FILTER_GAIN = 0.2
+GROUND_REFLECTION = -0.7          # the road's reflection coefficient the ECU assumes (asphalt at grazing incidence)
+HEIGHT_MIN_M, HEIGHT_MAX_M, HEIGHT_STEP_M = 4.0, 8.0, 0.1
+REFERENCE_HEIGHT_M = 5.0
+MAX_PHASE_STEP = 0.25             # lobes per radar cycle
+MIN_RANGE_M = 60.0
+MIN_LOBES = 2.0
+MIN_SAMPLES = 24
+CORR_MIN = 0.5
+BETA_MIN, BETA_MAX = 0.6, 1.8
+MAX_SAMPLES = 400                 # a landmark's history is capped (≈ 29 s of cycles)
+#: a stationary track belongs to a landmark within these distances of it (odometry frame, m); across the road an
+#: overhead landmark takes any track within OVERHEAD_MATCH_LAT_M (a bridge spans the road, and the radar reports
+#: its parts as objects of their own as they come into the near scan)
+MATCH_LONG_M, MATCH_LAT_M, OVERHEAD_MATCH_LAT_M = 4.0, 2.5, 25.0
+
+
+def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float, wavelength_m: float,
+               reflection: float = GROUND_REFLECTION) -> np.ndarray:
+    """Two-way power factor (dB) of a reflector ``height_m`` above the road at ranges ``range_m``, far field
+    (the elevation beam ≈ 1). Broadcasts ``height_m`` (H, 1) against ``range_m`` (N,) to (H, N)."""
+    r = np.maximum(np.asarray(range_m, dtype=np.float64), 1.0)
+    phase = 2.0 * radar_height_m * np.asarray(height_m, dtype=np.float64) / (wavelength_m * r)
+    f = np.abs(1.0 + reflection * np.exp(-2j * np.pi * np.mod(phase, 1.0))) ** 4
+    return 10.0 * np.log10(np.maximum(f, 1e-12))
+
+
+def averaged_db(pattern_db: np.ndarray, starts: np.ndarray, gain: float = RCS_FILTER_GAIN) -> np.ndarray:
+    """What the sensor reports of a pattern (H, N) (dB): its power average along the samples, restarted at each
+    index in ``starts`` (a new radar track starts its average at its first value)."""
+    x = 10.0 ** (pattern_db / 10.0)
+    out = np.empty_like(x)
+    bounds = list(starts) + [x.shape[1]]
+    for a, b in zip(bounds[:-1], bounds[1:]):        # one filter per radar track (a handful), over all heights
+        if b <= a:
+            continue
+        seg = x[:, a:b]
+        out[:, a:b], _ = scipy.signal.lfilter([gain], [1.0, gain - 1.0], seg, axis=1,
+                                               zi=((1.0 - gain) * seg[:, :1]))
+    return 10.0 * np.log10(np.maximum(out, 1e-12))
+
+
+@dataclass
+class Fit:
+    """The best overhead height for a history and how well it fits."""
+
+    mature: bool
+    height_m: float = math.nan
+    corr: float = 0.0
+    beta: float = 0.0
+    lobes: float = 0.0
+    samples: int = 0
+
+    @property
+    def overhead(self) -> bool:
+        return self.mature and self.corr >= CORR_MIN and BETA_MIN <= self.beta <= BETA_MAX
+
+
+def fit_history(range_m: np.ndarray, rcs_dbsm: np.ndarray, starts: np.ndarray, radar_height_m: float,
+                wavelength_m: float) -> Fit:
+    """Test an RCS history (shape (N,), in the order received; ``starts``: indices where a radar track began)
+    against the two-ray pattern of every overhead height (see the module docstring)."""
+    r = np.asarray(range_m, dtype=np.float64)
+    y = np.asarray(rcs_dbsm, dtype=np.float64)
+    if r.size < MIN_SAMPLES:
+        return Fit(False, samples=int(r.size))
+    heights = np.arange(HEIGHT_MIN_M, HEIGHT_MAX_M + 1e-9, HEIGHT_STEP_M)[:, None]        # (H, 1)
+    phase = 2.0 * radar_height_m * heights / (wavelength_m * np.maximum(r, 1.0))           # lobes, (H, N)
+    step = np.abs(np.diff(phase, axis=1, prepend=phase[:, :1]))
+    new = np.zeros(r.size, dtype=bool)
+    new[np.asarray(starts, dtype=np.int64)] = True
+    usable = (step <= MAX_PHASE_STEP) & (r >= MIN_RANGE_M) & ~new
+    ref = np.abs(np.diff(2.0 * radar_height_m * REFERENCE_HEIGHT_M / (wavelength_m * np.maximum(r, 1.0)),
+                         prepend=np.nan))
+    ref_ok = (ref <= MAX_PHASE_STEP) & (r >= MIN_RANGE_M) & ~new
+    lobes = float(np.nansum(np.where(ref_ok, ref, 0.0)))
+    n_ok = int(np.count_nonzero(ref_ok))
+    if lobes < MIN_LOBES or n_ok < MIN_SAMPLES:
+        return Fit(False, lobes=lobes, samples=n_ok)
+    t = averaged_db(two_ray_db(r, heights, radar_height_m, wavelength_m), np.flatnonzero(new))
+    w = usable.astype(np.float64)
+    cnt = np.maximum(w.sum(axis=1, keepdims=True), 1.0)
+    ym = y[None, :] - (w * y[None, :]).sum(axis=1, keepdims=True) / cnt
+    tm = t - (w * t).sum(axis=1, keepdims=True) / cnt
+    syt = (w * ym * tm).sum(axis=1)
+    stt = (w * tm * tm).sum(axis=1)
+    syy = (w * ym * ym).sum(axis=1)
+    corr = syt / np.sqrt(np.maximum(stt * syy, 1e-12))
+    beta = syt / np.maximum(stt, 1e-12)
+    corr = np.where(w.sum(axis=1) >= MIN_SAMPLES, corr, -1.0)
+    k = int(np.argmax(corr))
+    return Fit(True, float(heights[k, 0]), float(corr[k]), float(beta[k]), lobes, n_ok)
+
+
+@dataclass
+class Landmark:
+    """A stationary object's place (odometry frame) and the RCS history of the radar tracks seen there."""
+
+    x_m: float
+    y_m: float
+    range_m: list = field(default_factory=list)
+    rcs_dbsm: list = field(default_factory=list)
+    starts: list = field(default_factory=list)      # sample index where each radar track's history starts
+    last_object: int | None = None
+    overhead: bool = False                          # latched once the test says so
+    fit: Fit | None = None
+
+    def add(self, object_id: int, range_m: float, rcs_dbsm: float) -> None:
+        if object_id != self.last_object:
+            self.starts.append(len(self.range_m))
+            self.last_object = object_id
+        self.range_m.append(range_m)
+        self.rcs_dbsm.append(rcs_dbsm)
+        if len(self.range_m) > MAX_SAMPLES:
+            drop = len(self.range_m) - MAX_SAMPLES
+            del self.range_m[:drop], self.rcs_dbsm[:drop]
+            self.starts = [max(s - drop, 0) for s in self.starts]
+            self.starts = sorted(set(self.starts))
+
+    def evaluate(self, radar_height_m: float, wavelength_m: float) -> Fit:
+        self.fit = fit_history(np.array(self.range_m), np.array(self.rcs_dbsm), np.array(self.starts, dtype=np.int64),
+                               radar_height_m, wavelength_m)
+        self.overhead |= self.fit.overhead
+        return self.fit
+
+
+class LandmarkMap:
+    """Stationary objects' landmarks along the drive; each cycle :meth:`observe` files the stationary tracks."""
+
+    def __init__(self, radar_height_m: float, wavelength_m: float) -> None:
+        self.radar_height_m = radar_height_m
+        self.wavelength_m = wavelength_m
+        self.landmarks: list[Landmark] = []
+        self.by_track: dict[int, Landmark] = {}
+
+    def observe(self, track_id: int, object_id: int, x_m: float, y_m: float, heading_rad: float, range_m: float,
+                rcs_dbsm: float) -> Landmark:
+        """File a stationary track at odometry-frame position (x_m, y_m) with the ego's heading ``heading_rad``
+        (matching is along and across the ego's heading); returns its landmark, re-evaluated."""
+        lm = self.by_track.get(track_id)
+        if lm is None:
+            c, s = math.cos(heading_rad), math.sin(heading_rad)
+            best, best_d = None, math.inf
+            for cand in self.landmarks:
+                dx, dy = cand.x_m - x_m, cand.y_m - y_m
+                along, across = c * dx + s * dy, -s * dx + c * dy
+                lat = OVERHEAD_MATCH_LAT_M if cand.overhead else MATCH_LAT_M
+                if abs(along) <= MATCH_LONG_M and abs(across) <= lat and abs(along) < best_d:
+                    best, best_d = cand, abs(along)
+            lm = best if best is not None else Landmark(x_m, y_m)
+            if best is None:
+                self.landmarks.append(lm)
+            self.by_track[track_id] = lm
+        if math.isfinite(rcs_dbsm) and math.isfinite(range_m):
+            lm.add(object_id, range_m, rcs_dbsm)
+            if not lm.overhead:
+                lm.evaluate(self.radar_height_m, self.wavelength_m)
+        return lm
+
+    def forget(self, alive: set[int], ego_x_m: float, ego_y_m: float, keep_m: float = 300.0) -> None:
+        """Drop the tracks that ended and the landmarks far behind the ego."""
+        self.by_track = {k: v for k, v in self.by_track.items() if k in alive}
+        kept = set(map(id, self.by_track.values()))
+        self.landmarks = [lm for lm in self.landmarks
+                          if id(lm) in kept or math.hypot(lm.x_m - ego_x_m, lm.y_m - ego_y_m) <= keep_m]
+
+
+__all__ = ["Fit", "Landmark", "LandmarkMap", "averaged_db", "fit_history", "two_ray_db"]
