@@ -19,7 +19,8 @@ RCS-vs-range pattern of the history it has recorded, and test the history agains
   the far scan sees a structure as one reflector);
 * the test is *mature* once the usable samples cover :data:`MIN_LOBES` lobes of a reflector at
   :data:`REFERENCE_HEIGHT_M`; an object is overhead when, mature, ``corr ≥`` :data:`CORR_MIN` and ``beta`` lies in
-  [:data:`BETA_MIN`, :data:`BETA_MAX`] for some height. That decision is latched.
+  [:data:`BETA_MIN`, :data:`BETA_MAX`] for some height in :data:`CONSECUTIVE` cycles in a row. That decision is
+  latched.
 
 Measured (``benchmarks/overhead_cue.py``): at 50 and 90 km/h bridges and gantries reach corr 0.6–0.9 with slope
 0.7–1.2 at their true height, stopped cars and trucks slope ≤ 0.45. At 130 km/h the lobes a sensor that averages
@@ -46,10 +47,11 @@ HEIGHT_MIN_M, HEIGHT_MAX_M, HEIGHT_STEP_M = 4.0, 8.0, 0.1
 REFERENCE_HEIGHT_M = 5.0
 MAX_PHASE_STEP = 0.25             # lobes per radar cycle
 MIN_RANGE_M = 60.0
-MIN_LOBES = 2.0
+MIN_LOBES = 2.5
 MIN_SAMPLES = 24
-CORR_MIN = 0.5
-BETA_MIN, BETA_MAX = 0.6, 1.8
+CORR_MIN = 0.55
+BETA_MIN, BETA_MAX = 0.65, 1.6
+CONSECUTIVE = 8                   # cycles in a row the test must say "overhead" before it is latched
 MAX_SAMPLES = 400                 # a landmark's history is capped (≈ 29 s of cycles)
 #: a stationary track belongs to a landmark within these distances of it (odometry frame, m); across the road an
 #: overhead landmark takes any track within OVERHEAD_MATCH_LAT_M (a bridge spans the road, and the radar reports
@@ -145,7 +147,9 @@ class Landmark:
     starts: list = field(default_factory=list)      # sample index where each radar track's history starts
     last_object: int | None = None
     overhead: bool = False                          # latched once the test says so
+    moved: bool = False                             # a track seen moving stopped here: a vehicle, never overhead
     fit: Fit | None = None
+    streak: int = 0                                 # consecutive cycles the test said "overhead"
 
     def add(self, object_id: int, range_m: float, rcs_dbsm: float) -> None:
         if object_id != self.last_object:
@@ -162,7 +166,8 @@ class Landmark:
     def evaluate(self, radar_height_m: float, wavelength_m: float) -> Fit:
         self.fit = fit_history(np.array(self.range_m), np.array(self.rcs_dbsm), np.array(self.starts, dtype=np.int64),
                                radar_height_m, wavelength_m)
-        self.overhead |= self.fit.overhead
+        self.streak = self.streak + 1 if self.fit.overhead else 0
+        self.overhead |= self.streak >= CONSECUTIVE and not self.moved
         return self.fit
 
 
@@ -176,9 +181,11 @@ class LandmarkMap:
         self.by_track: dict[int, Landmark] = {}
 
     def observe(self, track_id: int, object_id: int, x_m: float, y_m: float, heading_rad: float, range_m: float,
-                rcs_dbsm: float) -> Landmark:
+                rcs_dbsm: float, moved: bool = False) -> Landmark:
         """File a stationary track at odometry-frame position (x_m, y_m) with the ego's heading ``heading_rad``
-        (matching is along and across the ego's heading); returns its landmark, re-evaluated."""
+        (matching is along and across the ego's heading); returns its landmark, re-evaluated. ``moved``: the
+        track was seen moving (a vehicle that stopped: its landmark is never overhead, and a new track the radar
+        creates there later inherits that it moved)."""
         lm = self.by_track.get(track_id)
         if lm is None:
             c, s = math.cos(heading_rad), math.sin(heading_rad)
@@ -193,7 +200,8 @@ class LandmarkMap:
             if best is None:
                 self.landmarks.append(lm)
             self.by_track[track_id] = lm
-        if math.isfinite(rcs_dbsm) and math.isfinite(range_m):
+        lm.moved |= moved
+        if math.isfinite(rcs_dbsm) and math.isfinite(range_m) and not lm.moved:
             lm.add(object_id, range_m, rcs_dbsm)
             if not lm.overhead:
                 lm.evaluate(self.radar_height_m, self.wavelength_m)

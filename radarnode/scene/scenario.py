@@ -443,13 +443,14 @@ class Expectation:
     ttc_with_lead_decel: bool = False      # fcw_ttc_min_s on the TTC that counts the lead's deceleration (LVD)
     acc_follows: str | None = None         # ACC's target is this actor (from gap_settle_s, else 2 s): ≥ 95 % of cycles
     never_target: tuple[str, ...] = ()     # actors ACC and FCW must never select (adjacent lane, roadside)
+    no_braking: bool = False               # ACC never requests braking (< NO_BRAKING_MPS2) and the driver never brakes
 
     @property
     def checks(self) -> bool:
         """Whether anything is to be checked (a lead alone only names the actor figures are measured to)."""
         return any((self.fcw_ttc_min_s is not None, self.fcw_required, self.no_fcw, self.gap_settle_s is not None,
                     self.min_gap_m is not None, self.fcw_before_impact_s is not None, self.fcw_prewarning,
-                    self.acc_follows is not None, bool(self.never_target)))
+                    self.acc_follows is not None, bool(self.never_target), self.no_braking))
 
     def __post_init__(self) -> None:
         if self.lead is not None:
@@ -467,6 +468,7 @@ class Expectation:
             validate.number("fcw_before_impact_s", self.fcw_before_impact_s, lo=0.0, hi=20.0)
         validate.boolean("fcw_prewarning", self.fcw_prewarning)
         validate.boolean("ttc_with_lead_decel", self.ttc_with_lead_decel)
+        validate.boolean("no_braking", self.no_braking)
         if self.acc_follows is not None:
             validate.text("acc_follows", self.acc_follows)
         if not isinstance(self.never_target, (tuple, list)) or not all(isinstance(a, str) for a in self.never_target):
