@@ -94,6 +94,7 @@ def cmd(args) -> int:
             decision = None
             if cycles:
                 ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+                ecu.boundaries = assembler.road_boundaries
                 for c in cycles:
                     decision = ecu.on_cycle(out.t_s, c) or decision
                 cycle = cycles[-1]

@@ -175,6 +175,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         for m in out.messages:
             assembler.on_message_received(m)
         ecu.set_ego(t, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+        ecu.boundaries = assembler.road_boundaries          # as the radar reported them (0x680/0x681)
         decision = None
         for cycle in assembler.drain():
             if isinstance(cycle, ObjectCycle):
