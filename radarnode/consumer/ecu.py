@@ -27,7 +27,7 @@ from radarnode.consumer.acc import Acc, AccSettings, Target
 from radarnode.consumer.path import SensorMount, in_path
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
-from radarnode.consumer.overhead import LandmarkMap
+from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
 from radarnode.consumer.tracking import Tracker
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
 from radarnode.wire import ids
@@ -47,7 +47,7 @@ RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
-#: seems to move away at v·(1 − cos atan(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
+#: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
 OVERHEAD_HEIGHT_M = 8.0
 STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
 MOVED_CYCLES = 3                     # cycles in a row of moving that make a track one seen moving
@@ -289,7 +289,7 @@ class Ecu:
         """Whether a track moves over ground more than a stationary reflector up to OVERHEAD_HEIGHT_M above the
         radar seems to: its Doppler is the ego's speed times cos(elevation), so at short range it seems to
         move away slowly (a bridge at 10 m, at 36 m/s: 3.2 m/s)."""
-        el = math.atan2(OVERHEAD_HEIGHT_M, max(range_m, 0.1))
+        el = math.asin(min(OVERHEAD_HEIGHT_M / max(range_m, 0.1), 1.0))      # highest elevation at that range
         return ground_mps > MOVING_MPS + abs(self.ego_speed_mps) * (1.0 - math.cos(el))
 
     def _select(self, tracks, ol, by_id, cluster_strength=None) -> tuple[Target | None, Target | None]:
@@ -315,6 +315,9 @@ class Ecu:
         stationary_ok = self.ego_speed_mps <= self.fcw.settings.stationary_max_speed_mps
         moved = np.zeros(len(tracks), dtype=bool)
         obstacle = np.zeros(len(tracks), dtype=bool)
+        # tracks that ended leave their landmarks first (a new track at the place of one that ended continues its
+        # history; one at the place of a track still alive is another object)
+        self.landmarks.forget({t.id for t in tracks}, ox, oy)
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
             ground = math.hypot(vx + self.ego_speed_mps, vy)
@@ -353,8 +356,14 @@ class Ecu:
                 mean_rcs = 10.0 * math.log10(max(self._rcs_power.get(t.id, 1e-12), 1e-12))
                 if t.age >= OBSTACLE_MIN_AGE and mean_rcs >= OBSTACLE_RCS_DBSM:
                     self._obstacles.add(t.id)
-            # (a coasting track keeps what it was)
+            # (a coasting track keeps what it was); any track never seen moving at the place of a bridge is part of it
+            # (the radar reports its parts as objects of their own, moving or not as its Doppler makes them)
             overhead = landmark is not None and landmark.overhead
+            if not overhead and landmark is None and t.id not in self._moved and self.landmarks.landmarks:
+                wx = ox + co * xv[i] - so * yv[i]
+                wy = oy + so * xv[i] + co * yv[i]
+                overhead = self.landmarks.match(wx, wy, oh, overhead_only=True,
+                                                beyond_m=OVERHEAD_DEPTH_M) is not None
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead
             obstacle[i] = t.id in self._obstacles and not overhead
@@ -364,7 +373,6 @@ class Ecu:
         self._obstacles &= alive
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
-        self.landmarks.forget(alive, ox, oy)
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
         # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of

@@ -19,8 +19,9 @@ RCS-vs-range pattern of the history it has recorded, and test the history agains
   the far scan sees a structure as one reflector);
 * the test is *mature* once the usable samples cover :data:`MIN_LOBES` lobes of a reflector at
   :data:`REFERENCE_HEIGHT_M`; an object is overhead when, mature, ``corr ≥`` :data:`CORR_MIN` and ``beta`` lies in
-  [:data:`BETA_MIN`, :data:`BETA_MAX`] for some height in :data:`CONSECUTIVE` cycles in a row. That decision is
-  latched.
+  [:data:`BETA_MIN`, :data:`BETA_MAX`] for some height in :data:`CONSECUTIVE` cycles in a row, that height
+  steady within :data:`HEIGHT_STABLE_M` (a chance fit of a fluctuating car wanders from height to height). That
+  decision is latched.
 
 Measured (``benchmarks/overhead_cue.py``): at 50 and 90 km/h bridges and gantries reach corr 0.6–0.9 with slope
 0.7–1.2 at their true height, stopped cars and trucks slope ≤ 0.45. At 130 km/h the lobes a sensor that averages
@@ -48,15 +49,19 @@ REFERENCE_HEIGHT_M = 5.0
 MAX_PHASE_STEP = 0.25             # lobes per radar cycle
 MIN_RANGE_M = 60.0
 MIN_LOBES = 2.5
-MIN_SAMPLES = 24
+MIN_SAMPLES = 32
 CORR_MIN = 0.55
 BETA_MIN, BETA_MAX = 0.65, 1.6
-CONSECUTIVE = 8                   # cycles in a row the test must say "overhead" before it is latched
+CONSECUTIVE = 8                   # cycles in a row the test must say "overhead" before it is latched …
+HEIGHT_STABLE_M = 0.3             # … at a height that moves by no more than this from one cycle to the next
 MAX_SAMPLES = 400                 # a landmark's history is capped (≈ 29 s of cycles)
 #: a stationary track belongs to a landmark within these distances of it (odometry frame, m); across the road an
 #: overhead landmark takes any track within OVERHEAD_MATCH_LAT_M (a bridge spans the road, and the radar reports
 #: its parts as objects of their own as they come into the near scan)
 MATCH_LONG_M, MATCH_LAT_M, OVERHEAD_MATCH_LAT_M = 4.0, 2.5, 25.0
+#: how deep an overhead structure may reach beyond its near edge (a motorway deck, m): what the radar reports of it
+#: from underneath, moving as its Doppler makes it, belongs to it
+OVERHEAD_DEPTH_M = 20.0
 
 
 def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float, wavelength_m: float,
@@ -149,7 +154,8 @@ class Landmark:
     overhead: bool = False                          # latched once the test says so
     moved: bool = False                             # a track seen moving stopped here: a vehicle, never overhead
     fit: Fit | None = None
-    streak: int = 0                                 # consecutive cycles the test said "overhead"
+    streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
+    _last_height: float = math.nan
 
     def add(self, object_id: int, range_m: float, rcs_dbsm: float) -> None:
         if object_id != self.last_object:
@@ -166,7 +172,11 @@ class Landmark:
     def evaluate(self, radar_height_m: float, wavelength_m: float) -> Fit:
         self.fit = fit_history(np.array(self.range_m), np.array(self.rcs_dbsm), np.array(self.starts, dtype=np.int64),
                                radar_height_m, wavelength_m)
-        self.streak = self.streak + 1 if self.fit.overhead else 0
+        # a real reflector fits at its own height cycle after cycle; a chance fit wanders from height to height
+        steady = self.fit.overhead and (self.streak == 0
+                                        or abs(self.fit.height_m - self._last_height) <= HEIGHT_STABLE_M + 1e-9)
+        self.streak = self.streak + 1 if steady else (1 if self.fit.overhead else 0)
+        self._last_height = self.fit.height_m
         self.overhead |= self.streak >= CONSECUTIVE and not self.moved
         return self.fit
 
@@ -188,16 +198,12 @@ class LandmarkMap:
         creates there later inherits that it moved)."""
         lm = self.by_track.get(track_id)
         if lm is None:
-            c, s = math.cos(heading_rad), math.sin(heading_rad)
-            best, best_d = None, math.inf
-            for cand in self.landmarks:
-                dx, dy = cand.x_m - x_m, cand.y_m - y_m
-                along, across = c * dx + s * dy, -s * dx + c * dy
-                lat = OVERHEAD_MATCH_LAT_M if cand.overhead else MATCH_LAT_M
-                if abs(along) <= MATCH_LONG_M and abs(across) <= lat and abs(along) < best_d:
-                    best, best_d = cand, abs(along)
-            lm = best if best is not None else Landmark(x_m, y_m)
-            if best is None:
+            # a landmark another live track is filed at is that track's: two objects seen at once are two
+            # (a post of the guardrail beside a stopped car must not mix into the car's history)
+            busy = {id(v) for v in self.by_track.values()}
+            lm = self.match(x_m, y_m, heading_rad, exclude=busy)
+            if lm is None:
+                lm = Landmark(x_m, y_m)
                 self.landmarks.append(lm)
             self.by_track[track_id] = lm
         lm.moved |= moved
@@ -206,6 +212,23 @@ class LandmarkMap:
             if not lm.overhead:
                 lm.evaluate(self.radar_height_m, self.wavelength_m)
         return lm
+
+    def match(self, x_m: float, y_m: float, heading_rad: float, overhead_only: bool = False,
+              beyond_m: float = 0.0, exclude: set[int] = frozenset()) -> Landmark | None:
+        """The landmark at odometry-frame (x_m, y_m), matched along and across the ego's heading (see
+        :data:`MATCH_LONG_M`); ``overhead_only``: only an overhead one; ``beyond_m``: the point may also lie up to
+        this much farther along than the landmark (the deck behind a bridge's near edge)."""
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        best, best_d = None, math.inf
+        for cand in self.landmarks:
+            if (overhead_only and not cand.overhead) or (id(cand) in exclude and not cand.overhead):
+                continue
+            dx, dy = cand.x_m - x_m, cand.y_m - y_m
+            along, across = c * dx + s * dy, -s * dx + c * dy
+            lat = OVERHEAD_MATCH_LAT_M if cand.overhead else MATCH_LAT_M
+            if -MATCH_LONG_M - beyond_m <= along <= MATCH_LONG_M and abs(across) <= lat and abs(along) < best_d:
+                best, best_d = cand, abs(along)
+        return best
 
     def forget(self, alive: set[int], ego_x_m: float, ego_y_m: float, keep_m: float = 300.0) -> None:
         """Drop the tracks that ended and the landmarks far behind the ego."""

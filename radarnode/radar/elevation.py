@@ -43,10 +43,13 @@ _GAUSS_DB = 10.0 * math.log10(2.0) * 4.0          # 12.04: a Gaussian beam is �
 
 
 def pattern_db(preset: RadarPreset, elevation_rad: np.ndarray) -> np.ndarray:
-    """One-way power gain of the elevation beam at ``elevation_rad``, dB re. boresight (≤ 0)."""
+    """One-way power gain of the elevation beam at ``elevation_rad``, dB re. boresight (≤ 0): the Gaussian main
+    lobe on the sidelobe floor, which falls off with the element pattern towards ±90° (as in azimuth,
+    :func:`radarnode.radar.equation.pattern_db`: a patch sees nothing straight above it)."""
     theta3 = math.radians(preset.elevation_beamwidth_deg)
     el = np.asarray(elevation_rad, dtype=np.float64)
-    return np.maximum(-_GAUSS_DB * (el / theta3) ** 2, SIDELOBE_DB)
+    floor = SIDELOBE_DB + preset.element_pattern_exponent * 10.0 * np.log10(np.maximum(np.cos(el), 1e-6))
+    return np.maximum(-_GAUSS_DB * (el / theta3) ** 2, floor)
 
 
 def propagation_db(preset: RadarPreset, ground_range_m: np.ndarray, target_height_m: np.ndarray,
