@@ -266,6 +266,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     res.trace = {k: np.asarray(v) for k, v in tr.items()}
     res.final_time_gap_s = float(res.trace["time_gap"][-1]) if len(res.trace["t"]) else None
     res.trace["assembler"] = assembler
+    res.trace["ecu"] = ecu                         # the ECU as it ended (its landmarks, for the benchmarks)
     _judge(scenario, res)
     return res
 

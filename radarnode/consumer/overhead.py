@@ -49,8 +49,8 @@ REFERENCE_HEIGHT_M = 5.0
 MAX_PHASE_STEP = 0.25             # lobes per radar cycle
 MIN_RANGE_M = 60.0
 MIN_LOBES = 2.5
-MIN_SAMPLES = 32
-CORR_MIN = 0.55
+MIN_SAMPLES = 40
+CORR_MIN = 0.65
 BETA_MIN, BETA_MAX = 0.65, 1.6
 CONSECUTIVE = 8                   # cycles in a row the test must say "overhead" before it is latched …
 HEIGHT_STABLE_M = 0.3             # … at a height that moves by no more than this from one cycle to the next
@@ -87,6 +87,17 @@ def averaged_db(pattern_db: np.ndarray, starts: np.ndarray, gain: float = RCS_FI
         out[:, a:b], _ = scipy.signal.lfilter([gain], [1.0, gain - 1.0], seg, axis=1,
                                                zi=((1.0 - gain) * seg[:, :1]))
     return 10.0 * np.log10(np.maximum(out, 1e-12))
+
+
+def _detrend(v: np.ndarray, r: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Rows of ``v`` (H, N) less their weighted least-squares line in ``r`` (N,), weights ``w`` (H, N)."""
+    s0 = np.maximum(w.sum(axis=1, keepdims=True), 1.0)
+    rm = (w * r).sum(axis=1, keepdims=True) / s0
+    vm = (w * v).sum(axis=1, keepdims=True) / s0
+    dr = r - rm
+    slope = (w * dr * (v - vm)).sum(axis=1, keepdims=True) / np.maximum((w * dr * dr).sum(axis=1, keepdims=True),
+                                                                        1e-12)
+    return v - vm - slope * dr
 
 
 @dataclass
@@ -128,9 +139,10 @@ def fit_history(range_m: np.ndarray, rcs_dbsm: np.ndarray, starts: np.ndarray, r
         return Fit(False, lobes=lobes, samples=n_ok)
     t = averaged_db(two_ray_db(r, heights, radar_height_m, wavelength_m), np.flatnonzero(new))
     w = usable.astype(np.float64)
-    cnt = np.maximum(w.sum(axis=1, keepdims=True), 1.0)
-    ym = y[None, :] - (w * y[None, :]).sum(axis=1, keepdims=True) / cnt
-    tm = t - (w * t).sum(axis=1, keepdims=True) / cnt
+    # both without their straight-line trend in range: a slow drift of the RCS (a car turning in a bend, the
+    # azimuth pattern, a fade) is no lobing; the lobes of a reflector 4 m up and more repeat within the history
+    ym = _detrend(np.broadcast_to(y, t.shape), r, w)
+    tm = _detrend(t, r, w)
     syt = (w * ym * tm).sum(axis=1)
     stt = (w * tm * tm).sum(axis=1)
     syy = (w * ym * ym).sum(axis=1)
@@ -155,6 +167,8 @@ class Landmark:
     moved: bool = False                             # a track seen moving stopped here: a vehicle, never overhead
     fit: Fit | None = None
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
+    latched_range_m: float | None = None            # the range at which the overhead decision was latched
+    latched_fit: Fit | None = None
     _last_height: float = math.nan
 
     def add(self, object_id: int, range_m: float, rcs_dbsm: float) -> None:
@@ -177,7 +191,8 @@ class Landmark:
                                         or abs(self.fit.height_m - self._last_height) <= HEIGHT_STABLE_M + 1e-9)
         self.streak = self.streak + 1 if steady else (1 if self.fit.overhead else 0)
         self._last_height = self.fit.height_m
-        self.overhead |= self.streak >= CONSECUTIVE and not self.moved
+        if not self.overhead and self.streak >= CONSECUTIVE and not self.moved:
+            self.overhead, self.latched_range_m, self.latched_fit = True, self.range_m[-1], self.fit
         return self.fit
 
 
