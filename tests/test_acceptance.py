@@ -46,3 +46,28 @@ def test_closed_loop_ego_motion_reaches_the_node():
     assert speed[0] == pytest.approx(27.8) and abs(speed[-1] - 25.0) < 1.0    # slowed down to the lead's speed
     asm = r.trace["assembler"]
     assert asm.radar_state["RadarState_MotionRxState"] == 0                    # the node got 0x300/0x301
+
+
+# Issue 10: roads, overhead structures, a driver, a brake profile on waypoints (benchmarks/acceptance.py runs the
+# whole set over seven seeds at both levels; BENCHMARKS.md has its table)
+ISSUE10 = ["acc_follow_bend_500_right", "clothoid_stopped_own_lane", "clothoid_stopped_outer_lane", "bridge_50",
+           "bridge_90", "bridge_130", "gantry_50", "gantry_90", "gantry_130", "bridge_stopped_car_50",
+           "bridge_stopped_car_90", "cut_in_then_brake"]
+
+
+@pytest.mark.parametrize("name", ISSUE10)
+def test_issue10_acceptance_one_seed_object_level(name):
+    r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity="object")
+    assert r.passed and r.checked, r.reasons
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("level", ["object", "detection"])
+@pytest.mark.parametrize("name", ISSUE10 + ["acc_follow_bend_250", "lane_change_to_stopped", "lane_change_past_stopped",
+                                            "acc_stop_and_go"]
+                         + [f"bend_r{r}_{d}_stopped_{lane}_lane" for r in (250, 500) for d in ("left", "right")
+                            for lane in ("own", "inner", "outer")])
+def test_issue10_acceptance_six_of_seven_seeds(name, level):
+    sc = load_scenario(SCENARIOS / f"{name}.yaml")
+    results = [simulate(dataclasses.replace(sc, seed=s), fidelity=level) for s in range(1, 8)]
+    assert sum(r.passed and r.checked for r in results) >= 6, [r.reasons for r in results]

@@ -155,3 +155,13 @@ def test_ecu_settings_from_the_command_line_are_used_and_checked(capsys):
     assert "warning at TTC" in capsys.readouterr().out
     assert main(["report", scen, "--fcw-ttc-warn", "20"]) == 2
     assert "option --fcw-ttc-warn: value 20.0 is not allowed" in capsys.readouterr().err
+
+
+def test_the_stationary_speed_limit_from_the_command_line(capsys):
+    from radarnode.cli.main import main
+    scen = str(SCENARIOS / "nhtsa_lead_stopped.yaml")                 # 20.1 m/s towards a car never seen moving
+    assert main(["report", scen, "--fcw-stationary-max-speed", "20"]) == 1
+    assert "no FCW warning" in capsys.readouterr().out
+    assert main(["report", scen, "--fcw-stationary-max-speed", "71"]) == 2
+    assert "option --fcw-stationary-max-speed: value 71.0 is not allowed; expected a number in [0, 70]" in \
+        capsys.readouterr().err

@@ -85,6 +85,7 @@ def cmd(args) -> int:
                 return
             # the ECU decides on what it decoded from the logged frames, as it would on the bus
             ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+            ecu.boundaries = assembler.road_boundaries
             decision = None
             for cycle in assembler.drain():
                 if isinstance(cycle, ObjectCycle):

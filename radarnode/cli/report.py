@@ -54,7 +54,9 @@ ECU_OPTIONS = (("--fcw-ttc-warn", "fcw_ttc_warn_s", "FCW warns at a TTC at or be
                ("--fcw-decel-warn", "fcw_decel_warn_mps2", "FCW warns when avoiding needs X m/s² (1–10)"),
                ("--acc-min-speed", "acc_min_speed_mps", "ACC waits in standby below X m/s (0–30)"),
                ("--path-half-width", "path_half_width_m", "the predicted path's half-width, m (0.5–5)"),
-               ("--ecu-latency", "processing_latency_s", "the ECU's processing latency, s (0–0.5)"))
+               ("--ecu-latency", "processing_latency_s", "the ECU's processing latency, s (0–0.5)"),
+               ("--fcw-stationary-max-speed", "fcw_stationary_max_speed_mps",
+                "above X m/s a stationary object never seen moving draws no FCW (0–70)"))
 
 
 def _with_ecu_options(sc, args):

@@ -18,7 +18,7 @@ from radarnode.cli.common import add_scenario_argument, format_boundaries, forma
 from radarnode.cli.foxglove import add_live_arguments, live_view
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
-from radarnode.consumer.evaluate import EgoActuator, make_ecu
+from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, make_ecu
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -68,6 +68,7 @@ def cmd(args) -> int:
     spec = scenario.ecu
     ecu = make_ecu(scenario, node.period_s, acc_enabled=spec.acc_enabled or args.closed_loop)
     actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
+    driver = DriverModel(scenario.ego.driver) if args.closed_loop and scenario.ego.driver is not None else None
     latency, held = spec.processing_latency_s, [0.0, 0.0]     # the request held, the driver's watch
     if actuator is not None:
         actuator.at(0.0)
@@ -91,6 +92,7 @@ def cmd(args) -> int:
             decision = None
             if cycles:
                 ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+                ecu.boundaries = assembler.road_boundaries
                 for c in cycles:
                     decision = ecu.on_cycle(out.t_s, c) or decision
                 cycle = cycles[-1]
@@ -111,12 +113,13 @@ def cmd(args) -> int:
                 if held[1] >= spec.driver_reaction_s:
                     ecu.acc.confirm_resume()
             if actuator is not None:
-                # as in report: the previous request holds until the ECU's output is out, latency after the cycle
+                # as in report: the previous request holds until the ECU's output is out, latency after the cycle;
+                # the driver (ego.driver) brakes a reaction time after the warning and overrides ACC
                 new = decision.accel_request_mps2 if decision is not None else 0.0
-                lat = min(latency, node.period_s)
-                if lat > 0.0:
-                    actuator.apply(held[0], lat)
-                actuator.apply(new, node.period_s - lat)
+                if driver is not None and decision is not None and decision.warning_level == LEVEL_WARNING:
+                    driver.warn(out.t_s + latency)
+                drive(actuator, out.t_s, node.period_s, min(latency, node.period_s), held[0], new, driver,
+                      scripted=False)
                 held[0] = new
                 actuator.at(out.t_s + node.period_s)
             if cycle is None:

@@ -27,8 +27,9 @@ from radarnode.consumer.acc import Acc, AccSettings, Target
 from radarnode.consumer.path import SensorMount, in_path
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
+from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
 from radarnode.consumer.tracking import Tracker
-from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, DYN_STOPPED
+from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
 from radarnode.wire import ids
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.dbc import load_own_database
@@ -44,6 +45,13 @@ OBSTACLE_RCS_DBSM = 0.0          # of the track's power-averaged RCS: a car ≈ 
 OBSTACLE_MIN_AGE = 4
 RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
+MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
+#: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
+#: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
+OVERHEAD_HEIGHT_M = 8.0
+STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
+MOVED_CYCLES = 3                     # cycles in a row of moving that make a track one seen moving
+DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
 
@@ -79,6 +87,7 @@ class EcuOutput:
     radar_ok: bool
     take_over: bool = False        # the driver must brake: the target needs more than ACC's authority
     standstill: bool = False       # ACC holds the ego at a standstill
+    fcw_target: Target | None = None   # the object FCW judges (ACC's target, or a stationary object ACC ignores)
 
 
 class Ecu:
@@ -86,7 +95,7 @@ class Ecu:
 
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
                  period_s: float = 0.072, timeout_cycles: int = 3, max_gap_s: float = MAX_GAP_S,
-                 mount: SensorMount = SensorMount()) -> None:
+                 mount: SensorMount = SensorMount(), wavelength_m: float = DEFAULT_WAVELENGTH_M) -> None:
         for name, value in (("period_s", period_s), ("max_gap_s", max_gap_s)):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
                 raise ValueError(f"Ecu {name}: value {value!r} is not allowed; expected a finite number of seconds > 0")
@@ -118,9 +127,18 @@ class Ecu:
         self._in_path: dict[int, int] = {}      # consecutive cycles each track has been in the predicted path
         self._out_path: dict[int, int] = {}
         self._target_id: int | None = None
+        self._fcw_target_id: int | None = None
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._last_out_t: float | None = None
+        if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
+            raise ValueError(f"Ecu wavelength_m: value {wavelength_m!r} is not allowed; expected the radar's carrier "
+                             "wavelength in metres (1e-4 … 1)")
+        self.wavelength_m = float(wavelength_m)
+        self._moved: set[int] = set()             # tracks seen moving over ground (beyond what elevation explains)
+        self._moving_for: dict[int, int] = {}      # cycles in a row each track has been seen moving
+        self.landmarks = LandmarkMap(mount.z_m, self.wavelength_m)
+        self.odometry = (0.0, 0.0, 0.0)           # the ECU's own dead reckoning: x, y (m), heading (rad)
 
     @staticmethod
     def _finite_time(t_s) -> float | None:
@@ -174,8 +192,10 @@ class Ecu:
     def _restart_tracking(self) -> None:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
-        self._in_path, self._out_path, self._target_id = {}, {}, None
+        self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
         self._rcs_power, self._obstacles = {}, set()
+        self._moved, self._moving_for = set(), {}
+        self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.last_cycle_t = None
         self._last_out_t = None
         self._prev_speed = None
@@ -265,80 +285,144 @@ class Ecu:
             return None
         return self._decide(t, [], None, {}, radar_ok=False)
 
-    def _select(self, tracks, ol, by_id, cluster_strength=None) -> Target | None:
+    def _moving(self, ground_mps: float, range_m: float) -> bool:
+        """Whether a track moves over ground more than a stationary reflector up to OVERHEAD_HEIGHT_M above the
+        radar seems to: its Doppler is the ego's speed times cos(elevation), so at short range it seems to
+        move away slowly (a bridge at 10 m, at 36 m/s: 3.2 m/s)."""
+        el = math.asin(min(OVERHEAD_HEIGHT_M / max(range_m, 0.1), 1.0))      # highest elevation at that range
+        return ground_mps > MOVING_MPS + abs(self.ego_speed_mps) * (1.0 - math.cos(el))
+
+    def _select(self, tracks, ol, by_id, cluster_strength=None) -> tuple[Target | None, Target | None]:
+        """ACC's target and FCW's: the nearest track steadily in the predicted path that is a road user for each.
+
+        ACC follows vehicles it has seen moving (also once they stopped) and never brakes for a stationary object
+        never seen moving (ISO 15622 does not ask it to; production ACC does not). FCW also warns for a stationary
+        object that reflects like a vehicle, unless the overhead test found it to be a bridge or a gantry
+        (:mod:`radarnode.consumer.overhead`) or the ego is faster than ``stationary_max_speed_mps``.
+        """
         if not tracks:
-            return None
+            self._target_id = self._fcw_target_id = None
+            return None, None
         x = np.array([t.x[0] for t in tracks])
         y = np.array([t.x[1] for t in tracks])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
                      self.boundaries, self.mount)
-        road_user = np.zeros(len(tracks), dtype=bool)
+        xv, yv = self.mount.to_vehicle(x, y)
+        ox, oy, oh = self.odometry
+        co, so = math.cos(oh), math.sin(oh)
+        # stationary objects never seen moving count only up to this speed (above it the overhead test cannot
+        # have its evidence before the warning distance: radarnode.consumer.overhead)
+        stationary_ok = self.ego_speed_mps <= self.fcw.settings.stationary_max_speed_mps
+        moved = np.zeros(len(tracks), dtype=bool)
+        obstacle = np.zeros(len(tracks), dtype=bool)
+        # tracks that ended leave their landmarks first (a new track at the place of one that ended continues its
+        # history; one at the place of a track still alive is another object)
+        self.landmarks.forget({t.id for t in tracks}, ox, oy)
         for i, t in enumerate(tracks):
+            vx, vy = self.mount.rotate(t.x[2], t.x[3])
+            ground = math.hypot(vx + self.ego_speed_mps, vy)
+            rng = math.hypot(t.x[0], t.x[1])
             if cluster_strength is not None:
-                ground = math.hypot(t.x[2] + self.ego_speed_mps, t.x[3])
-                road_user[i] = ground > 1.0 or cluster_strength.get(t.id, False)
+                moved[i] = ground > 1.0
+                obstacle[i] = cluster_strength.get(t.id, False)
                 continue
             k = by_id.get(t.meas_id)
-            if k is None:
-                road_user[i] = True            # coasting: it was a road user when selected
-                continue
-            dyn = int(ol.dyn_prop[k])
-            # a stationary object counts by what it reflects over its track's life (power average: one
-            # fade of a fluctuating car must not drop it; two merged guardrail posts stay near −2 dBsm), once
-            # tracked OBSTACLE_MIN_AGE cycles; once it qualified it stays a candidate (latched)
-            rcs = float(ol.rcs_dbsm[k])
-            if math.isfinite(rcs):
-                old = self._rcs_power.get(t.id)
-                p = 10.0 ** (rcs / 10.0)
-                self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
-            mean_rcs = 10.0 * math.log10(max(self._rcs_power.get(t.id, 1e-12), 1e-12))
-            if t.age >= OBSTACLE_MIN_AGE and mean_rcs >= OBSTACLE_RCS_DBSM:
-                self._obstacles.add(t.id)
-            road_user[i] = dyn in (DYN_MOVING, DYN_ONCOMING, DYN_STOPPED) or t.id in self._obstacles
-        # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
-        # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
-        # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
-        # the target at its edge, does not switch)
+            landmark = self.landmarks.by_track.get(t.id)
+            if k is not None:
+                dyn = int(ol.dyn_prop[k])
+                # seen moving: the radar says so and its speed over ground is more than elevation explains, in
+                # MOVED_CYCLES cycles in a row (one glitch of a stationary object's velocity is no vehicle)
+                moving_now = dyn in (DYN_MOVING, DYN_ONCOMING) and self._moving(ground, rng)
+                self._moving_for[t.id] = self._moving_for.get(t.id, 0) + 1 if moving_now else 0
+                if self._moving_for[t.id] >= MOVED_CYCLES:
+                    self._moved.add(t.id)
+                if ground < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
+                    # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
+                    # stopped marks its place, so that a track the radar creates there anew is still one
+                    wx = ox + co * xv[i] - so * yv[i]
+                    wy = oy + so * xv[i] + co * yv[i]
+                    landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, oh, rng, float(ol.rcs_dbsm[k]),
+                                                      moved=t.id in self._moved)
+                    if landmark.moved:
+                        self._moved.add(t.id)
+                # a stationary object counts by what it reflects over its track's life (power average: one
+                # fade of a fluctuating car must not drop it; two merged guardrail posts stay near −2 dBsm), once
+                # tracked OBSTACLE_MIN_AGE cycles; once it qualified it stays a candidate (latched)
+                rcs = float(ol.rcs_dbsm[k])
+                if math.isfinite(rcs):
+                    old = self._rcs_power.get(t.id)
+                    p = 10.0 ** (rcs / 10.0)
+                    self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
+                mean_rcs = 10.0 * math.log10(max(self._rcs_power.get(t.id, 1e-12), 1e-12))
+                if t.age >= OBSTACLE_MIN_AGE and mean_rcs >= OBSTACLE_RCS_DBSM:
+                    self._obstacles.add(t.id)
+            # (a coasting track keeps what it was); any track never seen moving at the place of a bridge is part of it
+            # (the radar reports its parts as objects of their own, moving or not as its Doppler makes them)
+            overhead = landmark is not None and landmark.overhead
+            if not overhead and landmark is None and t.id not in self._moved and self.landmarks.landmarks:
+                wx = ox + co * xv[i] - so * yv[i]
+                wy = oy + so * xv[i] + co * yv[i]
+                overhead = self.landmarks.match(wx, wy, oh, overhead_only=True,
+                                                beyond_m=OVERHEAD_DEPTH_M) is not None
+            # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
+            moved[i] = t.id in self._moved and not overhead
+            obstacle[i] = t.id in self._obstacles and not overhead
         ids = [t.id for t in tracks]
         alive = set(ids)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
+        self._moved &= alive
+        self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
+        # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
+        # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
+        # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
+        # the target at its edge, does not switch)
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
-        steady = np.array([self._in_path[tid] >= ENTER_CYCLES or (tid == self._target_id
-                                                                    and self._out_path[tid] < EXIT_CYCLES)
-                           for tid in ids])
-        cand = np.flatnonzero(steady & road_user)
-        if cand.size == 0:
-            self._target_id = None
-            return None
-        xv, yv = self.mount.to_vehicle(x, y)
-        i = int(cand[np.argmin(xv[cand])])
-        t = tracks[i]
-        self._target_id = t.id
-        vx, _ = self.mount.rotate(t.x[2], t.x[3])
-        ax, _ = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
-        # distance ahead of the sensor along the vehicle's axis, lateral from the vehicle's centre line
-        return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]), float(vx),
-                      float(ax + self.ego_accel_mps2))
+        entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
+        held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])
+
+        def pick(user: np.ndarray, current: int | None) -> Target | None:
+            steady = entered | (held & (np.array(ids) == (-1 if current is None else current)))
+            cand = np.flatnonzero(steady & user)
+            if cand.size == 0:
+                return None
+            i = int(cand[np.argmin(xv[cand])])
+            t = tracks[i]
+            vx, _ = self.mount.rotate(t.x[2], t.x[3])
+            ax, _ = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
+            # distance ahead of the sensor along the vehicle's axis, lateral from the vehicle's centre line
+            return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]), float(vx),
+                          float(ax + self.ego_accel_mps2))
+
+        acc = pick(moved, self._target_id)
+        fcw = pick(moved | (obstacle & stationary_ok), self._fcw_target_id)
+        self._target_id = acc.track_id if acc is not None else None
+        self._fcw_target_id = fcw.track_id if fcw is not None else None
+        return acc, fcw
 
     def _decide(self, t_s, tracks, ol, by_id, radar_ok: bool, cluster_strength=None) -> EcuOutput:
         dt = self.period_s if self._last_out_t is None else t_s - self._last_out_t
         if not 0.0 <= dt <= self.max_gap_s:
             dt = self.period_s           # the ACC's rate limits need a sane step; the time itself was checked
         self._last_out_t = t_s
-        target = self._select(tracks, ol, by_id, cluster_strength) if radar_ok else None
+        # dead reckoning from the ego motion on the bus (places the landmarks of stationary objects)
+        ox, oy, oh = self.odometry
+        v, w = self.ego_speed_mps, self.ego_yaw_rate_rps
+        self.odometry = (ox + v * dt * math.cos(oh + 0.5 * w * dt), oy + v * dt * math.sin(oh + 0.5 * w * dt),
+                         oh + w * dt)
+        target, fcw_target = self._select(tracks, ol, by_id, cluster_strength) if radar_ok else (None, None)
         accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
-        v, lead_v = self.ego_speed_mps, None
-        if target is not None:
-            lead_v = max(v + target.rel_speed_mps, 0.0)
-            level = self.fcw.step(target.distance_m, v, lead_v, self.ego_accel_mps2, target.lead_accel_mps2)
+        v = self.ego_speed_mps
+        if fcw_target is not None:
+            lead_v = max(v + fcw_target.rel_speed_mps, 0.0)
+            level = self.fcw.step(fcw_target.distance_m, v, lead_v, self.ego_accel_mps2, fcw_target.lead_accel_mps2)
         else:
             level = self.fcw.step(None, v, 0.0, 0.0, 0.0)
         fault = (0 if radar_ok else 1)
         out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
                         target, radar_ok,
-                        self.acc.take_over and self.acc.settings.enabled, self.acc.standstill)
+                        self.acc.take_over and self.acc.settings.enabled, self.acc.standstill, fcw_target)
         self.outputs.append(out)
         return out
 
@@ -352,11 +436,12 @@ class Ecu:
             "ACC_TimeGap": min(Acc.time_gap(tgt.distance_m, self.ego_speed_mps), 6.35) if tgt else 6.35,
             "ACC_AccelRequest": out.accel_request_mps2, "ACC_TakeOverRequest": int(out.take_over),
             "ACC_Standstill": int(out.standstill)})[0]
+        ft = out.fcw_target
         fcw = self._fcw_codec.encode({
             "FCW_CRC": 0, "FCW_Counter": 0, "FCW_WarningLevel": out.warning_level,
-            "FCW_TargetID": tgt.track_id % 255 if tgt else 255, "FCW_TTC": min(out.ttc_s, 25.5),
+            "FCW_TargetID": ft.track_id % 255 if ft else 255, "FCW_TTC": min(out.ttc_s, 25.5),
             "FCW_RequiredDecel": -out.required_decel_mps2,
-            "FCW_LeadAccel": tgt.lead_accel_mps2 if tgt else 0.0})[0]
+            "FCW_LeadAccel": ft.lead_accel_mps2 if ft else 0.0})[0]
         ts = out.t_s if timestamp is None else timestamp
         msgs = []
         for base, payload in ((ACC_STATUS, acc), (FCW_STATUS, fcw)):

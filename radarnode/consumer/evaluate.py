@@ -28,6 +28,7 @@ from radarnode.wire.node import EgoMotionSender, RadarNode
 
 
 STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
+NO_BRAKING_MPS2 = -0.5         # ``expect.no_braking``: an ACC request below this is braking (above: coasting)
 
 
 class EgoActuator:
@@ -35,12 +36,18 @@ class EgoActuator:
 
     def __init__(self, scene, lag_s: float, speed_mps: float) -> None:
         self.ego = scene.drive_ego()
+        self.script = self.ego.lateral          # the scenario's own motion of the ego (speed profile, lane change)
         self.lag_s = lag_s
         self.s_m, self.v_mps, self.a_mps2 = 0.0, speed_mps, 0.0
 
     def at(self, t_s: float) -> None:
         """Publish the current state to the scene for the cycle at ``t_s``."""
         self.ego.set(t_s, self.s_m, self.v_mps, self.a_mps2)
+
+    def follow_script(self, t_s: float) -> None:
+        """Take the ego's state from the scenario's own profile at ``t_s`` (no ACC in the loop, no driver yet)."""
+        st = self.script.state(t_s)
+        self.s_m, self.v_mps, self.a_mps2 = float(st.x_m[0]), float(st.vx_mps[0]), float(st.ax_mps2[0])
 
     def apply(self, request_mps2: float, dt_s: float) -> None:
         a_new = self.a_mps2 + (request_mps2 - self.a_mps2) * (1.0 - math.exp(-dt_s / self.lag_s))
@@ -52,6 +59,49 @@ class EgoActuator:
         self.a_mps2 = a_new if self.v_mps > 0 else 0.0
 
 
+class DriverModel:
+    """The ego's driver (``ego.driver``): ``reaction_s`` after the ECU's first FCW warning he brakes at
+    ``decel_mps2`` (through the actuator's lag) until the ego stands, and holds it; his braking overrides ACC."""
+
+    def __init__(self, driver) -> None:
+        self.reaction_s, self.decel_mps2 = driver.reaction_s, driver.decel_mps2
+        self.warned_s: float | None = None
+
+    def warn(self, t_s: float) -> None:
+        """The warning reached the driver at ``t_s`` (the first one counts)."""
+        if self.warned_s is None:
+            self.warned_s = t_s
+
+    @property
+    def brake_s(self) -> float:
+        """When the driver's foot is on the brake (inf: not yet warned)."""
+        return math.inf if self.warned_s is None else self.warned_s + self.reaction_s
+
+
+def drive(actuator: EgoActuator, t_s: float, period_s: float, latency_s: float, held: float, new: float,
+          driver: DriverModel | None, scripted: bool) -> None:
+    """Move the closed-loop ego over the cycle [t_s, t_s + period_s]: the previous ACC request ``held`` until
+    the ECU's output comes ``latency_s`` after the cycle, then ``new``; from the driver's braking on his
+    deceleration; without ACC in the loop (``scripted``) the scenario's own profile until the driver brakes."""
+    t_end = t_s + period_s
+    brake = driver.brake_s if driver is not None else math.inf
+    if scripted and brake >= t_end:
+        actuator.follow_script(t_end)
+        return
+    if scripted and brake > t_s:
+        actuator.follow_script(brake)
+        t_s = brake
+    cuts = sorted({t_s, t_end, min(max(t_s + latency_s, t_s), t_end), min(max(brake, t_s), t_end)})
+    for a, b in zip(cuts[:-1], cuts[1:]):
+        if b - a <= 0.0:
+            continue
+        if a >= brake:
+            request = -driver.decel_mps2
+        else:
+            request = held if a < t_s + latency_s and not scripted else new
+        actuator.apply(0.0 if scripted and a < brake else request, b - a)
+
+
 @dataclass
 class ScenarioResult:
     """Figures of one run; ``passed`` against the scenario's ``ecu.expect``."""
@@ -59,6 +109,7 @@ class ScenarioResult:
     name: str
     seed: int
     warning_time_s: float | None = None
+    driver_brake_time_s: float | None = None   # the driver model's braking began (ego.driver)
     impact_time_s: float | None = None      # the lead's gap closed (in the ego lane)
     prewarning_time_s: float | None = None  # the first cycle with FCW at prewarning level or above
     latency_s: float = 0.0                  # the ECU's processing latency applied to its outputs
@@ -83,9 +134,12 @@ def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = Non
                       set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s,
                       path_half_width_m=spec.path_half_width_m, min_speed_mps=spec.acc_min_speed_mps)
     fcw = FcwSettings(ttc_warn_s=spec.fcw_ttc_warn_s, ttc_prewarn_s=max(4.0, spec.fcw_ttc_warn_s),
-                      decel_warn_mps2=spec.fcw_decel_warn_mps2)
+                      decel_warn_mps2=spec.fcw_decel_warn_mps2,
+                      stationary_max_speed_mps=spec.fcw_stationary_max_speed_mps)
+    # the radar's carrier, as the ECU has it calibrated for its sensor (the overhead test needs the wavelength)
+    from radarnode.radar.setup import radar_config
     return Ecu(acc, fcw, sensor_id=scenario.radar.sensor_id, period_s=period_s,
-               mount=SensorMount.of(scenario.radar.mount))
+               mount=SensorMount.of(scenario.radar.mount), wavelength_m=radar_config(scenario).preset.wavelength_m)
 
 
 def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
@@ -93,7 +147,10 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     spec = scenario.ecu
     node = RadarNode(scenario, fidelity=fidelity)
     scene = node.scene
-    actuator = EgoActuator(scene, spec.actuator_lag_s, scenario.ego.speed_mps) if spec.closed_loop else None
+    driver = DriverModel(scenario.ego.driver) if scenario.ego.driver is not None else None
+    # a driver who reacts to the warning closes the loop even without ACC in it
+    actuator = (EgoActuator(scene, spec.actuator_lag_s, scenario.ego.speed_mps)
+                if spec.closed_loop or driver is not None else None)
     vehicle = EgoMotionSender(scene, scenario.radar.sensor_id)
     period = node.period_s
     ecu = make_ecu(scenario, period)
@@ -106,7 +163,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     moving_for, lead_v, prev_speed = 0.0, 0.0, scenario.ego.speed_mps
     res.latency_s = latency
     tr = {k: [] for k in ("t", "gap", "ttc", "rel_speed", "speed", "accel", "request", "warning", "state",
-                          "time_gap", "target", "target_track")}
+                          "time_gap", "target", "target_track", "fcw_target")}
     for k in range(scenario.num_cycles):
         t = k * period
         if actuator is not None:
@@ -118,6 +175,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         for m in out.messages:
             assembler.on_message_received(m)
         ecu.set_ego(t, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
+        ecu.boundaries = assembler.road_boundaries          # as the radar reported them (0x680/0x681)
         decision = None
         for cycle in assembler.drain():
             if isinstance(cycle, ObjectCycle):
@@ -147,15 +205,22 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                 res.impact_time_s = t
             prev_gap = lane_gap
         # which actor the ECU selected: its object ID, looked up in this cycle's object list (truth tags)
-        target_actor = -1
-        if decision is not None and decision.target is not None:
-            ol = out.frame.objects
-            hit = np.flatnonzero(ol.id == decision.target.object_id)
-            target_actor = int(ol.actor_index[hit[0]]) if hit.size else -1
+        def actor_of(target) -> int:
+            if target is None:
+                return -1
+            hit = np.flatnonzero(out.frame.objects.id == target.object_id)
+            return int(out.frame.objects.actor_index[hit[0]]) if hit.size else -1
+
+        target_actor = actor_of(decision.target) if decision is not None else -1
+        # FCW's object, while it (pre)warns: what FCW selected and acted on
+        fcw_actor = (actor_of(decision.fcw_target) if decision is not None and decision.warning_level >= LEVEL_PREWARNING
+                     else -1)
         warning = decision is not None and decision.warning_level == LEVEL_WARNING
         # the ECU's outputs exist from t + latency: the warning is judged then (TTC shorter by the latency)
         if warning and res.warning_time_s is None:
             res.warning_time_s, res.ttc_at_warning_s = t + latency, ttc - latency
+        if warning and driver is not None:
+            driver.warn(t + latency)
         if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
             res.prewarning_time_s = t + latency
         # the driver confirms driving off after a long standstill, a reaction time after the lead has left
@@ -165,13 +230,14 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                 ecu.acc.confirm_resume()
         # closed loop: the ego follows the request through a first-order lag
         if actuator is not None:
-            # the previous request holds until this cycle's is out, latency after the cycle
+            # the previous request holds until this cycle's is out, latency after the cycle; the driver's braking
+            # (ego.driver) overrides it from the moment his foot is on the brake
             new = decision.accel_request_mps2 if (decision is not None and spec.acc_enabled) else 0.0
-            lat = min(latency, period)
-            if lat > 0.0:
-                actuator.apply(request, lat)
-            actuator.apply(new, period - lat)
+            drive(actuator, t, period, min(latency, period), request, new, driver,
+                  scripted=not (spec.closed_loop and spec.acc_enabled))
             request = new
+            if driver is not None and res.driver_brake_time_s is None and driver.brake_s <= t + period:
+                res.driver_brake_time_s = driver.brake_s
         accel = ego_state.accel_mps2
         jerk = abs(accel - prev_a) / period if prev_a is not None else 0.0
         if ego_state.speed_mps >= STANDSTILL_JUDGE_MPS and prev_speed >= STANDSTILL_JUDGE_MPS:
@@ -181,7 +247,9 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         res.peak_accel_mps2 = max(res.peak_accel_mps2, accel)
         # ISO 15622's limits while driving; the instant the wheels stop (the deceleration ends with the speed)
         # is the vehicle's, not the controller's
-        if actuator is not None and ego_state.speed_mps >= STANDSTILL_JUDGE_MPS and prev_speed >= STANDSTILL_JUDGE_MPS:
+        acc_drives = driver is None or t < driver.brake_s        # the driver's braking is not ACC's to judge
+        if (actuator is not None and acc_drives and ego_state.speed_mps >= STANDSTILL_JUDGE_MPS
+                and prev_speed >= STANDSTILL_JUDGE_MPS):
             lo, hi, jerk_max = iso15622_limits(ego_state.speed_mps)
             if accel < lo - 0.05 or accel > hi + 0.05 or jerk > jerk_max + 0.05:
                 res.iso_limits_ok = False
@@ -192,12 +260,13 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                          ("warning", decision.warning_level if decision else 0),
                          ("state", decision.acc_state if decision else 0),
                          ("time_gap", gap / ego_state.speed_mps if ego_state.speed_mps > 0.5 else math.inf),
-                         ("target", target_actor),
+                         ("target", target_actor), ("fcw_target", fcw_actor),
                          ("target_track", decision.target.track_id if decision and decision.target else -1)):
             tr[key].append(val)
     res.trace = {k: np.asarray(v) for k, v in tr.items()}
     res.final_time_gap_s = float(res.trace["time_gap"][-1]) if len(res.trace["t"]) else None
     res.trace["assembler"] = assembler
+    res.trace["ecu"] = ecu                         # the ECU as it ended (its landmarks, for the benchmarks)
     _judge(scenario, res)
     return res
 
@@ -235,6 +304,9 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
         n = int(np.sum(targets == names.index(a)))
         if n:
             res.reasons.append(f"{a} selected as the target in {n} cycles")
+        n = int(np.sum(res.trace["fcw_target"] == names.index(a)))
+        if n:
+            res.reasons.append(f"FCW warned for {a} in {n} cycles")
     if e.acc_follows is not None:
         after = res.trace["t"] >= (e.gap_settle_s if e.gap_settle_s is not None else 2.0)
         share = float(np.mean(targets[after] == names.index(e.acc_follows))) if after.any() else 0.0
@@ -244,6 +316,14 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
                                + (f", also {', '.join(others)}" if others else ""))
     if e.no_fcw and res.warning_time_s is not None:
         res.reasons.append(f"FCW warning at t = {res.warning_time_s:.2f} s")
+    if e.no_braking:
+        req = res.trace["request"]
+        braking = np.flatnonzero(req < NO_BRAKING_MPS2) if scenario.ecu.acc_enabled else np.zeros(0, dtype=int)
+        if braking.size:
+            k = int(braking[0])
+            res.reasons.append(f"ACC braking at t = {res.trace['t'][k]:.2f} s ({req[k]:+.2f} m/s²)")
+        if res.driver_brake_time_s is not None:
+            res.reasons.append(f"the driver braked at t = {res.driver_brake_time_s:.2f} s")
     if e.gap_settle_s is not None:
         tr = res.trace
         after = tr["t"] >= e.gap_settle_s

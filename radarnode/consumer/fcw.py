@@ -69,6 +69,8 @@ class FcwSettings:
     decel_warn_mps2: float = 4.0
     on_cycles: int = 2
     off_cycles: int = 10
+    #: above this ego speed a stationary object never seen moving draws no warning (radarnode.consumer.overhead)
+    stationary_max_speed_mps: float = 27.8
 
     def __post_init__(self) -> None:
         validate.number("ttc_warn_s", self.ttc_warn_s, lo=0.5, hi=10.0)
@@ -76,6 +78,7 @@ class FcwSettings:
         validate.number("decel_warn_mps2", self.decel_warn_mps2, lo=1.0, hi=10.0)
         validate.integer("on_cycles", self.on_cycles, lo=1, hi=20)
         validate.integer("off_cycles", self.off_cycles, lo=1, hi=100)
+        validate.number("stationary_max_speed_mps", self.stationary_max_speed_mps, lo=0.0, hi=70.0)
 
 
 class Fcw:

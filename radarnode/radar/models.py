@@ -23,6 +23,7 @@ from radarnode.perception.tracker import ObjectTracker, clusters_from_detections
 from radarnode.perception.types import ClusterList, Detections, RadarFrame
 from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.calibration import RESOLUTION
+from radarnode.radar.elevation import GROUND_REFLECTION
 from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo, in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
@@ -60,8 +61,10 @@ class ScattererModel:
 
     def scatterers(self, t_s: float, view: SensorView, config: RuntimeConfig) -> Scatterers:
         o = self.options
+        # the signal level's multipath impairment reflects every scatterer off the road itself: not twice
         scat = scene_scatterers(self.scene, t_s, view, self.preset, config.max_distance_m, o.scatterer_spacing_m,
-                                self.rng, o.clutter_density_per_m2, o.clutter_rcs_dbsm)
+                                self.rng, o.clutter_density_per_m2, o.clutter_rcs_dbsm,
+                                0.0 if o.impairments.multipath else GROUND_REFLECTION)
         return fluctuate(self.scene, scat, self.rng)
 
     def sequences(self) -> list[RadarPreset]:

@@ -35,7 +35,7 @@ from radarnode.perception.types import (
 from radarnode.perception.types import Detections
 from radarnode.perception.tracker import (MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify, cluster_dyn_prop,
                                           orientation_sigma_rad)
-from radarnode.radar import ambiguity, equation
+from radarnode.radar import ambiguity, elevation, equation
 from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
 from radarnode.radar.options import SignalOptions
@@ -93,10 +93,14 @@ def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) ->
     return inside & (range_m >= preset.min_range_m)
 
 
-def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, occluder: np.ndarray) -> np.ndarray:
+def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, occluder: np.ndarray,
+                     elevation: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Fraction of each actor's azimuth extent not covered by any nearer occluding actor.
 
-    Shapes: all inputs (..., n) — any leading axes, e.g. time; returns (..., n).
+    Shapes: all inputs (..., n) — any leading axes, e.g. time; returns (..., n). ``elevation`` is
+    (bottom, top, elevated): the actors' elevation extents (rad) and which are off the ground; a pair of which
+    one is elevated occludes only where their elevation extents overlap (a car is not hidden by the bridge it
+    stands under or beyond; two actors on the road occlude by azimuth alone, as before).
     Cost O(n²·16) per leading index, fine for the tens of actors of a scene.
     """
     n = range_m.shape[-1]
@@ -105,6 +109,10 @@ def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, 
     u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
     samples = az_lo[..., :, None] + u * (az_hi - az_lo)[..., :, None]                   # (..., n, S)
     nearer = (range_m[..., None, :] < range_m[..., :, None]) & occluder[..., None, :]    # (..., target, occluder)
+    if elevation is not None:
+        lo, hi, up = elevation
+        overlap = (lo[..., :, None] <= hi[..., None, :]) & (lo[..., None, :] <= hi[..., :, None])
+        nearer &= overlap | ~(up[..., :, None] | up[..., None, :])
     covered = ((samples[..., None] >= az_lo[..., None, None, :]) & (samples[..., None] <= az_hi[..., None, None, :])
                & nearer[..., :, None, :]).any(axis=-1)                                  # (..., n, S)
     return 1.0 - covered.mean(axis=-1)
@@ -149,6 +157,7 @@ class ObjectModel:
         self.cycle = 0
         self.period_s = scene.scenario.period_s
         self._cache: dict | None = None
+        self._gain_state: dict[int, np.ndarray] = {}   # power-averaged elevation factor before cycle k
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
         self._drawn_upto = -1
         # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own stream
@@ -178,9 +187,21 @@ class ObjectModel:
         rng_m, az = view.range_m, view.azimuth_rad
         fov = in_fov(p, rng_m, az)
         observable = fov & (rng_m <= config.max_distance_m)
-        frac = visible_fraction(rng_m, view.az_lo_rad, view.az_hi_rad, self.occluder & observable)
+        elev = None
+        if sc.elevated.any():
+            elev = (*sc.elevation_extent(view), np.broadcast_to(sc.elevated, rng_m.shape))
+        frac = visible_fraction(rng_m, view.az_lo_rad, view.az_hi_rad, self.occluder & observable, elev)
         observable &= frac >= MIN_VISIBLE_FRACTION
         rcs_eff = sc.rcs_dbsm + 10.0 * np.log10(np.maximum(frac, 1e-3))
+        rcs_body = rcs_eff
+        if sc.elevated.any():
+            # an actor above the road: its elevation beam and the road's reflection (the radar's RCS is apparent)
+            gain = np.where(sc.elevated, elevation.propagation_db(p, np.hypot(view.x_m, view.y_m), sc.z_m,
+                                                                  sc.mount_z_m), 0.0)
+            rcs_eff = rcs_eff + gain
+            # the object's reported RCS is the tracker's average in power over the cycles (RCS_GAIN per cycle, as
+            # the detection level's tracker and the real sensor report it): so is this range-dependent factor
+            rcs_body = rcs_body + self._averaged_gain_db(k0, gain)
         snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db, az)
         stat = self.statistic
         pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
@@ -200,6 +221,8 @@ class ObjectModel:
         m_az = az + sig_az * z[:, 1]
         c, s = np.cos(az), np.sin(az)
         v_rad = view.vx_mps * c + view.vy_mps * s
+        if sc.elevated.any():
+            v_rad = v_rad * (np.hypot(view.x_m, view.y_m) / np.maximum(rng_m, 1e-9))   # cos(elevation)
         v_tan = -view.vx_mps * s + view.vy_mps * c
         # the speed the radar can measure: aliased and resolved by the same rules as the other levels
         m_vr, ambig = ambiguity.apparent_range_rate(p, v_rad + sig_v * z[:, 2], az,
@@ -234,7 +257,7 @@ class ObjectModel:
             "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
-            **self._reported_body(view, rng_m, az, rcs_eff, snr, z),
+            **self._reported_body(view, rng_m, az, rcs_body, snr, z),
             # the acceleration reported keeps the model's small noise: drawn with σ_alat (about 1 m/s² from the
             # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
@@ -266,6 +289,19 @@ class ObjectModel:
             return stat.masking_factor(snr, interference, 1)
         return np.where(sc.swerling == 0, stat.masking_factor(snr, interference, 0),
                         stat.masking_factor(snr, interference, 1))
+
+    def _averaged_gain_db(self, k0: int, gain_db: np.ndarray) -> np.ndarray:
+        """The power average (gain RCS_GAIN per cycle) of the elevation factor ``gain_db`` (T, n) over the cycles
+        k0 … k0+T−1, continued from the cycles before k0 (one ``lfilter`` along time; a chunk recomputed from
+        the same k0 starts from the same state)."""
+        x = 10.0 ** (gain_db / 10.0)
+        before = self._gain_state.get(k0)
+        prev = x[0] if before is None else before
+        import scipy.signal  # imported when first needed: a faster start
+        y, _ = scipy.signal.lfilter([RCS_GAIN], [1.0, RCS_GAIN - 1.0], x, axis=0,
+                                    zi=((1.0 - RCS_GAIN) * prev)[None, :])
+        self._gain_state = {k0: prev, k0 + x.shape[0]: y[-1]}
+        return 10.0 * np.log10(np.maximum(y, 1e-30))
 
     def _reported_body(self, view, rng_m, az, rcs_eff, snr, z) -> dict[str, np.ndarray]:
         """RCS, extent and class as the detection-level tracker reports them (``radarnode.perception.tracker``),

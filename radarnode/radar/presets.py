@@ -82,6 +82,9 @@ class RadarPreset:
     #: the range-rate span the sensor reports (data sheet), m/s; None: ±v_max of the (combined) sequences
     min_range_rate_mps: float | None = None
     max_range_rate_mps: float | None = None
+    #: full one-way −3 dB width of the elevation beam, degrees (radarnode.radar.elevation); 14° is typical of a
+    #: 77 GHz series-fed patch column and the ARS 408-21's far scan
+    elevation_beamwidth_deg: float = 14.0
 
     def __post_init__(self) -> None:
         validate.text("name", self.name)
@@ -107,6 +110,7 @@ class RadarPreset:
             if getattr(self, f) is not None:
                 validate.number(f, getattr(self, f), lo=-500.0, hi=500.0)
         validate.number("pfa", self.pfa, lo=0.0, hi=0.5, lo_open=True)
+        validate.number("elevation_beamwidth_deg", self.elevation_beamwidth_deg, lo=0.5, hi=180.0)
         if self.min_range_m >= self.max_range_m:
             raise FieldError("min_range_m", self.min_range_m, f"less than max_range_m ({self.max_range_m})")
         if not self.fov or not all(isinstance(s, FovSector) for s in self.fov):
@@ -314,6 +318,9 @@ PRESETS: dict[str, RadarPreset] = {
         # one chirp sequence spans only ±19.5 m/s; the data sheet's −400…+200 km/h needs a staggered second
         # sequence: periods 25 and 28.57 µs (ratio 8/7) resolve uniquely over 2·19.5·7 = 273 m/s
         stagger_chirp_period_s=25e-6 * 8 / 7, min_range_rate_mps=-400 / 3.6, max_range_rate_mps=200 / 3.6,
+        # data sheet, "elevation angle augmentation (field of view FoV): 14° far range, 20° near range": the far
+        # scan's beam, ±7° at −3 dB one way (a target ahead is in the far scan; the near scan is not modelled apart)
+        elevation_beamwidth_deg=14.0,
     ),
 }
 

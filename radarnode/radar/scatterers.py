@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode.perception.types import _Columns
+from radarnode.radar import elevation
 from radarnode.radar.object_model import in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
@@ -141,7 +142,9 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
     wsum = np.bincount(a_i, weights=weight, minlength=idx.size)
     rcs = scene.rcs_dbsm[idx][a_i] + 10.0 * np.log10(weight / wsum[a_i])
     actor = idx[a_i]
-    return Scatterers(px, py, np.zeros(total), view.vx_mps[actor], view.vy_mps[actor], rcs, actor.astype(np.int64))
+    # height above the sensor: an elevated actor's lower edge, 0 for one on the road (SensorView.z_m)
+    pz = np.zeros(total) if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[actor]
+    return Scatterers(px, py, pz, view.vx_mps[actor], view.vy_mps[actor], rcs, actor.astype(np.int64))
 
 
 def guardrail_scatterers(scene: Scene, t_s: float, view: SensorView, max_range_m: float) -> Scatterers:
@@ -169,28 +172,57 @@ def clutter_scatterers(rng: np.random.Generator, preset: RadarPreset, view: Sens
 
 
 def visible(preset: RadarPreset, scat: Scatterers, view: SensorView, occluder: np.ndarray,
-            max_range_m: float) -> np.ndarray:
-    """Scatterers inside the field of view and not behind a nearer occluding actor (by azimuth)."""
+            max_range_m: float, elevation: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+    """Scatterers inside the field of view and not behind a nearer occluding actor (by azimuth).
+
+    ``elevation`` is (bottom, top, elevated) of every actor (elevation angles in rad, as
+    :meth:`radarnode.scene.world.Scene.elevation_extent` gives them): where the scatterer's actor or the
+    occluder is off the ground, the scatterer is behind the occluder only within its elevation extent.
+    """
     r, az = scat.range_m, scat.azimuth_rad
     ok = in_fov(preset, r, az) & (r <= max_range_m)
     if occluder.any() and len(scat):
+        occ = np.flatnonzero(occluder)
         lo, hi, rng_a = view.az_lo_rad[occluder], view.az_hi_rad[occluder], view.range_m[occluder]
-        own = scat.actor_index[:, None] == np.flatnonzero(occluder)[None, :]
+        own = scat.actor_index[:, None] == occ[None, :]
         behind = (az[:, None] > lo[None, :]) & (az[:, None] < hi[None, :]) & (r[:, None] > rng_a[None, :] + 0.5)
+        if elevation is not None:
+            el_lo, el_hi, up = elevation
+            el = np.arctan2(scat.z_m, np.maximum(np.hypot(scat.x_m, scat.y_m), 0.1))
+            mine = np.where(scat.actor_index >= 0, up[np.maximum(scat.actor_index, 0)], False)
+            inside = (el[:, None] >= el_lo[occ][None, :]) & (el[:, None] <= el_hi[occ][None, :])
+            behind &= inside | ~(mine[:, None] | up[occ][None, :])
         ok &= ~(behind & ~own).any(axis=1)
     return ok
 
 
 def scene_scatterers(scene: Scene, t_s: float, view: SensorView, preset: RadarPreset, max_range_m: float,
                      spacing_m: float = 1.0, rng: np.random.Generator | None = None,
-                     clutter_density_per_m2: float = 0.0, clutter_rcs_dbsm: float = -20.0) -> Scatterers:
-    """Every visible scatterer of the scene at ``t_s``."""
+                     clutter_density_per_m2: float = 0.0, clutter_rcs_dbsm: float = -20.0,
+                     ground_reflection: float = elevation.GROUND_REFLECTION) -> Scatterers:
+    """Every visible scatterer of the scene at ``t_s``.
+
+    The scatterers of an actor above the road carry its height (``z_m``, above the sensor) and, in their RCS,
+    what the elevation beam and the road's reflection make of it (:func:`radarnode.radar.elevation.propagation_db`
+    with ``ground_reflection``; 0 leaves the reflection to the signal level's ``multipath`` impairment).
+    """
     parts = [actor_scatterers(scene, view, spacing_m), guardrail_scatterers(scene, t_s, view, max_range_m)]
     if clutter_density_per_m2 > 0 and rng is not None:
         parts.append(clutter_scatterers(rng, preset, view, clutter_density_per_m2, clutter_rcs_dbsm))
     scat = Scatterers.concat(parts)
     occluder = ~scene.is_guardrail & in_fov(preset, view.range_m, view.azimuth_rad)
-    return scat.take(visible(preset, scat, view, occluder, max_range_m))
+    up = scene.elevated
+    ext = None
+    if up.any():
+        ext = (*scene.elevation_extent(view), up)
+        a = scat.actor_index
+        lifted = np.where(a >= 0, up[np.maximum(a, 0)], False)
+        if lifted.any():
+            gain = elevation.propagation_db(preset, np.hypot(scat.x_m[lifted], scat.y_m[lifted]),
+                                            scat.z_m[lifted] + scene.mount_z_m, scene.mount_z_m, ground_reflection)
+            scat.rcs_dbsm = scat.rcs_dbsm.copy()
+            scat.rcs_dbsm[lifted] += gain
+    return scat.take(visible(preset, scat, view, occluder, max_range_m, ext))
 
 
 __all__ = ["Scatterers", "point_targets", "actor_scatterers", "guardrail_scatterers", "clutter_scatterers",

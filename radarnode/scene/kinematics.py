@@ -1,10 +1,12 @@
 """Piecewise motion profiles evaluated for many movers at once.
 
-Each mover is either a speed profile (initial speed, piecewise-constant
-acceleration along a fixed road-relative heading; the speed never goes below
-zero) or a waypoint path (straight segments, constant speed on each). The
-profiles are compiled once into padded knot tables so that evaluating all
-movers at one time is a handful of numpy operations.
+Each mover is a speed profile (initial speed, piecewise-constant acceleration;
+the speed never goes below zero) driven either along a fixed road-relative
+heading or along a path of untimed waypoints (straight legs; beyond the last
+waypoint it goes on in the last leg's direction), or a timed waypoint path
+(straight segments, constant speed on each). The profiles are compiled once
+into padded knot tables so that evaluating all movers at one time is a
+handful of numpy operations.
 """
 
 from __future__ import annotations
@@ -70,7 +72,9 @@ class MoverTable:
     x0_m, y0_m, speed_mps, heading_rad : sequences of length n
         Initial road-frame position, speed and road-relative heading.
     accel : sequence of n sequences of AccelStep
-    waypoints : sequence of n sequences of Waypoint (a mover with waypoints ignores the rest)
+    waypoints : sequence of n sequences of Waypoint
+        Timed (every ``t_s`` given): the mover follows them and ignores the rest; untimed: the path along
+        which the speed profile drives (the initial position and heading are not used).
     """
 
     def __init__(self, x0_m, y0_m, speed_mps, heading_rad, accel, waypoints, lateral=None) -> None:
@@ -83,7 +87,24 @@ class MoverTable:
         self.n = n
         spd = [_speed_knots(float(speed_mps[i]), accel[i]) for i in range(n)]
         k = max([len(s) for s in spd] + [len(w) for w in waypoints] + [1])
-        self.is_path = np.array([len(w) >= 2 for w in waypoints], dtype=bool)
+        self.is_path = np.array([len(w) >= 2 and w[0].t_s is not None for w in waypoints], dtype=bool)
+        # untimed waypoints: legs of a path driven by the speed profile (start, direction, cumulative length)
+        self.is_route = np.array([len(w) >= 2 and w[0].t_s is None for w in waypoints], dtype=bool)
+        kl = max([len(w) - 1 for w, r in zip(waypoints, self.is_route) if r] + [1])
+        self.leg_x = np.zeros((n, kl))
+        self.leg_y = np.zeros((n, kl))
+        self.leg_ux = np.ones((n, kl))
+        self.leg_uy = np.zeros((n, kl))
+        self.leg_s = np.full((n, kl), np.inf)        # distance along the path at each leg's start
+        for i in np.flatnonzero(self.is_route):
+            px = np.array([p.x_m for p in waypoints[i]])
+            py = np.array([p.y_m for p in waypoints[i]])
+            dx, dy = np.diff(px), np.diff(py)
+            ell = np.hypot(dx, dy)
+            m = ell.size
+            self.leg_x[i, :m], self.leg_y[i, :m] = px[:-1], py[:-1]
+            self.leg_ux[i, :m], self.leg_uy[i, :m] = dx / ell, dy / ell
+            self.leg_s[i, :m] = np.concatenate([[0.0], np.cumsum(ell)[:-1]])
         self.t = np.full((n, k), np.inf)
         self.v = np.zeros((n, k))
         self.dist = np.zeros((n, k))
@@ -135,6 +156,16 @@ class MoverTable:
         sy = self.y0 + dist * self.sin_h
         svx, svy = v * self.cos_h, v * self.sin_h
         sax, say = a * self.cos_h, a * self.sin_h
+        if self.is_route.any():
+            # along the path: the leg the distance has reached (the last leg goes on beyond its end)
+            leg = np.maximum(np.sum(self.leg_s[:, 1:] <= dist[..., None], axis=-1), 0)
+            ux, uy = self.leg_ux[r, leg], self.leg_uy[r, leg]
+            along = dist - self.leg_s[r, leg]
+            q = self.is_route
+            sx = np.where(q, self.leg_x[r, leg] + along * ux, sx)
+            sy = np.where(q, self.leg_y[r, leg] + along * uy, sy)
+            svx, svy = np.where(q, v * ux, svx), np.where(q, v * uy, svy)
+            sax, say = np.where(q, a * ux, sax), np.where(q, a * uy, say)
         if np.any(self.lat_dy != 0.0):
             u = np.clip((t_s - self.lat_t0) / self.lat_dur, 0.0, 1.0)
             inside = (u > 0.0) & (u < 1.0)

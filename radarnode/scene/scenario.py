@@ -33,6 +33,18 @@ ACTOR_CLASSES: dict[str, tuple[int, float, float, float]] = {
     "bicycle": (5, 1.8, 0.6, 0.0),
     "sign": (0, 0.2, 0.8, 10.0),
     "guardrail": (6, 0.0, 0.3, -5.0),  # length required; RCS per post
+    # overhead structures (issue 10): length along the road, width across it, RCS of the structure seen from
+    # the front in free space (a deck's fascia and girders; a gantry's truss and sign panels)
+    "bridge": (6, 12.0, 40.0, 25.0),
+    "gantry": (6, 1.0, 25.0, 20.0),
+}
+
+#: class name -> (default bottom height above the road z_m, default height_m): where an actor's body is in height
+ACTOR_HEIGHTS: dict[str, tuple[float, float]] = {
+    "point": (0.0, 0.3), "car": (0.0, 1.5), "truck": (0.0, 3.5), "pedestrian": (0.0, 1.8),
+    "motorcycle": (0.0, 1.4), "bicycle": (0.0, 1.7), "sign": (0.0, 2.5), "guardrail": (0.0, 0.8),
+    "bridge": (5.0, 1.5),     # a motorway bridge: 4.5–5.5 m clearance, a deck fascia ~1.5 m deep
+    "gantry": (5.5, 2.0),     # a sign gantry: sign panels from 5.5 m up
 }
 
 OUTPUT_TYPES = ("objects", "clusters", "none")
@@ -55,23 +67,38 @@ class AccelStep:
 
 @dataclass(frozen=True)
 class Waypoint:
-    """Road-frame position at time ``t_s``; the actor moves in straight segments between waypoints."""
+    """Road-frame position; the actor moves in straight segments between waypoints.
 
-    t_s: float
+    With ``t_s`` the actor is there at that time (a timed path); without it the waypoints are a path the
+    actor drives along with its speed profile (``speed_mps`` and ``accel``).
+    """
+
     x_m: float
     y_m: float
+    t_s: float | None = None
 
     def __post_init__(self) -> None:
-        validate.number("t_s", self.t_s, lo=0.0)
+        if self.t_s is not None:
+            validate.number("t_s", self.t_s, lo=0.0)
         validate.number("x_m", self.x_m, lo=-1e5, hi=1e5)
         validate.number("y_m", self.y_m, lo=-1e4, hi=1e4)
 
 
 def _check_profile(accel: tuple[AccelStep, ...], waypoints: tuple[Waypoint, ...] = ()) -> None:
-    for name, seq in (("accel", accel), ("waypoints", waypoints)):
+    timed = [w for w in waypoints if w.t_s is not None]
+    if timed and len(timed) != len(waypoints):
+        k = next(i for i, w in enumerate(waypoints) if w.t_s is None)
+        raise FieldError(f"waypoints[{k}].t_s", None, "a time on every waypoint (a timed path) or on none (a path "
+                         "driven with the speed profile)")
+    for name, seq in (("accel", accel), ("waypoints", timed)):
         times = [s.t_s for s in seq]
         if any(b <= a for a, b in zip(times, times[1:])):
             raise FieldError(name, times, "strictly increasing t_s")
+    if waypoints and not timed:
+        for k, (a, b) in enumerate(zip(waypoints, waypoints[1:])):
+            if a.x_m == b.x_m and a.y_m == b.y_m:
+                raise FieldError(f"waypoints[{k + 1}]", {"x_m": b.x_m, "y_m": b.y_m},
+                                 "a point different from the one before (a path has no zero-length legs)")
 
 
 @dataclass(frozen=True)
@@ -145,21 +172,77 @@ class Guardrails:
         validate.number("rcs_dbsm", self.rcs_dbsm, lo=-40.0, hi=40.0)
 
 
+SEGMENT_TYPES = ("straight", "arc", "clothoid")
+MAX_CURVATURE_1PM = 0.05           # 1/radius: a 20 m radius, tighter than any road an ACC drives
+
+
+@dataclass(frozen=True)
+class RoadSegment:
+    """One piece of the reference line (OpenDRIVE plan view): a straight, an arc of constant curvature, or a
+    clothoid whose curvature changes linearly from ``curvature_start_1pm`` to ``curvature_end_1pm``."""
+
+    type: str
+    length_m: float
+    curvature_1pm: float | None = None          # arc
+    curvature_start_1pm: float | None = None    # clothoid
+    curvature_end_1pm: float | None = None      # clothoid
+
+    #: the curvature fields each type takes
+    FIELDS = {"straight": (), "arc": ("curvature_1pm",), "clothoid": ("curvature_start_1pm", "curvature_end_1pm")}
+
+    def __post_init__(self) -> None:
+        validate.choice("type", self.type, SEGMENT_TYPES)
+        validate.number("length_m", self.length_m, lo=0.0, hi=1e5, lo_open=True)
+        wanted = self.FIELDS[self.type]
+        for name in ("curvature_1pm", "curvature_start_1pm", "curvature_end_1pm"):
+            value = getattr(self, name)
+            if name in wanted:
+                if value is None:
+                    raise FieldError(name, None, f"a curvature in 1/m for a {self.type} segment, in "
+                                     f"[{-MAX_CURVATURE_1PM:g}, {MAX_CURVATURE_1PM:g}] (left positive)")
+                validate.number(name, value, lo=-MAX_CURVATURE_1PM, hi=MAX_CURVATURE_1PM)
+            elif value is not None:
+                allowed = ", ".join(wanted) if wanted else "no curvature"
+                raise FieldError(name, value, f"not given for a {self.type} segment (it takes {allowed})")
+
+    @property
+    def curvatures(self) -> tuple[float, float]:
+        """Curvature at the start and at the end (1/m)."""
+        if self.type == "straight":
+            return 0.0, 0.0
+        if self.type == "arc":
+            return self.curvature_1pm, self.curvature_1pm
+        return self.curvature_start_1pm, self.curvature_end_1pm
+
+
 @dataclass(frozen=True)
 class Road:
-    """Lanes (index 0 is the rightmost), the ego lane, curvature (1/m, left positive), guardrails."""
+    """Lanes (index 0 is the rightmost), the ego lane, the reference line's shape, guardrails.
+
+    The shape is either ``curvature_1pm`` (one arc everywhere; 0: straight) or ``segments`` from the ego's start
+    on (before the first the road continues with its starting curvature, after the last with its end curvature).
+    """
 
     lanes: int = 3
     lane_width_m: float = 3.5
     ego_lane: int = 1
     curvature_1pm: float = 0.0
+    segments: tuple[RoadSegment, ...] = ()
     guardrails: Guardrails = Guardrails()
 
     def __post_init__(self) -> None:
         validate.integer("lanes", self.lanes, lo=1, hi=10)
         validate.number("lane_width_m", self.lane_width_m, lo=2.0, hi=6.0)
         validate.integer("ego_lane", self.ego_lane, lo=0, hi=self.lanes - 1)
-        validate.number("curvature_1pm", self.curvature_1pm, lo=-0.05, hi=0.05)
+        validate.number("curvature_1pm", self.curvature_1pm, lo=-MAX_CURVATURE_1PM, hi=MAX_CURVATURE_1PM)
+        if len(self.segments) > 10_000:
+            raise FieldError("segments", f"{len(self.segments)} segments", "at most 10000 segments")
+        if self.segments and self.curvature_1pm != 0.0:
+            raise FieldError("segments", "...", "either curvature_1pm (one arc) or segments, not both")
+
+    def geometry_segments(self) -> list[tuple[float, float, float]]:
+        """(length, start curvature, end curvature) of every segment, for :class:`radarnode.scene.road.RoadGeometry`."""
+        return [(s.length_m, *s.curvatures) for s in self.segments]
 
     def lane_center_y_m(self, lane: int) -> float:
         return (lane - self.ego_lane) * self.lane_width_m
@@ -195,8 +278,26 @@ class LaneChange:
 
 
 @dataclass(frozen=True)
+class Driver:
+    """The ego's driver: ``reaction_s`` after the ECU's FCW warning, brakes at ``decel_mps2`` to a standstill.
+
+    The brake builds up through the ego's actuator lag (``ecu.actuator_lag_s``); the driver's braking overrides
+    the ACC request (a brake pedal cancels ACC). 1.0–1.5 s is the reaction of an alert driver to a warning
+    (NHTSA's FCW test procedure assumes 1.2 s as the typical); 5–8 m/s² an emergency stop.
+    """
+
+    reaction_s: float = 1.2
+    decel_mps2: float = 6.0
+
+    def __post_init__(self) -> None:
+        validate.number("reaction_s", self.reaction_s, lo=0.0, hi=5.0)
+        validate.number("decel_mps2", self.decel_mps2, lo=1.0, hi=12.0)
+
+
+@dataclass(frozen=True)
 class Ego:
-    """The vehicle carrying the radar: in its lane, ``y_m`` off the lane centre, with an optional lane change."""
+    """The vehicle carrying the radar: in its lane, ``y_m`` off the lane centre, with an optional lane change
+    and an optional driver who brakes after an FCW warning."""
 
     speed_mps: float = 0.0
     accel: tuple[AccelStep, ...] = ()
@@ -204,6 +305,7 @@ class Ego:
     width_m: float = 1.9
     y_m: float = 0.0                       # lateral offset from the centre of the ego lane (left positive)
     lane_change: LaneChange | None = None
+    driver: Driver | None = None
 
     def __post_init__(self) -> None:
         validate.number("speed_mps", self.speed_mps, lo=0.0, hi=100.0)
@@ -217,9 +319,10 @@ class Ego:
 class Actor:
     """One road user or roadside object.
 
-    Give either ``y_m`` or ``lane`` (default: the ego lane). Motion is either
-    a speed with piecewise-constant ``accel`` along ``heading_deg`` (speeds
-    never go below zero: a braking vehicle stops), or ``waypoints``.
+    Give either ``y_m`` or ``lane`` (default: the ego lane). Motion is a speed with piecewise-constant
+    ``accel`` (speeds never go below zero: a braking vehicle stops) along ``heading_deg``, or along a path of
+    untimed ``waypoints``; or timed ``waypoints`` (each with ``t_s``). ``z_m`` is the height of the actor's
+    bottom above the road (a bridge's or a gantry's clearance), ``height_m`` its height.
     """
 
     id: str
@@ -235,6 +338,8 @@ class Actor:
     width_m: float | None = None
     rcs_dbsm: float | None = None
     swerling: int | None = None      # RCS fluctuation: 0 steady, 1 Rayleigh from frame to frame
+    z_m: float | None = None         # bottom above the road (default by class: 0, a bridge 5, a gantry 5.5)
+    height_m: float | None = None    # height of the body (default by class)
 
     def __post_init__(self) -> None:
         validate.text("id", self.id)
@@ -258,11 +363,42 @@ class Actor:
             validate.number("rcs_dbsm", self.rcs_dbsm, lo=-60.0, hi=60.0)
         if self.swerling is not None:
             validate.integer("swerling", self.swerling, lo=0, hi=1)
-        if self.accel and self.waypoints:
-            raise FieldError("waypoints", "...", "either accel or waypoints, not both")
+        if self.z_m is not None:
+            validate.number("z_m", self.z_m, lo=0.0, hi=20.0)
+        if self.height_m is not None:
+            validate.number("height_m", self.height_m, lo=0.0, hi=50.0, lo_open=True)
         if len(self.waypoints) == 1:
             raise FieldError("waypoints", "one waypoint", "two or more waypoints")
         _check_profile(self.accel, self.waypoints)
+        if self.timed_path and self.accel:
+            raise FieldError("accel", "...", "no accel with timed waypoints (their times set the speed); leave "
+                             "out the waypoints' t_s to drive the path with speed_mps and accel")
+        if self.waypoints and not self.timed_path:
+            if self.heading_deg != 0.0:
+                raise FieldError("heading_deg", self.heading_deg, "0 (a path of waypoints sets the heading)")
+            if self.y_m is not None or self.lane is not None:
+                raise FieldError("y_m" if self.y_m is not None else "lane", self.y_m if self.y_m is not None
+                                 else self.lane, "none with waypoints (the path starts at the first waypoint)")
+
+    @property
+    def timed_path(self) -> bool:
+        """Waypoints with times (a timed path), as opposed to a path driven with the speed profile."""
+        return bool(self.waypoints) and self.waypoints[0].t_s is not None
+
+    @property
+    def z(self) -> float:
+        """Height of the bottom above the road, m."""
+        return self.z_m if self.z_m is not None else ACTOR_HEIGHTS[self.object_class][0]
+
+    @property
+    def height(self) -> float:
+        return self.height_m if self.height_m is not None else ACTOR_HEIGHTS[self.object_class][1]
+
+    @property
+    def elevated(self) -> bool:
+        """Off the ground (a bridge, a gantry, an overhead sign): the radar sees it through its elevation beam
+        and the ground's reflection (radarnode.radar.elevation)."""
+        return self.z > 0.0
 
     @property
     def class_code(self) -> int:
@@ -274,7 +410,9 @@ class Actor:
         (a car or a person is many scatterers whose sum fluctuates as the aspect changes)."""
         if self.swerling is not None:
             return self.swerling
-        return 0 if self.object_class == "point" else 1
+        # a bridge or a gantry is rigid and stands still: seen from the road ahead its aspect changes only in
+        # elevation, which the elevation model accounts for (radarnode.radar.elevation); its RCS is steady
+        return 0 if self.object_class in ("point", "bridge", "gantry") else 1
 
     @property
     def length(self) -> float:
@@ -305,13 +443,14 @@ class Expectation:
     ttc_with_lead_decel: bool = False      # fcw_ttc_min_s on the TTC that counts the lead's deceleration (LVD)
     acc_follows: str | None = None         # ACC's target is this actor (from gap_settle_s, else 2 s): ≥ 95 % of cycles
     never_target: tuple[str, ...] = ()     # actors ACC and FCW must never select (adjacent lane, roadside)
+    no_braking: bool = False               # ACC never requests braking (< NO_BRAKING_MPS2) and the driver never brakes
 
     @property
     def checks(self) -> bool:
         """Whether anything is to be checked (a lead alone only names the actor figures are measured to)."""
         return any((self.fcw_ttc_min_s is not None, self.fcw_required, self.no_fcw, self.gap_settle_s is not None,
                     self.min_gap_m is not None, self.fcw_before_impact_s is not None, self.fcw_prewarning,
-                    self.acc_follows is not None, bool(self.never_target)))
+                    self.acc_follows is not None, bool(self.never_target), self.no_braking))
 
     def __post_init__(self) -> None:
         if self.lead is not None:
@@ -329,6 +468,7 @@ class Expectation:
             validate.number("fcw_before_impact_s", self.fcw_before_impact_s, lo=0.0, hi=20.0)
         validate.boolean("fcw_prewarning", self.fcw_prewarning)
         validate.boolean("ttc_with_lead_decel", self.ttc_with_lead_decel)
+        validate.boolean("no_braking", self.no_braking)
         if self.acc_follows is not None:
             validate.text("acc_follows", self.acc_follows)
         if not isinstance(self.never_target, (tuple, list)) or not all(isinstance(a, str) for a in self.never_target):
@@ -353,6 +493,9 @@ class EcuSpec:
     path_half_width_m: float = 1.6         # the predicted path's half-width
     fcw_ttc_warn_s: float = 2.8            # FCW warns at a TTC at or below this …
     fcw_decel_warn_mps2: float = 4.0       # … or when avoiding the collision needs this deceleration
+    #: above this speed a stationary object never seen moving draws no FCW (a radar without elevation cannot
+    #: tell it from a bridge in time: radarnode.consumer.overhead); 27.8 m/s = 100 km/h
+    fcw_stationary_max_speed_mps: float = 27.8
     expect: Expectation = Expectation()
 
     def __post_init__(self) -> None:
@@ -368,6 +511,7 @@ class EcuSpec:
         validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
         validate.number("fcw_ttc_warn_s", self.fcw_ttc_warn_s, lo=0.5, hi=10.0)
         validate.number("fcw_decel_warn_mps2", self.fcw_decel_warn_mps2, lo=1.0, hi=10.0)
+        validate.number("fcw_stationary_max_speed_mps", self.fcw_stationary_max_speed_mps, lo=0.0, hi=70.0)
 
 
 @dataclass(frozen=True)
@@ -454,8 +598,8 @@ SCHEMA = Schema(
                    "actors": (Actor, True), "ecu": (EcuSpec, False)},
         EcuSpec: {"expect": (Expectation, False)},
         RadarSetup: {"mount": (Mount, False)},
-        Road: {"guardrails": (Guardrails, False)},
-        Ego: {"accel": (AccelStep, True), "lane_change": (LaneChange, False)},
+        Road: {"guardrails": (Guardrails, False), "segments": (RoadSegment, True)},
+        Ego: {"accel": (AccelStep, True), "lane_change": (LaneChange, False), "driver": (Driver, False)},
         Actor: {"accel": (AccelStep, True), "waypoints": (Waypoint, True)},
     })
 
@@ -486,5 +630,6 @@ def read_scenario_text(text: str, name: str = "<string>") -> Scenario:
     return build(Scenario, src.data, "", src, SCHEMA, extra={"source": name, "lines": src.lines})
 
 
-__all__ = ["ACTOR_CLASSES", "Actor", "AccelStep", "Ego", "Guardrails", "Mount", "RadarSetup", "Road",
-           "LaneChange", "Scenario", "Waypoint", "read_scenario", "read_scenario_text"]
+__all__ = ["ACTOR_CLASSES", "ACTOR_HEIGHTS", "Actor", "AccelStep", "Driver", "Ego", "Guardrails", "Mount",
+           "RadarSetup", "Road", "RoadSegment", "LaneChange", "Scenario", "Waypoint", "read_scenario",
+           "read_scenario_text"]

@@ -1,13 +1,15 @@
 """The road scene in the world frame and as the sensor sees it.
 
-The road's reference line is the centre of the ego lane, an arc of constant
-curvature κ (straight when κ = 0). Road coordinates (s, d) — distance along the
-reference line and lateral offset to the left — map to world coordinates by
+The road's reference line is the centre of the ego lane, made of straight, arc and clothoid segments
+(:class:`radarnode.scene.road.RoadGeometry`; one arc of constant curvature κ when the scenario gives
+``road.curvature_1pm``). Road coordinates (s, d) — distance along the reference line and lateral offset to the
+left — map to world coordinates by
 
-    x = sin(κs)/κ − d·sin(κs),   y = (1 − cos(κs))/κ + d·cos(κs)
+    x = X(s) − d·sin θ(s),   y = Y(s) + d·cos θ(s)
 
-Movers are integrated in road coordinates (so a car keeps its lane around a
-bend); their speed is measured along the reference line.
+with (X, Y, θ) the reference line's pose at s (for one arc: X = sin(κs)/κ, Y = (1 − cos(κs))/κ, θ = κs).
+Movers are integrated in road coordinates (so a car keeps its lane around a bend and through a curve's
+entry); their speed is measured along the reference line.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode.scene.kinematics import MoverState, MoverTable
+from radarnode.scene.road import RoadGeometry
 from radarnode.scene.scenario import Scenario
 
 
@@ -58,10 +61,16 @@ class SensorView:
     centre_y_m: np.ndarray
     sensor_vx_mps: float        # sensor velocity over ground, sensor axes
     sensor_vy_mps: float
+    #: height of the reflecting point above the sensor: an elevated actor's lower edge (z_m − mount height), 0 for
+    #: an actor standing on the road (its reflection centres spread around the mount's height); None: all 0
+    z_m: np.ndarray | None = None
 
     @property
     def range_m(self) -> np.ndarray:
-        return np.hypot(self.x_m, self.y_m)
+        """Range to the reflecting point (slant range where it is above the sensor: what the radar measures)."""
+        if self.z_m is None:
+            return np.hypot(self.x_m, self.y_m)
+        return np.sqrt(self.x_m ** 2 + self.y_m ** 2 + self.z_m ** 2)
 
     @property
     def azimuth_rad(self) -> np.ndarray:
@@ -70,7 +79,8 @@ class SensorView:
     def row(self, k: int) -> SensorView:
         """Time ``k`` of a view computed for several times (see :meth:`Scene.views`)."""
         f = [getattr(self, name)[k] for name in _VIEW_ARRAYS]
-        return SensorView(float(self.t_s[k]), *f, float(self.sensor_vx_mps[k]), float(self.sensor_vy_mps[k]))
+        return SensorView(float(self.t_s[k]), *f, float(self.sensor_vx_mps[k]), float(self.sensor_vy_mps[k]),
+                          None if self.z_m is None else self.z_m[k])
 
 
 _VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
@@ -114,7 +124,7 @@ class Scene:
 
     def __init__(self, scenario: Scenario) -> None:
         self.scenario = scenario
-        self.kappa = scenario.road.curvature_1pm
+        self.road = RoadGeometry(scenario.road.geometry_segments(), scenario.road.curvature_1pm)
         actors = scenario.actors
         self.actors = actors
         self.n = len(actors)
@@ -124,6 +134,10 @@ class Scene:
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
+        self.z_m = np.array([a.z for a in actors], dtype=np.float64)              # bottom above the road
+        self.height_m = np.array([a.height for a in actors], dtype=np.float64)
+        self.elevated = np.array([a.elevated for a in actors], dtype=bool)
+        self.mount_z_m = float(scenario.radar.mount.z_m)
         self.length_m = np.array([a.length for a in actors], dtype=np.float64)
         self.width_m = np.array([a.width for a in actors], dtype=np.float64)
         self.rcs_dbsm = np.array([a.rcs for a in actors], dtype=np.float64)
@@ -146,17 +160,12 @@ class Scene:
     # --- road geometry ---------------------------------------------------
     def road_to_world(self, s: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """World position and road heading at road coordinates (s, d)."""
-        k = self.kappa
-        if k == 0.0:
-            return np.asarray(s, dtype=np.float64), np.asarray(d, dtype=np.float64), np.zeros(np.shape(s))
-        psi = k * np.asarray(s, dtype=np.float64)
-        x = np.sin(psi) / k - d * np.sin(psi)
-        y = (1.0 - np.cos(psi)) / k + d * np.cos(psi)
-        return x, y, psi
+        return self.road.to_world(s, d)
 
     def _world_motion(self, st: MoverState) -> tuple[np.ndarray, ...]:
         x, y, psi = self.road_to_world(st.x_m, st.y_m)
-        scale = 1.0 - self.kappa * st.y_m  # ds along an offset line is (1 − κd) times longer
+        kappa = 0.0 if self.road.straight else self.road.curvature(st.x_m)
+        scale = 1.0 - kappa * st.y_m  # ds along an offset line is (1 − κd) times longer
         vx, vy = _rot(psi, st.vx_mps * scale, st.vy_mps)
         return x, y, psi, vx, vy
 
@@ -164,15 +173,17 @@ class Scene:
         """World position, heading, world velocity, speed, acceleration and yaw rate of the ego's rear axle.
 
         The heading is the road's plus the angle of the ego's own lateral motion (an offset or a lane change);
-        the yaw rate is the road's κ·v plus that angle's rate, d/dt atan(v_y / v_s).
+        the yaw rate is the road's turn, κ(s)·ds/dt (κ changes along a clothoid), plus that angle's rate,
+        d/dt atan(v_y / v_s).
         """
         x, y, psi, vxw, vyw = self._world_motion(st)
-        v_s = st.vx_mps * (1.0 - self.kappa * st.y_m)
+        kappa = 0.0 if self.road.straight else self.road.curvature(st.x_m)
+        v_s = st.vx_mps * (1.0 - kappa * st.y_m)
         v_d = st.vy_mps
         heading = psi + np.arctan2(v_d, np.maximum(v_s, 1e-6))
         speed = np.hypot(v_s, v_d)
         turn = np.where(speed > 0.1, (st.ay_mps2 * v_s - v_d * st.ax_mps2) / np.maximum(speed * speed, 1e-2), 0.0)
-        return x, y, heading, vxw, vyw, speed, st.ax_mps2, self.kappa * v_s + turn
+        return x, y, heading, vxw, vyw, speed, st.ax_mps2, kappa * st.vx_mps + turn
 
     def ego_state(self, t_s: float) -> EgoState:
         x, y, heading, _, _, speed, accel, yaw = self._ego_pose(self._ego.state(t_s))
@@ -186,11 +197,14 @@ class Scene:
         (m/s, positive closing), and the actor's speed and acceleration along the lane (m/s, m/s²).
         """
         e, a = self._ego.state(t_s), self._movers.state(t_s)
-        scale = 1.0 - self.kappa * float(e.y_m[0])          # arc length along the ego's lane per unit of s
-        gap = (float(a.x_m[i]) - float(e.x_m[0])) * scale - self.mount[0] - self.length_m[i] / 2.0
-        closing = (float(e.vx_mps[0]) - float(a.vx_mps[i])) * scale
-        return (gap, float(a.y_m[i]) - float(e.y_m[0]), closing, float(a.vx_mps[i]) * scale,
-                float(a.ax_mps2[i]) * scale)
+        se, sa, de = float(e.x_m[0]), float(a.x_m[i]), float(e.y_m[0])
+        # arc length along the ego's lane (offset de from the reference line), through any change of curvature
+        gap = float(self.road.lane_length(se, sa, de)) - self.mount[0] - self.length_m[i] / 2.0
+        scale_e = 1.0 - float(self.road.curvature(se)) * de
+        scale_a = 1.0 - float(self.road.curvature(sa)) * de
+        closing = float(e.vx_mps[0]) * scale_e - float(a.vx_mps[i]) * scale_a
+        return (gap, float(a.y_m[i]) - de, closing, float(a.vx_mps[i]) * scale_a,
+                float(a.ax_mps2[i]) * scale_a)
 
     # --- the sensor's view -------------------------------------------------
     def sensor_pose(self, ego: EgoState) -> tuple[float, float, float, float, float]:
@@ -224,7 +238,7 @@ class Scene:
         speed = np.hypot(avx, avy)
         aheading = np.where(speed > 0.1, np.arctan2(avy, avx), self.road_to_world(st.x_m, st.y_m)[2]
                             + self.heading_rel)
-        if self.kappa == 0.0:
+        if self.road.straight:
             # straight road: the road frame is the world frame, the profiles' accelerations are exact
             aax, aay = st.ax_mps2, st.ay_mps2
             eax, eay = eacc, est.ay_mps2[:, 0]
@@ -257,7 +271,15 @@ class Scene:
         wrapped = (rel_heading + np.pi) % (2.0 * np.pi) - np.pi
         lo = az.min(axis=-1) if self.n else np.zeros(rx.shape)
         hi = az.max(axis=-1) if self.n else np.zeros(rx.shape)
-        return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, cx, cy, s_vx, s_vy)
+        rz = np.broadcast_to(np.where(self.elevated, self.z_m - self.mount_z_m, 0.0), rx.shape)
+        return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, cx, cy, s_vx, s_vy, rz)
+
+    def elevation_extent(self, view: SensorView) -> tuple[np.ndarray, np.ndarray]:
+        """Elevation angles (rad, up positive) of each actor's bottom and top as the sensor sees them at the
+        horizontal distance of its nearest point: shapes like ``view.x_m``."""
+        r = np.maximum(np.hypot(view.x_m, view.y_m), 0.1)
+        return (np.arctan2(self.z_m - self.mount_z_m, r),
+                np.arctan2(self.z_m + self.height_m - self.mount_z_m, r))
 
     def road_line(self, t_s: float, d_m: float, max_range_m: float, step_m: float = 1.0
                   ) -> tuple[np.ndarray, np.ndarray]:

@@ -203,7 +203,8 @@ def truth_update(scene, view, t_s: float, *, mount_z_m: float = 0.5) -> SceneUpd
     entities = []
     for i, actor in enumerate(scene.actors):
         length, width = float(scene.length_m[i]), float(scene.width_m[i])
-        height = CLASS_HEIGHT_M.get(int(actor.class_code), 1.0) if actor.object_class != "guardrail" else 0.8
+        height = float(scene.height_m[i])                    # the scenario's: a bridge's deck, a gantry's panels
+        bottom = float(scene.z_m[i]) - mount_z_m
         cx, cy, yaw = float(view.centre_x_m[i]), float(view.centre_y_m[i]), float(view.orientation_rad[i])
         meta = {"actor": actor.id, "class": actor.object_class, "centre_x_m": cx, "centre_y_m": cy,
                 "speed_mps": float(math.hypot(view.ground_vx_mps[i], view.ground_vy_mps[i])),
@@ -212,9 +213,9 @@ def truth_update(scene, view, t_s: float, *, mount_z_m: float = 0.5) -> SceneUpd
         entities.append(SceneEntity(
             timestamp=ts, frame_id=RADAR, id=f"truth {actor.id}", metadata=_kv(meta),
             lines=[LinePrimitive(type=LinePrimitiveLineType.LineList, pose=_pose(0.0, 0.0, 0.0), thickness=0.08,
-                                 points=_wire_box(cx, cy, -mount_z_m, yaw, length, width, height),
+                                 points=_wire_box(cx, cy, bottom, yaw, length, width, height),
                                  color=_color(TRUTH_RGB, 0.9))],
-            texts=[TextPrimitive(pose=_pose(cx, cy, height - mount_z_m + 0.3), billboard=True, font_size=11.0,
+            texts=[TextPrimitive(pose=_pose(cx, cy, bottom + height + 0.3), billboard=True, font_size=11.0,
                                  scale_invariant=True, color=_color(TRUTH_RGB, 0.8), text=actor.id)]))
     return SceneUpdate(deletions=[SceneEntityDeletion(timestamp=ts, type=SceneEntityDeletionType.All)],
                        entities=entities)

@@ -1,0 +1,241 @@
+"""Overhead structures (issue 10): the radar's elevation beam and the road's reflection, at object and detection
+level, and the ECU's overhead test on the RCS history that arrives on the wire."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from radarnode.consumer import overhead as O
+from radarnode.consumer.ecu import Ecu
+from radarnode.consumer.evaluate import simulate
+from radarnode.errors import FieldError
+from radarnode.radar import elevation
+from radarnode.radar.presets import get_preset
+from radarnode.radar.setup import load_scenario
+from radarnode.scene.scenario import read_scenario_text
+from radarnode.wire.node import RadarNode
+from tests.conftest import SCENARIOS
+
+P = get_preset("ars408_like")
+LAM = P.wavelength_m
+
+
+def test_the_elevation_beam_is_the_data_sheet_s_14_degrees():
+    assert P.elevation_beamwidth_deg == 14.0
+    el = np.radians([0.0, 7.0, 14.0, 60.0, 89.999])
+    db = elevation.pattern_db(P, el)
+    assert db[0] == 0.0
+    assert db[1] == pytest.approx(-3.0103, abs=1e-3)                # −3 dB at half the width, one way
+    assert db[2] == pytest.approx(-12.04, abs=0.01)
+    assert db[3] == pytest.approx(elevation.SIDELOBE_DB + 10 * math.log10(0.5), abs=1e-9)   # floor × element
+    assert db[4] < -60.0                                            # nothing straight above the antenna
+    for value, ok in ((0.49, False), (0.5, True), (90.0, True), (180.0, True), (180.1, False), (360.0, False)):
+        if ok:
+            P.with_overrides({"elevation_beamwidth_deg": value})
+        else:
+            with pytest.raises(FieldError, match="elevation_beamwidth_deg"):
+                P.with_overrides({"elevation_beamwidth_deg": value})
+
+
+def test_the_two_ray_factor_has_its_nulls_where_the_path_difference_is_whole_wavelengths():
+    nulls = elevation.null_ranges_m(P, 5.0, 0.5, 100.0, 250.0)
+    assert nulls.size >= 6 and np.all(np.diff(nulls) < 0)
+    k = 2 * 0.5 * 5.0 / LAM
+    np.testing.assert_allclose(nulls, k / np.round(k / nulls))
+    at_null = elevation.propagation_db(P, nulls, 5.0, 0.5)
+    # between two nulls (half way in 1/R) the rays add: (1 + 0.7)⁴ ≈ +9.2 dB, less the reflected ray's beam loss
+    mid = 1.0 / (0.5 * (1.0 / nulls[:-1] + 1.0 / nulls[1:]))
+    at_peak = elevation.propagation_db(P, mid, 5.0, 0.5)
+    assert np.all(at_null < -15.0) and np.all(np.abs(at_peak - 40 * math.log10(1.7)) < 1.0)
+    # without the road's reflection only the beam is left: two-way, twice the one-way pattern
+    r = np.array([20.0, 40.0, 100.0])
+    np.testing.assert_allclose(elevation.propagation_db(P, r, 5.0, 0.5, reflection=0.0),
+                               2 * elevation.pattern_db(P, np.arctan2(4.5, r)) + 40 * np.log10(
+                                   np.hypot(r, 4.5) / np.hypot(r, 4.5)), atol=1e-9)
+
+
+BRIDGE = """name: t
+duration_s: {dur}
+seed: {seed}
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 25.0}}
+road: {{lanes: 3, ego_lane: 1}}
+actors:
+  - {{id: s, class: {cls}, x_m: 300.0, {where}}}
+"""
+
+
+def _reported(cls: str, where: str, level: str, seed: int = 1):
+    """(range, RCS) of the object the node reports straight ahead, cycle by cycle."""
+    sc = dataclasses.replace(read_scenario_text(BRIDGE.format(dur=11.8, seed=seed, cls=cls, where=where)),
+                             cycle_period_s=0.072)
+    node = RadarNode(sc, fidelity=level)
+    rows = []
+    for k in range(sc.num_cycles):
+        frame = node.model.step(k * 0.072, _runtime(node))[0]
+        ol = frame.objects
+        ahead = np.flatnonzero((np.abs(ol.dist_lat_m) < 3.0) & (ol.dist_long_m > 0.0))
+        if ahead.size:
+            j = ahead[np.argmin(ol.dist_long_m[ahead])]
+            rows.append((float(ol.dist_long_m[j]), float(ol.rcs_dbsm[j])))
+    return np.array(rows)
+
+
+def _runtime(node):
+    from radarnode.radar.object_model import RuntimeConfig
+    return RuntimeConfig(max_distance_m=min(node.config.max_distance_m, node.preset.max_range_m), clusters=False)
+
+
+def _power_mean_db(rcs):
+    return 10 * np.log10(np.mean(10 ** (np.asarray(rcs) / 10)))
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_a_bridge_fades_as_it_leaves_the_beam_and_a_car_does_not(level):
+    bridge = _reported("bridge", "y_m: 0.0", level)
+    car = _reported("car", "lane: 1, speed_mps: 0.0", level)
+    far_b = _power_mean_db(bridge[(bridge[:, 0] > 80) & (bridge[:, 0] < 200), 1])
+    near_b = _power_mean_db(bridge[(bridge[:, 0] > 8) & (bridge[:, 0] < 20), 1])
+    far_c = _power_mean_db(car[(car[:, 0] > 80) & (car[:, 0] < 200), 1])
+    near_c = _power_mean_db(car[(car[:, 0] > 8) & (car[:, 0] < 20), 1])
+    assert far_b - near_b > 8.0, (far_b, near_b)           # 4.5 m above the radar: 12–31° up at 20–8 m
+    assert abs(far_c - near_c) < 3.0, (far_c, near_c)
+    # far away the bridge's RCS swings with the road's reflection (smoothed as the radar averages it), the car's
+    # stays within its fluctuation
+    swing_b = np.ptp(bridge[(bridge[:, 0] > 120) & (bridge[:, 0] < 230), 1])
+    assert swing_b > 6.0, swing_b
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_a_car_under_a_bridge_is_not_hidden_by_it(level):
+    sc = load_scenario(SCENARIOS / "bridge_stopped_car_90.yaml")
+    node = RadarNode(dataclasses.replace(sc, duration_s=9.0), fidelity=level)
+    seen = []
+    for k in range(0, 120):
+        frame, view = node.model.step(k * 0.072, _runtime(node))
+        ol = frame.objects
+        seen.append(np.any(np.abs(ol.dist_long_m - view.x_m[1]) < 3.0) and np.any(np.abs(ol.dist_lat_m) < 2.5))
+    assert np.mean(seen[40:]) > 0.9                        # from 200 m on, the car is reported nearly every cycle
+    # a nearer car in the same lane still hides a car behind it (occlusion on the road is unchanged)
+    from radarnode.radar.object_model import visible_fraction
+    frac = visible_fraction(np.array([50.0, 80.0]), np.array([-0.02, -0.012]), np.array([0.02, 0.012]),
+                            np.array([True, True]), (np.array([-0.01, -0.006]), np.array([0.02, 0.012]),
+                                                     np.array([False, False])))
+    assert frac[1] == 0.0 and frac[0] == 1.0
+    over = visible_fraction(np.array([50.0, 80.0]), np.array([-0.5, -0.012]), np.array([0.5, 0.012]),
+                            np.array([True, True]), (np.array([0.09, -0.006]), np.array([0.12, 0.012]),
+                                                     np.array([True, False])))
+    assert over[1] == 1.0                                  # the bridge's elevation extent is above the car's
+
+
+def _synthetic(h_m, n=90, r0=250.0, step=1.8, noise_db=1.0, seed=0, flat=False):
+    r = r0 - step * np.arange(n)
+    starts = np.array([0])
+    pattern = O.averaged_db(O.two_ray_db(r, np.array([[h_m]]), 0.5, LAM), starts)[0]
+    rng = np.random.default_rng(seed)
+    y = 20.0 + (0.0 if flat else pattern) + noise_db * rng.standard_normal(n)
+    return r, np.round(2 * y) / 2, starts          # the wire's 0.5 dBsm steps
+
+
+def test_the_fit_finds_the_height_of_a_two_ray_reflector_and_nothing_in_a_flat_history():
+    for h in (4.6, 5.0, 5.5, 7.0):
+        r, y, s = _synthetic(h)
+        f = O.fit_history(r, y, s, 0.5, LAM)
+        assert f.overhead and abs(f.height_m - h) <= 0.15 and f.beta == pytest.approx(1.0, abs=0.25), (h, f)
+    misses = [O.fit_history(*_synthetic(5.0, seed=k, flat=True, noise_db=1.5), 0.5, LAM).overhead for k in range(30)]
+    assert sum(misses) == 0
+
+
+def test_the_fit_is_mature_only_with_enough_lobes_and_samples():
+    # lobes of a 5 m reflector seen from 0.5 m: 2·0.5·5/λ/R; MIN_LOBES of them end at R_end
+    k = 2 * 0.5 * O.REFERENCE_HEIGHT_M / LAM
+    for lobes, mature in ((O.MIN_LOBES - 0.1, False), (O.MIN_LOBES + 0.1, True), (2 * O.MIN_LOBES, True)):
+        r_end = k / (k / 250.0 + lobes)
+        r = np.linspace(250.0, r_end, 80)
+        y = 20.0 + O.two_ray_db(r, np.array([[5.0]]), 0.5, LAM)[0]
+        assert O.fit_history(r, y, np.array([0]), 0.5, LAM).mature == mature, lobes
+    r = np.linspace(250.0, 100.0, O.MIN_SAMPLES - 1)        # plenty of lobes, too few samples
+    assert not O.fit_history(r, 20.0 + O.two_ray_db(r, np.array([[5.0]]), 0.5, LAM)[0], np.array([0]), 0.5,
+                             LAM).mature
+
+
+@pytest.mark.parametrize("field, limit, above_ok", [("corr", O.CORR_MIN, True), ("beta", O.BETA_MIN, True),
+                                                    ("beta", O.BETA_MAX, False)])
+def test_the_decision_thresholds_below_at_above_and_twice(field, limit, above_ok):
+    base = dict(mature=True, height_m=5.0, corr=0.9, beta=1.0)
+    for value, expect in ((limit - 1e-3, not above_ok), (limit, True), (limit + 1e-3, above_ok),
+                          (2 * limit, above_ok)):
+        f = O.Fit(**{**base, field: value})
+        assert f.overhead == expect, (field, value)
+    assert not O.Fit(**{**base, "mature": False}).overhead
+
+
+def test_the_decision_is_latched_after_consecutive_fits_at_a_steady_height(monkeypatch):
+    fits = []
+    monkeypatch.setattr(O, "fit_history", lambda *a: fits.pop(0))
+
+    def run(heights):
+        fits[:] = [O.Fit(True, h, 0.9, 1.0) if h is not None else O.Fit(True, 5.0, 0.1, 0.1) for h in heights]
+        lm = O.Landmark(0.0, 0.0)
+        for _ in heights:
+            lm.add(1, 100.0, 20.0)
+            lm.evaluate(0.5, LAM)
+        return lm.overhead
+
+    n = O.CONSECUTIVE
+    assert not run([5.0] * (n - 1)) and run([5.0] * n) and run([5.0] * (2 * n))
+    assert not run([5.0] * (n - 1) + [None] + [5.0] * (n - 1))           # an interruption starts again
+    step = O.HEIGHT_STABLE_M
+    assert run([5.0 + step * i for i in range(n)])                       # at the limit: steady
+    assert not run([5.0 + (step + 0.01) * (i % 2) for i in range(n)])   # beyond it: a wandering chance fit
+    assert run([5.0, 7.0] + [5.0] * n)                                   # a jump restarts the count, then holds
+
+
+def test_landmarks_match_within_their_distances():
+    m = O.LandmarkMap(0.5, LAM)
+    a = m.observe(1, 1, 100.0, 0.0, 0.0, 90.0, 10.0)
+    # a track that ended is continued by a new one at the same place; a track alive at once is another object
+    for dx, dy, same in ((O.MATCH_LONG_M - 0.01, 0.0, True), (O.MATCH_LONG_M + 0.01, 0.0, False),
+                         (0.0, O.MATCH_LAT_M - 0.01, True), (0.0, O.MATCH_LAT_M + 0.01, False)):
+        m.forget(set(), 0.0, 0.0)
+        m.by_track.clear()
+        m.landmarks = [a]
+        b = m.observe(2, 2, 100.0 + dx, dy, 0.0, 90.0, 10.0)
+        assert (b is a) == same, (dx, dy)
+    m.landmarks, m.by_track = [a], {1: a}
+    assert m.observe(3, 3, 100.5, 0.0, 0.0, 90.0, 10.0) is not a        # track 1 is alive: another object
+    a.overhead = True
+    m.landmarks, m.by_track = [a], {}
+    assert m.observe(4, 4, 100.0, O.OVERHEAD_MATCH_LAT_M - 0.1, 0.0, 90.0, 10.0) is a   # a bridge spans the road
+    assert m.match(100.0 + O.MATCH_LONG_M + O.OVERHEAD_DEPTH_M - 0.1, 0.0, 0.0, overhead_only=True,
+                   beyond_m=O.OVERHEAD_DEPTH_M) is a
+    assert m.match(100.0 + O.MATCH_LONG_M + O.OVERHEAD_DEPTH_M + 0.1, 0.0, 0.0, overhead_only=True,
+                   beyond_m=O.OVERHEAD_DEPTH_M) is None
+
+
+def test_what_elevation_makes_of_a_stationary_object_is_not_moving():
+    ecu = Ecu()
+    ecu.ego_speed_mps = 36.0
+    bound = 1.0 + 36.0 * (1.0 - math.cos(math.asin(8.0 / 10.0)))       # 15.4 m/s at 10 m
+    for ground, moving in ((bound - 0.01, False), (bound + 0.01, True), (2 * bound, True)):
+        assert ecu._moving(ground, 10.0) == moving
+    assert not ecu._moving(35.0, 5.0)             # inside 8 m anything up to the ego's speed may be a deck above
+    assert ecu._moving(1.01, 1000.0) and not ecu._moving(0.99, 1000.0)
+
+
+def test_stationary_objects_are_warned_up_to_the_set_speed_and_not_beyond():
+    sc = load_scenario(SCENARIOS / "nhtsa_lead_stopped.yaml")          # 20.1 m/s towards a car never seen moving
+    for ceiling, warned in ((20.09, False), (20.1, True), (20.11, True), (40.2, True)):
+        r = simulate(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, fcw_stationary_max_speed_mps=ceiling)))
+        assert (r.warning_time_s is not None) == warned, ceiling
+
+
+@pytest.mark.parametrize("name", ["bridge_90", "gantry_90", "bridge_130"])
+def test_an_overhead_structure_is_classified_from_the_wire_and_draws_nothing(name):
+    r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity="object")
+    assert r.passed and r.checked, r.reasons
+    assert np.all(r.trace["request"] >= -0.5) and np.all(r.trace["warning"] < 2)
