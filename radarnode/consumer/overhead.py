@@ -40,7 +40,6 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.signal
 
 #: the sensor's RCS average: exponential in power, this gain per cycle (the ARS 408-like radar's tracker)
 RCS_FILTER_GAIN = 0.2
@@ -78,6 +77,7 @@ def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float,
 def averaged_db(pattern_db: np.ndarray, starts: np.ndarray, gain: float = RCS_FILTER_GAIN) -> np.ndarray:
     """What the sensor reports of a pattern (H, N) (dB): its power average along the samples, restarted at each
     index in ``starts`` (a new radar track starts its average at its first value)."""
+    import scipy.signal  # imported when first needed: a faster start
     x = 10.0 ** (pattern_db / 10.0)
     out = np.empty_like(x)
     bounds = list(starts) + [x.shape[1]]
