@@ -15,8 +15,8 @@ CAR = "  - {id: a, class: car, x_m: 36.0, lane: 1, speed_mps: 20.0}"
 POINT = "  - {id: a, class: point, x_m: 34.0, lane: 1, speed_mps: 20.0, rcs_dbsm: 10.0}"
 
 
-def _fields(actor: str, level: str, duration: float = 3.0, seed: int = 1):
-    sc = scenario(actor, duration=duration, seed=seed)
+def _fields(actor: str, level: str, duration: float = 3.0, seed: int = 1, ego: str = "{speed_mps: 20.0}"):
+    sc = scenario(actor, duration=duration, seed=seed, ego=ego)
     rc = radar_config(sc)
     model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
     cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
@@ -43,3 +43,16 @@ def test_a_car_at_30_m_is_a_car_of_a_car_s_rcs_and_width(level):
     assert np.mean((cls == 1) | (cls == 2)) >= 0.9, np.bincount(cls, minlength=7)
     assert abs(np.median(rcs) - 10.0) <= 2.0, np.median(rcs)
     assert abs(np.median(width) - 1.8) <= 0.5 and np.median(length) >= 3.0, (np.median(length), np.median(width))
+
+
+PEDESTRIAN = "  - {id: a, class: pedestrian, x_m: 30.0, lane: 1, speed_mps: 1.4}"
+
+
+@pytest.mark.parametrize("level", ["object", "detection", "signal"])
+def test_a_pedestrian_walking_at_30_m_is_a_pedestrian_of_a_pedestrian_s_size(level):
+    # walking away along the lane ahead of a slow ego (30 → 34 m); its speed over ground tells it from a post
+    cls, rcs, length, width = _fields(PEDESTRIAN, level, duration=2.0 if level == "signal" else 3.0,
+                                      ego="{speed_mps: 0.1}")
+    assert np.mean(cls == 3) >= 0.8, np.bincount(cls, minlength=7)
+    assert np.median(length) <= 1.0 and np.median(width) <= 1.0, (np.median(length), np.median(width))
+    assert abs(np.median(rcs) + 5.0) <= 3.0, np.median(rcs)       # the scene's pedestrian: −5 dBsm

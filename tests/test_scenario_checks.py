@@ -193,10 +193,10 @@ def test_motion_fields_that_agree_with_the_waypoints_are_taken_as_notes(tmp_path
     assert len(sc.actors[0].waypoints) == 3
 
 
-def test_accel_beside_waypoints_stays_an_error(tmp_path):
+def test_accel_beside_timed_waypoints_stays_an_error(tmp_path):
     _, msg = _error(tmp_path, HEAD + "actors:\n  - id: c\n    class: car\n    accel: [{t_s: 1.0, accel_mps2: -2.0}]\n"
                     + WAYPOINTS)
-    assert "either accel or waypoints, not both" in msg
+    assert "no accel with timed waypoints" in msg and "actors[0].accel" in msg
 
 
 def test_checks_run_on_scenarios_built_from_text_too():

@@ -61,14 +61,16 @@ def _given(scenario: Scenario, path: str) -> bool:
     return path in scenario.lines
 
 
-def _segments(actor: Actor) -> list[tuple[float, float]]:
-    """(speed m/s, direction rad) of every waypoint segment the actor moves on."""
+def _segments(actor: Actor) -> list[tuple[float | None, float]]:
+    """(speed m/s, direction rad) of every waypoint segment the actor moves on; the speed is None on an untimed
+    path (no t_s: speed_mps and accel drive it, so they cannot conflict with it)."""
     out = []
     for a, b in zip(actor.waypoints, actor.waypoints[1:]):
         dx, dy = b.x_m - a.x_m, b.y_m - a.y_m
         dist = math.hypot(dx, dy)
         if dist > 1e-9:
-            out.append((dist / (b.t_s - a.t_s), math.atan2(dy, dx)))
+            timed = a.t_s is not None and b.t_s is not None
+            out.append((dist / (b.t_s - a.t_s) if timed else None, math.atan2(dy, dx)))
     return out
 
 
@@ -84,7 +86,7 @@ def _check_waypoint_fields(scenario: Scenario, src: Source, i: int, actor: Actor
         return src.error(f"{base}.{key}", f"field '{base}.{key}': value {value!r} conflicts with "
                                           f"'{base}.waypoints' ({why}: {says}); expected it left out, or equal")
 
-    if _given(scenario, f"{base}.speed_mps"):
+    if _given(scenario, f"{base}.speed_mps") and actor.timed_path:
         v = actor.speed_mps
         speeds = [seg[0] for seg in segments] + ([0.0] if len(segments) < len(actor.waypoints) - 1 else [])
         if not any(abs(v - u) <= max(SPEED_TOLERANCE[0], SPEED_TOLERANCE[1] * max(v, u)) for u in speeds):

@@ -132,7 +132,11 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     e_rd = np.bincount(rd_inv, weights=energy[peak], minlength=rd_u.size)
     # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
     # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
-    interference = statistic.ring_interference(rd_u % m, rd_u // m, np.mod(vb, m), rb, statistic.energy(rho),
+    # each scatterer's energy as its cell's coherent sum realised it this frame (the fade |Σ|²/Σ|a|², mean 1):
+    # a bridge deck of many reflectors fades and surges from frame to frame, and so does what it puts into a
+    # neighbour's ring (the mean alone would mask the neighbour in every frame where the chain masks it in few)
+    fade = (np.abs(field) ** 2 / wsafe)[inv]
+    interference = statistic.ring_interference(rd_u % m, rd_u // m, np.mod(vb, m), rb, statistic.energy(rho) * fade,
                                                (m, n_r))
     hit_rd, stat_rd = statistic.draw(e_rd, rng, interference)
     top = np.zeros(rd_u.size)
