@@ -200,37 +200,39 @@ def _search(cost: Callable[[np.ndarray | None], np.ndarray], n: int, d: float, n
             n_grid: int | None, floor_db: float, maximise: bool) -> tuple[np.ndarray, np.ndarray]:
     """Grid search, then a fine local grid with a parabola through the three best points.
 
-    ``cost(None)`` evaluates on the cached coarse grid, ``cost(u)`` at arbitrary ``u`` (shape S → S).
-    ``maximise``: the cost is −P (beam scanning, spectrum P); otherwise the cost is the
-    denominator of the pseudo-spectrum 1/cost (Capon, MUSIC). Returns ``(u (n,), resolved (n,))``.
+    ``cost(None)`` evaluates on the cached coarse grid, ``cost(u)`` at arbitrary ``u`` (shape S → S),
+    to be minimised. ``maximise``: the cost is −P (beam scanning, spectrum P); otherwise it is
+    the positive denominator of the pseudo-spectrum 1/cost (Capon, MUSIC). Peaks more than
+    ``floor_db`` below the strongest are dropped. Returns ``(u (n,), resolved (n,))``.
     """
     ug, _, step = _grid(n, d, _n_grid(n, n_grid))
     c = cost(None)
-    if maximise:
-        level = 10.0 * np.log10(np.maximum(-c, 1e-300))
-    else:
-        level = -10.0 * np.log10(np.maximum(c, 1e-300))
-    if _periodic(d):
-        left, right = np.roll(level, 1), np.roll(level, -1)
-    else:
-        left = np.concatenate(([-np.inf], level[:-1]))
-        right = np.concatenate((level[1:], [-np.inf]))
-    peaks = np.flatnonzero((level > left) & (level >= right) & (level >= level.max() - floor_db))
-    if peaks.size == 0:                                   # flat spectrum (zero data): nothing resolved
+    # local minima of the cost; at d = ½ the grid is circular
+    ext = np.concatenate((c[-1:], c, c[:1])) if _periodic(d) else np.concatenate(([np.inf], c, [np.inf]))
+    best = c.min()
+    limit = best * 10.0 ** (-floor_db / 10.0) if maximise else best * 10.0 ** (floor_db / 10.0)
+    peaks = np.flatnonzero((c < ext[:-2]) & (c <= ext[2:]) & (c <= limit))
+    if peaks.size == 0 or not (best < 0 if maximise else True):   # flat or empty spectrum
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
-    peaks = peaks[np.argsort(level[peaks])[::-1][:n_sources]]
+    if peaks.size > n_sources:
+        peaks = peaks[np.argsort(c[peaks])[:n_sources]]
     # local refinement: 2·REFINE_HALF+1 points over ± one coarse step, parabola through the best three
-    offs = np.linspace(-step, step, 2 * REFINE_HALF + 1)
+    offs = _refine_offsets(step)
     uf = ug[peaks][:, None] + offs[None, :]                   # (P, F)
     cf = cost(uf)
     i = np.clip(np.argmin(cf, axis=1), 1, offs.size - 2)
     rows = np.arange(peaks.size)
     c0, c1, c2 = cf[rows, i - 1], cf[rows, i], cf[rows, i + 1]
     den = c0 - 2.0 * c1 + c2
-    h = offs[1] - offs[0]
-    shift = np.where(den > 0, 0.5 * (c0 - c2) / np.where(den > 0, den, 1.0), 0.0)
-    u = _wrap(uf[rows, i] + h * np.clip(shift, -1.0, 1.0), d)
+    ok = den > 0
+    shift = np.clip(0.5 * (c0 - c2) / np.where(ok, den, 1.0), -1.0, 1.0) * ok
+    u = _wrap(uf[rows, i] + (offs[1] - offs[0]) * shift, d)
     return _pad(u, np.ones(u.size, dtype=bool), n_sources)
+
+
+@functools.lru_cache(maxsize=64)
+def _refine_offsets(step: float) -> np.ndarray:
+    return np.linspace(-step, step, 2 * REFINE_HALF + 1)
 
 
 def _pad(u: np.ndarray, ok: np.ndarray, n_sources: int) -> tuple[np.ndarray, np.ndarray]:
@@ -263,9 +265,10 @@ def bartlett(r: np.ndarray, n_sources: int, d: float = 0.5, n_grid: int | None =
     _, ag, _ = _grid(n, d, _n_grid(n, n_grid))
 
     def cost(u):
-        a = ag if u is None else steering(n, u, d)
-        ra = np.tensordot(r, a, axes=(1, 0))
-        return -np.real(np.sum(np.conj(a) * ra, axis=0))
+        a = ag if u is None else steering(n, u, d).reshape(n, -1)
+        ra = r @ a
+        out = -np.einsum("ij,ij->j", np.conj(a), ra).real
+        return out if u is None else out.reshape(np.shape(u))
 
     return _search(cost, n, d, n_sources, n_grid, floor_db, maximise=True)
 
@@ -286,22 +289,31 @@ def capon(r: np.ndarray, n_sources: int, d: float = 0.5, loading: float = 1e-3,
     vs = v / np.sqrt(w)[None, :]                             # R⁻¹ = vs·vsᴴ
     _, ag, _ = _grid(n, d, _n_grid(n, n_grid))
 
+    vsh = np.conj(vs.T)
+
     def cost(u):
-        a = ag if u is None else steering(n, u, d)
-        p = np.tensordot(np.conj(vs.T), a, axes=(1, 0))
-        return np.sum(p.real ** 2 + p.imag ** 2, axis=0)
+        a = ag if u is None else steering(n, u, d).reshape(n, -1)
+        out = np.maximum(_sq_colnorm(vsh @ a), 1e-300)
+        return out if u is None else out.reshape(np.shape(u))
 
     return _search(cost, n, d, n_sources, n_grid, floor_db, maximise=False)
 
 
+def _sq_colnorm(p: np.ndarray) -> np.ndarray:
+    """Squared 2-norm of each column of a real or complex (M, G) matrix → (G,) float64."""
+    if np.iscomplexobj(p):
+        return np.einsum("ij,ij->j", p.real, p.real) + np.einsum("ij,ij->j", p.imag, p.imag)
+    return np.einsum("ij,ij->j", p, p)
+
+
 def _music_cost(es: np.ndarray, basis: np.ndarray, n: int, vec: Callable[[np.ndarray], np.ndarray]):
     """Null-spectrum ``‖Enᴴ a‖² = N − ‖Esᴴ a‖²`` from the (thin) signal subspace ``es`` (N, M)."""
-    esh = np.conj(es.T)
+    esh = np.ascontiguousarray(np.conj(es.T))
 
     def cost(u):
-        a = basis if u is None else vec(u)
-        p = np.tensordot(esh, a, axes=(1, 0))
-        return np.maximum(n - np.sum(p.real ** 2 + p.imag ** 2, axis=0), 0.0)
+        a = basis if u is None else vec(u).reshape(n, -1)
+        out = np.maximum(n - _sq_colnorm(esh @ a), 1e-300)
+        return out if u is None else out.reshape(np.shape(u))
 
     return cost
 
