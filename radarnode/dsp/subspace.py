@@ -196,31 +196,35 @@ def _wrap(u: np.ndarray, d: float) -> np.ndarray:
     return np.clip(u, -1.0, 1.0)
 
 
-def _search(cost: Callable[[np.ndarray | None], np.ndarray], n: int, d: float, n_sources: int,
+def _search(cost: Callable[[np.ndarray], np.ndarray], basis: np.ndarray,
+            fine: Callable[[np.ndarray], np.ndarray], n: int, d: float, n_sources: int,
             n_grid: int | None, floor_db: float, maximise: bool) -> tuple[np.ndarray, np.ndarray]:
     """Grid search, then a fine local grid with a parabola through the three best points.
 
-    ``cost(None)`` evaluates on the cached coarse grid, ``cost(u)`` at arbitrary ``u`` (shape S → S),
-    to be minimised. ``maximise``: the cost is −P (beam scanning, spectrum P); otherwise it is
-    the positive denominator of the pseudo-spectrum 1/cost (Capon, MUSIC). Peaks more than
-    ``floor_db`` below the strongest are dropped. Returns ``(u (n,), resolved (n,))``.
+    ``cost(A)`` maps steering columns ``A`` (N, G) to the cost (G,) to be minimised; ``basis`` is the
+    coarse grid's steering (N, G); ``fine(u)`` gives the steering (N, P·F) at ``u`` (P, F).
+    ``maximise``: the cost is −P (beam scanning, spectrum P); otherwise it is the positive
+    denominator of the pseudo-spectrum 1/cost (Capon, MUSIC). Peaks more than ``floor_db`` below
+    the strongest are dropped. Returns ``(u (n,), resolved (n,))``.
     """
     ug, _, step = _grid(n, d, _n_grid(n, n_grid))
-    c = cost(None)
+    c = cost(basis)
     # local minima of the cost; at d = ½ the grid is circular
     ext = np.concatenate((c[-1:], c, c[:1])) if _periodic(d) else np.concatenate(([np.inf], c, [np.inf]))
     best = c.min()
-    limit = best * 10.0 ** (-floor_db / 10.0) if maximise else best * 10.0 ** (floor_db / 10.0)
+    if maximise and not best < 0:                      # zero data: a flat, empty spectrum
+        return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
+    limit = best * _FLOOR[floor_db, maximise]
     peaks = np.flatnonzero((c < ext[:-2]) & (c <= ext[2:]) & (c <= limit))
-    if peaks.size == 0 or not (best < 0 if maximise else True):   # flat or empty spectrum
+    if peaks.size == 0:
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
     if peaks.size > n_sources:
         peaks = peaks[np.argsort(c[peaks])[:n_sources]]
     # local refinement: 2·REFINE_HALF+1 points over ± one coarse step, parabola through the best three
     offs = _refine_offsets(step)
-    uf = ug[peaks][:, None] + offs[None, :]                   # (P, F)
-    cf = cost(uf)
-    i = np.clip(np.argmin(cf, axis=1), 1, offs.size - 2)
+    uf = ug[peaks][:, None] + offs                            # (P, F)
+    cf = cost(fine(uf)).reshape(uf.shape)
+    i = np.clip(cf.argmin(axis=1), 1, offs.size - 2)
     rows = np.arange(peaks.size)
     c0, c1, c2 = cf[rows, i - 1], cf[rows, i], cf[rows, i + 1]
     den = c0 - 2.0 * c1 + c2
@@ -230,20 +234,50 @@ def _search(cost: Callable[[np.ndarray | None], np.ndarray], n: int, d: float, n
     return _pad(u, np.ones(u.size, dtype=bool), n_sources)
 
 
+class _FloorFactors(dict):
+    """(floor_db, maximise) → factor on the best cost below which a grid minimum counts as a peak."""
+
+    def __missing__(self, key):
+        floor_db, maximise = key
+        value = 10.0 ** (-floor_db / 10.0) if maximise else 10.0 ** (floor_db / 10.0)
+        self[key] = value
+        return value
+
+
+_FLOOR = _FloorFactors()
+
+
 @functools.lru_cache(maxsize=64)
 def _refine_offsets(step: float) -> np.ndarray:
     return np.linspace(-step, step, 2 * REFINE_HALF + 1)
 
 
+@functools.lru_cache(maxsize=64)
+def _offset_steering(n: int, d: float, step: float) -> np.ndarray:
+    off = steering(n, _refine_offsets(step), d)             # (N, F)
+    return off[:, None, :]
+
+
+def _fine_steering(n: int, d: float, n_grid: int | None) -> Callable[[np.ndarray], np.ndarray]:
+    """Steering at ``u = grid[peak] + offset`` (P, F) as the product of cached columns: (N, P·F)."""
+    ug, ag, step = _grid(n, d, _n_grid(n, n_grid))
+    off = _offset_steering(n, d, step)
+
+    def fine(uf):
+        # the centre of each row of uf is a grid point; recover its index instead of recomputing exp
+        idx = np.rint((uf[:, REFINE_HALF] - ug[0]) / step).astype(int) % ug.size
+        return (ag[:, idx, None] * off).reshape(n, -1)
+
+    return fine
+
+
 def _pad(u: np.ndarray, ok: np.ndarray, n_sources: int) -> tuple[np.ndarray, np.ndarray]:
     """Fill up to ``n_sources`` with copies of the first (strongest) estimate, flagged unresolved; sort."""
-    u = np.where(np.isfinite(u), u, 0.0)
-    ok = ok & np.isfinite(u)
     if u.size < n_sources:
         fill = u[0] if u.size else 0.0
         u = np.concatenate((u, np.full(n_sources - u.size, fill)))
         ok = np.concatenate((ok, np.zeros(n_sources - ok.size, dtype=bool)))
-    order = np.argsort(u, kind="stable")
+    order = np.argsort(u)
     return u[order], ok[order]
 
 
@@ -264,13 +298,10 @@ def bartlett(r: np.ndarray, n_sources: int, d: float = 0.5, n_grid: int | None =
     n = r.shape[0]
     _, ag, _ = _grid(n, d, _n_grid(n, n_grid))
 
-    def cost(u):
-        a = ag if u is None else steering(n, u, d).reshape(n, -1)
-        ra = r @ a
-        out = -np.einsum("ij,ij->j", np.conj(a), ra).real
-        return out if u is None else out.reshape(np.shape(u))
+    def cost(a):
+        return -np.einsum("ij,ij->j", np.conj(a), r @ a).real
 
-    return _search(cost, n, d, n_sources, n_grid, floor_db, maximise=True)
+    return _search(cost, ag, _fine_steering(n, d, n_grid), n, d, n_sources, n_grid, floor_db, maximise=True)
 
 
 def capon(r: np.ndarray, n_sources: int, d: float = 0.5, loading: float = 1e-3,
@@ -291,29 +322,25 @@ def capon(r: np.ndarray, n_sources: int, d: float = 0.5, loading: float = 1e-3,
 
     vsh = np.conj(vs.T)
 
-    def cost(u):
-        a = ag if u is None else steering(n, u, d).reshape(n, -1)
-        out = np.maximum(_sq_colnorm(vsh @ a), 1e-300)
-        return out if u is None else out.reshape(np.shape(u))
+    def cost(a):
+        return np.maximum(_sq_colnorm(vsh @ a), 1e-300)
 
-    return _search(cost, n, d, n_sources, n_grid, floor_db, maximise=False)
+    return _search(cost, ag, _fine_steering(n, d, n_grid), n, d, n_sources, n_grid, floor_db, maximise=False)
 
 
 def _sq_colnorm(p: np.ndarray) -> np.ndarray:
     """Squared 2-norm of each column of a real or complex (M, G) matrix → (G,) float64."""
     if np.iscomplexobj(p):
-        return np.einsum("ij,ij->j", p.real, p.real) + np.einsum("ij,ij->j", p.imag, p.imag)
+        return np.einsum("ij,ij->j", np.conj(p), p).real
     return np.einsum("ij,ij->j", p, p)
 
 
-def _music_cost(es: np.ndarray, basis: np.ndarray, n: int, vec: Callable[[np.ndarray], np.ndarray]):
-    """Null-spectrum ``‖Enᴴ a‖² = N − ‖Esᴴ a‖²`` from the (thin) signal subspace ``es`` (N, M)."""
-    esh = np.ascontiguousarray(np.conj(es.T))
+def _music_cost(es: np.ndarray, n: int) -> Callable[[np.ndarray], np.ndarray]:
+    """Null spectrum ``‖Enᴴ a‖² = N − ‖Esᴴ a‖²`` (‖a‖² = N) from the thin signal subspace ``es`` (N, M)."""
+    esh = np.conj(es.T)
 
-    def cost(u):
-        a = basis if u is None else vec(u).reshape(n, -1)
-        out = np.maximum(n - _sq_colnorm(esh @ a), 1e-300)
-        return out if u is None else out.reshape(np.shape(u))
+    def cost(a):
+        return np.maximum(n - _sq_colnorm(esh @ a), 1e-300)
 
     return cost
 
@@ -325,8 +352,8 @@ def music(r: np.ndarray, n_sources: int, d: float = 0.5, n_grid: int | None = No
     _, v = _hermitian_eigh(r)
     es = v[:, n - n_sources:]
     _, ag, _ = _grid(n, d, _n_grid(n, n_grid))
-    cost = _music_cost(es, ag, n, lambda u: steering(n, u, d))
-    return _search(cost, n, d, n_sources, n_grid, floor_db, maximise=False)
+    return _search(_music_cost(es, n), ag, _fine_steering(n, d, n_grid), n, d, n_sources, n_grid, floor_db,
+                   maximise=False)
 
 
 @functools.lru_cache(maxsize=64)
@@ -389,8 +416,8 @@ def unitary_music(r: np.ndarray, n_sources: int, d: float = 0.5, n_grid: int | N
     _, v = np.linalg.eigh(0.5 * (c + c.T))
     es = v[:, n - n_sources:]
     bg = _unitary_grid(n, d, _n_grid(n, n_grid))
-    cost = _music_cost(es, bg, n, lambda u: _unitary_steering(n, u, d))
-    return _search(cost, n, d, n_sources, n_grid, floor_db, maximise=False)
+    return _search(_music_cost(es, n), bg, lambda uf: _unitary_steering(n, uf, d).reshape(n, -1), n, d,
+                   n_sources, n_grid, floor_db, maximise=False)
 
 
 @functools.lru_cache(maxsize=64)
