@@ -193,7 +193,7 @@ def _n_grid(n: int, n_grid: int | None) -> int:
 def _wrap(u: np.ndarray, d: float) -> np.ndarray:
     if _periodic(d):
         return (u + 1.0) % 2.0 - 1.0
-    return np.clip(u, -1.0, 1.0)
+    return np.minimum(np.maximum(u, -1.0), 1.0)
 
 
 def _search(cost: Callable[[np.ndarray], np.ndarray], basis: np.ndarray,
@@ -224,14 +224,17 @@ def _search(cost: Callable[[np.ndarray], np.ndarray], basis: np.ndarray,
     offs = _refine_offsets(step)
     uf = ug[peaks][:, None] + offs                            # (P, F)
     cf = cost(fine(uf)).reshape(uf.shape)
-    i = np.clip(cf.argmin(axis=1), 1, offs.size - 2)
-    rows = np.arange(peaks.size)
-    c0, c1, c2 = cf[rows, i - 1], cf[rows, i], cf[rows, i + 1]
+    # np.clip is slow on tiny arrays (it looks up dtype limits); minimum/maximum are plain ufuncs
+    i = np.minimum(np.maximum(cf.argmin(axis=1), 1), offs.size - 2)
+    c0, c1, c2 = np.take_along_axis(cf, i[:, None] + _THREE, axis=1).T
     den = c0 - 2.0 * c1 + c2
     ok = den > 0
-    shift = np.clip(0.5 * (c0 - c2) / np.where(ok, den, 1.0), -1.0, 1.0) * ok
-    u = _wrap(uf[rows, i] + (offs[1] - offs[0]) * shift, d)
+    shift = np.minimum(np.maximum(0.5 * (c0 - c2) / np.where(ok, den, 1.0), -1.0), 1.0) * ok
+    u = _wrap(uf[:, 0] + (i + shift) * (offs[1] - offs[0]), d)
     return _pad(u, np.ones(u.size, dtype=bool), n_sources)
+
+
+_THREE = np.array([-1, 0, 1])
 
 
 class _FloorFactors(dict):
@@ -532,10 +535,7 @@ def _check_snapshots(x: object) -> np.ndarray:
                           f"elements and K >= 1 snapshots (or (N,) for one snapshot)")
     if not (np.issubdtype(x.dtype, np.number) or x.dtype == bool):
         raise ConfigError(f"subspace X: dtype {x.dtype} is not allowed; expected a real or complex number array")
-    x = x.astype(np.complex128, copy=False)
-    if not np.all(np.isfinite(x)):
-        raise ConfigError("subspace X: a non-finite value (NaN or inf) is not allowed; expected finite samples")
-    return x
+    return x.astype(np.complex128, copy=False)
 
 
 def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float = 0.5, *,
@@ -581,8 +581,10 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
         q = n
     else:
         q = subarray
-    peak = float(np.max(np.abs(x)))
-    if peak > 0:
+    peak = float(np.abs(x).max())                        # NaN or inf anywhere makes this non-finite
+    if not math.isfinite(peak):
+        raise ConfigError("subspace X: a non-finite value (NaN or inf) is not allowed; expected finite samples")
+    if peak > 0 and not 1e-100 < peak < 1e100:        # angles are scale invariant; keep x·xᴴ in range
         x = x / peak
     r = sample_covariance(x)
     r = spatial_smoothing(r, q)
