@@ -43,6 +43,9 @@ from radarnode.errors import ConfigError
 #: spectrum peaks more than this far below the strongest are not counted as sources (dB); a uniform
 #: aperture's first sidelobe is −13.3 dB, so beam scanning needs less than that
 DEFAULT_FLOOR_DB = {"bartlett": 10.0, "capon": 20.0, "music": 20.0, "unitary_music": 20.0}
+#: a MUSIC peak whose null spectrum ‖Enᴴa‖² is below this fraction of ‖a‖² = N counts whatever its height
+#: relative to the strongest (a steering vector in a random M-dim subspace has ≈ 1 − M/N there)
+MUSIC_ACCEPT = 0.5
 #: coarse grid points per unit of sin θ per element (≥ 256 points over [-1, 1])
 GRID_PER_ELEMENT = 16
 #: fine-grid points on each side of a coarse peak in the local refinement
@@ -198,14 +201,17 @@ def _wrap(u: np.ndarray, d: float) -> np.ndarray:
 
 def _search(cost: Callable[[np.ndarray], np.ndarray], basis: np.ndarray,
             fine: Callable[[np.ndarray], np.ndarray], n: int, d: float, n_sources: int,
-            n_grid: int | None, floor_db: float, maximise: bool) -> tuple[np.ndarray, np.ndarray]:
+            n_grid: int | None, floor_db: float, maximise: bool,
+            accept_below: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Grid search, then a fine local grid with a parabola through the three best points.
 
     ``cost(A)`` maps steering columns ``A`` (N, G) to the cost (G,) to be minimised; ``basis`` is the
     coarse grid's steering (N, G); ``fine(u)`` gives the steering (N, P·F) at ``u`` (P, F).
     ``maximise``: the cost is −P (beam scanning, spectrum P); otherwise it is the positive
     denominator of the pseudo-spectrum 1/cost (Capon, MUSIC). Peaks more than ``floor_db`` below
-    the strongest are dropped. Returns ``(u (n,), resolved (n,))``.
+    the strongest are dropped unless their cost is below ``accept_below`` (MUSIC: half the steering
+    vector's energy outside the signal subspace — pseudo-spectrum peak heights span decades and say
+    little about source power). Returns ``(u (n,), resolved (n,))``.
     """
     ug, _, step = _grid(n, d, _n_grid(n, n_grid))
     c = cost(basis)
@@ -214,7 +220,7 @@ def _search(cost: Callable[[np.ndarray], np.ndarray], basis: np.ndarray,
     best = c.min()
     if maximise and not best < 0:                      # zero data: a flat, empty spectrum
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
-    limit = best * _FLOOR[floor_db, maximise]
+    limit = max(best * _FLOOR[floor_db, maximise], accept_below)
     peaks = np.flatnonzero((c < ext[:-2]) & (c <= ext[2:]) & (c <= limit))
     if peaks.size == 0:
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
@@ -356,7 +362,7 @@ def music(r: np.ndarray, n_sources: int, d: float = 0.5, n_grid: int | None = No
     es = v[:, n - n_sources:]
     _, ag, _ = _grid(n, d, _n_grid(n, n_grid))
     return _search(_music_cost(es, n), ag, _fine_steering(n, d, n_grid), n, d, n_sources, n_grid, floor_db,
-                   maximise=False)
+                   maximise=False, accept_below=MUSIC_ACCEPT * n)
 
 
 @functools.lru_cache(maxsize=64)
@@ -420,7 +426,7 @@ def unitary_music(r: np.ndarray, n_sources: int, d: float = 0.5, n_grid: int | N
     es = v[:, n - n_sources:]
     bg = _unitary_grid(n, d, _n_grid(n, n_grid))
     return _search(_music_cost(es, n), bg, lambda uf: _unitary_steering(n, uf, d).reshape(n, -1), n, d,
-                   n_sources, n_grid, floor_db, maximise=False)
+                   n_sources, n_grid, floor_db, maximise=False, accept_below=MUSIC_ACCEPT * n)
 
 
 @functools.lru_cache(maxsize=64)
