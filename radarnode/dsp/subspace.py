@@ -202,7 +202,7 @@ def _wrap(u: np.ndarray, d: float) -> np.ndarray:
 def _search(cost: Callable[[np.ndarray], np.ndarray], basis: np.ndarray,
             fine: Callable[[np.ndarray], np.ndarray], n: int, d: float, n_sources: int,
             n_grid: int | None, floor_db: float, maximise: bool,
-            accept_below: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+            accept_below: float = -np.inf) -> tuple[np.ndarray, np.ndarray]:
     """Grid search, then a fine local grid with a parabola through the three best points.
 
     ``cost(A)`` maps steering columns ``A`` (N, G) to the cost (G,) to be minimised; ``basis`` is the
