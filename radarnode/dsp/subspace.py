@@ -9,8 +9,8 @@ Axis order: snapshots ``X`` have shape ``(..., N, K)`` — elements, then snapsh
 be 1); covariances have shape ``(..., N, N)``. The covariance helpers broadcast over leading
 batch axes; the estimators take one covariance ``(N, N)`` each.
 
-Pipeline of :func:`estimate`: validate → scale to unit peak magnitude (angles are scale
-invariant; this keeps 1e±300 inputs finite) → sample covariance → optional spatial smoothing
+Pipeline of :func:`estimate`: validate → scale to unit peak magnitude when the peak lies outside
+1e±100 (angles are scale invariant; this keeps 1e±300 inputs finite) → sample covariance → optional spatial smoothing
 (sub-arrays of length ``Q``, default ``round(0.7·N)`` as seed 001) → optional forward–backward
 averaging → source count (given, or MDL) → estimator.
 
