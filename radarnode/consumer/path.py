@@ -249,36 +249,41 @@ def _bends_like_a_road(f: TrailFit, curvature_1pm: float) -> bool:
 
 
 def trail_fits(trails, curvature_1pm: float, reference=None) -> list[TrailFit]:
-    """The trails (each an (x, y) pair of vehicle-frame arrays) that describe the road: each consistent within
-    TRAIL_DRIFT_M with the course the other trails give (:func:`fit_course`) and with ``reference`` ((course(x),
-    x from, x to): the boundaries' course in the vehicle frame, from :func:`boundary_reference`, or None), or,
-    with nothing else known, with the yaw-rate course within TRAIL_LONE_DRIFT_M. A vehicle changing lane drifts
-    against them; the most drifting trail is dropped first, until all agree."""
+    """The trails (each an (x, y) pair of vehicle-frame arrays) that describe the road. Each pair of trails is
+    compared where both run (their lateral distance may change by TRAIL_DRIFT_M at most); the trail that disagrees
+    with the most others (on a tie, the one drifting most from the yaw-rate course) is dropped, until all agree.
+    Every trail must also agree within TRAIL_DRIFT_M with ``reference`` ((course(x), x from, x to): the
+    boundaries' course in the vehicle frame, from :func:`boundary_reference`, or None). A trail that no other
+    trail or reference overlaps must keep within TRAIL_LONE_DRIFT_M of the yaw-rate course or drift from it as a
+    road bends (:func:`_bends_like_a_road`). A vehicle changing lane drifts against the others: it is dropped."""
     fits = [f for f in (fit_trail(x, y) for x, y in trails) if f is not None]
     circle = lambda xs: 0.5 * curvature_1pm * xs * xs        # noqa: E731 — the yaw-rate course, x ≪ radius
-    while fits:
-        worst, worst_excess = None, 1.0
-        for i, f in enumerate(fits):
-            checks = []
-            others = fit_course(fits[:i] + fits[i + 1:], curvature_1pm)
-            if others is not None:
-                d = _drift(f, lambda xs, c=others: xs * (c[0] + xs * (c[1] + xs * c[2])))
-                if d is not None:
-                    checks.append(d / TRAIL_DRIFT_M)
-            if reference is not None:
-                d = _drift(f, *reference)
-                if d is not None:
-                    checks.append(d / TRAIL_DRIFT_M)
-            if not checks:
-                d = _drift(f, circle) or 0.0
-                checks.append(0.0 if d <= TRAIL_LONE_DRIFT_M or _bends_like_a_road(f, curvature_1pm)
-                              else d / TRAIL_LONE_DRIFT_M)
-            if max(checks) > worst_excess:
-                worst, worst_excess = i, max(checks)
-        if worst is None:
+    if reference is not None:
+        fits = [f for f in fits if (_drift(f, *reference) or 0.0) <= TRAIL_DRIFT_M]
+    n = len(fits)
+    agree = np.ones((n, n), dtype=bool)
+    compared = np.eye(n, dtype=bool)
+    for i in range(n):
+        for j in range(i + 1, n):
+            lo, hi = max(fits[i].x_min, fits[j].x_min), min(fits[i].x_max, fits[j].x_max)
+            d = _drift(fits[i], fits[j].y, lo, hi)
+            if d is not None:
+                compared[i, j] = compared[j, i] = True
+                agree[i, j] = agree[j, i] = d <= TRAIL_DRIFT_M
+    keep = np.ones(n, dtype=bool)
+    off_circle = np.array([_drift(f, circle) or 0.0 for f in fits])
+    while True:
+        against = np.sum(~agree[np.ix_(keep, keep)], axis=1)
+        if not against.any():
             break
-        fits.pop(worst)
-    return fits
+        live = np.flatnonzero(keep)
+        worst = max(range(live.size), key=lambda k: (against[k], off_circle[live[k]]))
+        keep[live[worst]] = False
+    for i in np.flatnonzero(keep):
+        alone = reference is None and not compared[i, keep & (np.arange(n) != i)].any()
+        if alone and off_circle[i] > TRAIL_LONE_DRIFT_M and not _bends_like_a_road(fits[i], curvature_1pm):
+            keep[i] = False
+    return [f for f, k in zip(fits, keep) if k]
 
 
 def boundary_reference(boundaries: dict | None, mount: SensorMount):
