@@ -16,6 +16,15 @@ on) (what production course prediction does with the road geometry from stationa
 targets). Not while the ego turns across the road (a lane change: its heading to the boundaries, averaged,
 beyond :data:`LANE_KEEPING_HEADING_RAD`; a single boundary's heading is not enough, as a quadratic fit to a
 clothoid tilts it by a degree or two): then the yaw rate is the better guess.
+
+The vehicles ahead drove the road the ego is about to drive: :class:`VehicleTrails` keeps, per vehicle moving our
+way, its positions of the last TRAIL_MAX_AGE_S in the vehicle frame, carried along every cycle by the ego's speed
+and yaw rate (:func:`dead_reckon`). :func:`trail_fits` keeps the trails that describe the road (a vehicle changing
+lane drifts from the others, from the boundaries, or — alone — from the yaw-rate course otherwise than a road
+bends), :func:`fit_course` fits one clothoid y = c1·x + c2·x² + c3·x³ to them (per-trail offsets, weak priors from
+the yaw rate), and :func:`in_path` blends it in like the boundaries' course, both counting equally where both
+cover (production ACC's course prediction from the "history of vehicles ahead"). With neither, the yaw-rate
+circle alone decides.
 """
 
 from __future__ import annotations
