@@ -61,7 +61,8 @@ AHEAD = np.array([60.0, 70.0, 80.0, 90.0, 100.0])
 
 
 @pytest.mark.parametrize("entry_m", [0.0, 20.0])
-@pytest.mark.parametrize("vehicles", [((70.0, 0.0), (95.0, 3.5)), ((95.0, 3.5),), ((50.0, 0.0), (90.0, 3.5), (110.0, 0.0))])
+@pytest.mark.parametrize("vehicles", [((70.0, 0.0), (95.0, 3.5)), ((95.0, 3.5),),
+                                      ((50.0, 0.0), (90.0, 3.5), (110.0, 0.0))])
 def test_on_a_curve_entry_the_trails_know_the_curve_the_yaw_rate_does_not(entry_m, vehicles):
     rng = np.random.default_rng(int(entry_m) + len(vehicles))
     kappa = 0.0                                       # the ego still on the straight: the yaw rate says straight
@@ -167,8 +168,9 @@ def test_trails_are_bounded_and_nothing_unusable_leaves_them():
     tr.keep(10.0, {7})
     assert tr.trails() == [] and len(tr) == 0
     # a trail of fewer than TRAIL_MIN_POINTS, a short one, one all at one x, NaNs: no fit and no course
-    for x, y in (([10.0, 20.0], [0.0, 0.0]), (np.linspace(10, 12, 10), np.zeros(10)), (np.full(10, 30.0), np.arange(10.0)),
-                 (np.full(10, np.nan), np.zeros(10)), (np.linspace(10, 60, 10), np.full(10, np.inf))):
+    for x, y in (([10.0, 20.0], [0.0, 0.0]), (np.linspace(10, 12, 10), np.zeros(10)),
+                 (np.full(10, 30.0), np.arange(10.0)), (np.full(10, np.nan), np.zeros(10)),
+                 (np.linspace(10, 60, 10), np.full(10, np.inf))):
         assert P.fit_trail(np.asarray(x), np.asarray(y)) is None
     assert P.trail_fits([], 0.0) == [] and P.trail_course(AHEAD, [], 0.0) is None
     f = P.fit_trail(np.linspace(10.0, 60.0, 30), np.zeros(30))
@@ -176,14 +178,25 @@ def test_trails_are_bounded_and_nothing_unusable_leaves_them():
     assert np.isfinite(y).all() and cov.tolist() == [0.0, 1.0, 1.0, 0.0, 0.0]
 
 
-def test_the_setting_switches_the_trails_off_and_is_validated():
+def test_the_setting_switches_the_trails_off_and_is_validated(tmp_path):
     assert AccSettings().path_from_trails and EcuSpec().path_from_trails
     for make in (lambda v: AccSettings(path_from_trails=v), lambda v: EcuSpec(path_from_trails=v)):
-        with pytest.raises(FieldError, match="field 'path_from_trails': value 'no' is not allowed; expected true or false"):
+        with pytest.raises(FieldError,
+                           match="field 'path_from_trails': value 'no' is not allowed; expected true or false"):
             make("no")
     sc = load_scenario(SCENARIOS / "clothoid_stopped_own_lane.yaml")
     off = dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, path_from_trails=False))
     assert make_ecu(sc, 0.072).acc.settings.path_from_trails and not make_ecu(off, 0.072).acc.settings.path_from_trails
+    # in a scenario file: read, and a bad value named with its line
+    from radarnode.errors import ScenarioError
+    text = (SCENARIOS / "clothoid_stopped_outer_lane.yaml").read_text()
+    p = tmp_path / "x.yaml"
+    p.write_text(text.replace("ecu: {acc_enabled: false,", "ecu: {acc_enabled: false, path_from_trails: false,"))
+    assert load_scenario(p).ecu.path_from_trails is False
+    p.write_text(text.replace("ecu: {acc_enabled: false,", "ecu: {acc_enabled: false, path_from_trails: maybe,"))
+    with pytest.raises(ScenarioError, match=r"x.yaml:\d+: field 'ecu.path_from_trails': value 'maybe' is not allowed; "
+                                            r"expected true or false"):
+        load_scenario(p)
 
 
 def _curve_entry(name: str, seed: int, trails: bool):

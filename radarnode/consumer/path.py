@@ -163,7 +163,7 @@ TRAIL_MIN_SPAN_M = 15.0        # a trail shorter along x says nothing about curv
 TRAIL_MAX_RESIDUAL_M = 0.4     # rms about a cubic over the trail: more, and it is no smooth course (or no one track)
 TRAIL_DRIFT_M = 0.9            # lateral drift (peak to peak) against the other trails or the boundaries: ¼ lane
 TRAIL_LONE_DRIFT_M = 0.9       # … against the yaw-rate course when nothing else is known, unless it bends as a road
-TRAIL_BEND_RATIO = 1.5         # a lone trail that drifts from the yaw-rate course bends as a road: see _bends_like_a_road
+TRAIL_BEND_RATIO = 1.5         # a lone trail drifting from the yaw-rate course must bend as a road (_bends_like_a_road)
 TRAIL_EXTENT = 1.5             # a trail's course is used up to this multiple of its farthest point
 TRAIL_SIGMA_M = 0.1            # the weight of a trail: its length / (σ² + fit rms²)
 _MAX_COND = 1e8                # the fit's condition number (x scaled to [-1, 1]); beyond it, no fit
@@ -397,9 +397,9 @@ class VehicleTrails:
         if not p.size:
             return []
         p = p[np.lexsort((p[:, 3], p[:, 0]))]
-        ids, first = np.unique(p[:, 0], return_index=True)
+        _, first = np.unique(p[:, 0], return_index=True)
         return [(s[:, 1], s[:, 2]) for s in np.split(p, first[1:])]
 
 
-__all__ = ["SensorMount", "VehicleTrails", "boundary_reference", "curvature", "dead_reckon", "fit_course", "fit_trail", "in_path", "path_offset_m", "plausible",
-           "road_course", "trail_course", "trail_fits"]
+__all__ = ["SensorMount", "VehicleTrails", "boundary_reference", "curvature", "dead_reckon", "fit_course",
+           "fit_trail", "in_path", "path_offset_m", "plausible", "road_course", "trail_course", "trail_fits"]
