@@ -45,6 +45,7 @@ class AccSettings:
     k_gap: float = 0.2
     k_rel_speed: float = 0.8
     path_half_width_m: float = 1.6
+    path_from_trails: bool = True      # the trails of the vehicles ahead shape the predicted path (path.py)
     min_speed_mps: float = 0.0         # below it ACC waits in standby (ISO 15622 ACC without stop and go: ~5 m/s)
 
     def __post_init__(self) -> None:
@@ -56,6 +57,7 @@ class AccSettings:
         for f in ("k_speed", "k_gap", "k_rel_speed"):
             validate.number(f, getattr(self, f), lo=0.0, hi=5.0)
         validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
+        validate.boolean("path_from_trails", self.path_from_trails)
         validate.number("min_speed_mps", self.min_speed_mps, lo=0.0, hi=30.0)
 
 

@@ -24,7 +24,7 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import SensorMount, in_path
+from radarnode.consumer.path import SensorMount, VehicleTrails, boundary_reference, curvature, in_path, trail_fits
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
@@ -54,6 +54,8 @@ MOVED_CYCLES = 3                     # cycles in a row of moving that make a tra
 DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
+TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
+TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
 
 @dataclass
@@ -138,6 +140,8 @@ class Ecu:
         self._moved: set[int] = set()             # tracks seen moving over ground (beyond what elevation explains)
         self._moving_for: dict[int, int] = {}      # cycles in a row each track has been seen moving
         self.landmarks = LandmarkMap(mount.z_m, self.wavelength_m)
+        self.trails = VehicleTrails()             # where the vehicles ahead drove, vehicle frame (path.py)
+        self.trail_fits: list = []                # the trails that shaped the last predicted path
         self.odometry = (0.0, 0.0, 0.0)           # the ECU's own dead reckoning: x, y (m), heading (rad)
 
     @staticmethod
@@ -196,6 +200,8 @@ class Ecu:
         self._rcs_power, self._obstacles = {}, set()
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
+        self.trails.clear()
+        self.trail_fits = []
         self.last_cycle_t = None
         self._last_out_t = None
         self._prev_speed = None
@@ -292,7 +298,7 @@ class Ecu:
         el = math.asin(min(OVERHEAD_HEIGHT_M / max(range_m, 0.1), 1.0))      # highest elevation at that range
         return ground_mps > MOVING_MPS + abs(self.ego_speed_mps) * (1.0 - math.cos(el))
 
-    def _select(self, tracks, ol, by_id, cluster_strength=None) -> tuple[Target | None, Target | None]:
+    def _select(self, t_s, tracks, ol, by_id, cluster_strength=None) -> tuple[Target | None, Target | None]:
         """ACC's target and FCW's: the nearest track steadily in the predicted path that is a road user for each.
 
         ACC follows vehicles it has seen moving (also once they stopped) and never brakes for a stationary object
@@ -302,11 +308,12 @@ class Ecu:
         """
         if not tracks:
             self._target_id = self._fcw_target_id = None
+            self.trails.keep(t_s, ())
+            self.trail_fits = []
             return None, None
         x = np.array([t.x[0] for t in tracks])
         y = np.array([t.x[1] for t in tracks])
-        ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                     self.boundaries, self.mount)
+        trail = np.zeros(len(tracks), dtype=bool)     # a vehicle ahead driving our way, measured this cycle
         xv, yv = self.mount.to_vehicle(x, y)
         ox, oy, oh = self.odometry
         co, so = math.cos(oh), math.sin(oh)
@@ -330,6 +337,10 @@ class Ecu:
             landmark = self.landmarks.by_track.get(t.id)
             if k is not None:
                 dyn = int(ol.dyn_prop[k])
+                trail[i] = (dyn == DYN_MOVING and vx + self.ego_speed_mps > MOVING_MPS
+                            and int(ol.meas_state[k]) != MEAS_PREDICTED and xv[i] > self.mount.x_m
+                            and (int(ol.obj_class[k]) in VEHICLE_CLASSES or ol.length_m[k] >= TRAIL_MIN_LENGTH_M
+                                 or ol.width_m[k] >= TRAIL_MIN_WIDTH_M))
                 # seen moving: the radar says so and its speed over ground is more than elevation explains, in
                 # MOVED_CYCLES cycles in a row (one glitch of a stationary object's velocity is no vehicle)
                 moving_now = dyn in (DYN_MOVING, DYN_ONCOMING) and self._moving(ground, rng)
@@ -369,6 +380,15 @@ class Ecu:
             obstacle[i] = t.id in self._obstacles and not overhead
         ids = [t.id for t in tracks]
         alive = set(ids)
+        # the trails of the vehicles ahead (seen moving, moving our way now, not a bridge's part), then the path
+        trail &= moved
+        self.trails.add(t_s, np.array(ids)[trail], xv[trail], yv[trail])
+        self.trails.keep(t_s, alive)
+        self.trail_fits = (trail_fits(self.trails.trails(), curvature(self.ego_speed_mps, self.ego_yaw_rate_rps),
+                                      boundary_reference(self.boundaries, self.mount))
+                           if self.acc.settings.path_from_trails else [])
+        ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
+                     self.boundaries, self.mount, self.trail_fits)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
         self._moved &= alive
@@ -411,7 +431,8 @@ class Ecu:
         v, w = self.ego_speed_mps, self.ego_yaw_rate_rps
         self.odometry = (ox + v * dt * math.cos(oh + 0.5 * w * dt), oy + v * dt * math.sin(oh + 0.5 * w * dt),
                          oh + w * dt)
-        target, fcw_target = self._select(tracks, ol, by_id, cluster_strength) if radar_ok else (None, None)
+        self.trails.advance(v, w, dt)           # the same motion carries the trails into this cycle's frame
+        target, fcw_target = self._select(t_s, tracks, ol, by_id, cluster_strength) if radar_ok else (None, None)
         accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
         v = self.ego_speed_mps
         if fcw_target is not None:

@@ -132,7 +132,8 @@ def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = Non
     spec = scenario.ecu
     acc = AccSettings(enabled=spec.acc_enabled if acc_enabled is None else acc_enabled,
                       set_speed_mps=spec.set_speed_mps, time_gap_s=spec.time_gap_s,
-                      path_half_width_m=spec.path_half_width_m, min_speed_mps=spec.acc_min_speed_mps)
+                      path_half_width_m=spec.path_half_width_m, path_from_trails=spec.path_from_trails,
+                      min_speed_mps=spec.acc_min_speed_mps)
     fcw = FcwSettings(ttc_warn_s=spec.fcw_ttc_warn_s, ttc_prewarn_s=max(4.0, spec.fcw_ttc_warn_s),
                       decel_warn_mps2=spec.fcw_decel_warn_mps2,
                       stationary_max_speed_mps=spec.fcw_stationary_max_speed_mps)

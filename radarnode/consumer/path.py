@@ -16,6 +16,15 @@ on) (what production course prediction does with the road geometry from stationa
 targets). Not while the ego turns across the road (a lane change: its heading to the boundaries, averaged,
 beyond :data:`LANE_KEEPING_HEADING_RAD`; a single boundary's heading is not enough, as a quadratic fit to a
 clothoid tilts it by a degree or two): then the yaw rate is the better guess.
+
+The vehicles ahead drove the road the ego is about to drive: :class:`VehicleTrails` keeps, per vehicle moving our
+way, its positions of the last TRAIL_MAX_AGE_S in the vehicle frame, carried along every cycle by the ego's speed
+and yaw rate (:func:`dead_reckon`). :func:`trail_fits` keeps the trails that describe the road (a vehicle changing
+lane drifts from the others, from the boundaries, or — alone — from the yaw-rate course otherwise than a road
+bends), :func:`fit_course` fits one clothoid y = c1·x + c2·x² + c3·x³ to them (per-trail offsets, weak priors from
+the yaw rate), and :func:`in_path` blends it in like the boundaries' course, both counting equally where both
+cover (production ACC's course prediction from the "history of vehicles ahead"). With neither, the yaw-rate
+circle alone decides.
 """
 
 from __future__ import annotations
@@ -75,22 +84,43 @@ def path_offset_m(x: np.ndarray, y: np.ndarray, curvature_1pm: float) -> np.ndar
     return math.copysign(1.0, r) * (abs(r) - np.hypot(x, y - r))
 
 
+def curvature(ego_speed_mps: float, yaw_rate_rps: float) -> float:
+    """The rear axle's path curvature κ = yaw rate / speed (0 when too slow to tell)."""
+    return yaw_rate_rps / ego_speed_mps if ego_speed_mps > MIN_SPEED_FOR_CURVATURE_MPS else 0.0
+
+
 def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: float, half_width_m: float,
-            boundaries: dict | None = None, mount: SensorMount | None = None) -> np.ndarray:
+            boundaries: dict | None = None, mount: SensorMount | None = None,
+            trails: list | None = None) -> np.ndarray:
     """Which sensor-frame points lie ahead in the ego's predicted path.
 
-    ``mount=None`` takes the sensor at the rear axle (the circle then starts at the sensor).
+    ``mount=None`` takes the sensor at the rear axle (the circle then starts at the sensor). ``trails``: the
+    vehicles' trails that describe the road (:func:`trail_fits`); where they and the boundaries both cover a
+    range, the two courses count equally.
     """
     x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-    kappa = yaw_rate_rps / ego_speed_mps if ego_speed_mps > MIN_SPEED_FOR_CURVATURE_MPS else 0.0
+    kappa = curvature(ego_speed_mps, yaw_rate_rps)
     m = mount if mount is not None else SensorMount(0.0, 0.0, 0.0)
     xv, yv = m.to_vehicle(x, y)
     offset = path_offset_m(xv, yv, kappa)
     course = road_course(x, boundaries)
+    by_trails = trail_course(xv, trails, kappa) if trails else None
+    far = cover = None
     if course is not None:
-        shift, covered = course
-        w = np.clip((x - BLEND_START_M) / (BLEND_END_M - BLEND_START_M), 0.0, 1.0) * covered
-        offset = (1.0 - w) * offset + w * (y - shift)
+        shift, cover = course
+        far = y - shift
+    if by_trails is not None:
+        yc, covered_t = by_trails
+        far_t = yv - yc
+        if far is None:
+            far, cover = far_t, covered_t
+        else:
+            n = cover + covered_t
+            far = np.where(n > 0, (cover * far + covered_t * far_t) / np.maximum(n, 1.0), 0.0)
+            cover = np.minimum(n, 1.0)
+    if far is not None:
+        w = np.clip((x - BLEND_START_M) / (BLEND_END_M - BLEND_START_M), 0.0, 1.0) * cover
+        offset = (1.0 - w) * offset + w * far
     inside = (xv > m.x_m) & (np.abs(offset) <= half_width_m)
     for side, b in plausible(boundaries):
         inside &= (y < b.y_at(x)) if side == "left" else (y > b.y_at(x))
@@ -125,4 +155,251 @@ def road_course(x: np.ndarray, boundaries: dict | None) -> tuple[np.ndarray, np.
     return np.where(n > 0, shift / np.maximum(n, 1), 0.0), (n > 0).astype(np.float64)
 
 
-__all__ = ["SensorMount", "in_path", "path_offset_m", "plausible", "road_course"]
+# --- the course from the trails of vehicles ahead ------------------------------------------------------------------
+TRAIL_MAX_AGE_S = 3.0          # a trail keeps the points of the last 3 s …
+TRAIL_MAX_POINTS = 60          # … and at most this many (60 × 72 ms ≈ 4.3 s)
+TRAIL_MIN_POINTS = 5           # fewer points: no trail
+TRAIL_MIN_SPAN_M = 15.0        # a trail shorter along x says nothing about curvature
+TRAIL_MAX_RESIDUAL_M = 0.4     # rms about a cubic over the trail: more, and it is no smooth course (or no one track)
+TRAIL_DRIFT_M = 0.9            # lateral drift (peak to peak) against the other trails or the boundaries: ¼ lane
+TRAIL_LONE_DRIFT_M = 0.9       # … against the yaw-rate course when nothing else is known, unless it bends as a road
+TRAIL_BEND_RATIO = 1.5         # a lone trail drifting from the yaw-rate course must bend as a road (_bends_like_a_road)
+TRAIL_EXTENT = 1.5             # a trail's course is used up to this multiple of its farthest point
+TRAIL_SIGMA_M = 0.1            # the weight of a trail: its length / (σ² + fit rms²)
+_MAX_COND = 1e8                # the fit's condition number (x scaled to [-1, 1]); beyond it, no fit
+_U = 100.0                     # x in the course fit, in units of 100 m (conditioning)
+_PRIOR_HEADING = 0.02 * _U     # the priors' σ: heading to the road 0.02 rad, …
+_PRIOR_CURVATURE = 0.5 * 0.002 * _U ** 2     # … curvature 0.002 1/m from the yaw rate's, …
+_PRIOR_CURVATURE_RATE = 1e-4 / 6.0 * _U ** 3  # … curvature rate 1e-4 1/m² (0 to 1/250 m in 40 m)
+
+
+def dead_reckon(x: np.ndarray, y: np.ndarray, speed_mps: float, yaw_rate_rps: float,
+                dt_s: float) -> tuple[np.ndarray, np.ndarray]:
+    """Vehicle-frame points (fixed in the world) in the vehicle frame ``dt_s`` later: the rear axle moved
+    ``speed_mps·dt_s`` along the mean heading of the step and turned by ``yaw_rate_rps·dt_s`` (the same motion
+    model as the ECU's odometry)."""
+    h = yaw_rate_rps * dt_s
+    d = speed_mps * dt_s
+    dx, dy = d * math.cos(0.5 * h), d * math.sin(0.5 * h)
+    c, s = math.cos(h), math.sin(h)
+    px, py = np.asarray(x, dtype=np.float64) - dx, np.asarray(y, dtype=np.float64) - dy
+    return c * px + s * py, -s * px + c * py
+
+
+@dataclass(frozen=True)
+class TrailFit:
+    """y = poly(u), u = (x − centre) / scale: one vehicle's trail smoothed (vehicle frame)."""
+
+    coef: np.ndarray            # highest power first (numpy.polyval)
+    centre: float
+    scale: float
+    x_min: float
+    x_max: float
+    rms_m: float
+    weight: float
+    xs: np.ndarray              # the trail's points
+    ys: np.ndarray
+
+    def y(self, x) -> np.ndarray:
+        return np.polyval(self.coef, (np.asarray(x, dtype=np.float64) - self.centre) / self.scale)
+
+
+def fit_trail(x: np.ndarray, y: np.ndarray) -> TrailFit | None:
+    """One trail smoothed by a cubic over its own span (its noise, and its drift against a reference course), or
+    None when it has fewer than TRAIL_MIN_POINTS finite points, spans less than TRAIL_MIN_SPAN_M, lies behind the
+    ego, is ill-conditioned or ragged (rms beyond TRAIL_MAX_RESIDUAL_M)."""
+    x, y = np.asarray(x, dtype=np.float64).reshape(-1), np.asarray(y, dtype=np.float64).reshape(-1)
+    ok = np.isfinite(x) & np.isfinite(y)
+    x, y = x[ok], y[ok]
+    if x.size < TRAIL_MIN_POINTS:
+        return None
+    lo, hi = float(x.min()), float(x.max())
+    if hi - lo < TRAIL_MIN_SPAN_M or hi <= 0.0:
+        return None
+    centre, scale = 0.5 * (lo + hi), 0.5 * (hi - lo)
+    u = (x - centre) / scale
+    deg = 3 if x.size > 6 else 2
+    a = u[:, None] ** np.arange(deg, -1, -1)
+    try:
+        coef, _, rank, sv = np.linalg.lstsq(a, y, rcond=None)
+    except np.linalg.LinAlgError:
+        return None
+    if rank < deg + 1 or not np.isfinite(coef).all() or sv[-1] <= 0.0 or sv[0] / sv[-1] > _MAX_COND:
+        return None
+    rms = float(np.sqrt(np.sum((a @ coef - y) ** 2) / max(x.size - deg - 1, 1)))
+    if not math.isfinite(rms) or rms > TRAIL_MAX_RESIDUAL_M:
+        return None
+    return TrailFit(coef, centre, scale, lo, hi, rms, (hi - lo) / (TRAIL_SIGMA_M ** 2 + rms ** 2), x, y)
+
+
+def _drift(f: TrailFit, ref, lo: float = -math.inf, hi: float = math.inf) -> float | None:
+    """Peak-to-peak lateral drift of trail ``f`` (smoothed) against the course ``ref(x)`` over its points within
+    [lo, hi] (None where they overlap over less than TRAIL_MIN_SPAN_M)."""
+    xs = f.xs[(f.xs >= lo) & (f.xs <= hi)]
+    if xs.size < 2 or xs.max() - xs.min() < TRAIL_MIN_SPAN_M:
+        return None
+    d = f.y(xs) - ref(xs)
+    return float(np.ptp(d)) if np.isfinite(d).all() else math.inf
+
+
+def _bends_like_a_road(f: TrailFit, curvature_1pm: float) -> bool:
+    """Whether a lone trail's drift from the yaw-rate course can be a road that bends (its curvature changing
+    through a clothoid, a curve's start or end) rather than a lane change: over the second half of the trail it
+    drifts at least as much as over the first, in the same direction (a curve ahead bends the more the farther it
+    goes, TRAIL_BEND_RATIO times as much at least: 3 for a constant curvature from the trail's start, 7 for a
+    clothoid; a lane change is an S that drifts evenly across its middle and levels out past half-way, half a lane
+    across). The first half of a lane change drifts ever faster like a curve entry (2.4 for a cosine profile):
+    by its trail alone it cannot be told from one."""
+    xs = np.array([f.x_min, 0.5 * (f.x_min + f.x_max), f.x_max])
+    d = f.y(xs) - 0.5 * curvature_1pm * xs * xs
+    first, second = d[1] - d[0], d[2] - d[1]
+    s = math.copysign(1.0, first + second)
+    return bool(s * second >= TRAIL_BEND_RATIO * s * first and s * first >= 0.0)
+
+
+def trail_fits(trails, curvature_1pm: float, reference=None) -> list[TrailFit]:
+    """The trails (each an (x, y) pair of vehicle-frame arrays) that describe the road. Each pair of trails is
+    compared where both run (their lateral distance may change by TRAIL_DRIFT_M at most); the trail that disagrees
+    with the most others (on a tie, the one drifting most from the yaw-rate course) is dropped, until all agree.
+    Every trail must also agree within TRAIL_DRIFT_M with ``reference`` ((course(x), x from, x to): the
+    boundaries' course in the vehicle frame, from :func:`boundary_reference`, or None). A trail that no other
+    trail or reference overlaps must keep within TRAIL_LONE_DRIFT_M of the yaw-rate course or drift from it as a
+    road bends (:func:`_bends_like_a_road`). A vehicle changing lane drifts against the others: it is dropped."""
+    fits = [f for f in (fit_trail(x, y) for x, y in trails) if f is not None]
+    circle = lambda xs: 0.5 * curvature_1pm * xs * xs        # noqa: E731 — the yaw-rate course, x ≪ radius
+    if reference is not None:
+        fits = [f for f in fits if (_drift(f, *reference) or 0.0) <= TRAIL_DRIFT_M]
+    n = len(fits)
+    agree = np.ones((n, n), dtype=bool)
+    compared = np.eye(n, dtype=bool)
+    for i in range(n):
+        for j in range(i + 1, n):
+            lo, hi = max(fits[i].x_min, fits[j].x_min), min(fits[i].x_max, fits[j].x_max)
+            d = _drift(fits[i], fits[j].y, lo, hi)
+            if d is not None:
+                compared[i, j] = compared[j, i] = True
+                agree[i, j] = agree[j, i] = d <= TRAIL_DRIFT_M
+    keep = np.ones(n, dtype=bool)
+    off_circle = np.array([_drift(f, circle) or 0.0 for f in fits])
+    while True:
+        against = np.sum(~agree[np.ix_(keep, keep)], axis=1)
+        if not against.any():
+            break
+        live = np.flatnonzero(keep)
+        worst = max(range(live.size), key=lambda k: (against[k], off_circle[live[k]]))
+        keep[live[worst]] = False
+    for i in np.flatnonzero(keep):
+        alone = reference is None and not compared[i, keep & (np.arange(n) != i)].any()
+        if alone and off_circle[i] > TRAIL_LONE_DRIFT_M and not _bends_like_a_road(fits[i], curvature_1pm):
+            keep[i] = False
+    return [f for f, k in zip(fits, keep) if k]
+
+
+def boundary_reference(boundaries: dict | None, mount: SensorMount):
+    """The boundaries' course as a reference for :func:`trail_fits` (vehicle frame, the mount's yaw neglected: a
+    drift is measured peak to peak), or None."""
+    valid = [b for _, b in plausible(boundaries)]
+    if road_course(np.zeros(1), boundaries) is None:
+        return None
+    end = COURSE_EXTENT * max(b.range_end_m for b in valid)
+    return (lambda xs: road_course(xs - mount.x_m, boundaries)[0] + mount.y_m), mount.x_m, mount.x_m + end
+
+
+def fit_course(fits: list[TrailFit], curvature_1pm: float) -> np.ndarray | None:
+    """The road's course ahead of the rear axle as a clothoid, y = c1·x + c2·x² + c3·x³ (heading, curvature / 2,
+    curvature rate / 6): one shape fitted to all trails at once, each with its own lateral offset, each point
+    weighted by 1 / (TRAIL_SIGMA_M² + its trail's fit rms²) (a longer, smoother trail counts more). Weak priors
+    tie it to what the ego knows where the trails say little: heading 0 (it keeps its lane), the curvature at the
+    ego its yaw rate / speed, a steady curvature. Returns (c1, c2, c3), or None (ill-conditioned, not finite)."""
+    if not fits:
+        return None
+    u = np.concatenate([f.xs for f in fits]) / _U
+    ys = np.concatenate([f.ys for f in fits])
+    sw = np.concatenate([np.full(f.xs.size, 1.0 / math.sqrt(TRAIL_SIGMA_M ** 2 + f.rms_m ** 2)) for f in fits])
+    m = len(fits)
+    a = np.zeros((u.size + 3, 3 + m))
+    a[:u.size, 0], a[:u.size, 1], a[:u.size, 2] = u, u * u, u ** 3
+    a[np.arange(u.size), 3 + np.repeat(np.arange(m), [f.xs.size for f in fits])] = 1.0
+    a[:u.size] *= sw[:, None]
+    b = np.concatenate([ys * sw, np.zeros(3)])
+    for k, (prior, sigma) in enumerate(((0.0, _PRIOR_HEADING), (0.5 * curvature_1pm * _U ** 2, _PRIOR_CURVATURE),
+                                        (0.0, _PRIOR_CURVATURE_RATE))):
+        a[u.size + k, k] = 1.0 / sigma
+        b[u.size + k] = prior / sigma
+    try:
+        coef, _, _, sv = np.linalg.lstsq(a, b, rcond=None)
+    except np.linalg.LinAlgError:
+        return None
+    if not np.isfinite(coef).all() or sv[-1] <= 0.0 or sv[0] / sv[-1] > _MAX_COND:
+        return None
+    return coef[:3] / np.array([_U, _U ** 2, _U ** 3])
+
+
+def trail_course(x: np.ndarray, fits: list[TrailFit], curvature_1pm: float = 0.0,
+                 ) -> tuple[np.ndarray, np.ndarray] | None:
+    """The road's lateral course ahead from the vehicles' trails, vehicle frame: (y of the course at ``x``, 1 where
+    it is covered — up to TRAIL_EXTENT times the farthest trail point — else 0); None without a trail, or while
+    the ego's heading to the course exceeds LANE_KEEPING_HEADING_RAD (it is crossing the road: the yaw rate is
+    the better guess)."""
+    c = fit_course(fits, curvature_1pm)
+    if c is None or abs(c[0]) > LANE_KEEPING_HEADING_RAD:
+        return None
+    x = np.asarray(x, dtype=np.float64)
+    y = x * (c[0] + x * (c[1] + x * c[2]))
+    on = (x >= 0.0) & (x <= TRAIL_EXTENT * max(f.x_max for f in fits)) & np.isfinite(y)
+    return np.where(on, y, 0.0), on.astype(np.float64)
+
+
+class VehicleTrails:
+    """Where the vehicles ahead drove: per track, its recent positions in the vehicle frame (rear axle), carried
+    along by the ego's motion every cycle (:func:`dead_reckon`, all points at once), bounded to the last
+    TRAIL_MAX_AGE_S and TRAIL_MAX_POINTS."""
+
+    def __init__(self) -> None:
+        self._xyt = np.zeros((0, 4))        # rows: track id, x, y, t
+
+    def __len__(self) -> int:
+        return len(np.unique(self._xyt[:, 0]))
+
+    def advance(self, speed_mps: float, yaw_rate_rps: float, dt_s: float) -> None:
+        """The ego moved for ``dt_s`` at this speed and yaw rate: every stored point into the new vehicle frame."""
+        if self._xyt.size and all(math.isfinite(v) for v in (speed_mps, yaw_rate_rps, dt_s)):
+            self._xyt[:, 1], self._xyt[:, 2] = dead_reckon(self._xyt[:, 1], self._xyt[:, 2], speed_mps,
+                                                            yaw_rate_rps, dt_s)
+
+    def add(self, t_s: float, track_ids, x: np.ndarray, y: np.ndarray) -> None:
+        """This cycle's vehicle-frame positions of the vehicles ahead that qualify (finite ones only)."""
+        ids = np.asarray(track_ids, dtype=np.float64).reshape(-1)
+        new = np.stack([ids, np.asarray(x, np.float64).reshape(-1), np.asarray(y, np.float64).reshape(-1),
+                        np.full(ids.shape, float(t_s))], axis=1)
+        new = new[np.isfinite(new).all(axis=1)]
+        self._xyt = np.concatenate([self._xyt, new])
+
+    def keep(self, t_s: float, alive) -> None:
+        """Forget the tracks not in ``alive`` and the points older than TRAIL_MAX_AGE_S (or beyond the last
+        TRAIL_MAX_POINTS of a track)."""
+        p = self._xyt
+        p = p[np.isin(p[:, 0], np.fromiter(alive, dtype=np.float64)) & (t_s - p[:, 3] <= TRAIL_MAX_AGE_S)
+              & (p[:, 3] <= t_s)]
+        if p.size:
+            p = p[np.lexsort((p[:, 3], p[:, 0]))]                 # by track, oldest first
+            _, first, counts = np.unique(p[:, 0], return_index=True, return_counts=True)
+            rank_from_end = np.repeat(first + counts, counts) - np.arange(len(p))
+            p = p[rank_from_end <= TRAIL_MAX_POINTS]
+        self._xyt = p
+
+    def clear(self) -> None:
+        self._xyt = np.zeros((0, 4))
+
+    def trails(self) -> list[tuple[np.ndarray, np.ndarray]]:
+        """Per track, its points (x, y), oldest first."""
+        p = self._xyt
+        if not p.size:
+            return []
+        p = p[np.lexsort((p[:, 3], p[:, 0]))]
+        _, first = np.unique(p[:, 0], return_index=True)
+        return [(s[:, 1], s[:, 2]) for s in np.split(p, first[1:])]
+
+
+__all__ = ["SensorMount", "VehicleTrails", "boundary_reference", "curvature", "dead_reckon", "fit_course",
+           "fit_trail", "in_path", "path_offset_m", "plausible", "road_course", "trail_course", "trail_fits"]

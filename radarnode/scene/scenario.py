@@ -491,6 +491,7 @@ class EcuSpec:
     acc_min_speed_mps: float = 0.0         # below it ACC waits in standby (0: stop and go)
     driver_reaction_s: float = 1.0         # the driver confirms a resume this long after the lead drove off
     path_half_width_m: float = 1.6         # the predicted path's half-width
+    path_from_trails: bool = True          # the trails of the vehicles ahead shape the predicted path
     fcw_ttc_warn_s: float = 2.8            # FCW warns at a TTC at or below this …
     fcw_decel_warn_mps2: float = 4.0       # … or when avoiding the collision needs this deceleration
     #: above this speed a stationary object never seen moving draws no FCW (a radar without elevation cannot
@@ -509,6 +510,7 @@ class EcuSpec:
         validate.number("acc_min_speed_mps", self.acc_min_speed_mps, lo=0.0, hi=30.0)
         validate.number("driver_reaction_s", self.driver_reaction_s, lo=0.0, hi=10.0)
         validate.number("path_half_width_m", self.path_half_width_m, lo=0.5, hi=5.0)
+        validate.boolean("path_from_trails", self.path_from_trails)
         validate.number("fcw_ttc_warn_s", self.fcw_ttc_warn_s, lo=0.5, hi=10.0)
         validate.number("fcw_decel_warn_mps2", self.fcw_decel_warn_mps2, lo=1.0, hi=10.0)
         validate.number("fcw_stationary_max_speed_mps", self.fcw_stationary_max_speed_mps, lo=0.0, hi=70.0)
