@@ -8,9 +8,7 @@ What the signal chain does to scatterers, without the signal:
    (grating lobes where the element spacing exceeds λ/2), power through the
    element pattern (:func:`radarnode.radar.equation.pattern_db`);
 2. scatterers in one range–Doppler–angle cell add coherently with their
-   random scattering phases, each weighted by its window straddle loss; the
-   cell is seen at their glint point Re(Σ z·x / Σ z) in each axis, as the
-   chain's phase slopes see it (an extended reflector's apparent point wanders);
+   random scattering phases, each weighted by its window straddle loss;
 3. cells closer than the chain's measured resolution (:data:`RESOLUTION`, in
    range bins, Doppler bins and beamwidths) are one peak: a cell that has a
    stronger cell within the resolution in every axis gives its power to the
@@ -62,23 +60,6 @@ def hann_straddle(delta: np.ndarray) -> np.ndarray:
     return np.where(np.abs(np.abs(d) - 1.0) < 1e-9, 0.5, w)
 
 
-def _glint(z: np.ndarray, x: np.ndarray, field: np.ndarray, inv: np.ndarray, margin: float) -> np.ndarray:
-    """Apparent position per cell of scatterers ``z`` (complex amplitudes, shape (k,)) at ``x`` (k,) summed into
-    ``field`` (cells,) by ``inv``: Re(Σ z·x · conj(Σ z)) / |Σ z|², within [min x − margin, max x + margin] of the
-    cell (a deep fade's glint is bounded by the main lobe in the chain). Shape (cells,)."""
-    n = field.size
-    num = np.zeros(n, dtype=np.complex128)
-    np.add.at(num, inv, z * x)
-    lo = np.full(n, np.inf)
-    hi = np.full(n, -np.inf)
-    np.minimum.at(lo, inv, x)
-    np.maximum.at(hi, inv, x)
-    power = np.abs(field) ** 2
-    with np.errstate(invalid="ignore", divide="ignore"):
-        g = np.where(power > 0.0, (num * np.conj(field)).real / np.where(power > 0.0, power, 1.0), 0.5 * (lo + hi))
-    return np.clip(g, lo - margin, hi + margin)
-
-
 def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½))."""
     p = preset
@@ -124,19 +105,14 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     amp = np.sqrt(statistic.energy(rho, rb - ri, vb - vi))
     uniq, inv = np.unique(cell, return_inverse=True)
     inv = inv.ravel()
-    z = amp * np.exp(2j * np.pi * rng.random(k))
     field = np.zeros(uniq.size, dtype=np.complex128)
-    np.add.at(field, inv, z)
+    np.add.at(field, inv, amp * np.exp(2j * np.pi * rng.random(k)))
     energy = np.abs(field) ** 2
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
-    # where the chain sees the cell's unresolved scatterers: the glint point Re(Σ z·x / Σ z) in each axis (the
-    # phase slope of their coherent sum across the array, the range and the Doppler spectra), which wanders
-    # with the phases and can leave the scatterers' span by up to half a resolution cell (a bridge deck across
-    # the road is seen anywhere along it, not at its middle); one scatterer alone gives its own position
-    c_r = _glint(z, rb, field, inv, 0.5)
-    c_v = _glint(z, vb, field, inv, 0.5)
-    c_u = _glint(z, u, field, inv, 0.5 * beam)
+    c_r = np.bincount(inv, weights=amp ** 2 * rb, minlength=uniq.size) / wsafe
+    c_v = np.bincount(inv, weights=amp ** 2 * vb, minlength=uniq.size) / wsafe
+    c_u = np.bincount(inv, weights=amp ** 2 * u, minlength=uniq.size) / wsafe
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
     # what the chain's coupling correction with the aliased speed leaves in the range (RadarPreset.range_rate_coupling_s)
     c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.doppler_bin_mps),
