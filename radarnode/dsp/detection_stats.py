@@ -443,6 +443,10 @@ class DetectionStatistic:
     def masking_factor(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:
         """Pd with ``interference`` in the training ring over Pd without (:meth:`pd_interfered`), from a table
         over ρ (1 dB) and log I (a quarter decade), interpolated bilinearly; 1 below 1 % of the noise's sum."""
+        mean_z = self.n_channels * self.eigenvalues.sum()
+        rel = np.asarray(interference, dtype=np.float64) / mean_z
+        if not np.any(rel >= 0.01):                  # nothing in any ring: the table is not even built
+            return np.ones(np.broadcast(np.asarray(rho_db), rel).shape)
         tables = self.__dict__.setdefault("_mask_tables", {})
         if swerling not in tables:
             rho, log_i = np.meshgrid(self.MASK_RHO_DB, self.MASK_LOG_I, indexing="ij")
@@ -451,8 +455,6 @@ class DetectionStatistic:
             without = self.pd_interfered(self.MASK_RHO_DB, np.zeros(self.MASK_RHO_DB.size), swerling)
             tables[swerling] = np.clip(with_i / np.maximum(without, 1e-300)[:, None], 0.0, 1.0)
         table = tables[swerling]
-        mean_z = self.n_channels * self.eigenvalues.sum()
-        rel = np.asarray(interference, dtype=np.float64) / mean_z
         x = np.clip(np.asarray(rho_db, dtype=np.float64), self.MASK_RHO_DB[0], self.MASK_RHO_DB[-1])
         y = np.clip(np.log10(np.maximum(rel, 1e-300)), self.MASK_LOG_I[0], self.MASK_LOG_I[-1])
         fx = (x - self.MASK_RHO_DB[0]) / (self.MASK_RHO_DB[1] - self.MASK_RHO_DB[0])
