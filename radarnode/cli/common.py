@@ -147,15 +147,20 @@ def format_stats(stats: ConsumerStats) -> str:
     return "consumer: " + ", ".join(f"{k}={v}" for k, v in shown.items())
 
 
-def progress(total: int | None, label: str, unit: str = "cycle"):
+def progress(total: int | None, label: str, unit: str = "cycle", *, to_stdout: bool = False):
     """A tqdm progress bar on stderr, shown only when stderr is a terminal (never in piped output or logs).
+
+    ``to_stdout``: the command writes its records to standard output as it goes (``decode`` without ``-o``);
+    then no bar when standard output is a terminal too — the bar's redraws would land in the middle of the
+    records, and the records scrolling by show the progress themselves.
 
     tqdm rather than a hand-written bar: it measures the rate and the time left, redraws at most ~10 times a
     second whatever the loop's speed, adapts to the terminal width and to resizes, and leaves a clean line when
     closed or interrupted. ``total`` None shows a running count without a bar.
     """
     from tqdm import tqdm
-    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, disable=not sys.stderr.isatty(),
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr,
+                disable=not sys.stderr.isatty() or (to_stdout and sys.stdout.isatty()),
                 dynamic_ncols=True, leave=False)
 
 

@@ -126,7 +126,7 @@ def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
         columns = _signal_columns(decoder.table, present)
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
-    bar = progress(None, f"decoding {args.file}", unit="frame")
+    bar = progress(None, f"decoding {args.file}", unit="frame", to_stdout=args.output is None)
     try:
         for msg in read_frames(args.file, report):
             bar.update(1)
@@ -153,7 +153,7 @@ def _write_text(args, out, report: ReadReport) -> None:
     sensor = 0 if args.sensor_id is None else args.sensor_id
     assembler = CycleAssembler(sensor_id=sensor)
     cycles = []
-    bar = progress(None, f"decoding {args.file}", unit="frame")
+    bar = progress(None, f"decoding {args.file}", unit="frame", to_stdout=args.output is None)
 
     def counted(reader):
         for msg in reader:
