@@ -442,3 +442,22 @@ def test_live_view_serves_object_messages_over_foxglove_websocket(command):
         if proc.poll() is None:
             proc.kill()
             proc.wait(timeout=10)
+
+
+def test_export_decodes_the_scenarios_sensor_id_unless_told_otherwise(tmp_path, capsys):
+    """A sensor-5 scenario's log exported with --scenario: sensor 5's objects, not an MCAP of raw frames only."""
+    text = (ROOT / "scenarios" / "highway_cut_in.yaml").read_text()
+    s5 = tmp_path / "s5.yaml"
+    s5.write_text(re.sub(r"(?m)^(\s*)sensor_id:.*$", r"\1sensor_id: 5", text))
+    assert load_scenario(s5).radar.sensor_id == 5
+    log = tmp_path / "s5.blf"
+    assert main(["log", str(s5), "--duration", "0.5", "-o", str(log)]) == 0
+    capsys.readouterr()
+    out = tmp_path / "s5.mcap"
+    assert main(["export", str(log), "--scenario", str(s5), "-o", str(out)]) == 0
+    assert "warning" not in capsys.readouterr().err
+    assert "/radar/objects" in read_mcap(out)["counts"]
+    # without the scenario: sensor 0, which sent nothing here; said on stderr with the IDs there are
+    assert main(["export", str(log), "-o", str(tmp_path / "s0.mcap")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: no frame of sensor 0" in err and "sensor ID 5" in err and "--sensor-id" in err

@@ -23,7 +23,7 @@ import sys
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import atomic_output, format_cycle, format_stats, progress
+from radarnode.cli.common import SensorCensus, atomic_output, format_cycle, format_stats, progress
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
@@ -116,13 +116,15 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
     return list(cols.items())
 
 
-def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
+def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> FrameDecoder:
     decoder = FrameDecoder(args.sensor_id)
     if args.format == "csv":
         # a first pass for the columns: only the signals of messages that occur, not the whole DBC's ~200
         first = ReadReport(report.path, report.fmt)
         present = {m.arbitration_id for m in read_frames(args.file, first)
                    if not (m.is_error_frame or m.is_remote_frame)}
+        if first.frames == 0:                            # not even a header line for a file with no frame
+            raise FileError(first.message("argument FILE"))
         columns = _signal_columns(decoder.table, present)
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
@@ -130,6 +132,7 @@ def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
     try:
         for msg in read_frames(args.file, report):
             bar.update(1)
+            census.note(msg)
             rec = decoder.record(msg)
             if rec is None:
                 continue
@@ -149,7 +152,7 @@ def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
     return decoder
 
 
-def _write_text(args, out, report: ReadReport) -> None:
+def _write_text(args, out, report: ReadReport, census: SensorCensus) -> None:
     sensor = 0 if args.sensor_id is None else args.sensor_id
     assembler = CycleAssembler(sensor_id=sensor)
     cycles = []
@@ -158,6 +161,7 @@ def _write_text(args, out, report: ReadReport) -> None:
     def counted(reader):
         for msg in reader:
             bar.update(1)
+            census.note(msg)
             yield msg
 
     try:
@@ -167,6 +171,8 @@ def _write_text(args, out, report: ReadReport) -> None:
                 out.write(format_cycle(cycle) + "\n")
     finally:
         bar.close()
+    if report.frames == 0:                               # no frame, no summary of nothing
+        raise FileError(report.message("argument FILE"))
     out.write(format_stats(assembler.stats) + "\n")
     objects = summarize_objects([c for c in cycles if isinstance(c, ObjectCycle)])
     for oid, d in sorted(objects.items(), key=lambda kv: -kv[1]["cycles"]):
@@ -185,16 +191,22 @@ def cmd(args) -> int:
     write = _write_text if args.format == "text" else _write_machine
 
     def nothing_readable() -> None:
-        if report.damaged and report.frames == 0:        # not a log of this format: no output file at all
+        if report.frames == 0:          # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument FILE"))
 
+    census = SensorCensus()
     if args.output is None:
-        result = write(args, sys.stdout, report)
+        result = write(args, sys.stdout, report, census)
         nothing_readable()
     else:
         with atomic_output(args.output, "--output", newline="" if args.format == "csv" else None) as out:
-            result = write(args, out, report)
+            result = write(args, out, report, census)
             nothing_readable()
+    if args.format == "text" or args.sensor_id is not None:
+        # the sensor asked for (text: 0 by default) sent nothing here, others did: say which there are
+        warning = census.warning(0 if args.sensor_id is None else args.sensor_id, "--sensor-id")
+        if warning:
+            print(warning, file=sys.stderr)
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "

@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from radarnode.cli import options
-from radarnode.cli.common import atomic_path, progress
+from radarnode.cli.common import SensorCensus, atomic_path, progress
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
 from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, read_frames
@@ -28,8 +28,8 @@ def add_subparser(sub) -> None:
     p.add_argument("--scenario", help="the scenario the log was rendered from: adds the ego and the ground truth")
     p.add_argument("--start-time", type=options.START_TIME, default=0.0,
                    help="timestamp of the scenario's start in the log, s (log --start-time; default 0)")
-    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=0,
-                   help="the radar whose frames are decoded, 0..7 (default 0)")
+    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None,
+                   help="the radar whose frames are decoded, 0..7 (default: the --scenario's radar.sensor_id, else 0)")
     p.set_defaults(func=cmd)
 
 
@@ -45,7 +45,9 @@ def cmd(args) -> int:
     if args.scenario:
         from radarnode.radar.setup import load_scenario
         scenario = load_scenario(args.scenario)
-    rec = FoxgloveRecorder(sensor_id=args.sensor_id)
+    sensor_id = args.sensor_id if args.sensor_id is not None else scenario.radar.sensor_id if scenario else 0
+    rec = FoxgloveRecorder(sensor_id=sensor_id)
+    census = SensorCensus()
     report = ReadReport(args.log, fmt)
     with atomic_path(args.output, "--output") as tmp:
         try:
@@ -60,15 +62,19 @@ def cmd(args) -> int:
             try:
                 for msg in read_frames(args.log, report):
                     rec.on_message_received(msg)
+                    census.note(msg)
                     bar.update(1)
             finally:
                 bar.close()
         finally:
             rec.close()
-        if report.damaged and report.frames == 0:          # not a log of this format: no output file at all
+        if report.frames == 0:      # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument LOG"))
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
+    warning = census.warning(sensor_id, "--sensor-id")
+    if warning:
+        print(warning, file=sys.stderr)
     if report.damaged:
         # everything readable is in the MCAP; the status says the log itself is not whole
         raise FileError(report.message("argument LOG"))
