@@ -166,3 +166,23 @@ def test_consume_json_carries_timestamp_sensor_and_cycle_counter(tmp_path, capsy
         assert x["sensor_id"] == 2 and x["type"] == "objects"
         assert x["timestamp"] == pytest.approx(by_counter[x["cycle_counter"]], abs=1e-6)
     assert [x["cycle_counter"] for x in lines] == [c for _, c in headers][:len(lines)]
+
+
+@pytest.mark.parametrize("fmt, output, refused", [
+    ("text", "text.blf", True), ("text", "t.log.gz", True), ("text", "t.json", True), ("text", "t.mcap", True),
+    ("json", "frames.csv", True), ("json", "frames.asc", True), ("csv", "frames.json", True),
+    ("csv", "frames.jsonl", True), ("csv", "frames.blf", True),
+    ("text", "t.txt", False), ("json", "f.jsonl", False), ("json", "f.txt", False), ("csv", "f.csv", False),
+    ("csv", "f.txt", False),
+])
+def test_decode_output_suffix_must_not_say_another_format(tmp_path, fmt, output, refused):
+    log = _log(tmp_path, ".blf", duration="0.5")
+    r = run("decode", str(log), "--format", fmt, "-o", str(tmp_path / output))
+    if refused:
+        assert r.returncode == 2, r.stderr
+        line = r.stderr.strip()
+        assert "\n" not in line and line.startswith(f"error: option --output: value '{tmp_path / output}' is not "
+                                                    f"allowed with --format {fmt}"), line
+        assert "expected a file name ending in" in line and not (tmp_path / output).exists()
+    else:
+        assert r.returncode == 0 and (tmp_path / output).stat().st_size > 0, r.stderr

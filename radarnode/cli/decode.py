@@ -28,7 +28,7 @@ from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.busdbc import frame_table
-from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, read_frames
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, log_format, read_frames
 
 FORMATS_OUT = ("text", "json", "csv")
 FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
@@ -181,7 +181,31 @@ def _write_text(args, out, report: ReadReport, census: SensorCensus) -> None:
                   f"{d['dist_lat_m']:6.1f} m lat\n")
 
 
+#: the suffixes of decode's own formats; an output named for one must be written in it
+OWN_SUFFIXES = {"json": (".json", ".jsonl"), "csv": (".csv",)}
+SUGGESTED = {"text": ".txt", "json": ".jsonl, .json or .txt", "csv": ".csv or .txt"}
+
+
+def check_output_suffix(path: str, fmt: str) -> None:
+    """Refuse (UsageError) an ``-o`` whose suffix says another format than the one written: a CAN log format
+    (decode writes no CAN log: ``-o text.blf``), or another of decode's formats (``--format json -o x.csv``).
+    Any other suffix (``.txt``, none) is taken as it is."""
+    suffix = log_format(path)
+    if suffix in OWN_SUFFIXES.get(fmt, ()):
+        return
+    what = next((f"{suffix} is decode's --format {other}" for other, suffixes in OWN_SUFFIXES.items()
+                 if suffix in suffixes), None)
+    if what is None and (suffix in FORMATS or suffix == ".mcap"):
+        what = f"{suffix} is a CAN log format, and decode writes no CAN log"
+    if what is not None:
+        raise UsageError(f"option --output: value {path!r} is not allowed with --format {fmt}: {what}; expected "
+                         f"a file name ending in {SUGGESTED[fmt]} (or any suffix that is not a CAN log's or "
+                         "another format's)")
+
+
 def cmd(args) -> int:
+    if args.output is not None:
+        check_output_suffix(args.output, args.format)
     fmt = check_input(args.file, "argument FILE")     # a missing, empty or unknown file fails before any output
     if args.output is not None:
         if os.path.exists(args.output) and os.path.samefile(args.output, args.file):
