@@ -184,3 +184,13 @@ def test_debug_keeps_the_exit_status_of_a_usage_error(tmp_path, args):
     assert plain.returncode == 2, plain.stderr
     r = subprocess.run([*CLI, *args, "--debug"], capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert r.returncode == 2 and "Traceback" in r.stderr, r.stderr
+
+
+def test_a_udp_multicast_bus_is_named_by_interface_and_group():
+    """python-can leaves udp_multicast's channel_info at "unknown": node and consume say interface and group."""
+    group = "239.74.163.2"
+    r = run("node", SCENARIO, "-i", "udp_multicast", "-c", group, "--fast", "--duration", "0.2")
+    assert r.returncode == 0, r.stderr
+    assert f"on udp_multicast channel {group}," in r.stderr and "unknown" not in r.stderr
+    r = run("consume", "-i", "udp_multicast", "-c", group, "--timeout", "0.2")
+    assert r.returncode == 0 and f"listening on udp_multicast channel {group}" in r.stderr, r.stderr
