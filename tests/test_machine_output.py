@@ -186,3 +186,13 @@ def test_decode_output_suffix_must_not_say_another_format(tmp_path, fmt, output,
         assert "expected a file name ending in" in line and not (tmp_path / output).exists()
     else:
         assert r.returncode == 0 and (tmp_path / output).stat().st_size > 0, r.stderr
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".log", ".asc"])
+def test_decode_json_channel_is_text_whatever_the_log_format(tmp_path, suffix):
+    """.log gives python-can "can0", .blf and .asc a number: JSON gives a string either way (one type a field)."""
+    log = _log(tmp_path, suffix, duration="0.5")
+    r = run("decode", str(log), "--format", "json")
+    assert r.returncode == 0, r.stderr
+    channels = {type(json.loads(line)["channel"]) for line in r.stdout.splitlines()}
+    assert channels == {str}, channels

@@ -77,7 +77,9 @@ class FrameDecoder:
         if self.only is not None and sensor is not None and sensor != self.only:
             return None
         self.frames += 1
-        rec = {"timestamp": msg.timestamp, "channel": msg.channel, "can_id": msg.arbitration_id,
+        # the channel as text whatever the reader gives (.log "can0", .blf 0): one JSON type per field
+        channel = None if msg.channel is None else str(msg.channel)
+        rec = {"timestamp": msg.timestamp, "channel": channel, "can_id": msg.arbitration_id,
                "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
                "dlc": msg.dlc, "data": bytes(msg.data).hex().upper(), "signals": {}}
         if info is None:
