@@ -194,3 +194,14 @@ def test_a_udp_multicast_bus_is_named_by_interface_and_group():
     assert f"on udp_multicast channel {group}," in r.stderr and "unknown" not in r.stderr
     r = run("consume", "-i", "udp_multicast", "-c", group, "--timeout", "0.2")
     assert r.returncode == 0 and f"listening on udp_multicast channel {group}" in r.stderr, r.stderr
+
+
+def test_run_takes_its_bit_rate_as_node_does_and_names_the_source(monkeypatch):
+    env = {k: v for k, v in os.environ.items() if k not in ("CAN_BITRATE", "CAN_CONFIG")}
+    r = run("run", SCENARIO, "--fast", "--quiet", "--duration", "0.2", env={**env, "CAN_BITRATE": "250000"})
+    assert r.returncode == 0, r.stderr
+    assert "of 250000 bit/s (python-can environment CAN_BITRATE)" in r.stdout, r.stdout
+    r = run("run", SCENARIO, "--fast", "--quiet", "--duration", "0.2", "-b", "125000", env=env)
+    assert r.returncode == 0 and "of 125000 bit/s (command line -b/--bitrate)" in r.stdout, r.stderr + r.stdout
+    r = run("run", SCENARIO, "--fast", "--quiet", "--duration", "0.2", "-b", "5", env=env)
+    assert r.returncode == 2 and r.stderr.startswith("error: option -b/--bitrate: value 5 is not allowed"), r.stderr
