@@ -26,8 +26,9 @@ def add_subparser(sub) -> None:
     p.add_argument("log", help="python-can log file (" + " ".join(FORMATS) + "; .mf4 with radarnode[mf4])")
     p.add_argument("-o", "--output", required=True, help="MCAP file to write (.mcap)")
     p.add_argument("--scenario", help="the scenario the log was rendered from: adds the ego and the ground truth")
-    p.add_argument("--start-time", type=options.START_TIME, default=0.0,
-                   help="timestamp of the scenario's start in the log, s (log --start-time; default 0)")
+    p.add_argument("--start-time", type=options.START_TIME, default=None,
+                   help="timestamp of the scenario's start in the log, s, with --scenario (log --start-time; "
+                        "default 0)")
     p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None,
                    help="the radar whose frames are decoded, 0..7 (default: the --scenario's radar.sensor_id, else 0)")
     p.set_defaults(func=cmd)
@@ -35,6 +36,10 @@ def add_subparser(sub) -> None:
 
 def cmd(args) -> int:
     from radarnode.viz.recorder import FoxgloveRecorder
+    if args.start_time is not None and not args.scenario:
+        # it places the scenario's ego and truth on the log's time line; without a scenario nothing uses it
+        raise UsageError(f"option --start-time: value {args.start_time:g} is not allowed without --scenario; "
+                         "expected --scenario with it (or no --start-time)")
     if not is_mcap(args.output):
         raise UsageError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
                          ".mcap")
@@ -56,7 +61,7 @@ def cmd(args) -> int:
                 from radarnode.scene.world import Scene
                 m, attachments = scenario_metadata(scenario, "unknown (from a log)")
                 meta.update(m)
-                rec.attach_scene(Scene(scenario), args.start_time)
+                rec.attach_scene(Scene(scenario), args.start_time or 0.0)
             rec.open_mcap(tmp, metadata=meta, attachments=attachments)
             bar = progress(None, f"exporting {Path(args.log).name}", unit="frame")
             try:

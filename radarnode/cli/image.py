@@ -41,12 +41,14 @@ def add_subparser(sub) -> None:
                        description=__doc__)
     add_scenario_argument(p)
     p.add_argument("-o", "--output", required=True, help="PNG file to write (or GIF with --animate)")
-    p.add_argument("--time", type=options.number(lo=0.0, hi=86_400.0), default=0.0,
-                   help="scenario time of the frame, s (default 0; at most the scenario's duration)")
+    p.add_argument("--time", type=options.number(lo=0.0, hi=86_400.0), default=None,
+                   help="scenario time of the frame, s (default 0; at most the scenario's duration; not with "
+                        "--animate)")
     p.add_argument("--k", type=options.number(lo=1.0, hi=10.0), default=2.5,
                    help="direct-perspective widening of the near edge, 1..10 (1.7, 2.5)")
     p.add_argument("--animate", action="store_true", help="render every --every-th cycle of the scenario as a GIF")
-    p.add_argument("--every", type=options.POSITIVE_COUNT, default=5, help="cycles between animation frames (default 5)")
+    p.add_argument("--every", type=options.POSITIVE_COUNT, default=None,
+                   help="cycles between animation frames, with --animate (default 5)")
     p.set_defaults(func=cmd)
 
 
@@ -215,6 +217,15 @@ def _check_output(path: str, animate: bool, plt) -> None:
 
 
 def cmd(args) -> int:
+    # an option the chosen mode does not use would be ignored: refused, naming both
+    if args.every is not None and not args.animate:
+        raise UsageError(f"option --every: value {args.every} is not allowed without --animate; expected --animate "
+                         "with it (or no --every)")
+    if args.time is not None and args.animate:
+        raise UsageError(f"option --time: value {args.time:g} is not allowed with --animate (it renders every "
+                         "cycle); expected --time without --animate, or no --time")
+    args.every = 5 if args.every is None else args.every
+    args.time = 0.0 if args.time is None else args.time
     plt = _matplotlib()
     _check_output(args.output, args.animate, plt)
     scenario = scenario_from_args(args)

@@ -16,7 +16,7 @@ import can
 from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
     resolve_bitrate, scenario_from_args, stop_on_signals
-from radarnode.cli.foxglove import add_live_arguments, live_view
+from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, make_ecu
@@ -63,6 +63,7 @@ def format_ecu(d, ego_speed_mps: float) -> str:
 
 
 def cmd(args) -> int:
+    check_live_arguments(args)
     scenario = scenario_from_args(args)
     # the budget's bit rate as node takes it: -b, python-can's CAN_BITRATE/can.conf, else the scenario's
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)
