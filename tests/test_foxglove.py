@@ -461,3 +461,31 @@ def test_export_decodes_the_scenarios_sensor_id_unless_told_otherwise(tmp_path, 
     assert main(["export", str(log), "-o", str(tmp_path / "s0.mcap")]) == 0
     err = capsys.readouterr().err
     assert "warning: no frame of sensor 0" in err and "sensor ID 5" in err and "--sensor-id" in err
+
+
+def test_decoded_values_carry_no_binary_noise(tmp_path):
+    """scale × raw + offset in floating point gives 2.84e-14 for 0 m and 3.6500000000000004 for 3.65: the MCAP
+    has each value at its signal's resolution (the JSON of /ecu/*, the metadata text of /radar/objects)."""
+    out = tmp_path / "run.mcap"
+    assert main(["log", str(ROOT / "scenarios" / "highway_cut_in.yaml"), "--duration", "8", "-o", str(out)]) == 0
+    got = read_mcap(out)["topics"]
+    noisy = re.compile(r"e-|\.\d{7,}")
+    seen = 0
+    for topic in ("/ecu/acc", "/ecu/fcw"):
+        for _, rec in got[topic][3]:
+            for key, v in rec.items():
+                if key != "timestamp" and isinstance(v, float):
+                    seen += 1
+                    assert v == round(v, 3) and not noisy.search(repr(v)), (topic, key, v)
+    for _, update in got["/radar/objects"][3]:
+        for entity in update.entities:
+            for key, text in meta(entity).items():
+                seen += 1
+                assert not noisy.search(text), (key, text)
+    assert seen > 100
+
+
+def test_signal_value_rounds_to_the_dbc_resolution():
+    from radarnode.wire.busdbc import frame_table, signal_value
+    sig = next(s for info in frame_table().values() for s in info.message.signals if s.name == "Obj_DistLat")
+    assert signal_value(sig, -204.6 + 1023 * 0.2) == 0 and signal_value(sig, 3.6000000000000014) == 3.6

@@ -27,7 +27,7 @@ from radarnode.cli.common import SensorCensus, atomic_output, format_cycle, form
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
-from radarnode.wire.busdbc import frame_table
+from radarnode.wire.busdbc import frame_table, signal_value
 from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, log_format, read_frames
 
 FORMATS_OUT = ("text", "json", "csv")
@@ -95,7 +95,7 @@ class FrameDecoder:
                 if sig.name not in values:
                     continue           # a multiplexed signal of another multiplexer value
                 v = values[sig.name]
-                entry = {"value": _number(v), "unit": sig.unit or ""}
+                entry = {"value": _number(signal_value(sig, v)), "unit": sig.unit or ""}
                 if sig.choices and v in sig.choices:
                     entry["label"] = str(sig.choices[v])
                 rec["signals"][sig.name] = entry
