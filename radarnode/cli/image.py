@@ -123,7 +123,12 @@ class Renderer:
         im = a1.imshow(rdp.T - vmax, origin="lower", aspect="auto", cmap="viridis", vmin=-50, vmax=0,
                        extent=[speeds[0], speeds[-1], 0, ranges[-1]])
         fig.colorbar(im, ax=a1, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
-        a1.scatter(det.range_rate_mps, det.range_m, s=20, facecolors="none", edgecolors="r", label="detections")
+        # the map's Doppler axis is the measured one, which wraps at ±N/2 bins; a detection's range rate is the
+        # resolved (unaliased) one: drawn where the map shows its cell, folded into the axis (-28 m/s → +10 m/s)
+        span = rd.shape[1] * p.speed_resolution_mps
+        aliased = (np.asarray(det.range_rate_mps) - speeds[0]) % span + speeds[0]
+        a1.scatter(aliased, det.range_m, s=20, facecolors="none", edgecolors="r",
+                   label="detections (at the measured Doppler)")
         a1.legend(loc="upper right", fontsize=7)
         top = min(ranges[-1], p.max_range_m)
         a1.set(xlabel="range rate, m/s (negative closing)", ylabel="range, m", title="range–Doppler", ylim=(0, top))
