@@ -127,11 +127,11 @@ class Renderer:
         # resolved (unaliased) one: drawn where the map shows its cell, folded into the axis (-28 m/s → +10 m/s)
         span = rd.shape[1] * p.speed_resolution_mps
         aliased = (np.asarray(det.range_rate_mps) - speeds[0]) % span + speeds[0]
-        a1.scatter(aliased, det.range_m, s=20, facecolors="none", edgecolors="r",
-                   label="detections (at the measured Doppler)")
+        a1.scatter(aliased, det.range_m, s=20, facecolors="none", edgecolors="r", label="detections")
         a1.legend(loc="upper right", fontsize=7)
         top = min(ranges[-1], p.max_range_m)
-        a1.set(xlabel="range rate, m/s (negative closing)", ylabel="range, m", title="range–Doppler", ylim=(0, top))
+        a1.set(xlabel="range rate, m/s (negative closing; as measured, aliased)", ylabel="range, m",
+               title="range–Doppler", ylim=(0, top))
         vmax = img.max()
         pm = a2.pcolormesh(np.degrees(az), ranges, img.T - vmax, cmap="viridis", vmin=-45, vmax=0, shading="auto")
         fig.colorbar(pm, ax=a2, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
