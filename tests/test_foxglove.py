@@ -489,3 +489,4 @@ def test_signal_value_rounds_to_the_dbc_resolution():
     from radarnode.wire.busdbc import frame_table, signal_value
     sig = next(s for info in frame_table().values() for s in info.message.signals if s.name == "Obj_DistLat")
     assert signal_value(sig, -204.6 + 1023 * 0.2) == 0 and signal_value(sig, 3.6000000000000014) == 3.6
+    assert isinstance(signal_value(sig, -2.0), float)          # a scaled signal stays a float when whole

@@ -132,9 +132,10 @@ def _decimals(x: float) -> int:
 def signal_value(sig, v: float) -> float | int:
     """A decoded signal value at the signal's resolution: rounded to the decimals of its DBC scale and offset,
     so ``scale × raw + offset`` carries no binary noise (FCW_RequiredDecel 3.65, not 3.6500000000000004);
-    an int when whole."""
+    an int for a signal of whole steps, a float (-2.0, not -2) for a scaled one, so a field keeps its type."""
     v = float(v)
     if not math.isfinite(v):
         return v
-    v = round(v, max(_decimals(sig.scale), _decimals(sig.offset))) + 0.0
-    return int(v) if v.is_integer() else v
+    places = max(_decimals(sig.scale), _decimals(sig.offset))
+    v = round(v, places) + 0.0
+    return int(v) if places == 0 and v.is_integer() else v
