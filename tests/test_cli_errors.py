@@ -144,6 +144,18 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     (["log", SCENARIO], "the following arguments are required: -o/--output"),
     (["log", SCENARIO, "-o", "LOGS/x.log", "--no-such-option"], "unrecognized arguments: --no-such-option"),
     (["frobnicate"], "argument COMMAND: value 'frobnicate' is not allowed; expected one of run, node"),
+    # an option that the rest of the command line leaves unused is refused, not ignored: both named
+    (["image", SCENARIO, "-o", "LOGS/x.png", "--every", "3"],
+     "option --every: value 3 is not allowed without --animate"),
+    (["image", SCENARIO, "-o", "LOGS/x.gif", "--animate", "--time", "2"],
+     "option --time: value 2 is not allowed with --animate"),
+    (["run", SCENARIO, "--fast", "--foxglove-port", "9000"],
+     "option --foxglove-port: value 9000 is not allowed without --foxglove"),
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--fast", "--foxglove-port", "9000"],
+     "option --foxglove-port: value 9000 is not allowed without --foxglove"),
+    (["export", "LOGS/small.blf", "-o", "LOGS/y.mcap", "--start-time", "5"],
+     "option --start-time: value 5 is not allowed without --scenario"),
+    (["run", SCENARIO, "--duration", "0.01"], "option --duration: value 0.01 is not allowed; expected at least one"),
 ])
 def test_other_usage_errors_are_one_line_and_exit_2(capsys, logs, argv, needle):
     d = str(logs[".blf"].parent)

@@ -70,13 +70,14 @@ def test_debug_before_and_after_the_subcommand(where):
     assert r.returncode != 0 and "Traceback" in r.stderr and "FileError: argument FILE" in r.stderr
 
 
-def _run_on_a_terminal(tmp_path, *args, timeout=120):
-    """Run with stderr on a pseudo-terminal (stdout to a file) and return (rc, stdout, what the terminal showed)."""
+def _run_on_a_terminal(tmp_path, *args, timeout=120, stdout_too=False):
+    """Run with stderr on a pseudo-terminal (stdout to a file, or to the terminal too with ``stdout_too``) and
+    return (rc, stdout, what the terminal showed)."""
     stdout = tmp_path / "stdout.txt"
     master, slave = pty.openpty()
     fcntl.ioctl(slave, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 100, 0, 0))    # a 100-column terminal
     with stdout.open("wb") as f:
-        p = subprocess.Popen([*CLI, *args], stdout=f, stderr=slave, cwd=ROOT)
+        p = subprocess.Popen([*CLI, *args], stdout=slave if stdout_too else f, stderr=slave, cwd=ROOT)
     os.close(slave)
     shown = b""
     while True:
@@ -109,6 +110,20 @@ def test_progress_bar_on_a_terminal_only(tmp_path):
     rc, stdout, shown = _run_on_a_terminal(tmp_path, "decode", str(out), "--format", "json")
     assert rc == 0 and "decoding" in shown and "frame" in shown
     assert stdout.startswith("{") and "decoding" not in stdout and "\r" not in stdout
+
+
+@pytest.mark.parametrize("fmt", ["json", "csv", "text"])
+def test_no_progress_bar_among_records_on_a_terminal_stdout(tmp_path, fmt):
+    """decode writing its records to a terminal: no bar redrawn in the middle of them (they show the progress)."""
+    out = tmp_path / "p.blf"
+    assert run("log", SCENARIO, "-o", str(out), "--duration", "1").returncode == 0
+    rc, _, shown = _run_on_a_terminal(tmp_path, "decode", str(out), "--format", fmt, stdout_too=True)
+    assert rc == 0, shown
+    assert "frame/s" not in shown and "decoding p.blf:" not in shown, shown[:2000]
+    # with -o the records go to the file: the bar is back on the terminal
+    rc, _, shown = _run_on_a_terminal(tmp_path, "decode", str(out), "--format", fmt, "-o",
+                                      str(tmp_path / f"x.{fmt if fmt != 'text' else 'txt'}"), stdout_too=True)
+    assert rc == 0 and "decoding" in shown, shown
 
 
 def test_bit_rate_from_the_command_line_python_can_config_or_scenario(monkeypatch, tmp_path):
@@ -156,3 +171,37 @@ def test_node_takes_its_budget_bit_rate_from_python_can_configuration(monkeypatc
     assert main(["node", scen, "-i", "virtual", "-c", "habits-bitrate", "--fast", "--duration", "0.3",
                  "-b", "125000"]) == 0
     assert "of 125000 bit/s (command line -b/--bitrate)" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("args", [
+    ["log", SCENARIO, "-o", "a.txt"],
+    ["image", SCENARIO, "-o", "x.png", "--time", "99"],
+    ["export", "nosuch.log", "-o", "x.blf"],
+    ["consume", "-i", "nosuch", "-c", "x"],
+])
+def test_debug_keeps_the_exit_status_of_a_usage_error(tmp_path, args):
+    plain = subprocess.run([*CLI, *args], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert plain.returncode == 2, plain.stderr
+    r = subprocess.run([*CLI, *args, "--debug"], capture_output=True, text=True, timeout=120, cwd=tmp_path)
+    assert r.returncode == 2 and "Traceback" in r.stderr, r.stderr
+
+
+def test_a_udp_multicast_bus_is_named_by_interface_and_group():
+    """python-can leaves udp_multicast's channel_info at "unknown": node and consume say interface and group."""
+    group = "239.74.163.2"
+    r = run("node", SCENARIO, "-i", "udp_multicast", "-c", group, "--fast", "--duration", "0.2")
+    assert r.returncode == 0, r.stderr
+    assert f"on udp_multicast channel {group}," in r.stderr and "unknown" not in r.stderr
+    r = run("consume", "-i", "udp_multicast", "-c", group, "--timeout", "0.2")
+    assert r.returncode == 0 and f"listening on udp_multicast channel {group}" in r.stderr, r.stderr
+
+
+def test_run_takes_its_bit_rate_as_node_does_and_names_the_source(monkeypatch):
+    env = {k: v for k, v in os.environ.items() if k not in ("CAN_BITRATE", "CAN_CONFIG")}
+    r = run("run", SCENARIO, "--fast", "--quiet", "--duration", "0.2", env={**env, "CAN_BITRATE": "250000"})
+    assert r.returncode == 0, r.stderr
+    assert "of 250000 bit/s (python-can environment CAN_BITRATE)" in r.stdout, r.stdout
+    r = run("run", SCENARIO, "--fast", "--quiet", "--duration", "0.2", "-b", "125000", env=env)
+    assert r.returncode == 0 and "of 125000 bit/s (command line -b/--bitrate)" in r.stdout, r.stderr + r.stdout
+    r = run("run", SCENARIO, "--fast", "--quiet", "--duration", "0.2", "-b", "5", env=env)
+    assert r.returncode == 2 and r.stderr.startswith("error: option -b/--bitrate: value 5 is not allowed"), r.stderr

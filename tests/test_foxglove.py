@@ -442,3 +442,51 @@ def test_live_view_serves_object_messages_over_foxglove_websocket(command):
         if proc.poll() is None:
             proc.kill()
             proc.wait(timeout=10)
+
+
+def test_export_decodes_the_scenarios_sensor_id_unless_told_otherwise(tmp_path, capsys):
+    """A sensor-5 scenario's log exported with --scenario: sensor 5's objects, not an MCAP of raw frames only."""
+    text = (ROOT / "scenarios" / "highway_cut_in.yaml").read_text()
+    s5 = tmp_path / "s5.yaml"
+    s5.write_text(re.sub(r"(?m)^(\s*)sensor_id:.*$", r"\1sensor_id: 5", text))
+    assert load_scenario(s5).radar.sensor_id == 5
+    log = tmp_path / "s5.blf"
+    assert main(["log", str(s5), "--duration", "0.5", "-o", str(log)]) == 0
+    capsys.readouterr()
+    out = tmp_path / "s5.mcap"
+    assert main(["export", str(log), "--scenario", str(s5), "-o", str(out)]) == 0
+    assert "warning" not in capsys.readouterr().err
+    assert "/radar/objects" in read_mcap(out)["counts"]
+    # without the scenario: sensor 0, which sent nothing here; said on stderr with the IDs there are
+    assert main(["export", str(log), "-o", str(tmp_path / "s0.mcap")]) == 0
+    err = capsys.readouterr().err
+    assert "warning: no frame of sensor 0" in err and "sensor ID 5" in err and "--sensor-id" in err
+
+
+def test_decoded_values_carry_no_binary_noise(tmp_path):
+    """scale × raw + offset in floating point gives 2.84e-14 for 0 m and 3.6500000000000004 for 3.65: the MCAP
+    has each value at its signal's resolution (the JSON of /ecu/*, the metadata text of /radar/objects)."""
+    out = tmp_path / "run.mcap"
+    assert main(["log", str(ROOT / "scenarios" / "highway_cut_in.yaml"), "--duration", "8", "-o", str(out)]) == 0
+    got = read_mcap(out)["topics"]
+    noisy = re.compile(r"e-|\.\d{7,}")
+    seen = 0
+    for topic in ("/ecu/acc", "/ecu/fcw"):
+        for _, rec in got[topic][3]:
+            for key, v in rec.items():
+                if key != "timestamp" and isinstance(v, float):
+                    seen += 1
+                    assert v == round(v, 3) and not noisy.search(repr(v)), (topic, key, v)
+    for _, update in got["/radar/objects"][3]:
+        for entity in update.entities:
+            for key, text in meta(entity).items():
+                seen += 1
+                assert not noisy.search(text), (key, text)
+    assert seen > 100
+
+
+def test_signal_value_rounds_to_the_dbc_resolution():
+    from radarnode.wire.busdbc import frame_table, signal_value
+    sig = next(s for info in frame_table().values() for s in info.message.signals if s.name == "Obj_DistLat")
+    assert signal_value(sig, -204.6 + 1023 * 0.2) == 0 and signal_value(sig, 3.6000000000000014) == 3.6
+    assert isinstance(signal_value(sig, -2.0), float)          # a scaled signal stays a float when whole

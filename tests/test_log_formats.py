@@ -240,3 +240,41 @@ def test_a_long_sqlite_log_keeps_every_frame(tmp_path):
     for out in (db, blf):
         assert main(["log", LONG, "-o", str(out), "--duration", "10"]) == 0
     assert sum(1 for _ in can.LogReader(str(db))) == sum(1 for _ in can.LogReader(str(blf))) > 2000
+
+
+def test_a_duration_shorter_than_one_cycle_is_a_usage_error(capsys, tmp_path):
+    rc, _, err = cli(capsys, "log", SCENARIO, "--duration", "0.001", "-o", tmp_path / "a.blf")
+    assert rc == 2 and err.startswith("error: option --duration: value 0.001 is not allowed; expected at least one "
+                                      "radar cycle of 0.072 s"), err
+    assert not (tmp_path / "a.blf").exists()
+    assert cli(capsys, "log", SCENARIO, "--duration", "0.072", "-o", tmp_path / "b.blf")[0] == 0
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".asc", ".csv"])
+def test_a_log_of_no_frame_is_an_error_with_no_output(capsys, tmp_path, suffix):
+    empty = tmp_path / f"empty{suffix}"
+    can.Logger(str(empty)).stop()                     # python-can's own writer, no frame
+    for argv, option in ((["decode", empty], "FILE"), (["decode", empty, "--format", "csv"], "FILE"),
+                         (["decode", empty, "--format", "json", "-o", tmp_path / "x.jsonl"], "FILE"),
+                         (["export", empty, "-o", tmp_path / "x.mcap"], "LOG")):
+        if argv[0] == "export":
+            pytest.importorskip("foxglove")
+        rc, out, err = cli(capsys, *argv)
+        assert rc == 1 and out == "", (argv, out, err)
+        assert err.startswith(f"error: argument {option}: {str(empty)!r} holds no CAN frame"), err
+    assert not (tmp_path / "x.jsonl").exists() and not (tmp_path / "x.mcap").exists()
+
+
+def test_decode_names_the_sensors_a_log_holds_when_the_one_asked_for_has_none(capsys, tmp_path):
+    s5 = tmp_path / "s5.yaml"
+    s5.write_text(re.sub(r"(?m)^(\s*)sensor_id:.*$", r"\1sensor_id: 5",
+                         (SCENARIOS / "highway_cut_in.yaml").read_text()))
+    log = tmp_path / "s5.blf"
+    assert cli(capsys, "log", s5, "--duration", "0.5", "-o", log)[0] == 0
+    rc, out, err = cli(capsys, "decode", log, "--summary")
+    assert rc == 0 and "cycles=0" in out
+    assert "warning: no frame of sensor 0 in the log; it holds frames of sensor ID 5: pick one with --sensor-id" in err
+    rc, out, err = cli(capsys, "decode", log, "--summary", "--sensor-id", "5")
+    assert rc == 0 and "cycles=0" not in out and "warning" not in err
+    rc, out, err = cli(capsys, "decode", log, "--format", "json")          # every sensor's frames: nothing to say
+    assert rc == 0 and "warning" not in err

@@ -166,3 +166,33 @@ def test_consume_json_carries_timestamp_sensor_and_cycle_counter(tmp_path, capsy
         assert x["sensor_id"] == 2 and x["type"] == "objects"
         assert x["timestamp"] == pytest.approx(by_counter[x["cycle_counter"]], abs=1e-6)
     assert [x["cycle_counter"] for x in lines] == [c for _, c in headers][:len(lines)]
+
+
+@pytest.mark.parametrize("fmt, output, refused", [
+    ("text", "text.blf", True), ("text", "t.log.gz", True), ("text", "t.json", True), ("text", "t.mcap", True),
+    ("json", "frames.csv", True), ("json", "frames.asc", True), ("csv", "frames.json", True),
+    ("csv", "frames.jsonl", True), ("csv", "frames.blf", True),
+    ("text", "t.txt", False), ("json", "f.jsonl", False), ("json", "f.txt", False), ("csv", "f.csv", False),
+    ("csv", "f.txt", False),
+])
+def test_decode_output_suffix_must_not_say_another_format(tmp_path, fmt, output, refused):
+    log = _log(tmp_path, ".blf", duration="0.5")
+    r = run("decode", str(log), "--format", fmt, "-o", str(tmp_path / output))
+    if refused:
+        assert r.returncode == 2, r.stderr
+        line = r.stderr.strip()
+        assert "\n" not in line and line.startswith(f"error: option --output: value '{tmp_path / output}' is not "
+                                                    f"allowed with --format {fmt}"), line
+        assert "expected a file name ending in" in line and not (tmp_path / output).exists()
+    else:
+        assert r.returncode == 0 and (tmp_path / output).stat().st_size > 0, r.stderr
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".log", ".asc"])
+def test_decode_json_channel_is_text_whatever_the_log_format(tmp_path, suffix):
+    """.log gives python-can "can0", .blf and .asc a number: JSON gives a string either way (one type a field)."""
+    log = _log(tmp_path, suffix, duration="0.5")
+    r = run("decode", str(log), "--format", "json")
+    assert r.returncode == 0, r.stderr
+    channels = {type(json.loads(line)["channel"]) for line in r.stdout.splitlines()}
+    assert channels == {str}, channels

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import re
 import subprocess
 import sys
@@ -145,6 +146,26 @@ def test_nothing_to_check_is_said_and_skipped_not_passed(tmp_path, capsys):
     assert "nothing to check" in capsys.readouterr().out
     case = ET.parse(junit).getroot().find(".//testcase")
     assert case.find("skipped") is not None and case.find("failure") is None
+
+
+
+def test_nothing_to_check_is_the_plot_title_too():
+    pytest.importorskip("matplotlib")
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from radarnode.cli.plots import report_figure
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import load_scenario
+    sc = load_scenario(SCENARIOS / "highway_cut_in.yaml")
+    res = simulate(dataclasses.replace(sc, duration_s=0.5))
+    assert not res.checked
+    fig = report_figure(sc, res, plt)
+    try:
+        assert fig._suptitle.get_text().endswith(": nothing to check"), fig._suptitle.get_text()
+    finally:
+        plt.close(fig)
 
 
 def test_ecu_settings_from_the_command_line_are_used_and_checked(capsys):

@@ -47,6 +47,10 @@ def scenario_from_args(args) -> Scenario:
                                                                       hi=86_400.0, lo_open=True))
     except FieldError as exc:
         raise UsageError(f"option {exc.field}: value {exc.value!r} is not allowed; expected {exc.allowed}") from None
+    if args.duration is not None and sc.num_cycles < 1:
+        # a run of no cycle writes a log of no frame: refused, as the duration the radar's cycle needs at least
+        raise UsageError(f"option --duration: value {args.duration:g} is not allowed; expected at least one "
+                         f"radar cycle of {sc.period_s:g} s: a duration in [{sc.period_s:g}, 86400] s")
     return sc
 
 
@@ -147,15 +151,20 @@ def format_stats(stats: ConsumerStats) -> str:
     return "consumer: " + ", ".join(f"{k}={v}" for k, v in shown.items())
 
 
-def progress(total: int | None, label: str, unit: str = "cycle"):
+def progress(total: int | None, label: str, unit: str = "cycle", *, to_stdout: bool = False):
     """A tqdm progress bar on stderr, shown only when stderr is a terminal (never in piped output or logs).
+
+    ``to_stdout``: the command writes its records to standard output as it goes (``decode`` without ``-o``);
+    then no bar when standard output is a terminal too — the bar's redraws would land in the middle of the
+    records, and the records scrolling by show the progress themselves.
 
     tqdm rather than a hand-written bar: it measures the rate and the time left, redraws at most ~10 times a
     second whatever the loop's speed, adapts to the terminal width and to resizes, and leaves a clean line when
     closed or interrupted. ``total`` None shows a running count without a bar.
     """
     from tqdm import tqdm
-    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, disable=not sys.stderr.isatty(),
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr,
+                disable=not sys.stderr.isatty() or (to_stdout and sys.stdout.isatty()),
                 dynamic_ncols=True, leave=False)
 
 
@@ -291,3 +300,28 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
         raise UsageError(f"{source}: bit rate value {value!r} is not allowed; expected an integer "
                          "10000..1000000 bit/s")
     return Bitrate(bit_s, source)
+
+
+class SensorCensus:
+    """The radar sensor IDs whose frames a log holds (by the whole-bus DBC's ID plan), to say which to pick when
+    the one asked for has none."""
+
+    def __init__(self) -> None:
+        from radarnode.wire.busdbc import frame_table
+        self._table = frame_table()
+        self.present: set[int] = set()
+
+    def note(self, msg) -> None:
+        if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame:
+            return
+        info = self._table.get(msg.arbitration_id)
+        if info is not None and info.sensor_id is not None:
+            self.present.add(info.sensor_id)
+
+    def warning(self, wanted: int, option: str) -> str | None:
+        """One line when the log holds other sensors' frames but none of ``wanted``'s, else None."""
+        if wanted in self.present or not self.present:
+            return None
+        ids = ", ".join(str(i) for i in sorted(self.present))
+        return (f"warning: no frame of sensor {wanted} in the log; it holds frames of sensor ID "
+                f"{ids}: pick one with {option}")

@@ -23,12 +23,12 @@ import sys
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import atomic_output, format_cycle, format_stats, progress
+from radarnode.cli.common import SensorCensus, atomic_output, format_cycle, format_stats, progress
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
-from radarnode.wire.busdbc import frame_table
-from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, read_frames
+from radarnode.wire.busdbc import frame_table, signal_value
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, log_format, read_frames
 
 FORMATS_OUT = ("text", "json", "csv")
 FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
@@ -77,7 +77,9 @@ class FrameDecoder:
         if self.only is not None and sensor is not None and sensor != self.only:
             return None
         self.frames += 1
-        rec = {"timestamp": msg.timestamp, "channel": msg.channel, "can_id": msg.arbitration_id,
+        # the channel as text whatever the reader gives (.log "can0", .blf 0): one JSON type per field
+        channel = None if msg.channel is None else str(msg.channel)
+        rec = {"timestamp": msg.timestamp, "channel": channel, "can_id": msg.arbitration_id,
                "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
                "dlc": msg.dlc, "data": bytes(msg.data).hex().upper(), "signals": {}}
         if info is None:
@@ -93,7 +95,7 @@ class FrameDecoder:
                 if sig.name not in values:
                     continue           # a multiplexed signal of another multiplexer value
                 v = values[sig.name]
-                entry = {"value": _number(v), "unit": sig.unit or ""}
+                entry = {"value": _number(signal_value(sig, v)), "unit": sig.unit or ""}
                 if sig.choices and v in sig.choices:
                     entry["label"] = str(sig.choices[v])
                 rec["signals"][sig.name] = entry
@@ -116,20 +118,23 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
     return list(cols.items())
 
 
-def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
+def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> FrameDecoder:
     decoder = FrameDecoder(args.sensor_id)
     if args.format == "csv":
         # a first pass for the columns: only the signals of messages that occur, not the whole DBC's ~200
         first = ReadReport(report.path, report.fmt)
         present = {m.arbitration_id for m in read_frames(args.file, first)
                    if not (m.is_error_frame or m.is_remote_frame)}
+        if first.frames == 0:                            # not even a header line for a file with no frame
+            raise FileError(first.message("argument FILE"))
         columns = _signal_columns(decoder.table, present)
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
-    bar = progress(None, f"decoding {args.file}", unit="frame")
+    bar = progress(None, f"decoding {args.file}", unit="frame", to_stdout=args.output is None)
     try:
         for msg in read_frames(args.file, report):
             bar.update(1)
+            census.note(msg)
             rec = decoder.record(msg)
             if rec is None:
                 continue
@@ -149,15 +154,16 @@ def _write_machine(args, out, report: ReadReport) -> FrameDecoder:
     return decoder
 
 
-def _write_text(args, out, report: ReadReport) -> None:
+def _write_text(args, out, report: ReadReport, census: SensorCensus) -> None:
     sensor = 0 if args.sensor_id is None else args.sensor_id
     assembler = CycleAssembler(sensor_id=sensor)
     cycles = []
-    bar = progress(None, f"decoding {args.file}", unit="frame")
+    bar = progress(None, f"decoding {args.file}", unit="frame", to_stdout=args.output is None)
 
     def counted(reader):
         for msg in reader:
             bar.update(1)
+            census.note(msg)
             yield msg
 
     try:
@@ -167,6 +173,8 @@ def _write_text(args, out, report: ReadReport) -> None:
                 out.write(format_cycle(cycle) + "\n")
     finally:
         bar.close()
+    if report.frames == 0:                               # no frame, no summary of nothing
+        raise FileError(report.message("argument FILE"))
     out.write(format_stats(assembler.stats) + "\n")
     objects = summarize_objects([c for c in cycles if isinstance(c, ObjectCycle)])
     for oid, d in sorted(objects.items(), key=lambda kv: -kv[1]["cycles"]):
@@ -175,7 +183,31 @@ def _write_text(args, out, report: ReadReport) -> None:
                   f"{d['dist_lat_m']:6.1f} m lat\n")
 
 
+#: the suffixes of decode's own formats; an output named for one must be written in it
+OWN_SUFFIXES = {"json": (".json", ".jsonl"), "csv": (".csv",)}
+SUGGESTED = {"text": ".txt", "json": ".jsonl, .json or .txt", "csv": ".csv or .txt"}
+
+
+def check_output_suffix(path: str, fmt: str) -> None:
+    """Refuse (UsageError) an ``-o`` whose suffix says another format than the one written: a CAN log format
+    (decode writes no CAN log: ``-o text.blf``), or another of decode's formats (``--format json -o x.csv``).
+    Any other suffix (``.txt``, none) is taken as it is."""
+    suffix = log_format(path)
+    if suffix in OWN_SUFFIXES.get(fmt, ()):
+        return
+    what = next((f"{suffix} is decode's --format {other}" for other, suffixes in OWN_SUFFIXES.items()
+                 if suffix in suffixes), None)
+    if what is None and (suffix in FORMATS or suffix == ".mcap"):
+        what = f"{suffix} is a CAN log format, and decode writes no CAN log"
+    if what is not None:
+        raise UsageError(f"option --output: value {path!r} is not allowed with --format {fmt}: {what}; expected "
+                         f"a file name ending in {SUGGESTED[fmt]} (or any suffix that is not a CAN log's or "
+                         "another format's)")
+
+
 def cmd(args) -> int:
+    if args.output is not None:
+        check_output_suffix(args.output, args.format)
     fmt = check_input(args.file, "argument FILE")     # a missing, empty or unknown file fails before any output
     if args.output is not None:
         if os.path.exists(args.output) and os.path.samefile(args.output, args.file):
@@ -185,16 +217,22 @@ def cmd(args) -> int:
     write = _write_text if args.format == "text" else _write_machine
 
     def nothing_readable() -> None:
-        if report.damaged and report.frames == 0:        # not a log of this format: no output file at all
+        if report.frames == 0:          # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument FILE"))
 
+    census = SensorCensus()
     if args.output is None:
-        result = write(args, sys.stdout, report)
+        result = write(args, sys.stdout, report, census)
         nothing_readable()
     else:
         with atomic_output(args.output, "--output", newline="" if args.format == "csv" else None) as out:
-            result = write(args, out, report)
+            result = write(args, out, report, census)
             nothing_readable()
+    if args.format == "text" or args.sensor_id is not None:
+        # the sensor asked for (text: 0 by default) sent nothing here, others did: say which there are
+        warning = census.warning(0 if args.sensor_id is None else args.sensor_id, "--sensor-id")
+        if warning:
+            print(warning, file=sys.stderr)
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "

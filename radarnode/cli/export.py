@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 
 from radarnode.cli import options
-from radarnode.cli.common import atomic_path, progress
+from radarnode.cli.common import SensorCensus, atomic_path, progress
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
 from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, read_frames
@@ -26,15 +26,20 @@ def add_subparser(sub) -> None:
     p.add_argument("log", help="python-can log file (" + " ".join(FORMATS) + "; .mf4 with radarnode[mf4])")
     p.add_argument("-o", "--output", required=True, help="MCAP file to write (.mcap)")
     p.add_argument("--scenario", help="the scenario the log was rendered from: adds the ego and the ground truth")
-    p.add_argument("--start-time", type=options.START_TIME, default=0.0,
-                   help="timestamp of the scenario's start in the log, s (log --start-time; default 0)")
-    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=0,
-                   help="the radar whose frames are decoded, 0..7 (default 0)")
+    p.add_argument("--start-time", type=options.START_TIME, default=None,
+                   help="timestamp of the scenario's start in the log, s, with --scenario (log --start-time; "
+                        "default 0)")
+    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None,
+                   help="the radar whose frames are decoded, 0..7 (default: the --scenario's radar.sensor_id, else 0)")
     p.set_defaults(func=cmd)
 
 
 def cmd(args) -> int:
     from radarnode.viz.recorder import FoxgloveRecorder
+    if args.start_time is not None and not args.scenario:
+        # it places the scenario's ego and truth on the log's time line; without a scenario nothing uses it
+        raise UsageError(f"option --start-time: value {args.start_time:g} is not allowed without --scenario; "
+                         "expected --scenario with it (or no --start-time)")
     if not is_mcap(args.output):
         raise UsageError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
                          ".mcap")
@@ -45,7 +50,9 @@ def cmd(args) -> int:
     if args.scenario:
         from radarnode.radar.setup import load_scenario
         scenario = load_scenario(args.scenario)
-    rec = FoxgloveRecorder(sensor_id=args.sensor_id)
+    sensor_id = args.sensor_id if args.sensor_id is not None else scenario.radar.sensor_id if scenario else 0
+    rec = FoxgloveRecorder(sensor_id=sensor_id)
+    census = SensorCensus()
     report = ReadReport(args.log, fmt)
     with atomic_path(args.output, "--output") as tmp:
         try:
@@ -54,21 +61,25 @@ def cmd(args) -> int:
                 from radarnode.scene.world import Scene
                 m, attachments = scenario_metadata(scenario, "unknown (from a log)")
                 meta.update(m)
-                rec.attach_scene(Scene(scenario), args.start_time)
+                rec.attach_scene(Scene(scenario), args.start_time or 0.0)
             rec.open_mcap(tmp, metadata=meta, attachments=attachments)
             bar = progress(None, f"exporting {Path(args.log).name}", unit="frame")
             try:
                 for msg in read_frames(args.log, report):
                     rec.on_message_received(msg)
+                    census.note(msg)
                     bar.update(1)
             finally:
                 bar.close()
         finally:
             rec.close()
-        if report.damaged and report.frames == 0:          # not a log of this format: no output file at all
+        if report.frames == 0:      # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument LOG"))
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
+    warning = census.warning(sensor_id, "--sensor-id")
+    if warning:
+        print(warning, file=sys.stderr)
     if report.damaged:
         # everything readable is in the MCAP; the status says the log itself is not whole
         raise FileError(report.message("argument LOG"))

@@ -38,8 +38,16 @@ def add_live_arguments(parser) -> None:
                    help="serve the run live over Foxglove's WebSocket protocol on localhost (in Foxglove: Open "
                         "connection → Foxglove WebSocket → ws://localhost:PORT)")
     from radarnode.cli.options import PORT
-    g.add_argument("--foxglove-port", type=PORT, default=DEFAULT_PORT, metavar="PORT",
-                   help=f"port of the live view (default {DEFAULT_PORT}; 0: any free port, printed at the start)")
+    g.add_argument("--foxglove-port", type=PORT, default=None, metavar="PORT",
+                   help=f"port of the live view, with --foxglove (default {DEFAULT_PORT}; 0: any free port, printed "
+                        "at the start)")
+
+
+def check_live_arguments(args) -> None:
+    """``--foxglove-port`` without ``--foxglove`` would be ignored: a usage error naming both, before any work."""
+    if getattr(args, "foxglove_port", None) is not None and not getattr(args, "foxglove", False):
+        raise UsageError(f"option --foxglove-port: value {args.foxglove_port} is not allowed without --foxglove; "
+                         "expected --foxglove with it (or no --foxglove-port)")
 
 
 def layout_hint() -> str:
@@ -135,7 +143,7 @@ def live_view(args, node, virtual_channel: str | None = None):
         yield _NoLiveView()
         return
     require_foxglove("--foxglove", True)
-    port = args.foxglove_port
+    port = DEFAULT_PORT if getattr(args, "foxglove_port", None) is None else args.foxglove_port
     if isinstance(port, bool) or not isinstance(port, int) or not 0 <= port <= 65535:
         raise UsageError(f"option --foxglove-port: value {port!r} is not allowed; expected an integer 0..65535 "
                          "(0: any free port)")

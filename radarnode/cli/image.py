@@ -41,12 +41,14 @@ def add_subparser(sub) -> None:
                        description=__doc__)
     add_scenario_argument(p)
     p.add_argument("-o", "--output", required=True, help="PNG file to write (or GIF with --animate)")
-    p.add_argument("--time", type=options.number(lo=0.0, hi=86_400.0), default=0.0,
-                   help="scenario time of the frame, s (default 0; at most the scenario's duration)")
+    p.add_argument("--time", type=options.number(lo=0.0, hi=86_400.0), default=None,
+                   help="scenario time of the frame, s (default 0; at most the scenario's duration; not with "
+                        "--animate)")
     p.add_argument("--k", type=options.number(lo=1.0, hi=10.0), default=2.5,
                    help="direct-perspective widening of the near edge, 1..10 (1.7, 2.5)")
     p.add_argument("--animate", action="store_true", help="render every --every-th cycle of the scenario as a GIF")
-    p.add_argument("--every", type=options.POSITIVE_COUNT, default=5, help="cycles between animation frames (default 5)")
+    p.add_argument("--every", type=options.POSITIVE_COUNT, default=None,
+                   help="cycles between animation frames, with --animate (default 5)")
     p.set_defaults(func=cmd)
 
 
@@ -121,10 +123,15 @@ class Renderer:
         im = a1.imshow(rdp.T - vmax, origin="lower", aspect="auto", cmap="viridis", vmin=-50, vmax=0,
                        extent=[speeds[0], speeds[-1], 0, ranges[-1]])
         fig.colorbar(im, ax=a1, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
-        a1.scatter(det.range_rate_mps, det.range_m, s=20, facecolors="none", edgecolors="r", label="detections")
+        # the map's Doppler axis is the measured one, which wraps at ±N/2 bins; a detection's range rate is the
+        # resolved (unaliased) one: drawn where the map shows its cell, folded into the axis (-28 m/s → +10 m/s)
+        span = rd.shape[1] * p.speed_resolution_mps
+        aliased = (np.asarray(det.range_rate_mps) - speeds[0]) % span + speeds[0]
+        a1.scatter(aliased, det.range_m, s=20, facecolors="none", edgecolors="r", label="detections")
         a1.legend(loc="upper right", fontsize=7)
         top = min(ranges[-1], p.max_range_m)
-        a1.set(xlabel="range rate, m/s (negative closing)", ylabel="range, m", title="range–Doppler", ylim=(0, top))
+        a1.set(xlabel="range rate, m/s (negative closing; as measured, aliased)", ylabel="range, m",
+               title="range–Doppler", ylim=(0, top))
         vmax = img.max()
         pm = a2.pcolormesh(np.degrees(az), ranges, img.T - vmax, cmap="viridis", vmin=-45, vmax=0, shading="auto")
         fig.colorbar(pm, ax=a2, label=COLOUR_LABEL, fraction=0.05, pad=0.02)
@@ -215,6 +222,15 @@ def _check_output(path: str, animate: bool, plt) -> None:
 
 
 def cmd(args) -> int:
+    # an option the chosen mode does not use would be ignored: refused, naming both
+    if args.every is not None and not args.animate:
+        raise UsageError(f"option --every: value {args.every} is not allowed without --animate; expected --animate "
+                         "with it (or no --every)")
+    if args.time is not None and args.animate:
+        raise UsageError(f"option --time: value {args.time:g} is not allowed with --animate (it renders every "
+                         "cycle); expected --time without --animate, or no --time")
+    args.every = 5 if args.every is None else args.every
+    args.time = 0.0 if args.time is None else args.time
     plt = _matplotlib()
     _check_output(args.output, args.animate, plt)
     scenario = scenario_from_args(args)

@@ -19,7 +19,7 @@ from radarnode.cli.common import add_scenario_argument, atomic_path, progress, r
 from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
 from radarnode.wire.logfiles import check_output_format, open_writer
-from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
+from radarnode.consumer.assembler import CycleAssembler
 from radarnode.consumer.evaluate import make_ecu
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
@@ -86,10 +86,11 @@ def cmd(args) -> int:
             # the ECU decides on what it decoded from the logged frames, as it would on the bus
             ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
             ecu.boundaries = assembler.road_boundaries
+            # an object list or a cluster list, whichever the radar sends (as run and report): an ECU fed only
+            # object lists would decide "radar unavailable" on a cluster radar, on its timer, not every cycle
             decision = None
             for cycle in assembler.drain():
-                if isinstance(cycle, ObjectCycle):
-                    decision = ecu.on_cycle(out.t_s, cycle)
+                decision = ecu.on_cycle(out.t_s, cycle) or decision
             if decision is None:
                 decision = ecu.tick(out.t_s)
             if decision is not None:

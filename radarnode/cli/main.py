@@ -6,6 +6,7 @@ import argparse
 import logging
 import signal
 import sys
+import traceback
 
 from radarnode import __version__
 from radarnode.cli import consume, decode, export, image, log, node, report, run
@@ -75,9 +76,10 @@ def _main(argv: list[str] | None) -> int:
     try:
         return int(args.func(args) or 0)
     except RadarnodeError as exc:
-        if args.debug:
-            raise
-        print(f"error: {exc}", file=sys.stderr)
+        if args.debug:          # the traceback too, but the same exit status: a usage error stays 2
+            traceback.print_exc(file=sys.stderr)
+        else:
+            print(f"error: {exc}", file=sys.stderr)
         return 2 if isinstance(exc, UsageError) else 1
     except KeyboardInterrupt:
         return 128 + signal.SIGINT
@@ -89,7 +91,8 @@ def _main(argv: list[str] | None) -> int:
         return 0
     except OSError as exc:   # a write that failed mid-way (a full disk, a vanished directory): one line, not a trace
         if args.debug:
-            raise
+            traceback.print_exc(file=sys.stderr)
+            return 1
         where = f": {exc.filename!r}" if exc.filename else ""
         print(f"error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 1

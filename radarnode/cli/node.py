@@ -11,7 +11,7 @@ import dataclasses
 import sys
 
 from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals
-from radarnode.cli.foxglove import add_live_arguments, live_view
+from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
 from radarnode.wire.bus import add_bus_arguments, open_bus
 from radarnode.wire.node import EgoMotionSender, RadarNode
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
@@ -31,6 +31,7 @@ def add_subparser(sub) -> None:
 
 
 def cmd(args) -> int:
+    check_live_arguments(args)
     scenario = scenario_from_args(args)
     # the budget's bit rate as python-can opens the bus: -b, CAN_BITRATE/can.conf, else the scenario's
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)

@@ -7,6 +7,7 @@ consumer decoded, not what the model computed.
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 import uuid
 
@@ -14,8 +15,8 @@ import can
 
 from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
-    scenario_from_args, stop_on_signals
-from radarnode.cli.foxglove import add_live_arguments, live_view
+    resolve_bitrate, scenario_from_args, stop_on_signals
+from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, make_ecu
@@ -38,6 +39,10 @@ def add_subparser(sub) -> None:
     p.add_argument("--closed-loop", action="store_true",
                    help="the ego follows the consumer's ACC request (first-order actuator lag); its speed and yaw "
                         "rate go back to the node as 0x300/0x301")
+    p.add_argument("-b", "--bitrate", type=options.BITRATE,
+                   help="bit rate of the (virtual) bus for the bus-load budget and the load shown, bit/s, "
+                        "10000..1000000 (default: python-can's configuration, CAN_BITRATE or can.conf, else the "
+                        "scenario's radar.bitrate), as for node")
     add_live_arguments(p)
     p.set_defaults(func=cmd, fast=False)
 
@@ -58,7 +63,12 @@ def format_ecu(d, ego_speed_mps: float) -> str:
 
 
 def cmd(args) -> int:
+    check_live_arguments(args)
     scenario = scenario_from_args(args)
+    # the budget's bit rate as node takes it: -b, python-can's CAN_BITRATE/can.conf, else the scenario's
+    bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)
+    if bitrate.bit_s != scenario.radar.bitrate:
+        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
     node = RadarNode(scenario)
     vehicle = EgoMotionSender(node.scene, scenario.radar.sensor_id)
     channel = f"radarnode-{uuid.uuid4().hex}"
@@ -147,7 +157,7 @@ def cmd(args) -> int:
     assembler.flush()
     decoded += assembler.drain()
     print(f"\nsummary: {stats.cycles} cycles, {stats.frames} frames, bus load {100 * stats.bus_load(node.bitrate):.1f} % "
-          f"of {node.bitrate} bit/s (worst-case stuffing)")
+          f"of {bitrate}, worst-case stuffing")
     print("node: " + ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())))
     if node.saturated:
         print("saturated values: " + ", ".join(f"{k}={v}" for k, v in sorted(node.saturated.items())))

@@ -26,6 +26,7 @@ from foxglove.messages import (Color, CubePrimitive, FrameTransform, FrameTransf
 
 from radarnode.perception.boundaries import Boundary
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES, ClusterList, ObjectList
+from radarnode.wire.busdbc import signal_value
 
 WORLD, EGO, RADAR = "world", "ego", "radar"
 
@@ -66,12 +67,16 @@ def _kv(d: dict) -> list[KeyValuePair]:
 
 
 def _num(v: float) -> str:
-    """A number as metadata text: exact for the wire's LSBs (0.2 m, 0.25 m/s …), '-' for not available."""
+    """A number as metadata text: exact for the wire's LSBs (0.2 m, 0.25 m/s …), '-' for not available.
+
+    Rounded to 6 decimals first: a decoded value is offset + raw × scale with an LSB of 0.001 or coarser, so
+    this keeps it exact and drops the binary noise (-204.6 + 1023 × 0.2 is 2.84e-14, shown as 0)."""
     if v is None or (isinstance(v, float) and not math.isfinite(v)):
         return "-"
-    if float(v).is_integer():
+    v = round(float(v), 6) + 0.0          # + 0.0: no "-0"
+    if v.is_integer():
         return str(int(v))
-    return f"{float(v):.6g}"
+    return f"{v:.6g}"
 
 
 def _label(choices: dict | None, code: int) -> str:
@@ -378,8 +383,8 @@ def signal_record(message, values: dict, t_s: float) -> dict:
     for sig in message.signals:
         if sig.name not in values:
             continue
-        v = float(values[sig.name])
-        rec[sig.name] = int(v) if v.is_integer() else v
+        v = signal_value(sig, values[sig.name])
+        rec[sig.name] = v
         if sig.choices:
             rec[f"{sig.name}_label"] = str(sig.choices.get(int(v), "-"))
     return rec

@@ -88,7 +88,23 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
     except (can.CanError, ValueError, TypeError, OSError, NotImplementedError) as exc:
         raise BusError(f"cannot open CAN bus {what}: {exc}") from None
     enlarge_receive_buffer(bus)
+    name_bus(bus, kwargs)
     return bus
+
+
+def name_bus(bus: can.BusABC, kwargs: dict) -> None:
+    """Give a bus whose interface leaves ``channel_info`` at python-can's ``"unknown"`` (udp_multicast) a name
+    that says what it is: the interface and the channel (multicast group), as python-can resolved them from the
+    options and its configuration."""
+    if bus.channel_info and bus.channel_info != "unknown":
+        return
+    try:
+        config = can.util.load_config(config=dict(kwargs))
+    except Exception:  # noqa: BLE001 - a configuration python-can already opened the bus with; keep what it said
+        config = kwargs
+    interface = config.get("interface") or type(bus).__name__
+    channel = config.get("channel")
+    bus.channel_info = f"{interface} channel {channel}" if channel is not None else str(interface)
 
 
 def enlarge_receive_buffer(bus: can.BusABC, size: int = UDP_RECEIVE_BUFFER_BYTES) -> int | None:

@@ -18,6 +18,8 @@ The two source files stay the reference; regenerate after editing either::
 from __future__ import annotations
 
 import copy
+import decimal
+import math
 from collections import OrderedDict
 import re
 import sys
@@ -119,3 +121,21 @@ def main() -> int:
 
 if __name__ == "__main__":
     raise SystemExit(main())
+
+
+def _decimals(x: float) -> int:
+    """The decimal places of a DBC factor or offset as written (0.05 → 2, 0.2 → 1, 1 → 0)."""
+    exponent = decimal.Decimal(repr(float(x))).normalize().as_tuple().exponent
+    return max(0, -int(exponent))
+
+
+def signal_value(sig, v: float) -> float | int:
+    """A decoded signal value at the signal's resolution: rounded to the decimals of its DBC scale and offset,
+    so ``scale × raw + offset`` carries no binary noise (FCW_RequiredDecel 3.65, not 3.6500000000000004);
+    an int for a signal of whole steps, a float (-2.0, not -2) for a scaled one, so a field keeps its type."""
+    v = float(v)
+    if not math.isfinite(v):
+        return v
+    places = max(_decimals(sig.scale), _decimals(sig.offset))
+    v = round(v, places) + 0.0
+    return int(v) if places == 0 and v.is_integer() else v

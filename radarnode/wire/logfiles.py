@@ -181,6 +181,8 @@ class ReadReport:
 
     def message(self, what: str) -> str:
         """One line for an ``error:``: what was read and where the damage starts."""
+        if self.frames == 0 and not self.damaged:
+            return f"{what}: {self.path!r} holds no CAN frame; expected a log with at least one frame"
         if self.frames == 0:
             return (f"{what}: {self.path!r} holds no frame a {self.fmt} reader can read; first bad record at "
                     f"{self.first_bad}")
