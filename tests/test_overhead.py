@@ -243,3 +243,10 @@ def test_an_overhead_structure_is_classified_from_the_wire_and_draws_nothing(nam
     r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity="object")
     assert r.passed and r.checked, r.reasons
     assert np.all(r.trace["request"] >= -0.5) and np.all(r.trace["warning"] < 2)
+
+
+def test_a_car_stopped_under_a_bridge_is_warned_in_time_at_signal_level():
+    # the reference for the detection level's open defect there (tests/test_acceptance.py): the chain itself
+    # sees the car through the deck's masking often enough to warn in time and stop short of it
+    r = simulate(load_scenario(SCENARIOS / "bridge_stopped_car_90.yaml"), fidelity="signal")
+    assert r.passed and r.checked, r.reasons
