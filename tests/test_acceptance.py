@@ -63,9 +63,9 @@ def test_issue10_acceptance_one_seed_object_level(name):
 
 #: open defects, measured (BENCHMARKS.md "ADAS on real roads"): strict, so a fix shows up as a failure here
 KNOWN_DETECTION_LEVEL_DEFECTS = {
-    name: "the detection level lets the deck, 2-5 range bins in front of the stopped car and in its CA-CFAR "
-          "training ring, mask the car in more of the last cycles than the signal chain does: warned too late in "
-          "5-6 of 7 seeds, where the object and signal levels warn in time"
+    name: "the detection level detects the car as often as the chain, but its tracker keeps no object of it "
+          "behind the deck's detection, placed at the deck's power centroid straight ahead (the chain's glints "
+          "aside): warned too late in 5-6 of 7 seeds, where the object and signal levels warn in time"
     for name in ("bridge_stopped_car_50", "bridge_stopped_car_90")}
 
 
