@@ -63,18 +63,25 @@ def test_a_timed_path_is_as_before():
     np.testing.assert_allclose(st.y_m[:, 0], [3.5, 1.75, 0.0])
 
 
+def _refused(path, text: str, fragments, line: int | None = None) -> None:
+    """Loading ``text`` written to ``path`` raises a ScenarioError naming every fragment (and the line, if given)."""
+    path.write_text(text)
+    with pytest.raises(ScenarioError) as info:
+        load_scenario(path)
+    msg = str(info.value)
+    if line is not None:
+        assert msg.startswith(f"{path}:{line}:"), msg
+    for f in fragments:
+        assert f in msg, msg
+
+
 @pytest.mark.parametrize("extra, fragments", [
     ("accel: [{t_s: 1.0, accel_mps2: -2.0}]\n    lane: 1", ("actors[0].lane", "value 1", "none with waypoints")),
     ("y_m: 3.5", ("actors[0].y_m", "3.5", "the path starts at the first waypoint")),
     ("heading_deg: 10.0", ("actors[0].heading_deg", "10.0", "a path of waypoints sets the heading")),
 ])
 def test_a_path_refuses_what_it_sets_itself(tmp_path, extra, fragments):
-    p = tmp_path / "bad.yaml"
-    p.write_text(PATH.format(extra=extra))
-    with pytest.raises(ScenarioError) as info:
-        load_scenario(p)
-    for f in fragments:
-        assert f in str(info.value), str(info.value)
+    _refused(tmp_path / "bad.yaml", PATH.format(extra=extra), fragments)
 
 
 def test_mixed_timed_and_untimed_waypoints_and_accel_with_times_are_refused(tmp_path):
@@ -120,14 +127,7 @@ def test_actors_have_a_height_and_overhead_classes_default_to_their_clearance():
     (", height_m: .inf", ("actors[0].height_m", "inf", "finite")),
 ])
 def test_bad_heights_name_the_field(tmp_path, extra, fragments):
-    p = tmp_path / "bad.yaml"
-    p.write_text(HEIGHTS.format(cls="sign", extra=extra))
-    with pytest.raises(ScenarioError) as info:
-        load_scenario(p)
-    msg = str(info.value)
-    assert msg.startswith(f"{p}:5:"), msg
-    for f in fragments:
-        assert f in msg, msg
+    _refused(tmp_path / "bad.yaml", HEIGHTS.format(cls="sign", extra=extra), fragments, line=5)
 
 
 @pytest.mark.parametrize("driver, fragments", [
@@ -139,14 +139,8 @@ def test_bad_heights_name_the_field(tmp_path, extra, fragments):
     ("{brake_mps2: 6}", ("unknown field 'ego.driver.brake_mps2'", "decel_mps2, reaction_s")),
 ])
 def test_bad_driver_values_name_the_field(tmp_path, driver, fragments):
-    p = tmp_path / "bad.yaml"
-    p.write_text(f"name: t\nduration_s: 2.0\nseed: 1\nego:\n  speed_mps: 20.0\n  driver: {driver}\n")
-    with pytest.raises(ScenarioError) as info:
-        load_scenario(p)
-    msg = str(info.value)
-    assert msg.startswith(f"{p}:6:"), msg
-    for f in fragments:
-        assert f in msg, msg
+    _refused(tmp_path / "bad.yaml", f"name: t\nduration_s: 2.0\nseed: 1\nego:\n  speed_mps: 20.0\n  driver: {driver}\n",
+             fragments, line=6)
 
 
 def test_the_driver_brakes_a_reaction_time_after_the_warning_and_stops_in_time():

@@ -450,7 +450,6 @@ class DetectionStatistic:
         tables = self.__dict__.setdefault("_mask_tables", {})
         if swerling not in tables:
             rho, log_i = np.meshgrid(self.MASK_RHO_DB, self.MASK_LOG_I, indexing="ij")
-            mean_z = self.n_channels * self.eigenvalues.sum()
             with_i = self.pd_interfered(rho, 10.0 ** log_i * mean_z, swerling)
             without = self.pd_interfered(self.MASK_RHO_DB, np.zeros(self.MASK_RHO_DB.size), swerling)
             tables[swerling] = np.clip(with_i / np.maximum(without, 1e-300)[:, None], 0.0, 1.0)

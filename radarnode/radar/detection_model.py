@@ -110,6 +110,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     energy = np.abs(field) ** 2
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
+    fade = energy / wsafe           # the cell's coherent sum against its power sum (mean 1), used for the ring below
     c_r = np.bincount(inv, weights=amp ** 2 * rb, minlength=uniq.size) / wsafe
     c_v = np.bincount(inv, weights=amp ** 2 * vb, minlength=uniq.size) / wsafe
     c_u = np.bincount(inv, weights=amp ** 2 * u, minlength=uniq.size) / wsafe
@@ -135,8 +136,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # each scatterer's energy as its cell's coherent sum realised it this frame (the fade |Σ|²/Σ|a|², mean 1):
     # a bridge deck of many reflectors fades and surges from frame to frame, and so does what it puts into a
     # neighbour's ring (the mean alone would mask the neighbour in every frame where the chain masks it in few)
-    fade = (np.abs(field) ** 2 / wsafe)[inv]
-    interference = statistic.ring_interference(rd_u % m, rd_u // m, np.mod(vb, m), rb, statistic.energy(rho) * fade,
+    interference = statistic.ring_interference(rd_u % m, rd_u // m, np.mod(vb, m), rb,
+                                               statistic.energy(rho) * fade[inv],
                                                (m, n_r))
     hit_rd, stat_rd = statistic.draw(e_rd, rng, interference)
     top = np.zeros(rd_u.size)
