@@ -41,7 +41,6 @@ def test_run_realtime_paces_cycles():
     assert time.monotonic() - t0 >= 0.9
     # 1.0 s of 72 ms cycles is 13; on a loaded machine a cycle may miss its deadline: then it is not sent but
     # counted, so sent + missed is still 13
-    import re
     sent = int(re.search(r"summary: (\d+) cycles", r.stdout).group(1))
     missed = re.search(r"cycles_missed_deadline=(\d+)", r.stdout)
     assert sent + (int(missed.group(1)) if missed else 0) == 13 and sent >= 10, r.stdout
