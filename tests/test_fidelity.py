@@ -158,3 +158,35 @@ def test_signal_options_in_scenario_files_are_validated(tmp_path):
         path.write_text("\n".join(lines) + "\n" + bad + "\n")
         with pytest.raises(ScenarioError, match=fragment):
             load_scenario(path)
+
+
+def test_auto_on_a_curve_entry_beside_guardrail_posts_reports_the_car_as_the_detection_level_does():
+    """clothoid_stopped_own_lane: the stopped car 127 m ahead stands within the chain's resolution of the guardrail
+    posts (8 channels: ~30 m of cross range there), so auto renders it at the detection level in every cycle and
+    must report it as that level does. One seed is not enough to judge (seed 1 alone: auto 0.69, detection 1.00;
+    seed 5: 0.91 against 0.37): over seeds 1–6 the reported fractions agree."""
+    from radarnode.radar.setup import load_scenario
+    from radarnode.radar.object_model import in_fov
+    import dataclasses
+    base = load_scenario(SCENARIOS / "clothoid_stopped_own_lane.yaml")
+    reported = {"detection": [], "auto": []}
+    for seed in range(1, 7):
+        sc = dataclasses.replace(base, seed=seed)
+        rc = radar_config(sc)
+        cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+        for level in reported:
+            scene = Scene(sc)
+            car = int(np.flatnonzero(~scene.is_guardrail)[0])
+            model = make_model(level, scene, rc.preset, np.random.default_rng(seed), rc.signal)
+            hits = []
+            for k in range(40):
+                frame, view = model.step(k * sc.period_s, cfg)
+                if k >= 5 and in_fov(rc.preset, view.range_m[car:car + 1], view.azimuth_rad[car:car + 1])[0]:
+                    ol = frame.objects
+                    d = np.hypot(ol.dist_long_m - view.x_m[car], ol.dist_lat_m - view.y_m[car])
+                    hits.append(bool(d.size and d.min() <= 2.5))
+            reported[level].append(np.mean(hits))
+            if level == "auto":
+                assert model.actor_frames["object"] == 0           # the car at the detection level throughout
+    assert np.mean(reported["detection"]) > 0.7
+    assert abs(np.mean(reported["auto"]) - np.mean(reported["detection"])) < 0.12
