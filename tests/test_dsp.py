@@ -40,7 +40,7 @@ def test_cfar_and_doa_reject_unknown_names_and_bad_values():
     with pytest.raises(ConfigError, match="pfa"):
         make_cfar("ca", pfa=0.7)
     with pytest.raises(ConfigError, match="doa method"):
-        make_doa("music", 4)
+        make_doa("maximum_entropy", 4)
     with pytest.raises(ConfigError, match="window"):
         window("kaiser-bessel", 8)
     with pytest.raises(ConfigError, match="cube: shape"):

@@ -29,6 +29,10 @@ def add_scenario_argument(parser) -> None:
                         help="override the scenario's duration in seconds, (0, 86400]")
     parser.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"),
                         help="radar model level (default: the scenario's)")
+    parser.add_argument("--doa", choices=options.DOA_CHOICES,
+                        help="angle estimator of the signal chain (default: the scenario's signal.dsp.doa, else fft); "
+                             "the others are super-resolution on the cells that hold more than one source, "
+                             "at fidelity signal")
 
 
 def scenario_from_args(args) -> Scenario:
@@ -42,6 +46,9 @@ def scenario_from_args(args) -> Scenario:
             sc = dataclasses.replace(sc, seed=validate.integer("--seed", args.seed, lo=0))
         if getattr(args, "fidelity", None):
             sc = dataclasses.replace(sc, fidelity=args.fidelity)
+        if getattr(args, "doa", None):
+            from radarnode.cli.report import _with_doa
+            sc = _with_doa(sc, args.doa)
         if args.duration is not None:
             sc = dataclasses.replace(sc, duration_s=validate.number("--duration", args.duration, lo=0.0,
                                                                       hi=86_400.0, lo_open=True))
@@ -51,6 +58,10 @@ def scenario_from_args(args) -> Scenario:
         # a run of no cycle writes a log of no frame: refused, as the duration the radar's cycle needs at least
         raise UsageError(f"option --duration: value {args.duration:g} is not allowed; expected at least one "
                          f"radar cycle of {sc.period_s:g} s: a duration in [{sc.period_s:g}, 86400] s")
+    if getattr(args, "doa", None) and args.doa != "fft":
+        from radarnode.radar.models import check_doa
+        from radarnode.radar.setup import radar_config
+        check_doa(sc.fidelity, radar_config(sc).signal)
     return sc
 
 

@@ -99,3 +99,6 @@ COUNT = integer(lo=0)
 POSITIVE_COUNT = integer(lo=1)
 #: seconds of silence before ``consume`` gives up (0: never); at most a day
 TIMEOUT = number(lo=0.0, hi=86_400.0)
+#: the signal chain's angle estimators (radarnode.dsp.doa.DOA_METHODS; written out so that the parser does not import
+#: the DSP at start-up — tests/test_cli.py checks the two agree)
+DOA_CHOICES = ("fft", "capon", "esprit", "music", "root_music", "unitary_music")

@@ -38,6 +38,8 @@ def add_subparser(sub) -> None:
     p.add_argument("--seeds", type=options.integer(lo=1, hi=10_000), default=1,
                    help="run each scenario with seeds 1..N, N up to 10000 (default 1)")
     p.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"), help="radar model level")
+    p.add_argument("--doa", choices=options.DOA_CHOICES,
+                   help="angle estimator of the signal chain (super-resolution other than fft: fidelity signal)")
     p.add_argument("--min-passes", type=options.POSITIVE_COUNT, default=None,
                    help="exit 1 when a scenario passes in fewer seeds than this (default: all of them)")
     p.add_argument("--junit", metavar="FILE", help="also write JUnit XML for a CI system to FILE")
@@ -57,6 +59,15 @@ ECU_OPTIONS = (("--fcw-ttc-warn", "fcw_ttc_warn_s", "FCW warns at a TTC at or be
                ("--ecu-latency", "processing_latency_s", "the ECU's processing latency, s (0–0.5)"),
                ("--fcw-stationary-max-speed", "fcw_stationary_max_speed_mps",
                 "above X m/s a stationary object never seen moving draws no FCW (0–70)"))
+
+
+def _with_doa(sc, doa: str | None):
+    """The scenario with the signal chain's angle estimator given on the command line."""
+    if doa is None:
+        return sc
+    sig = dict(sc.signal)
+    sig["dsp"] = {**(sig.get("dsp") or {}), "doa": doa}
+    return dataclasses.replace(sc, signal=sig)
 
 
 def _with_ecu_options(sc, args):
@@ -164,7 +175,12 @@ def cmd(args) -> int:
                         f"{str(Path(args.junit).parent)!r}")
     if args.junit and not os.access(Path(args.junit).parent, os.W_OK):
         raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
-    scenarios = [(path, _with_ecu_options(load_scenario(path), args)) for path in args.scenarios]   # checked first
+    scenarios = [(path, _with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
+                 for path in args.scenarios]                                                    # checked first
+    from radarnode.radar.models import check_doa
+    from radarnode.radar.setup import radar_config
+    for _, sc in scenarios:
+        check_doa(args.fidelity or sc.fidelity, radar_config(sc).signal)
     plot_dir = _plot_dir(args.plots) if args.plots else None     # created once everything else is known good
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")
 

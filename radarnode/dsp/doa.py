@@ -2,13 +2,22 @@
 
 One base class, one subclass per algorithm, steering computed once;
 ``DOA_METHODS`` is the registry. Snapshots have shape (n_detections, n_elements).
+
+``fft`` is zero-padded beamforming with CLEAN (every angle peak of a cell, strongest first). The other
+methods (``capon``, ``music``, ``unitary_music``, ``root_music``, ``esprit``: :mod:`radarnode.dsp.subspace`)
+are super-resolution run only where it can change the answer: on the cells whose snapshot one plane wave
+does not explain (:class:`SuperResolution`); every other cell keeps the beamformer's estimate.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import scipy.fft
+import scipy.special
 
+from radarnode.dsp import subspace
 from radarnode.errors import ConfigError
 
 
@@ -128,10 +137,131 @@ class FftBeamformer(Doa):
         return np.clip(u / self.spacing_wl, -1.0, 1.0)
 
 
-DOA_METHODS: dict[str, type[Doa]] = {"fft": FftBeamformer}
+class SuperResolution(FftBeamformer):
+    """Beamforming everywhere, a subspace estimator on the cells where more than one source is likely.
+
+    A cell gets super-resolution when its snapshot x is not one plane wave: after the beamformer's
+    strongest source is fitted and taken out (its angle refined to the maximum-likelihood one), the
+    residual energy ‖r‖² exceeds what noise leaves, ``σ²·χ²₂₍N−1₎/2`` at a false-alarm rate of
+    :attr:`GATE_PFA`, and a fraction :attr:`GATE_MIN_FRACTION` of ‖x‖² (the fit's numerical floor at
+    very high SNR). Cells where CLEAN already found two or more sources qualify too. There, from the
+    one snapshot: spatial smoothing over sub-arrays of Q = round(0.7·N) elements (seed 001) and
+    forward–backward averaging (2·(N−Q+1) looks, enough to decorrelate coherent sources), the number
+    of sources by MDL (at most :attr:`MAX_SOURCES`), then the estimator; each source's power is its
+    least-squares amplitude over the full array. A cell whose count is below two, or whose estimate
+    is not resolved, keeps the beamformer's answer: super-resolution never loses a detection.
+
+    ``stats`` counts, over the instance's life, the cells seen and the cells that went through the
+    estimator (what gating saves: the estimator costs 0.1–0.4 ms a cell, ``BENCHMARKS.md``).
+    ``gate=False`` runs it on every cell (for that comparison).
+    """
+
+    GATE_PFA = 1e-3
+    GATE_MIN_FRACTION = 1e-3
+    MAX_SOURCES = 3
+
+    def __init__(self, num_elements: int, spacing_wl: float = 0.5, n_fft: int = 256, method: str = "music",
+                 gate: bool = True) -> None:
+        super().__init__(num_elements, spacing_wl, n_fft)
+        if method not in subspace.ESTIMATORS:
+            raise ConfigError(f"doa method: value {method!r} is not allowed; expected one of "
+                              f"{', '.join(['fft', *sorted(subspace.ESTIMATORS)])}")
+        if num_elements < 3:
+            raise ConfigError(f"doa num_elements: value {num_elements!r} is not allowed for {method}; expected "
+                              ">= 3 (super-resolution needs a sub-array of two elements and more)")
+        self.name = method
+        self.gate = gate
+        self.subarray = subspace.default_subarray(num_elements)
+        # the residual's energy over σ² is χ² with 2(N−1) degrees of freedom, halved (complex noise)
+        self.gate_ratio = float(scipy.special.gammainccinv(num_elements - 1, self.GATE_PFA))
+        self.stats = {"cells": 0, "super": 0}
+
+    def _ml_refine(self, x: np.ndarray, sin_t: np.ndarray) -> np.ndarray:
+        """Newton steps on |aᴴx|² from the beamformer's interpolated peak (the single-source ML angle)."""
+        k = np.arange(self.num_elements)
+        u = sin_t.copy()
+        for _ in range(3):                                     # a loop over iterations, not over cells
+            ph = np.exp(-2j * np.pi * self.spacing_wl * u[:, None] * k[None, :])
+            w = 2j * np.pi * self.spacing_wl * k[None, :]
+            s0 = (ph * x).sum(axis=1)
+            s1 = (-w * ph * x).sum(axis=1)
+            s2 = (w * w * ph * x).sum(axis=1)
+            g = 2.0 * np.real(np.conj(s0) * s1)                # d|s0|²/du
+            h = 2.0 * (np.abs(s1) ** 2 + np.real(np.conj(s0) * s2))
+            step = np.where(h < 0, -g / np.where(h < 0, h, -1.0), 0.0)
+            u = np.clip(u + np.clip(step, -0.5 / (self.num_elements * self.spacing_wl),
+                                    0.5 / (self.num_elements * self.spacing_wl)), -1.0, 1.0)
+        return u
+
+    def multi_source(self, snapshots: np.ndarray, noise_power: float | None) -> np.ndarray:
+        """(n,) bool: cells whose snapshot one plane wave does not explain (see the class docstring)."""
+        x = np.atleast_2d(snapshots).astype(np.complex128)
+        if x.shape[0] == 0:
+            return np.zeros(0, dtype=bool)
+        p = np.where(self.valid[None, :], self.spectrum(x), 0.0)
+        u = self._ml_refine(x, self._refine(p, np.arange(x.shape[0]), np.argmax(p, axis=1)))
+        a = np.exp(2j * np.pi * self.spacing_wl * u[:, None] * np.arange(self.num_elements)[None, :])
+        amp = (np.conj(a) * x).sum(axis=1) / self.num_elements
+        resid = np.sum(np.abs(x - amp[:, None] * a) ** 2, axis=1)
+        total = np.sum(np.abs(x) ** 2, axis=1)
+        floor = self.GATE_MIN_FRACTION * total
+        if noise_power is not None and math.isfinite(noise_power) and noise_power > 0:
+            floor = np.maximum(floor, self.gate_ratio * noise_power)
+        return resid > floor
+
+    def estimate_peaks(self, snapshots: np.ndarray, floor_db: float = 9.0, noise_power: float | None = None,
+                       secondary_snr_db: float = 12.0, max_sources: int = 4
+                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        x = np.atleast_2d(snapshots).astype(np.complex128)
+        row, sin_t, rel = super().estimate_peaks(x, floor_db, noise_power, secondary_snr_db, max_sources)
+        n = x.shape[0]
+        self.stats["cells"] += n
+        if n == 0:
+            return row, sin_t, rel
+        cand = np.ones(n, dtype=bool) if not self.gate else (
+            self.multi_source(x, noise_power) | (np.bincount(row, minlength=n) >= 2))
+        cells = np.flatnonzero(cand)
+        self.stats["super"] += int(cells.size)
+        if cells.size == 0:
+            return row, sin_t, rel
+        k_eff = 2 * (self.num_elements - self.subarray + 1)
+        elements = np.arange(self.num_elements)
+        keep = np.ones(row.size, dtype=bool)
+        add_rows, add_sin, add_rel = [], [], []
+        for c in cells:          # only the gated cells (a few per frame), not every cell
+            r = subspace.forward_backward(subspace.spatial_smoothing(subspace.sample_covariance(x[c][:, None]),
+                                                                     self.subarray))
+            count = min(subspace.mdl(subspace._eigvals_desc(r), k_eff), self.MAX_SOURCES, self.subarray - 1)
+            if count < 2:
+                continue
+            est = subspace.estimate(self.name, x[c], count, self.spacing_wl, fb=True, subarray=self.subarray)
+            if not est.all_resolved:
+                continue
+            a = np.exp(2j * np.pi * self.spacing_wl * est.sin_theta[None, :] * elements[:, None])     # (N, M)
+            amp = np.linalg.lstsq(a, x[c], rcond=None)[0]
+            pw = np.abs(amp) ** 2
+            ok = pw >= pw.max() * 10.0 ** (-floor_db / 10.0)
+            keep &= row != c
+            add_rows.append(np.full(int(ok.sum()), c))
+            add_sin.append(est.sin_theta[ok])
+            add_rel.append(10.0 * np.log10(np.maximum(pw[ok] / pw.max(), 1e-30)))
+        if not add_rows:
+            return row, sin_t, rel
+        row = np.concatenate([row[keep], *add_rows])
+        sin_t = np.concatenate([sin_t[keep], *add_sin])
+        rel = np.concatenate([rel[keep], *add_rel])
+        order = np.argsort(row, kind="stable")
+        return row[order], sin_t[order], rel[order]
+
+
+#: "fft" is beam scanning (Bartlett); the rest are the subspace estimators, as super-resolution
+DOA_METHODS: tuple[str, ...] = ("fft", *sorted(m for m in subspace.ESTIMATORS if m != "bartlett"))
 
 
 def make_doa(name: str, num_elements: int, spacing_wl: float = 0.5, **kwargs) -> Doa:
+    """The DOA stage ``name`` (a key of :data:`DOA_METHODS`): ``fft``, or super-resolution with that estimator."""
     if name not in DOA_METHODS:
         raise ConfigError(f"doa method: value {name!r} is not allowed; expected one of {', '.join(DOA_METHODS)}")
-    return DOA_METHODS[name](num_elements, spacing_wl, **kwargs)
+    if name == "fft":
+        return FftBeamformer(num_elements, spacing_wl, **kwargs)
+    return SuperResolution(num_elements, spacing_wl, method=name, **kwargs)

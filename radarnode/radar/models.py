@@ -287,8 +287,21 @@ def ego_motion(scene: Scene, t_s: float, view: SensorView, estimate) -> tuple[tu
     return (estimate[0], estimate[1]), 0.0
 
 
+def check_doa(level: str, options: SignalOptions) -> None:
+    """A super-resolution angle estimator exists only in the signal chain: refuse it at another level.
+
+    The object and detection levels reproduce the beamformer's resolution (:data:`RESOLUTION`), not a
+    super-resolution estimator's: they would report what that estimator does not.
+    """
+    if options.dsp.doa != "fft" and level in FIDELITY_LEVELS and level != "signal":
+        raise ConfigError(f"signal.dsp.doa: value {options.dsp.doa!r} is not allowed at fidelity {level!r}; "
+                          "expected 'fft' (the object and detection levels model the FFT beamformer), or "
+                          "fidelity 'signal' for a super-resolution estimator")
+
+
 def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                options: SignalOptions = SignalOptions(), clusters_wanted: bool = False):
+    check_doa(level, options)
     if level == "object":
         return ObjectModel(scene, preset, rng, options)
     if level == "detection":
