@@ -141,6 +141,37 @@ def format_cycle(cycle: ObjectCycle | ClusterCycle, t_s: float | None = None, ma
     return "\n".join(lines)
 
 
+def format_fused(fused, max_rows: int = 20) -> str:
+    """A small fixed-width table of a fused object list (several radars, vehicle frame)."""
+    from radarnode.perception.types import CLASS_NAMES as names
+    lines = [f"fused t={fused.t_s:7.2f} s  {len(fused)} objects (vehicle frame, from the rear axle)",
+             "   ID  class          x_m     y_m   vx_m/s  vy_m/s  rcs_dBsm  sensors"]
+    for k in range(min(len(fused), max_rows)):
+        cls = names[fused.obj_class[k]] if 0 <= fused.obj_class[k] < 8 else "-"
+        seen = ",".join(str(b) for b in range(8) if fused.sensors[k] >> b & 1) or "coasting"
+        lines.append(f"  {fused.id[k]:3d}  {cls:10s} {fused.x_m[k]:7.1f} {fused.y_m[k]:7.1f} {fused.vx_mps[k]:8.2f} "
+                     f"{fused.vy_mps[k]:7.2f} {fused.rcs_dbsm[k]:8.1f}  {seen}")
+    if len(fused) > max_rows:
+        lines.append(f"  ... {len(fused) - max_rows} more")
+    return "\n".join(lines)
+
+
+def with_bitrate(scenario: Scenario, bit_s: int) -> Scenario:
+    """The scenario with its bus's bit rate set (every radar's, when it has several)."""
+    if bit_s == scenario.radar.bitrate:
+        return scenario
+    if scenario.radars:
+        return dataclasses.replace(scenario, radars=tuple(dataclasses.replace(r, bitrate=bit_s)
+                                                          for r in scenario.radars))
+    return dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bit_s))
+
+
+def fusion_mounts(scenario: Scenario) -> dict:
+    """Sensor ID → mount of every radar of ``scenario`` (what a fusing ECU has calibrated)."""
+    from radarnode.consumer.path import SensorMount
+    return {r.sensor_id: SensorMount.of(r.mount) for r in scenario.sensors}
+
+
 def format_boundaries(boundaries: dict) -> str:
     """One line with the decoded road boundaries (radarnode's RoadBoundary_Left/Right, 0x680/0x681 + 8 × SensorID)."""
     parts = []

@@ -10,7 +10,7 @@ import can
 import numpy as np
 
 from radarnode.cli import options
-from radarnode.cli.common import format_cycle, format_stats, stop_on_signals
+from radarnode.cli.common import format_cycle, format_fused, format_stats, fusion_mounts, stop_on_signals
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
 from radarnode.wire.bus import add_bus_arguments, open_bus
 
@@ -19,6 +19,9 @@ def add_subparser(sub) -> None:
     p = sub.add_parser("consume", help="decode radar cycles from a CAN bus", description=__doc__)
     add_bus_arguments(p, bitrate=True)
     p.add_argument("--sensor-id", type=options.SENSOR_ID, default=0, help="radar sensor ID 0..7 (default 0)")
+    p.add_argument("--fuse", metavar="SCENARIO",
+                   help="decode every radar of SCENARIO (its radars' sensor IDs and mounts) and print their object "
+                        "lists fused into one, in the vehicle frame (instead of --sensor-id's cycles)")
     p.add_argument("--count", type=options.COUNT, default=0, help="stop after this many cycles (0: until Ctrl-C)")
     p.add_argument("--timeout", type=options.TIMEOUT, default=0.0,
                    help="stop after this many seconds without a cycle, up to 86400 (0: never, the default)")
@@ -58,7 +61,51 @@ def cycle_to_json(cycle, sensor_id: int = 0) -> str:
     return json.dumps({**head, "type": "clusters", "clusters": rows})
 
 
+def fused_to_json(fused) -> str:
+    """One fused object list as one JSON object (vehicle frame; ``sensors``: the sensor IDs that saw each)."""
+    rows = [{"id": int(fused.id[k]), "x_m": _f(fused.x_m[k]), "y_m": _f(fused.y_m[k]),
+             "vx_mps": _f(fused.vx_mps[k]), "vy_mps": _f(fused.vy_mps[k]), "rcs_dbsm": _f(fused.rcs_dbsm[k], 1),
+             "obj_class": int(fused.obj_class[k]),
+             "sensors": [b for b in range(8) if fused.sensors[k] >> b & 1]} for k in range(len(fused))]
+    return json.dumps({"timestamp": fused.t_s, "type": "fused_objects", "objects": rows})
+
+
+def _consume_fused(args) -> int:
+    from radarnode.consumer.fusion import FusingConsumer
+    from radarnode.radar.setup import load_scenario
+    fuser = FusingConsumer(fusion_mounts(load_scenario(args.fuse)))
+    with open_bus(args) as bus, stop_on_signals() as stop:
+        notifier = can.Notifier(bus, [fuser], timeout=0.05)
+        print(f"listening on {bus.channel_info} for sensors {', '.join(map(str, fuser.assemblers))}",
+              file=sys.stderr, flush=True)
+        n = 0
+        last = time.monotonic()
+        try:
+            while not stop.is_set():
+                rounds = fuser.drain()
+                if not rounds:
+                    if args.timeout and time.monotonic() - last > args.timeout:
+                        break
+                    time.sleep(0.01)
+                    continue
+                last = time.monotonic()
+                for _, fused in rounds:
+                    n += 1
+                    print(fused_to_json(fused) if args.json else format_fused(fused), flush=True)
+                    if args.count and n >= args.count:
+                        break
+                if args.count and n >= args.count:
+                    break
+        finally:
+            notifier.stop()
+    for sid, st in fuser.stats.items():
+        print(f"sensor {sid}: " + format_stats(st), file=sys.stderr)
+    return stop.exit_status
+
+
 def cmd(args) -> int:
+    if args.fuse is not None:
+        return _consume_fused(args)
     assembler = CycleAssembler(sensor_id=args.sensor_id)
     with open_bus(args) as bus, stop_on_signals() as stop:
         notifier = can.Notifier(bus, [assembler], timeout=0.05)

@@ -23,7 +23,8 @@ import sys
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import SensorCensus, atomic_output, format_cycle, format_stats, progress
+from radarnode.cli.common import SensorCensus, atomic_output, format_cycle, format_fused, format_stats, fusion_mounts, \
+    progress
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
@@ -45,6 +46,9 @@ def add_subparser(sub) -> None:
     p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None,
                    help="radar sensor ID 0..7 (text: whose cycles, default 0; json/csv: only this sensor's frames and "
                         "the ECU's, default every frame)")
+    p.add_argument("--fuse", metavar="SCENARIO",
+                   help="text: fuse the object lists of every radar of SCENARIO (its radars' sensor IDs and mounts) "
+                        "into one list in the vehicle frame and print that")
     p.add_argument("--summary", action="store_true", help="text: only the per-object summary, no per-cycle tables")
     p.add_argument("--max-cycles", type=options.COUNT, default=0,
                    help="text: print at most this many cycles (0: all)")
@@ -154,7 +158,47 @@ def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> Frame
     return decoder
 
 
+def _write_fused(args, out, report: ReadReport, census: SensorCensus) -> None:
+    """Every radar of ``--fuse``'s scenario decoded, their object lists fused in the vehicle frame."""
+    from radarnode.consumer.fusion import FusingConsumer
+    fuser = FusingConsumer(args.mounts)
+    bar = progress(None, f"decoding {args.file}", unit="frame", to_stdout=args.output is None)
+    rounds = 0
+    seen: dict[int, set] = {}
+
+    def counted(reader):
+        for msg in reader:
+            bar.update(1)
+            census.note(msg)
+            yield msg
+
+    def show(batch) -> None:
+        nonlocal rounds
+        for cycles, fused in batch:
+            rounds += 1
+            for k in range(len(fused)):
+                seen.setdefault(int(fused.id[k]), set()).update(b for b in range(8) if fused.sensors[k] >> b & 1)
+            if not args.summary and (not args.max_cycles or rounds <= args.max_cycles):
+                out.write(format_fused(fused) + "\n")
+
+    try:
+        for batch in fuser.feed(counted(read_frames(args.file, report))):
+            show([batch])
+        fuser.flush()
+        show(fuser.drain())
+    finally:
+        bar.close()
+    if report.frames == 0:
+        raise FileError(report.message("argument FILE"))
+    for sid, st in fuser.stats.items():
+        out.write(f"sensor {sid}: " + format_stats(st) + "\n")
+    out.write(f"fused: {rounds} rounds, {len(seen)} fused objects; seen by several sensors: "
+              f"{sum(len(v) > 1 for v in seen.values())}\n")
+
+
 def _write_text(args, out, report: ReadReport, census: SensorCensus) -> None:
+    if getattr(args, "mounts", None):
+        return _write_fused(args, out, report, census)
     sensor = 0 if args.sensor_id is None else args.sensor_id
     assembler = CycleAssembler(sensor_id=sensor)
     cycles = []
@@ -206,6 +250,16 @@ def check_output_suffix(path: str, fmt: str) -> None:
 
 
 def cmd(args) -> int:
+    args.mounts = None
+    if args.fuse is not None:
+        if args.format != "text":
+            raise UsageError(f"option --fuse: not allowed with --format {args.format}; expected --format text (the "
+                             "json and csv formats list every frame of every sensor already)")
+        if args.sensor_id is not None:
+            raise UsageError("option --fuse: not allowed with --sensor-id; expected one of them (--fuse takes every "
+                             "radar of its scenario)")
+        from radarnode.radar.setup import load_scenario
+        args.mounts = fusion_mounts(load_scenario(args.fuse))
     if args.output is not None:
         check_output_suffix(args.output, args.format)
     fmt = check_input(args.file, "argument FILE")     # a missing, empty or unknown file fails before any output
@@ -228,7 +282,7 @@ def cmd(args) -> int:
         with atomic_output(args.output, "--output", newline="" if args.format == "csv" else None) as out:
             result = write(args, out, report, census)
             nothing_readable()
-    if args.format == "text" or args.sensor_id is not None:
+    if (args.format == "text" and args.mounts is None) or args.sensor_id is not None:
         # the sensor asked for (text: 0 by default) sent nothing here, others did: say which there are
         warning = census.warning(0 if args.sensor_id is None else args.sensor_id, "--sensor-id")
         if warning:

@@ -15,13 +15,13 @@ import sys
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals
+from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
 from radarnode.wire.logfiles import check_output_format, open_writer
 from radarnode.consumer.assembler import CycleAssembler
 from radarnode.consumer.evaluate import make_ecu
-from radarnode.wire.node import EgoMotionSender, RadarNode
+from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import SimulatedClock, run_node
 
 logger = logging.getLogger(__name__)
@@ -56,10 +56,9 @@ def cmd(args) -> int:
         args.ecu = True
     scenario = scenario_from_args(args)
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate, use_can_config=False)
-    if bitrate.bit_s != scenario.radar.bitrate:
-        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
-    node = RadarNode(scenario)
-    vehicle = None if args.no_ego_motion else EgoMotionSender(node.scene, scenario.radar.sensor_id)
+    scenario = with_bitrate(scenario, bitrate.bit_s)
+    node = make_node(scenario)
+    vehicle = None if args.no_ego_motion else ego_motion_for(node)
     with atomic_path(args.output, "--output") as tmp:      # no partial file if the run fails
         try:
             writer = mcap_writer(tmp, scenario, node) if is_mcap(args.output) else open_writer(tmp)

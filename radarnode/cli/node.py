@@ -10,10 +10,10 @@ from __future__ import annotations
 import dataclasses
 import sys
 
-from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals
+from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
 from radarnode.wire.bus import add_bus_arguments, open_bus
-from radarnode.wire.node import EgoMotionSender, RadarNode
+from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
 
 
@@ -35,10 +35,9 @@ def cmd(args) -> int:
     scenario = scenario_from_args(args)
     # the budget's bit rate as python-can opens the bus: -b, CAN_BITRATE/can.conf, else the scenario's
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)
-    if bitrate.bit_s != scenario.radar.bitrate:
-        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
-    node = RadarNode(scenario)
-    vehicle = EgoMotionSender(node.scene, scenario.radar.sensor_id) if args.send_ego_motion else None
+    scenario = with_bitrate(scenario, bitrate.bit_s)
+    node = make_node(scenario)
+    vehicle = ego_motion_for(node) if args.send_ego_motion else None
     with open_bus(args) as bus, stop_on_signals() as stop, live_view(args, node) as live:
         print(f"radarnode node: {scenario.name} on {bus.channel_info}, sensor {node.config.sensor_id}, "
               f"{scenario.num_cycles} cycles of {node.period_s * 1e3:.0f} ms; bus-load budget "

@@ -9,20 +9,22 @@ from __future__ import annotations
 
 import dataclasses
 import sys
+import time
 import uuid
 
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_stats, \
-    resolve_bitrate, scenario_from_args, stop_on_signals
+from radarnode.cli.common import add_scenario_argument, format_boundaries, format_cycle, format_fused, format_stats, \
+    fusion_mounts, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
+from radarnode.consumer.fusion import FusingConsumer
 from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, make_ecu
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
-from radarnode.wire.node import EgoMotionSender, RadarNode
+from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
 
 
@@ -67,14 +69,16 @@ def cmd(args) -> int:
     scenario = scenario_from_args(args)
     # the budget's bit rate as node takes it: -b, python-can's CAN_BITRATE/can.conf, else the scenario's
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)
-    if bitrate.bit_s != scenario.radar.bitrate:
-        scenario = dataclasses.replace(scenario, radar=dataclasses.replace(scenario.radar, bitrate=bitrate.bit_s))
-    node = RadarNode(scenario)
-    vehicle = EgoMotionSender(node.scene, scenario.radar.sensor_id)
+    scenario = with_bitrate(scenario, bitrate.bit_s)
+    node = make_node(scenario)
+    vehicle = ego_motion_for(node)
     channel = f"radarnode-{uuid.uuid4().hex}"
     tty = sys.stdout.isatty()
     every = args.every or (1 if tty else max(1, round(1.0 / node.period_s)))
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
+    # several radars: every sensor's object list decoded from the bus and fused in the vehicle frame
+    fuser = FusingConsumer(fusion_mounts(scenario)) if len(scenario.sensors) > 1 else None
+    fused_last = [None]
     spec = scenario.ecu
     ecu = make_ecu(scenario, node.period_s, acc_enabled=spec.acc_enabled or args.closed_loop)
     actuator = EgoActuator(node.scene, spec.actuator_lag_s, scenario.ego.speed_mps) if args.closed_loop else None
@@ -84,12 +88,14 @@ def cmd(args) -> int:
         actuator.at(0.0)
     warnings = []
     print(f"scenario {scenario.name}: {scenario.description.strip()}".rstrip(": "))
-    print(f"radar {node.preset.name}, cycle {node.period_s * 1e3:.0f} ms, {scenario.num_cycles} cycles, "
+    radars = ", ".join(f"{r.preset} (sensor {r.sensor_id})" for r in scenario.sensors) if fuser else \
+        f"radar {node.preset.name}"
+    print(f"{radars}, cycle {node.period_s * 1e3:.0f} ms, {scenario.num_cycles} cycles, "
           f"{'simulated' if args.fast else 'real'} time, python-can virtual bus {channel}")
     with can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as node_bus, \
             can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as consumer_bus, \
             stop_on_signals() as stop, live_view(args, node, channel) as live:
-        notifier = can.Notifier(consumer_bus, [assembler], timeout=0.01)
+        notifier = can.Notifier(consumer_bus, [assembler] + ([fuser] if fuser else []), timeout=0.01)
         shown = [0]
         decoded = []
 
@@ -132,6 +138,15 @@ def cmd(args) -> int:
                       scripted=False)
                 held[0] = new
                 actuator.at(out.t_s + node.period_s)
+            if fuser is not None:
+                # the other sensors' frames follow the first's on the bus: wait for the round to close
+                deadline = time.perf_counter() + 0.2
+                rounds = fuser.drain()
+                while not rounds and time.perf_counter() < deadline:
+                    time.sleep(0.001)
+                    rounds = fuser.drain()
+                if rounds:
+                    fused_last[0] = rounds[-1][1]
             if cycle is None:
                 return
             decoded.append(cycle)
@@ -142,6 +157,8 @@ def cmd(args) -> int:
             road = format_boundaries(assembler.road_boundaries)
             if road:
                 text += "\n" + road
+            if fused_last[0] is not None:
+                text += "\n" + format_fused(fused_last[0])
             if decision is not None:
                 text += "\n" + format_ecu(decision, ecu.ego_speed_mps)
             if tty:

@@ -12,6 +12,8 @@ import dataclasses
 from dataclasses import dataclass
 from pathlib import Path
 
+import numpy as np
+
 from radarnode.errors import FieldError, short_repr
 from radarnode.radar.chain import DspConfig
 from radarnode.radar.checks import check_scenario
@@ -37,10 +39,11 @@ def radar_config(scenario: Scenario) -> RadarConfig:
     if cached is not None:
         return cached
     src = Source.of_lines(scenario.source, scenario.lines)
+    root = scenario.__dict__.get("_radar_path", "radar")     # "radars[i]" for one of several radars
     try:
         preset = get_preset(scenario.radar.preset).with_overrides(scenario.radar.overrides)
     except FieldError as exc:
-        child = f"radar.{exc.field}"
+        child = f"{root}.{exc.field}"
         raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}") from None
     signal = build(SignalOptions, scenario.signal, "signal", src, SIGNAL_SCHEMA)
@@ -60,7 +63,35 @@ def resolved(scenario: Scenario) -> Scenario:
     if scenario.cycle_period_s is None:
         scenario = dataclasses.replace(scenario, cycle_period_s=cfg.preset.cycle_period_s)
         object.__setattr__(scenario, "_radar_config", cfg)
+    if scenario.radars:
+        radar_scenarios(scenario)           # every radar's preset and overrides checked now, not at the first cycle
     return scenario
+
+
+def radar_seed(seed: int, index: int) -> int:
+    """The seed of radar ``index`` of several: the scenario's for the first (so adding radars does not change the
+    first one's frames), one derived from (seed, index) for the others (independent noise)."""
+    if index == 0:
+        return seed
+    return int(np.random.SeedSequence([seed, index]).generate_state(2, dtype=np.uint64)[0] >> np.uint64(1))
+
+
+def radar_scenarios(scenario: Scenario) -> list[Scenario]:
+    """One single-radar scenario per radar of ``scenario`` (its ``radars``, or itself): the same scene, period and
+    duration; radar i's setup and seed (:func:`radar_seed`). Errors name ``radars[i].…``."""
+    if not scenario.radars:
+        return [scenario]
+    cached = scenario.__dict__.get("_radar_scenarios")
+    if cached is not None:
+        return cached
+    out = []
+    for i, setup in enumerate(scenario.radars):
+        sc = dataclasses.replace(scenario, radar=setup, radars=(), seed=radar_seed(scenario.seed, i))
+        object.__setattr__(sc, "_radar_path", f"radars[{i}]")
+        radar_config(sc)
+        out.append(sc)
+    object.__setattr__(scenario, "_radar_scenarios", out)
+    return out
 
 
 def load_scenario(path: str | Path) -> Scenario:
@@ -79,4 +110,5 @@ def parse_scenario(text: str, name: str = "<string>") -> Scenario:
     return check_scenario(resolved(read_scenario_text(text, name)))
 
 
-__all__ = ["RadarConfig", "load_scenario", "parse_scenario", "radar_config", "resolved", "with_signal"]
+__all__ = ["RadarConfig", "load_scenario", "parse_scenario", "radar_config", "radar_scenarios", "radar_seed",
+           "resolved", "with_signal"]

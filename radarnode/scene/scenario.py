@@ -530,6 +530,8 @@ class Scenario:
     signal: dict = field(default_factory=dict)
     ecu: EcuSpec = EcuSpec()
     radar: RadarSetup = RadarSetup()
+    #: several radars on one bus (each its own node, one scene, one clock); ``radar`` is then the first of them
+    radars: tuple[RadarSetup, ...] = ()
     ego: Ego = Ego()
     road: Road = Road()
     actors: tuple[Actor, ...] = ()
@@ -547,6 +549,8 @@ class Scenario:
         validate.choice("fidelity", self.fidelity, FIDELITIES)
         if not isinstance(self.signal, dict):
             raise FieldError("signal", self.signal, "a mapping of signal-level options")
+        if self.radars:
+            self._check_radars()
         ids = [a.id for a in self.actors]
         dup = sorted({i for i in ids if ids.count(i) > 1})
         if dup:
@@ -562,6 +566,28 @@ class Scenario:
         for i, a in enumerate(self.actors):
             if a.lane is not None and a.lane >= self.road.lanes:
                 raise FieldError(f"actors[{i}].lane", a.lane, f"a lane index in [0, {self.road.lanes - 1}]")
+
+    def _check_radars(self) -> None:
+        """Several radars: each its own sensor ID, all on one bus (one bit rate); ``radar`` becomes the first."""
+        if any(k == "radar" or k.startswith("radar.") for k in self.lines) and self.radar != self.radars[0]:
+            raise FieldError("radar", "(given)", "either 'radar' (one radar) or 'radars' (a list), not both")
+        if len(self.radars) > 8:
+            raise FieldError("radars", f"a list of {len(self.radars)}", "at most 8 radars (sensor IDs 0..7)")
+        for i, r in enumerate(self.radars):
+            for j in range(i):
+                if self.radars[j].sensor_id == r.sensor_id:
+                    raise FieldError(f"radars[{i}].sensor_id", r.sensor_id,
+                                     f"a sensor ID no other radar uses (radars[{j}] has {r.sensor_id}): each radar "
+                                     "is its own node, its CAN IDs shifted by 0x10 x sensor ID")
+            if r.bitrate != self.radars[0].bitrate:
+                raise FieldError(f"radars[{i}].bitrate", r.bitrate,
+                                 f"{self.radars[0].bitrate} (radars[0].bitrate): the radars share one bus")
+        object.__setattr__(self, "radar", self.radars[0])
+
+    @property
+    def sensors(self) -> tuple[RadarSetup, ...]:
+        """Every radar of the scenario: ``radars``, or the one ``radar``."""
+        return self.radars if self.radars else (self.radar,)
 
     @property
     def period_s(self) -> float:
@@ -596,7 +622,7 @@ class Scenario:
 SCHEMA = Schema(
     aliases={Actor: {"class": "object_class"}},
     nested={
-        Scenario: {"radar": (RadarSetup, False), "ego": (Ego, False), "road": (Road, False),
+        Scenario: {"radar": (RadarSetup, False), "radars": (RadarSetup, True), "ego": (Ego, False), "road": (Road, False),
                    "actors": (Actor, True), "ecu": (EcuSpec, False)},
         EcuSpec: {"expect": (Expectation, False)},
         RadarSetup: {"mount": (Mount, False)},

@@ -1,0 +1,335 @@
+"""Several radars' object lists fused into one, in the vehicle frame, with track-to-track association.
+
+Each sensor's objects are taken from its own frame (x forward, y left of the sensor) into the vehicle frame
+(rear-axle centre) through its mount (:class:`radarnode.consumer.path.SensorMount`, calibrated into the ECU),
+their positions with the covariance their σ fields give (rotated with the sensor's yaw) and their velocities
+relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
+
+1. **Continuity.** An object whose (sensor, object ID) fed a fused track last cycle feeds it again, as long as it
+   still lies within the gate: a radar keeps its object IDs, so the association is kept where it holds.
+2. **Association.** The others are assigned to fused tracks by a globally optimal assignment
+   (``scipy.optimize.linear_sum_assignment``) on the Mahalanobis distance of the positions, with the fused
+   track predicted to the object's time, the covariance of both and an extent term (:data:`EXTENT_SIGMA_M`: two
+   radars see different points of one car — the front radar its rear, a corner radar its side), gated at
+   :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %); at most one object per sensor per fused track.
+3. **Fusion.** A fused track's position and velocity are the information-weighted mean of its objects this
+   cycle (each predicted to the fusion time with its velocity: the sensors' cycles are not simultaneous); a track
+   seen by no sensor coasts on its velocity for up to :data:`COAST_CYCLES` fusions, then ends. Unassigned objects
+   start new fused tracks.
+
+Fused IDs are stable and never reused while alive. ``sensors`` of a fused object is a bit field of the sensor
+IDs that saw it this cycle.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import can
+import numpy as np
+
+from radarnode.consumer.path import SensorMount
+from radarnode.perception.types import ObjectList
+
+GATE_CHI2 = 13.82            # χ²(2) at 0.999
+EXTENT_SIGMA_M = 1.5         # where on a vehicle's outline a radar's reference point falls (per axis)
+MIN_SIGMA_M = 0.1            # an object without quality (σ) fields: this position σ, and …
+MIN_SIGMA_MPS = 0.25         # … this velocity σ
+COAST_CYCLES = 3
+
+
+@dataclass
+class SensorObjects:
+    """One sensor's objects of one cycle in the vehicle frame."""
+
+    sensor_id: int
+    t_s: float
+    ids: np.ndarray              # the radar's object IDs
+    pos: np.ndarray              # (n, 2) vehicle frame
+    vel: np.ndarray              # (n, 2) relative to the vehicle, vehicle axes
+    cov: np.ndarray              # (n, 2, 2) position covariance
+    var_v: np.ndarray            # (n, 2) velocity variance (vehicle axes, diagonal after rotation)
+    rcs: np.ndarray
+    obj_class: np.ndarray
+    length: np.ndarray
+    width: np.ndarray
+
+
+def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMount) -> SensorObjects:
+    """One sensor's object list in the vehicle frame (positions, velocities, covariances)."""
+    yaw = math.radians(mount.yaw_deg)
+    c, s = math.cos(yaw), math.sin(yaw)
+    rot = np.array([[c, -s], [s, c]])
+    x, y = mount.to_vehicle(objects.dist_long_m, objects.dist_lat_m)
+    vx, vy = mount.rotate(objects.vrel_long_mps, objects.vrel_lat_mps)
+    sx = np.nan_to_num(objects.dist_long_sigma_m, nan=MIN_SIGMA_M)
+    sy = np.nan_to_num(objects.dist_lat_sigma_m, nan=MIN_SIGMA_M)
+    svx = np.nan_to_num(objects.vrel_long_sigma_mps, nan=MIN_SIGMA_MPS)
+    svy = np.nan_to_num(objects.vrel_lat_sigma_mps, nan=MIN_SIGMA_MPS)
+    d = np.zeros((len(objects), 2, 2))
+    d[:, 0, 0], d[:, 1, 1] = np.maximum(sx, MIN_SIGMA_M) ** 2, np.maximum(sy, MIN_SIGMA_M) ** 2
+    cov = rot @ d @ rot.T
+    dv = np.zeros((len(objects), 2, 2))
+    dv[:, 0, 0], dv[:, 1, 1] = np.maximum(svx, MIN_SIGMA_MPS) ** 2, np.maximum(svy, MIN_SIGMA_MPS) ** 2
+    cov_v = rot @ dv @ rot.T
+    return SensorObjects(sensor_id, t_s, np.asarray(objects.id, dtype=np.int64), np.stack([x, y], axis=1),
+                         np.stack([vx, vy], axis=1), cov, np.stack([cov_v[:, 0, 0], cov_v[:, 1, 1]], axis=1),
+                         np.asarray(objects.rcs_dbsm, dtype=np.float64), np.asarray(objects.obj_class),
+                         np.asarray(objects.length_m, dtype=np.float64), np.asarray(objects.width_m, dtype=np.float64))
+
+
+@dataclass
+class FusedObjects:
+    """The fused object list of one fusion step (vehicle frame, rear-axle centre; velocities relative)."""
+
+    t_s: float
+    id: np.ndarray
+    x_m: np.ndarray
+    y_m: np.ndarray
+    vx_mps: np.ndarray
+    vy_mps: np.ndarray
+    sigma_x_m: np.ndarray
+    sigma_y_m: np.ndarray
+    rcs_dbsm: np.ndarray
+    obj_class: np.ndarray
+    length_m: np.ndarray
+    width_m: np.ndarray
+    sensors: np.ndarray          # bit field: bit k set when sensor ID k saw it this cycle
+    coasting: np.ndarray         # bool: no sensor saw it this cycle
+
+    def __len__(self) -> int:
+        return int(self.id.size)
+
+
+@dataclass
+class _Track:
+    fid: int
+    t_s: float
+    pos: np.ndarray
+    vel: np.ndarray
+    cov: np.ndarray
+    members: dict = field(default_factory=dict)       # sensor ID -> radar object ID, last cycle
+    misses: int = 0
+    rcs: float = math.nan
+    obj_class: int = -1
+    length: float = math.nan
+    width: float = math.nan
+    sensors: int = 0
+
+
+class ObjectFusion:
+    """Track-to-track fusion of several radars' object lists (see the module docstring).
+
+    Parameters
+    ----------
+    mounts : dict sensor ID -> SensorMount
+        Where each radar sits; objects of a sensor not in it are refused (counted in ``unknown_sensor``).
+    """
+
+    def __init__(self, mounts: dict[int, SensorMount]) -> None:
+        if not mounts:
+            raise ValueError("mounts: value {} is not allowed; expected at least one sensor ID with its mount")
+        self.mounts = dict(mounts)
+        self.tracks: list[_Track] = []
+        self._next_id = 0
+        self.unknown_sensor = 0
+
+    def _new_id(self) -> int:
+        used = {t.fid for t in self.tracks}
+        while self._next_id in used:
+            self._next_id = (self._next_id + 1) % 65536
+        fid = self._next_id
+        self._next_id = (self._next_id + 1) % 65536
+        return fid
+
+    def step(self, t_s: float, cycles: dict[int, tuple[float, ObjectList]]) -> FusedObjects:
+        """Fuse the latest object list of each sensor, ``{sensor ID: (its cycle's time, objects)}``, at ``t_s``."""
+        parts = []
+        for sid, (ts, objects) in sorted(cycles.items()):
+            if sid not in self.mounts:
+                self.unknown_sensor += 1
+                continue
+            parts.append(to_vehicle(sid, ts, objects, self.mounts[sid]))
+        # every track predicted to the fusion time
+        for tr in self.tracks:
+            dt = t_s - tr.t_s
+            tr.pos = tr.pos + tr.vel * dt
+            tr.t_s = t_s
+        assigned: dict[int, list[tuple[SensorObjects, int]]] = {id(t): [] for t in self.tracks}
+        new_tracks: list[tuple[SensorObjects, int]] = []
+        for so in parts:
+            self._associate(so, t_s, assigned, new_tracks)
+        kept = []
+        for tr in self.tracks:
+            got = assigned[id(tr)]
+            if got:
+                self._update(tr, got, t_s)
+                kept.append(tr)
+            else:
+                tr.misses += 1
+                tr.members = {}
+                tr.sensors = 0
+                if tr.misses <= COAST_CYCLES:
+                    kept.append(tr)
+        # objects no track took: grouped into new tracks (the same object seen by two sensors in its first cycle
+        # becomes one track: each new one is offered to the tracks started before it in this step)
+        started: list[_Track] = []
+        members: dict[int, list[tuple[SensorObjects, int]]] = {}
+        for so, i in new_tracks:
+            best, best_d = None, GATE_CHI2
+            for tr in started:
+                if so.sensor_id in tr.members:
+                    continue
+                d = _mahalanobis(tr.pos, tr.cov, so.pos[i] + so.vel[i] * (t_s - so.t_s), so.cov[i])
+                if d < best_d:
+                    best, best_d = tr, d
+            if best is None:
+                best = _Track(self._new_id(), t_s, so.pos[i].copy(), so.vel[i].copy(), so.cov[i].copy())
+                self.tracks.append(best)      # reserves the ID
+                started.append(best)
+                members[id(best)] = []
+            members[id(best)].append((so, i))
+            self._update(best, members[id(best)], t_s)
+        self.tracks = kept + started
+        return self._output(t_s)
+
+    def _associate(self, so: SensorObjects, t_s: float, assigned: dict, new_tracks: list) -> None:
+        n = len(so.ids)
+        if n == 0:
+            return
+        # a fused track takes at most one object of each sensor
+        free = [tr for tr in self.tracks if all(p.sensor_id != so.sensor_id for p, _ in assigned[id(tr)])]
+        pos = so.pos + so.vel * (t_s - so.t_s)
+        taken = np.zeros(n, dtype=bool)
+        # 1. continuity: the same radar object keeps its fused track while it stays within the gate
+        for tr in list(free):
+            oid = tr.members.get(so.sensor_id)
+            if oid is None:
+                continue
+            hit = np.flatnonzero((so.ids == oid) & ~taken)
+            if hit.size and _mahalanobis(tr.pos, tr.cov, pos[hit[0]], so.cov[hit[0]]) < GATE_CHI2:
+                assigned[id(tr)].append((so, int(hit[0])))
+                taken[hit[0]] = True
+                free.remove(tr)
+        # 2. the rest by a global assignment on the Mahalanobis distance
+        rest = np.flatnonzero(~taken)
+        if rest.size and free:
+            cost = np.array([[_mahalanobis(tr.pos, tr.cov, pos[i], so.cov[i]) for i in rest] for tr in free])
+            import scipy.optimize  # imported when first needed: a faster start
+            big = 1e6
+            rows, cols = scipy.optimize.linear_sum_assignment(np.where(cost < GATE_CHI2, cost, big))
+            for r, c in zip(rows, cols):
+                if cost[r, c] < GATE_CHI2:
+                    assigned[id(free[r])].append((so, int(rest[c])))
+                    taken[rest[c]] = True
+        for i in np.flatnonzero(~taken):
+            new_tracks.append((so, int(i)))
+
+    @staticmethod
+    def _update(tr: _Track, got: list[tuple[SensorObjects, int]], t_s: float) -> None:
+        """The information-weighted mean of the track's objects this cycle (each predicted to ``t_s``)."""
+        info = np.zeros((2, 2))
+        acc = np.zeros(2)
+        w_v = np.zeros(2)
+        acc_v = np.zeros(2)
+        for so, i in got:
+            p = so.pos[i] + so.vel[i] * (t_s - so.t_s)
+            inv = np.linalg.inv(so.cov[i] + 1e-9 * np.eye(2))
+            info += inv
+            acc += inv @ p
+            wv = 1.0 / so.var_v[i]
+            w_v += wv
+            acc_v += wv * so.vel[i]
+        tr.cov = np.linalg.inv(info)
+        tr.pos = tr.cov @ acc
+        tr.vel = acc_v / w_v
+        tr.t_s = t_s
+        tr.misses = 0
+        tr.members = {so.sensor_id: int(so.ids[i]) for so, i in got}
+        tr.sensors = sum(1 << so.sensor_id for so, _ in got)
+        strongest = max(got, key=lambda g: g[0].rcs[g[1]] if np.isfinite(g[0].rcs[g[1]]) else -np.inf)
+        so, i = strongest
+        tr.rcs, tr.obj_class = float(so.rcs[i]), int(so.obj_class[i])
+        tr.length = float(np.nanmax([g[0].length[g[1]] for g in got]))
+        tr.width = float(np.nanmax([g[0].width[g[1]] for g in got]))
+
+    def _output(self, t_s: float) -> FusedObjects:
+        ts = sorted(self.tracks, key=lambda t: t.fid)
+        arr = lambda f, dt=np.float64: np.array([f(t) for t in ts], dtype=dt)   # noqa: E731
+        return FusedObjects(
+            t_s, arr(lambda t: t.fid, np.int64), arr(lambda t: t.pos[0]), arr(lambda t: t.pos[1]),
+            arr(lambda t: t.vel[0]), arr(lambda t: t.vel[1]), arr(lambda t: math.sqrt(t.cov[0, 0])),
+            arr(lambda t: math.sqrt(t.cov[1, 1])), arr(lambda t: t.rcs), arr(lambda t: t.obj_class, np.int64),
+            arr(lambda t: t.length), arr(lambda t: t.width), arr(lambda t: t.sensors, np.int64),
+            arr(lambda t: t.misses > 0, bool))
+
+
+def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray) -> float:
+    d = p2 - p1
+    s = c1 + c2 + (EXTENT_SIGMA_M ** 2) * np.eye(2)
+    return float(d @ np.linalg.solve(s, d))
+
+
+
+
+
+class FusingConsumer(can.Listener):
+    """Every radar's frames from one bus: one :class:`~radarnode.consumer.assembler.CycleAssembler` per sensor ID,
+    and the fused object list each time every sensor has delivered a new object list.
+
+    A sensor that delivers its next list before the others theirs (one is missing or slow) closes the round
+    with what is there: a silent radar delays the fused list by one of the others' cycles, never stops it.
+    ``drain()`` returns ``(sensor_cycles, fused)`` pairs: the round's cycles by sensor ID and the fused list.
+    """
+
+    def __init__(self, mounts: dict[int, SensorMount], database=None) -> None:
+        from radarnode.consumer.assembler import CycleAssembler
+        self.fusion = ObjectFusion(mounts)
+        self.assemblers = {sid: CycleAssembler(sid, database) for sid in sorted(mounts)}
+        self._round: dict = {}
+        self._out: list = []
+
+    def on_message_received(self, msg: can.Message) -> None:
+        for a in self.assemblers.values():
+            a.on_message_received(msg)
+        self._collect()
+
+    def feed(self, messages):
+        for m in messages:
+            self.on_message_received(m)
+            yield from self.drain()
+
+    def _collect(self) -> None:
+        from radarnode.consumer.assembler import ObjectCycle
+        for sid, a in self.assemblers.items():
+            for cyc in a.drain():
+                if not isinstance(cyc, ObjectCycle):
+                    continue
+                if sid in self._round:
+                    self._close()
+                self._round[sid] = cyc
+                if len(self._round) == len(self.assemblers):
+                    self._close()
+
+    def _close(self) -> None:
+        if not self._round:
+            return
+        t = max(c.timestamp for c in self._round.values())
+        fused = self.fusion.step(t, {sid: (c.timestamp, c.objects) for sid, c in self._round.items()})
+        self._out.append((dict(self._round), fused))
+        self._round = {}
+
+    def flush(self) -> None:
+        """Fuse what the last, incomplete round holds (at the end of a log)."""
+        self._close()
+
+    def drain(self) -> list:
+        out, self._out = self._out, []
+        return out
+
+    @property
+    def stats(self) -> dict:
+        """Each sensor's consumer counters."""
+        return {sid: a.stats for sid, a in self.assemblers.items()}
+__all__ = ["FusedObjects", "FusingConsumer", "ObjectFusion", "SensorObjects", "to_vehicle"]

@@ -1,0 +1,297 @@
+"""Several radars on one bus (issue 11 item 2): a scenario's ``radars`` list, one node per radar driven by one scene
+and one clock, the consumer decoding every sensor and fusing their object lists in the vehicle frame."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import can
+import numpy as np
+import pytest
+
+from radarnode.cli.main import main
+from radarnode.consumer.assembler import CycleAssembler
+from radarnode.consumer.fusion import FusingConsumer, ObjectFusion
+from radarnode.consumer.path import SensorMount
+from radarnode.errors import ScenarioError
+from radarnode.perception.types import ObjectList
+from radarnode.radar.setup import load_scenario, parse_scenario, radar_scenarios
+from radarnode.wire import ars408 as P
+from radarnode.wire.group import RadarGroup, ego_motion_for, make_node
+from radarnode.wire.node import RadarNode
+from radarnode.wire.runner import SimulatedClock, run_node
+from tests.conftest import SCENARIOS
+
+THREE = """
+name: three
+duration_s: {duration}
+seed: 4
+radars:
+  - {{preset: ars408_like, sensor_id: 0, mount: {{x_m: 3.7, y_m: 0.0, yaw_deg: 0.0}}}}
+  - {{preset: srr_corner, sensor_id: 1, mount: {{x_m: 3.5, y_m: 0.73, yaw_deg: 45.0}}}}
+  - {{preset: srr_corner, sensor_id: 2, mount: {{x_m: 3.5, y_m: -0.73, yaw_deg: -45.0}}}}
+ego: {{speed_mps: 6.0}}
+road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0}}
+actors:
+  - {{id: car, class: car, x_m: 18.0, y_m: 0.0, speed_mps: 6.0}}
+"""
+
+
+def _frames(sc, fidelity=None):
+    node = make_node(sc, fidelity=fidelity)
+    frames, outs = [], []
+    run_node(node, clock=SimulatedClock(), sinks=[frames.append], vehicle=ego_motion_for(node),
+             on_cycle=outs.append)
+    return node, frames, outs
+
+
+def _mounts(sc):
+    return {r.sensor_id: SensorMount.of(r.mount) for r in sc.sensors}
+
+
+def _fused(sc, frames):
+    fc = FusingConsumer(_mounts(sc))
+    rounds = list(fc.feed(frames))
+    fc.flush()
+    return fc, rounds + fc.drain()
+
+
+# --- the scenario -------------------------------------------------------------------------------------------
+
+
+def test_radars_list_gives_every_radar_its_setup_and_a_seed_of_its_own():
+    sc = parse_scenario(THREE.format(duration=1.0))
+    assert [r.sensor_id for r in sc.sensors] == [0, 1, 2]
+    assert sc.radar == sc.radars[0]
+    per = radar_scenarios(sc)
+    assert [s.radar.preset for s in per] == ["ars408_like", "srr_corner", "srr_corner"]
+    assert per[0].seed == sc.seed and len({s.seed for s in per}) == 3
+    assert all(s.period_s == sc.period_s for s in per)          # one clock
+
+
+@pytest.mark.parametrize("edit, message", [
+    (("sensor_id: 1,", "sensor_id: 0,"), r"radars\[1\]\.sensor_id': value 0 is not allowed; expected a sensor ID no "
+                                         r"other radar uses \(radars\[0\] has 0\)"),
+    (("sensor_id: 2, mount", "sensor_id: 2, bitrate: 250000, mount"),
+     r"radars\[2\]\.bitrate': value 250000 is not allowed; expected 500000 \(radars\[0\]\.bitrate\): the radars "
+     r"share one bus"),
+    (("preset: srr_corner, sensor_id: 2", "preset: srr_cornr, sensor_id: 2"), r"radars\[2\]\.preset': value "
+                                                                              r"'srr_cornr' is not allowed"),
+    (("ego:", "radar: {preset: mimo12}\nego:"), r"field 'radar'.*either 'radar' \(one radar\) or 'radars'"),
+    (("yaw_deg: 45.0", "yaw_deg: .nan"), r"radars\[1\]\.mount\.yaw_deg"),
+])
+def test_bad_radars_are_refused_with_the_field_named(edit, message):
+    with pytest.raises(ScenarioError, match=message):
+        parse_scenario(THREE.format(duration=1.0).replace(*edit, 1))
+
+
+# --- the nodes on one bus -----------------------------------------------------------------------------------
+
+
+def test_every_radar_is_its_own_node_with_its_shifted_ids_and_none_collide():
+    sc = parse_scenario(THREE.format(duration=1.5))
+    node, frames, outs = _frames(sc)
+    assert isinstance(node, RadarGroup) and len(outs) == sc.num_cycles
+    by_sensor = {}
+    for m in frames:
+        for sid in (0, 1, 2):
+            base = m.arbitration_id - 0x10 * sid
+            if base in (P.OBJ_STATUS, P.RADAR_STATE, P.SPEED_INFO):
+                by_sensor.setdefault(sid, set()).add(m.arbitration_id)
+    assert by_sensor[1] == {P.OBJ_STATUS + 0x10, P.RADAR_STATE + 0x10, P.SPEED_INFO + 0x10}
+    # each sensor's consumer takes its own cycles, every one of them, and counts the others' frames as not its own
+    for sid in (0, 1, 2):
+        a = CycleAssembler(sensor_id=sid)
+        cycles = list(a.feed(frames))
+        assert len(cycles) == sc.num_cycles and a.stats.dropped() == 0
+        assert [c.meas_counter for c in cycles] == list(range(sc.num_cycles))
+    # in each cycle sensor 1's frames follow sensor 0's on the wire, timestamps never go back
+    stamps = [m.timestamp for m in frames]
+    assert all(b >= a for a, b in zip(stamps, stamps[1:]))
+
+
+def test_adding_radars_does_not_change_the_first_radars_frames():
+    from radarnode.wire.node import EgoMotionSender
+    sc = parse_scenario(THREE.format(duration=1.5))
+    alone = dataclasses.replace(sc, radars=(), radar=sc.radars[0])
+    _, multi, _ = _frames(sc)
+    node = RadarNode(alone)
+    single = []
+    run_node(node, clock=SimulatedClock(), sinks=[single.append], vehicle=EgoMotionSender(node.scene, 0))
+    ids0 = {m.arbitration_id for m in single}
+    mine = [m for m in multi if m.arbitration_id in ids0]
+    assert len(single) > 100
+    assert [(m.arbitration_id, bytes(m.data)) for m in mine] == [(m.arbitration_id, bytes(m.data)) for m in single]
+
+
+def test_same_scenario_and_seed_give_the_same_frames():
+    sc = parse_scenario(THREE.format(duration=1.0))
+    _, a, _ = _frames(sc)
+    _, b, _ = _frames(sc)
+    assert [(m.arbitration_id, bytes(m.data), m.timestamp) for m in a] == \
+        [(m.arbitration_id, bytes(m.data), m.timestamp) for m in b]
+
+
+def test_closed_loop_drives_one_ego_for_every_radar():
+    from radarnode.consumer.evaluate import EgoActuator
+    sc = parse_scenario(THREE.format(duration=1.0))
+    node = make_node(sc)
+    act = EgoActuator(node.scene, 0.2, 6.0)
+    act.at(0.0)
+    node.cycle(0.0)
+    assert all(n.scene._ego is node.scene._ego for n in node.nodes)
+
+
+# --- fusion -------------------------------------------------------------------------------------------------
+
+
+def _objects(x, y, vx=0.0, vy=0.0, ids=None, sigma=0.2):
+    n = len(x)
+    nan = np.full(n, np.nan)
+    f = lambda v: np.asarray(v, dtype=np.float64)   # noqa: E731
+    return ObjectList(id=np.arange(n) if ids is None else np.asarray(ids), dist_long_m=f(x), dist_lat_m=f(y),
+                      vrel_long_mps=f(np.broadcast_to(vx, (n,))), vrel_lat_mps=f(np.broadcast_to(vy, (n,))),
+                      dyn_prop=np.zeros(n, dtype=np.int64), rcs_dbsm=np.full(n, 10.0),
+                      dist_long_sigma_m=np.full(n, sigma), dist_lat_sigma_m=np.full(n, sigma),
+                      vrel_long_sigma_mps=np.full(n, 0.1), vrel_lat_sigma_mps=np.full(n, 0.5),
+                      arel_long_sigma_mps2=nan, arel_lat_sigma_mps2=nan, orientation_sigma_rad=nan,
+                      meas_state=np.ones(n, dtype=np.int64), prob_of_exist=np.full(n, 7),
+                      arel_long_mps2=nan, arel_lat_mps2=nan, obj_class=np.ones(n, dtype=np.int64),
+                      orientation_rad=nan, length_m=np.full(n, 4.0), width_m=np.full(n, 1.8),
+                      actor_index=np.full(n, -1))
+
+
+def _in_sensor(mount: SensorMount, xv, yv):
+    """Vehicle-frame points in a sensor's frame (the inverse of SensorMount.to_vehicle)."""
+    c, s = math.cos(math.radians(mount.yaw_deg)), math.sin(math.radians(mount.yaw_deg))
+    dx, dy = np.asarray(xv) - mount.x_m, np.asarray(yv) - mount.y_m
+    return c * dx + s * dy, -s * dx + c * dy
+
+
+def test_one_object_seen_by_two_turned_radars_is_one_fused_object_where_it_is():
+    m0, m1 = SensorMount(3.7, 0.0, 0.0), SensorMount(3.5, 0.73, 45.0)
+    fusion = ObjectFusion({0: m0, 1: m1})
+    truth = np.array([[12.0, 4.0], [20.0, -1.0]])
+    x0, y0 = _in_sensor(m0, truth[:, 0], truth[:, 1])
+    x1, y1 = _in_sensor(m1, truth[:1, 0], truth[:1, 1])                 # sensor 1 sees only the first
+    out = fusion.step(0.0, {0: (0.0, _objects(x0, y0)), 1: (0.0, _objects(x1, y1, ids=[7]))})
+    assert len(out) == 2
+    k = int(np.argmin(np.hypot(out.x_m - 12.0, out.y_m - 4.0)))
+    assert abs(out.x_m[k] - 12.0) < 1e-9 and abs(out.y_m[k] - 4.0) < 1e-9
+    assert out.sensors[k] == 0b11 and out.sensors[1 - k] == 0b01
+    # two looks of 0.2 m each: the fused σ is 0.2/√2
+    assert abs(out.sigma_x_m[k] - 0.2 / math.sqrt(2)) < 1e-6
+
+
+def test_fused_ids_stay_while_an_object_passes_from_one_radar_to_another():
+    """A car crossing in front: the right corner radar, then the front one, then the left; one fused ID."""
+    sc = load_scenario(SCENARIOS / "intersection_crossing.yaml")
+    _, frames, outs = _frames(sc)
+    _, rounds = _fused(sc, frames)
+    assert len(rounds) == sc.num_cycles
+    ids = {int(i) for _, f in rounds for i in f.id[f.sensors > 0]}
+    seen_by = [int(s) for _, f in rounds for s in f.sensors[f.sensors > 0]]
+    assert ids == {0}                                                  # one object, one fused ID all along
+    assert {0b100, 0b010} <= set(seen_by) and any(bin(s).count("1") >= 2 for s in seen_by)
+    # against the truth (vehicle frame: the sensor-0 view plus the mount), within a car's half length
+    m0 = sc.radars[0].mount
+    errs = []
+    for (_, f), out in zip(rounds, outs):
+        if len(f) and f.sensors[0] and out.view.range_m[0] < 25.0:
+            errs.append(math.hypot(f.x_m[0] - (out.view.x_m[0] + m0.x_m), f.y_m[0] - out.view.y_m[0]))
+    assert len(errs) > 20 and np.median(errs) < 2.5
+
+
+def test_fusion_keeps_going_when_a_radar_falls_silent_and_ignores_strangers_duplicates_and_reordering():
+    sc = load_scenario(SCENARIOS / "intersection_crossing.yaml")
+    _, frames, _ = _frames(sc)
+    _, clean = _fused(sc, frames)
+    t_cut = 2.0
+    # sensor 1 (left corner) falls silent after 2 s; a stranger (sensor 5, radarnode's own IDs) talks; every
+    # frame arrives twice; RadarState and VersionID swap places with their neighbours
+    messy = []
+    for m in frames:
+        if (m.arbitration_id & 0xFF0) in (0x610, 0x210, 0x710, 0x310) and m.timestamp > t_cut:
+            continue
+        messy += [m, m]
+        if m.arbitration_id == P.OBJ_STATUS:
+            messy.append(can.Message(arbitration_id=P.OBJ_STATUS + 0x50, data=m.data, timestamp=m.timestamp,
+                                     is_extended_id=False))
+    for i in range(len(messy) - 1):            # each RadarState arrives after the frame that followed it
+        if messy[i].arbitration_id in (P.RADAR_STATE, P.RADAR_STATE + 0x20) and \
+                messy[i + 1].arbitration_id not in (P.RADAR_STATE, P.RADAR_STATE + 0x20):
+            messy[i], messy[i + 1] = messy[i + 1], messy[i]
+    fc, rounds = _fused(sc, messy)
+    assert abs(len(rounds) - len(clean)) <= 2
+    late = [f for _, f in rounds if f.t_s > t_cut + 0.5]
+    assert late and all(not (s & 0b010) for f in late for s in f.sensors)     # no word from sensor 1 …
+    assert any(len(f) for f in late)                                        # … yet the fused list goes on
+    assert all(fc.stats[sid].as_dict()["duplicate_frames"] > 0 for sid in (0, 2))       # counted, not used twice
+    assert fc.stats[0].as_dict()["lost_cycles"] == 0
+
+
+# --- the commands -------------------------------------------------------------------------------------------
+
+
+def test_run_prints_the_fused_list(capsys):
+    rc = main(["run", str(SCENARIOS / "front_and_corners.yaml"), "--fast", "--every", "20"])
+    out = capsys.readouterr().out
+    assert rc == 0
+    assert "ars408_like (sensor 0), srr_corner (sensor 1), srr_corner (sensor 2)" in out
+    assert "fused t=" in out and "0,1,2" in out                             # the overtaker seen by all three
+
+
+def test_log_then_decode_fuse(tmp_path, capsys):
+    log = tmp_path / "x.blf"
+    assert main(["log", str(SCENARIOS / "front_and_corners.yaml"), "-o", str(log)]) == 0
+    capsys.readouterr()
+    assert main(["decode", str(log), "--fuse", str(SCENARIOS / "front_and_corners.yaml"), "--summary"]) == 0
+    out = capsys.readouterr().out
+    assert "sensor 1: consumer:" in out and "fused: 111 rounds" in out
+    assert "seen by several sensors: 1" in out or "seen by several sensors: 2" in out
+    assert main(["decode", str(log), "--sensor-id", "2", "--summary"]) == 0
+    assert "object_cycles=111" in capsys.readouterr().out
+    assert main(["decode", str(log), "--fuse", str(SCENARIOS / "front_and_corners.yaml"), "--format", "json"]) == 2
+    assert "option --fuse: not allowed with --format json" in capsys.readouterr().err
+    assert main(["decode", str(log), "--fuse", str(tmp_path / "none.yaml")]) == 1
+    assert "none.yaml" in capsys.readouterr().err
+
+
+def _can_unshare() -> bool:
+    import shutil
+    import subprocess
+    if not shutil.which("unshare") or not shutil.which("ip"):
+        return False
+    return subprocess.run(["unshare", "-n", "true"], capture_output=True).returncode == 0
+
+
+@pytest.mark.skipif(not _can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
+                    "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
+def test_three_radar_nodes_and_a_fusing_consumer_in_two_processes(tmp_path):
+    import json
+    import os
+    import subprocess
+    import sys
+    from tests.conftest import ROOT
+    group = "239.74.163.3"
+    scen = SCENARIOS / "intersection_crossing.yaml"
+    script = f"""
+set -e
+ip link set lo up
+ip link set lo multicast on
+ip route add 224.0.0.0/4 dev lo
+{sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} --fuse {scen} --json --count 30 --timeout 20 > {tmp_path}/fused.jsonl 2> {tmp_path}/consume.err &
+CONSUMER=$!
+for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done
+{sys.executable} -m radarnode.cli node {scen} -i udp_multicast -c {group} --duration 3.0 --send-ego-motion 2> {tmp_path}/node.err
+wait $CONSUMER
+"""
+    r = subprocess.run(["unshare", "-n", "bash", "-c", script], capture_output=True, text=True, timeout=120,
+                       cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
+    lines = [json.loads(x) for x in (tmp_path / "fused.jsonl").read_text().splitlines()]
+    assert len(lines) >= 25 and all(x["type"] == "fused_objects" for x in lines)
+    seen = {s for x in lines for o in x["objects"] for s in o["sensors"]}
+    assert {0, 2} <= seen                                   # the front and the right corner radar, over the bus
+    assert "sensor 1: consumer:" in (tmp_path / "consume.err").read_text()
