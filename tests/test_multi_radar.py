@@ -295,3 +295,22 @@ wait $CONSUMER
     seen = {s for x in lines for o in x["objects"] for s in o["sensors"]}
     assert {0, 2} <= seen                                   # the front and the right corner radar, over the bus
     assert "sensor 1: consumer:" in (tmp_path / "consume.err").read_text()
+
+
+def test_report_gives_the_ecu_the_fused_list(capsys):
+    """front_and_corners: ACC follows the lead and never the overtaker in the fused list; widen the path to 4.5 m
+    and the overtaker beside the ego — which only the left corner radar sees there — becomes ACC's target."""
+    from radarnode.consumer.evaluate import simulate
+    sc = load_scenario(SCENARIOS / "front_and_corners.yaml")
+    res = simulate(sc)
+    assert res.passed, res.reasons
+    wide = dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, path_half_width_m=4.5))
+    res = simulate(wide)
+    over = [a.id for a in sc.actors].index("overtaker")
+    first = int(np.flatnonzero(res.trace["target"] == over)[0])
+    t = res.trace["t"][first]
+    node = make_node(sc)
+    view = node.nodes[0].scene.view(t)
+    # where the overtaker is when ACC first takes it: beside the front radar, outside its field of view
+    from radarnode.radar.object_model import in_fov
+    assert not res.passed and not in_fov(node.nodes[0].preset, view.range_m, view.azimuth_rad)[over]

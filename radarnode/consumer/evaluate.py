@@ -24,7 +24,8 @@ from radarnode.consumer.ecu import Ecu
 from radarnode.consumer.fcw import LEVEL_PREWARNING, LEVEL_WARNING, FcwSettings, time_to_collision
 from radarnode.consumer.path import SensorMount
 from radarnode.scene.scenario import Scenario
-from radarnode.wire.node import EgoMotionSender, RadarNode
+from radarnode.consumer.fusion import FusingConsumer
+from radarnode.wire.group import ego_motion_for, make_node
 
 
 STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
@@ -144,15 +145,23 @@ def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = Non
 
 
 def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
-    """Run ``scenario`` in simulated time and return the ECU's figures."""
+    """Run ``scenario`` in simulated time and return the ECU's figures.
+
+    With several radars (``radars:``) every one is a node on the bus and the ECU takes their object lists fused
+    in the vehicle frame (:mod:`radarnode.consumer.fusion`), re-expressed in the first radar's frame (the ECU's
+    path, warning and following logic is written for a front radar at that mount)."""
     spec = scenario.ecu
-    node = RadarNode(scenario, fidelity=fidelity)
+    node = make_node(scenario, fidelity=fidelity)
     scene = node.scene
     driver = DriverModel(scenario.ego.driver) if scenario.ego.driver is not None else None
     # a driver who reacts to the warning closes the loop even without ACC in it
     actuator = (EgoActuator(scene, spec.actuator_lag_s, scenario.ego.speed_mps)
                 if spec.closed_loop or driver is not None else None)
-    vehicle = EgoMotionSender(scene, scenario.radar.sensor_id)
+    vehicle = ego_motion_for(node)
+    fuser = (FusingConsumer({r.sensor_id: SensorMount.of(r.mount) for r in scenario.sensors})
+             if len(scenario.sensors) > 1 else None)
+    front = SensorMount.of(scenario.radar.mount)
+    fused_members: dict[int, dict] = {}
     period = node.period_s
     ecu = make_ecu(scenario, period)
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
@@ -175,12 +184,21 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         out = node.cycle(t)
         for m in out.messages:
             assembler.on_message_received(m)
+            if fuser is not None:
+                fuser.on_message_received(m)
         ecu.set_ego(t, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
         ecu.boundaries = assembler.road_boundaries          # as the radar reported them (0x680/0x681)
         decision = None
-        for cycle in assembler.drain():
-            if isinstance(cycle, ObjectCycle):
-                decision = ecu.on_cycle(t, cycle)
+        primary = assembler.drain()
+        if fuser is None:
+            cycles = [c for c in primary if isinstance(c, ObjectCycle)]
+        else:
+            cycles = []
+            for _, fused in fuser.drain():
+                fused_members = {int(i): m for i, m in zip(fused.id, fused.members)}
+                cycles.append(ObjectCycle(len(cycles), fused.t_s, fused.in_sensor_frame(front), True, True))
+        for cycle in cycles:
+            decision = ecu.on_cycle(t, cycle)
         if decision is None:
             decision = ecu.tick(t)
         if decision is not None:
@@ -208,6 +226,14 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # which actor the ECU selected: its object ID, looked up in this cycle's object list (truth tags)
         def actor_of(target) -> int:
             if target is None:
+                return -1
+            if fuser is not None:
+                # a fused object: the actor of the radar objects that fed it this cycle
+                for sid, oid in fused_members.get(int(target.object_id), {}).items():
+                    ol = out.outputs[node.sensor_ids.index(sid)].frame.objects
+                    hit = np.flatnonzero(ol.id == oid)
+                    if hit.size:
+                        return int(ol.actor_index[hit[0]])
                 return -1
             hit = np.flatnonzero(out.frame.objects.id == target.object_id)
             return int(out.frame.objects.actor_index[hit[0]]) if hit.size else -1

@@ -54,6 +54,8 @@ class SensorObjects:
     obj_class: np.ndarray
     length: np.ndarray
     width: np.ndarray
+    dyn_prop: np.ndarray
+    prob_of_exist: np.ndarray
 
 
 def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMount) -> SensorObjects:
@@ -76,7 +78,8 @@ def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMou
     return SensorObjects(sensor_id, t_s, np.asarray(objects.id, dtype=np.int64), np.stack([x, y], axis=1),
                          np.stack([vx, vy], axis=1), cov, np.stack([cov_v[:, 0, 0], cov_v[:, 1, 1]], axis=1),
                          np.asarray(objects.rcs_dbsm, dtype=np.float64), np.asarray(objects.obj_class),
-                         np.asarray(objects.length_m, dtype=np.float64), np.asarray(objects.width_m, dtype=np.float64))
+                         np.asarray(objects.length_m, dtype=np.float64), np.asarray(objects.width_m, dtype=np.float64),
+                         np.asarray(objects.dyn_prop, dtype=np.int64), np.asarray(objects.prob_of_exist, dtype=np.int64))
 
 
 @dataclass
@@ -97,9 +100,42 @@ class FusedObjects:
     width_m: np.ndarray
     sensors: np.ndarray          # bit field: bit k set when sensor ID k saw it this cycle
     coasting: np.ndarray         # bool: no sensor saw it this cycle
+    sigma_vx_mps: np.ndarray
+    sigma_vy_mps: np.ndarray
+    dyn_prop: np.ndarray         # of the strongest object that fed it (ARS 408 codes)
+    prob_of_exist: np.ndarray    # the highest of its objects' (ARS 408 codes)
+    new: np.ndarray              # bool: its first cycle
+    members: list                # per object: {sensor ID: that radar's object ID} this cycle
 
     def __len__(self) -> int:
         return int(self.id.size)
+
+    def in_sensor_frame(self, mount: SensorMount) -> ObjectList:
+        """The fused list as an object list in the frame of a radar at ``mount`` (what an ECU written for one
+        front radar takes: the fused objects where that radar would report them). IDs are the fused IDs."""
+        from radarnode.perception.types import MEAS_MEASURED, MEAS_NEW, MEAS_PREDICTED
+        yaw = math.radians(mount.yaw_deg)
+        c, s = math.cos(yaw), math.sin(yaw)
+        dx, dy = self.x_m - mount.x_m, self.y_m - mount.y_m
+        n = len(self)
+        nan = np.full(n, np.nan)
+        rot = lambda a, b: (c * a + s * b, -s * a + c * b)       # noqa: E731  vehicle axes -> sensor axes
+        x, y = rot(dx, dy)
+        vx, vy = rot(self.vx_mps, self.vy_mps)
+        # σ along the sensor's axes (the covariance's diagonal after the rotation; the fused ones are near round)
+        sx = np.sqrt((c * self.sigma_x_m) ** 2 + (s * self.sigma_y_m) ** 2)
+        sy = np.sqrt((s * self.sigma_x_m) ** 2 + (c * self.sigma_y_m) ** 2)
+        svx = np.sqrt((c * self.sigma_vx_mps) ** 2 + (s * self.sigma_vy_mps) ** 2)
+        svy = np.sqrt((s * self.sigma_vx_mps) ** 2 + (c * self.sigma_vy_mps) ** 2)
+        meas = np.where(self.coasting, MEAS_PREDICTED, np.where(self.new, MEAS_NEW, MEAS_MEASURED))
+        return ObjectList(id=self.id.copy(), dist_long_m=x, dist_lat_m=y, vrel_long_mps=vx, vrel_lat_mps=vy,
+                          dyn_prop=self.dyn_prop.copy(), rcs_dbsm=self.rcs_dbsm.copy(),
+                          dist_long_sigma_m=sx, dist_lat_sigma_m=sy, vrel_long_sigma_mps=svx,
+                          vrel_lat_sigma_mps=svy, arel_long_sigma_mps2=nan, arel_lat_sigma_mps2=nan,
+                          orientation_sigma_rad=nan, meas_state=meas.astype(np.int64),
+                          prob_of_exist=self.prob_of_exist.copy(), arel_long_mps2=nan, arel_lat_mps2=nan,
+                          obj_class=self.obj_class.copy(), orientation_rad=nan, length_m=self.length_m.copy(),
+                          width_m=self.width_m.copy(), actor_index=np.full(n, -1, dtype=np.int64))
 
 
 @dataclass
@@ -116,6 +152,10 @@ class _Track:
     length: float = math.nan
     width: float = math.nan
     sensors: int = 0
+    var_v: np.ndarray = field(default_factory=lambda: np.full(2, MIN_SIGMA_MPS ** 2))
+    dyn_prop: int = 0
+    prob_of_exist: int = 0
+    updates: int = 0
 
 
 class ObjectFusion:
@@ -244,13 +284,16 @@ class ObjectFusion:
         tr.cov = np.linalg.inv(info)
         tr.pos = tr.cov @ acc
         tr.vel = acc_v / w_v
+        tr.var_v = 1.0 / w_v
+        tr.updates += 1
         tr.t_s = t_s
         tr.misses = 0
         tr.members = {so.sensor_id: int(so.ids[i]) for so, i in got}
         tr.sensors = sum(1 << so.sensor_id for so, _ in got)
         strongest = max(got, key=lambda g: g[0].rcs[g[1]] if np.isfinite(g[0].rcs[g[1]]) else -np.inf)
         so, i = strongest
-        tr.rcs, tr.obj_class = float(so.rcs[i]), int(so.obj_class[i])
+        tr.rcs, tr.obj_class, tr.dyn_prop = float(so.rcs[i]), int(so.obj_class[i]), int(so.dyn_prop[i])
+        tr.prob_of_exist = int(max(g[0].prob_of_exist[g[1]] for g in got))
         tr.length = float(np.nanmax([g[0].length[g[1]] for g in got]))
         tr.width = float(np.nanmax([g[0].width[g[1]] for g in got]))
 
@@ -262,7 +305,10 @@ class ObjectFusion:
             arr(lambda t: t.vel[0]), arr(lambda t: t.vel[1]), arr(lambda t: math.sqrt(t.cov[0, 0])),
             arr(lambda t: math.sqrt(t.cov[1, 1])), arr(lambda t: t.rcs), arr(lambda t: t.obj_class, np.int64),
             arr(lambda t: t.length), arr(lambda t: t.width), arr(lambda t: t.sensors, np.int64),
-            arr(lambda t: t.misses > 0, bool))
+            arr(lambda t: t.misses > 0, bool), arr(lambda t: math.sqrt(t.var_v[0])),
+            arr(lambda t: math.sqrt(t.var_v[1])), arr(lambda t: t.dyn_prop, np.int64),
+            arr(lambda t: t.prob_of_exist, np.int64), arr(lambda t: t.updates == 1 and t.misses == 0, bool),
+            [dict(t.members) for t in ts])
 
 
 def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray) -> float:
