@@ -16,6 +16,8 @@ relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
    cycle (each predicted to the fusion time with its velocity: the sensors' cycles are not simultaneous); a track
    seen by no sensor coasts on its velocity for up to :data:`COAST_CYCLES` fusions, then ends. Unassigned objects
    start new fused tracks.
+4. **Merging.** Two fused tracks that different sensors feed and that stay together (:meth:`ObjectFusion._merge`)
+   are one object: the younger is merged into the older.
 
 Fused IDs are stable and never reused while alive. ``sensors`` of a fused object is a bit field of the sensor
 IDs that saw it this cycle.
@@ -37,6 +39,9 @@ EXTENT_SIGMA_M = 1.5         # where on a vehicle's outline a radar's reference 
 MIN_SIGMA_M = 0.1            # an object without quality (σ) fields: this position σ, and …
 MIN_SIGMA_MPS = 0.25         # … this velocity σ
 COAST_CYCLES = 3
+MERGE_CHI2 = 1.0             # two fused tracks this close (with the extent term: about 1.5 m) …
+MERGE_SPEED_MPS = 1.5        # … and this similar in velocity …
+MERGE_ROUNDS = 3             # … this many rounds in a row, seen by different sensors, are merged
 
 
 @dataclass
@@ -172,6 +177,7 @@ class ObjectFusion:
             raise ValueError("mounts: value {} is not allowed; expected at least one sensor ID with its mount")
         self.mounts = dict(mounts)
         self.tracks: list[_Track] = []
+        self._together: dict[tuple[int, int], int] = {}     # fused ID pairs: rounds in a row close enough to merge
         self._next_id = 0
         self.unknown_sensor = 0
 
@@ -232,7 +238,43 @@ class ObjectFusion:
             members[id(best)].append((so, i))
             self._update(best, members[id(best)], t_s)
         self.tracks = kept + started
+        got = {id(t): assigned.get(id(t)) or members.get(id(t)) or [] for t in self.tracks}
+        self._merge(got, t_s)
         return self._output(t_s)
+
+    def _merge(self, got: dict, t_s: float) -> None:
+        """Two fused tracks fed by different sensors that stay together are one object: merged into the older.
+
+        A radar's object keeps its fused track (continuity), so an object that two radars first reported apart —
+        each its own track — would stay two. Tracks seen this round by disjoint sets of sensors whose positions
+        lie within :data:`MERGE_CHI2` (with the extent term: about 1 m) and velocities within
+        :data:`MERGE_SPEED_MPS` of each other for :data:`MERGE_ROUNDS` rounds in a row are merged. Two vehicles
+        side by side in adjacent lanes (3.5 m apart) are not, and one radar seeing both keeps them apart."""
+        live = [t for t in self.tracks if t.misses == 0 and got.get(id(t))]
+        close: set[tuple[int, int]] = set()
+        for a_i, a in enumerate(live):
+            for b in live[a_i + 1:]:
+                if set(a.members) & set(b.members):
+                    continue
+                if (_mahalanobis(a.pos, a.cov, b.pos, b.cov) < MERGE_CHI2
+                        and float(np.hypot(*(a.vel - b.vel))) < MERGE_SPEED_MPS):
+                    close.add((min(a.fid, b.fid), max(a.fid, b.fid)))
+        self._together = {pair: self._together.get(pair, 0) + 1 for pair in close}
+        gone: set[int] = set()
+        by_fid = {t.fid: t for t in self.tracks}
+        for (fa, fb), n in sorted(self._together.items()):
+            if n < MERGE_ROUNDS or fa in gone or fb in gone:
+                continue
+            older, younger = by_fid[fa], by_fid[fb]
+            if older.updates < younger.updates:
+                older, younger = younger, older
+            self._update(older, got[id(older)] + got[id(younger)], t_s)
+            older.updates -= 1                 # one round, not two
+            got[id(older)] = got[id(older)] + got[id(younger)]
+            gone.add(younger.fid)
+        if gone:
+            self.tracks = [t for t in self.tracks if t.fid not in gone]
+            self._together = {k: v for k, v in self._together.items() if not (set(k) & gone)}
 
     def _associate(self, so: SensorObjects, t_s: float, assigned: dict, new_tracks: list) -> None:
         n = len(so.ids)
