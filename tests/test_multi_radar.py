@@ -314,3 +314,21 @@ def test_report_gives_the_ecu_the_fused_list(capsys):
     # where the overtaker is when ACC first takes it: beside the front radar, outside its field of view
     from radarnode.radar.object_model import in_fov
     assert not res.passed and not in_fov(node.nodes[0].preset, view.range_m, view.azimuth_rad)[over]
+
+
+def test_two_tracks_of_one_object_merge_but_two_cars_side_by_side_do_not():
+    m0, m1 = SensorMount(0.0, 0.0, 0.0), SensorMount(0.0, 0.0, 0.0)
+    fusion = ObjectFusion({0: m0, 1: m1})
+    ids = []
+    # sensor 1 first reports the object 6 m off (beyond the gate: a track of its own), then converges onto it
+    for k, off in enumerate([6.0, 4.0, 1.0, 0.6, 0.5, 0.4, 0.3, 0.3]):
+        out = fusion.step(0.072 * k, {0: (0.072 * k, _objects([20.0], [0.0])),
+                                      1: (0.072 * k, _objects([20.0], [off], ids=[5]))})
+        ids.append(out.id.tolist())
+    assert len(ids[0]) == 2 and len(ids[-1]) == 1                    # two tracks first, merged at the end
+    assert ids[-1][0] in ids[0]                                      # into one of the two, its ID kept
+    fusion = ObjectFusion({0: m0, 1: m1})
+    for k in range(12):                                              # two cars 3.5 m apart, one sensor each
+        out = fusion.step(0.072 * k, {0: (0.072 * k, _objects([20.0], [0.0])),
+                                      1: (0.072 * k, _objects([20.0], [3.5]))})
+    assert len(out) == 2 and sorted(np.round(out.y_m, 6).tolist()) == [0.0, 3.5]

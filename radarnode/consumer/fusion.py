@@ -9,8 +9,9 @@ relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
    still lies within the gate: a radar keeps its object IDs, so the association is kept where it holds.
 2. **Association.** The others are assigned to fused tracks by a globally optimal assignment
    (``scipy.optimize.linear_sum_assignment``) on the Mahalanobis distance of the positions, with the fused
-   track predicted to the object's time, the covariance of both and an extent term (:data:`EXTENT_SIGMA_M`: two
-   radars see different points of one car — the front radar its rear, a corner radar its side), gated at
+   track predicted to the object's time, the covariance of both and an extent term along and across the
+   object's reported orientation (:data:`EXTENT_SIGMA_LONG_M`, :data:`EXTENT_SIGMA_LAT_M`: two radars see
+   different points of one car — the front radar its rear, a corner radar its side), gated at
    :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %); at most one object per sensor per fused track.
 3. **Fusion.** A fused track's position and velocity are the information-weighted mean of its objects this
    cycle (each predicted to the fusion time with its velocity: the sensors' cycles are not simultaneous); a track
@@ -35,11 +36,13 @@ from radarnode.consumer.path import SensorMount
 from radarnode.perception.types import ObjectList
 
 GATE_CHI2 = 13.82            # χ²(2) at 0.999
-EXTENT_SIGMA_M = 1.5         # where on a vehicle's outline a radar's reference point falls (per axis)
+#: where on a vehicle's outline a radar's reference point falls: along the object's heading (the front radar sees
+#: a car's rear, a corner radar its side) and across it (half a width at most)
+EXTENT_SIGMA_LONG_M, EXTENT_SIGMA_LAT_M = 1.5, 0.5
 MIN_SIGMA_M = 0.1            # an object without quality (σ) fields: this position σ, and …
 MIN_SIGMA_MPS = 0.25         # … this velocity σ
 COAST_CYCLES = 3
-MERGE_CHI2 = 1.0             # two fused tracks this close (with the extent term: about 1.5 m) …
+MERGE_CHI2 = 1.0             # two fused tracks this close (with the extent term: 1.5 m along, 0.5 m across) …
 MERGE_SPEED_MPS = 1.5        # … and this similar in velocity …
 MERGE_ROUNDS = 3             # … this many rounds in a row, seen by different sensors, are merged
 
@@ -61,6 +64,7 @@ class SensorObjects:
     width: np.ndarray
     dyn_prop: np.ndarray
     prob_of_exist: np.ndarray
+    heading: np.ndarray          # (n,) the object's orientation in the vehicle frame (0: along the vehicle's x)
 
 
 def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMount) -> SensorObjects:
@@ -84,7 +88,8 @@ def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMou
                          np.stack([vx, vy], axis=1), cov, np.stack([cov_v[:, 0, 0], cov_v[:, 1, 1]], axis=1),
                          np.asarray(objects.rcs_dbsm, dtype=np.float64), np.asarray(objects.obj_class),
                          np.asarray(objects.length_m, dtype=np.float64), np.asarray(objects.width_m, dtype=np.float64),
-                         np.asarray(objects.dyn_prop, dtype=np.int64), np.asarray(objects.prob_of_exist, dtype=np.int64))
+                         np.asarray(objects.dyn_prop, dtype=np.int64), np.asarray(objects.prob_of_exist, dtype=np.int64),
+                         np.nan_to_num(np.asarray(objects.orientation_rad, dtype=np.float64), nan=0.0) + yaw)
 
 
 @dataclass
@@ -161,6 +166,7 @@ class _Track:
     dyn_prop: int = 0
     prob_of_exist: int = 0
     updates: int = 0
+    heading: float = 0.0
 
 
 class ObjectFusion:
@@ -227,7 +233,7 @@ class ObjectFusion:
             for tr in started:
                 if so.sensor_id in tr.members:
                     continue
-                d = _mahalanobis(tr.pos, tr.cov, so.pos[i] + so.vel[i] * (t_s - so.t_s), so.cov[i])
+                d = _mahalanobis(tr.pos, tr.cov, so.pos[i] + so.vel[i] * (t_s - so.t_s), so.cov[i], so.heading[i])
                 if d < best_d:
                     best, best_d = tr, d
             if best is None:
@@ -247,7 +253,7 @@ class ObjectFusion:
 
         A radar's object keeps its fused track (continuity), so an object that two radars first reported apart —
         each its own track — would stay two. Tracks seen this round by disjoint sets of sensors whose positions
-        lie within :data:`MERGE_CHI2` (with the extent term: about 1 m) and velocities within
+        lie within :data:`MERGE_CHI2` (with the extent term: 1.5 m along, 0.5 m across) and velocities within
         :data:`MERGE_SPEED_MPS` of each other for :data:`MERGE_ROUNDS` rounds in a row are merged. Two vehicles
         side by side in adjacent lanes (3.5 m apart) are not, and one radar seeing both keeps them apart."""
         live = [t for t in self.tracks if t.misses == 0 and got.get(id(t))]
@@ -256,7 +262,7 @@ class ObjectFusion:
             for b in live[a_i + 1:]:
                 if set(a.members) & set(b.members):
                     continue
-                if (_mahalanobis(a.pos, a.cov, b.pos, b.cov) < MERGE_CHI2
+                if (_mahalanobis(a.pos, a.cov, b.pos, b.cov, a.heading) < MERGE_CHI2
                         and float(np.hypot(*(a.vel - b.vel))) < MERGE_SPEED_MPS):
                     close.add((min(a.fid, b.fid), max(a.fid, b.fid)))
         self._together = {pair: self._together.get(pair, 0) + 1 for pair in close}
@@ -290,14 +296,15 @@ class ObjectFusion:
             if oid is None:
                 continue
             hit = np.flatnonzero((so.ids == oid) & ~taken)
-            if hit.size and _mahalanobis(tr.pos, tr.cov, pos[hit[0]], so.cov[hit[0]]) < GATE_CHI2:
+            if hit.size and _mahalanobis(tr.pos, tr.cov, pos[hit[0]], so.cov[hit[0]], so.heading[hit[0]]) < GATE_CHI2:
                 assigned[id(tr)].append((so, int(hit[0])))
                 taken[hit[0]] = True
                 free.remove(tr)
         # 2. the rest by a global assignment on the Mahalanobis distance
         rest = np.flatnonzero(~taken)
         if rest.size and free:
-            cost = np.array([[_mahalanobis(tr.pos, tr.cov, pos[i], so.cov[i]) for i in rest] for tr in free])
+            cost = np.array([[_mahalanobis(tr.pos, tr.cov, pos[i], so.cov[i], so.heading[i]) for i in rest]
+                             for tr in free])
             import scipy.optimize  # imported when first needed: a faster start
             big = 1e6
             rows, cols = scipy.optimize.linear_sum_assignment(np.where(cost < GATE_CHI2, cost, big))
@@ -336,6 +343,7 @@ class ObjectFusion:
         so, i = strongest
         tr.rcs, tr.obj_class, tr.dyn_prop = float(so.rcs[i]), int(so.obj_class[i]), int(so.dyn_prop[i])
         tr.prob_of_exist = int(max(g[0].prob_of_exist[g[1]] for g in got))
+        tr.heading = float(so.heading[i])
         tr.length = float(np.nanmax([g[0].length[g[1]] for g in got]))
         tr.width = float(np.nanmax([g[0].width[g[1]] for g in got]))
 
@@ -353,9 +361,16 @@ class ObjectFusion:
             [dict(t.members) for t in ts])
 
 
-def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray) -> float:
+def _extent(heading: float) -> np.ndarray:
+    """The reference-point spread of an object with this heading (vehicle frame), as a covariance."""
+    c, s = math.cos(heading), math.sin(heading)
+    rot = np.array([[c, -s], [s, c]])
+    return rot @ np.diag([EXTENT_SIGMA_LONG_M ** 2, EXTENT_SIGMA_LAT_M ** 2]) @ rot.T
+
+
+def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: float = 0.0) -> float:
     d = p2 - p1
-    s = c1 + c2 + (EXTENT_SIGMA_M ** 2) * np.eye(2)
+    s = c1 + c2 + _extent(heading)
     return float(d @ np.linalg.solve(s, d))
 
 
