@@ -160,12 +160,13 @@ def format_tables(summary: dict) -> str:
                    + _table(["estimator", "SNR at 0.1°"], rows))
     if "table2" in summary:
         t = summary["table2"]
-        rows = [[n, _fmt(m["p"], 3), _fmt(m["rmse_deg"], 4), _fmt(m["norm_rmse"], 2), _fmt(m["bias_deg"], 4),
-                 _fmt(m["norm_bias"], 2)] for n, m in t["metrics"].items()]
+        rows = [[n + ("" if m["p_above_0.8_everywhere"] else " *"), _fmt(m["p"], 3), _fmt(m["rmse_deg"], 4),
+                 _fmt(m["norm_rmse"], 2), _fmt(m["bias_deg"], 4), _fmt(m["norm_bias"], 2)]
+                for n, m in t["metrics"].items()]
         rows += [[f"CRB {k}", "", _fmt(v, 4), "", "", ""] for k, v in t["crb_deg"].items()]
         az = ", ".join(f"{a:g}" for a in t["azimuth_deg"])
         out.append(f"### Table 2 (seed 001) at {t['snr_db']:g} dB, averaged over azimuths {az}°, {trials} trials "
-                   "each; normalised to lcacm (eq. 14)\n\n"
+                   "each; normalised to lcacm (eq. 14); * p ≤ 0.8 at some azimuth (seed 001 would not report it)\n\n"
                    + _table(["estimator", "p", "RMSE °", "norm. RMSE", "bias °", "norm. bias"], rows))
     if "resolution" in summary:
         r = summary["resolution"]

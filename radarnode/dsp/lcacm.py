@@ -354,7 +354,7 @@ def default_subarray(n: int) -> int:
 # the two-channel auto-compensator
 
 def acm_weights(m00: np.ndarray, m11: np.ndarray, m22: np.ndarray, m01: np.ndarray, m02: np.ndarray,
-                m21: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+                m21: np.ndarray, loading: float = 1e-9) -> tuple[np.ndarray, np.ndarray]:
     """Weights of the two-channel auto-compensator (seed 001 eq. 8–9, Wiener solution; eq. 9 corrected).
 
     Moments over the samples: ``m11 = ⟨|x1|²⟩``, ``m22 = ⟨|x2|²⟩``, ``m01 = ⟨x0 x1*⟩``, ``m02 = ⟨x0 x2*⟩``,
@@ -363,11 +363,14 @@ def acm_weights(m00: np.ndarray, m11: np.ndarray, m22: np.ndarray, m01: np.ndarr
         c1 = (⟨x0x2*⟩⟨x2x1*⟩ − ⟨x0x1*⟩⟨|x2|²⟩) / (⟨|x1|²⟩⟨|x2|²⟩ − |⟨x2x1*⟩|²)     (eq. 8)
         c2 = (⟨x0x1*⟩⟨x1x2*⟩ − ⟨x0x2*⟩⟨|x1|²⟩) / (⟨|x1|²⟩⟨|x2|²⟩ − |⟨x1x2*⟩|²)     (eq. 9, corrected)
 
-    The determinant is ≥ 0 (Cauchy–Schwarz) and is clipped at ``1e-12·m11·m22`` (+ tiny), so degenerate
-    auxiliary channels give finite weights. Arrays broadcast.
+    ``⟨|x1|²⟩`` and ``⟨|x2|²⟩`` get a diagonal loading of ``loading`` times their mean: when both auxiliary
+    channels see one and the same interferer and no noise, the determinant is 0 and eq. 8–9 are 0/0; the loaded
+    solution is then the minimum-norm one, which still cancels it (``loading=0`` gives eq. 8–9 exactly). The
+    determinant is clipped at a tiny positive value, so zero data gives zero weights, never NaN. Arrays broadcast.
     """
-    det = m11 * m22 - np.abs(m21) ** 2
-    det = np.maximum(det, 1e-12 * m11 * m22 + _TINY)
+    delta = loading * 0.5 * (m11 + m22)
+    m11, m22 = m11 + delta, m22 + delta
+    det = np.maximum(m11 * m22 - np.abs(m21) ** 2, _TINY)
     c1 = (m02 * m21 - m01 * m22) / det
     c2 = (m01 * np.conj(m21) - m02 * m11) / det
     return c1, c2

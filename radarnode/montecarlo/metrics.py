@@ -27,6 +27,8 @@ class Metrics:
         trials (eq. 12) — a spread about the mean, not about the truth; None where ``p ≤ 0.8`` or ``m < 2``.
     bias_deg : ``√(1/J Σ_k (φ̄_k − φ_k)²)`` (eq. 13); None as ``rmse_deg``.
     m, n : correct and all trials.
+    rmse_any_deg, bias_any_deg : the same figures whatever ``p`` (None only for ``m < 2``), for tables that show
+        them flagged rather than not at all.
     """
 
     p: float
@@ -34,6 +36,8 @@ class Metrics:
     bias_deg: float | None
     m: int
     n: int
+    rmse_any_deg: float | None = None
+    bias_any_deg: float | None = None
 
     def as_dict(self) -> dict:
         return {"p": self.p, "rmse_deg": self.rmse_deg, "bias_deg": self.bias_deg, "m": self.m, "n": self.n}
@@ -79,10 +83,12 @@ def metrics(count: np.ndarray, est_deg: np.ndarray, truth_deg: np.ndarray, gate_
         raise ValueError("metrics: no trial; expected at least one")
     p = float(np.mean(good))
     m = int(good.sum())
-    if p <= P_MIN or m < 2:
+    if m < 2:
         return Metrics(p, None, None, m, int(count.size))
     rmse, bias = rmse_bias(np.asarray(est_deg, dtype=float)[good], truth)
-    return Metrics(p, rmse, bias, m, int(count.size))
+    if p <= P_MIN:
+        return Metrics(p, None, None, m, int(count.size), rmse, bias)
+    return Metrics(p, rmse, bias, m, int(count.size), rmse, bias)
 
 
 def normalised(value: float | None, reference: float | None) -> float | None:
