@@ -129,7 +129,7 @@ def test_lcacm_corrects_the_error_of_the_two_circle_point():
     err_phi = np.degrees(est.centre_azimuth_rad) - 7.0
     err = np.degrees(est.azimuth_rad[ok, 0]) - 7.0
     rms_phi, rms = math.sqrt(np.mean(err_phi ** 2)), math.sqrt(np.mean(err ** 2))
-    # measured when written: φ 3.3°, LC-ACM 0.17°
+    # measured when written: φ 2.8°, LC-ACM 0.15°
     assert rms_phi > 2.0 and rms < 0.3, (rms_phi, rms)
 
 
@@ -150,7 +150,7 @@ def test_beam_scan_rmse_approaches_the_stochastic_crb():
     y = lc.snapshots(rng, np.full((200, 1), math.asin(u0)), 20.0, 12, 0.5, 64)
     u, ok = lc.beam_scan(y, 1)
     ratio = math.sqrt(np.mean((u[:, 0] - u0) ** 2) / ss.crb_sin([u0], 12, 64, 20.0)[0])
-    # measured when written: 1.00
+    # measured when written: 1.08
     assert ok.all() and 0.85 < ratio < 1.25, ratio
 
 
