@@ -166,3 +166,31 @@ def test_cli_errors_name_the_option_the_value_and_what_is_allowed(capsys, argv, 
 def test_cli_refuses_a_directory_for_csv_before_running(capsys, tmp_path):
     rc, out, err = cli(capsys, "montecarlo", "--csv", tmp_path, "--trials", "2")
     assert rc == 1 and err.startswith("error: option --csv:") and "directory" in err and out == ""
+
+
+#: montecarlo's numeric options: (option, int or float, lowest, highest)
+NUMERIC = [("--trials", int, 2, 1_000_000), ("--seed", int, 0, 2**63 - 1), ("--azimuth-deg", float, -40, 40),
+           ("--range-m", float, 2, 30), ("--range-sigma-m", float, 0, 1), ("--resolution-snr-db", float, -60, 100),
+           ("--workers", int, 1, 1024), ("--dask-local", int, 1, 256)]
+VALUES = ("nan", "inf", "-inf", "-1", "0", "1e300", "99999999999999999999", "1.5", "abc", "")
+
+
+def _allowed(text, kind, lo, hi):
+    try:
+        v = int(text, 10) if kind is int else float(text)
+    except ValueError:
+        return False
+    return math.isfinite(v) and lo <= v <= hi
+
+
+@pytest.mark.parametrize("option, kind, lo, hi, value", [(*o, v) for o in NUMERIC for v in VALUES])
+def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, option, kind, lo, hi, value):
+    from radarnode.cli.main import build_parser
+    argv = ["montecarlo", f"{option}={value}"]
+    if _allowed(value, kind, lo, hi):
+        build_parser().parse_args(argv)                         # parses; a run is not what this test is about
+        return
+    rc, out, err = cli(capsys, *argv)
+    lines = [x for x in err.splitlines() if x.strip()]
+    assert rc == 2 and len(lines) == 1, err
+    assert f"option {option}" in lines[0] and "is not allowed" in lines[0] and "expected" in lines[0], lines[0]

@@ -172,8 +172,8 @@ def format_tables(summary: dict) -> str:
         r = summary["resolution"]
         cols = [f"{v:g}°" for v in r["separation_deg"]]
         rows = [[n] + [_fmt(v, 2) for v in r["probability"][n]] for n in names]
-        out.append(f"### Probability of resolving two targets around {r['centre_deg']:g}° at {r['snr_db']:g} dB against "
-                   f"their separation, {trials} trials a point\n\n" + _table(["estimator"] + cols, rows))
+        out.append(f"### Probability of resolving two targets around {r['centre_deg']:g}° at {r['snr_db']:g} dB "
+                   f"against their separation, {trials} trials a point\n\n" + _table(["estimator"] + cols, rows))
     if "timing" in summary:
         t = summary["timing"]
         rows = [[n, _fmt(v["single"], 0), _fmt(v["batched"], 1)] for n, v in t["us"].items()]
@@ -198,7 +198,8 @@ def csv_rows(summary: dict) -> list[list]:
                 rows += [["snr", n, snr, s["azimuth_deg"], "", k, c[k]] for k in ("p", "rmse_deg", "bias_deg")]
             rows.append(["snr", n, "", s["azimuth_deg"], "", "snr_at_0.1deg_db", s["crossing_db"][n]])
         for k, curve in s["crb_deg"].items():
-            rows += [["snr", f"crb_{k}", snr, s["azimuth_deg"], "", "rmse_deg", v] for snr, v in zip(s["snr_db"], curve)]
+            rows += [["snr", f"crb_{k}", snr, s["azimuth_deg"], "", "rmse_deg", v]
+                     for snr, v in zip(s["snr_db"], curve)]
     if "table2" in summary:
         t = summary["table2"]
         for n, m in t["metrics"].items():

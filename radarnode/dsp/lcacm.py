@@ -379,8 +379,9 @@ def acm_weights(m00: np.ndarray, m11: np.ndarray, m22: np.ndarray, m01: np.ndarr
 def acm_spectrum(samples: np.ndarray, u: np.ndarray, d: float = 0.5, grid: np.ndarray | None = None) -> np.ndarray:
     """Output power ``⟨|y(u)|²⟩`` of the compensator (eq. 7) looking at ``u`` (transformed sine domain).
 
-    ``samples`` (T, S, Q); ``u`` (G,) or (T, M) (``grid``: ``u`` is this coarse grid, whose steering is cached). Main channel ``x0 = a_Q(u)ᴴz/Q``, auxiliaries the orthogonal
-    beams at ``u ∓ 1/(Q·d)`` (module docstring, choice 3). Returns (T, G) or (T, M), ≥ 0.
+    ``samples`` (T, S, Q); ``u`` (G,) or (T, M) (``grid``: ``u`` is this coarse grid, whose steering is
+    cached). Main channel ``x0 = a_Q(u)ᴴz/Q``, auxiliaries the orthogonal beams at ``u ∓ 1/(Q·d)`` (module
+    docstring, choice 3). Returns (T, G) or (T, M), ≥ 0.
     """
     q = samples.shape[-1]
     delta = 1.0 / (q * d)

@@ -54,7 +54,8 @@ def measure(setup: Setup, *, repeats: int = 15, calls: int = 100, batch: int = 5
     single["music_nofb"] = subspace_case("music", False)
     seed001 = {
         "seed001_bs": (lambda i: lc.beam_scan(small[0][i % DRAWS][None], 2, d), lambda: lc.beam_scan(big[0], 2, d)),
-        "seed001_capon": (lambda i: lc.capon_scan(small[0][i % DRAWS][None], 2, d, q), lambda: lc.capon_scan(big[0], 2, d, q)),
+        "seed001_capon": (lambda i: lc.capon_scan(small[0][i % DRAWS][None], 2, d, q),
+                          lambda: lc.capon_scan(big[0], 2, d, q)),
         "lcacm": (lambda i: lc.lcacm(small[0][i % DRAWS][None], small[1][i % DRAWS][None], rr[0][:1], rr[1][:1], geo,
                                      d=d, q=q),
                   lambda: lc.lcacm(big[0], big[1], rb[0], rb[1], geo, d=d, q=q)),
