@@ -111,7 +111,11 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int = 
 
 
 def _run_dask(fn, tasks, scheduler, dask_local, on_done):
+    import logging
     dd = require_dask("--scheduler" if scheduler is not None else "--dask-local")
+    # distributed's loggers are set to INFO by its own configuration: a local cluster's scheduler, which runs in
+    # this process, would print a dozen lines a run; they follow radarnode's -v instead (WARNING without it)
+    logging.getLogger("distributed").setLevel(max(logging.getLogger().getEffectiveLevel(), logging.DEBUG))
     cluster = None
     if scheduler is not None:
         try:
