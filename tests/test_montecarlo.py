@@ -163,6 +163,21 @@ def test_cli_errors_name_the_option_the_value_and_what_is_allowed(capsys, argv, 
     assert out == ""
 
 
+def test_cli_without_matplotlib_refuses_plots_before_running(capsys, monkeypatch, tmp_path):
+    monkeypatch.setitem(sys.modules, "matplotlib", None)
+    rc, out, err = cli(capsys, "montecarlo", "--plots", tmp_path / "png", "--trials", "2")
+    assert rc == 2 and "option --plots needs matplotlib" in err and "radarnode[image]" in err and out == ""
+    assert not (tmp_path / "png").exists()
+
+
+@pytest.mark.slow
+def test_cli_says_when_the_scheduler_cannot_be_reached(capsys):
+    # port 1 on the loopback: refused; distributed retries until its 10 s timeout
+    rc, out, err = cli(capsys, "montecarlo", "--scheduler", "tcp://127.0.0.1:1", "--trials", "2",
+                       "--experiment", "snr", "--snr-db", "10")
+    assert rc == 1 and err.startswith("error: option --scheduler: cannot reach the Dask scheduler"), err
+
+
 def test_cli_refuses_a_directory_for_csv_before_running(capsys, tmp_path):
     rc, out, err = cli(capsys, "montecarlo", "--csv", tmp_path, "--trials", "2")
     assert rc == 1 and err.startswith("error: option --csv:") and "directory" in err and out == ""

@@ -251,7 +251,12 @@ def cmd(args) -> int:
         summary = {"setup": dataclasses.asdict(setup), "sweep": {"trials": args.trials}, "estimators": []}
     if "timing" in experiments:
         from radarnode.montecarlo import timing
-        summary["timing"] = timing.measure(setup, seed=args.seed)
+        repeats = 15
+        bar = tqdm(disable=True) if args.quiet else progress(repeats, "timing", unit="repeat")
+        try:
+            summary["timing"] = timing.measure(setup, repeats=repeats, seed=args.seed, on_repeat=lambda: bar.update(1))
+        finally:
+            bar.close()
     summary["elapsed_s"] = time.perf_counter() - t0
     if args.json:
         print(json.dumps(summary, indent=1))

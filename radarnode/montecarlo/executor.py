@@ -13,7 +13,7 @@ import re
 from collections.abc import Callable, Sequence
 from typing import Any
 
-from radarnode.errors import UsageError
+from radarnode.errors import RadarnodeError, UsageError
 
 #: the address forms ``distributed.Client`` connects to
 SCHEDULER_ADDRESS = re.compile(r"^(tcp|tls|ws|wss|ucx)://[^\s/:]+(:\d{1,5})?/?$")
@@ -121,7 +121,9 @@ def _run_dask(fn, tasks, scheduler, dask_local, on_done):
         try:
             client = dd.Client(check_scheduler(scheduler), timeout="10s")
         except (OSError, TimeoutError) as exc:
-            raise UsageError(f"option --scheduler: cannot reach the Dask scheduler at {scheduler!r}: {exc}") from None
+            # the command line is right, the cluster is not there: exit status 1, as a bus that cannot be opened
+            raise RadarnodeError(f"option --scheduler: cannot reach the Dask scheduler at {scheduler!r}: {exc}") \
+                from None
     else:
         cluster = dd.LocalCluster(n_workers=dask_local, threads_per_worker=1, processes=True,
                                   dashboard_address=None)

@@ -36,8 +36,10 @@ def _draws(setup: Setup, rng: np.random.Generator, trials: int) -> tuple[list[np
     return ys, rng_k[:, 0]
 
 
-def measure(setup: Setup, *, repeats: int = 15, calls: int = 100, batch: int = 500, seed: int = 0) -> dict:
-    """``{"us": {name: {"single": µs, "batched": µs or None}}, "unitary_over_complex": {...}, ...}``."""
+def measure(setup: Setup, *, repeats: int = 15, calls: int = 100, batch: int = 500, seed: int = 0,
+            on_repeat=None) -> dict:
+    """``{"us": {name: {"single": µs, "batched": µs or None}}, "complex_over_unitary_music": {...}, ...}``;
+    ``on_repeat`` is called after each repeat (a progress bar)."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(99,)))
     small, r = _draws(setup, rng, DRAWS)
     big, _ = _draws(setup, rng, batch)
@@ -87,6 +89,8 @@ def measure(setup: Setup, *, repeats: int = 15, calls: int = 100, batch: int = 5
             t0 = time.perf_counter()
             many()
             batched[name].append((time.perf_counter() - t0) / batch * 1e6)
+        if on_repeat:
+            on_repeat()
     ratio = np.array(times["music"]) / np.array(times["unitary_music"])
     ratio_core = np.array(times["music_core"]) / np.array(times["unitary_music_core"])
     same = max(float(np.max(np.abs(ss.estimate("music", small[0][i], 1, d, fb=True, subarray=q).sin_theta
