@@ -5,8 +5,8 @@ Geometry (seed 001, fig. 1, eq. 4–5): the radars' phase centres are at ``C1 = 
 on the bumper, ``b`` the baseline (1.46 m); ``y`` points forward, the targets lie at ``y > 0``. An azimuth is
 measured from ``+y`` towards ``+x`` (towards radar 2): ``azimuth = atan2(x, y)``. This is the paper's frame, not
 the sensor frame of DESIGN.md (there azimuth is positive to the left); the Monte Carlo compares angles, so only
-the consistency matters. Radar ``k`` is turned by ``yaw_k`` (seed 001: each turned 45°, outwards: radar 1 by
-−45°, radar 2 by +45°); a point at azimuth ``ψ_k`` seen from ``C_k`` is at the local angle ``θ_k = ψ_k − yaw_k``,
+the consistency matters. Radar ``k`` is turned by ``yaw_k`` (seed 001: each turned 45°; outwards here — the
+paper gives no direction, corner radars look outwards — radar 1 by −45°, radar 2 by +45°); a point at azimuth ``ψ_k`` seen from ``C_k`` is at the local angle ``θ_k = ψ_k − yaw_k``,
 ``u_k = sin θ_k``.
 
 Array (seed 001, eq. 1): ``N`` isotropic elements at ``d`` wavelengths, phase centre in the middle of the
