@@ -232,7 +232,6 @@ def cmd(args) -> int:
     if args.snr_db is not None:
         sweep_kw["snr_db"] = args.snr_db
     mc = [e for e in experiments if e != "timing"]
-    summary: dict = {}
     t0 = time.perf_counter()
     if mc:
         sweep = sw.Sweep(experiments=tuple(mc), **sweep_kw)

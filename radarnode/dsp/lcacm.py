@@ -6,8 +6,8 @@ on the bumper, ``b`` the baseline (1.46 m); ``y`` points forward, the targets li
 measured from ``+y`` towards ``+x`` (towards radar 2): ``azimuth = atan2(x, y)``. This is the paper's frame, not
 the sensor frame of DESIGN.md (there azimuth is positive to the left); the Monte Carlo compares angles, so only
 the consistency matters. Radar ``k`` is turned by ``yaw_k`` (seed 001: each turned 45°; outwards here — the
-paper gives no direction, corner radars look outwards — radar 1 by −45°, radar 2 by +45°); a point at azimuth ``ψ_k`` seen from ``C_k`` is at the local angle ``θ_k = ψ_k − yaw_k``,
-``u_k = sin θ_k``.
+paper gives no direction, corner radars look outwards — radar 1 by −45°, radar 2 by +45°); a point at azimuth
+``ψ_k`` seen from ``C_k`` is at the local angle ``θ_k = ψ_k − yaw_k``, ``u_k = sin θ_k``.
 
 Array (seed 001, eq. 1): ``N`` isotropic elements at ``d`` wavelengths, phase centre in the middle of the
 aperture: ``a_p(u) = exp(j·2π·d·(p − (N+1)/2)·u)``, ``p = 1 … N`` (the printed eq. 1 has a bracket misplaced;
@@ -62,6 +62,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from radarnode.dsp.subspace import default_subarray
 from radarnode.errors import ConfigError
 
 #: seed 001: the radars 1.46 m apart on the bumper, each turned 45° (outwards)
@@ -216,9 +217,10 @@ _GRID_STEERING: dict = {}
 
 def _conj_steering(n: int, u: np.ndarray, d: float, grid: np.ndarray | None, shift: float = 0.0) -> np.ndarray:
     """``conj(a(u + shift))``: (N, G) for the coarse ``grid`` itself (computed once per grid, cached), else (T, N, M)
-    for per-trial points."""
+    for per-trial points. A uniform grid is known by its size and end points (not by ``id``, which a new array may
+    reuse once the old one is gone)."""
     if grid is not None and u is grid:
-        key = (n, float(d), id(grid), float(shift))
+        key = (n, float(d), grid.size, float(grid[0]), float(grid[-1]), float(shift))
         a = _GRID_STEERING.get(key)
         if a is None:
             a = np.ascontiguousarray(np.conj(steering(n, grid + shift, d)))
@@ -345,11 +347,6 @@ def capon_scan(y: np.ndarray, n_max: int = 1, d: float = 0.5, q: int | None = No
     return u, ok
 
 
-def default_subarray(n: int) -> int:
-    """Seed 001's sub-array length ``Q = round(0.7·N)`` (N = 12 → Q = 8), at least 2."""
-    return max(2, min(n, int(round(0.7 * n))))
-
-
 # ---------------------------------------------------------------------------------------------------------
 # the two-channel auto-compensator
 
@@ -472,5 +469,5 @@ def lcacm(y1: np.ndarray, y2: np.ndarray, r1_m: np.ndarray, r2_m: np.ndarray,
 
 
 __all__ = ["PairGeometry", "LcacmEstimate", "polar_to_xy", "seen_from", "two_circle_intersection", "steering",
-           "snapshots", "derotate", "subarray_samples", "beam_scan", "capon_scan", "default_subarray",
+           "snapshots", "derotate", "subarray_samples", "beam_scan", "capon_scan",
            "acm_weights", "acm_spectrum", "lcacm", "SEED001_BASELINE_M", "SEED001_YAW_DEG"]

@@ -43,14 +43,6 @@ class Metrics:
         return {"p": self.p, "rmse_deg": self.rmse_deg, "bias_deg": self.bias_deg, "m": self.m, "n": self.n}
 
 
-def probability_correct(count: np.ndarray, n_targets: int) -> float:
-    """Eq. 11: the fraction of trials whose estimator found exactly ``n_targets``."""
-    count = np.asarray(count)
-    if count.size == 0:
-        raise ValueError("probability_correct: no trial; expected at least one")
-    return float(np.mean(count == n_targets))
-
-
 def rmse_bias(est_deg: np.ndarray, truth_deg: np.ndarray) -> tuple[float, float]:
     """Eq. 12 and 13 over trials that found the right number of targets: ``est_deg`` (m, J), ``truth_deg`` (J,).
 
@@ -120,4 +112,4 @@ def crossing(x: np.ndarray, y: list[float | None], level: float) -> float | None
     return float(x[i] + (x[j] - x[i]) * (l0 - lv) / (l0 - l1))
 
 
-__all__ = ["Metrics", "P_MIN", "probability_correct", "rmse_bias", "metrics", "normalised", "crossing"]
+__all__ = ["Metrics", "P_MIN", "rmse_bias", "metrics", "normalised", "crossing"]

@@ -104,7 +104,7 @@ class Setup:
         p = get_preset(name)
         n = p.num_virtual
         return cls(n_elements=n, spacing_wl=p.element_spacing_wl, range_resolution_m=p.range_resolution_m,
-                   subarray=lc.default_subarray(n), **changes)
+                   subarray=ss.default_subarray(n), **changes)
 
     @property
     def geometry(self) -> lc.PairGeometry:
