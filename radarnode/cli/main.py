@@ -9,14 +9,14 @@ import sys
 import traceback
 
 from radarnode import __version__
-from radarnode.cli import consume, decode, export, image, log, node, report, run
+from radarnode.cli import consume, decode, export, image, log, montecarlo, node, report, run
 from radarnode.cli.common import Terminated
 from radarnode.cli.options import Parser
 from radarnode.errors import RadarnodeError, UsageError
 
 logger = logging.getLogger(__name__)
 
-SUBCOMMANDS = (run, node, consume, log, decode, export, image, report)
+SUBCOMMANDS = (run, node, consume, log, decode, export, image, report, montecarlo)
 
 
 def _add_global_options(parser: argparse.ArgumentParser, after: bool) -> None:
