@@ -186,3 +186,35 @@ def test_the_stationary_speed_limit_from_the_command_line(capsys):
     assert main(["report", scen, "--fcw-stationary-max-speed", "71"]) == 2
     assert "option --fcw-stationary-max-speed: value 71.0 is not allowed; expected a number in [0, 70]" in \
         capsys.readouterr().err
+
+
+def test_report_runs_scale_out_with_the_same_table_in_the_same_order(capsys, tmp_path):
+    """report --seeds on 2 local processes and on a Dask LocalCluster prints what one process prints, and the
+    JUnit XML holds the same cases."""
+    from radarnode.cli.main import main
+    args = [str(SCENARIOS / "nhtsa_lead_stopped.yaml"), str(SCENARIOS / "no_fcw_adjacent_stopped.yaml"),
+            "--seeds", "2"]
+    tables = {}
+    for name, extra in (("one", ["--workers", "1"]), ("two", ["--workers", "2"]), ("dask", ["--dask-local", "2"])):
+        if name == "dask":
+            pytest.importorskip("dask.distributed")
+        junit = tmp_path / f"{name}.xml"
+        assert main(["report", *args, *extra, "--junit", str(junit)]) == 0
+        tables[name] = capsys.readouterr().out
+        cases = [(c.get("classname"), c.get("name")) for c in ET.parse(junit).getroot().iter("testcase")]
+        assert len(cases) == 4
+    assert tables["one"].count("| pass |") == 4
+    assert tables["one"] == tables["two"] == tables["dask"]
+
+
+def test_report_scale_out_options_are_checked(capsys):
+    from radarnode.cli.main import main
+    sc = str(SCENARIOS / "nhtsa_lead_stopped.yaml")
+    assert main(["report", sc, "--workers", "2", "--dask-local", "2"]) == 2
+    assert "option --workers: value 2 is not allowed with --dask-local" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["report", sc, "--scheduler", "http://host:8786"])
+    assert "expected a Dask scheduler address such as tcp://host:8786" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["report", sc, "--workers", "0"])
+    assert "option --workers: value 0 is not allowed" in capsys.readouterr().err

@@ -21,6 +21,41 @@ from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario
 
 
+def _scheduler_address(text: str) -> str:
+    import argparse
+    from radarnode.montecarlo.executor import SCHEDULER_ADDRESS
+    if not SCHEDULER_ADDRESS.match(text):
+        raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a Dask scheduler address such as "
+                                         "tcp://host:8786 (tcp, tls, ws, wss or ucx)")
+    return text
+
+
+def add_scale_out_arguments(parser, what: str) -> None:
+    """``--workers``, ``--scheduler``, ``--dask-local``: where the independent ``what`` (points, runs) are computed."""
+    from radarnode.cli import options
+    parser.add_argument("--workers", type=options.integer(lo=1, hi=1024), default=None,
+                        help="local worker processes, 1..1024 (default: all cores)")
+    parser.add_argument("--scheduler", type=_scheduler_address, default=None, metavar="ADDRESS",
+                        help=f"run the {what} on the Dask cluster of this scheduler, e.g. tcp://host:8786 "
+                             "(needs radarnode[dask])")
+    parser.add_argument("--dask-local", type=options.integer(lo=1, hi=256), default=None, metavar="N",
+                        help=f"run the {what} on a Dask LocalCluster of N single-threaded processes on this machine")
+
+
+def check_scale_out(args) -> None:
+    """Refuse contradictory scale-out options (UsageError) and a Dask option without dask installed."""
+    if args.scheduler is not None and args.dask_local is not None:
+        raise UsageError(f"option --dask-local: value {args.dask_local} is not allowed with --scheduler; expected one "
+                         "of them (a cluster to connect to, or one to start here)")
+    if args.workers is not None and (args.scheduler is not None or args.dask_local is not None):
+        which = "--scheduler" if args.scheduler is not None else "--dask-local"
+        raise UsageError(f"option --workers: value {args.workers} is not allowed with {which}; expected no --workers "
+                         "(the cluster's workers do the work)")
+    if args.scheduler is not None or args.dask_local is not None:
+        from radarnode.montecarlo.executor import require_dask
+        require_dask("--scheduler" if args.scheduler is not None else "--dask-local")
+
+
 def add_scenario_argument(parser) -> None:
     from radarnode.cli import options
     parser.add_argument("scenario", help="scenario file (YAML), e.g. scenarios/highway_cut_in.yaml")

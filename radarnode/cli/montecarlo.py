@@ -28,7 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from radarnode.cli import options
-from radarnode.cli.common import atomic_output, atomic_path, progress
+from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress
 from radarnode.errors import FileError, UsageError
 
 EXPERIMENT_CHOICES = ("snr", "table2", "resolution", "timing")
@@ -59,14 +59,6 @@ def snr_list(text: str) -> tuple[float, ...]:
     return values
 
 
-def scheduler_address(text: str) -> str:
-    from radarnode.montecarlo.executor import SCHEDULER_ADDRESS
-    if not SCHEDULER_ADDRESS.match(text):
-        raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a Dask scheduler address such as "
-                                         "tcp://host:8786 (tcp, tls, ws, wss or ucx)")
-    return text
-
-
 def add_subparser(sub) -> None:
     p = sub.add_parser("montecarlo", help="seed 001's Monte Carlo: LC-ACM, beam scanning, Capon, subspace DOA",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -87,13 +79,7 @@ def add_subparser(sub) -> None:
                    help="σ of each radar's range, m, [0, 1] (default: the range CRB at each SNR)")
     p.add_argument("--resolution-snr-db", type=options.number(lo=SNR_LIMITS[0], hi=SNR_LIMITS[1]), default=20.0,
                    help="SNR of the resolution experiment, dB (default 20)")
-    p.add_argument("--workers", type=options.integer(lo=1, hi=1024), default=None,
-                   help="local worker processes, 1..1024 (default: all cores)")
-    p.add_argument("--scheduler", type=scheduler_address, default=None, metavar="ADDRESS",
-                   help="run the points on the Dask cluster of this scheduler, e.g. tcp://host:8786 "
-                        "(needs radarnode[dask])")
-    p.add_argument("--dask-local", type=options.integer(lo=1, hi=256), default=None, metavar="N",
-                   help="run the points on a Dask LocalCluster of N single-threaded processes on this machine")
+    add_scale_out_arguments(p, "points")
     p.add_argument("--json", action="store_true", help="one JSON document on standard output instead of tables")
     p.add_argument("--csv", metavar="FILE", help="also write every figure as one CSV row to FILE")
     p.add_argument("--plots", metavar="DIR", help="draw PNGs into DIR (created if missing; needs matplotlib)")
@@ -102,16 +88,7 @@ def add_subparser(sub) -> None:
 
 
 def _check_args(args):
-    if args.scheduler is not None and args.dask_local is not None:
-        raise UsageError(f"option --dask-local: value {args.dask_local} is not allowed with --scheduler; expected one "
-                         "of them (a cluster to connect to, or one to start here)")
-    if args.workers is not None and (args.scheduler is not None or args.dask_local is not None):
-        which = "--scheduler" if args.scheduler is not None else "--dask-local"
-        raise UsageError(f"option --workers: value {args.workers} is not allowed with {which}; expected no --workers "
-                         "(the cluster's workers run the points)")
-    if args.scheduler is not None or args.dask_local is not None:
-        from radarnode.montecarlo.executor import require_dask
-        require_dask("--scheduler" if args.scheduler is not None else "--dask-local")
+    check_scale_out(args)
     plt = None
     if args.plots:
         from radarnode.cli.report import _matplotlib, _plot_dir

@@ -10,7 +10,10 @@ case per scenario and seed, the failed expectations as the failure message)
 for a CI system to render; ``--plots DIR`` draws one PNG per scenario and seed
 (gap, relative speed, TTC, ego speed and acceleration over time, with the FCW
 and braking instants and the pass/fail limits; needs matplotlib). Files are
-written under a temporary name and renamed when complete.
+written under a temporary name and renamed when complete. The runs are
+independent: they go to all local cores (``--workers``), or to a Dask cluster
+(``--scheduler tcp://host:8786``, ``--dask-local N``), with the same results
+in the same order wherever they run.
 """
 
 from __future__ import annotations
@@ -26,7 +29,7 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from radarnode.cli import options
-from radarnode.cli.common import atomic_output, atomic_path, progress
+from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress
 from radarnode.consumer.evaluate import simulate
 from radarnode.errors import FieldError, FileError, UsageError
 from radarnode.radar.setup import load_scenario
@@ -40,6 +43,7 @@ def add_subparser(sub) -> None:
     p.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"), help="radar model level")
     p.add_argument("--doa", choices=options.DOA_CHOICES,
                    help="angle estimator of the signal chain (super-resolution other than fft: fidelity signal)")
+    add_scale_out_arguments(p, "runs")
     p.add_argument("--min-passes", type=options.POSITIVE_COUNT, default=None,
                    help="exit 1 when a scenario passes in fewer seeds than this (default: all of them)")
     p.add_argument("--junit", metavar="FILE", help="also write JUnit XML for a CI system to FILE")
@@ -59,6 +63,16 @@ ECU_OPTIONS = (("--fcw-ttc-warn", "fcw_ttc_warn_s", "FCW warns at a TTC at or be
                ("--ecu-latency", "processing_latency_s", "the ECU's processing latency, s (0–0.5)"),
                ("--fcw-stationary-max-speed", "fcw_stationary_max_speed_mps",
                 "above X m/s a stationary object never seen moving draws no FCW (0–70)"))
+
+
+def _simulate_task(task) -> tuple:
+    """One report run (a worker's task): the scenario's ECU figures and the seconds it took. The trace's live
+    objects (the consumer, the ECU) stay in the worker; its arrays come back."""
+    sc, fidelity = task
+    t0 = time.perf_counter()
+    r = simulate(sc, fidelity=fidelity)
+    r.trace = {k: v for k, v in r.trace.items() if k not in ("assembler", "ecu")}
+    return r, time.perf_counter() - t0
 
 
 def _with_doa(sc, doa: str | None):
@@ -160,6 +174,7 @@ def _matplotlib():
 
 
 def cmd(args) -> int:
+    check_scale_out(args)
     need = args.seeds if args.min_passes is None else args.min_passes
     if not 1 <= need <= args.seeds:
         raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {args.seeds}] "
@@ -190,19 +205,23 @@ def cmd(args) -> int:
     short = 0
     suites = []
     written = []
-    out("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
-        "final time gap | result |")
-    out("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
+    # every (scenario, seed) run is independent: on all local cores, or a Dask cluster, results in this order
+    from radarnode.montecarlo.executor import default_workers, run_tasks
+    tasks = [(dataclasses.replace(sc, seed=seed), args.fidelity) for _, sc in scenarios
+             for seed in (range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed])]
     try:
+        done = iter(run_tasks(_simulate_task, tasks, workers=args.workers or default_workers(),
+                              scheduler=args.scheduler, dask_local=args.dask_local, on_done=lambda: bar.update(1)))
+        out("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
+            "final time gap | result |")
+        out("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
         for path, sc in scenarios:
             passes = unchecked = 0
             runs = []
             for seed in range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed]:
                 run_sc = dataclasses.replace(sc, seed=seed)
-                t0 = time.perf_counter()
-                r = simulate(run_sc, fidelity=args.fidelity)
-                runs.append((r, time.perf_counter() - t0))
-                bar.update(1)
+                r, seconds = next(done)
+                runs.append((r, seconds))
                 passes += r.passed and r.checked
                 unchecked += not r.checked
                 verdict = ("nothing to check" if not r.checked else "pass" if r.passed
