@@ -30,6 +30,11 @@ def add_subparser(sub) -> None:
     p.set_defaults(func=cmd, fast=False)
 
 
+def _sensors(node) -> str:
+    ids = getattr(node, "sensor_ids", None)
+    return f"sensors {', '.join(map(str, ids))}" if ids else f"sensor {node.config.sensor_id}"
+
+
 def cmd(args) -> int:
     check_live_arguments(args)
     scenario = scenario_from_args(args)
@@ -39,7 +44,7 @@ def cmd(args) -> int:
     node = make_node(scenario)
     vehicle = ego_motion_for(node) if args.send_ego_motion else None
     with open_bus(args) as bus, stop_on_signals() as stop, live_view(args, node) as live:
-        print(f"radarnode node: {scenario.name} on {bus.channel_info}, sensor {node.config.sensor_id}, "
+        print(f"radarnode node: {scenario.name} on {bus.channel_info}, {_sensors(node)}, "
               f"{scenario.num_cycles} cycles of {node.period_s * 1e3:.0f} ms; bus-load budget "
               f"{100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr, flush=True)
         stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send, *live.sinks],
