@@ -5,7 +5,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import shutil
 import signal
 import subprocess
 import sys
@@ -16,6 +15,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import ROOT, SCENARIOS
+from tests.helpers import MULTICAST_LOOPBACK, can_unshare
 
 CLI = [sys.executable, "-m", "radarnode.cli"]
 DEFAULT = str(SCENARIOS / "highway_cut_in.yaml")
@@ -118,22 +118,11 @@ def test_log_interrupted_is_complete_and_readable(tmp_path):
     assert n_cycles > 20 and f"in {n_cycles} complete cycles" in err
 
 
-def _can_unshare() -> bool:
-    if not shutil.which("unshare") or not shutil.which("ip"):
-        return False
-    r = subprocess.run(["unshare", "-n", "true"], capture_output=True)
-    return r.returncode == 0
-
-
-@pytest.mark.skipif(not _can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
+@pytest.mark.skipif(not can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
                     "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
 def test_node_and_consumer_in_two_processes_over_udp_multicast(tmp_path):
     group = "239.74.163.2"
-    script = f"""
-set -e
-ip link set lo up
-ip link set lo multicast on
-ip route add 224.0.0.0/4 dev lo
+    script = MULTICAST_LOOPBACK + f"""
 {sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} --json --count 20 --timeout 20 > {tmp_path}/cycles.jsonl 2> {tmp_path}/consume.err &
 CONSUMER=$!
 for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done

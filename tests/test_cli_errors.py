@@ -20,19 +20,12 @@ from pathlib import Path
 import pytest
 
 from radarnode.cli.main import build_parser, main
+from tests.helpers import cli
 from tests.conftest import ROOT, SCENARIOS
 
 SCENARIO = str(SCENARIOS / "stopped_vehicle.yaml")          # 15 s, one stopped car ahead
 
 
-def cli(capsys, *argv: str) -> tuple[int, str, str]:
-    """Run a command in-process: (exit status, stdout, stderr)."""
-    try:
-        rc = main([str(a) for a in argv])
-    except SystemExit as exc:           # argparse's usage errors
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 def one_error_line(err: str) -> str:

@@ -18,6 +18,7 @@ import pytest
 
 from radarnode.cli.main import main
 from radarnode.wire.logfiles import FORMATS, mf4_available
+from tests.helpers import cli
 from tests.conftest import ROOT, SCENARIOS
 
 CLI = [sys.executable, "-m", "radarnode"]
@@ -27,13 +28,6 @@ WRITTEN = [f for f in FORMATS if f != ".mf4"] + [pytest.param(".mf4", marks=pyte
     not mf4_available(), reason="MF4 needs python-can's asammdf extra: pip install 'radarnode[mf4]'"))]
 
 
-def cli(capsys, *argv) -> tuple[int, str, str]:
-    try:
-        rc = main([str(a) for a in argv])
-    except SystemExit as exc:
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 @pytest.fixture(scope="module")

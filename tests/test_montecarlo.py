@@ -12,25 +12,18 @@ import sys
 import numpy as np
 import pytest
 
-from radarnode.cli.main import main
 from radarnode.errors import UsageError
 from radarnode.montecarlo import metrics as mx
 from radarnode.montecarlo import sweep as sw
 from radarnode.montecarlo.executor import require_dask
 from radarnode.montecarlo.seed001 import Point, Setup, estimator_names, run_point
+from tests.helpers import cli
 
 SETUP = Setup.from_preset()
 #: a small sweep: two SNR points, one Table-2 azimuth, one separation, 12 trials each
 SMALL = sw.Sweep(trials=12, seed=7, snr_db=(10.0, 30.0), table2_azimuth_deg=(0.0,), separation_deg=(10.0,))
 
 
-def cli(capsys, *argv):
-    try:
-        rc = main([str(a) for a in argv])
-    except SystemExit as exc:
-        rc = exc.code
-    out, err = capsys.readouterr()
-    return rc, out, err
 
 
 # ---------------------------------------------------------------------------------------------------------

@@ -22,6 +22,7 @@ from radarnode.wire.group import RadarGroup, ego_motion_for, make_node
 from radarnode.wire.node import RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
 from tests.conftest import SCENARIOS
+from tests.helpers import MULTICAST_LOOPBACK, can_unshare
 
 THREE = """
 name: three
@@ -258,15 +259,7 @@ def test_log_then_decode_fuse(tmp_path, capsys):
     assert "none.yaml" in capsys.readouterr().err
 
 
-def _can_unshare() -> bool:
-    import shutil
-    import subprocess
-    if not shutil.which("unshare") or not shutil.which("ip"):
-        return False
-    return subprocess.run(["unshare", "-n", "true"], capture_output=True).returncode == 0
-
-
-@pytest.mark.skipif(not _can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
+@pytest.mark.skipif(not can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
                     "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
 def test_three_radar_nodes_and_a_fusing_consumer_in_two_processes(tmp_path):
     import json
@@ -276,11 +269,7 @@ def test_three_radar_nodes_and_a_fusing_consumer_in_two_processes(tmp_path):
     from tests.conftest import ROOT
     group = "239.74.163.3"
     scen = SCENARIOS / "intersection_crossing.yaml"
-    script = f"""
-set -e
-ip link set lo up
-ip link set lo multicast on
-ip route add 224.0.0.0/4 dev lo
+    script = MULTICAST_LOOPBACK + f"""
 {sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} --fuse {scen} --json --count 30 --timeout 20 > {tmp_path}/fused.jsonl 2> {tmp_path}/consume.err &
 CONSUMER=$!
 for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done

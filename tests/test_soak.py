@@ -7,23 +7,18 @@ in the middle of the flood was answered and applied."""
 from __future__ import annotations
 
 import json
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import pytest
 
+from tests.helpers import can_unshare
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def _can_unshare() -> bool:
-    if not shutil.which("unshare") or not shutil.which("ip"):
-        return False
-    return subprocess.run(["unshare", "-rn", "true"], capture_output=True).returncode == 0
-
-
-@pytest.mark.skipif(not _can_unshare(), reason="the soak keeps its udp_multicast traffic inside a private network "
+@pytest.mark.skipif(not can_unshare("-rn"), reason="the soak keeps its udp_multicast traffic inside a private network "
                     "namespace (unshare -rn and iproute2); not available here")
 def test_short_soak_and_flood_over_udp_multicast(tmp_path):
     out = tmp_path / "soak.json"

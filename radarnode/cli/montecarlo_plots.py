@@ -24,52 +24,48 @@ def _curve(ax, x, values, name, **kw):
         ax.plot(xs, ys, marker=".", label=name, **kw)
 
 
+def _panels(plt, groups, x, values_of, xlabel, ylabel, title, extra=None, log=False):
+    """Two panels side by side (seed 001's estimators, the subspace ones): one curve per estimator."""
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True, constrained_layout=True)
+    for ax, group in zip(axes, groups):
+        for n in group:
+            _curve(ax, x, values_of(n), n)
+        if extra is not None:
+            extra(ax)
+        if log:
+            ax.set_yscale("log")
+        ax.set_xlabel(xlabel)
+        ax.grid(True, which="both" if log else "major", alpha=0.3)
+        ax.legend(fontsize=7)
+    axes[0].set_ylabel(ylabel)
+    fig.suptitle(title)
+    return fig
+
+
 def figures(summary: dict, plt) -> dict:
     """File name → matplotlib Figure (not yet saved)."""
     out = {}
-    names = summary.get("estimators", [])
-    ours, theirs = _split(names)
+    groups = _split(summary.get("estimators", []))
     if "snr" in summary:
         s = summary["snr"]
-        x = s["snr_db"]
-        fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True, constrained_layout=True)
-        for ax, group in zip(axes, (ours, theirs)):
-            for n in group:
-                _curve(ax, x, [c["p"] for c in s["metrics"][n]], n)
-            ax.set_xlabel("SNR per element, dB")
-            ax.grid(True, alpha=0.3)
-            ax.legend(fontsize=7)
-        axes[0].set_ylabel("P(correct number of targets)")
-        fig.suptitle(f"seed 001 eq. 11, one target at {s['azimuth_deg']:g}°")
-        out["montecarlo_p_correct.png"] = fig
+        x, snr = s["snr_db"], "SNR per element, dB"
+
+        def crb(ax):
+            for k, style in (("srr1", ":"), ("srr2", "--"), ("both", "-")):
+                ax.plot(x, s["crb_deg"][k], color="black", linestyle=style, linewidth=1.0, label=f"CRB {k}")
+            ax.axhline(0.1, color="grey", linewidth=0.8)
+
+        out["montecarlo_p_correct.png"] = _panels(
+            plt, groups, x, lambda n: [c["p"] for c in s["metrics"][n]], snr, "P(correct number of targets)",
+            f"seed 001 eq. 11, one target at {s['azimuth_deg']:g}°")
         for key, fname, label in (("rmse_deg", "montecarlo_rmse.png", "RMSE (eq. 12), °"),
                                   ("bias_deg", "montecarlo_bias.png", "bias (eq. 13), °")):
-            fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True, constrained_layout=True)
-            for ax, group in zip(axes, (ours, theirs)):
-                for n in group:
-                    _curve(ax, x, [c[key] for c in s["metrics"][n]], n)
-                if key == "rmse_deg":
-                    for k, style in (("srr1", ":"), ("srr2", "--"), ("both", "-")):
-                        ax.plot(x, s["crb_deg"][k], color="black", linestyle=style, linewidth=1.0,
-                                label=f"CRB {k}")
-                    ax.axhline(0.1, color="grey", linewidth=0.8)
-                ax.set_yscale("log")
-                ax.set_xlabel("SNR per element, dB")
-                ax.grid(True, which="both", alpha=0.3)
-                ax.legend(fontsize=7)
-            axes[0].set_ylabel(label)
-            fig.suptitle(f"seed 001, one target at {s['azimuth_deg']:g}°; shown where p > 0.8")
-            out[fname] = fig
+            out[fname] = _panels(plt, groups, x, lambda n, key=key: [c[key] for c in s["metrics"][n]], snr, label,
+                                 f"seed 001, one target at {s['azimuth_deg']:g}°; shown where p > 0.8",
+                                 extra=crb if key == "rmse_deg" else None, log=True)
     if "resolution" in summary:
         r = summary["resolution"]
-        fig, axes = plt.subplots(1, 2, figsize=(13, 5), sharey=True, constrained_layout=True)
-        for ax, group in zip(axes, (ours, theirs)):
-            for n in group:
-                _curve(ax, r["separation_deg"], r["probability"][n], n)
-            ax.set_xlabel("separation, °")
-            ax.grid(True, alpha=0.3)
-            ax.legend(fontsize=7)
-        axes[0].set_ylabel("P(resolved)")
-        fig.suptitle(f"two targets around {r['centre_deg']:g}° at {r['snr_db']:g} dB")
-        out["montecarlo_resolution.png"] = fig
+        out["montecarlo_resolution.png"] = _panels(
+            plt, groups, r["separation_deg"], lambda n: r["probability"][n], "separation, °", "P(resolved)",
+            f"two targets around {r['centre_deg']:g}° at {r['snr_db']:g} dB")
     return out
