@@ -312,8 +312,15 @@ class ObjectFusion:
                 if cost[r, c] < GATE_CHI2:
                     assigned[id(free[r])].append((so, int(rest[c])))
                     taken[rest[c]] = True
+        # 3. a radar that splits one car into two objects: the second, as close to a track that already took this
+        #    radar's first as two tracks must be to merge, is that car too (not a new fused object)
         for i in np.flatnonzero(~taken):
-            new_tracks.append((so, int(i)))
+            near = [tr for tr in self.tracks if any(p.sensor_id == so.sensor_id for p, _ in assigned[id(tr)])
+                    and _mahalanobis(tr.pos, tr.cov, pos[i], so.cov[i], so.heading[i]) < MERGE_CHI2]
+            if near:
+                assigned[id(near[0])].append((so, int(i)))
+            else:
+                new_tracks.append((so, int(i)))
 
     @staticmethod
     def _update(tr: _Track, got: list[tuple[SensorObjects, int]], t_s: float) -> None:
@@ -337,7 +344,7 @@ class ObjectFusion:
         tr.updates += 1
         tr.t_s = t_s
         tr.misses = 0
-        tr.members = {so.sensor_id: int(so.ids[i]) for so, i in got}
+        tr.members = {so.sensor_id: int(so.ids[i]) for so, i in got}      # (a split object: the later of two)
         tr.sensors = sum(1 << so.sensor_id for so, _ in got)
         strongest = max(got, key=lambda g: g[0].rcs[g[1]] if np.isfinite(g[0].rcs[g[1]]) else -np.inf)
         so, i = strongest
