@@ -12,7 +12,8 @@ relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
    track predicted to the object's time, the covariance of both and an extent term along and across the
    object's reported orientation (:data:`EXTENT_SIGMA_LONG_M`, :data:`EXTENT_SIGMA_LAT_M`: two radars see
    different points of one car — the front radar its rear, a corner radar its side), gated at
-   :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %); at most one object per sensor per fused track.
+   :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %); one object per sensor per fused track, except a
+   radar's second object of one car (a split), which joins the track when it lies within :data:`MERGE_CHI2`.
 3. **Fusion.** A fused track's position and velocity are the information-weighted mean of its objects this
    cycle (each predicted to the fusion time with its velocity: the sensors' cycles are not simultaneous); a track
    seen by no sensor coasts on its velocity for up to :data:`COAST_CYCLES` fusions, then ends. Unassigned objects
