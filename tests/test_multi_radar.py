@@ -321,3 +321,46 @@ def test_two_tracks_of_one_object_merge_but_two_cars_side_by_side_do_not():
         out = fusion.step(0.072 * k, {0: (0.072 * k, _objects([20.0], [0.0])),
                                       1: (0.072 * k, _objects([20.0], [3.5]))})
     assert len(out) == 2 and sorted(np.round(out.y_m, 6).tolist()) == [0.0, 3.5]
+
+
+def test_a_second_object_of_one_radar_beside_a_fused_track_is_a_second_fused_object():
+    """The radar says two (a pedestrian stepping out beside a stopped car): the fusion does not swallow it."""
+    fusion = ObjectFusion({0: SensorMount(0.0, 0.0, 0.0)})
+    for k in range(6):
+        objs = _objects([20.0], [0.0], ids=[1]) if k < 3 else _objects([20.0, 21.0], [0.0, 0.4], ids=[1, 2])
+        out = fusion.step(0.072 * k, {0: (0.072 * k, objs)})
+    assert len(out) == 2 and sorted(m[0] for m in out.members) == [1, 2]
+
+
+def test_adjacent_lane_cars_each_seen_by_another_radar_stay_two_however_loose_their_sigma():
+    m = SensorMount(0.0, 0.0, 0.0)
+    for spacing in (2.0, 2.5, 3.0):
+        fusion = ObjectFusion({0: m, 1: m})
+        for k in range(6):
+            out = fusion.step(0.072 * k, {0: (0.072 * k, _objects([30.0], [0.0], sigma=1.0)),
+                                          1: (0.072 * k, _objects([30.0], [spacing], sigma=1.0))})
+        assert len(out) == 2, spacing
+
+
+def test_fusion_refuses_what_cannot_be_fused_and_restarts_after_a_gap():
+    m = SensorMount(0.0, 0.0, 0.0)
+    fusion = ObjectFusion({0: m, 1: m})
+    good = _objects([20.0], [1.0])
+    for k in range(3):
+        out = fusion.step(0.072 * k, {0: (0.072 * k, good), 1: (0.072 * k, good)})
+    fid = int(out.id[0])
+    # a NaN time: refused, the tracks as they were
+    out = fusion.step(float("nan"), {0: (0.3, good)})
+    assert fusion.bad_times == 1 and out.id.tolist() == [fid]
+    # a NaN position from one radar and an infinite σ from the other: left out, the track goes on, no NaN
+    bad = _objects([float("nan")], [1.0])
+    inf_sigma = _objects([20.0], [1.0], sigma=float("inf"))
+    out = fusion.step(0.3, {0: (0.3, bad), 1: (0.3, inf_sigma)})
+    assert fusion.bad_objects == 2 and np.isfinite(out.x_m).all() and out.id.tolist() == [fid]
+    out = fusion.step(0.372, {0: (0.372, good), 1: (0.372, good)})
+    assert out.id.tolist() == [fid] and abs(out.x_m[0] - 20.0) < 1e-6
+    # a list 10 s old is stale; a fusion 600 s later restarts (no track coasts 600 s of its old velocity)
+    fusion.step(0.444, {0: (0.444, good), 1: (-9.6, good)})
+    assert fusion.stale_lists == 1
+    out = fusion.step(600.0, {0: (600.0, _objects([50.0], [0.0]))})
+    assert fusion.restarts == 1 and len(out) == 1 and abs(out.x_m[0] - 50.0) < 1e-6 and out.id[0] != fid

@@ -12,8 +12,9 @@ relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
    track predicted to the object's time, the covariance of both and an extent term along and across the
    object's reported orientation (:data:`EXTENT_SIGMA_LONG_M`, :data:`EXTENT_SIGMA_LAT_M`: two radars see
    different points of one car — the front radar its rear, a corner radar its side), gated at
-   :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %); one object per sensor per fused track, except a
-   radar's second object of one car (a split), which joins the track when it lies within :data:`MERGE_CHI2`.
+   :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %) and never farther apart across the object's heading
+   than :data:`MAX_ACROSS_M` (two cars in adjacent 3 m lanes, each seen by another radar, stay two however loose
+   their σ); at most one object per sensor per fused track (a radar that reports two objects is believed).
 3. **Fusion.** A fused track's position and velocity are the information-weighted mean of its objects this
    cycle (each predicted to the fusion time with its velocity: the sensors' cycles are not simultaneous); a track
    seen by no sensor coasts on its velocity for up to :data:`COAST_CYCLES` fusions, then ends. Unassigned objects
@@ -27,6 +28,7 @@ IDs that saw it this cycle.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -43,6 +45,8 @@ EXTENT_SIGMA_LONG_M, EXTENT_SIGMA_LAT_M = 1.5, 0.5
 MIN_SIGMA_M = 0.1            # an object without quality (σ) fields: this position σ, and …
 MIN_SIGMA_MPS = 0.25         # … this velocity σ
 COAST_CYCLES = 3
+MAX_ACROSS_M = 1.5           # objects of two radars farther apart than this across the object's heading: two objects
+MAX_GAP_S = 1.0              # a fusion this long after the last (or earlier than it) restarts the fused tracks
 MERGE_CHI2 = 1.0             # two fused tracks this close (with the extent term: 1.5 m along, 0.5 m across) …
 MERGE_SPEED_MPS = 1.5        # … and this similar in velocity …
 MERGE_ROUNDS = 3             # … this many rounds in a row, seen by different sensors, are merged
@@ -67,6 +71,15 @@ class SensorObjects:
     prob_of_exist: np.ndarray
     heading: np.ndarray          # (n,) the object's orientation in the vehicle frame (0: along the vehicle's x)
 
+    def finite(self) -> np.ndarray:
+        """(n,) bool: the objects whose position, velocity and σ are all finite (the others cannot be fused)."""
+        return (np.isfinite(self.pos).all(axis=1) & np.isfinite(self.vel).all(axis=1)
+                & np.isfinite(self.cov).all(axis=(1, 2)) & np.isfinite(self.var_v).all(axis=1))
+
+    def take(self, keep: np.ndarray) -> SensorObjects:
+        return SensorObjects(self.sensor_id, self.t_s, *(getattr(self, f.name)[keep] for f in dataclasses.fields(self)
+                                                         if f.name not in ("sensor_id", "t_s")))
+
 
 def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMount) -> SensorObjects:
     """One sensor's object list in the vehicle frame (positions, velocities, covariances)."""
@@ -75,16 +88,18 @@ def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMou
     rot = np.array([[c, -s], [s, c]])
     x, y = mount.to_vehicle(objects.dist_long_m, objects.dist_lat_m)
     vx, vy = mount.rotate(objects.vrel_long_mps, objects.vrel_lat_mps)
-    sx = np.nan_to_num(objects.dist_long_sigma_m, nan=MIN_SIGMA_M)
-    sy = np.nan_to_num(objects.dist_lat_sigma_m, nan=MIN_SIGMA_M)
-    svx = np.nan_to_num(objects.vrel_long_sigma_mps, nan=MIN_SIGMA_MPS)
-    svy = np.nan_to_num(objects.vrel_lat_sigma_mps, nan=MIN_SIGMA_MPS)
+    # a list without quality fields (σ NaN) gets the floors; an infinite σ makes a non-finite covariance, and the
+    # object is left out by the fusion (SensorObjects.finite)
+    nan_to = lambda v, floor: np.where(np.isnan(v), floor, np.maximum(v, floor))   # noqa: E731
+    sx, sy = nan_to(objects.dist_long_sigma_m, MIN_SIGMA_M), nan_to(objects.dist_lat_sigma_m, MIN_SIGMA_M)
+    svx, svy = nan_to(objects.vrel_long_sigma_mps, MIN_SIGMA_MPS), nan_to(objects.vrel_lat_sigma_mps, MIN_SIGMA_MPS)
     d = np.zeros((len(objects), 2, 2))
-    d[:, 0, 0], d[:, 1, 1] = np.maximum(sx, MIN_SIGMA_M) ** 2, np.maximum(sy, MIN_SIGMA_M) ** 2
-    cov = rot @ d @ rot.T
     dv = np.zeros((len(objects), 2, 2))
-    dv[:, 0, 0], dv[:, 1, 1] = np.maximum(svx, MIN_SIGMA_MPS) ** 2, np.maximum(svy, MIN_SIGMA_MPS) ** 2
-    cov_v = rot @ dv @ rot.T
+    with np.errstate(invalid="ignore"):                  # ∞·0 in the rotation of an infinite σ: NaN, left out
+        d[:, 0, 0], d[:, 1, 1] = sx ** 2, sy ** 2
+        cov = rot @ d @ rot.T
+        dv[:, 0, 0], dv[:, 1, 1] = svx ** 2, svy ** 2
+        cov_v = rot @ dv @ rot.T
     return SensorObjects(sensor_id, t_s, np.asarray(objects.id, dtype=np.int64), np.stack([x, y], axis=1),
                          np.stack([vx, vy], axis=1), cov, np.stack([cov_v[:, 0, 0], cov_v[:, 1, 1]], axis=1),
                          np.asarray(objects.rcs_dbsm, dtype=np.float64), np.asarray(objects.obj_class),
@@ -186,7 +201,10 @@ class ObjectFusion:
         self.tracks: list[_Track] = []
         self._together: dict[tuple[int, int], int] = {}     # fused ID pairs: rounds in a row close enough to merge
         self._next_id = 0
-        self.unknown_sensor = 0
+        self._last_t: float | None = None
+        #: what was not fused: lists of a sensor not in ``mounts``, lists too old or with a time that is not a
+        #: number, objects with a non-finite position, velocity or σ, and restarts after a gap in time
+        self.unknown_sensor = self.stale_lists = self.bad_objects = self.restarts = self.bad_times = 0
 
     def _new_id(self) -> int:
         used = {t.fid for t in self.tracks}
@@ -197,13 +215,33 @@ class ObjectFusion:
         return fid
 
     def step(self, t_s: float, cycles: dict[int, tuple[float, ObjectList]]) -> FusedObjects:
-        """Fuse the latest object list of each sensor, ``{sensor ID: (its cycle's time, objects)}``, at ``t_s``."""
+        """Fuse the latest object list of each sensor, ``{sensor ID: (its cycle's time, objects)}``, at ``t_s``.
+
+        Nothing that cannot be fused is fused: a fusion time that is not a finite number is refused (the tracks
+        stay as they were); one more than :data:`MAX_GAP_S` after the last, or before it, restarts the fused tracks
+        (new IDs); a sensor's list more than :data:`MAX_GAP_S` from ``t_s``, and objects with a non-finite
+        position, velocity or σ, are left out. Each is counted (``bad_times``, ``restarts``, ``stale_lists``,
+        ``bad_objects``).
+        """
+        if not (isinstance(t_s, (int, float, np.floating)) and math.isfinite(t_s)):
+            self.bad_times += 1
+            return self._output(self._last_t if self._last_t is not None else 0.0)
+        if self._last_t is not None and not 0.0 <= t_s - self._last_t <= MAX_GAP_S:
+            self.restarts += bool(self.tracks)
+            self.tracks, self._together = [], {}
+        self._last_t = float(t_s)
         parts = []
         for sid, (ts, objects) in sorted(cycles.items()):
             if sid not in self.mounts:
                 self.unknown_sensor += 1
                 continue
-            parts.append(to_vehicle(sid, ts, objects, self.mounts[sid]))
+            if not (math.isfinite(ts) and abs(t_s - ts) <= MAX_GAP_S):
+                self.stale_lists += 1
+                continue
+            so = to_vehicle(sid, ts, objects, self.mounts[sid])
+            ok = so.finite()
+            self.bad_objects += int(np.count_nonzero(~ok))
+            parts.append(so if ok.all() else so.take(ok))
         # every track predicted to the fusion time
         for tr in self.tracks:
             dt = t_s - tr.t_s
@@ -259,13 +297,16 @@ class ObjectFusion:
         side by side in adjacent lanes (3.5 m apart) are not, and one radar seeing both keeps them apart."""
         live = [t for t in self.tracks if t.misses == 0 and got.get(id(t))]
         close: set[tuple[int, int]] = set()
-        for a_i, a in enumerate(live):
-            for b in live[a_i + 1:]:
-                if set(a.members) & set(b.members):
-                    continue
-                if (_mahalanobis(a.pos, a.cov, b.pos, b.cov, a.heading) < MERGE_CHI2
-                        and float(np.hypot(*(a.vel - b.vel))) < MERGE_SPEED_MPS):
-                    close.add((min(a.fid, b.fid), max(a.fid, b.fid)))
+        if len(live) > 1:
+            pos, cov = np.array([t.pos for t in live]), np.array([t.cov for t in live])
+            vel, heading = np.array([t.vel for t in live]), np.array([t.heading for t in live])
+            seen = np.array([sum(1 << s for s in t.members) for t in live])
+            near = ((_distances(pos, cov, pos, cov, heading, max_across_m=MAX_ACROSS_M / 2) < MERGE_CHI2)
+                    & (np.hypot(*(vel[:, None, :] - vel[None, :, :]).transpose(2, 0, 1)) < MERGE_SPEED_MPS)
+                    & ((seen[:, None] & seen[None, :]) == 0))
+            for i, j in zip(*np.nonzero(np.triu(near, 1))):
+                a, b = live[i], live[j]
+                close.add((min(a.fid, b.fid), max(a.fid, b.fid)))
         self._together = {pair: self._together.get(pair, 0) + 1 for pair in close}
         gone: set[int] = set()
         by_fid = {t.fid: t for t in self.tracks}
@@ -304,8 +345,8 @@ class ObjectFusion:
         # 2. the rest by a global assignment on the Mahalanobis distance
         rest = np.flatnonzero(~taken)
         if rest.size and free:
-            cost = np.array([[_mahalanobis(tr.pos, tr.cov, pos[i], so.cov[i], so.heading[i]) for i in rest]
-                             for tr in free])
+            cost = _distances(np.array([tr.pos for tr in free]), np.array([tr.cov for tr in free]), pos[rest],
+                              so.cov[rest], so.heading[rest])
             import scipy.optimize  # imported when first needed: a faster start
             big = 1e6
             rows, cols = scipy.optimize.linear_sum_assignment(np.where(cost < GATE_CHI2, cost, big))
@@ -313,15 +354,8 @@ class ObjectFusion:
                 if cost[r, c] < GATE_CHI2:
                     assigned[id(free[r])].append((so, int(rest[c])))
                     taken[rest[c]] = True
-        # 3. a radar that splits one car into two objects: the second, as close to a track that already took this
-        #    radar's first as two tracks must be to merge, is that car too (not a new fused object)
         for i in np.flatnonzero(~taken):
-            near = [tr for tr in self.tracks if any(p.sensor_id == so.sensor_id for p, _ in assigned[id(tr)])
-                    and _mahalanobis(tr.pos, tr.cov, pos[i], so.cov[i], so.heading[i]) < MERGE_CHI2]
-            if near:
-                assigned[id(near[0])].append((so, int(i)))
-            else:
-                new_tracks.append((so, int(i)))
+            new_tracks.append((so, int(i)))
 
     @staticmethod
     def _update(tr: _Track, got: list[tuple[SensorObjects, int]], t_s: float) -> None:
@@ -345,7 +379,7 @@ class ObjectFusion:
         tr.updates += 1
         tr.t_s = t_s
         tr.misses = 0
-        tr.members = {so.sensor_id: int(so.ids[i]) for so, i in got}      # (a split object: the later of two)
+        tr.members = {so.sensor_id: int(so.ids[i]) for so, i in got}
         tr.sensors = sum(1 << so.sensor_id for so, _ in got)
         strongest = max(got, key=lambda g: g[0].rcs[g[1]] if np.isfinite(g[0].rcs[g[1]]) else -np.inf)
         so, i = strongest
@@ -376,8 +410,32 @@ def _extent(heading: float) -> np.ndarray:
     return rot @ np.diag([EXTENT_SIGMA_LONG_M ** 2, EXTENT_SIGMA_LAT_M ** 2]) @ rot.T
 
 
-def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: float = 0.0) -> float:
+def _distances(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: np.ndarray,
+               max_across_m: float = MAX_ACROSS_M) -> np.ndarray:
+    """:func:`_mahalanobis` of every pair at once: positions (A, 2) and (B, 2), covariances (A, 2, 2) and
+    (B, 2, 2), the headings (B,) of the second set → (A, B)."""
+    d = p2[None, :, :] - p1[:, None, :]                                          # (A, B, 2)
+    c, s = np.cos(heading), np.sin(heading)                                     # (B,)
+    across = np.abs(-s[None, :] * d[..., 0] + c[None, :] * d[..., 1])
+    el, et = EXTENT_SIGMA_LONG_M ** 2, EXTENT_SIGMA_LAT_M ** 2
+    ext = np.stack([np.stack([el * c * c + et * s * s, (el - et) * c * s], axis=-1),
+                    np.stack([(el - et) * c * s, el * s * s + et * c * c], axis=-1)], axis=-2)    # (B, 2, 2)
+    m = c1[:, None] + c2[None, :] + ext[None, :]                                # (A, B, 2, 2)
+    a, b, cc, dd = m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1]
+    det = a * dd - b * cc
+    x, y = d[..., 0], d[..., 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        q = (dd * x * x - (b + cc) * x * y + a * y * y) / det                  # dᵀ M⁻¹ d for a 2×2 M
+    return np.where((across > max_across_m) | ~np.isfinite(q) | (det <= 0), np.inf, q)
+
+
+def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: float = 0.0,
+                 max_across_m: float = MAX_ACROSS_M) -> float:
+    """The Mahalanobis distance² of two positions with both covariances and the extent term; ∞ when they lie more
+    than ``max_across_m`` apart across ``heading`` (whatever the covariances allow)."""
     d = p2 - p1
+    if abs(-math.sin(heading) * d[0] + math.cos(heading) * d[1]) > max_across_m:
+        return math.inf
     s = c1 + c2 + _extent(heading)
     return float(d @ np.linalg.solve(s, d))
 
