@@ -132,9 +132,9 @@ def test_scenario_selects_the_estimator_and_it_runs_in_the_node():
     det = model.info.detections
     assert np.any(np.hypot(det.x_m - view.x_m[0], det.y_m - view.y_m[0]) < 3.0)
     assert next(iter(model.chains.values())).doa.stats["cells"] > 0
-    with pytest.raises(ConfigError, match=r"signal\.dsp\.doa: value 'root_music' is not allowed at fidelity 'object'"):
+    with pytest.raises(ConfigError, match=r"signal\.dsp\.doa': value 'root_music' is not allowed at fidelity 'object'"):
         make_model("object", Scene(sc), rc.preset, np.random.default_rng(1), rc.signal)
-    with pytest.raises(ConfigError, match=r"signal\.dsp\.doa: value 'root_music' is not allowed at fidelity 'auto'"):
+    with pytest.raises(ConfigError, match=r"signal\.dsp\.doa': value 'root_music' is not allowed at fidelity 'auto'"):
         make_model("auto", Scene(sc), rc.preset, np.random.default_rng(1), rc.signal)
 
 
@@ -152,11 +152,12 @@ def test_cli_doa_needs_the_signal_level_and_leaves_no_file(capsys, tmp_path):
     out = tmp_path / "x.blf"
     rc = main(["log", str(SCENARIOS / "acc_cut_in.yaml"), "--doa", "music", "-o", str(out)])
     err = capsys.readouterr().err
-    assert rc == 1 and "signal.dsp.doa: value 'music' is not allowed at fidelity 'object'" in err
+    assert rc == 2 and "option --doa: value 'music' is not allowed at fidelity 'object'" in err
     assert not out.exists()
     rc = main(["report", str(SCENARIOS / "acc_cut_in.yaml"), "--doa", "esprit", "--fidelity", "detection"])
     captured = capsys.readouterr()
-    assert rc == 1 and "fidelity 'detection'" in captured.err and "| acc_cut_in |" not in captured.out
+    assert rc == 2 and "option --doa: value 'esprit' is not allowed at fidelity 'detection'" in captured.err
+    assert "| acc_cut_in |" not in captured.out
     with pytest.raises(SystemExit):
         main(["log", str(SCENARIOS / "acc_cut_in.yaml"), "--doa", "beamscan", "-o", str(out)])
     assert "option --doa: value 'beamscan' is not allowed; expected one of fft, capon" in capsys.readouterr().err
@@ -166,3 +167,19 @@ def test_cli_doa_runs_a_scenario_at_signal_level(capsys):
     rc = main(["report", str(SCENARIOS / "acc_cut_in.yaml"), "--doa", "music", "--fidelity", "signal"])
     out = capsys.readouterr().out
     assert rc == 0 and "| acc_cut_in | 1 |" in out and "pass" in out
+
+
+def test_a_scenario_asking_super_resolution_at_another_level_is_refused_with_its_line(tmp_path, capsys):
+    text = (SCENARIOS / "acc_cut_in.yaml").read_text()
+    path = tmp_path / "s.yaml"
+    path.write_text(text.rstrip("\n") + "\nsignal: {dsp: {doa: music}}\n")
+    line = len(path.read_text().splitlines())
+    rc = main(["log", str(path), "-o", str(tmp_path / "x.blf")])
+    err = capsys.readouterr().err
+    assert rc == 1 and f"s.yaml:{line}: field 'signal.dsp.doa': value 'music' is not allowed at fidelity" in err
+    assert not (tmp_path / "x.blf").exists()
+
+
+def test_super_resolution_needs_channels():
+    with pytest.raises(ConfigError, match="signal.dsp.doa: value 'music' is not allowed with preset scanning_ka"):
+        DspChain(PRESETS["scanning_ka"], DspConfig(doa="music"))

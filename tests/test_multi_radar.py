@@ -73,7 +73,7 @@ def test_radars_list_gives_every_radar_its_setup_and_a_seed_of_its_own():
 
 @pytest.mark.parametrize("edit, message", [
     (("sensor_id: 1,", "sensor_id: 0,"), r"radars\[1\]\.sensor_id': value 0 is not allowed; expected a sensor ID no "
-                                         r"other radar uses \(radars\[0\] has 0\)"),
+                                         r"other radar uses \(radars\[0\] has 0;"),
     (("sensor_id: 2, mount", "sensor_id: 2, bitrate: 250000, mount"),
      r"radars\[2\]\.bitrate': value 250000 is not allowed; expected 500000 \(radars\[0\]\.bitrate\): the radars "
      r"share one bus"),
@@ -364,3 +364,36 @@ def test_fusion_refuses_what_cannot_be_fused_and_restarts_after_a_gap():
     assert fusion.stale_lists == 1
     out = fusion.step(600.0, {0: (600.0, _objects([50.0], [0.0]))})
     assert fusion.restarts == 1 and len(out) == 1 and abs(out.x_m[0] - 50.0) < 1e-6 and out.id[0] != fid
+
+
+def test_a_radar_in_cluster_mode_closes_its_rounds_on_time_and_is_counted_not_fused():
+    sc = parse_scenario(THREE.format(duration=1.0).replace("sensor_id: 2, mount", "sensor_id: 2, output: clusters, "
+                                                                                   "mount"))
+    _, frames, outs = _frames(sc)
+    fc, rounds = _fused(sc, frames)
+    assert len(rounds) == len(outs) and fc.cluster_lists == len(outs)
+    # every round closes within its own cycle: the fusion time is the cycle's, not the next one's
+    assert all(abs(f.t_s - o.t_s) < 0.05 for (_, f), o in zip(rounds, outs))
+
+
+def test_report_takes_a_cluster_list_radar(capsys):
+    """A single radar sending cluster lists: the ECU follows on the clusters (it was given nothing before)."""
+    from radarnode.consumer.evaluate import simulate
+    sc = load_scenario(SCENARIOS / "acc_follow_90.yaml")
+    sc = dataclasses.replace(sc, radar=dataclasses.replace(sc.radar, output="clusters"))
+    res = simulate(sc)
+    assert res.passed, res.reasons
+
+
+def test_decode_fuse_says_which_sensor_of_the_scenario_sent_nothing(tmp_path, capsys):
+    sc = parse_scenario(THREE.format(duration=0.5))
+    _, frames, _ = _frames(sc)
+    log = tmp_path / "x.asc"
+    with can.ASCWriter(str(log)) as w:
+        for m in frames:
+            if (m.arbitration_id & 0xFF0) not in (0x620, 0x220, 0x720, 0x320):     # sensor 2 silent
+                w.on_message_received(m)
+    scen = tmp_path / "three.yaml"
+    scen.write_text(THREE.format(duration=0.5))
+    assert main(["decode", str(log), "--fuse", str(scen), "--summary"]) == 0
+    assert f"warning: sensor 2 of --fuse {scen} sent no cycle in {log}" in capsys.readouterr().err

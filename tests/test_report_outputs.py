@@ -216,5 +216,8 @@ def test_report_scale_out_options_are_checked(capsys):
         main(["report", sc, "--scheduler", "http://host:8786"])
     assert "expected a Dask scheduler address such as tcp://host:8786" in capsys.readouterr().err
     with pytest.raises(SystemExit):
+        main(["report", sc, "--scheduler", "tcp://127.0.0.1:99999"])              # no such port
+    assert "a port 1..65535" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
         main(["report", sc, "--workers", "0"])
     assert "option --workers: value 0 is not allowed" in capsys.readouterr().err

@@ -23,10 +23,10 @@ from radarnode.scene.scenario import Scenario
 
 def _scheduler_address(text: str) -> str:
     import argparse
-    from radarnode.montecarlo.executor import SCHEDULER_ADDRESS
-    if not SCHEDULER_ADDRESS.match(text):
+    from radarnode.montecarlo.executor import valid_scheduler
+    if not valid_scheduler(text):
         raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a Dask scheduler address such as "
-                                         "tcp://host:8786 (tcp, tls, ws, wss or ucx)")
+                                         "tcp://host:8786 (tcp, tls, ws, wss or ucx; a port 1..65535)")
     return text
 
 
@@ -94,10 +94,16 @@ def scenario_from_args(args) -> Scenario:
         raise UsageError(f"option --duration: value {args.duration:g} is not allowed; expected at least one "
                          f"radar cycle of {sc.period_s:g} s: a duration in [{sc.period_s:g}, 86400] s")
     if getattr(args, "doa", None) and args.doa != "fft":
-        from radarnode.radar.models import check_doa
-        from radarnode.radar.setup import radar_config
-        check_doa(sc.fidelity, radar_config(sc).signal)
+        check_doa_option(args.doa, sc.fidelity)
     return sc
+
+
+def check_doa_option(doa: str, fidelity: str) -> None:
+    """``--doa`` other than fft needs fidelity signal (UsageError naming the option: the command line conflicts)."""
+    if doa != "fft" and fidelity != "signal":
+        raise UsageError(f"option --doa: value {doa!r} is not allowed at fidelity {fidelity!r}; expected fft, or "
+                         "--fidelity signal (super-resolution exists only in the signal chain: the object and "
+                         "detection levels model the FFT beamformer)")
 
 
 class Terminated(BaseException):

@@ -192,6 +192,10 @@ def _write_fused(args, out, report: ReadReport, census: SensorCensus) -> None:
         raise FileError(report.message("argument FILE"))
     for sid, st in fuser.stats.items():
         out.write(f"sensor {sid}: " + format_stats(st) + "\n")
+        if st.as_dict()["cycles"] == 0:
+            print(f"warning: sensor {sid} of --fuse {args.fuse} sent no cycle in {args.file}", file=sys.stderr)
+    if fuser.cluster_lists:
+        print(f"warning: {fuser.cluster_lists} cluster lists were not fused (only object lists are)", file=sys.stderr)
     out.write(f"fused: {rounds} rounds, {len(seen)} fused objects; seen by several sensors: "
               f"{sum(len(v) > 1 for v in seen.values())}\n")
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from radarnode.consumer.acc import AccSettings, iso15622_limits
-from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
+from radarnode.consumer.assembler import ClusterCycle, CycleAssembler, ObjectCycle
 from radarnode.consumer.ecu import Ecu
 from radarnode.consumer.fcw import LEVEL_PREWARNING, LEVEL_WARNING, FcwSettings, time_to_collision
 from radarnode.consumer.path import SensorMount
@@ -191,7 +191,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         decision = None
         primary = assembler.drain()
         if fuser is None:
-            cycles = [c for c in primary if isinstance(c, ObjectCycle)]
+            cycles = [c for c in primary if isinstance(c, (ObjectCycle, ClusterCycle))]     # the ECU takes both
         else:
             cycles = []
             for _, fused in fuser.drain():

@@ -448,7 +448,9 @@ class FusingConsumer(can.Listener):
     and the fused object list each time every sensor has delivered a new object list.
 
     A sensor that delivers its next list before the others theirs (one is missing or slow) closes the round
-    with what is there: a silent radar delays the fused list by one of the others' cycles, never stops it.
+    with what is there: a silent radar delays the fused list by one of the others' cycles, never stops it. A
+    radar that sends cluster lists counts for its round (on time) but only object lists are fused
+    (``cluster_lists`` counts what was left out).
     ``drain()`` returns ``(sensor_cycles, fused)`` pairs: the round's cycles by sensor ID and the fused list.
     """
 
@@ -458,6 +460,7 @@ class FusingConsumer(can.Listener):
         self.assemblers = {sid: CycleAssembler(sid, database) for sid in sorted(mounts)}
         self._round: dict = {}
         self._out: list = []
+        self.cluster_lists = 0          # cycles of a radar in cluster mode: they close a round, they are not fused
 
     def on_message_received(self, msg: can.Message) -> None:
         for a in self.assemblers.values():
@@ -470,11 +473,8 @@ class FusingConsumer(can.Listener):
             yield from self.drain()
 
     def _collect(self) -> None:
-        from radarnode.consumer.assembler import ObjectCycle
         for sid, a in self.assemblers.items():
             for cyc in a.drain():
-                if not isinstance(cyc, ObjectCycle):
-                    continue
                 if sid in self._round:
                     self._close()
                 self._round[sid] = cyc
@@ -484,8 +484,12 @@ class FusingConsumer(can.Listener):
     def _close(self) -> None:
         if not self._round:
             return
+        from radarnode.consumer.assembler import ObjectCycle
         t = max(c.timestamp for c in self._round.values())
-        fused = self.fusion.step(t, {sid: (c.timestamp, c.objects) for sid, c in self._round.items()})
+        # a radar that sends its cluster list closes the round on time, but only object lists are fused
+        self.cluster_lists += sum(not isinstance(c, ObjectCycle) for c in self._round.values())
+        fused = self.fusion.step(t, {sid: (c.timestamp, c.objects) for sid, c in self._round.items()
+                                     if isinstance(c, ObjectCycle)})
         self._out.append((dict(self._round), fused))
         self._round = {}
 

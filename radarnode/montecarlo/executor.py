@@ -15,8 +15,14 @@ from typing import Any
 
 from radarnode.errors import RadarnodeError, UsageError
 
-#: the address forms ``distributed.Client`` connects to
-SCHEDULER_ADDRESS = re.compile(r"^(tcp|tls|ws|wss|ucx)://[^\s/:]+(:\d{1,5})?/?$")
+#: the address forms ``distributed.Client`` connects to: a host name, IPv4 or a bracketed IPv6 address, a port
+SCHEDULER_ADDRESS = re.compile(r"^(tcp|tls|ws|wss|ucx)://([^\s/:\[\]]+|\[[0-9A-Fa-f:.]+\])(:(\d{1,5}))?/?$")
+
+
+def valid_scheduler(address: object) -> bool:
+    """Whether ``address`` is a scheduler address (:data:`SCHEDULER_ADDRESS`) with a port in 1..65535."""
+    m = SCHEDULER_ADDRESS.match(address) if isinstance(address, str) else None
+    return m is not None and (m.group(4) is None or 1 <= int(m.group(4)) <= 65535)
 
 
 def default_workers() -> int:
@@ -26,7 +32,7 @@ def default_workers() -> int:
 
 def check_scheduler(address: str) -> str:
     """The address as given, or UsageError naming ``--scheduler`` and the forms allowed."""
-    if not isinstance(address, str) or not SCHEDULER_ADDRESS.match(address):
+    if not valid_scheduler(address):
         raise UsageError(f"option --scheduler: value {address!r} is not allowed; expected a Dask scheduler address "
                          "such as tcp://host:8786 (tcp, tls, ws, wss or ucx)")
     return address
@@ -142,4 +148,5 @@ def _run_dask(fn, tasks, scheduler, dask_local, on_done):
             cluster.close()
 
 
-__all__ = ["run_tasks", "default_workers", "limit_blas_threads", "check_scheduler", "require_dask", "SCHEDULER_ADDRESS"]
+__all__ = ["run_tasks", "default_workers", "limit_blas_threads", "check_scheduler", "require_dask", "SCHEDULER_ADDRESS",
+           "valid_scheduler"]

@@ -80,6 +80,10 @@ class DspChain:
         self.config = config
         self.statistic = detection_statistic(config, preset.num_virtual, preset.num_chirps, preset.num_range_bins)
         self.cfar = self.statistic.cfar
+        if config.doa != "fft" and preset.num_virtual < 3:
+            raise ConfigError(f"signal.dsp.doa: value {config.doa!r} is not allowed with preset {preset.name} "
+                              f"({preset.num_virtual} virtual channel(s)); expected 'fft' (super-resolution needs "
+                              "3 channels or more)")
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)

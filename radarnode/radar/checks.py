@@ -159,13 +159,27 @@ def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
 
 
 def _check_visibility(scenario: Scenario, src: Source) -> None:
+    """Warn of an actor that no radar of the scenario ever has in its field of view."""
+    from radarnode.radar.setup import radar_config, radar_scenarios
+    candidates = [i for i, a in enumerate(scenario.actors) if a.object_class != "guardrail"]
+    if not candidates:
+        return
+    per = [_seen_by(sc, candidates) for sc in radar_scenarios(scenario)]
+    seen = np.logical_or.reduce([p[0] for p in per])
+    if seen.all():
+        return
+    _, closest, closest_az, closest_t = per[0]
+    preset = radar_config(radar_scenarios(scenario)[0]).preset
+    _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t)
+
+
+def _seen_by(scenario: Scenario, candidates: list[int]) -> tuple[np.ndarray, ...]:
+    """Which actors the scenario's (one) radar ever has in its field of view; the closest range, its azimuth and
+    time of each."""
     from radarnode.radar.setup import radar_config
     from radarnode.scene.world import Scene
     preset = radar_config(scenario).preset
     max_m = preset.max_range_m if scenario.radar.max_distance_m is None else scenario.radar.max_distance_m
-    candidates = [i for i, a in enumerate(scenario.actors) if a.object_class != "guardrail"]
-    if not candidates:
-        return
     scene = Scene(scenario)
     n_cycles = max(scenario.num_cycles, 1)
     seen = np.zeros(len(scenario.actors), dtype=bool)
@@ -190,8 +204,14 @@ def _check_visibility(scenario: Scenario, src: Source) -> None:
         closest_az = np.where(better, az[k, cols], closest_az)
         closest_t = np.where(better, times[k], closest_t)
         if seen.all():
-            return
+            break
+    return seen, closest, closest_az, closest_t
+
+
+def _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t) -> None:
     half = max(s.half_angle_deg for s in preset.fov)
+    max_m = preset.max_range_m if scenario.radar.max_distance_m is None else scenario.radar.max_distance_m
+    others = f" (nor do the other {len(scenario.radars) - 1} radars)" if len(scenario.radars) > 1 else ""
     for i in np.flatnonzero(~seen):
         actor = scenario.actors[i]
         base = f"actors[{i}]"
@@ -199,6 +219,6 @@ def _check_visibility(scenario: Scenario, src: Source) -> None:
         line = src.where(f"{base}.x_m" if f"{base}.x_m" in scenario.lines else base)
         logger.warning("%s: actor '%s' (%s) is never in the radar's field of view during the scenario's %g s: "
                        "preset %s sees %g–%g m within ±%g°, the actor comes no nearer than %.1f m (azimuth %.1f° at "
-                       "t = %.2f s), so the radar never reports it%s", line, actor.id, base, scenario.duration_s,
+                       "t = %.2f s), so the radar never reports it%s%s", line, actor.id, base, scenario.duration_s,
                        preset.name, preset.min_range_m, max_m, half, closest[i], math.degrees(closest_az[i]),
-                       closest_t[i], f"; it is {' and '.join(named)}" if named else "")
+                       closest_t[i], others, f"; it is {' and '.join(named)}" if named else "")

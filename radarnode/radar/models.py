@@ -287,16 +287,21 @@ def ego_motion(scene: Scene, t_s: float, view: SensorView, estimate) -> tuple[tu
     return (estimate[0], estimate[1]), 0.0
 
 
-def check_doa(level: str, options: SignalOptions) -> None:
+def check_doa(level: str, options: SignalOptions, scenario=None) -> None:
     """A super-resolution angle estimator exists only in the signal chain: refuse it at another level.
 
     The object and detection levels reproduce the beamformer's resolution (:data:`RESOLUTION`), not a
-    super-resolution estimator's: they would report what that estimator does not.
+    super-resolution estimator's: they would report what that estimator does not. With ``scenario`` the error
+    names its file and the line of ``signal.dsp.doa``.
     """
     if options.dsp.doa != "fft" and level in FIDELITY_LEVELS and level != "signal":
-        raise ConfigError(f"signal.dsp.doa: value {options.dsp.doa!r} is not allowed at fidelity {level!r}; "
-                          "expected 'fft' (the object and detection levels model the FFT beamformer), or "
-                          "fidelity 'signal' for a super-resolution estimator")
+        msg = (f"field 'signal.dsp.doa': value {options.dsp.doa!r} is not allowed at fidelity {level!r}; "
+               "expected 'fft' (the object and detection levels model the FFT beamformer), or fidelity 'signal' for a "
+               "super-resolution estimator")
+        if scenario is not None:
+            from radarnode.schema import Source
+            raise Source.of_lines(scenario.source, scenario.lines).error("signal.dsp.doa", msg)
+        raise ConfigError(msg)
 
 
 def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,

@@ -86,7 +86,7 @@ def radar_scenarios(scenario: Scenario) -> list[Scenario]:
         return cached
     out = []
     for i, setup in enumerate(scenario.radars):
-        sc = dataclasses.replace(scenario, radar=setup, radars=(), seed=radar_seed(scenario.seed, i))
+        sc = dataclasses.replace(scenario, radar=setup, radars=None, seed=radar_seed(scenario.seed, i))
         object.__setattr__(sc, "_radar_path", f"radars[{i}]")
         radar_config(sc)
         out.append(sc)

@@ -531,7 +531,7 @@ class Scenario:
     ecu: EcuSpec = EcuSpec()
     radar: RadarSetup = RadarSetup()
     #: several radars on one bus (each its own node, one scene, one clock); ``radar`` is then the first of them
-    radars: tuple[RadarSetup, ...] = ()
+    radars: tuple[RadarSetup, ...] | None = ()
     ego: Ego = Ego()
     road: Road = Road()
     actors: tuple[Actor, ...] = ()
@@ -549,7 +549,9 @@ class Scenario:
         validate.choice("fidelity", self.fidelity, FIDELITIES)
         if not isinstance(self.signal, dict):
             raise FieldError("signal", self.signal, "a mapping of signal-level options")
-        if self.radars:
+        if self.radars is None:          # one radar of several (radarnode.radar.setup.radar_scenarios)
+            object.__setattr__(self, "radars", ())
+        elif self.radars:
             self._check_radars()
         ids = [a.id for a in self.actors]
         dup = sorted({i for i in ids if ids.count(i) > 1})
@@ -569,16 +571,18 @@ class Scenario:
 
     def _check_radars(self) -> None:
         """Several radars: each its own sensor ID, all on one bus (one bit rate); ``radar`` becomes the first."""
-        if any(k == "radar" or k.startswith("radar.") for k in self.lines) and self.radar != self.radars[0]:
-            raise FieldError("radar", "(given)", "either 'radar' (one radar) or 'radars' (a list), not both")
+        if any(k == "radar" or k.startswith("radar.") for k in self.lines):
+            raise FieldError("radar", {"preset": self.radar.preset},
+                             "no 'radar' beside 'radars': either 'radar' (one radar) or 'radars' (a list)")
         if len(self.radars) > 8:
             raise FieldError("radars", f"a list of {len(self.radars)}", "at most 8 radars (sensor IDs 0..7)")
         for i, r in enumerate(self.radars):
             for j in range(i):
                 if self.radars[j].sensor_id == r.sensor_id:
                     raise FieldError(f"radars[{i}].sensor_id", r.sensor_id,
-                                     f"a sensor ID no other radar uses (radars[{j}] has {r.sensor_id}): each radar "
-                                     "is its own node, its CAN IDs shifted by 0x10 x sensor ID")
+                                     f"a sensor ID no other radar uses (radars[{j}] has {r.sensor_id}; sensor_id "
+                                     "is 0 where not given): each radar is its own node, its CAN IDs shifted by "
+                                     "0x10 x sensor ID")
             if r.bitrate != self.radars[0].bitrate:
                 raise FieldError(f"radars[{i}].bitrate", r.bitrate,
                                  f"{self.radars[0].bitrate} (radars[0].bitrate): the radars share one bus")
@@ -649,12 +653,18 @@ def read_scenario(path: str | Path) -> Scenario:
         raise ScenarioError(f"{p}: not a scenario file: byte {exc.object[exc.start]:#04x} at offset {exc.start} is not "
                             "UTF-8 text; expected a YAML scenario in UTF-8") from None
     src = Source(str(p), text)
-    return build(Scenario, src.data, "", src, SCHEMA, extra={"source": str(p), "lines": src.lines})
+    return _built(src, str(p))
 
 
 def read_scenario_text(text: str, name: str = "<string>") -> Scenario:
     """Like :func:`read_scenario` for YAML text."""
-    src = Source(name, text)
+    return _built(Source(name, text), name)
+
+
+def _built(src: Source, name: str) -> Scenario:
+    if isinstance(src.data, dict) and "radars" in src.data and not src.data["radars"]:
+        raise src.error("radars", f"field 'radars': value {src.data['radars']!r} is not allowed; expected a list of "
+                                  "one radar or more (or no 'radars' and one 'radar')")
     return build(Scenario, src.data, "", src, SCHEMA, extra={"source": name, "lines": src.lines})
 
 

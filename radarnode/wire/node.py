@@ -31,7 +31,7 @@ import numpy as np
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
 from radarnode.radar.setup import radar_config
-from radarnode.radar.models import make_model
+from radarnode.radar.models import check_doa, make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
@@ -105,8 +105,9 @@ class RadarNode:
         self.bus_load_limit = setup.bus_load_limit
         max_distance = setup.max_distance_m if setup.max_distance_m is not None else self.preset.max_range_m
         if max_distance > self.preset.max_range_m + 1e-9:
+            field = f"{scenario.__dict__.get('_radar_path', 'radar')}.max_distance_m"    # radars[i] of several
             raise Source.of_lines(scenario.source, scenario.lines).error(
-                "radar.max_distance_m", f"field 'radar.max_distance_m': value {max_distance:g} is not allowed; "
+                field, f"field '{field}': value {max_distance:g} is not allowed; "
                 f"expected 2..{self.preset.max_range_m:g} m (what preset {self.preset.name} can see)")
         self.config = NodeConfig(
             output_type=P.OUTPUT_CODES[setup.output], send_quality=setup.send_quality,
@@ -114,6 +115,7 @@ class RadarNode:
             sort_index=P.SORT_CODES[setup.sort_index], radar_power=setup.radar_power, sensor_id=setup.sensor_id)
         self.scene = Scene(scenario)
         self.fidelity = fidelity or scenario.fidelity
+        check_doa(self.fidelity, radar_config(scenario).signal, scenario)       # file:line of signal.dsp.doa
         self.model = make_model(self.fidelity, self.scene, self.preset, np.random.default_rng(scenario.seed),
                                 radar_config(scenario).signal, clusters_wanted=setup.output == "clusters")
         self.counters: Counter = Counter()
