@@ -190,3 +190,38 @@ def test_auto_on_a_curve_entry_beside_guardrail_posts_reports_the_car_as_the_det
                 assert model.actor_frames["object"] == 0           # the car at the detection level throughout
     assert np.mean(reported["detection"]) > 0.7
     assert abs(np.mean(reported["auto"]) - np.mean(reported["detection"])) < 0.12
+
+
+def test_cars_side_by_side_at_close_range_are_reported_alike_at_object_and_detection_level():
+    """Three cars at close range in 3.5 m lanes (a jam): a car 3 m beside the sensor must not mask the cars ahead at
+    the object level more than the chain does. Its energy is spread over its visible outline (the detection
+    level's scatterers); taken whole at its nearest point, it had hidden them in 29 and 15 of 55 cycles where the
+    detection level reports them in 53 and 47."""
+    from radarnode.radar.setup import parse_scenario
+    sc = parse_scenario("""
+name: side
+duration_s: 4.0
+seed: 1
+radar: {preset: ars408_like}
+ego: {speed_mps: 20.0}
+road: {lanes: 3, lane_width_m: 3.5, ego_lane: 1}
+actors:
+  - {id: a, class: car, x_m: 14.0, lane: 1, speed_mps: 20.5}
+  - {id: b, class: car, x_m: 16.0, lane: 2, speed_mps: 20.5}
+  - {id: c, class: car, x_m: 8.0, lane: 0, speed_mps: 20.5}
+""")
+    rc = radar_config(sc)
+    cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+    rate = {}
+    for level in ("object", "detection"):
+        model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(1), rc.signal)
+        hits = np.zeros(3)
+        for k in range(sc.num_cycles):
+            frame, v = model.step(k * sc.period_s, cfg)
+            ol = frame.objects
+            for i in range(3):
+                d = np.hypot(ol.dist_long_m - v.x_m[i], ol.dist_lat_m - v.y_m[i])
+                hits[i] += d.size > 0 and d.min() < 2.5
+        rate[level] = hits / sc.num_cycles
+    assert np.all(rate["detection"] > 0.8)
+    assert np.all(rate["object"] > 0.7) and np.all(np.abs(rate["object"] - rate["detection"]) < 0.15)
