@@ -48,7 +48,6 @@ def add_subparser(sub) -> None:
 
 
 def cmd(args) -> int:
-    import dataclasses
     # what the command line alone decides comes first: a format nothing reads back is refused before the run
     check_output_format(args.output, "--output", extra=(".mcap",))
     if is_mcap(args.output):        # for Foxglove (needs foxglove-sdk): a run to watch shows the ECU's decisions too

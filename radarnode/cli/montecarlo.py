@@ -29,7 +29,7 @@ import numpy as np
 
 from radarnode.cli import options
 from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress
-from radarnode.errors import FileError, UsageError
+from radarnode.errors import FileError
 
 EXPERIMENT_CHOICES = ("snr", "table2", "resolution", "timing")
 SNR_LIMITS = (-60.0, 100.0)

@@ -7,7 +7,6 @@ possible with scenario timestamps.
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 
 from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate

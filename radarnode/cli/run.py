@@ -7,7 +7,6 @@ consumer decoded, not what the model computed.
 
 from __future__ import annotations
 
-import dataclasses
 import sys
 import time
 import uuid
