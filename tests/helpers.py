@@ -49,3 +49,25 @@ def cli(capsys, *argv) -> tuple[int, str, str]:
         rc = exc.code
     out, err = capsys.readouterr()
     return rc, out, err
+
+
+def node_and_consumer_over_multicast(tmp_path, group: str, node_args: str, consume_args: str, out_name: str) -> str:
+    """``radarnode consume`` and ``radarnode node`` as two processes over udp_multicast inside a private network
+    namespace (nothing leaves this machine); asserts both ended well and returns the consumer's standard output.
+    The node's stderr is left in ``tmp_path/node.err``, the consumer's in ``tmp_path/consume.err``."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+    root = Path(__file__).resolve().parents[1]
+    script = MULTICAST_LOOPBACK + f"""
+{sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} {consume_args} > {tmp_path}/{out_name} 2> {tmp_path}/consume.err &
+CONSUMER=$!
+for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done
+{sys.executable} -m radarnode.cli node {node_args} -i udp_multicast -c {group} 2> {tmp_path}/node.err
+wait $CONSUMER
+"""
+    r = subprocess.run(["unshare", "-n", "bash", "-c", script], capture_output=True, text=True, timeout=120,
+                       cwd=root, env={**os.environ, "PYTHONPATH": str(root)})
+    assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
+    return (tmp_path / out_name).read_text()

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tests.conftest import ROOT, SCENARIOS
-from tests.helpers import MULTICAST_LOOPBACK, can_unshare
+from tests.helpers import can_unshare, node_and_consumer_over_multicast
 
 CLI = [sys.executable, "-m", "radarnode.cli"]
 DEFAULT = str(SCENARIOS / "highway_cut_in.yaml")
@@ -121,18 +121,9 @@ def test_log_interrupted_is_complete_and_readable(tmp_path):
 @pytest.mark.skipif(not can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
                     "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
 def test_node_and_consumer_in_two_processes_over_udp_multicast(tmp_path):
-    group = "239.74.163.2"
-    script = MULTICAST_LOOPBACK + f"""
-{sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} --json --count 20 --timeout 20 > {tmp_path}/cycles.jsonl 2> {tmp_path}/consume.err &
-CONSUMER=$!
-for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done
-{sys.executable} -m radarnode.cli node {DEFAULT} -i udp_multicast -c {group} --duration 2.5 --send-ego-motion 2> {tmp_path}/node.err
-wait $CONSUMER
-"""
-    r = subprocess.run(["unshare", "-n", "bash", "-c", script], capture_output=True, text=True, timeout=120,
-                       cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
-    assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
-    lines = [json.loads(x) for x in (tmp_path / "cycles.jsonl").read_text().splitlines()]
+    out = node_and_consumer_over_multicast(tmp_path, "239.74.163.2", f"{DEFAULT} --duration 2.5 --send-ego-motion",
+                                           "--json --count 20 --timeout 20", "cycles.jsonl")
+    lines = [json.loads(x) for x in out.splitlines()]
     node_err = (tmp_path / "node.err").read_text()
     sent = int(re.search(r"sent (\d+) cycles", node_err).group(1))
     missed = int(m.group(1)) if (m := re.search(r"cycles_missed_deadline=(\d+)", node_err)) else 0

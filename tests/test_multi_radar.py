@@ -22,7 +22,7 @@ from radarnode.wire.group import RadarGroup, ego_motion_for, make_node
 from radarnode.wire.node import RadarNode
 from radarnode.wire.runner import SimulatedClock, run_node
 from tests.conftest import SCENARIOS
-from tests.helpers import MULTICAST_LOOPBACK, can_unshare
+from tests.helpers import can_unshare, node_and_consumer_over_multicast
 
 THREE = """
 name: three
@@ -263,23 +263,10 @@ def test_log_then_decode_fuse(tmp_path, capsys):
                     "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
 def test_three_radar_nodes_and_a_fusing_consumer_in_two_processes(tmp_path):
     import json
-    import os
-    import subprocess
-    import sys
-    from tests.conftest import ROOT
-    group = "239.74.163.3"
     scen = SCENARIOS / "intersection_crossing.yaml"
-    script = MULTICAST_LOOPBACK + f"""
-{sys.executable} -m radarnode.cli consume -i udp_multicast -c {group} --fuse {scen} --json --count 30 --timeout 20 > {tmp_path}/fused.jsonl 2> {tmp_path}/consume.err &
-CONSUMER=$!
-for i in $(seq 100); do grep -q listening {tmp_path}/consume.err && break; sleep 0.1; done
-{sys.executable} -m radarnode.cli node {scen} -i udp_multicast -c {group} --duration 3.0 --send-ego-motion 2> {tmp_path}/node.err
-wait $CONSUMER
-"""
-    r = subprocess.run(["unshare", "-n", "bash", "-c", script], capture_output=True, text=True, timeout=120,
-                       cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)})
-    assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
-    lines = [json.loads(x) for x in (tmp_path / "fused.jsonl").read_text().splitlines()]
+    out = node_and_consumer_over_multicast(tmp_path, "239.74.163.3", f"{scen} --duration 3.0 --send-ego-motion",
+                                           f"--fuse {scen} --json --count 30 --timeout 20", "fused.jsonl")
+    lines = [json.loads(x) for x in out.splitlines()]
     assert len(lines) >= 25 and all(x["type"] == "fused_objects" for x in lines)
     seen = {s for x in lines for o in x["objects"] for s in o["sensors"]}
     assert {0, 2} <= seen                                   # the front and the right corner radar, over the bus
