@@ -268,13 +268,14 @@ class ObjectFusion:
         started: list[_Track] = []
         members: dict[int, list[tuple[SensorObjects, int]]] = {}
         for so, i in new_tracks:
-            best, best_d = None, GATE_CHI2
-            for tr in started:
-                if so.sensor_id in tr.members:
-                    continue
-                d = _mahalanobis(tr.pos, tr.cov, so.pos[i] + so.vel[i] * (t_s - so.t_s), so.cov[i], so.heading[i])
-                if d < best_d:
-                    best, best_d = tr, d
+            best = None
+            open_ = [tr for tr in started if so.sensor_id not in tr.members]
+            if open_:
+                d = _distances(np.array([tr.pos for tr in open_]), np.array([tr.cov for tr in open_]),
+                               (so.pos[i] + so.vel[i] * (t_s - so.t_s))[None], so.cov[i][None],
+                               so.heading[i:i + 1])[:, 0]
+                k = int(np.argmin(d))
+                best = open_[k] if d[k] < GATE_CHI2 else None
             if best is None:
                 best = _Track(self._new_id(), t_s, so.pos[i].copy(), so.vel[i].copy(), so.cov[i].copy())
                 self.tracks.append(best)      # reserves the ID
@@ -300,7 +301,7 @@ class ObjectFusion:
         if len(live) > 1:
             pos, cov = np.array([t.pos for t in live]), np.array([t.cov for t in live])
             vel, heading = np.array([t.vel for t in live]), np.array([t.heading for t in live])
-            seen = np.array([sum(1 << s for s in t.members) for t in live])
+            seen = np.array([t.sensors for t in live])                 # the sensors' bit field of each
             near = ((_distances(pos, cov, pos, cov, heading, max_across_m=MAX_ACROSS_M / 2) < MERGE_CHI2)
                     & (np.hypot(*(vel[:, None, :] - vel[None, :, :]).transpose(2, 0, 1)) < MERGE_SPEED_MPS)
                     & ((seen[:, None] & seen[None, :]) == 0))
@@ -333,15 +334,20 @@ class ObjectFusion:
         pos = so.pos + so.vel * (t_s - so.t_s)
         taken = np.zeros(n, dtype=bool)
         # 1. continuity: the same radar object keeps its fused track while it stays within the gate
-        for tr in list(free):
-            oid = tr.members.get(so.sensor_id)
-            if oid is None:
-                continue
-            hit = np.flatnonzero((so.ids == oid) & ~taken)
-            if hit.size and _mahalanobis(tr.pos, tr.cov, pos[hit[0]], so.cov[hit[0]], so.heading[hit[0]]) < GATE_CHI2:
-                assigned[id(tr)].append((so, int(hit[0])))
-                taken[hit[0]] = True
-                free.remove(tr)
+        pairs = []
+        for tr in free:
+            hit = np.flatnonzero(so.ids == tr.members.get(so.sensor_id, -1))
+            if hit.size:
+                pairs.append((tr, int(hit[0])))
+        if pairs:
+            idx = np.array([j for _, j in pairs])
+            d = np.diagonal(_distances(np.array([tr.pos for tr, _ in pairs]), np.array([tr.cov for tr, _ in pairs]),
+                                       pos[idx], so.cov[idx], so.heading[idx]))
+            for (tr, j), dj in zip(pairs, d):
+                if dj < GATE_CHI2 and not taken[j]:
+                    assigned[id(tr)].append((so, j))
+                    taken[j] = True
+                    free.remove(tr)
         # 2. the rest by a global assignment on the Mahalanobis distance
         rest = np.flatnonzero(~taken)
         if rest.size and free:
@@ -403,17 +409,11 @@ class ObjectFusion:
             [dict(t.members) for t in ts])
 
 
-def _extent(heading: float) -> np.ndarray:
-    """The reference-point spread of an object with this heading (vehicle frame), as a covariance."""
-    c, s = math.cos(heading), math.sin(heading)
-    rot = np.array([[c, -s], [s, c]])
-    return rot @ np.diag([EXTENT_SIGMA_LONG_M ** 2, EXTENT_SIGMA_LAT_M ** 2]) @ rot.T
-
-
 def _distances(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: np.ndarray,
                max_across_m: float = MAX_ACROSS_M) -> np.ndarray:
-    """:func:`_mahalanobis` of every pair at once: positions (A, 2) and (B, 2), covariances (A, 2, 2) and
-    (B, 2, 2), the headings (B,) of the second set → (A, B)."""
+    """The Mahalanobis distance² of every pair, with both covariances and the extent term (reference points spread
+    along and across the object's heading): positions (A, 2) and (B, 2), covariances (A, 2, 2) and (B, 2, 2), the
+    headings (B,) of the second set → (A, B); ∞ where a pair lies more than ``max_across_m`` apart across it."""
     d = p2[None, :, :] - p1[:, None, :]                                          # (A, B, 2)
     c, s = np.cos(heading), np.sin(heading)                                     # (B,)
     across = np.abs(-s[None, :] * d[..., 0] + c[None, :] * d[..., 1])
@@ -427,20 +427,6 @@ def _distances(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, h
     with np.errstate(divide="ignore", invalid="ignore"):
         q = (dd * x * x - (b + cc) * x * y + a * y * y) / det                  # dᵀ M⁻¹ d for a 2×2 M
     return np.where((across > max_across_m) | ~np.isfinite(q) | (det <= 0), np.inf, q)
-
-
-def _mahalanobis(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: float = 0.0,
-                 max_across_m: float = MAX_ACROSS_M) -> float:
-    """The Mahalanobis distance² of two positions with both covariances and the extent term; ∞ when they lie more
-    than ``max_across_m`` apart across ``heading`` (whatever the covariances allow)."""
-    d = p2 - p1
-    if abs(-math.sin(heading) * d[0] + math.cos(heading) * d[1]) > max_across_m:
-        return math.inf
-    s = c1 + c2 + _extent(heading)
-    return float(d @ np.linalg.solve(s, d))
-
-
-
 
 
 class FusingConsumer(can.Listener):
