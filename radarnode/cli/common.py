@@ -82,8 +82,7 @@ def scenario_from_args(args) -> Scenario:
         if getattr(args, "fidelity", None):
             sc = dataclasses.replace(sc, fidelity=args.fidelity)
         if getattr(args, "doa", None):
-            from radarnode.cli.report import _with_doa
-            sc = _with_doa(sc, args.doa)
+            sc = with_doa(sc, args.doa)
         if args.duration is not None:
             sc = dataclasses.replace(sc, duration_s=validate.number("--duration", args.duration, lo=0.0,
                                                                       hi=86_400.0, lo_open=True))
@@ -189,12 +188,21 @@ def format_fused(fused, max_rows: int = 20) -> str:
              "   ID  class          x_m     y_m   vx_m/s  vy_m/s  rcs_dBsm  sensors"]
     for k in range(min(len(fused), max_rows)):
         cls = names[fused.obj_class[k]] if 0 <= fused.obj_class[k] < 8 else "-"
-        seen = ",".join(str(b) for b in range(8) if fused.sensors[k] >> b & 1) or "coasting"
+        seen = ",".join(map(str, fused.sensor_ids(k))) or "coasting"
         lines.append(f"  {fused.id[k]:3d}  {cls:10s} {fused.x_m[k]:7.1f} {fused.y_m[k]:7.1f} {fused.vx_mps[k]:8.2f} "
                      f"{fused.vy_mps[k]:7.2f} {fused.rcs_dbsm[k]:8.1f}  {seen}")
     if len(fused) > max_rows:
         lines.append(f"  ... {len(fused) - max_rows} more")
     return "\n".join(lines)
+
+
+def with_doa(scenario: Scenario, doa: str | None) -> Scenario:
+    """The scenario with the signal chain's angle estimator given on the command line (``--doa``)."""
+    if doa is None:
+        return scenario
+    sig = dict(scenario.signal)
+    sig["dsp"] = {**(sig.get("dsp") or {}), "doa": doa}
+    return dataclasses.replace(scenario, signal=sig)
 
 
 def with_bitrate(scenario: Scenario, bit_s: int) -> Scenario:

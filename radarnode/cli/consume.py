@@ -66,7 +66,7 @@ def fused_to_json(fused) -> str:
     rows = [{"id": int(fused.id[k]), "x_m": _f(fused.x_m[k]), "y_m": _f(fused.y_m[k]),
              "vx_mps": _f(fused.vx_mps[k]), "vy_mps": _f(fused.vy_mps[k]), "rcs_dbsm": _f(fused.rcs_dbsm[k], 1),
              "obj_class": int(fused.obj_class[k]),
-             "sensors": [b for b in range(8) if fused.sensors[k] >> b & 1]} for k in range(len(fused))]
+             "sensors": fused.sensor_ids(k)} for k in range(len(fused))]
     return json.dumps({"timestamp": fused.t_s, "type": "fused_objects", "objects": rows})
 
 

@@ -177,7 +177,7 @@ def _write_fused(args, out, report: ReadReport, census: SensorCensus) -> None:
         for cycles, fused in batch:
             rounds += 1
             for k in range(len(fused)):
-                seen.setdefault(int(fused.id[k]), set()).update(b for b in range(8) if fused.sensors[k] >> b & 1)
+                seen.setdefault(int(fused.id[k]), set()).update(fused.sensor_ids(k))
             if not args.summary and (not args.max_cycles or rounds <= args.max_cycles):
                 out.write(format_fused(fused) + "\n")
 

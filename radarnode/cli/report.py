@@ -29,7 +29,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress
+from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress, \
+    with_doa
 from radarnode.consumer.evaluate import simulate
 from radarnode.errors import FieldError, FileError, UsageError
 from radarnode.radar.setup import load_scenario
@@ -73,15 +74,6 @@ def _simulate_task(task) -> tuple:
     r = simulate(sc, fidelity=fidelity)
     r.trace = {k: v for k, v in r.trace.items() if k not in ("assembler", "ecu")}
     return r, time.perf_counter() - t0
-
-
-def _with_doa(sc, doa: str | None):
-    """The scenario with the signal chain's angle estimator given on the command line."""
-    if doa is None:
-        return sc
-    sig = dict(sc.signal)
-    sig["dsp"] = {**(sig.get("dsp") or {}), "doa": doa}
-    return dataclasses.replace(sc, signal=sig)
 
 
 def _with_ecu_options(sc, args):
@@ -190,7 +182,7 @@ def cmd(args) -> int:
                         f"{str(Path(args.junit).parent)!r}")
     if args.junit and not os.access(Path(args.junit).parent, os.W_OK):
         raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
-    scenarios = [(path, _with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
+    scenarios = [(path, with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
                  for path in args.scenarios]                                                    # checked first
     from radarnode.cli.common import check_doa_option
     from radarnode.radar.models import check_doa

@@ -136,6 +136,10 @@ class FusedObjects:
     def __len__(self) -> int:
         return int(self.id.size)
 
+    def sensor_ids(self, k: int) -> list[int]:
+        """The sensor IDs that saw fused object ``k`` this cycle (its ``sensors`` bit field), ascending."""
+        return [b for b in range(8) if int(self.sensors[k]) >> b & 1]
+
     def in_sensor_frame(self, mount: SensorMount) -> ObjectList:
         """The fused list as an object list in the frame of a radar at ``mount`` (what an ECU written for one
         front radar takes: the fused objects where that radar would report them). IDs are the fused IDs."""
