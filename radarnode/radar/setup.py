@@ -33,13 +33,19 @@ class RadarConfig:
     signal: SignalOptions
 
 
+def radar_path(scenario: Scenario) -> str:
+    """The field path of the scenario's radar in its file: ``radar``, or ``radars[i]`` for one of several
+    (:func:`radar_scenarios`)."""
+    return scenario.__dict__.get("_radar_path", "radar")
+
+
 def radar_config(scenario: Scenario) -> RadarConfig:
     """Build and validate the scenario's radar configuration (built once per scenario object)."""
     cached = scenario.__dict__.get("_radar_config")
     if cached is not None:
         return cached
     src = Source.of_lines(scenario.source, scenario.lines)
-    root = scenario.__dict__.get("_radar_path", "radar")     # "radars[i]" for one of several radars
+    root = radar_path(scenario)
     try:
         preset = get_preset(scenario.radar.preset).with_overrides(scenario.radar.overrides)
     except FieldError as exc:
@@ -110,5 +116,5 @@ def parse_scenario(text: str, name: str = "<string>") -> Scenario:
     return check_scenario(resolved(read_scenario_text(text, name)))
 
 
-__all__ = ["RadarConfig", "load_scenario", "parse_scenario", "radar_config", "radar_scenarios", "radar_seed",
+__all__ = ["RadarConfig", "load_scenario", "parse_scenario", "radar_config", "radar_path", "radar_scenarios", "radar_seed",
            "resolved", "with_signal"]

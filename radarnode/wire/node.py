@@ -30,7 +30,7 @@ import numpy as np
 
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
-from radarnode.radar.setup import radar_config
+from radarnode.radar.setup import radar_config, radar_path
 from radarnode.radar.models import check_doa, make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
@@ -105,7 +105,7 @@ class RadarNode:
         self.bus_load_limit = setup.bus_load_limit
         max_distance = setup.max_distance_m if setup.max_distance_m is not None else self.preset.max_range_m
         if max_distance > self.preset.max_range_m + 1e-9:
-            field = f"{scenario.__dict__.get('_radar_path', 'radar')}.max_distance_m"    # radars[i] of several
+            field = f"{radar_path(scenario)}.max_distance_m"
             raise Source.of_lines(scenario.source, scenario.lines).error(
                 field, f"field '{field}': value {max_distance:g} is not allowed; "
                 f"expected 2..{self.preset.max_range_m:g} m (what preset {self.preset.name} can see)")
