@@ -200,7 +200,7 @@ class SuperResolution(FftBeamformer):
             return np.zeros(0, dtype=bool)
         p = np.where(self.valid[None, :], self.spectrum(x), 0.0)
         u = self._ml_refine(x, self._refine(p, np.arange(x.shape[0]), np.argmax(p, axis=1)))
-        a = np.exp(2j * np.pi * self.spacing_wl * u[:, None] * np.arange(self.num_elements)[None, :])
+        a = subspace.steering(self.num_elements, u, self.spacing_wl).T                   # (n, N)
         amp = (np.conj(a) * x).sum(axis=1) / self.num_elements
         resid = np.sum(np.abs(x - amp[:, None] * a) ** 2, axis=1)
         total = np.sum(np.abs(x) ** 2, axis=1)
@@ -225,7 +225,6 @@ class SuperResolution(FftBeamformer):
         if cells.size == 0:
             return row, sin_t, rel
         k_eff = 2 * (self.num_elements - self.subarray + 1)
-        elements = np.arange(self.num_elements)
         keep = np.ones(row.size, dtype=bool)
         add_rows, add_sin, add_rel = [], [], []
         for c in cells:          # only the gated cells (a few per frame), not every cell
@@ -237,7 +236,7 @@ class SuperResolution(FftBeamformer):
             est = subspace.estimate(self.name, x[c], count, self.spacing_wl, fb=True, subarray=self.subarray)
             if not est.all_resolved:
                 continue
-            a = np.exp(2j * np.pi * self.spacing_wl * est.sin_theta[None, :] * elements[:, None])     # (N, M)
+            a = subspace.steering(self.num_elements, est.sin_theta, self.spacing_wl)          # (N, M)
             amp = np.linalg.lstsq(a, x[c], rcond=None)[0]
             pw = np.abs(amp) ** 2
             ok = pw >= pw.max() * 10.0 ** (-floor_db / 10.0)
