@@ -196,6 +196,33 @@ def format_fused(fused, max_rows: int = 20) -> str:
     return "\n".join(lines)
 
 
+def require_matplotlib(who: str):
+    """matplotlib's pyplot on the Agg backend, or a UsageError saying that ``who`` ("option --plots", "radarnode
+    image") needs it and which extra installs it."""
+    try:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise UsageError(f"{who} needs matplotlib, which is not installed: pip install 'radarnode[image]'") from None
+    return plt
+
+
+def plot_dir(path: str) -> Path:
+    """``--plots DIR`` created if missing and writable, or a FileError naming the option."""
+    d = Path(path)
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise FileError(f"option --plots: value {path!r} is not allowed; expected a directory (it is a file)") \
+            from None
+    except OSError as exc:
+        raise FileError(f"option --plots: cannot create directory {path!r}: {exc.strerror or exc}") from None
+    if not os.access(d, os.W_OK):
+        raise FileError(f"option --plots: cannot write into directory {path!r}: permission denied")
+    return d
+
+
 def with_doa(scenario: Scenario, doa: str | None) -> Scenario:
     """The scenario with the signal chain's angle estimator given on the command line (``--doa``)."""
     if doa is None:

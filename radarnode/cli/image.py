@@ -21,7 +21,7 @@ import numpy as np
 import scipy.fft
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scenario_argument, atomic_path, scenario_from_args
+from radarnode.cli.common import add_scenario_argument, atomic_path, require_matplotlib, scenario_from_args
 from radarnode.dsp.spectra import noncoherent_power, range_doppler
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.boundaries import RoadBoundaryEstimator
@@ -197,17 +197,6 @@ class Renderer:
         ax.legend(loc="upper right", fontsize=7, facecolor="0.3", labelcolor="w", framealpha=0.7)
 
 
-def _matplotlib():
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise UsageError("radarnode image needs matplotlib, which is not installed: pip install 'radarnode[image]'") \
-            from None
-    return plt
-
-
 def _check_output(path: str, animate: bool, plt) -> None:
     """The output's suffix must name a format the writer has, before the (slow) rendering starts."""
     suffix = Path(path).suffix.lower().lstrip(".")
@@ -231,7 +220,7 @@ def cmd(args) -> int:
                          "cycle); expected --time without --animate, or no --time")
     args.every = 5 if args.every is None else args.every
     args.time = 0.0 if args.time is None else args.time
-    plt = _matplotlib()
+    plt = require_matplotlib("radarnode image")
     _check_output(args.output, args.animate, plt)
     scenario = scenario_from_args(args)
     if not 0.0 <= args.time <= scenario.duration_s:

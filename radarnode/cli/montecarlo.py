@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress
+from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, plot_dir, \
+    progress, require_matplotlib
 from radarnode.errors import FileError
 
 EXPERIMENT_CHOICES = ("snr", "table2", "resolution", "timing")
@@ -91,10 +92,9 @@ def _check_args(args):
     check_scale_out(args)
     plt = None
     if args.plots:
-        from radarnode.cli.report import _matplotlib, _plot_dir
-        plt = _matplotlib()
+        plt = require_matplotlib("option --plots")
         if Path(args.plots).is_file():
-            _plot_dir(args.plots)
+            plot_dir(args.plots)
     if args.csv:
         target = Path(args.csv)
         if target.is_dir():
@@ -247,8 +247,7 @@ def cmd(args) -> int:
         print(f"wrote {args.csv}", file=sys.stderr)
     if plt is not None and mc:
         from radarnode.cli.montecarlo_plots import figures
-        from radarnode.cli.report import _plot_dir
-        d = _plot_dir(args.plots)
+        d = plot_dir(args.plots)
         written = []
         for name, fig in figures(summary, plt).items():
             target = d / name

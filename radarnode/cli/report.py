@@ -29,8 +29,8 @@ import xml.etree.ElementTree as ET
 from pathlib import Path
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, progress, \
-    with_doa
+from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, plot_dir, \
+    progress, require_matplotlib, with_doa
 from radarnode.consumer.evaluate import simulate
 from radarnode.errors import FieldError, FileError, UsageError
 from radarnode.radar.setup import load_scenario
@@ -140,40 +140,15 @@ def junit_xml(suites: list[tuple[str, str, list[tuple[object, float]]]], min_pas
     return ET.ElementTree(root)
 
 
-def _plot_dir(path: str) -> Path:
-    d = Path(path)
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-    except (FileExistsError, NotADirectoryError):
-        raise FileError(f"option --plots: value {path!r} is not allowed; expected a directory (it is a file)") \
-            from None
-    except OSError as exc:
-        raise FileError(f"option --plots: cannot create directory {path!r}: {exc.strerror or exc}") from None
-    if not os.access(d, os.W_OK):
-        raise FileError(f"option --plots: cannot write into directory {path!r}: permission denied")
-    return d
-
-
-def _matplotlib():
-    try:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
-        raise UsageError("option --plots needs matplotlib, which is not installed: pip install 'radarnode[image]'") \
-            from None
-    return plt
-
-
 def cmd(args) -> int:
     check_scale_out(args)
     need = args.seeds if args.min_passes is None else args.min_passes
     if not 1 <= need <= args.seeds:
         raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {args.seeds}] "
                          "(at most --seeds)")
-    plt = _matplotlib() if args.plots else None
+    plt = require_matplotlib("option --plots") if args.plots else None
     if args.plots and Path(args.plots).is_file():
-        _plot_dir(args.plots)                                   # the error for a file, before anything is run
+        plot_dir(args.plots)                                    # the error for a file, before anything is run
     if args.junit and Path(args.junit).is_dir():
         raise FileError(f"option --junit: value {args.junit!r} is not allowed; expected a file name (it is a "
                         "directory)")
@@ -191,7 +166,7 @@ def cmd(args) -> int:
         if args.doa is not None:
             check_doa_option(args.doa, args.fidelity or sc.fidelity)
         check_doa(args.fidelity or sc.fidelity, radar_config(sc).signal, sc)
-    plot_dir = _plot_dir(args.plots) if args.plots else None     # created once everything else is known good
+    out_dir = plot_dir(args.plots) if args.plots else None     # created once everything else is known good
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")
 
     def out(line: str) -> None:
@@ -224,9 +199,9 @@ def cmd(args) -> int:
                 out(f"| {sc.name} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
                     f"{_fmt(r.min_ttc_s, 's')} | {_fmt(r.min_gap_m, 'm', 1)} | {_fmt(r.peak_decel_mps2, 'm/s²')} | "
                     f"{_fmt(r.peak_jerk_mps3, 'm/s³')} | {_fmt(r.final_time_gap_s, 's')} | {verdict} |")
-                if plot_dir is not None:
+                if out_dir is not None:
                     from radarnode.cli.plots import report_figure
-                    target = plot_dir / f"{sc.name}_seed{seed}.png"
+                    target = out_dir / f"{sc.name}_seed{seed}.png"
                     fig = report_figure(run_sc, r, plt)
                     try:
                         with atomic_path(target, "--plots") as tmp:
@@ -251,5 +226,5 @@ def cmd(args) -> int:
             tree.write(f, encoding="utf-8", xml_declaration=True)
         print(f"wrote {args.junit}: {sum(len(r) for _, _, r in suites)} test cases", file=sys.stderr)
     if written:
-        print(f"wrote {len(written)} plots to {plot_dir}", file=sys.stderr)
+        print(f"wrote {len(written)} plots to {out_dir}", file=sys.stderr)
     return 1 if short else 0
