@@ -183,3 +183,16 @@ def test_a_scenario_asking_super_resolution_at_another_level_is_refused_with_its
 def test_super_resolution_needs_channels():
     with pytest.raises(ConfigError, match="signal.dsp.doa: value 'music' is not allowed with preset scanning_ka"):
         DspChain(PRESETS["scanning_ka"], DspConfig(doa="music"))
+
+
+@pytest.mark.parametrize("elements, ok", [(2, False), (3, True), (4, True), (6, True)])
+def test_super_resolution_needs_three_elements_or_more(elements, ok):
+    if not ok:
+        with pytest.raises(ConfigError, match=f"doa num_elements: value {elements} is not allowed for music"):
+            make_doa("music", elements, 0.5)
+        return
+    doa = make_doa("music", elements, 0.5)
+    k = np.arange(elements)
+    snap = (np.exp(2j * np.pi * 0.5 * k * 0.2) * 10.0)[None, :]
+    rows, sin_t, _ = doa.estimate_peaks(snap, noise_power=1.0)
+    assert rows.tolist() == [0] and abs(sin_t[0] - 0.2) < 1e-3

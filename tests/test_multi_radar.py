@@ -384,3 +384,29 @@ def test_decode_fuse_says_which_sensor_of_the_scenario_sent_nothing(tmp_path, ca
     scen.write_text(THREE.format(duration=0.5))
     assert main(["decode", str(log), "--fuse", str(scen), "--summary"]) == 0
     assert f"warning: sensor 2 of --fuse {scen} sent no cycle in {log}" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("gap_s, restarts", [(0.9, 0), (1.0, 0), (1.1, 1), (2.0, 1)])
+def test_a_gap_restarts_the_tracks_only_beyond_a_second(gap_s, restarts):
+    fusion = ObjectFusion({0: SensorMount(0.0, 0.0, 0.0)})
+    first = fusion.step(0.0, {0: (0.0, _objects([20.0], [0.0]))})
+    out = fusion.step(gap_s, {0: (gap_s, _objects([20.0], [0.0]))})
+    assert fusion.restarts == restarts
+    assert (out.id[0] == first.id[0]) == (restarts == 0)
+
+
+@pytest.mark.parametrize("age_s, stale", [(0.9, 0), (1.0, 0), (1.1, 1), (2.0, 1)])
+def test_a_list_older_than_a_second_is_stale(age_s, stale):
+    fusion = ObjectFusion({0: SensorMount(0.0, 0.0, 0.0), 1: SensorMount(0.0, 0.0, 0.0)})
+    out = fusion.step(5.0, {0: (5.0, _objects([20.0], [0.0])), 1: (5.0 - age_s, _objects([40.0], [0.0]))})
+    assert fusion.stale_lists == stale and len(out) == 2 - stale
+
+
+@pytest.mark.parametrize("across_m, fused", [(1.4, True), (1.5, True), (1.6, False), (3.0, False)])
+def test_two_radars_objects_are_one_only_within_the_cap_across_the_heading(across_m, fused):
+    """σ 1 m: by the covariances alone every spacing here would be one object; the 1.5 m cap across decides."""
+    m = SensorMount(0.0, 0.0, 0.0)
+    fusion = ObjectFusion({0: m, 1: m})
+    out = fusion.step(0.0, {0: (0.0, _objects([30.0], [0.0], sigma=1.0)),
+                            1: (0.0, _objects([30.0], [across_m], sigma=1.0))})
+    assert len(out) == (1 if fused else 2)
