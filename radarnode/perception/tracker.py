@@ -71,6 +71,7 @@ class Groups:
     rcs_dbsm: np.ndarray
     snr_db: np.ndarray
     actor_index: np.ndarray     # most common truth tag of the group (-1 if none)
+    labels: np.ndarray | None = None   # per detection: its group (shape (detections,))
 
     def __len__(self) -> int:
         return int(self.x_m.shape[0])
@@ -85,7 +86,7 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     n = len(det)
     if n == 0:
         z = np.zeros(0)
-        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64))
+        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
     g = labels.max() + 1
@@ -110,7 +111,26 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
         counts = np.zeros((g, int(det.actor_index.max()) + 1))
         np.add.at(counts, (labels[tagged], det.actor_index[tagged]), 1)
         tags = np.where(counts.max(axis=1) > 0, counts.argmax(axis=1), -1)
-    return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags)
+    return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels)
+
+
+def extents_along(det: Detections, labels: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
+    """Span (G, 2) of each group's detections along and across ``heading_rad`` (G,), the heading of the body it
+    belongs to in sensor axes: its length and width as the ARS 408 reports them (along the object, not along the
+    sensor's axes; a heading of 0 gives the sensor-axes spans)."""
+    g = heading_rad.shape[0]
+    h = heading_rad[labels]
+    c, s = np.cos(h), np.sin(h)
+    along = c * det.x_m + s * det.y_m
+    across = -s * det.x_m + c * det.y_m
+    out = np.empty((g, 2))
+    for col, v in enumerate((along, across)):
+        lo = np.full(g, np.inf)
+        hi = np.full(g, -np.inf)
+        np.minimum.at(lo, labels, v)
+        np.maximum.at(hi, labels, v)
+        out[:, col] = np.where(hi >= lo, hi - lo, 0.0)
+    return out
 
 
 def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, yaw_rate_rps: float = 0.0,
@@ -237,7 +257,12 @@ class ObjectTracker:
             hit[ti], used[gi] = True, True
             # extent: what the detections spanned over the last cycles (a decaying maximum: one cycle sees only a
             # part of a body, and a far one is a single detection until its parts are resolved)
-            seen = np.stack([groups.length_m[gi], groups.width_m[gi]], 1)
+            # measured along the body's heading over ground (a moving object; a standing one along the sensor's
+            # axes, as its orientation is reported): a corner radar sees a car beside it as long, not as wide
+            heading, moving = self._heading(ti, sensor_velocity)
+            h_group = np.zeros(len(groups))
+            h_group[gi] = np.where(moving, heading, 0.0)
+            seen = extents_along(det, groups.labels, h_group)[gi]
             self.size[ti] = np.maximum(SIZE_DECAY * self.size[ti], seen)
             # RCS averaged in power, not in dB: a fluctuating (Swerling 1) target's mean of log power lies
             # 2.5 dB below its mean power, and its mean power is its RCS
@@ -253,6 +278,17 @@ class ObjectTracker:
         self._assign_ids(np.flatnonzero(newly))
         self._delete((self.misses > COAST_CYCLES) | (~self.confirmed & (self.misses > 0)) | self._duplicates())
         return self._object_list(sensor_velocity)
+
+    def _heading(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
+        """Heading over ground (sensor axes, rad) of tracks ``idx`` and whether each moves: only where the ground
+        speed stands out of its own uncertainty (the lateral velocity of a far object is poorly observed, azimuth
+        noise × range, and a post must not become a crossing object)."""
+        x, pv = self.x[idx], self.p[idx][:, 2:4, 2:4]
+        gx, gy = x[:, 2] + sensor_velocity[0], x[:, 3] + sensor_velocity[1]
+        speed = np.hypot(gx, gy)
+        ux, uy = gx / np.maximum(speed, 1e-9), gy / np.maximum(speed, 1e-9)
+        sigma = np.sqrt(np.maximum(ux * ux * pv[:, 0, 0] + 2 * ux * uy * pv[:, 0, 1] + uy * uy * pv[:, 1, 1], 0.0))
+        return np.arctan2(gy, gx), speed >= np.maximum(MOVING_THRESHOLD_MPS, 3.0 * sigma)
 
     def _measurement_cov(self, z: np.ndarray) -> np.ndarray:
         """Measurement covariances (m, 3, 3) of the groups: the position noise plus range × σ_az across the
@@ -331,12 +367,9 @@ class ObjectTracker:
         ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps = x[:, 0], x[:, 1], x[:, 2], x[:, 3]
         gx, gy = x[:, 2] + sensor_velocity[0], x[:, 3] + sensor_velocity[1]
         speed = np.hypot(gx, gy)
-        # moving only where the ground speed stands out of its own uncertainty: the lateral velocity of a far
-        # object is poorly observed (azimuth noise × range), and a post must not become a crossing object
         pv = self.p[idx][:, 2:4, 2:4]
         ux, uy = gx / np.maximum(speed, 1e-9), gy / np.maximum(speed, 1e-9)
-        sigma = np.sqrt(np.maximum(ux * ux * pv[:, 0, 0] + 2 * ux * uy * pv[:, 0, 1] + uy * uy * pv[:, 1, 1], 0.0))
-        moving = speed >= np.maximum(MOVING_THRESHOLD_MPS, 3.0 * sigma)
+        _, moving = self._heading(idx, sensor_velocity)
         self.was_moving[idx] |= moving
         angle = np.abs(np.arctan2(gy, gx))
         dyn = np.where(angle > np.radians(135), DYN_ONCOMING, np.where(angle > np.radians(45), DYN_CROSSING_MOVING,

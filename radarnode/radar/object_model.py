@@ -318,9 +318,11 @@ class ObjectModel:
 
         RCS: the power average over the cycles (relative spread √(g/(2−g)) for a fluctuating target, the
         amplitude noise 10^(−ρ/20)·√2 for a steady one). Extent: the faces the radar sees (the rear or front
-        where the sensor is beyond the body's ends, a side where it is beside them), each projected on the
-        sensor's axes and measured only where it spans more than a resolution cell (range bins along x, the
-        beam's cross-range width along y); the class from extent, RCS and motion; at least the class's body.
+        where the sensor is beyond the body's ends, a side where it is beside them), each measured only where it
+        spans more than a resolution cell (range bins along x, the beam's cross-range width along y), reported
+        along and across the body's heading when it moves (the ARS 408's length and width) and along the sensor's
+        axes when it stands, as the tracker does; the class from extent, RCS and motion; at least the class's
+        body.
         """
         p, sc = self.preset, self.scene
         steady = sc.swerling == 0
@@ -332,14 +334,22 @@ class ObjectModel:
         L, W = sc.length_m, sc.width_m
         end_seen = np.abs(ch * cx + sh * cy) > L / 2.0           # sensor beyond the front or the rear
         side_seen = np.abs(-sh * cx + ch * cy) > W / 2.0        # sensor beside the body
-        ext_x = np.where(side_seen, np.abs(L * ch), 0.0) + np.where(end_seen, np.abs(W * sh), 0.0)
-        ext_y = np.where(side_seen, np.abs(L * sh), 0.0) + np.where(end_seen, np.abs(W * ch), 0.0)
-        ext_x = np.where(ext_x > 2.0 * p.range_resolution_m, ext_x, 0.0)
-        ext_y = np.where(ext_y > rng_m * p.angular_resolution_rad, ext_y, 0.0)
-        length = np.maximum(ext_x + p.size_sigma_m * z[:, 7], 0.2)
-        width = np.maximum(ext_y + 0.5 * p.size_sigma_m * z[:, 8], 0.2)
+        # a face is measured where it spans more than a resolution cell: range bins along x, the beam's cross-range
+        # width along y (the side is the vector L·(cos h, sin h), the end W·(−sin h, cos h) in sensor axes)
+        res_x, res_y = 2.0 * p.range_resolution_m, rng_m * p.angular_resolution_rad
+        side_ok = side_seen & ((np.abs(L * ch) > res_x) | (np.abs(L * sh) > res_y))
+        end_ok = end_seen & ((np.abs(W * sh) > res_x) | (np.abs(W * ch) > res_y))
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
-        cls = classify(length, width, rcs, ground, ground >= MOVING_THRESHOLD_MPS)
+        moving = ground >= MOVING_THRESHOLD_MPS
+        # the measured faces' spans along and across the body's heading when it moves, along the sensor's axes when
+        # it stands (as the tracker reports them: radarnode.perception.tracker.extents_along)
+        d = np.where(moving, 0.0, h)
+        cd, sd = np.abs(np.cos(d)), np.abs(np.sin(d))
+        ext_a = np.where(side_ok, L * cd, 0.0) + np.where(end_ok, W * sd, 0.0)
+        ext_c = np.where(side_ok, L * sd, 0.0) + np.where(end_ok, W * cd, 0.0)
+        length = np.maximum(ext_a + p.size_sigma_m * z[:, 7], 0.2)
+        width = np.maximum(ext_c + 0.5 * p.size_sigma_m * z[:, 8], 0.2)
+        cls = classify(length, width, rcs, ground, moving)
         body = MIN_BODY_M[cls]
         return {"rcs_obj": rcs, "obj_class": cls, "length": np.maximum(length, body[..., 0]),
                 "width": np.maximum(width, body[..., 1])}
