@@ -240,7 +240,7 @@ def test_length_and_width_are_reported_along_the_moving_object_at_every_mount_ya
     run_node(node, clock=SimulatedClock(), sinks=[lambda m: None], on_cycle=outs.append,
              vehicle=EgoMotionSender(node.scene))
     length, width, cls = [], [], []
-    for o in outs[5:]:
+    for o in outs[10:]:      # once the track's velocity, hence its heading, is known (0.7 s)
         ol = o.frame.objects
         k = np.flatnonzero(ol.actor_index == 0)
         if k.size:

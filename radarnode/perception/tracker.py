@@ -32,6 +32,11 @@ from radarnode.perception.types import (
 GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
 CONFIRM_HITS, CONFIRM_WINDOW = 2, 3
 COAST_CYCLES = 3
+#: a confirmed track standing still over ground coasts longer: the ego motion predicts where it is, and a
+#: stopped car in the training ring of a bridge deck's CA-CFAR is detected in only a third of the cycles
+COAST_STATIONARY_CYCLES = 10
+#: … and is confirmed by CONFIRM_HITS detections in this many cycles (a tentative one survives the misses between)
+CONFIRM_WINDOW_STATIONARY = 5
 MOVING_THRESHOLD_MPS = 1.0
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
@@ -72,6 +77,7 @@ class Groups:
     snr_db: np.ndarray
     actor_index: np.ndarray     # most common truth tag of the group (-1 if none)
     labels: np.ndarray | None = None   # per detection: its group (shape (detections,))
+    cross_sigma_m: np.ndarray | None = None   # glint across the line of sight: half the span its reflector shows
 
     def __len__(self) -> int:
         return int(self.x_m.shape[0])
@@ -86,7 +92,7 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     n = len(det)
     if n == 0:
         z = np.zeros(0)
-        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), z)
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
     g = labels.max() + 1
@@ -111,7 +117,11 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
         counts = np.zeros((g, int(det.actor_index.max()) + 1))
         np.add.at(counts, (labels[tagged], det.actor_index[tagged]), 1)
         tags = np.where(counts.max(axis=1) > 0, counts.argmax(axis=1), -1)
-    return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels)
+    # an extended reflector's angle glints over the span its snapshot shows (radarnode.dsp.spread): half of it
+    # across the line of sight is the group's position uncertainty from glint
+    glint = np.zeros(g)
+    np.maximum.at(glint, labels, 0.5 * det.range_m * det.azimuth_spread_rad)
+    return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint)
 
 
 def extents_along(det: Detections, labels: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
@@ -247,7 +257,7 @@ class ObjectTracker:
             self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps,
                                      sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])))
         z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
-        r_cov = self._measurement_cov(z)
+        r_cov = self._measurement_cov(z, groups.cross_sigma_m)
         pairs = associate(self.x, self.p, z, r_cov)
         hit = np.zeros(len(self.x), dtype=bool)
         used = np.zeros(len(groups), dtype=bool)
@@ -272,11 +282,19 @@ class ObjectTracker:
         self.misses = np.where(hit, 0, self.misses + 1)
         new_tracks = np.flatnonzero(~used)
         self._initiate(groups, z, new_tracks, sensor_velocity, r_cov)
-        recent = np.unpackbits(self.hist[:, None], axis=1)[:, -CONFIRM_WINDOW:].sum(axis=1)
+        # a track standing still over ground is confirmed over a longer window and coasts longer: the ego motion
+        # predicts where it is (a stopped car under a bridge deck, masked in its CA-CFAR ring two cycles in three)
+        _, moving = self._heading(np.arange(len(self.x)), sensor_velocity)
+        bits = np.unpackbits(self.hist[:, None], axis=1)
+        recent = np.where(moving, bits[:, -CONFIRM_WINDOW:].sum(axis=1),
+                          bits[:, -CONFIRM_WINDOW_STATIONARY:].sum(axis=1))
         newly = ~self.confirmed & (recent >= CONFIRM_HITS)
         self.confirmed |= newly
         self._assign_ids(np.flatnonzero(newly))
-        self._delete((self.misses > COAST_CYCLES) | (~self.confirmed & (self.misses > 0)) | self._duplicates())
+        coast = np.where(moving, COAST_CYCLES, COAST_STATIONARY_CYCLES)
+        tentative = np.where(moving, 0, CONFIRM_WINDOW_STATIONARY - CONFIRM_HITS)
+        self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
+                     | self._duplicates())
         return self._object_list(sensor_velocity)
 
     def _heading(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
@@ -290,14 +308,15 @@ class ObjectTracker:
         sigma = np.sqrt(np.maximum(ux * ux * pv[:, 0, 0] + 2 * ux * uy * pv[:, 0, 1] + uy * uy * pv[:, 1, 1], 0.0))
         return np.arctan2(gy, gx), speed >= np.maximum(MOVING_THRESHOLD_MPS, 3.0 * sigma)
 
-    def _measurement_cov(self, z: np.ndarray) -> np.ndarray:
+    def _measurement_cov(self, z: np.ndarray, glint_m: np.ndarray | None = None) -> np.ndarray:
         """Measurement covariances (m, 3, 3) of the groups: the position noise plus range × σ_az across the
-        line of sight."""
+        line of sight, and the glint of an extended reflector (``glint_m``, σ across the line of sight, m)."""
         r = np.hypot(z[:, 0], z[:, 1])
         u = np.stack([z[:, 0], z[:, 1]], axis=1) / np.maximum(r, 1e-3)[:, None]
         perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
         cov = np.repeat(self.r_cov[None], len(z), axis=0)
-        cov[:, :2, :2] += (r * self.sigma_az_rad)[:, None, None] ** 2 * perp[:, :, None] * perp[:, None, :]
+        across = (r * self.sigma_az_rad) ** 2 + (0.0 if glint_m is None else glint_m ** 2)
+        cov[:, :2, :2] += across[:, None, None] * perp[:, :, None] * perp[:, None, :]
         return cov
 
     def _initiate(self, groups, z, idx, sensor_velocity, r_cov) -> None:

@@ -139,7 +139,10 @@ class Detections(_Columns):
     merged from several actors, or unknown). ``snr_db`` is the estimated
     integrated SNR ρ (:func:`radarnode.radar.equation.snr_db`). ``ambig_state``
     is the ARS 408 Cluster_AmbigState of the range rate (:data:`AMBIG_NAMES`);
-    left out, it is 3 (unambiguous).
+    left out, it is 3 (unambiguous). ``azimuth_spread_rad`` is the angle the
+    reflector in the detection's cell spans as its array snapshot shows it
+    (:mod:`radarnode.dsp.spread`; 0 for a point, left out: 0): its angle
+    glints over about that much.
     """
 
     range_m: np.ndarray
@@ -149,12 +152,15 @@ class Detections(_Columns):
     snr_db: np.ndarray
     actor_index: np.ndarray
     ambig_state: np.ndarray | None = None
+    azimuth_spread_rad: np.ndarray | None = None
 
     INT_FIELDS = ("actor_index", "ambig_state")
 
     def __post_init__(self) -> None:
         if self.ambig_state is None:
             self.ambig_state = np.full(np.shape(self.range_m), AMBIG_UNAMBIGUOUS, dtype=np.int64)
+        if self.azimuth_spread_rad is None:
+            self.azimuth_spread_rad = np.zeros(np.shape(self.range_m))
 
     @property
     def x_m(self) -> np.ndarray:

@@ -18,6 +18,7 @@ from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
 from radarnode.dsp.peaks import PatchFit, interpolate, local_maxima, patch_halves
+from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
 from radarnode.radar import equation
@@ -190,9 +191,14 @@ class DspChain:
         if d.size and c > 1:   # every angle peak of a cell is a detection, sharing the cell's energy
             row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db)
             range_m, speed, rho = range_m[row], speed[row], rho[row] * 10.0 ** (rel_db / 10.0)
+            # what the cell's sources leave unexplained: the angle an extended reflector spans (its glint)
+            frac = spread.unexplained_fraction(snap, row, sin_t, self.doa.spacing_wl, sigma2)
+            spread_sin = spread.angular_spread(frac[row], c, self.doa.spacing_wl)
         else:                  # one channel measures no angle: boresight (a scanning radar adds its beam angle)
             sin_t = np.zeros(d.size)
+            spread_sin = np.zeros(d.size)
         snr = 10.0 * np.log10(rho)
         azimuth = np.arcsin(sin_t)
         rcs = snr - equation.snr_db(p, range_m, 0.0, power_reduction_db, azimuth)
-        return Detections(range_m, speed, azimuth, rcs, snr, np.full(range_m.size, -1, dtype=np.int64))
+        return Detections(range_m, speed, azimuth, rcs, snr, np.full(range_m.size, -1, dtype=np.int64),
+                          azimuth_spread_rad=spread_sin / np.maximum(np.cos(azimuth), 0.05))

@@ -8,7 +8,9 @@ What the signal chain does to scatterers, without the signal:
    (grating lobes where the element spacing exceeds λ/2), power through the
    element pattern (:func:`radarnode.radar.equation.pattern_db`);
 2. scatterers in one range–Doppler–angle cell add coherently with their
-   random scattering phases, each weighted by its window straddle loss;
+   random scattering phases, each weighted by its window straddle loss; the
+   cell is seen at their glint point Re(Σ z·x / Σ z) in each axis, as the
+   chain's phase slopes see it (an extended reflector's apparent point wanders);
 3. cells closer than the chain's measured resolution (:data:`RESOLUTION`, in
    range bins, Doppler bins and beamwidths) are one peak: a cell that has a
    stronger cell within the resolution in every axis gives its power to the
@@ -38,6 +40,7 @@ import math
 
 import numpy as np
 
+from radarnode.dsp import spread
 from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
@@ -58,6 +61,23 @@ def hann_straddle(delta: np.ndarray) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         w = np.sinc(d) / (1.0 - d * d)
     return np.where(np.abs(np.abs(d) - 1.0) < 1e-9, 0.5, w)
+
+
+def _glint(z: np.ndarray, x: np.ndarray, field: np.ndarray, inv: np.ndarray, margin: float) -> np.ndarray:
+    """Apparent position per cell of scatterers ``z`` (complex amplitudes, shape (k,)) at ``x`` (k,) summed into
+    ``field`` (cells,) by ``inv``: Re(Σ z·x · conj(Σ z)) / |Σ z|², within [min x − margin, max x + margin] of the
+    cell (a deep fade's glint is bounded by the main lobe in the chain). Shape (cells,)."""
+    n = field.size
+    num = np.zeros(n, dtype=np.complex128)
+    np.add.at(num, inv, z * x)
+    lo = np.full(n, np.inf)
+    hi = np.full(n, -np.inf)
+    np.minimum.at(lo, inv, x)
+    np.maximum.at(hi, inv, x)
+    power = np.abs(field) ** 2
+    with np.errstate(invalid="ignore", divide="ignore"):
+        g = np.where(power > 0.0, (num * np.conj(field)).real / np.where(power > 0.0, power, 1.0), 0.5 * (lo + hi))
+    return np.clip(g, lo - margin, hi + margin)
 
 
 def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -105,15 +125,20 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     amp = np.sqrt(statistic.energy(rho, rb - ri, vb - vi))
     uniq, inv = np.unique(cell, return_inverse=True)
     inv = inv.ravel()
+    z = amp * np.exp(2j * np.pi * rng.random(k))
     field = np.zeros(uniq.size, dtype=np.complex128)
-    np.add.at(field, inv, amp * np.exp(2j * np.pi * rng.random(k)))
+    np.add.at(field, inv, z)
     energy = np.abs(field) ** 2
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
     fade = energy / wsafe           # the cell's coherent sum against its power sum (mean 1), used for the ring below
-    c_r = np.bincount(inv, weights=amp ** 2 * rb, minlength=uniq.size) / wsafe
-    c_v = np.bincount(inv, weights=amp ** 2 * vb, minlength=uniq.size) / wsafe
-    c_u = np.bincount(inv, weights=amp ** 2 * u, minlength=uniq.size) / wsafe
+    # where the chain sees the cell's unresolved scatterers: the glint point Re(Σ z·x / Σ z) in each axis (the
+    # phase slope of their coherent sum across the array, the range and the Doppler spectra), which wanders
+    # with the phases and can leave the scatterers' span by up to half a resolution cell (a bridge deck across
+    # the road is seen anywhere along it, not at its middle); one scatterer alone gives its own position
+    c_r = _glint(z, rb, field, inv, 0.5)
+    c_v = _glint(z, vb, field, inv, 0.5)
+    c_u = _glint(z, u, field, inv, 0.5 * beam)
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
     # what the chain's coupling correction with the aliased speed leaves in the range (RadarPreset.range_rate_coupling_s)
     c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.doppler_bin_mps),
@@ -160,8 +185,19 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # the chain divides the window and straddle losses out of the measured energy
     loss = statistic.energy(1.0, c_r[idx] - np.rint(c_r[idx]), c_v[idx] - np.rint(c_v[idx]))
     snr_est = 10.0 * np.log10(measured / np.maximum(loss, 1e-30))
+    # the angle each detection's reflector spans, from the snapshot its range–Doppler cell's scatterers sum to with
+    # its peaks fitted out (the chain's estimator on the chain's snapshot: radarnode.dsp.spread)
+    rd_of = rd[inv]
+    cells, row = np.unique(rd[idx], return_inverse=True)
+    pos = np.minimum(np.searchsorted(cells, rd_of), max(cells.size - 1, 0))
+    inside = cells[pos] == rd_of if cells.size else np.zeros(k, dtype=bool)
+    snap = np.zeros((cells.size, k_el), dtype=np.complex128)
+    np.add.at(snap, pos[inside], z[inside, None] * np.exp(2j * np.pi * u[inside, None] * np.arange(k_el)[None, :]))
+    frac = spread.unexplained_fraction(snap, row.ravel(), c_u[idx] / p.element_spacing_wl, p.element_spacing_wl)
+    spread_rad = (spread.angular_spread(frac[row.ravel()], k_el, p.element_spacing_wl)
+                  / np.maximum(np.cos(est_az), 0.05))
     det = Detections(est_r, est_v, est_az, snr_est - equation.snr_db(p, est_r, 0.0, power_reduction_db, est_az),
-                     snr_est, tag[idx])
+                     snr_est, tag[idx], azimuth_spread_rad=spread_rad)
     parts = [det]
     if sidelobes:
         threshold_db = 10.0 * math.log10(statistic.threshold_mean() / statistic.window_gain)

@@ -33,7 +33,8 @@ from radarnode.perception.types import (
     AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
-from radarnode.perception.tracker import (MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify, cluster_dyn_prop,
+from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify,
+                                          cluster_dyn_prop,
                                           orientation_sigma_rad)
 from radarnode.radar import ambiguity, elevation, equation
 from radarnode.radar.chain import DspChain
@@ -57,6 +58,7 @@ DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixe
 _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
+_POPCOUNT_LOW5 = np.array([bin(i & ((1 << 5) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 
 
@@ -231,7 +233,8 @@ class ObjectModel:
         mc, ms = np.cos(m_az), np.sin(m_az)
         meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
         sx, sy = sigma_to_xy(rng_m, az, sig_r, sig_az)
-        flags = self._track_flags(observable & (u < pd), fov)
+        ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
+        flags = self._track_flags(observable & (u < pd), fov, ground < MOVING_THRESHOLD_MPS)
         # the object list's fields that follow from the flags, for every cycle of the chunk
         det, misses, hits = flags["detected"], flags["misses"], flags["hits"]
         coast = np.where(det, 1.0, 1.0 + misses)                 # σ grows while coasting
@@ -354,7 +357,8 @@ class ObjectModel:
         return {"rcs_obj": rcs, "obj_class": cls, "length": np.maximum(length, body[..., 0]),
                 "width": np.maximum(width, body[..., 1])}
 
-    def _track_flags(self, det: np.ndarray, fov: np.ndarray) -> dict[str, np.ndarray]:
+    def _track_flags(self, det: np.ndarray, fov: np.ndarray, stationary: np.ndarray | None = None
+                     ) -> dict[str, np.ndarray]:
         """The tracker's bookkeeping for a chunk of cycles, from its state before the chunk.
 
         Detection history, consecutive misses, confirmation (``CONFIRM_HITS`` of the last
@@ -369,12 +373,16 @@ class ObjectModel:
         hist = np.zeros((t_n, n), dtype=np.uint8)
         for j in range(8):       # eight shifted slices, not a loop over cycles
             hist |= (ext[8 - j: 8 - j + t_n] << j).astype(np.uint8)
-        recent = _POPCOUNT_LOW3[hist]
+        if stationary is None:
+            stationary = np.zeros(det.shape, dtype=bool)
+        # standing still over ground: confirmed over a longer window and coasting longer, as the tracker does
+        # (radarnode.perception.tracker.COAST_STATIONARY_CYCLES)
+        recent = np.where(stationary, _POPCOUNT_LOW5[hist], _POPCOUNT_LOW3[hist])
         steps = np.arange(t_n)[:, None]
         last = np.maximum.accumulate(np.where(det, steps, -1 - self.misses[None, :]), axis=0)
         misses = steps - last
         confirm = det & (recent >= CONFIRM_HITS) & self.reportable
-        loss = (misses > COAST_CYCLES) | ~fov
+        loss = (misses > np.where(stationary, COAST_STATIONARY_CYCLES, COAST_CYCLES)) | ~fov
         event = np.where(confirm, 1, np.where(loss, -1, 0))
         at = np.maximum.accumulate(np.where(event != 0, steps, -1), axis=0)
         cols = np.broadcast_to(np.arange(n), at.shape)
