@@ -61,23 +61,13 @@ def test_issue10_acceptance_one_seed_object_level(name):
     assert r.passed and r.checked, r.reasons
 
 
-#: open defects, measured (BENCHMARKS.md "ADAS on real roads"): strict, so a fix shows up as a failure here
-KNOWN_DETECTION_LEVEL_DEFECTS = {
-    name: "the detection level detects the car as often as the chain, but its tracker keeps no object of it "
-          "behind the deck's detection, placed at the deck's power centroid straight ahead (the chain's glints "
-          "aside): warned too late in 5-6 of 7 seeds, where the object and signal levels warn in time"
-    for name in ("bridge_stopped_car_50", "bridge_stopped_car_90")}
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("level", ["object", "detection"])
 @pytest.mark.parametrize("name", ISSUE10 + ["acc_follow_bend_250", "lane_change_to_stopped", "lane_change_past_stopped",
                                             "acc_stop_and_go"]
                          + [f"bend_r{r}_{d}_stopped_{lane}_lane" for r in (250, 500) for d in ("left", "right")
                             for lane in ("own", "inner", "outer")])
-def test_issue10_acceptance_six_of_seven_seeds(name, level, request):
-    if level == "detection" and name in KNOWN_DETECTION_LEVEL_DEFECTS:
-        request.applymarker(pytest.mark.xfail(strict=True, reason=KNOWN_DETECTION_LEVEL_DEFECTS[name]))
+def test_issue10_acceptance_six_of_seven_seeds(name, level):
     sc = load_scenario(SCENARIOS / f"{name}.yaml")
     results = [simulate(dataclasses.replace(sc, seed=s), fidelity=level) for s in range(1, 8)]
     assert sum(r.passed and r.checked for r in results) >= 6, [r.reasons for r in results]

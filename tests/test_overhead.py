@@ -70,7 +70,8 @@ actors:
 
 
 def _reported(cls: str, where: str, level: str, seed: int = 1):
-    """(range, RCS) of the object the node reports straight ahead, cycle by cycle."""
+    """(range, RCS) of the object the node reports ahead (within 10 m of the axis: a deck across the road is one
+    object whose angle glints over its span, so its reported place wanders by metres), cycle by cycle."""
     sc = dataclasses.replace(read_scenario_text(BRIDGE.format(dur=11.8, seed=seed, cls=cls, where=where)),
                              cycle_period_s=0.072)
     node = RadarNode(sc, fidelity=level)
@@ -78,7 +79,7 @@ def _reported(cls: str, where: str, level: str, seed: int = 1):
     for k in range(sc.num_cycles):
         frame = node.model.step(k * 0.072, _runtime(node))[0]
         ol = frame.objects
-        ahead = np.flatnonzero((np.abs(ol.dist_lat_m) < 3.0) & (ol.dist_long_m > 0.0))
+        ahead = np.flatnonzero((np.abs(ol.dist_lat_m) < 10.0) & (ol.dist_long_m > 0.0))
         if ahead.size:
             j = ahead[np.argmin(ol.dist_long_m[ahead])]
             rows.append((float(ol.dist_long_m[j]), float(ol.rcs_dbsm[j])))
@@ -180,7 +181,7 @@ def test_the_decision_thresholds_below_at_above_and_twice(field, limit, above_ok
 
 def test_the_decision_is_latched_after_consecutive_fits_at_a_steady_height(monkeypatch):
     fits = []
-    monkeypatch.setattr(O, "fit_history", lambda *a: fits.pop(0))
+    monkeypatch.setattr(O, "fit_history", lambda *a, **k: fits.pop(0))
 
     def run(heights):
         fits[:] = [O.Fit(True, h, 0.9, 1.0) if h is not None else O.Fit(True, 5.0, 0.1, 0.1) for h in heights]
@@ -245,8 +246,78 @@ def test_an_overhead_structure_is_classified_from_the_wire_and_draws_nothing(nam
     assert np.all(r.trace["request"] >= -0.5) and np.all(r.trace["warning"] < 2)
 
 
-def test_a_car_stopped_under_a_bridge_is_warned_in_time_at_signal_level():
-    # the reference for the detection level's open defect there (tests/test_acceptance.py): the chain itself
-    # sees the car through the deck's masking often enough to warn in time and stop short of it
-    r = simulate(load_scenario(SCENARIOS / "bridge_stopped_car_90.yaml"), fidelity="signal")
+@pytest.mark.parametrize("name", ["bridge_90", "gantry_90", "bridge_stopped_car_90"])
+def test_bridges_draw_nothing_and_the_car_under_one_is_warned_at_signal_level(name):
+    # the chain's deck glints across the road; its radar keeps one object of it (the spread of the cell's snapshot
+    # widens the track's gate), so the ECU's overhead test has a continuous history: no FCW for the deck, and the
+    # car under it (masked in its CA-CFAR ring in two cycles of three) is kept and warned in time
+    r = simulate(load_scenario(SCENARIOS / f"{name}.yaml"), fidelity="signal")
     assert r.passed and r.checked, r.reasons
+
+
+def _deck_history(level: str, seed: int = 1):
+    """Per cycle: IDs of the objects the node reports of a bridge deck 300 m ahead, within ±25 m of the axis."""
+    sc = dataclasses.replace(read_scenario_text(BRIDGE.format(dur=9.0, seed=seed, cls="bridge", where="y_m: 0.0")),
+                             cycle_period_s=0.072)
+    node = RadarNode(sc, fidelity=level)
+    ids, spreads = [], []
+    for k in range(sc.num_cycles):
+        frame = node.model.step(k * 0.072, _runtime(node))[0]
+        ol = frame.objects
+        ids.append(set(ol.id[(np.abs(ol.dist_lat_m) < 25.0) & (ol.dist_long_m > 60.0)].tolist()))
+        det = node.model.info.detections
+        spreads.extend(det.azimuth_spread_rad[det.range_m > 60.0].tolist())
+    return ids, np.array(spreads)
+
+
+@pytest.mark.parametrize("level", ["detection", "signal"])
+def test_a_glinting_deck_is_one_object_whose_detections_show_their_spread(level):
+    ids, spreads = _deck_history(level)
+    seen = [s for s in ids if s]
+    assert len(seen) >= 0.9 * len(ids[20:]) - 2
+    # one object most of the way, as the real sensor's tracker holds an extended reflector; without the spread in
+    # the gate the deck's glint made a new object every few cycles (8 IDs on the way at detection level)
+    assert len(set().union(*seen)) <= 3, seen
+    assert np.median(spreads) > 0.03          # the deck spans most of a 14° beam: its snapshot says so
+
+
+def test_landmarks_that_take_turns_are_pooled_and_those_seen_together_are_not():
+    m = O.LandmarkMap(0.5, LAM)
+    r = np.linspace(240.0, 120.0, 80)
+    pattern = O.two_ray_db(r, np.array([[5.0]]), 0.5, LAM)
+    y = np.empty(r.size)
+    y[0::2] = 20.0 + O.averaged_db(pattern[:, 0::2], np.array([0]))[0]     # each object's own running average
+    y[1::2] = 20.0 + O.averaged_db(pattern[:, 1::2], np.array([0]))[0]
+    a = b = car = None
+    for k, (rk, yk) in enumerate(zip(r, y)):
+        m.next_cycle()
+        # one glinting reflector: its detection lands on object 1 or object 2, 9 m apart, in turns; a car 1 m
+        # beyond is measured in every cycle
+        if k % 2 == 0:
+            a = m.observe(1, 1, 300.0, -4.5, 0.0, rk, yk)
+        else:
+            b = m.observe(2, 2, 300.5, 4.5, 0.0, rk, yk)
+        car = m.observe(3, 3, 301.0, 0.0, 0.0, rk + 1.0, 10.0)
+    assert a is not b and m.pool(a, 0.0) == [b] and m.pool(b, 0.0) == [a]
+    assert a.pooled == 2 and a.overhead and b.overhead and not car.overhead
+    assert m.pool(car, 0.0) == []                 # seen together with both halves: another object
+    alone = O.fit_history(np.array(a.range_m), np.array(a.rcs_dbsm), np.array(a.starts), 0.5, LAM)
+    assert not alone.overhead                     # one half alone is too thin to be tested
+    b.moved = True                                # a vehicle that stopped is never part of a structure
+    assert m.pool(a, 0.0) == []
+
+
+def test_a_pooled_history_fits_as_the_same_history_in_one_piece():
+    r = np.linspace(240.0, 100.0, 90)
+    pattern = O.two_ray_db(r, np.array([[5.5]]), 0.5, LAM)
+    y = 18.0 + O.averaged_db(pattern, np.array([0]))[0]         # what the sensor reports: its running average
+    whole = O.fit_history(r, y, np.array([0]), 0.5, LAM)
+    # the same reflector measured in turns by two tracks: each reports its own average, at its own level
+    ia, ib = np.arange(0, 90, 2), np.arange(1, 90, 2)
+    rr = np.concatenate([r[ia], r[ib]])
+    yy = np.concatenate([18.0 + O.averaged_db(pattern[:, ia], np.array([0]))[0],
+                         22.0 + O.averaged_db(pattern[:, ib], np.array([0]))[0]])
+    pooled = O.fit_history(rr, yy, np.array([0, ia.size]), 0.5, LAM, members=np.array([0, ia.size]),
+                           cycles=np.concatenate([ia, ib]))
+    assert whole.overhead and pooled.mature and abs(pooled.height_m - 5.5) <= 0.2 and pooled.corr > 0.8
+    assert O.covered_lobes(rr, 0.5, LAM) == pytest.approx(O.covered_lobes(r, 0.5, LAM))

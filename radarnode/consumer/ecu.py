@@ -325,6 +325,7 @@ class Ecu:
         # tracks that ended leave their landmarks first (a new track at the place of one that ended continues its
         # history; one at the place of a track still alive is another object)
         self.landmarks.forget({t.id for t in tracks}, ox, oy)
+        self.landmarks.next_cycle()
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
             ground = math.hypot(vx + self.ego_speed_mps, vy)
@@ -347,7 +348,11 @@ class Ecu:
                 self._moving_for[t.id] = self._moving_for.get(t.id, 0) + 1 if moving_now else 0
                 if self._moving_for[t.id] >= MOVED_CYCLES:
                     self._moved.add(t.id)
-                if ground < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
+                # standing still by its speed along the line of sight, what the radar measures (Doppler): the
+                # lateral speed of an object whose angle glints (a bridge deck) is seconds-long noise
+                lx, ly = self.mount.rotate(t.x[0], t.x[1])          # line of sight, vehicle axes
+                radial = ((vx + self.ego_speed_mps) * lx + vy * ly) / max(rng, 0.1)
+                if abs(radial) < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
                     wx = ox + co * xv[i] - so * yv[i]

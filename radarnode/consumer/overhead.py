@@ -62,6 +62,9 @@ MATCH_LONG_M, MATCH_LAT_M, OVERHEAD_MATCH_LAT_M = 4.0, 2.5, 25.0
 #: how deep an overhead structure may reach beyond its near edge (a motorway deck, m): what the radar reports of it
 #: from underneath, moving as its Doppler makes it, belongs to it
 OVERHEAD_DEPTH_M = 20.0
+#: landmarks take turns (are parts of one glinting structure) when measured together in at most this fraction of the
+#: cycles the less frequent one was measured
+POOL_SHARED = 0.25
 
 
 def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float, wavelength_m: float,
@@ -90,15 +93,28 @@ def averaged_db(pattern_db: np.ndarray, starts: np.ndarray, gain: float = RCS_FI
     return 10.0 * np.log10(np.maximum(out, 1e-12))
 
 
-def _detrend(v: np.ndarray, r: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """Rows of ``v`` (H, N) less their weighted least-squares line in ``r`` (N,), weights ``w`` (H, N)."""
-    s0 = np.maximum(w.sum(axis=1, keepdims=True), 1.0)
-    rm = (w * r).sum(axis=1, keepdims=True) / s0
-    vm = (w * v).sum(axis=1, keepdims=True) / s0
+def _detrend(v: np.ndarray, r: np.ndarray, w: np.ndarray, bounds: np.ndarray) -> np.ndarray:
+    """Rows of ``v`` (H, N) less their weighted least-squares line in ``r`` (N,), weights ``w`` (H, N), fitted
+    separately on each contiguous segment of samples starting at ``bounds`` (ascending, first 0): one line per
+    radar track pooled into the history (the parts of one structure differ in level)."""
+    def seg_sum(a: np.ndarray) -> np.ndarray:
+        return np.repeat(np.add.reduceat(a, bounds, axis=1), sizes, axis=1)
+    sizes = np.diff(np.append(bounds, v.shape[1]))
+    s0 = np.maximum(seg_sum(w), 1.0)
+    rm = seg_sum(w * r) / s0
+    vm = seg_sum(w * v) / s0
     dr = r - rm
-    slope = (w * dr * (v - vm)).sum(axis=1, keepdims=True) / np.maximum((w * dr * dr).sum(axis=1, keepdims=True),
-                                                                        1e-12)
+    slope = seg_sum(w * dr * (v - vm)) / np.maximum(seg_sum(w * dr * dr), 1e-12)
     return v - vm - slope * dr
+
+
+def covered_lobes(range_m: np.ndarray, radar_height_m: float, wavelength_m: float,
+                  height_m: float = REFERENCE_HEIGHT_M) -> float:
+    """How many lobes of a reflector ``height_m`` up the ranges ``range_m`` cover: the phase span of their union,
+    counting only gaps of at most :data:`MAX_PHASE_STEP` (samples of several tracks at the same ranges count once)."""
+    phase = np.unique(2.0 * radar_height_m * height_m / (wavelength_m * np.maximum(range_m, 1.0)))
+    step = np.diff(phase)
+    return float(step[step <= MAX_PHASE_STEP].sum())
 
 
 @dataclass
@@ -118,32 +134,49 @@ class Fit:
 
 
 def fit_history(range_m: np.ndarray, rcs_dbsm: np.ndarray, starts: np.ndarray, radar_height_m: float,
-                wavelength_m: float) -> Fit:
+                wavelength_m: float, members: np.ndarray | None = None, cycles: np.ndarray | None = None) -> Fit:
     """Test an RCS history (shape (N,), in the order received; ``starts``: indices where a radar track began)
-    against the two-ray pattern of every overhead height (see the module docstring)."""
+    against the two-ray pattern of every overhead height (see the module docstring).
+
+    ``members``: indices where the samples of another pooled landmark begin (ascending; each member's samples are
+    contiguous and in the order received, and each begins a radar track): every member gets its own trend line,
+    and the lobes count over the union of the members' ranges. ``cycles``: the cycle of each sample; the pattern's
+    phase step that makes a sample usable is then taken between the structure's consecutive samples in time,
+    whichever member they came from (each member's own average is modelled over its own samples)."""
     r = np.asarray(range_m, dtype=np.float64)
     y = np.asarray(rcs_dbsm, dtype=np.float64)
     if r.size < MIN_SAMPLES:
         return Fit(False, samples=int(r.size))
+    bounds = np.array([0], dtype=np.int64) if members is None else np.asarray(members, dtype=np.int64)
     heights = np.arange(HEIGHT_MIN_M, HEIGHT_MAX_M + 1e-9, HEIGHT_STEP_M)[:, None]        # (H, 1)
     phase = 2.0 * radar_height_m * heights / (wavelength_m * np.maximum(r, 1.0))           # lobes, (H, N)
-    step = np.abs(np.diff(phase, axis=1, prepend=phase[:, :1]))
+    if cycles is None:
+        step = np.abs(np.diff(phase, axis=1, prepend=phase[:, :1]))
+    else:
+        order = np.argsort(np.asarray(cycles), kind="stable")
+        step = np.empty_like(phase)
+        step[:, order] = np.abs(np.diff(phase[:, order], axis=1, prepend=phase[:, order[:1]]))
     new = np.zeros(r.size, dtype=bool)
     new[np.asarray(starts, dtype=np.int64)] = True
+    new[bounds] = True
     usable = (step <= MAX_PHASE_STEP) & (r >= MIN_RANGE_M) & ~new
-    ref = np.abs(np.diff(2.0 * radar_height_m * REFERENCE_HEIGHT_M / (wavelength_m * np.maximum(r, 1.0)),
-                         prepend=np.nan))
+    ref_phase = 2.0 * radar_height_m * REFERENCE_HEIGHT_M / (wavelength_m * np.maximum(r, 1.0))
+    if cycles is None:
+        ref = np.abs(np.diff(ref_phase, prepend=np.nan))
+    else:
+        ref = np.empty_like(ref_phase)
+        ref[order] = np.abs(np.diff(ref_phase[order], prepend=np.nan))
     ref_ok = (ref <= MAX_PHASE_STEP) & (r >= MIN_RANGE_M) & ~new
-    lobes = float(np.nansum(np.where(ref_ok, ref, 0.0)))
     n_ok = int(np.count_nonzero(ref_ok))
+    lobes = covered_lobes(r[ref_ok], radar_height_m, wavelength_m) if n_ok else 0.0
     if lobes < MIN_LOBES or n_ok < MIN_SAMPLES:
         return Fit(False, lobes=lobes, samples=n_ok)
     t = averaged_db(two_ray_db(r, heights, radar_height_m, wavelength_m), np.flatnonzero(new))
     w = usable.astype(np.float64)
     # both without their straight-line trend in range: a slow drift of the RCS (a car turning in a bend, the
     # azimuth pattern, a fade) is no lobing; the lobes of a reflector 4 m up and more repeat within the history
-    ym = _detrend(np.broadcast_to(y, t.shape), r, w)
-    tm = _detrend(t, r, w)
+    ym = _detrend(np.broadcast_to(y, t.shape), r, w, bounds)
+    tm = _detrend(t, r, w, bounds)
     syt = (w * ym * tm).sum(axis=1)
     stt = (w * tm * tm).sum(axis=1)
     syy = (w * ym * ym).sum(axis=1)
@@ -162,6 +195,7 @@ class Landmark:
     y_m: float
     range_m: list = field(default_factory=list)
     rcs_dbsm: list = field(default_factory=list)
+    cycles: list = field(default_factory=list)      # the ECU cycle of each sample
     starts: list = field(default_factory=list)      # sample index where each radar track's history starts
     last_object: int | None = None
     overhead: bool = False                          # latched once the test says so
@@ -170,23 +204,33 @@ class Landmark:
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
     latched_range_m: float | None = None            # the range at which the overhead decision was latched
     latched_fit: Fit | None = None
+    pooled: int = 1                                 # landmarks whose histories the last test pooled (itself too)
     _last_height: float = math.nan
 
-    def add(self, object_id: int, range_m: float, rcs_dbsm: float) -> None:
+    def add(self, object_id: int, range_m: float, rcs_dbsm: float, cycle: int = -1) -> None:
         if object_id != self.last_object:
             self.starts.append(len(self.range_m))
             self.last_object = object_id
         self.range_m.append(range_m)
         self.rcs_dbsm.append(rcs_dbsm)
+        self.cycles.append(cycle)
         if len(self.range_m) > MAX_SAMPLES:
             drop = len(self.range_m) - MAX_SAMPLES
-            del self.range_m[:drop], self.rcs_dbsm[:drop]
+            del self.range_m[:drop], self.rcs_dbsm[:drop], self.cycles[:drop]
             self.starts = [max(s - drop, 0) for s in self.starts]
             self.starts = sorted(set(self.starts))
 
-    def evaluate(self, radar_height_m: float, wavelength_m: float) -> Fit:
-        self.fit = fit_history(np.array(self.range_m), np.array(self.rcs_dbsm), np.array(self.starts, dtype=np.int64),
-                               radar_height_m, wavelength_m)
+    def evaluate(self, radar_height_m: float, wavelength_m: float, pool: list[Landmark] = ()) -> Fit:
+        """Test this landmark's history, pooled with the histories of ``pool`` (other landmarks that are parts of
+        the same structure: :meth:`LandmarkMap.pool`), and latch "overhead" after :data:`CONSECUTIVE` steady fits."""
+        parts = [self, *pool]
+        offsets = np.cumsum([0] + [len(p.range_m) for p in parts])
+        starts = np.concatenate([np.asarray(p.starts, dtype=np.int64) + o for p, o in zip(parts, offsets)])
+        self.fit = fit_history(np.concatenate([p.range_m for p in parts]),
+                               np.concatenate([p.rcs_dbsm for p in parts]), starts, radar_height_m, wavelength_m,
+                               members=offsets[:-1] if pool else None,
+                               cycles=np.concatenate([p.cycles for p in parts]) if pool else None)
+        self.pooled = len(parts)
         # a real reflector fits at its own height cycle after cycle; a chance fit wanders from height to height
         steady = self.fit.overhead and (self.streak == 0
                                         or abs(self.fit.height_m - self._last_height) <= HEIGHT_STABLE_M + 1e-9)
@@ -198,13 +242,45 @@ class Landmark:
 
 
 class LandmarkMap:
-    """Stationary objects' landmarks along the drive; each cycle :meth:`observe` files the stationary tracks."""
+    """Stationary objects' landmarks along the drive; each cycle :meth:`observe` files the stationary tracks.
+
+    **Pooling.** The radar sees a bridge deck as one range–Doppler cell of many reflectors across the road; the
+    angle it measures wanders with their phases (glint: several metres either way at 150 m), so its tracker
+    alternates between objects metres apart, each measured in every other cycle or less, and no one history holds
+    enough samples for the test. The test therefore pools the histories of the landmarks at the same place along
+    the road (within :data:`MATCH_LONG_M`) anywhere across it (:data:`OVERHEAD_MATCH_LAT_M`) that take turns —
+    measured together in at most :data:`POOL_SHARED` of the cycles the less frequent one was measured — and never
+    moved. A stopped car under the bridge is measured in the same cycles as the deck (two resolved reflectors):
+    it keeps its own, flat history."""
 
     def __init__(self, radar_height_m: float, wavelength_m: float) -> None:
         self.radar_height_m = radar_height_m
         self.wavelength_m = wavelength_m
         self.landmarks: list[Landmark] = []
         self.by_track: dict[int, Landmark] = {}
+        self.cycle = 0
+
+    def next_cycle(self) -> None:
+        """A new radar cycle begins (the samples filed from here on are measured together)."""
+        self.cycle += 1
+
+    def pool(self, lm: Landmark, heading_rad: float) -> list[Landmark]:
+        """The other landmarks whose histories :meth:`Landmark.evaluate` pools with ``lm``'s (class docstring)."""
+        if lm.moved:
+            return []
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        mine = set(lm.cycles)
+        out = []
+        for cand in self.landmarks:
+            if cand is lm or cand.moved or not cand.range_m:
+                continue
+            dx, dy = cand.x_m - lm.x_m, cand.y_m - lm.y_m
+            if abs(c * dx + s * dy) > MATCH_LONG_M or abs(-s * dx + c * dy) > OVERHEAD_MATCH_LAT_M:
+                continue
+            shared = len(mine.intersection(cand.cycles))
+            if shared <= POOL_SHARED * min(len(mine), len(cand.cycles)):
+                out.append(cand)
+        return out
 
     def observe(self, track_id: int, object_id: int, x_m: float, y_m: float, heading_rad: float, range_m: float,
                 rcs_dbsm: float, moved: bool = False) -> Landmark:
@@ -224,9 +300,9 @@ class LandmarkMap:
             self.by_track[track_id] = lm
         lm.moved |= moved
         if math.isfinite(rcs_dbsm) and math.isfinite(range_m) and not lm.moved:
-            lm.add(object_id, range_m, rcs_dbsm)
+            lm.add(object_id, range_m, rcs_dbsm, self.cycle)
             if not lm.overhead:
-                lm.evaluate(self.radar_height_m, self.wavelength_m)
+                lm.evaluate(self.radar_height_m, self.wavelength_m, self.pool(lm, heading_rad))
         return lm
 
     def match(self, x_m: float, y_m: float, heading_rad: float, overhead_only: bool = False,
@@ -254,4 +330,4 @@ class LandmarkMap:
                           if id(lm) in kept or math.hypot(lm.x_m - ego_x_m, lm.y_m - ego_y_m) <= keep_m]
 
 
-__all__ = ["Fit", "Landmark", "LandmarkMap", "averaged_db", "fit_history", "two_ray_db"]
+__all__ = ["Fit", "Landmark", "LandmarkMap", "averaged_db", "covered_lobes", "fit_history", "two_ray_db"]
