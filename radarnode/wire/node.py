@@ -31,7 +31,7 @@ import numpy as np
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
 from radarnode.radar.setup import radar_config, radar_path
-from radarnode.radar.models import check_doa, make_model
+from radarnode.radar.levels import check_doa, make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
