@@ -74,3 +74,20 @@ def test_weights_and_bad_input():
         accumulate(np.zeros(3), np.zeros(4), GRID)
     with pytest.raises(ConfigError, match="hough grid"):
         HoughGrid.make(rho_max_m=-1.0)
+
+
+def test_the_accumulator_votes_exactly_as_the_plain_formula():
+    """accumulate works in place on one array; every cell and every (weighted) vote is the plain formula's:
+    ρ = x·cosθ + y·sinθ rounded to a cell, points beyond the ρ range voting nowhere."""
+    rng = np.random.default_rng(7)
+    x = rng.uniform(-5.0, 120.0, 900)
+    y = rng.uniform(-60.0, 60.0, 900)        # many beyond ±ρ_max: they must vote nowhere
+    w = rng.uniform(0.5, 2.0, 900)
+    for weights in (None, w):
+        rho = x[:, None] * np.cos(GRID.theta_rad)[None, :] + y[:, None] * np.sin(GRID.theta_rad)[None, :]
+        idx = np.rint((rho - GRID.rho_m[0]) / (GRID.rho_m[1] - GRID.rho_m[0])).astype(np.int64)
+        ok = (idx >= 0) & (idx < GRID.rho_m.size)
+        flat = (np.arange(GRID.theta_rad.size)[None, :] * GRID.rho_m.size + idx)[ok]
+        votes = np.broadcast_to((np.ones_like(x) if weights is None else weights)[:, None], rho.shape)[ok]
+        plain = np.bincount(flat, weights=votes, minlength=GRID.theta_rad.size * GRID.rho_m.size)
+        np.testing.assert_array_equal(accumulate(x, y, GRID, weights=weights), plain.reshape(GRID.theta_rad.size, -1))

@@ -65,14 +65,24 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     n_t, n_r = grid.theta_rad.size, grid.rho_m.size
     if x.size == 0:
         return np.zeros((n_t, n_r))
-    w = np.ones_like(x) if weights is None else np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
-    rho = x[:, None] * np.cos(grid.theta_rad)[None, :] + y[:, None] * np.sin(grid.theta_rad)[None, :]   # (n, n_t)
-    step = grid.rho_m[1] - grid.rho_m[0]
-    idx = np.rint((rho - grid.rho_m[0]) / step).astype(np.int64)
-    ok = (idx >= 0) & (idx < n_r)
-    flat = (np.arange(n_t)[None, :] * n_r + idx)[ok]
-    votes = np.broadcast_to(w[:, None], rho.shape)[ok]
-    return np.bincount(flat, weights=votes, minlength=n_t * n_r).reshape(n_t, n_r)
+    # every step in place on the one (n, n_theta) array: a few passes over it, not a dozen (the arithmetic, and so
+    # every cell a point votes for, is the same as x·cosθ + y·sinθ, minus ρ₀, over the step, rounded)
+    rho = np.multiply.outer(x, np.cos(grid.theta_rad))
+    rho += np.multiply.outer(y, np.sin(grid.theta_rad))
+    rho -= grid.rho_m[0]
+    rho /= grid.rho_m[1] - grid.rho_m[0]
+    np.rint(rho, out=rho)
+    idx = rho.astype(np.int64)
+    beyond = (idx < 0) | (idx >= n_r)
+    idx += np.arange(n_t) * n_r
+    idx[beyond] = n_t * n_r                     # one cell past the grid collects the votes that fall outside it
+    if weights is None:
+        votes = np.bincount(idx.ravel(), minlength=n_t * n_r + 1).astype(np.float64)
+    else:
+        w = np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
+        votes = np.bincount(idx.ravel(), weights=np.broadcast_to(w[:, None], idx.shape).ravel(),
+                            minlength=n_t * n_r + 1)
+    return votes[:-1].reshape(n_t, n_r)
 
 
 def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_votes: float = 3.0,
