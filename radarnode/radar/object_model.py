@@ -58,6 +58,17 @@ _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
+#: the object list's fields of a chunk, gathered in two (T, n, F) tables so that a cycle takes its objects' rows
+#: with one fancy index per table instead of one per field (ObjectList field, chunk key)
+_OBJECT_FLOATS = (("rcs_dbsm", "rcs_obj"), ("dist_long_sigma_m", "sig_long"), ("dist_lat_sigma_m", "sig_lat"),
+                  ("vrel_long_sigma_mps", "sig_vlong"), ("vrel_lat_sigma_mps", "sig_vlat"),
+                  ("arel_long_sigma_mps2", "sig_along"), ("arel_lat_sigma_mps2", "sig_alat"),
+                  ("orientation_sigma_rad", "sig_orient"), ("arel_long_mps2", "arel_long"),
+                  ("arel_lat_mps2", "arel_lat"), ("orientation_rad", "orientation"), ("length_m", "length"),
+                  ("width_m", "width"))
+_OBJECT_INTS = (("meas_state", "meas_state"), ("prob_of_exist", "prob_of_exist"), ("obj_class", "obj_class"))
+#: the detections' fields (Detections' order after the actor index: range, range rate, azimuth, RCS, SNR)
+_DETECTION_FLOATS = ("m_r", "m_vr", "m_az", "rcs_rep", "snr")
 
 
 @dataclass
@@ -263,6 +274,15 @@ class ObjectModel:
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
         }
 
+    @staticmethod
+    def _tables(ch: dict) -> dict:
+        """The per-cycle lists' fields of a chunk as (T, n, F) tables (float64 and int64, the fields' own dtypes)."""
+        ch["object_floats"] = np.stack([ch[key] for _, key in _OBJECT_FLOATS], axis=-1)
+        ch["object_ints"] = np.stack([ch[key] for _, key in _OBJECT_INTS], axis=-1).astype(np.int64, copy=False)
+        ch["detection_floats"] = np.stack([ch[key] for key in _DETECTION_FLOATS], axis=-1)
+        ch["arel"] = np.stack([ch["arel_long"], ch["arel_lat"]], axis=-1)
+        return ch
+
     def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
         """Pd factor (T, n) from the other actors' energy in each actor's CA-CFAR training ring.
 
@@ -386,7 +406,7 @@ class ObjectModel:
         if self.scene.dynamic_ego is not None:
             size = 1          # closed loop: the ego's future is not known in advance
         times = (k + np.arange(size)) * period if on_grid else np.array([t_s])
-        self._cache = self._chunk(k, times, config)
+        self._cache = self._tables(self._chunk(k, times, config))
         return self._cache, 0
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
@@ -417,18 +437,20 @@ class ObjectModel:
         predicted[:, 0:2] += predicted[:, 2:4] * dt
         # the tracker models acceleration (it reports it in Obj_3_Extended): a braking lead's speed is
         # predicted with it, so the smoothed speed does not lag by a·dt·(1−g)/g
-        predicted[:, 2] += ch["arel_long"][i] * dt
-        predicted[:, 3] += ch["arel_lat"][i] * dt
-        # velocity of a continuing track is smoothed like a tracker would (the lateral part is poorly measured)
-        tracked = (self.alive & ~new)[:, None]
-        smoothed = meas.copy()
-        smoothed[:, 2:4] = predicted[:, 2:4] + VELOCITY_GAIN * (meas[:, 2:4] - predicted[:, 2:4])
-        self.state = np.where(detected[:, None], np.where(tracked, smoothed, meas), predicted)
+        predicted[:, 2:4] += ch["arel"][i] * dt
+        # a detected actor takes its measurement; the velocity of a continuing track is smoothed like a tracker
+        # would (the lateral part is poorly measured)
+        state = np.where(detected[:, None], meas, predicted)
+        smooth = detected & self.alive & ~new
+        if smooth.any():
+            p = predicted[smooth, 2:4]
+            state[smooth, 2:4] = p + VELOCITY_GAIN * (meas[smooth, 2:4] - p)
+        self.state = state
         self.last_t, self.cycle = t_s, self.cycle + 1
 
         seen = np.flatnonzero(detected & self.reportable)
-        self.info.detections = Detections(ch["m_r"][i, seen], ch["m_vr"][i, seen], ch["m_az"][i, seen],
-                                          ch["rcs_rep"][i, seen], ch["snr"][i, seen], seen, ch["ambig"][i, seen])
+        d = ch["detection_floats"][i, seen]
+        self.info.detections = Detections(d[:, 0], d[:, 1], d[:, 2], d[:, 3], d[:, 4], seen, ch["ambig"][i, seen])
         idx = np.flatnonzero(self.alive)
         objects = self._object_list(ch, i, idx, view, detected, new, sensor_velocity_est)
         clusters = (self._cluster_list(t_s, view, detected, meas, ch["snr"][i], ch["rcs_eff"][i], ch["sig_r"][i],
@@ -462,19 +484,13 @@ class ObjectModel:
     def _object_list(self, ch: dict, i: int, idx: np.ndarray, view: SensorView, detected: np.ndarray,
                      new: np.ndarray, sensor_velocity_est) -> ObjectList:
         st = self.state[idx]
+        f, g = ch["object_floats"][i, idx], ch["object_ints"][i, idx]      # (m, F): one gather per table
         return ObjectList(
             id=self.obj_id[idx].copy(),
             dist_long_m=st[:, 0], dist_lat_m=st[:, 1], vrel_long_mps=st[:, 2], vrel_lat_mps=st[:, 3],
             dyn_prop=self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view),
-            rcs_dbsm=ch["rcs_obj"][i, idx],
-            dist_long_sigma_m=ch["sig_long"][i, idx], dist_lat_sigma_m=ch["sig_lat"][i, idx],
-            vrel_long_sigma_mps=ch["sig_vlong"][i, idx], vrel_lat_sigma_mps=ch["sig_vlat"][i, idx],
-            arel_long_sigma_mps2=ch["sig_along"][i, idx], arel_lat_sigma_mps2=ch["sig_alat"][i, idx],
-            orientation_sigma_rad=ch["sig_orient"][i, idx],
-            meas_state=ch["meas_state"][i, idx], prob_of_exist=ch["prob_of_exist"][i, idx],
-            arel_long_mps2=ch["arel_long"][i, idx], arel_lat_mps2=ch["arel_lat"][i, idx],
-            obj_class=ch["obj_class"][i, idx], orientation_rad=ch["orientation"][i, idx],
-            length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
+            **{name: f[:, j] for j, (name, _) in enumerate(_OBJECT_FLOATS)},
+            **{name: g[:, j] for j, (name, _) in enumerate(_OBJECT_INTS)}, actor_index=idx)
 
     def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
                       sensor_velocity_est, ambig):
