@@ -453,8 +453,7 @@ class ObjectModel:
         self.info.detections = Detections(d[:, 0], d[:, 1], d[:, 2], d[:, 3], d[:, 4], seen, ch["ambig"][i, seen])
         idx = np.flatnonzero(self.alive)
         objects = self._object_list(ch, i, idx, view, detected, new, sensor_velocity_est)
-        clusters = (self._cluster_list(t_s, view, detected, meas, ch["snr"][i], ch["rcs_eff"][i], ch["sig_r"][i],
-                                       ch["sig_v"][i], ch["sig_az"][i], config, sensor_velocity_est, ch["ambig"][i])
+        clusters = (self._cluster_list(ch, i, view, detected, meas, config, sensor_velocity_est)
                     if config.clusters else _NO_CLUSTERS)
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
@@ -492,9 +491,36 @@ class ObjectModel:
             **{name: f[:, j] for j, (name, _) in enumerate(_OBJECT_FLOATS)},
             **{name: g[:, j] for j, (name, _) in enumerate(_OBJECT_INTS)}, actor_index=idx)
 
-    def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
-                      sensor_velocity_est, ambig):
+    def _posts(self, ch: dict) -> dict | None:
+        """The guardrail posts of a chunk's cycles that the radar can see, and what does not depend on the draws:
+        range, azimuth, SNR, Pd and the chain's σ, each flat over the chunk with ``starts`` (T + 1,) marking where
+        each cycle's begin (None: the scene has no guardrail posts). Computed once per chunk, element by element
+        the same numbers as a cycle's own posts."""
+        if "posts" in ch:
+            return ch["posts"]
+        p, sc, config = self.preset, self.scene, ch["config"]
+        g = sc.scenario.road.guardrails
+        if not sc.is_guardrail.any() and g.left_offset_m is None and g.right_offset_m is None:
+            ch["posts"] = None
+            return None
+        gx, gy, starts = sc.guardrail_posts_many(ch["times"], p.max_range_m)
+        g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
+        keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
+        row = np.repeat(np.arange(starts.size - 1), np.diff(starts))[keep]
+        g_r, g_az = g_r[keep], g_az[keep]
+        g_rcs = np.full(g_r.shape, g.rcs_dbsm)
+        g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
+        er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
+        ch["posts"] = {
+            "starts": np.searchsorted(row, np.arange(starts.size)), "r": g_r, "az": g_az, "rcs": g_rcs,
+            "pd": self.statistic.pd_of_snr(g_snr, 1), "sig_r": er * equation.crb_range_m(p, g_snr),
+            "sig_az": ea * equation.crb_azimuth_rad(p, g_snr, g_az), "sig_v": ev * equation.crb_speed_mps(p, g_snr),
+            "cos": np.cos(g_az), "sin": np.sin(g_az)}
+        return ch["posts"]
+
+    def _cluster_list(self, ch, i, view, detected, meas, config, sensor_velocity_est):
         p, rng, sc = self.preset, self._cluster_rng, self.scene
+        rcs_eff, sig_r, sig_v, sig_az, ambig = (ch[k][i] for k in ("rcs_eff", "sig_r", "sig_v", "sig_az", "ambig"))
         parts_xy, parts_v, parts_rcs, parts_sig, parts_actor = [], [], [], [], []
         parts_ambig = [ambig[np.flatnonzero(detected & self.reportable)]]
         a_idx = np.flatnonzero(detected & self.reportable)
@@ -504,23 +530,16 @@ class ObjectModel:
         parts_sig.append(np.stack([sig_r[a_idx], sig_az[a_idx], sig_v[a_idx]], axis=1))
         parts_actor.append(a_idx)
         # guardrail posts: stationary point targets
-        gx, gy = sc.guardrail_posts(t_s, p.max_range_m)
-        if gx.size:
-            g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
-            keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
-            g_r, g_az = g_r[keep], g_az[keep]
-            g_rcs = np.full(g_r.shape, sc.scenario.road.guardrails.rcs_dbsm)
-            g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
-            hit = rng.random(g_r.shape) < self.statistic.pd_of_snr(g_snr, 1)
-            g_r, g_az, g_snr, g_rcs = g_r[hit], g_az[hit], g_snr[hit], g_rcs[hit]
-            er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
-            gs_r = er * equation.crb_range_m(p, g_snr)
-            gs_az = ea * equation.crb_azimuth_rad(p, g_snr, g_az)
-            gs_v = ev * equation.crb_speed_mps(p, g_snr)
+        posts = self._posts(ch)
+        if posts is not None:
+            a, b = posts["starts"][i], posts["starts"][i + 1]
+            hit = rng.random(b - a) < posts["pd"][a:b]
+            g_r, g_az, g_rcs, gs_r, gs_az, gs_v, cos_az, sin_az = (
+                posts[k][a:b][hit] for k in ("r", "az", "rcs", "sig_r", "sig_az", "sig_v", "cos", "sin"))
             nz = rng.standard_normal((3, g_r.size))
             mr, maz = g_r + gs_r * nz[0], g_az + gs_az * nz[1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
-            vr = -(view.sensor_vx_mps * np.cos(g_az) + view.sensor_vy_mps * np.sin(g_az)) + gs_v * nz[2]
+            vr = -(view.sensor_vx_mps * cos_az + view.sensor_vy_mps * sin_az) + gs_v * nz[2]
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g_az, (view.sensor_vx_mps, view.sensor_vy_mps))
             parts_ambig.append(g_amb)
             parts_xy.append(np.stack([mr * np.cos(maz), mr * np.sin(maz)], axis=1))

@@ -297,22 +297,42 @@ class Scene:
 
         Road-edge guardrails come from ``road.guardrails``; guardrail actors add
         posts along their own length. Posts are fixed in the world, so they are
-        stationary targets.
+        stationary targets. One time of :meth:`guardrail_posts_many`.
         """
+        gx, gy, _ = self.guardrail_posts_many(np.array([t_s], dtype=np.float64), max_range_m)
+        return gx, gy
+
+    def guardrail_posts_many(self, times_s: np.ndarray, max_range_m: float
+                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`guardrail_posts` at T times in one pass: the posts of every time one after the other, and where
+        each time's start, shape (T + 1,) (time k's posts are ``[starts[k]:starts[k + 1]]``, in the order of
+        :meth:`guardrail_posts`: the left edge's, the right edge's, then the guardrail actors').
+
+        The ego's state and the sensor's pose at each time, each post's world position and its rotation into the
+        sensor frame are the same numbers as one time at a time (element by element), so a chunk of cycles sees
+        exactly the posts that the cycles would one by one."""
         sc = self.scenario
         g = sc.road.guardrails
-        ego = self.ego_state(t_s)
-        px, py, psi_s, _, _ = self.sensor_pose(ego)
-        s_ego = self._ego.state(t_s).x_m[0]
-        xs, ys = [], []
-        k0 = math.floor((s_ego - 5.0) / g.post_spacing_m)
-        k1 = math.ceil((s_ego + max_range_m + 5.0) / g.post_spacing_m)
-        s = np.arange(k0, k1 + 1) * g.post_spacing_m
+        t = np.asarray(times_s, dtype=np.float64)
+        est = self._ego.state(t)                                   # (T, 1)
+        ex, ey, heading = (a[:, 0] for a in self._ego_pose(est)[:3])
+        mx, my, myaw = self.mount
+        ox, oy = _rot(heading, np.float64(mx), np.float64(my))
+        px, py, psi_s = ex + ox, ey + oy, heading + myaw
+        s_ego = est.x_m[:, 0]
+        rows, xs, ys = [], [], []
+        k0 = np.floor((s_ego - 5.0) / g.post_spacing_m).astype(np.int64)
+        k1 = np.ceil((s_ego + max_range_m + 5.0) / g.post_spacing_m).astype(np.int64)
+        count = k1 - k0 + 1
+        row = np.repeat(np.arange(t.size), count)
+        starts = np.concatenate([[0], np.cumsum(count)])
+        s = (np.repeat(k0, count) + (np.arange(row.size) - starts[row])) * g.post_spacing_m
         for offset, edge, sign in ((g.left_offset_m, sc.road.left_edge_y_m, 1.0),
                                    (g.right_offset_m, sc.road.right_edge_y_m, -1.0)):
             if offset is None:
                 continue
             wx, wy, _ = self.road_to_world(s, np.full_like(s, edge + sign * offset))
+            rows.append(row)
             xs.append(wx)
             ys.append(wy)
         for i in np.flatnonzero(self.is_guardrail):
@@ -322,9 +342,17 @@ class Scene:
             y0 = sc.actor_y_m(a)
             h = self.heading_rel[i]
             wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), y0 + u * math.sin(h))
-            xs.append(wx)
-            ys.append(wy)
+            rows.append(np.repeat(np.arange(t.size), n_posts))
+            xs.append(np.tile(wx, t.size))
+            ys.append(np.tile(wy, t.size))
         if not xs:
-            return np.zeros(0), np.zeros(0)
-        wx, wy = np.concatenate(xs), np.concatenate(ys)
-        return _rot(-psi_s, wx - px, wy - py)
+            return np.zeros(0), np.zeros(0), np.zeros(t.size + 1, dtype=np.int64)
+        row = np.concatenate(rows)
+        order = np.argsort(row, kind="stable")                     # by time, each time's posts in list order
+        row = row[order]
+        wx, wy = np.concatenate(xs)[order], np.concatenate(ys)[order]
+        c, s_ = np.cos(-psi_s), np.sin(-psi_s)
+        dx, dy = wx - px[row], wy - py[row]
+        c, s_ = c[row], s_[row]
+        starts = np.searchsorted(row, np.arange(t.size + 1))
+        return c * dx - s_ * dy, s_ * dx + c * dy, starts
