@@ -83,6 +83,9 @@ class SensorView:
                           None if self.z_m is None else self.z_m[k])
 
 
+#: cycles of a scripted ego computed together by :meth:`Scene.ego_state` (the vehicle's 0x300/0x301 every cycle)
+EGO_BLOCK = 256
+
 _VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
                 "orientation_rad", "az_lo_rad", "az_hi_rad", "centre_x_m", "centre_y_m")
 
@@ -131,6 +134,7 @@ class Scene:
         self._ego = MoverTable([0.0], [scenario.ego.y_m], [scenario.ego.speed_mps], [0.0], [scenario.ego.accel], [()],
                                [scenario.ego_lateral()])
         self.dynamic_ego: DynamicEgo | None = None
+        self._ego_block: tuple | None = None          # (ego, block, states) of :meth:`ego_state` on the cycle grid
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
@@ -186,8 +190,28 @@ class Scene:
         return x, y, heading, vxw, vyw, speed, st.ax_mps2, kappa * st.vx_mps + turn
 
     def ego_state(self, t_s: float) -> EgoState:
+        """The ego at ``t_s``. On the cycle grid of a scripted ego (``t_s`` = k × period) it comes from a block of
+        ``EGO_BLOCK`` cycles computed in one pass (the same numbers, element by element); a closed-loop ego, whose
+        future is not known yet, and any other time are computed on their own."""
+        if self.dynamic_ego is None:
+            state = self._ego_on_grid(t_s)
+            if state is not None:
+                return state
         x, y, heading, _, _, speed, accel, yaw = self._ego_pose(self._ego.state(t_s))
         return EgoState(float(x[0]), float(y[0]), float(heading[0]), float(speed[0]), float(accel[0]), float(yaw[0]))
+
+    def _ego_on_grid(self, t_s: float) -> EgoState | None:
+        period = self.scenario.period_s
+        k = round(t_s / period)
+        if not (0 <= k and k * period == t_s):
+            return None
+        block, i = divmod(k, EGO_BLOCK)
+        cached = self._ego_block
+        if cached is None or cached[0] is not self._ego or cached[1] != block:
+            times = (block * EGO_BLOCK + np.arange(EGO_BLOCK)) * period
+            x, y, heading, _, _, speed, accel, yaw = (a[:, 0].tolist() for a in self._ego_pose(self._ego.state(times)))
+            cached = self._ego_block = (self._ego, block, list(zip(x, y, heading, speed, accel, yaw)))
+        return EgoState(*cached[2][i])
 
     def lane_gap(self, t_s: float, i: int) -> tuple[float, float, float, float, float]:
         """Actor ``i`` against the ego in road coordinates, as a test judge measures a lead on any road.
