@@ -63,7 +63,10 @@ def polyfit(x: np.ndarray, y: np.ndarray, deg: int) -> np.ndarray:
         ym = float(np.add.reduce(y)) / y.size
         slope = float(np.dot(t, y - ym)) / max(float(np.dot(t, t)), 1e-300) / xs
         return np.array([ym - slope * xm, slope])
-    powers = np.vander(t, deg + 1, increasing=True)                  # (n, deg + 1)
+    powers = np.empty((t.size, 3))                                  # numpy.vander(t, 3, increasing=True)
+    powers[:, 0] = 1.0
+    powers[:, 1] = t
+    np.multiply(t, t, out=powers[:, 2])
     c = np.linalg.solve(powers.T @ powers, powers.T @ y)
     # back to x: Σ c_k·((x − xm)/xs)^k
     a = c[2] / (xs * xs)
@@ -225,18 +228,19 @@ class RoadBoundaryEstimator:
         if xi.size < 4:
             return UNAVAILABLE
         # seed 002: M cross-sections along x, at most k of them without a boundary point
-        start = max(0.0, float(xi.min()))
+        x_min, x_max = float(np.minimum.reduce(xi)), float(np.maximum.reduce(xi))
+        start = max(0.0, x_min)
         cell = np.floor((xi - start) / self.section_m).astype(np.int64)
-        counts = np.bincount(cell[cell < self.sections], minlength=self.sections)
-        present = counts > 0
-        reach = int(np.max(np.flatnonzero(present))) + 1 if present.any() else 0
-        missing = int((~present[:reach]).sum()) + max(0, self.sections - reach - self.max_missing)
+        present = (np.bincount(cell[cell < self.sections], minlength=self.sections) > 0).tolist()   # M sections
+        reach = max((k + 1 for k, p in enumerate(present) if p), default=0)
+        seen = sum(present[:reach])
+        missing = (reach - seen) + max(0, self.sections - reach - self.max_missing)
         if missing > self.max_missing or reach < 2:
             return UNAVAILABLE
-        span = float(xi.max() - xi.min())
+        span = x_max - x_min
         deg = 2 if span > 40.0 and xi.size >= 8 else 1
         c = polyfit(xi, yi, deg)
         c0, c1 = c[0], c[1]
         c2 = c[2] if deg == 2 else 0.0
-        return Boundary(True, float(c0), float(math.atan(c1)), float(2.0 * c2 + kappa), start, float(xi.max()),
-                        float(present[:reach].mean() * reach / self.sections))
+        return Boundary(True, float(c0), float(math.atan(c1)), float(2.0 * c2 + kappa), start, x_max,
+                        seen / reach * reach / self.sections)
