@@ -95,6 +95,21 @@ class RuntimeConfig:
     clusters: bool = True       # the object level builds its cluster list only when it is sent
 
 
+#: the columns of a cluster list's rows before it is sorted: position, velocity, RCS, σ of range, azimuth and range
+#: rate, the actor's index (−1: a guardrail post or a false alarm), AmbigState
+_CL_X, _CL_Y, _CL_VX, _CL_VY, _CL_RCS, _CL_SIG_R, _CL_SIG_AZ, _CL_SIG_V, _CL_ACTOR, _CL_AMBIG = range(10)
+
+
+def _cluster_rows(*columns) -> np.ndarray:
+    """Rows of the ``_CL_*`` columns from arrays of one shape (…, m) and scalars: shape (…, m, 10), float64 (the
+    actor index and AmbigState are small integers, exact in it)."""
+    shape = np.broadcast_shapes(*(np.shape(c) for c in columns))
+    out = np.empty(shape + (len(columns),))
+    for k, c in enumerate(columns):
+        out[..., k] = c
+    return out
+
+
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
     """True where (range, azimuth) lies inside any of the preset's sectors and above the minimum range."""
     inside = np.zeros(np.shape(range_m), dtype=bool)
@@ -281,6 +296,11 @@ class ObjectModel:
         ch["object_ints"] = np.stack([ch[key] for _, key in _OBJECT_INTS], axis=-1).astype(np.int64, copy=False)
         ch["detection_floats"] = np.stack([ch[key] for key in _DETECTION_FLOATS], axis=-1)
         ch["arel"] = np.stack([ch["arel_long"], ch["arel_lat"]], axis=-1)
+        if ch["config"].clusters:      # the actors' rows of the cluster list (_CL_* columns)
+            t_n, n = ch["snr"].shape
+            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), ch["rcs_eff"], ch["sig_r"],
+                                                 ch["sig_az"], ch["sig_v"], np.broadcast_to(np.arange(n), (t_n, n)),
+                                                 ch["ambig"])
         return ch
 
     def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
@@ -512,41 +532,33 @@ class ObjectModel:
         g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
         er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
         ch["posts"] = {
-            "starts": np.searchsorted(row, np.arange(starts.size)), "r": g_r, "az": g_az, "rcs": g_rcs,
-            "pd": self.statistic.pd_of_snr(g_snr, 1), "sig_r": er * equation.crb_range_m(p, g_snr),
-            "sig_az": ea * equation.crb_azimuth_rad(p, g_snr, g_az), "sig_v": ev * equation.crb_speed_mps(p, g_snr),
-            "cos": np.cos(g_az), "sin": np.sin(g_az)}
+            "starts": np.searchsorted(row, np.arange(starts.size)), "pd": self.statistic.pd_of_snr(g_snr, 1),
+            # (N, 8): range, azimuth, RCS, σ range, σ azimuth, σ speed, cos and sin of the azimuth
+            "table": np.stack([g_r, g_az, g_rcs, er * equation.crb_range_m(p, g_snr),
+                               ea * equation.crb_azimuth_rad(p, g_snr, g_az), ev * equation.crb_speed_mps(p, g_snr),
+                               np.cos(g_az), np.sin(g_az)], axis=1)}
         return ch["posts"]
 
     def _cluster_list(self, ch, i, view, detected, meas, config, sensor_velocity_est):
-        p, rng, sc = self.preset, self._cluster_rng, self.scene
-        rcs_eff, sig_r, sig_v, sig_az, ambig = (ch[k][i] for k in ("rcs_eff", "sig_r", "sig_v", "sig_az", "ambig"))
-        parts_xy, parts_v, parts_rcs, parts_sig, parts_actor = [], [], [], [], []
-        parts_ambig = [ambig[np.flatnonzero(detected & self.reportable)]]
+        """This cycle's detections, guardrail posts and false alarms as a cluster list; each part is a block of
+        rows of the ``_CL_*`` columns, so that the list is one concatenation and one gather in the sent order."""
+        p, rng = self.preset, self._cluster_rng
         a_idx = np.flatnonzero(detected & self.reportable)
-        parts_xy.append(meas[a_idx, 0:2])
-        parts_v.append(meas[a_idx, 2:4])
-        parts_rcs.append(rcs_eff[a_idx])
-        parts_sig.append(np.stack([sig_r[a_idx], sig_az[a_idx], sig_v[a_idx]], axis=1))
-        parts_actor.append(a_idx)
+        blocks = [ch["cluster_actors"][i, a_idx]]
         # guardrail posts: stationary point targets
         posts = self._posts(ch)
         if posts is not None:
             a, b = posts["starts"][i], posts["starts"][i + 1]
             hit = rng.random(b - a) < posts["pd"][a:b]
-            g_r, g_az, g_rcs, gs_r, gs_az, gs_v, cos_az, sin_az = (
-                posts[k][a:b][hit] for k in ("r", "az", "rcs", "sig_r", "sig_az", "sig_v", "cos", "sin"))
+            g = posts["table"][a:b][hit]
+            g_r, g_az, g_rcs, gs_r, gs_az, gs_v, cos_az, sin_az = g.T
             nz = rng.standard_normal((3, g_r.size))
             mr, maz = g_r + gs_r * nz[0], g_az + gs_az * nz[1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
             vr = -(view.sensor_vx_mps * cos_az + view.sensor_vy_mps * sin_az) + gs_v * nz[2]
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g_az, (view.sensor_vx_mps, view.sensor_vy_mps))
-            parts_ambig.append(g_amb)
-            parts_xy.append(np.stack([mr * np.cos(maz), mr * np.sin(maz)], axis=1))
-            parts_v.append(np.stack([vr * np.cos(maz), vr * np.sin(maz)], axis=1))
-            parts_rcs.append(g_rcs)
-            parts_sig.append(np.stack([gs_r, gs_az, gs_v], axis=1))
-            parts_actor.append(np.full(g_r.size, -1))
+            cm, sm = np.cos(maz), np.sin(maz)
+            blocks.append(_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g_rcs, gs_r, gs_az, gs_v, -1, g_amb))
         # false alarms
         rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
                 * (10.0 if config.high_sensitivity else 1.0))
@@ -557,39 +569,38 @@ class ObjectModel:
             ok = in_fov(p, fr, faz)
             fr, faz = fr[ok], faz[ok]
             fv = rng.uniform(-p.max_unambiguous_speed_mps, p.max_unambiguous_speed_mps, fr.size)
-            parts_xy.append(np.stack([fr * np.cos(faz), fr * np.sin(faz)], axis=1))
-            parts_v.append(np.stack([fv * np.cos(faz), fv * np.sin(faz)], axis=1))
+            cf, sf = np.cos(faz), np.sin(faz)
             f_snr = np.full(fr.size, 13.0)
-            parts_rcs.append(f_snr - equation.snr_db(p, fr, np.zeros(fr.size)))
-            parts_sig.append(np.stack([np.full(fr.size, p.range_resolution_m / 2),
-                                       np.full(fr.size, p.angular_resolution_rad / 2),
-                                       np.full(fr.size, p.speed_resolution_mps / 2)], axis=1))
-            parts_actor.append(np.full(fr.size, -1))
-            parts_ambig.append(np.full(fr.size, AMBIG_AMBIGUOUS))
-        xy = np.concatenate(parts_xy)
-        v = np.concatenate(parts_v)
-        rcs = np.concatenate(parts_rcs)
-        sig = np.concatenate(parts_sig)
-        actor = np.concatenate(parts_actor).astype(np.int64)
-        r = np.hypot(xy[:, 0], xy[:, 1])
+            blocks.append(_cluster_rows(fr * cf, fr * sf, fv * cf, fv * sf, f_snr - equation.snr_db(p, fr, np.zeros(fr.size)),
+                                        p.range_resolution_m / 2, p.angular_resolution_rad / 2,
+                                        p.speed_resolution_mps / 2, -1, AMBIG_AMBIGUOUS))
+        rows = np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
+        r = np.hypot(rows[:, _CL_X], rows[:, _CL_Y])
         near = r <= p.near_range_m
         order = np.lexsort((r, ~near))[:MAX_CLUSTERS]    # near first, then far, each by range
         n = order.size
+        sel, r = rows[order], r[order]
+        x, y, vx, vy = sel[:, _CL_X], sel[:, _CL_Y], sel[:, _CL_VX], sel[:, _CL_VY]
+        actor = sel[:, _CL_ACTOR].astype(np.int64)
         cl = ClusterList.empty(n)
         cl.id = np.arange(n, dtype=np.int64)
-        cl.dist_long_m, cl.dist_lat_m = xy[order, 0], xy[order, 1]
-        cl.vrel_long_mps, cl.vrel_lat_mps = v[order, 0], v[order, 1]
+        cl.dist_long_m, cl.dist_lat_m = x, y
+        cl.vrel_long_mps, cl.vrel_lat_mps = vx, vy
         sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
-        az_o = np.arctan2(xy[order, 1], xy[order, 0])
-        cl.dyn_prop = cluster_dyn_prop(v[order, 0] * np.cos(az_o) + v[order, 1] * np.sin(az_o), az_o, sv)
-        cl.rcs_dbsm = rcs[order]
-        az = np.arctan2(xy[order, 1], xy[order, 0])
-        cl.dist_long_sigma_m, cl.dist_lat_sigma_m = sigma_to_xy(r[order], az, sig[order, 0], sig[order, 1])
-        cl.vrel_long_sigma_mps = np.abs(np.cos(az)) * sig[order, 2] + np.abs(np.sin(az)) * p.lateral_speed_sigma_mps
-        cl.vrel_lat_sigma_mps = np.abs(np.sin(az)) * sig[order, 2] + np.abs(np.cos(az)) * p.lateral_speed_sigma_mps
-        cl.pdh0 = np.where(actor[order] >= 0, 1, 2).astype(np.int64)
-        cl.ambig_state = np.concatenate(parts_ambig).astype(np.int64)[order]
+        az = np.arctan2(y, x)
+        c, s = np.cos(az), np.sin(az)
+        cl.dyn_prop = cluster_dyn_prop(vx * c + vy * s, az, sv)
+        cl.rcs_dbsm = sel[:, _CL_RCS]
+        s_r, s_az, s_v = sel[:, _CL_SIG_R], sel[:, _CL_SIG_AZ], sel[:, _CL_SIG_V]
+        # sigma_to_xy(r, az, s_r, s_az), its cos and sin taken once
+        cl.dist_long_sigma_m = np.sqrt((c * s_r) ** 2 + (r * s * s_az) ** 2)
+        cl.dist_lat_sigma_m = np.sqrt((s * s_r) ** 2 + (r * c * s_az) ** 2)
+        ac, as_ = np.abs(c), np.abs(s)
+        cl.vrel_long_sigma_mps = ac * s_v + as_ * p.lateral_speed_sigma_mps
+        cl.vrel_lat_sigma_mps = as_ * s_v + ac * p.lateral_speed_sigma_mps
+        cl.pdh0 = np.where(actor >= 0, 1, 2).astype(np.int64)
+        cl.ambig_state = sel[:, _CL_AMBIG].astype(np.int64)
         cl.invalid_state = np.zeros(n, dtype=np.int64)
         cl.is_near = near[order]
-        cl.actor_index = actor[order]
+        cl.actor_index = actor
         return cl
