@@ -439,11 +439,11 @@ class RadarNode:
             ol = ol.take(keep[:n_fit])
             ol = ol.take(self._send_order(ol.id, ol.range_m, ol.rcs_dbsm))
             frame.objects = ol
-            general, quality, extended = P.object_signals(ol)
             out.append((P.OBJ_STATUS, self.codecs[P.OBJ_STATUS].encode({
                 "Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
                 "Obj_InterfaceVersion": P.INTERFACE_VERSION})[0]))
             if len(ol):
+                general, quality, extended = P.object_signals(ol)
                 rows = self.codecs[P.OBJ_GENERAL].encode(general)
                 out += [(P.OBJ_GENERAL, row) for row in rows]
                 if cfg.send_quality:
