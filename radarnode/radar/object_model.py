@@ -582,25 +582,18 @@ class ObjectModel:
         sel, r = rows[order], r[order]
         x, y, vx, vy = sel[:, _CL_X], sel[:, _CL_Y], sel[:, _CL_VX], sel[:, _CL_VY]
         actor = sel[:, _CL_ACTOR].astype(np.int64)
-        cl = ClusterList.empty(n)
-        cl.id = np.arange(n, dtype=np.int64)
-        cl.dist_long_m, cl.dist_lat_m = x, y
-        cl.vrel_long_mps, cl.vrel_lat_mps = vx, vy
         sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
         az = np.arctan2(y, x)
         c, s = np.cos(az), np.sin(az)
-        cl.dyn_prop = cluster_dyn_prop(vx * c + vy * s, az, sv)
-        cl.rcs_dbsm = sel[:, _CL_RCS]
         s_r, s_az, s_v = sel[:, _CL_SIG_R], sel[:, _CL_SIG_AZ], sel[:, _CL_SIG_V]
-        # sigma_to_xy(r, az, s_r, s_az), its cos and sin taken once
-        cl.dist_long_sigma_m = np.sqrt((c * s_r) ** 2 + (r * s * s_az) ** 2)
-        cl.dist_lat_sigma_m = np.sqrt((s * s_r) ** 2 + (r * c * s_az) ** 2)
         ac, as_ = np.abs(c), np.abs(s)
-        cl.vrel_long_sigma_mps = ac * s_v + as_ * p.lateral_speed_sigma_mps
-        cl.vrel_lat_sigma_mps = as_ * s_v + ac * p.lateral_speed_sigma_mps
-        cl.pdh0 = np.where(actor >= 0, 1, 2).astype(np.int64)
-        cl.ambig_state = sel[:, _CL_AMBIG].astype(np.int64)
-        cl.invalid_state = np.zeros(n, dtype=np.int64)
-        cl.is_near = near[order]
-        cl.actor_index = actor
-        return cl
+        return ClusterList(
+            id=np.arange(n, dtype=np.int64), dist_long_m=x, dist_lat_m=y, vrel_long_mps=vx, vrel_lat_mps=vy,
+            dyn_prop=cluster_dyn_prop(vx * c + vy * s, az, sv), rcs_dbsm=sel[:, _CL_RCS],
+            # sigma_to_xy(r, az, s_r, s_az), its cos and sin taken once
+            dist_long_sigma_m=np.sqrt((c * s_r) ** 2 + (r * s * s_az) ** 2),
+            dist_lat_sigma_m=np.sqrt((s * s_r) ** 2 + (r * c * s_az) ** 2),
+            vrel_long_sigma_mps=ac * s_v + as_ * p.lateral_speed_sigma_mps,
+            vrel_lat_sigma_mps=as_ * s_v + ac * p.lateral_speed_sigma_mps,
+            pdh0=np.where(actor >= 0, 1, 2).astype(np.int64), ambig_state=sel[:, _CL_AMBIG].astype(np.int64),
+            invalid_state=np.zeros(n, dtype=np.int64), is_near=near[order], actor_index=actor)
