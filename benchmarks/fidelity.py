@@ -11,7 +11,9 @@ Two scenes:
   scatterers); per level: frame time (median), frames per second, real-time
   factor against the 72 ms cycle; and what ``auto`` chose and saved.
 
-Run: ``python benchmarks/fidelity.py [--frames N]``. Prints Markdown tables.
+Run: ``python benchmarks/fidelity.py [--frames N] [--object-only]``. Prints Markdown tables; ``--object-only``
+prints only the object level's speed figures (its row of the highway_mimo12 table and the highway_cut_in line,
+issue 9 item 7), in seconds instead of minutes.
 """
 
 from __future__ import annotations
@@ -114,9 +116,18 @@ def speed(path: Path, level: str, frames: int, dtype: str = "complex128") -> dic
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--frames", type=int, default=60)
+    ap.add_argument("--object-only", action="store_true", help="only the object level's speed figures")
     args = ap.parse_args()
     points = ROOT / "scenarios" / "point_targets_mimo12.yaml"
     highway = ROOT / "scenarios" / "highway_mimo12.yaml"
+    if args.object_only:
+        print(f"### Speed, object level: {highway.name}, {args.frames} frames, cycle 72 ms\n")
+        print("| level | scatterers/frame | frame time (median) | frames/s | real-time factor |")
+        print("|---|---:|---:|---:|---:|")
+        s = speed(highway, "object", args.frames)
+        print(f"| object | - | {s['median_s'] * 1e3:.2f} ms | {s['fps']:.0f} | {s['rtf']:.1f}× |\n")
+        _object_list_line(args.frames)
+        return
     print(f"### Accuracy: {points.name}, {args.frames} frames, mimo12\n")
     print("| level | range RMSE | range-rate RMSE | azimuth RMSE | range RMSE/CRB | range-rate RMSE/CRB | "
           "azimuth RMSE/CRB | Pd | false alarms/frame |")
@@ -147,9 +158,13 @@ def main() -> None:
               f"{s['rtf']:.1f}× |", flush=True)
     s_obj = speed(highway, "object", args.frames)
     print(f"\nobject level against signal level (complex128), same run: {base / s_obj['median_s']:.0f}× faster")
+    _object_list_line(args.frames)
+
+
+def _object_list_line(frames: int) -> None:
     obj_only = ROOT / "scenarios" / "highway_cut_in.yaml"
-    s_list = speed(obj_only, "object", max(args.frames, 1024))
-    print(f"object level on {obj_only.name} (object list only, no cluster list, {max(args.frames, 1024)} frames): "
+    s_list = speed(obj_only, "object", max(frames, 1024))
+    print(f"object level on {obj_only.name} (object list only, no cluster list, {max(frames, 1024)} frames): "
           f"median {s_list['median_s'] * 1e6:.0f} µs per frame, mean {s_list['mean_s'] * 1e6:.0f} µs with the "
           f"chunk computations included: {s_list['rtf_mean']:.0f}× real time")
 

@@ -6,8 +6,10 @@ Each row times the command as a user starts it — a new Python process, imports
 the scenario's duration over that time. A first row, ``python -c "import radarnode.cli.main"``, is the start-up
 floor of every command. The last row is the issue's target case: ``highway_cut_in.yaml --duration 300``.
 
-Run: ``.venv/bin/python benchmarks/log_speed.py [--runs N] [--suffix .blf] [--only SUBSTRING]``. Prints a
-Markdown table.
+Run: ``.venv/bin/python benchmarks/log_speed.py [--runs N] [--suffix .blf] [--only SUBSTRING] [--before DIR]``.
+Prints a Markdown table. ``--before DIR`` (a tree of another version, e.g. ``git archive REV | tar -x -C DIR``)
+times that tree and this one interleaved — before, after, before, after, … — so that both see the same load, and
+prints both times and their ratio.
 """
 
 from __future__ import annotations
@@ -26,14 +28,16 @@ sys.path.insert(0, str(ROOT))
 from radarnode.radar.setup import load_scenario  # noqa: E402
 
 
-def wall(cmd: list[str], runs: int) -> float:
-    """Median wall time of a command, seconds (it must succeed)."""
-    times = []
+def wall(cmd: list[str], runs: int, roots: tuple[Path, ...] = (ROOT,)) -> list[float]:
+    """Median wall time of a command (it must succeed) in each tree of ``roots``, seconds; the runs of the trees
+    interleaved. ``python -m radarnode`` imports the tree it is started in (its working directory)."""
+    times: list[list[float]] = [[] for _ in roots]
     for _ in range(runs):
-        t0 = time.perf_counter()
-        subprocess.run(cmd, check=True, capture_output=True)
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times)
+        for k, root in enumerate(roots):
+            t0 = time.perf_counter()
+            subprocess.run(cmd, check=True, capture_output=True, cwd=root)
+            times[k].append(time.perf_counter() - t0)
+    return [statistics.median(t) for t in times]
 
 
 def main() -> None:
@@ -41,13 +45,21 @@ def main() -> None:
     ap.add_argument("--runs", type=int, default=3)
     ap.add_argument("--suffix", default=".blf")
     ap.add_argument("--only", default="")
+    ap.add_argument("--before", type=Path, help="a tree of another version, timed interleaved with this one")
     args = ap.parse_args()
     py = sys.executable
-    start = wall([py, "-c", "import radarnode.cli.main"], args.runs)
+    roots = (ROOT,) if args.before is None else (args.before.resolve(), ROOT)
+    start = wall([py, "-c", "import radarnode.cli.main"], args.runs, roots)
     print(f"### `radarnode log … --fidelity object -o x{args.suffix}`, median of {args.runs} runs\n")
-    print("| scenario | simulated | cycles | wall time | real-time factor |")
-    print("|---|---:|---:|---:|---:|")
-    print(f"| (start-up: `import radarnode.cli.main`) | - | - | {start:.2f} s | - |", flush=True)
+    if args.before is None:
+        print("| scenario | simulated | cycles | wall time | real-time factor |")
+        print("|---|---:|---:|---:|---:|")
+        print(f"| (start-up: `import radarnode.cli.main`) | - | - | {start[0]:.2f} s | - |", flush=True)
+    else:
+        print("| scenario | simulated | cycles | before | after | before/after | real-time factor after |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+        print(f"| (start-up: `import radarnode.cli.main`) | - | - | {start[0]:.2f} s | {start[1]:.2f} s | "
+              f"{start[0] / start[1]:.2f}× | - |", flush=True)
     cases = [(p, None) for p in sorted((ROOT / "scenarios").glob("*.yaml")) if args.only in p.stem]
     cases.append((ROOT / "scenarios" / "highway_cut_in.yaml", 300.0))
     with tempfile.TemporaryDirectory() as tmp:
@@ -58,11 +70,14 @@ def main() -> None:
             cmd = [py, "-m", "radarnode", "log", str(path), "--fidelity", "object", "-o", out]
             if duration is not None:
                 cmd += ["--duration", str(duration)]
-            t = wall(cmd, args.runs)
+            t = wall(cmd, args.runs, roots)
             name = path.stem + (f" --duration {duration:g}" if duration is not None else "")
             cycles = int(round(sim / sc.period_s))
-            print(f"| {name} | {sim:g} s | {cycles} | {t:.2f} s | {sim / t:.0f}× |", flush=True)
-
+            if args.before is None:
+                print(f"| {name} | {sim:g} s | {cycles} | {t[0]:.2f} s | {sim / t[0]:.0f}× |", flush=True)
+            else:
+                print(f"| {name} | {sim:g} s | {cycles} | {t[0]:.2f} s | {t[1]:.2f} s | {t[0] / t[1]:.2f}× | "
+                      f"{sim / t[1]:.0f}× |", flush=True)
 
 if __name__ == "__main__":
     main()

@@ -150,3 +150,22 @@ def test_a_followed_boundary_stays_on_an_off_grid_line_and_a_nearer_one_is_found
             assert right.valid and abs(right.offset_m + 4.37) < 0.1 and abs(right.heading_rad) < 0.003
         if k >= 30 + est.reacquire_cycles:
             assert right.valid and abs(right.offset_m + 2.37) < 0.1
+
+
+def test_the_curve_samples_are_numpys_linspace():
+    from radarnode.perception.boundaries import CURVE_SAMPLES, _linspace
+    for a, b in ((0.0, 100.0), (3.7, 151.3), (12.0, 12.0), (40.0, 8.25), (1e-300, 1e-300 + 1e-310)):
+        np.testing.assert_array_equal(_linspace(a, b), np.linspace(a, b, CURVE_SAMPLES))
+
+
+def test_the_e2e_crc_by_table_is_cantools_profile2_crc():
+    import random
+
+    from cantools.autosar.end_to_end import compute_profile2_crc
+
+    from radarnode.wire.e2e import profile2_crc
+    rnd = random.Random(2)
+    for _ in range(5000):
+        payload = bytes(rnd.randrange(256) for _ in range(rnd.randrange(2, 9)))
+        did = rnd.randrange(256)
+        assert profile2_crc(payload, did) == compute_profile2_crc(payload, did)

@@ -232,3 +232,20 @@ def test_report_rejects_bad_options():
     assert r.returncode == 2 and "option --seeds" in r.stderr
     r = run("report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--seeds", "2", "--min-passes", "3")
     assert r.returncode == 2 and "option --min-passes" in r.stderr
+
+
+def test_log_imports_only_what_it_needs(tmp_path):
+    """`radarnode log` at the object level sets up its own subcommand only: the consumer (without --ecu), the other
+    commands, the scatterer levels' synthesis and scipy.ndimage are not imported (issue 13 item 10's start-up)."""
+    out = tmp_path / "x.blf"
+    code = ("import sys; from radarnode.cli.main import main; "
+            f"assert main(['log', {str(SCENARIOS / 'highway_cut_in.yaml')!r}, '--fidelity', 'object', "
+            f"'--duration', '1', '-o', {str(out)!r}]) == 0; print(' '.join(sorted(sys.modules)))")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True)
+    loaded = set(done.stdout.split())
+    for name in ("radarnode.consumer.assembler", "radarnode.consumer.ecu", "radarnode.cli.consume",
+                 "radarnode.cli.image", "radarnode.cli.report", "radarnode.cli.montecarlo",
+                 "radarnode.radar.signal_model", "radarnode.radar.detection_model", "scipy.ndimage",
+                 "matplotlib"):
+        assert name not in loaded, name
+    assert {"radarnode.cli.log", "radarnode.radar.object_model", "radarnode.wire.node"} <= loaded

@@ -121,3 +121,27 @@ def test_sigma_codes_round_trip_to_the_table_bounds():
     finite = np.isfinite(sig[:5]) & (sig[:5] > 0.005)
     assert np.all(bound[:5][finite] > sig[:5][finite])   # the code's bound is above σ ...
     assert np.all(P.code_to_sigma(code[:5][finite] - 1) <= sig[:5][finite])   # ... and the next lower is not
+
+
+@pytest.mark.parametrize("frame_id", [i for i in ALL_IDS if i not in (0x202, 0x204)], ids=hex)
+@settings(max_examples=60, deadline=None)
+@given(data=st.data())
+def test_one_frame_of_scalars_is_encoded_as_the_columns_are(frame_id, data, db):
+    """Scalars take the one-frame path (Python numbers); its bytes and saturation counts are the columns' for
+    any value: inside the range, beyond it, and exactly half an LSB between two raw values (ties to even)."""
+    message = db.get_message_by_frame_id(frame_id)
+    scalar, column = MessageCodec(message), MessageCodec(message)
+    values = {}
+    for f in scalar.fields:
+        span = f.maximum - f.minimum
+        kind = data.draw(st.sampled_from(["inside", "beyond", "tie"]), label=f.name)
+        if kind == "tie":
+            raw = data.draw(st.integers(0, max(int(round(span / f.scale)) - 1, 0)), label=f"{f.name} raw")
+            values[f.name] = f.offset + (raw + 0.5) * f.scale
+        else:
+            lo, hi = (f.minimum, f.maximum) if kind == "inside" else (f.minimum - span, f.maximum + span)
+            values[f.name] = data.draw(st.floats(lo, hi, allow_nan=False), label=f.name)
+    one = scalar.encode(values)
+    assert one.shape == (1, message.length) and one.dtype == np.uint8
+    assert one.tobytes() == column.encode({k: np.array([v]) for k, v in values.items()}).tobytes()
+    assert scalar.saturated == column.saturated

@@ -74,3 +74,57 @@ def test_weights_and_bad_input():
         accumulate(np.zeros(3), np.zeros(4), GRID)
     with pytest.raises(ConfigError, match="hough grid"):
         HoughGrid.make(rho_max_m=-1.0)
+
+
+def test_the_accumulator_votes_exactly_as_the_plain_formula():
+    """accumulate works in place on one array; every cell and every (weighted) vote is the plain formula's:
+    ρ = x·cosθ + y·sinθ rounded to a cell, points beyond the ρ range voting nowhere."""
+    rng = np.random.default_rng(7)
+    x = rng.uniform(-5.0, 120.0, 900)
+    y = rng.uniform(-60.0, 60.0, 900)        # many beyond ±ρ_max: they must vote nowhere
+    w = rng.uniform(0.5, 2.0, 900)
+    for weights in (None, w):
+        rho = x[:, None] * np.cos(GRID.theta_rad)[None, :] + y[:, None] * np.sin(GRID.theta_rad)[None, :]
+        idx = np.rint((rho - GRID.rho_m[0]) / (GRID.rho_m[1] - GRID.rho_m[0])).astype(np.int64)
+        ok = (idx >= 0) & (idx < GRID.rho_m.size)
+        flat = (np.arange(GRID.theta_rad.size)[None, :] * GRID.rho_m.size + idx)[ok]
+        votes = np.broadcast_to((np.ones_like(x) if weights is None else weights)[:, None], rho.shape)[ok]
+        plain = np.bincount(flat, weights=votes, minlength=GRID.theta_rad.size * GRID.rho_m.size)
+        np.testing.assert_array_equal(accumulate(x, y, GRID, weights=weights), plain.reshape(GRID.theta_rad.size, -1))
+
+
+@pytest.mark.parametrize("half", [(0, 0), (1, 0), (0, 3), (10, 4), (2, 7), (13, 1)])
+def test_the_max_filter_is_scipys_with_edges_extended(half):
+    import scipy.ndimage
+
+    from radarnode.dsp.hough import max_filter
+    rng = np.random.default_rng(sum(half))
+    a = np.floor(rng.random((40, 57)) * 6.0)          # plateaus of equal values, as an accumulator has
+    want = scipy.ndimage.maximum_filter(a, size=(2 * half[0] + 1, 2 * half[1] + 1), mode="nearest")
+    np.testing.assert_array_equal(max_filter(a, half), want)
+
+
+def test_peaks_on_plateaus_are_taken_strongest_first_and_each_strikes_its_neighbourhood():
+    """Candidate cells on the plateaus of three lines: the lines found are the loop's over every candidate
+    (strongest first, stable; skipped when near a line already taken)."""
+    rng = np.random.default_rng(11)
+    x = np.concatenate([np.linspace(5, 150, 60)] * 3)
+    y = np.concatenate([np.full(60, 3.5), np.full(60, 7.0), 0.02 * np.linspace(5, 150, 60) - 4.0])
+    x, y = x + rng.normal(0, 0.05, x.size), y + rng.normal(0, 0.05, y.size)
+    acc = accumulate(x, y, GRID)
+    got = strongest_lines(acc, GRID, max_lines=3, min_votes=4.0)
+    # the plain loop, as it was written before
+    import scipy.ndimage
+    local = acc >= scipy.ndimage.maximum_filter(acc, size=(21, 9), mode="nearest")
+    ti, ri = np.nonzero(local & (acc >= 4.0))
+    plain = []
+    for k in np.argsort(-acc[ti, ri], kind="stable"):
+        t, r = ti[k], ri[k]
+        if any(abs(np.degrees(GRID.theta_rad[t] - ln.theta_rad)) <= 5.0 and abs(GRID.rho_m[r] - ln.rho_m) <= 1.0
+               for ln in plain):
+            continue
+        plain.append(type(got[0])(float(GRID.theta_rad[t]), float(GRID.rho_m[r]), float(acc[t, r])))
+        if len(plain) == 3:
+            break
+    assert ti.size > 3 * len(plain)                 # candidates were skipped
+    assert got == plain and len(got) == 3

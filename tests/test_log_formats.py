@@ -272,3 +272,35 @@ def test_decode_names_the_sensors_a_log_holds_when_the_one_asked_for_has_none(ca
     assert rc == 0 and "cycles=0" not in out and "warning" not in err
     rc, out, err = cli(capsys, "decode", log, "--format", "json")          # every sensor's frames: nothing to say
     assert rc == 0 and "warning" not in err
+
+
+def test_radarnodes_blf_writer_writes_python_cans_bytes(tmp_path):
+    """The .blf writer packs a classic frame in one call; the file is byte for byte python-can's BLFWriter's
+    (extended and remote frames, received and sent, several channels and none, an error frame and CAN FD among
+    them, over several compressed containers)."""
+    from can.io.blf import BLFWriter
+
+    from radarnode.wire.logfiles import open_writer
+    rnd = random.Random(4)
+    msgs = []
+    for k in range(12000):
+        kind = rnd.random()
+        ext = rnd.random() < 0.2
+        msgs.append(can.Message(
+            timestamp=1.7e9 + 0.0137 * k + rnd.random() * 1e-3, arbitration_id=rnd.randrange(1 << (29 if ext else 11)),
+            is_extended_id=ext, is_remote_frame=0.95 < kind < 0.97, is_error_frame=kind >= 0.995,
+            is_fd=0.97 <= kind < 0.98, is_rx=rnd.random() < 0.5, channel=rnd.choice(["can0", "can3", None, "vcan12"]),
+            data=bytes(rnd.randrange(256) for _ in range(rnd.randrange(9) if not 0.95 < kind < 0.97 else 0)),
+            check=False))
+    ours, theirs = tmp_path / "ours.blf", tmp_path / "theirs.blf"
+    w = open_writer(str(ours))
+    assert type(w).__name__ == "_BlfWriter"
+    ref = BLFWriter(str(theirs))
+    for m in msgs:
+        w.on_message_received(m)
+        ref.on_message_received(m)
+    w.stop()
+    ref.stop()
+    assert ours.read_bytes() == theirs.read_bytes()
+    back = list(can.BLFReader(str(ours)))
+    assert len(back) == len(msgs)

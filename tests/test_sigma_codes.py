@@ -88,3 +88,25 @@ def test_sigma_codes_grow_while_an_object_coasts(db, level):
     else:                      # the filter's covariance grows with every prediction: along the line of sight
         for name in ("Obj_VrelLong_rms", "Obj_ArelLong_rms"):
             assert all(cur[name] > prev[name] for prev, cur in pairs), name
+
+
+def test_the_quality_fields_codes_in_one_pass_are_each_fields_own():
+    """object_signals codes the seven σ fields of Obj_2_Quality in one pass; each is sigma_to_code of its field
+    (the orientation's in degrees, on its own scale), NaN ("invalid") included."""
+    from radarnode.perception.types import ObjectList
+    from radarnode.wire.ars408 import RMS_TOP_ANGLE_DEG, object_signals, sigma_to_code
+    rng = np.random.default_rng(3)
+    ol = ObjectList.empty(50)
+    fields = {"Obj_DistLong_rms": "dist_long_sigma_m", "Obj_DistLat_rms": "dist_lat_sigma_m",
+              "Obj_VrelLong_rms": "vrel_long_sigma_mps", "Obj_VrelLat_rms": "vrel_lat_sigma_mps",
+              "Obj_ArelLong_rms": "arel_long_sigma_mps2", "Obj_ArelLat_rms": "arel_lat_sigma_mps2",
+              "Obj_Orientation_rms": "orientation_sigma_rad"}
+    for name in fields.values():
+        v = 10.0 ** rng.uniform(-4.0, 2.5, 50)
+        v[rng.random(50) < 0.1] = np.nan
+        setattr(ol, name, v)
+    _, quality, _ = object_signals(ol)
+    for signal, name in fields.items():
+        want = (sigma_to_code(np.degrees(ol.orientation_sigma_rad), RMS_TOP_ANGLE_DEG) if signal == "Obj_Orientation_rms"
+                else sigma_to_code(getattr(ol, name)))
+        np.testing.assert_array_equal(quality[signal], want)

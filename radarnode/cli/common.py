@@ -11,14 +11,17 @@ import sys
 import tempfile
 import threading
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from radarnode.consumer.assembler import ClusterCycle, ConsumerStats, ObjectCycle
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
 from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario
+
+if TYPE_CHECKING:
+    from radarnode.consumer.assembler import ClusterCycle, ConsumerStats
 
 
 def _scheduler_address(text: str) -> str:
@@ -156,6 +159,7 @@ def stop_on_signals():
 def format_cycle(cycle: ObjectCycle | ClusterCycle, t_s: float | None = None, max_rows: int = 20) -> str:
     """A small fixed-width table of one decoded cycle."""
     when = f" t={t_s:7.2f} s" if t_s is not None else f" ts={cycle.timestamp:.3f}"
+    from radarnode.consumer.assembler import ObjectCycle     # the consumer's types: not for every command
     if isinstance(cycle, ObjectCycle):
         ol = cycle.objects
         lines = [f"cycle {cycle.meas_counter:5d}{when}  {len(ol)} objects",

@@ -19,8 +19,6 @@ from radarnode.cli.common import add_scenario_argument, atomic_path, progress, r
 from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
 from radarnode.wire.logfiles import check_output_format, open_writer
-from radarnode.consumer.assembler import CycleAssembler
-from radarnode.consumer.evaluate import make_ecu
 from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import SimulatedClock, run_node
 
@@ -65,8 +63,12 @@ def cmd(args) -> int:
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
             raise FileError(f"option --output: cannot write {args.output!r}: {reason}") from None
         bar = progress(scenario.num_cycles, f"logging {scenario.name}")
-        ecu = make_ecu(scenario, node.period_s) if args.ecu else None
-        assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id) if args.ecu else None
+        ecu = assembler = None
+        if args.ecu:            # the consumer's modules only when they run (a faster start without --ecu)
+            from radarnode.consumer.assembler import CycleAssembler
+            from radarnode.consumer.evaluate import make_ecu
+            ecu = make_ecu(scenario, node.period_s)
+            assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
         ecu_frames = [0]
 
         def write(msg: can.Message) -> None:

@@ -3,20 +3,21 @@
 from __future__ import annotations
 
 import argparse
+import importlib
 import logging
 import signal
 import sys
 import traceback
 
 from radarnode import __version__
-from radarnode.cli import consume, decode, export, image, log, montecarlo, node, report, run
 from radarnode.cli.common import Terminated
 from radarnode.cli.options import Parser
 from radarnode.errors import RadarnodeError, UsageError
 
 logger = logging.getLogger(__name__)
 
-SUBCOMMANDS = (run, node, consume, log, decode, export, image, report, montecarlo)
+#: the subcommands in the order ``--help`` lists them; each is the module ``radarnode.cli.<name>``
+COMMANDS = ("run", "node", "consume", "log", "decode", "export", "image", "report", "montecarlo")
 
 
 def _add_global_options(parser: argparse.ArgumentParser, after: bool) -> None:
@@ -31,7 +32,22 @@ def _add_global_options(parser: argparse.ArgumentParser, after: bool) -> None:
                         default=default if after else 0, help="more log output (-v info, -vv debug)")
 
 
-def build_parser() -> argparse.ArgumentParser:
+def _command_in(argv: list[str]) -> str | None:
+    """The subcommand a command line names, when nothing before it asks for the main parser's help or version;
+    None otherwise (then every subcommand is set up). The main parser's options take no value, so the first
+    word that is not an option is the subcommand."""
+    for word in argv:
+        if word in ("-h", "--help", "--version") or word.startswith("--help") or word == "--":
+            return None
+        if not word.startswith("-"):
+            return word if word in COMMANDS else None
+    return None
+
+
+def build_parser(only: str | None = None) -> argparse.ArgumentParser:
+    """The command-line parser; with ``only``, that subcommand's module alone is imported and set up (the
+    others are named, with no options of their own), so that a command does not pay for the imports of the
+    eight others (``radarnode log`` starts without the consumer's, the image's or Monte Carlo's)."""
     parser = Parser(prog="radarnode", description="ARS 408-21 compatible radar node emulator",
                     epilog="exit status: 0 done; 1 a file, scenario, bus or run failed (or report: a scenario "
                            "failed); 2 usage: the command line cannot run as typed; 130/143 stopped by "
@@ -39,8 +55,11 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"radarnode {__version__}")
     _add_global_options(parser, after=False)
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for module in SUBCOMMANDS:
-        module.add_subparser(sub)
+    for name in COMMANDS:
+        if only is None or name == only:
+            importlib.import_module(f"radarnode.cli.{name}").add_subparser(sub)
+        else:
+            sub.add_parser(name)
     for sp in sub.choices.values():
         _add_global_options(sp, after=True)
     return parser
@@ -65,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None) -> int:
-    parser = build_parser()
+    parser = build_parser(_command_in(sys.argv[1:] if argv is None else list(argv)))
     args = parser.parse_args(argv)
     args.debug = args.debug or getattr(args, "debug_after", False)
     args.verbose += getattr(args, "verbose_after", 0)

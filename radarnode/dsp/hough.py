@@ -65,14 +65,24 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     n_t, n_r = grid.theta_rad.size, grid.rho_m.size
     if x.size == 0:
         return np.zeros((n_t, n_r))
-    w = np.ones_like(x) if weights is None else np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
-    rho = x[:, None] * np.cos(grid.theta_rad)[None, :] + y[:, None] * np.sin(grid.theta_rad)[None, :]   # (n, n_t)
-    step = grid.rho_m[1] - grid.rho_m[0]
-    idx = np.rint((rho - grid.rho_m[0]) / step).astype(np.int64)
-    ok = (idx >= 0) & (idx < n_r)
-    flat = (np.arange(n_t)[None, :] * n_r + idx)[ok]
-    votes = np.broadcast_to(w[:, None], rho.shape)[ok]
-    return np.bincount(flat, weights=votes, minlength=n_t * n_r).reshape(n_t, n_r)
+    # every step in place on the one (n, n_theta) array: a few passes over it, not a dozen (the arithmetic, and so
+    # every cell a point votes for, is the same as x·cosθ + y·sinθ, minus ρ₀, over the step, rounded)
+    rho = np.multiply.outer(x, np.cos(grid.theta_rad))
+    rho += np.multiply.outer(y, np.sin(grid.theta_rad))
+    rho -= grid.rho_m[0]
+    rho /= grid.rho_m[1] - grid.rho_m[0]
+    np.rint(rho, out=rho)
+    idx = rho.astype(np.int64)
+    beyond = (idx < 0) | (idx >= n_r)
+    idx += np.arange(n_t) * n_r
+    idx[beyond] = n_t * n_r                     # one cell past the grid collects the votes that fall outside it
+    if weights is None:
+        votes = np.bincount(idx.ravel(), minlength=n_t * n_r + 1).astype(np.float64)
+    else:
+        w = np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
+        votes = np.bincount(idx.ravel(), weights=np.broadcast_to(w[:, None], idx.shape).ravel(),
+                            minlength=n_t * n_r + 1)
+    return votes[:-1].reshape(n_t, n_r)
 
 
 def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_votes: float = 3.0,
@@ -86,21 +96,52 @@ def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_vo
         return []
     step_r = grid.rho_m[1] - grid.rho_m[0]
     step_t = np.degrees(grid.theta_rad[1] - grid.theta_rad[0]) if grid.theta_rad.size > 1 else 1.0
-    size = (2 * max(int(round(suppress_theta_deg / step_t)), 0) + 1, 2 * max(int(round(suppress_rho_m / step_r)), 0) + 1)
-    import scipy.ndimage  # imported when first needed: a faster start
-    local = acc >= scipy.ndimage.maximum_filter(acc, size=size, mode="nearest")
+    half = (max(int(round(suppress_theta_deg / step_t)), 0), max(int(round(suppress_rho_m / step_r)), 0))
+    local = acc >= max_filter(acc, half)
     ti, ri = np.nonzero(local & (acc >= min_votes))
     order = np.argsort(-acc[ti, ri], kind="stable")
+    ti, ri = ti[order], ri[order]
+    theta, rho, votes = grid.theta_rad[ti], grid.rho_m[ri], acc[ti, ri]
+    # strongest first; a peak near one already taken (±suppress_theta_deg and ±suppress_rho_m) is the same line:
+    # each line taken strikes its neighbourhood off the candidates at once (a plateau holds a thousand of them)
+    free = np.ones(ti.size, dtype=bool)
     lines: list[Line] = []
-    for k in order:        # at most a handful of candidate peaks, not points or cells
-        t, r = ti[k], ri[k]
-        if any(abs(np.degrees(grid.theta_rad[t] - ln.theta_rad)) <= suppress_theta_deg
-               and abs(grid.rho_m[r] - ln.rho_m) <= suppress_rho_m for ln in lines):
-            continue
-        lines.append(Line(float(grid.theta_rad[t]), float(grid.rho_m[r]), float(acc[t, r])))
-        if len(lines) == max_lines:
+    while len(lines) < max_lines:
+        left = np.flatnonzero(free)
+        if not left.size:
             break
+        k = left[0]
+        lines.append(Line(float(theta[k]), float(rho[k]), float(votes[k])))
+        free &= ~((np.abs(np.degrees(theta - lines[-1].theta_rad)) <= suppress_theta_deg)
+                  & (np.abs(rho - lines[-1].rho_m) <= suppress_rho_m))
     return lines
+
+
+def max_filter(a: np.ndarray, half: tuple[int, int]) -> np.ndarray:
+    """The maximum over the (2·half[0] + 1) × (2·half[1] + 1) window around each cell of a 2-D array, edges
+    extended (what ``scipy.ndimage.maximum_filter(a, size, mode="nearest")`` gives), by doubling windows along
+    each axis: a few numpy passes instead of one per window cell."""
+    out = np.pad(a, ((half[0], half[0]), (0, 0)), mode="edge")
+    out = _running_max(out, 2 * half[0] + 1, axis=0)
+    out = np.pad(out, ((0, 0), (half[1], half[1])), mode="edge")
+    return _running_max(out, 2 * half[1] + 1, axis=1)
+
+
+def _running_max(a: np.ndarray, width: int, axis: int) -> np.ndarray:
+    """m[i] = max(a[i : i + width]) along ``axis`` (the result is ``width − 1`` shorter there)."""
+    n = a.shape[axis] - width + 1
+
+    def cut(x, start, length):
+        return x[start:start + length] if axis == 0 else x[:, start:start + length]
+
+    span, m = 1, a                        # m[i] = max(a[i : i + span])
+    while 2 * span <= width:
+        m = np.maximum(cut(m, 0, m.shape[axis] - span), cut(m, span, m.shape[axis] - span))
+        span *= 2
+    if span == width:
+        return cut(m, 0, n)
+    # the window is two overlapping spans: [i, i + span) and [i + width − span, i + width)
+    return np.maximum(cut(m, 0, n), cut(m, width - span, n))
 
 
 def refine(line: Line, x: np.ndarray, y: np.ndarray, band_m: float = 1.0) -> tuple[Line, np.ndarray]:

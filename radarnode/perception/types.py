@@ -8,6 +8,7 @@ order the radar sends them. Positions and velocities are in the sensor frame
 from __future__ import annotations
 
 import dataclasses
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -28,6 +29,12 @@ def _empty(n: int, dtype: type = np.float64) -> np.ndarray:
     return np.zeros(n, dtype=dtype)
 
 
+@functools.cache
+def _names(cls: type) -> tuple[str, ...]:
+    """A list class's field names, in order (``dataclasses.fields`` costs more than a cycle's selection)."""
+    return tuple(f.name for f in dataclasses.fields(cls))
+
+
 class _Columns:
     """Shared behaviour of the struct-of-arrays lists: construction, length, selection, range."""
 
@@ -38,22 +45,22 @@ class _Columns:
     def empty(cls, n: int = 0):
         """A list of ``n`` zero entries (integer and boolean fields get their own dtypes)."""
         kw = {}
-        for f in dataclasses.fields(cls):
-            dtype = bool if f.name in cls.BOOL_FIELDS else np.int64 if f.name in cls.INT_FIELDS else np.float64
-            kw[f.name] = _empty(n, dtype)
+        for name in _names(cls):
+            dtype = bool if name in cls.BOOL_FIELDS else np.int64 if name in cls.INT_FIELDS else np.float64
+            kw[name] = _empty(n, dtype)
         return cls(**kw)
 
     def __len__(self) -> int:
-        return int(getattr(self, dataclasses.fields(self)[0].name).shape[0])
+        return int(getattr(self, _names(type(self))[0]).shape[0])
 
     def take(self, index: np.ndarray):
         """A new list with the entries ``index`` (an integer or boolean array), in that order."""
-        return type(self)(**{f.name: getattr(self, f.name)[index] for f in dataclasses.fields(self)})
+        return type(self)(**{name: getattr(self, name)[index] for name in _names(type(self))})
 
     @classmethod
     def concat(cls, parts: list):
         """One list of the entries of ``parts``, in order."""
-        return cls(**{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(cls)})
+        return cls(**{name: np.concatenate([getattr(p, name) for p in parts]) for name in _names(cls)})
 
 
 class _Planar:

@@ -24,14 +24,13 @@ from radarnode.perception.types import ClusterList, Detections, RadarFrame
 from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.calibration import RESOLUTION
 from radarnode.radar.elevation import GROUND_REFLECTION
+from radarnode.radar.levels import FIDELITY_LEVELS, check_doa, make_model  # noqa: F401 (imported from here too)
 from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo, in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
 from radarnode.radar.options import SignalOptions
 from radarnode.radar.signal_model import decimation_for, synthesize, synthesize_rd
 from radarnode.scene.world import Scene, SensorView
-
-FIDELITY_LEVELS = ("object", "detection", "signal", "auto")
 
 
 def reportable(preset: RadarPreset, det: Detections, config: RuntimeConfig) -> np.ndarray:
@@ -285,34 +284,3 @@ def ego_motion(scene: Scene, t_s: float, view: SensorView, estimate) -> tuple[tu
     if len(estimate) == 3:
         return (estimate[0], estimate[1]), float(estimate[2])
     return (estimate[0], estimate[1]), 0.0
-
-
-def check_doa(level: str, options: SignalOptions, scenario=None) -> None:
-    """A super-resolution angle estimator exists only in the signal chain: refuse it at another level.
-
-    The object and detection levels reproduce the beamformer's resolution (:data:`RESOLUTION`), not a
-    super-resolution estimator's: they would report what that estimator does not. With ``scenario`` the error
-    names its file and the line of ``signal.dsp.doa``.
-    """
-    if options.dsp.doa != "fft" and level in FIDELITY_LEVELS and level != "signal":
-        msg = (f"field 'signal.dsp.doa': value {options.dsp.doa!r} is not allowed at fidelity {level!r}; "
-               "expected 'fft' (the object and detection levels model the FFT beamformer), or fidelity 'signal' for a "
-               "super-resolution estimator")
-        if scenario is not None:
-            from radarnode.schema import Source
-            raise Source.of_lines(scenario.source, scenario.lines).error("signal.dsp.doa", msg)
-        raise ConfigError(msg)
-
-
-def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
-               options: SignalOptions = SignalOptions(), clusters_wanted: bool = False):
-    check_doa(level, options)
-    if level == "object":
-        return ObjectModel(scene, preset, rng, options)
-    if level == "detection":
-        return DetectionModel(scene, preset, rng, options)
-    if level == "signal":
-        return SignalModel(scene, preset, rng, options)
-    if level == "auto":
-        return AutoModel(scene, preset, rng, options, clusters_wanted)
-    raise ConfigError(f"fidelity: value {level!r} is not allowed; expected one of {', '.join(FIDELITY_LEVELS)}")

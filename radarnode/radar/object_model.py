@@ -60,6 +60,17 @@ _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW5 = np.array([bin(i & ((1 << 5) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
+#: the object list's fields of a chunk, gathered in two (T, n, F) tables so that a cycle takes its objects' rows
+#: with one fancy index per table instead of one per field (ObjectList field, chunk key)
+_OBJECT_FLOATS = (("rcs_dbsm", "rcs_obj"), ("dist_long_sigma_m", "sig_long"), ("dist_lat_sigma_m", "sig_lat"),
+                  ("vrel_long_sigma_mps", "sig_vlong"), ("vrel_lat_sigma_mps", "sig_vlat"),
+                  ("arel_long_sigma_mps2", "sig_along"), ("arel_lat_sigma_mps2", "sig_alat"),
+                  ("orientation_sigma_rad", "sig_orient"), ("arel_long_mps2", "arel_long"),
+                  ("arel_lat_mps2", "arel_lat"), ("orientation_rad", "orientation"), ("length_m", "length"),
+                  ("width_m", "width"))
+_OBJECT_INTS = (("meas_state", "meas_state"), ("prob_of_exist", "prob_of_exist"), ("obj_class", "obj_class"))
+#: the detections' fields (Detections' order after the actor index: range, range rate, azimuth, RCS, SNR)
+_DETECTION_FLOATS = ("m_r", "m_vr", "m_az", "rcs_rep", "snr")
 
 
 @dataclass
@@ -84,6 +95,21 @@ class RuntimeConfig:
     power_reduction_db: float = 0.0
     high_sensitivity: bool = False
     clusters: bool = True       # the object level builds its cluster list only when it is sent
+
+
+#: the columns of a cluster list's rows before it is sorted: position, velocity, RCS, σ of range, azimuth and range
+#: rate, the actor's index (−1: a guardrail post or a false alarm), AmbigState
+_CL_X, _CL_Y, _CL_VX, _CL_VY, _CL_RCS, _CL_SIG_R, _CL_SIG_AZ, _CL_SIG_V, _CL_ACTOR, _CL_AMBIG = range(10)
+
+
+def _cluster_rows(*columns) -> np.ndarray:
+    """Rows of the ``_CL_*`` columns from arrays of one shape (…, m) and scalars: shape (…, m, 10), float64 (the
+    actor index and AmbigState are small integers, exact in it)."""
+    shape = np.broadcast_shapes(*(np.shape(c) for c in columns))
+    out = np.empty(shape + (len(columns),))
+    for k, c in enumerate(columns):
+        out[..., k] = c
+    return out
 
 
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
@@ -266,6 +292,20 @@ class ObjectModel:
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
         }
 
+    @staticmethod
+    def _tables(ch: dict) -> dict:
+        """The per-cycle lists' fields of a chunk as (T, n, F) tables (float64 and int64, the fields' own dtypes)."""
+        ch["object_floats"] = np.stack([ch[key] for _, key in _OBJECT_FLOATS], axis=-1)
+        ch["object_ints"] = np.stack([ch[key] for _, key in _OBJECT_INTS], axis=-1).astype(np.int64, copy=False)
+        ch["detection_floats"] = np.stack([ch[key] for key in _DETECTION_FLOATS], axis=-1)
+        ch["arel"] = np.stack([ch["arel_long"], ch["arel_lat"]], axis=-1)
+        if ch["config"].clusters:      # the actors' rows of the cluster list (_CL_* columns)
+            t_n, n = ch["snr"].shape
+            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), ch["rcs_eff"], ch["sig_r"],
+                                                 ch["sig_az"], ch["sig_v"], np.broadcast_to(np.arange(n), (t_n, n)),
+                                                 ch["ambig"])
+        return ch
+
     def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
         """Pd factor (T, n) from the other actors' energy in each actor's CA-CFAR training ring.
 
@@ -404,7 +444,7 @@ class ObjectModel:
         if self.scene.dynamic_ego is not None:
             size = 1          # closed loop: the ego's future is not known in advance
         times = (k + np.arange(size)) * period if on_grid else np.array([t_s])
-        self._cache = self._chunk(k, times, config)
+        self._cache = self._tables(self._chunk(k, times, config))
         return self._cache, 0
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
@@ -435,22 +475,23 @@ class ObjectModel:
         predicted[:, 0:2] += predicted[:, 2:4] * dt
         # the tracker models acceleration (it reports it in Obj_3_Extended): a braking lead's speed is
         # predicted with it, so the smoothed speed does not lag by a·dt·(1−g)/g
-        predicted[:, 2] += ch["arel_long"][i] * dt
-        predicted[:, 3] += ch["arel_lat"][i] * dt
-        # velocity of a continuing track is smoothed like a tracker would (the lateral part is poorly measured)
-        tracked = (self.alive & ~new)[:, None]
-        smoothed = meas.copy()
-        smoothed[:, 2:4] = predicted[:, 2:4] + VELOCITY_GAIN * (meas[:, 2:4] - predicted[:, 2:4])
-        self.state = np.where(detected[:, None], np.where(tracked, smoothed, meas), predicted)
+        predicted[:, 2:4] += ch["arel"][i] * dt
+        # a detected actor takes its measurement; the velocity of a continuing track is smoothed like a tracker
+        # would (the lateral part is poorly measured)
+        state = np.where(detected[:, None], meas, predicted)
+        smooth = detected & self.alive & ~new
+        if smooth.any():
+            p = predicted[smooth, 2:4]
+            state[smooth, 2:4] = p + VELOCITY_GAIN * (meas[smooth, 2:4] - p)
+        self.state = state
         self.last_t, self.cycle = t_s, self.cycle + 1
 
         seen = np.flatnonzero(detected & self.reportable)
-        self.info.detections = Detections(ch["m_r"][i, seen], ch["m_vr"][i, seen], ch["m_az"][i, seen],
-                                          ch["rcs_rep"][i, seen], ch["snr"][i, seen], seen, ch["ambig"][i, seen])
+        d = ch["detection_floats"][i, seen]
+        self.info.detections = Detections(d[:, 0], d[:, 1], d[:, 2], d[:, 3], d[:, 4], seen, ch["ambig"][i, seen])
         idx = np.flatnonzero(self.alive)
         objects = self._object_list(ch, i, idx, view, detected, new, sensor_velocity_est)
-        clusters = (self._cluster_list(t_s, view, detected, meas, ch["snr"][i], ch["rcs_eff"][i], ch["sig_r"][i],
-                                       ch["sig_v"][i], ch["sig_az"][i], config, sensor_velocity_est, ch["ambig"][i])
+        clusters = (self._cluster_list(ch, i, view, detected, meas, config, sensor_velocity_est)
                     if config.clusters else _NO_CLUSTERS)
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
@@ -480,56 +521,62 @@ class ObjectModel:
     def _object_list(self, ch: dict, i: int, idx: np.ndarray, view: SensorView, detected: np.ndarray,
                      new: np.ndarray, sensor_velocity_est) -> ObjectList:
         st = self.state[idx]
+        f, g = ch["object_floats"][i, idx], ch["object_ints"][i, idx]      # (m, F): one gather per table
         return ObjectList(
             id=self.obj_id[idx].copy(),
             dist_long_m=st[:, 0], dist_lat_m=st[:, 1], vrel_long_mps=st[:, 2], vrel_lat_mps=st[:, 3],
             dyn_prop=self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view),
-            rcs_dbsm=ch["rcs_obj"][i, idx],
-            dist_long_sigma_m=ch["sig_long"][i, idx], dist_lat_sigma_m=ch["sig_lat"][i, idx],
-            vrel_long_sigma_mps=ch["sig_vlong"][i, idx], vrel_lat_sigma_mps=ch["sig_vlat"][i, idx],
-            arel_long_sigma_mps2=ch["sig_along"][i, idx], arel_lat_sigma_mps2=ch["sig_alat"][i, idx],
-            orientation_sigma_rad=ch["sig_orient"][i, idx],
-            meas_state=ch["meas_state"][i, idx], prob_of_exist=ch["prob_of_exist"][i, idx],
-            arel_long_mps2=ch["arel_long"][i, idx], arel_lat_mps2=ch["arel_lat"][i, idx],
-            obj_class=ch["obj_class"][i, idx], orientation_rad=ch["orientation"][i, idx],
-            length_m=ch["length"][i, idx], width_m=ch["width"][i, idx], actor_index=idx)
+            **{name: f[:, j] for j, (name, _) in enumerate(_OBJECT_FLOATS)},
+            **{name: g[:, j] for j, (name, _) in enumerate(_OBJECT_INTS)}, actor_index=idx)
 
-    def _cluster_list(self, t_s, view, detected, meas, snr, rcs_eff, sig_r, sig_v, sig_az, config,
-                      sensor_velocity_est, ambig):
-        p, rng, sc = self.preset, self._cluster_rng, self.scene
-        parts_xy, parts_v, parts_rcs, parts_sig, parts_actor = [], [], [], [], []
-        parts_ambig = [ambig[np.flatnonzero(detected & self.reportable)]]
+    def _posts(self, ch: dict) -> dict | None:
+        """The guardrail posts of a chunk's cycles that the radar can see, and what does not depend on the draws:
+        range, azimuth, SNR, Pd and the chain's σ, each flat over the chunk with ``starts`` (T + 1,) marking where
+        each cycle's begin (None: the scene has no guardrail posts). Computed once per chunk, element by element
+        the same numbers as a cycle's own posts."""
+        if "posts" in ch:
+            return ch["posts"]
+        p, sc, config = self.preset, self.scene, ch["config"]
+        g = sc.scenario.road.guardrails
+        if not sc.is_guardrail.any() and g.left_offset_m is None and g.right_offset_m is None:
+            ch["posts"] = None
+            return None
+        gx, gy, starts = sc.guardrail_posts_many(ch["times"], p.max_range_m)
+        g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
+        keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
+        row = np.repeat(np.arange(starts.size - 1), np.diff(starts))[keep]
+        g_r, g_az = g_r[keep], g_az[keep]
+        g_rcs = np.full(g_r.shape, g.rcs_dbsm)
+        g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
+        er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
+        ch["posts"] = {
+            "starts": np.searchsorted(row, np.arange(starts.size)), "pd": self.statistic.pd_of_snr(g_snr, 1),
+            # (N, 8): range, azimuth, RCS, σ range, σ azimuth, σ speed, cos and sin of the azimuth
+            "table": np.stack([g_r, g_az, g_rcs, er * equation.crb_range_m(p, g_snr),
+                               ea * equation.crb_azimuth_rad(p, g_snr, g_az), ev * equation.crb_speed_mps(p, g_snr),
+                               np.cos(g_az), np.sin(g_az)], axis=1)}
+        return ch["posts"]
+
+    def _cluster_list(self, ch, i, view, detected, meas, config, sensor_velocity_est):
+        """This cycle's detections, guardrail posts and false alarms as a cluster list; each part is a block of
+        rows of the ``_CL_*`` columns, so that the list is one concatenation and one gather in the sent order."""
+        p, rng = self.preset, self._cluster_rng
         a_idx = np.flatnonzero(detected & self.reportable)
-        parts_xy.append(meas[a_idx, 0:2])
-        parts_v.append(meas[a_idx, 2:4])
-        parts_rcs.append(rcs_eff[a_idx])
-        parts_sig.append(np.stack([sig_r[a_idx], sig_az[a_idx], sig_v[a_idx]], axis=1))
-        parts_actor.append(a_idx)
+        blocks = [ch["cluster_actors"][i, a_idx]]
         # guardrail posts: stationary point targets
-        gx, gy = sc.guardrail_posts(t_s, p.max_range_m)
-        if gx.size:
-            g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
-            keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
-            g_r, g_az = g_r[keep], g_az[keep]
-            g_rcs = np.full(g_r.shape, sc.scenario.road.guardrails.rcs_dbsm)
-            g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
-            hit = rng.random(g_r.shape) < self.statistic.pd_of_snr(g_snr, 1)
-            g_r, g_az, g_snr, g_rcs = g_r[hit], g_az[hit], g_snr[hit], g_rcs[hit]
-            er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
-            gs_r = er * equation.crb_range_m(p, g_snr)
-            gs_az = ea * equation.crb_azimuth_rad(p, g_snr, g_az)
-            gs_v = ev * equation.crb_speed_mps(p, g_snr)
+        posts = self._posts(ch)
+        if posts is not None:
+            a, b = posts["starts"][i], posts["starts"][i + 1]
+            hit = rng.random(b - a) < posts["pd"][a:b]
+            g = posts["table"][a:b][hit]
+            g_r, g_az, g_rcs, gs_r, gs_az, gs_v, cos_az, sin_az = g.T
             nz = rng.standard_normal((3, g_r.size))
             mr, maz = g_r + gs_r * nz[0], g_az + gs_az * nz[1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
-            vr = -(view.sensor_vx_mps * np.cos(g_az) + view.sensor_vy_mps * np.sin(g_az)) + gs_v * nz[2]
+            vr = -(view.sensor_vx_mps * cos_az + view.sensor_vy_mps * sin_az) + gs_v * nz[2]
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g_az, (view.sensor_vx_mps, view.sensor_vy_mps))
-            parts_ambig.append(g_amb)
-            parts_xy.append(np.stack([mr * np.cos(maz), mr * np.sin(maz)], axis=1))
-            parts_v.append(np.stack([vr * np.cos(maz), vr * np.sin(maz)], axis=1))
-            parts_rcs.append(g_rcs)
-            parts_sig.append(np.stack([gs_r, gs_az, gs_v], axis=1))
-            parts_actor.append(np.full(g_r.size, -1))
+            cm, sm = np.cos(maz), np.sin(maz)
+            blocks.append(_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g_rcs, gs_r, gs_az, gs_v, -1, g_amb))
         # false alarms
         rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
                 * (10.0 if config.high_sensitivity else 1.0))
@@ -540,39 +587,31 @@ class ObjectModel:
             ok = in_fov(p, fr, faz)
             fr, faz = fr[ok], faz[ok]
             fv = rng.uniform(-p.max_unambiguous_speed_mps, p.max_unambiguous_speed_mps, fr.size)
-            parts_xy.append(np.stack([fr * np.cos(faz), fr * np.sin(faz)], axis=1))
-            parts_v.append(np.stack([fv * np.cos(faz), fv * np.sin(faz)], axis=1))
+            cf, sf = np.cos(faz), np.sin(faz)
             f_snr = np.full(fr.size, 13.0)
-            parts_rcs.append(f_snr - equation.snr_db(p, fr, np.zeros(fr.size)))
-            parts_sig.append(np.stack([np.full(fr.size, p.range_resolution_m / 2),
-                                       np.full(fr.size, p.angular_resolution_rad / 2),
-                                       np.full(fr.size, p.speed_resolution_mps / 2)], axis=1))
-            parts_actor.append(np.full(fr.size, -1))
-            parts_ambig.append(np.full(fr.size, AMBIG_AMBIGUOUS))
-        xy = np.concatenate(parts_xy)
-        v = np.concatenate(parts_v)
-        rcs = np.concatenate(parts_rcs)
-        sig = np.concatenate(parts_sig)
-        actor = np.concatenate(parts_actor).astype(np.int64)
-        r = np.hypot(xy[:, 0], xy[:, 1])
+            blocks.append(_cluster_rows(fr * cf, fr * sf, fv * cf, fv * sf, f_snr - equation.snr_db(p, fr, np.zeros(fr.size)),
+                                        p.range_resolution_m / 2, p.angular_resolution_rad / 2,
+                                        p.speed_resolution_mps / 2, -1, AMBIG_AMBIGUOUS))
+        rows = np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
+        r = np.hypot(rows[:, _CL_X], rows[:, _CL_Y])
         near = r <= p.near_range_m
         order = np.lexsort((r, ~near))[:MAX_CLUSTERS]    # near first, then far, each by range
         n = order.size
-        cl = ClusterList.empty(n)
-        cl.id = np.arange(n, dtype=np.int64)
-        cl.dist_long_m, cl.dist_lat_m = xy[order, 0], xy[order, 1]
-        cl.vrel_long_mps, cl.vrel_lat_mps = v[order, 0], v[order, 1]
+        sel, r = rows[order], r[order]
+        x, y, vx, vy = sel[:, _CL_X], sel[:, _CL_Y], sel[:, _CL_VX], sel[:, _CL_VY]
+        actor = sel[:, _CL_ACTOR].astype(np.int64)
         sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
-        az_o = np.arctan2(xy[order, 1], xy[order, 0])
-        cl.dyn_prop = cluster_dyn_prop(v[order, 0] * np.cos(az_o) + v[order, 1] * np.sin(az_o), az_o, sv)
-        cl.rcs_dbsm = rcs[order]
-        az = np.arctan2(xy[order, 1], xy[order, 0])
-        cl.dist_long_sigma_m, cl.dist_lat_sigma_m = sigma_to_xy(r[order], az, sig[order, 0], sig[order, 1])
-        cl.vrel_long_sigma_mps = np.abs(np.cos(az)) * sig[order, 2] + np.abs(np.sin(az)) * p.lateral_speed_sigma_mps
-        cl.vrel_lat_sigma_mps = np.abs(np.sin(az)) * sig[order, 2] + np.abs(np.cos(az)) * p.lateral_speed_sigma_mps
-        cl.pdh0 = np.where(actor[order] >= 0, 1, 2).astype(np.int64)
-        cl.ambig_state = np.concatenate(parts_ambig).astype(np.int64)[order]
-        cl.invalid_state = np.zeros(n, dtype=np.int64)
-        cl.is_near = near[order]
-        cl.actor_index = actor[order]
-        return cl
+        az = np.arctan2(y, x)
+        c, s = np.cos(az), np.sin(az)
+        s_r, s_az, s_v = sel[:, _CL_SIG_R], sel[:, _CL_SIG_AZ], sel[:, _CL_SIG_V]
+        ac, as_ = np.abs(c), np.abs(s)
+        return ClusterList(
+            id=np.arange(n, dtype=np.int64), dist_long_m=x, dist_lat_m=y, vrel_long_mps=vx, vrel_lat_mps=vy,
+            dyn_prop=cluster_dyn_prop(vx * c + vy * s, az, sv), rcs_dbsm=sel[:, _CL_RCS],
+            # sigma_to_xy(r, az, s_r, s_az), its cos and sin taken once
+            dist_long_sigma_m=np.sqrt((c * s_r) ** 2 + (r * s * s_az) ** 2),
+            dist_lat_sigma_m=np.sqrt((s * s_r) ** 2 + (r * c * s_az) ** 2),
+            vrel_long_sigma_mps=ac * s_v + as_ * p.lateral_speed_sigma_mps,
+            vrel_lat_sigma_mps=as_ * s_v + ac * p.lateral_speed_sigma_mps,
+            pdh0=np.where(actor >= 0, 1, 2).astype(np.int64), ambig_state=sel[:, _CL_AMBIG].astype(np.int64),
+            invalid_state=np.zeros(n, dtype=np.int64), is_near=near[order], actor_index=actor)

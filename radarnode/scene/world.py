@@ -83,6 +83,9 @@ class SensorView:
                           None if self.z_m is None else self.z_m[k])
 
 
+#: cycles of a scripted ego computed together by :meth:`Scene.ego_state` (the vehicle's 0x300/0x301 every cycle)
+EGO_BLOCK = 256
+
 _VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
                 "orientation_rad", "az_lo_rad", "az_hi_rad", "centre_x_m", "centre_y_m")
 
@@ -131,6 +134,7 @@ class Scene:
         self._ego = MoverTable([0.0], [scenario.ego.y_m], [scenario.ego.speed_mps], [0.0], [scenario.ego.accel], [()],
                                [scenario.ego_lateral()])
         self.dynamic_ego: DynamicEgo | None = None
+        self._ego_block: tuple | None = None          # (ego, block, states) of :meth:`ego_state` on the cycle grid
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
@@ -186,8 +190,28 @@ class Scene:
         return x, y, heading, vxw, vyw, speed, st.ax_mps2, kappa * st.vx_mps + turn
 
     def ego_state(self, t_s: float) -> EgoState:
+        """The ego at ``t_s``. On the cycle grid of a scripted ego (``t_s`` = k × period) it comes from a block of
+        ``EGO_BLOCK`` cycles computed in one pass (the same numbers, element by element); a closed-loop ego, whose
+        future is not known yet, and any other time are computed on their own."""
+        if self.dynamic_ego is None:
+            state = self._ego_on_grid(t_s)
+            if state is not None:
+                return state
         x, y, heading, _, _, speed, accel, yaw = self._ego_pose(self._ego.state(t_s))
         return EgoState(float(x[0]), float(y[0]), float(heading[0]), float(speed[0]), float(accel[0]), float(yaw[0]))
+
+    def _ego_on_grid(self, t_s: float) -> EgoState | None:
+        period = self.scenario.period_s
+        k = round(t_s / period)
+        if not (0 <= k and k * period == t_s):
+            return None
+        block, i = divmod(k, EGO_BLOCK)
+        cached = self._ego_block
+        if cached is None or cached[0] is not self._ego or cached[1] != block:
+            times = (block * EGO_BLOCK + np.arange(EGO_BLOCK)) * period
+            x, y, heading, _, _, speed, accel, yaw = (a[:, 0].tolist() for a in self._ego_pose(self._ego.state(times)))
+            cached = self._ego_block = (self._ego, block, list(zip(x, y, heading, speed, accel, yaw)))
+        return EgoState(*cached[2][i])
 
     def lane_gap(self, t_s: float, i: int) -> tuple[float, float, float, float, float]:
         """Actor ``i`` against the ego in road coordinates, as a test judge measures a lead on any road.
@@ -297,22 +321,42 @@ class Scene:
 
         Road-edge guardrails come from ``road.guardrails``; guardrail actors add
         posts along their own length. Posts are fixed in the world, so they are
-        stationary targets.
+        stationary targets. One time of :meth:`guardrail_posts_many`.
         """
+        gx, gy, _ = self.guardrail_posts_many(np.array([t_s], dtype=np.float64), max_range_m)
+        return gx, gy
+
+    def guardrail_posts_many(self, times_s: np.ndarray, max_range_m: float
+                             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`guardrail_posts` at T times in one pass: the posts of every time one after the other, and where
+        each time's start, shape (T + 1,) (time k's posts are ``[starts[k]:starts[k + 1]]``, in the order of
+        :meth:`guardrail_posts`: the left edge's, the right edge's, then the guardrail actors').
+
+        The ego's state and the sensor's pose at each time, each post's world position and its rotation into the
+        sensor frame are the same numbers as one time at a time (element by element), so a chunk of cycles sees
+        exactly the posts that the cycles would one by one."""
         sc = self.scenario
         g = sc.road.guardrails
-        ego = self.ego_state(t_s)
-        px, py, psi_s, _, _ = self.sensor_pose(ego)
-        s_ego = self._ego.state(t_s).x_m[0]
-        xs, ys = [], []
-        k0 = math.floor((s_ego - 5.0) / g.post_spacing_m)
-        k1 = math.ceil((s_ego + max_range_m + 5.0) / g.post_spacing_m)
-        s = np.arange(k0, k1 + 1) * g.post_spacing_m
+        t = np.asarray(times_s, dtype=np.float64)
+        est = self._ego.state(t)                                   # (T, 1)
+        ex, ey, heading = (a[:, 0] for a in self._ego_pose(est)[:3])
+        mx, my, myaw = self.mount
+        ox, oy = _rot(heading, np.float64(mx), np.float64(my))
+        px, py, psi_s = ex + ox, ey + oy, heading + myaw
+        s_ego = est.x_m[:, 0]
+        rows, xs, ys = [], [], []
+        k0 = np.floor((s_ego - 5.0) / g.post_spacing_m).astype(np.int64)
+        k1 = np.ceil((s_ego + max_range_m + 5.0) / g.post_spacing_m).astype(np.int64)
+        count = k1 - k0 + 1
+        row = np.repeat(np.arange(t.size), count)
+        starts = np.concatenate([[0], np.cumsum(count)])
+        s = (np.repeat(k0, count) + (np.arange(row.size) - starts[row])) * g.post_spacing_m
         for offset, edge, sign in ((g.left_offset_m, sc.road.left_edge_y_m, 1.0),
                                    (g.right_offset_m, sc.road.right_edge_y_m, -1.0)):
             if offset is None:
                 continue
             wx, wy, _ = self.road_to_world(s, np.full_like(s, edge + sign * offset))
+            rows.append(row)
             xs.append(wx)
             ys.append(wy)
         for i in np.flatnonzero(self.is_guardrail):
@@ -322,9 +366,17 @@ class Scene:
             y0 = sc.actor_y_m(a)
             h = self.heading_rel[i]
             wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), y0 + u * math.sin(h))
-            xs.append(wx)
-            ys.append(wy)
+            rows.append(np.repeat(np.arange(t.size), n_posts))
+            xs.append(np.tile(wx, t.size))
+            ys.append(np.tile(wy, t.size))
         if not xs:
-            return np.zeros(0), np.zeros(0)
-        wx, wy = np.concatenate(xs), np.concatenate(ys)
-        return _rot(-psi_s, wx - px, wy - py)
+            return np.zeros(0), np.zeros(0), np.zeros(t.size + 1, dtype=np.int64)
+        row = np.concatenate(rows)
+        order = np.argsort(row, kind="stable")                     # by time, each time's posts in list order
+        row = row[order]
+        wx, wy = np.concatenate(xs)[order], np.concatenate(ys)[order]
+        c, s_ = np.cos(-psi_s), np.sin(-psi_s)
+        dx, dy = wx - px[row], wy - py[row]
+        c, s_ = c[row], s_[row]
+        starts = np.searchsorted(row, np.arange(t.size + 1))
+        return c * dx - s_ * dy, s_ * dx + c * dy, starts

@@ -51,11 +51,22 @@ def unshifted(can_id: int) -> tuple[int, int]:
 
 def sigma_to_code(sigma: np.ndarray, top: float = RMS_TOP_LINEAR) -> np.ndarray:
     """Smallest ARS 408 σ code whose bound exceeds σ (0..30; NaN -> 31 "invalid")."""
-    s = np.asarray(sigma, dtype=np.float64)
+    return _codes(np.asarray(sigma, dtype=np.float64), math.log(top / RMS_FLOOR))
+
+
+def _codes(s: np.ndarray, log_span: float | np.ndarray) -> np.ndarray:
+    """:func:`sigma_to_code` with log(top / RMS_FLOOR) given (a column of them: several σ fields in one pass)."""
     with np.errstate(divide="ignore", invalid="ignore"):
-        code = np.floor(30.0 * np.log(np.maximum(s, 1e-12) / RMS_FLOOR) / math.log(top / RMS_FLOOR)) + 1.0
+        code = np.floor(30.0 * np.log(np.maximum(s, 1e-12) / RMS_FLOOR) / log_span) + 1.0
     code = np.clip(code, 0, 30)
     return np.where(np.isnan(s), 31, code).astype(np.int64)
+
+
+#: Obj_2_Quality's σ fields (six linear, the orientation's in degrees) and log(top / RMS_FLOOR) for each, a column
+_OBJECT_RMS = ("Obj_DistLong_rms", "Obj_DistLat_rms", "Obj_VrelLong_rms", "Obj_VrelLat_rms", "Obj_ArelLong_rms",
+               "Obj_ArelLat_rms", "Obj_Orientation_rms")
+_OBJECT_LOG_SPAN = np.array([math.log(RMS_TOP_LINEAR / RMS_FLOOR)] * 6
+                            + [math.log(RMS_TOP_ANGLE_DEG / RMS_FLOOR)])[:, None]
 
 
 def code_to_sigma(code: np.ndarray, top: float = RMS_TOP_LINEAR) -> np.ndarray:
@@ -72,16 +83,11 @@ def object_signals(ol: ObjectList) -> tuple[dict, dict, dict]:
         "Obj_VrelLong": ol.vrel_long_mps, "Obj_VrelLat": ol.vrel_lat_mps, "Obj_DynProp": ol.dyn_prop,
         "Obj_RCS": ol.rcs_dbsm,
     }
-    quality = {
-        "Obj_ID": ol.id,
-        "Obj_DistLong_rms": sigma_to_code(ol.dist_long_sigma_m), "Obj_DistLat_rms": sigma_to_code(ol.dist_lat_sigma_m),
-        "Obj_VrelLong_rms": sigma_to_code(ol.vrel_long_sigma_mps),
-        "Obj_VrelLat_rms": sigma_to_code(ol.vrel_lat_sigma_mps),
-        "Obj_ArelLong_rms": sigma_to_code(ol.arel_long_sigma_mps2),
-        "Obj_ArelLat_rms": sigma_to_code(ol.arel_lat_sigma_mps2),
-        "Obj_Orientation_rms": sigma_to_code(np.degrees(ol.orientation_sigma_rad), RMS_TOP_ANGLE_DEG),
-        "Obj_MeasState": ol.meas_state, "Obj_ProbOfExist": ol.prob_of_exist,
-    }
+    sigmas = np.stack([ol.dist_long_sigma_m, ol.dist_lat_sigma_m, ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps,
+                       ol.arel_long_sigma_mps2, ol.arel_lat_sigma_mps2, np.degrees(ol.orientation_sigma_rad)])
+    codes = _codes(sigmas.astype(np.float64, copy=False), _OBJECT_LOG_SPAN)      # the seven σ codes in one pass
+    quality = {"Obj_ID": ol.id, **dict(zip(_OBJECT_RMS, codes)),
+               "Obj_MeasState": ol.meas_state, "Obj_ProbOfExist": ol.prob_of_exist}
     extended = {
         "Obj_ID": ol.id, "Obj_ArelLong": ol.arel_long_mps2, "Obj_ArelLat": ol.arel_lat_mps2,
         "Obj_Class": ol.obj_class, "Obj_OrientationAngle": np.degrees(ol.orientation_rad),

@@ -40,6 +40,7 @@ from pathlib import Path
 
 import can
 from can.io.asc import ASCReader
+from can.io import blf
 from can.io.blf import BLFReader
 from can.io.canutils import CanutilsLogReader
 from can.io.csv import CSVReader
@@ -79,10 +80,53 @@ class _SqliteWriter(can.io.SqliteWriter):
         super().stop()
 
 
+class _BlfWriter(can.io.BLFWriter):
+    """python-can's BLFWriter, a classic CAN frame packed in one ``struct`` call instead of four.
+
+    ``on_message_received`` costs about 10 µs a frame in python-can (the channel parsed by a regular
+    expression, the object's two headers and the frame packed separately), as much as the node takes to encode a
+    cycle's object list; here the channel's number is kept and the 48 bytes of a CAN_MESSAGE object (object
+    header, v1 header, frame) are one pack. The bytes, the object's time stamp (nanoseconds from the file's
+    start, truncated to the millisecond as python-can does) and the containers are python-can's; error frames
+    and CAN FD go through python-can's own code."""
+
+    _CAN_OBJECT = struct.Struct("<4sHHLL" "LHHQ" "HBBL8s")       # OBJ_HEADER_BASE, OBJ_HEADER_V1, CAN_MSG
+
+    def __init__(self, path, **kwargs) -> None:
+        super().__init__(path, **kwargs)
+        self._channels: dict = {}
+
+    def on_message_received(self, msg: can.Message) -> None:
+        if msg.is_error_frame or msg.is_fd or msg.timestamp is None:
+            super().on_message_received(msg)
+            return
+        channel = self._channels.get(msg.channel)
+        if channel is None:
+            number = can.util.channel2int(msg.channel)
+            channel = self._channels[msg.channel] = self.channel if number is None else number + 1
+        arb_id = msg.arbitration_id | (blf.CAN_MSG_EXT if msg.is_extended_id else 0)
+        flags = (blf.REMOTE_FLAG if msg.is_remote_frame else 0) | (0 if msg.is_rx else blf.DIR)
+        timestamp = msg.timestamp
+        if self.start_timestamp is None:
+            self.start_timestamp = int(timestamp * 1000) / 1000
+        self.stop_timestamp = timestamp
+        since = int((timestamp - self.start_timestamp) * 1e9)
+        self._buffer.append(self._CAN_OBJECT.pack(b"LOBJ", 32, 1, 48, blf.CAN_MESSAGE, blf.TIME_ONE_NANS, 0, 0,
+                                                  max(since, 0), channel, flags, msg.dlc, arb_id, bytes(msg.data)))
+        self._buffer_size += 48
+        self.object_count += 1
+        if self._buffer_size >= self.max_container_size:
+            self._flush()
+
+
 def open_writer(path: str):
-    """python-can's writer for the file's suffix (``can.Logger``), with :class:`_SqliteWriter` for ``.db``."""
-    if log_format(path) == ".db":
+    """python-can's writer for the file's suffix (``can.Logger``), with :class:`_SqliteWriter` for ``.db`` and
+    :class:`_BlfWriter` for ``.blf``."""
+    fmt = log_format(path)
+    if fmt == ".db":
         return _SqliteWriter(path)
+    if fmt == ".blf":
+        return _BlfWriter(path)
     return can.Logger(path)
 
 

@@ -31,7 +31,7 @@ import numpy as np
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
 from radarnode.radar.setup import radar_config, radar_path
-from radarnode.radar.models import check_doa, make_model
+from radarnode.radar.levels import check_doa, make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
@@ -439,11 +439,11 @@ class RadarNode:
             ol = ol.take(keep[:n_fit])
             ol = ol.take(self._send_order(ol.id, ol.range_m, ol.rcs_dbsm))
             frame.objects = ol
-            general, quality, extended = P.object_signals(ol)
             out.append((P.OBJ_STATUS, self.codecs[P.OBJ_STATUS].encode({
                 "Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
                 "Obj_InterfaceVersion": P.INTERFACE_VERSION})[0]))
             if len(ol):
+                general, quality, extended = P.object_signals(ol)
                 rows = self.codecs[P.OBJ_GENERAL].encode(general)
                 out += [(P.OBJ_GENERAL, row) for row in rows]
                 if cfg.send_quality:

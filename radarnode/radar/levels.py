@@ -1,0 +1,50 @@
+"""Which model renders a fidelity level: :func:`make_model`, and the check of options a level cannot honour.
+
+The object level is built here directly; the scatterer levels (detection, signal, auto, in
+:mod:`radarnode.radar.models`) are imported only when one is asked for, so a command at the object level does
+not import the signal chain's synthesis.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from radarnode.errors import ConfigError
+from radarnode.radar.object_model import ObjectModel
+from radarnode.radar.options import SignalOptions
+from radarnode.radar.presets import RadarPreset
+from radarnode.scene.world import Scene
+
+FIDELITY_LEVELS = ("object", "detection", "signal", "auto")
+
+
+def check_doa(level: str, options: SignalOptions, scenario=None) -> None:
+    """A super-resolution angle estimator exists only in the signal chain: refuse it at another level.
+
+    The object and detection levels reproduce the beamformer's resolution (:data:`radarnode.radar.calibration.RESOLUTION`), not a
+    super-resolution estimator's: they would report what that estimator does not. With ``scenario`` the error
+    names its file and the line of ``signal.dsp.doa``.
+    """
+    if options.dsp.doa != "fft" and level in FIDELITY_LEVELS and level != "signal":
+        msg = (f"field 'signal.dsp.doa': value {options.dsp.doa!r} is not allowed at fidelity {level!r}; "
+               "expected 'fft' (the object and detection levels model the FFT beamformer), or fidelity 'signal' for a "
+               "super-resolution estimator")
+        if scenario is not None:
+            from radarnode.schema import Source
+            raise Source.of_lines(scenario.source, scenario.lines).error("signal.dsp.doa", msg)
+        raise ConfigError(msg)
+
+
+def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
+               options: SignalOptions = SignalOptions(), clusters_wanted: bool = False):
+    check_doa(level, options)
+    if level == "object":
+        return ObjectModel(scene, preset, rng, options)
+    from radarnode.radar import models     # the scatterer levels' modules only when one runs (a faster start)
+    if level == "detection":
+        return models.DetectionModel(scene, preset, rng, options)
+    if level == "signal":
+        return models.SignalModel(scene, preset, rng, options)
+    if level == "auto":
+        return models.AutoModel(scene, preset, rng, options, clusters_wanted)
+    raise ConfigError(f"fidelity: value {level!r} is not allowed; expected one of {', '.join(FIDELITY_LEVELS)}")
