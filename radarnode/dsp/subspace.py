@@ -39,6 +39,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from scipy.linalg import blas as _blas
 from scipy.linalg import lapack as _lapack
 
 from radarnode.errors import ConfigError
@@ -128,9 +129,12 @@ def _covariance(x: np.ndarray, q: int, fb: bool) -> np.ndarray:
     z = x if q == n else x[_subarray_index(n, q)].reshape(q, -1)
     if fb:
         z = np.concatenate((z, np.conj(z[::-1])), axis=1)
-    r = z @ np.conj(z.T)
-    r *= 1.0 / z.shape[1]
-    return r
+    return _gram(z, 1.0 / z.shape[1])
+
+
+def _gram(a: np.ndarray, scale: float = 1.0) -> np.ndarray:
+    """``scale · a·aᴴ`` (complex) in one BLAS call (no conjugate copy, no separate scaling)."""
+    return _blas.zgemm(scale, a, a, trans_b=2)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -263,7 +267,7 @@ def _diag_sums(s: np.ndarray, sign: float = 1.0) -> np.ndarray:
 def _null_sums(es: np.ndarray) -> np.ndarray:
     """Diagonal-sum vector of the noise projector ``I − Es·Esᴴ`` from the signal subspace ``es`` (N, M)."""
     n = es.shape[0]
-    c = _diag_sums(es @ np.conj(es.T), -1.0)
+    c = _diag_sums(_gram(es), -1.0)
     c[0] += n
     return c
 
@@ -423,7 +427,7 @@ def capon(r: np.ndarray, n_sources: int, d: float = 0.5, loading: float = 1e-3,
     w = w + delta
     w = np.maximum(w, max(float(w[-1]), 0.0) * 1e-12 + 1e-300)
     vs = v / np.sqrt(w)[None, :]                             # R⁻¹ = vs·vsᴴ
-    s = _diag_sums(vs @ np.conj(vs.T))
+    s = _diag_sums(_gram(vs))
 
     def cost(rows):
         return np.maximum(rows @ s, 1e-300)
@@ -640,7 +644,7 @@ def esprit(r: np.ndarray, n_sources: int, d: float = 0.5, tls: bool = True) -> t
     e1, e2 = es[:-1], es[1:]
     if tls:
         e12 = np.concatenate((e1, e2), axis=1)
-        v = _eigvecs(np.conj(e12.T) @ e12, 1, m)                # (2M, M)
+        v = _eigvecs(_blas.zgemm(1.0, e12, e12, trans_a=2), 1, m)         # (2M, M): Gram matrix
         v12, v22 = v[:m], v[m:]
         try:
             inv = np.linalg.inv(v22)
