@@ -338,7 +338,7 @@ def _search(cost: Callable[[np.ndarray], np.ndarray], n: int, d: float, n_source
     else:
         c = cost(grid.coarse)
         ext = np.concatenate(([np.inf], c, [np.inf]))
-    best = c.min()
+    best = np.minimum.reduce(c)
     if maximise and not best < 0:                      # zero data: a flat, empty spectrum
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
     limit = max(best * _FLOOR[floor_db, maximise], accept_below)
@@ -575,7 +575,7 @@ def _polynomial_roots(c: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, co
     ``t = tr + j·ti`` of the real Cayley polynomial: returns ``(tr, ti, w)``, ``z = w·(t − j)/(t + j)``. Should
     LAPACK fail (never seen), ``w`` is None and ``tr`` holds P's roots z from ``np.roots`` (the reference)."""
     probe, real, w, template = _cayley_tables(n)
-    g = int(np.argmax(probe @ c))
+    g = int((probe @ c).argmax())
     q = real[g] @ c                                             # ascending powers of t; |q[-1]| = max |P|
     comp = template.copy(order="F")
     np.divide(q[-2::-1], -q[-1], out=comp[0])
@@ -761,7 +761,7 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
         q = n
     else:
         q = subarray
-    peak = float(np.abs(x).max())                        # NaN or inf anywhere makes this non-finite
+    peak = float(np.maximum.reduce(np.abs(x), axis=None))   # NaN or inf anywhere makes this non-finite
     if not math.isfinite(peak):
         raise ConfigError("subspace X: a non-finite value (NaN or inf) is not allowed; expected finite samples")
     if peak > 0 and not 1e-100 < peak < 1e100:        # angles are scale invariant; keep x·xᴴ in range
@@ -789,7 +789,7 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
     u = np.asarray(u, dtype=float)
     finite = np.isfinite(u)
     ok = np.asarray(ok, dtype=bool) & finite
-    if not finite.all():
+    if not np.logical_and.reduce(finite):
         u = np.where(finite, u, 0.0)
     return SubspaceEstimate(u, ok, n_used, method)
 
