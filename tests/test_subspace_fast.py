@@ -187,3 +187,33 @@ def test_esprit_falls_back_to_the_pseudo_inverse_on_a_singular_block():
     r = es @ np.conj(es.T) + 1e-3 * np.eye(6)
     u, ok = ss.esprit(r, 1)
     assert np.all(np.isfinite(u)) and u.shape == (1,)
+
+
+class _FailingLapack:
+    """scipy's LAPACK wrappers, with the named ones reporting failure (info = 1), as they never have here."""
+
+    def __init__(self, real, failing):
+        self._real, self._failing = real, failing
+
+    def __getattr__(self, name):
+        fn = getattr(self._real, name)
+        if name not in self._failing:
+            return fn
+
+        def failed(*args, **kwargs):
+            out = list(fn(*args, **kwargs))
+            out[-1] = 1
+            return tuple(out)
+
+        return failed
+
+
+@pytest.mark.parametrize("method", ["music", "unitary_music", "root_music", "esprit"])
+def test_lapack_failures_fall_back_to_the_reference_routines(method, monkeypatch):
+    cases = random_cases(6, 40, n_choices=(12, 8))
+    want = [ss.ESTIMATORS[method](r, m, d) for r, m, d in cases]
+    monkeypatch.setattr(ss, "_lapack", _FailingLapack(ss._lapack, {"zheevr", "dsyevr", "dgeev", "zgeev"}))
+    for (r, m, d), (u, ok) in zip(cases, want):
+        u2, ok2 = ss.ESTIMATORS[method](r, m, d)
+        assert np.array_equal(ok, ok2)
+        assert np.max(circular_distance(u, u2, d)) < 1e-9

@@ -241,7 +241,7 @@ def _signal_subspace(r: np.ndarray, n_sources: int) -> np.ndarray:
 # the real trigonometric polynomial  s_0 + Σ_{m≥1} 2·Re s_m·cos(2π·d·m·u) − 2·Im s_m·sin(2π·d·m·u):
 # a real row (2N − 1) per u, tabulated on the grids, times one real vector per covariance.
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=32)
 def _diag_sum_matrix(n: int, sign: float = 1.0) -> np.ndarray:
     """(2N − 1, 2N²) float64: ``S.view(float)`` (row-major, re/im interleaved) → ``[s_0, Re s_1 … s_{N−1},
     Im s_1 … s_{N−1}]`` of the Hermitian part of S (both triangles averaged)."""
@@ -290,7 +290,7 @@ class _Grid:
     centre: np.ndarray      # (F,) int: argmin over the fine points → centre of the three for the parabola
 
 
-@functools.lru_cache(maxsize=32)
+@functools.lru_cache(maxsize=16)               # (G, F, 2N − 1) floats each: 0.4 MB at N = 12
 def _grid(n: int, d: float, n_grid: int) -> _Grid:
     if _periodic(d):
         u = -1.0 + 2.0 * np.arange(n_grid) / n_grid                 # [-1, 1): +1 is -1
