@@ -607,7 +607,9 @@ def root_music(r: np.ndarray, n_sources: int, d: float = 0.5) -> tuple[np.ndarra
             # t or a conjugate pair; keep one of each two (in order), as np.roots' radial split keeps one inside
             t = np.concatenate((t, np.sort(tr[ti == 0.0])[::2]))
         if t.size >= n_sources:
-            roots = inside = w * (t - 1j) / (t + 1j)
+            v = (t - 1j) / (t + 1j)                             # z / w
+            # inside, 1 − |z| is the distance to the circle: the n_sources largest |z|
+            return _roots_to_u(w * v[np.abs(v).argsort()[:-n_sources - 1:-1]], d, n_sources)
         else:                                                   # P's roots at ∞ (t = −j) are not roots
             t = tr + 1j * ti
             with np.errstate(divide="ignore", invalid="ignore"):
