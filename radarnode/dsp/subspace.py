@@ -715,7 +715,7 @@ def _check_snapshots(x: object) -> np.ndarray:
     if x.ndim != 2 or x.shape[0] < 2 or x.shape[1] < 1:
         raise ConfigError(f"subspace X: shape {x.shape} is not allowed; expected (N, K) with N >= 2 "
                           f"elements and K >= 1 snapshots (or (N,) for one snapshot)")
-    if not (np.issubdtype(x.dtype, np.number) or x.dtype == bool):
+    if x.dtype.kind not in "biufcm":                    # bool or np.number (timedelta64 is one)
         raise ConfigError(f"subspace X: dtype {x.dtype} is not allowed; expected a real or complex number array")
     return x.astype(np.complex128, copy=False)
 
