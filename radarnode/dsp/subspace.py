@@ -114,8 +114,15 @@ def _check_subarray(q: object, n: int) -> None:
 
 
 @functools.lru_cache(maxsize=64)
-def _subarray_index(n: int, q: int) -> np.ndarray:
-    idx = np.arange(q)[:, None] + np.arange(n - q + 1)[None, :]      # (Q, L): element l + i
+def _stack_index(n: int, q: int, k: int, fb: bool) -> np.ndarray:
+    """Flat index of ``Z`` (:func:`_covariance`) into ``x.ravel()`` (N·K), followed for FB by its conjugate: (Q, L·K)
+    or (Q, 2·L·K); column (l, k) of the forward part is sub-array l's snapshot k, ``x[l + i, k]`` in row i, of the
+    backward part ``x*[l + Q − 1 − i, k]``."""
+    i = np.arange(q)[:, None, None]
+    lk = (np.arange(n - q + 1)[None, :, None], np.arange(k)[None, None, :])
+    idx = ((lk[0] + i) * k + lk[1]).reshape(q, -1)
+    if fb:
+        idx = np.concatenate((idx, (n * k + (lk[0] + q - 1 - i) * k + lk[1]).reshape(q, -1)), axis=1)
     idx.setflags(write=False)
     return idx
 
@@ -125,10 +132,12 @@ def _covariance(x: np.ndarray, q: int, fb: bool) -> np.ndarray:
     one set of snapshots ``x`` (N, K), as one product: ``Z·Zᴴ / (columns of Z)`` with ``Z`` the L = N − Q + 1
     sub-arrays' snapshots side by side (Q, L·K), followed for FB by their reversed conjugates (Q, 2·L·K).
     The same matrix as the three steps (the sums in another order): (Q, Q) complex."""
-    n = x.shape[0]
-    z = x if q == n else x[_subarray_index(n, q)].reshape(q, -1)
-    if fb:
-        z = np.concatenate((z, np.conj(z[::-1])), axis=1)
+    n, k = x.shape
+    if q == n and not fb:
+        z = x
+    else:
+        flat = x.reshape(-1)
+        z = (np.concatenate((flat, np.conj(flat))) if fb else flat).take(_stack_index(n, q, k, fb))
     return _gram(z, 1.0 / z.shape[1])
 
 
