@@ -228,14 +228,19 @@ def _eigvecs(h: np.ndarray, lo: int, hi: int) -> np.ndarray:
     """Eigenvectors of the ``lo``-th … ``hi``-th smallest eigenvalues (1-based, inclusive) of a Hermitian
     (complex) or symmetric (real) ``h`` (N, N), read from its upper triangle: (N, hi − lo + 1), ascending.
 
-    LAPACK's ``?heevr``/``?syevr`` computes only the wanted vectors. Should it report a failure (never
-    seen), numpy's ``eigh`` of the Hermitian part is the fallback; its ``LinAlgError`` is what
-    :func:`estimate` turns into "not resolved".
+    LAPACK's ``?heevr``/``?syevr`` computes only the wanted vectors; up to N = 8 the plain QR ``?heev``/``?syev``
+    of all of them is cheaper. Should LAPACK report a failure (never seen), numpy's ``eigh`` of the Hermitian part
+    is the fallback; its ``LinAlgError`` is what :func:`estimate` turns into "not resolved".
     """
-    solver = _lapack.zheevr if h.dtype.kind == "c" else _lapack.dsyevr
-    _, v, found, _, info = solver(h, range="I", il=lo, iu=hi)
-    if info == 0 and found == hi - lo + 1:
-        return v
+    complex_ = h.dtype.kind == "c"
+    if h.shape[0] <= 8:
+        _, v, info = (_lapack.zheev if complex_ else _lapack.dsyev)(h, lower=0)
+        if info == 0:
+            return v[:, lo - 1:hi]
+    else:
+        _, v, found, _, info = (_lapack.zheevr if complex_ else _lapack.dsyevr)(h, range="I", il=lo, iu=hi)
+        if info == 0 and found == hi - lo + 1:
+            return v
     _, v = np.linalg.eigh(0.5 * (h + np.conj(h.T)))
     return v[:, lo - 1:hi]
 
