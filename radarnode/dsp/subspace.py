@@ -210,7 +210,8 @@ SOURCE_COUNTERS: dict[str, Callable[..., int]] = {"mdl": mdl, "aic": aic, "thres
 # Cost (issue 11 item 7): at N = 12 an estimate is a few dozen tiny numpy/LAPACK calls, each costing
 # ~1 µs of call overhead whatever its arithmetic. So everything that depends only on (N, d, grid) is
 # tabulated once (lru_cache), the search works on real tables and a real coefficient vector, and the
-# eigenvectors come from LAPACK's ?heevr/?syevr for the needed ones only (about half numpy's eigh).
+# eigenvectors come straight from LAPACK (?heevr for the needed ones only; ?heev up to N = 8), about half
+# the cost of numpy's eigh with its checks.
 
 def steering(n: int, u: np.ndarray, d: float = 0.5) -> np.ndarray:
     """Steering vectors ``exp(j·2π·d·k·u)``: ``u`` shape ``S`` → ``(N, *S)`` complex."""
