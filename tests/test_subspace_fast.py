@@ -212,7 +212,8 @@ class _FailingLapack:
 def test_lapack_failures_fall_back_to_the_reference_routines(method, monkeypatch):
     cases = random_cases(6, 40, n_choices=(12, 8, 5))
     want = [ss.ESTIMATORS[method](r, m, d) for r, m, d in cases]
-    monkeypatch.setattr(ss, "_lapack", _FailingLapack(ss._lapack, {"zheevr", "dsyevr", "zheev", "dsyev", "dgeev", "zgeev"}))
+    failing = {"zheevr", "dsyevr", "zheev", "dsyev", "dgeev", "zgeev"}
+    monkeypatch.setattr(ss, "_lapack", _FailingLapack(ss._lapack, failing))
     for (r, m, d), (u, ok) in zip(cases, want):
         u2, ok2 = ss.ESTIMATORS[method](r, m, d)
         assert np.array_equal(ok, ok2)
