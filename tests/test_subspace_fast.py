@@ -150,11 +150,14 @@ def test_cayley_roots_are_np_roots():
     assert worst < 1e-9, worst
 
 
-def test_root_music_equals_the_np_roots_reference():
+@pytest.mark.parametrize("name, seed", [("root_music", 3), ("esprit", 5)])
+def test_root_music_and_esprit_equal_their_np_roots_and_svd_references(name, seed):
+    fast, reference = {"root_music": (ss.root_music, reference_root_music),
+                       "esprit": (ss.esprit, reference_esprit)}[name]
     worst = 0.0
-    for r, m, d in random_cases(3, 300):
-        got = ss.root_music(r, m, d)[0]
-        worst = max(worst, float(np.max(circular_distance(got, reference_root_music(r, m, d), d))))
+    for r, m, d in random_cases(seed, 300):
+        got = fast(r, m, d)[0]
+        worst = max(worst, float(np.max(circular_distance(got, reference(r, m, d), d))))
     assert worst < 1e-9, worst
 
 
@@ -170,14 +173,6 @@ def test_root_music_double_roots_agree_to_their_sensitivity():
         got = ss.root_music(r, 3, 0.5)[0]
         worst = max(worst, float(np.max(circular_distance(got, reference_root_music(r, 3, 0.5), 0.5))))
     assert worst < 1e-6, worst
-
-
-def test_esprit_equals_the_svd_reference():
-    worst = 0.0
-    for r, m, d in random_cases(5, 300):
-        got = ss.esprit(r, m, d)[0]
-        worst = max(worst, float(np.max(circular_distance(got, reference_esprit(r, m, d), d))))
-    assert worst < 1e-9, worst
 
 
 def test_esprit_falls_back_to_the_pseudo_inverse_on_a_singular_block():
