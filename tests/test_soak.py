@@ -31,9 +31,12 @@ def test_short_soak_and_flood_over_udp_multicast(tmp_path):
     # the node kept its cycle: every cycle of the run was either sent or flagged as not sent
     expected = round((0.1 * 60 + 6 + 2.0) / 0.072 - 0.5)
     assert abs(node["cycles"] + node["missed"] - expected) <= 1 and node["cycles"] > 0.8 * expected
-    # the ECU assembled every cycle the node sent, whole; the only MeasCounter gaps are the flagged ones
+    # the ECU assembled every cycle the node sent, whole; the only MeasCounter gaps are the flagged ones (a cycle
+    # flagged before the first or after the last one sent leaves no gap the ECU could see: on a loaded machine the
+    # node may miss its deadline right at the end)
     st = ecu["stats"]
-    assert st["cycles"] == node["cycles"] and st["incomplete_cycles"] == 0 and st["lost_cycles"] == node["missed"]
+    assert st["cycles"] == node["cycles"] and st["incomplete_cycles"] == 0
+    assert st["lost_cycles"] <= node["missed"] <= st["lost_cycles"] + 2, (st["lost_cycles"], node["missed"])
     assert res["frames_lost"] == 0 and ecu["coll_det_active"]
     # every bad frame the node read was counted; what it did not read the kernel dropped (receive buffer full)
     sent = sum(s for s, _ in res["refused"].values())
