@@ -53,9 +53,14 @@ def unexplained_fraction(x: np.ndarray, row: np.ndarray, sin_t: np.ndarray, spac
         cells = np.flatnonzero(count == p)
         src = order[first[cells][:, None] + np.arange(p)[None, :]]                     # (c, p)
         a = np.exp(2j * np.pi * spacing_wl * sin_t[src][:, None, :] * elements[None, :, None])   # (c, N, p)
-        coef = np.linalg.pinv(a) @ x[cells][:, :, None]                                  # (c, p, 1)
-        r = x[cells] - (a @ coef)[:, :, 0]
-        resid[cells] = np.sum(r.real ** 2 + r.imag ** 2, axis=1) - (k_el - p) * noise_power
+        if p == 1:        # one source (most cells): aᴴa = N, the residual is ‖x‖² − |aᴴx|²/N
+            ax = np.einsum("cn,cn->c", np.conj(a[:, :, 0]), x[cells])
+            left = total[cells] - (ax.real ** 2 + ax.imag ** 2) / k_el
+        else:
+            coef = np.linalg.pinv(a) @ x[cells][:, :, None]                              # (c, p, 1)
+            r = x[cells] - (a @ coef)[:, :, 0]
+            left = np.sum(r.real ** 2 + r.imag ** 2, axis=1)
+        resid[cells] = left - (k_el - p) * noise_power
     with np.errstate(divide="ignore", invalid="ignore"):
         frac = np.where(total > 0.0, resid / np.where(total > 0.0, total, 1.0), 0.0)
     return np.clip(frac, 0.0, 1.0)
