@@ -83,4 +83,10 @@ def angular_spread(fraction: np.ndarray, n_elements: int, spacing_wl: float) -> 
     return np.interp(np.asarray(fraction, dtype=np.float64), frac, spread)
 
 
-__all__ = ["angular_spread", "unexplained_fraction"]
+def azimuth_spread(fraction: np.ndarray, n_elements: int, spacing_wl: float, azimuth_rad: np.ndarray) -> np.ndarray:
+    """The spread of :func:`angular_spread` in azimuth (rad) at ``azimuth_rad``: Δθ ≈ Δs / cos θ (cos θ taken as at
+    least 0.05, near endfire)."""
+    return angular_spread(fraction, n_elements, spacing_wl) / np.maximum(np.cos(azimuth_rad), 0.05)
+
+
+__all__ = ["angular_spread", "azimuth_spread", "unexplained_fraction"]

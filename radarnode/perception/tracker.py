@@ -388,9 +388,9 @@ class ObjectTracker:
         speed = np.hypot(gx, gy)
         pv = self.p[idx][:, 2:4, 2:4]
         ux, uy = gx / np.maximum(speed, 1e-9), gy / np.maximum(speed, 1e-9)
-        _, moving = self._heading(idx, sensor_velocity)
+        heading, moving = self._heading(idx, sensor_velocity)
         self.was_moving[idx] |= moving
-        angle = np.abs(np.arctan2(gy, gx))
+        angle = np.abs(heading)
         dyn = np.where(angle > np.radians(135), DYN_ONCOMING, np.where(angle > np.radians(45), DYN_CROSSING_MOVING,
                                                                         DYN_MOVING))
         ol.dyn_prop = np.where(moving, dyn, np.where(self.was_moving[idx], DYN_STOPPED, DYN_STATIONARY))
@@ -412,7 +412,7 @@ class ObjectTracker:
         ol.obj_class = classify(length, width, rcs, speed, moving)
         body = MIN_BODY_M[ol.obj_class]
         length, width = np.maximum(length, body[:, 0]), np.maximum(width, body[:, 1])
-        ol.orientation_rad = np.where(moving, np.arctan2(gy, gx), 0.0)
+        ol.orientation_rad = np.where(moving, heading, 0.0)
         # heading of a moving object from its velocity's direction, of a standing one from its two ends
         across = np.sqrt(np.maximum(uy * uy * pv[:, 0, 0] - 2 * ux * uy * pv[:, 0, 1] + ux * ux * pv[:, 1, 1], 0.0))
         from_velocity = np.arctan2(across, np.maximum(speed, 1e-9))

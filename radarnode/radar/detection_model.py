@@ -194,8 +194,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     snap = np.zeros((cells.size, k_el), dtype=np.complex128)
     np.add.at(snap, pos[inside], z[inside, None] * np.exp(2j * np.pi * u[inside, None] * np.arange(k_el)[None, :]))
     frac = spread.unexplained_fraction(snap, row.ravel(), c_u[idx] / p.element_spacing_wl, p.element_spacing_wl)
-    spread_rad = (spread.angular_spread(frac[row.ravel()], k_el, p.element_spacing_wl)
-                  / np.maximum(np.cos(est_az), 0.05))
+    spread_rad = spread.azimuth_spread(frac[row.ravel()], k_el, p.element_spacing_wl, est_az)
     det = Detections(est_r, est_v, est_az, snr_est - equation.snr_db(p, est_r, 0.0, power_reduction_db, est_az),
                      snr_est, tag[idx], azimuth_spread_rad=spread_rad)
     parts = [det]

@@ -286,7 +286,7 @@ class ObjectModel:
             "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
-            **self._reported_body(view, rng_m, az, rcs_body, snr, z),
+            **self._reported_body(view, rng_m, az, rcs_body, snr, z, ground),
             # the acceleration reported keeps the model's small noise: drawn with σ_alat (about 1 m/s² from the
             # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
             "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
@@ -355,7 +355,7 @@ class ObjectModel:
         self._gain_state = {k0: prev, k0 + x.shape[0]: y[-1]}
         return 10.0 * np.log10(np.maximum(y, 1e-30))
 
-    def _reported_body(self, view, rng_m, az, rcs_eff, snr, z) -> dict[str, np.ndarray]:
+    def _reported_body(self, view, rng_m, az, rcs_eff, snr, z, ground) -> dict[str, np.ndarray]:
         """RCS, extent and class as the detection-level tracker reports them (``radarnode.perception.tracker``),
         drawn instead of copied from the truth, so that every level classes a body by the same rules.
 
@@ -382,7 +382,6 @@ class ObjectModel:
         res_x, res_y = 2.0 * p.range_resolution_m, rng_m * p.angular_resolution_rad
         side_ok = side_seen & ((np.abs(L * ch) > res_x) | (np.abs(L * sh) > res_y))
         end_ok = end_seen & ((np.abs(W * sh) > res_x) | (np.abs(W * ch) > res_y))
-        ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
         moving = ground >= MOVING_THRESHOLD_MPS
         # the measured faces' spans along and across the body's heading when it moves, along the sensor's axes when
         # it stands (as the tracker reports them: radarnode.perception.tracker.extents_along)
@@ -397,8 +396,7 @@ class ObjectModel:
         return {"rcs_obj": rcs, "obj_class": cls, "length": np.maximum(length, body[..., 0]),
                 "width": np.maximum(width, body[..., 1])}
 
-    def _track_flags(self, det: np.ndarray, fov: np.ndarray, stationary: np.ndarray | None = None
-                     ) -> dict[str, np.ndarray]:
+    def _track_flags(self, det: np.ndarray, fov: np.ndarray, stationary: np.ndarray) -> dict[str, np.ndarray]:
         """The tracker's bookkeeping for a chunk of cycles, from its state before the chunk.
 
         Detection history, consecutive misses, confirmation (``CONFIRM_HITS`` of the last
@@ -413,8 +411,6 @@ class ObjectModel:
         hist = np.zeros((t_n, n), dtype=np.uint8)
         for j in range(8):       # eight shifted slices, not a loop over cycles
             hist |= (ext[8 - j: 8 - j + t_n] << j).astype(np.uint8)
-        if stationary is None:
-            stationary = np.zeros(det.shape, dtype=bool)
         # standing still over ground: confirmed over a longer window and coasting longer, as the tracker does
         # (radarnode.perception.tracker.COAST_STATIONARY_CYCLES)
         recent = np.where(stationary, _POPCOUNT_LOW5[hist], _POPCOUNT_LOW3[hist])
