@@ -321,3 +321,20 @@ def test_a_pooled_history_fits_as_the_same_history_in_one_piece():
                            cycles=np.concatenate([ia, ib]))
     assert whole.overhead and pooled.mature and abs(pooled.height_m - 5.5) <= 0.2 and pooled.corr > 0.8
     assert O.covered_lobes(rr, 0.5, LAM) == pytest.approx(O.covered_lobes(r, 0.5, LAM))
+
+
+@pytest.mark.parametrize("shared, pooled", [(4, True), (5, True), (6, False), (10, False)])
+def test_landmarks_measured_together_in_more_than_a_quarter_of_cycles_are_not_pooled(shared, pooled):
+    # POOL_SHARED (0.25) of the less frequent one's 20 cycles: 5; just below, at, just above and at twice the limit
+    assert O.POOL_SHARED * 20 == 5
+    m = O.LandmarkMap(0.5, LAM)
+    a, b = O.Landmark(300.0, -4.0), O.Landmark(300.5, 4.0)
+    a.cycles = list(range(0, 40, 2))                               # 20 cycles
+    b.cycles = list(range(1, 41, 2))[: 20 - shared] + a.cycles[:shared]
+    for lm in (a, b):
+        lm.range_m = [150.0] * len(lm.cycles)
+    m.landmarks = [a, b]
+    assert (m.pool(a, 0.0) == [b]) == pooled
+    # beyond MATCH_LONG_M along the road, never: another place
+    b.x_m = a.x_m + O.MATCH_LONG_M + 0.1
+    assert m.pool(a, 0.0) == []
