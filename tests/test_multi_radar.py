@@ -310,6 +310,38 @@ def test_two_tracks_of_one_object_merge_but_two_cars_side_by_side_do_not():
     assert len(out) == 2 and sorted(np.round(out.y_m, 6).tolist()) == [0.0, 3.5]
 
 
+def _oriented(objs: ObjectList, heading_deg: float, sigma_deg: float) -> ObjectList:
+    objs.orientation_rad = np.full(len(objs), math.radians(heading_deg))
+    objs.orientation_sigma_rad = np.full(len(objs), math.radians(sigma_deg))
+    return objs
+
+
+@pytest.mark.parametrize("track_sigma_deg, object_sigma_deg, fused", [(2.0, 40.0, True), (30.0, 1.0, False)])
+def test_the_cap_across_follows_the_better_known_orientation(track_sigma_deg, object_sigma_deg, fused):
+    """A crossing car (heading 90°, along the vehicle's y): radar 0's point and radar 1's lie 2 m apart along it,
+    which its extent allows. Radar 1 reports the car at 0°: taken at its word the 2 m are across the car, beyond
+    the 1.5 m cap. The pair is judged by whichever orientation has the smaller σ, as each radar reports it."""
+    m = SensorMount(0.0, 0.0, 0.0)
+    fusion = ObjectFusion({0: m, 1: m})
+    out = fusion.step(0.0, {0: (0.0, _oriented(_objects([20.0], [0.0], vy=5.0), 90.0, track_sigma_deg)),
+                            1: (0.0, _oriented(_objects([20.0], [2.0], vy=5.0, ids=[4]), 0.0, object_sigma_deg))})
+    assert len(out) == (1 if fused else 2)
+
+
+@pytest.mark.parametrize("lat_sigma_mps, merged", [(0.1, False), (2.0, True)])
+def test_two_tracks_whose_velocities_differ_merge_only_within_their_sigma(lat_sigma_mps, merged):
+    """Radar 1 first sees the car 6 m off (a track of its own), then comes within 1.2 m of radar 0's point — closer than
+    the association gate but not within 1 (the merge rule before issue 10's glint) — and 3 m/s apart in lateral speed:
+    a radar tracking a car beside it from glinting reflections. Merged when that is within their σ, never when not."""
+    m = SensorMount(0.0, 0.0, 0.0)
+    fusion = ObjectFusion({0: m, 1: m})
+    for k, off in enumerate([6.0, 4.8, 3.6, 2.4] + [1.2] * 6):      # converging: radar 1's object keeps its track
+        a, b = _objects([20.0], [0.0], vy=0.0), _objects([20.0], [off], vy=3.0, ids=[5])
+        a.vrel_lat_sigma_mps[:] = b.vrel_lat_sigma_mps[:] = lat_sigma_mps
+        out = fusion.step(0.072 * k, {0: (0.072 * k, a), 1: (0.072 * k, b)})
+    assert len(out) == (1 if merged else 2)
+
+
 def test_a_second_object_of_one_radar_beside_a_fused_track_is_a_second_fused_object():
     """The radar says two (a pedestrian stepping out beside a stopped car): the fusion does not swallow it."""
     fusion = ObjectFusion({0: SensorMount(0.0, 0.0, 0.0)})

@@ -10,7 +10,8 @@ relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
 2. **Association.** The others are assigned to fused tracks by a globally optimal assignment
    (``scipy.optimize.linear_sum_assignment``) on the Mahalanobis distance of the positions, with the fused
    track predicted to the object's time, the covariance of both and an extent term along and across the
-   object's reported orientation (:data:`EXTENT_SIGMA_LONG_M`, :data:`EXTENT_SIGMA_LAT_M`: two radars see
+   object's orientation — the better known of the track's and the object's, by the σ the radars report
+   (:data:`EXTENT_SIGMA_LONG_M`, :data:`EXTENT_SIGMA_LAT_M`: two radars see
    different points of one car — the front radar its rear, a corner radar its side), gated at
    :data:`GATE_CHI2` (χ² with 2 degrees of freedom, 99.9 %) and never farther apart across the object's heading
    than :data:`MAX_ACROSS_M` (two cars in adjacent 3 m lanes, each seen by another radar, stay two however loose
@@ -19,8 +20,9 @@ relative to the vehicle. The fusion keeps fused tracks from cycle to cycle:
    cycle (each predicted to the fusion time with its velocity: the sensors' cycles are not simultaneous); a track
    seen by no sensor coasts on its velocity for up to :data:`COAST_CYCLES` fusions, then ends. Unassigned objects
    start new fused tracks.
-4. **Merging.** Two fused tracks that different sensors feed and that stay together (:meth:`ObjectFusion._merge`)
-   are one object: the younger is merged into the older.
+4. **Merging.** Two fused tracks that different sensors feed and that stay together (:meth:`ObjectFusion._merge`:
+   within the association's own gate, with velocities that agree within their σ, three rounds in a row) are one
+   object: the younger is merged into the older.
 
 Fused IDs are stable and never reused while alive. ``sensors`` of a fused object is a bit field of the sensor
 IDs that saw it this cycle.
@@ -47,8 +49,7 @@ MIN_SIGMA_MPS = 0.25         # … this velocity σ
 COAST_CYCLES = 3
 MAX_ACROSS_M = 1.5           # objects of two radars farther apart than this across the object's heading: two objects
 MAX_GAP_S = 1.0              # a fusion this long after the last (or earlier than it) restarts the fused tracks
-MERGE_CHI2 = 1.0             # two fused tracks this close (with the extent term: 1.5 m along, 0.5 m across) …
-MERGE_SPEED_MPS = 1.5        # … and this similar in velocity …
+MERGE_SPEED_MPS = 1.5        # two fused tracks within the gate and this similar in velocity (or within their σ) …
 MERGE_ROUNDS = 3             # … this many rounds in a row, seen by different sensors, are merged
 
 
@@ -70,6 +71,7 @@ class SensorObjects:
     dyn_prop: np.ndarray
     prob_of_exist: np.ndarray
     heading: np.ndarray          # (n,) the object's orientation in the vehicle frame (0: along the vehicle's x)
+    heading_sigma: np.ndarray    # (n,) its σ as the radar reports it (π where it reports none)
 
     def finite(self) -> np.ndarray:
         """(n,) bool: the objects whose position, velocity and σ are all finite (the others cannot be fused)."""
@@ -105,7 +107,8 @@ def to_vehicle(sensor_id: int, t_s: float, objects: ObjectList, mount: SensorMou
                          np.asarray(objects.rcs_dbsm, dtype=np.float64), np.asarray(objects.obj_class),
                          np.asarray(objects.length_m, dtype=np.float64), np.asarray(objects.width_m, dtype=np.float64),
                          np.asarray(objects.dyn_prop, dtype=np.int64), np.asarray(objects.prob_of_exist, dtype=np.int64),
-                         np.nan_to_num(np.asarray(objects.orientation_rad, dtype=np.float64), nan=0.0) + yaw)
+                         np.nan_to_num(np.asarray(objects.orientation_rad, dtype=np.float64), nan=0.0) + yaw,
+                         np.nan_to_num(np.asarray(objects.orientation_sigma_rad, dtype=np.float64), nan=math.pi))
 
 
 @dataclass
@@ -187,6 +190,14 @@ class _Track:
     prob_of_exist: int = 0
     updates: int = 0
     heading: float = 0.0
+    heading_sigma: float = math.pi
+
+
+def _pair_heading(h1: np.ndarray, s1: np.ndarray, h2: np.ndarray, s2: np.ndarray) -> np.ndarray:
+    """The orientation of each pair of the sets (A,) and (B,) as the better-known of the two: (A, B). At the detection
+    and signal levels a radar's orientation of a near car comes from a short track's velocity and may be tens of
+    degrees off (and says so in its σ); the extent term and the cap across follow the orientation that is known."""
+    return np.where(s1[:, None] < s2[None, :], h1[:, None], h2[None, :])
 
 
 class ObjectFusion:
@@ -277,7 +288,8 @@ class ObjectFusion:
             if open_:
                 d = _distances(np.array([tr.pos for tr in open_]), np.array([tr.cov for tr in open_]),
                                (so.pos[i] + so.vel[i] * (t_s - so.t_s))[None], so.cov[i][None],
-                               so.heading[i:i + 1])[:, 0]
+                               _pair_heading(*_track_headings(open_), so.heading[i:i + 1],
+                                             so.heading_sigma[i:i + 1]))[:, 0]
                 k = int(np.argmin(d))
                 best = open_[k] if d[k] < GATE_CHI2 else None
             if best is None:
@@ -297,17 +309,18 @@ class ObjectFusion:
 
         A radar's object keeps its fused track (continuity), so an object that two radars first reported apart —
         each its own track — would stay two. Tracks seen this round by disjoint sets of sensors whose positions
-        lie within :data:`MERGE_CHI2` (with the extent term: 1.5 m along, 0.5 m across) and velocities within
-        :data:`MERGE_SPEED_MPS` of each other for :data:`MERGE_ROUNDS` rounds in a row are merged. Two vehicles
+        lie within the association's gate (:data:`GATE_CHI2` with the extent term, :data:`MAX_ACROSS_M` across) and
+        whose velocities agree (:func:`_same_velocity`) for :data:`MERGE_ROUNDS` rounds in a row are merged: what
+        one round would have associated is merged once it has held for three. Two vehicles
         side by side in adjacent lanes (3.5 m apart) are not, and one radar seeing both keeps them apart."""
         live = [t for t in self.tracks if t.misses == 0 and got.get(id(t))]
         close: set[tuple[int, int]] = set()
         if len(live) > 1:
             pos, cov = np.array([t.pos for t in live]), np.array([t.cov for t in live])
-            vel, heading = np.array([t.vel for t in live]), np.array([t.heading for t in live])
+            vel, (h, hs) = np.array([t.vel for t in live]), _track_headings(live)
             seen = np.array([t.sensors for t in live])                 # the sensors' bit field of each
-            near = ((_distances(pos, cov, pos, cov, heading, max_across_m=MAX_ACROSS_M / 2) < MERGE_CHI2)
-                    & (np.hypot(*(vel[:, None, :] - vel[None, :, :]).transpose(2, 0, 1)) < MERGE_SPEED_MPS)
+            near = ((_distances(pos, cov, pos, cov, _pair_heading(h, hs, h, hs)) < GATE_CHI2)
+                    & _same_velocity(vel, np.array([t.var_v for t in live]))
                     & ((seen[:, None] & seen[None, :]) == 0))
             for i, j in zip(*np.nonzero(np.triu(near, 1))):
                 a, b = live[i], live[j]
@@ -346,7 +359,8 @@ class ObjectFusion:
         if pairs:
             idx = np.array([j for _, j in pairs])
             d = np.diagonal(_distances(np.array([tr.pos for tr, _ in pairs]), np.array([tr.cov for tr, _ in pairs]),
-                                       pos[idx], so.cov[idx], so.heading[idx]))
+                                       pos[idx], so.cov[idx], _pair_heading(*_track_headings([tr for tr, _ in pairs]),
+                                                                            so.heading[idx], so.heading_sigma[idx])))
             for (tr, j), dj in zip(pairs, d):
                 if dj < GATE_CHI2 and not taken[j]:
                     assigned[id(tr)].append((so, j))
@@ -356,7 +370,8 @@ class ObjectFusion:
         rest = np.flatnonzero(~taken)
         if rest.size and free:
             cost = _distances(np.array([tr.pos for tr in free]), np.array([tr.cov for tr in free]), pos[rest],
-                              so.cov[rest], so.heading[rest])
+                              so.cov[rest], _pair_heading(*_track_headings(free), so.heading[rest],
+                                                          so.heading_sigma[rest]))
             import scipy.optimize  # imported when first needed: a faster start
             big = 1e6
             rows, cols = scipy.optimize.linear_sum_assignment(np.where(cost < GATE_CHI2, cost, big))
@@ -395,7 +410,9 @@ class ObjectFusion:
         so, i = strongest
         tr.rcs, tr.obj_class, tr.dyn_prop = float(so.rcs[i]), int(so.obj_class[i]), int(so.dyn_prop[i])
         tr.prob_of_exist = int(max(g[0].prob_of_exist[g[1]] for g in got))
-        tr.heading = float(so.heading[i])
+        # the orientation of the member that knows it best (the strongest reflection need not be the best track)
+        so_h, i_h = min(got, key=lambda g: g[0].heading_sigma[g[1]])
+        tr.heading, tr.heading_sigma = float(so_h.heading[i_h]), float(so_h.heading_sigma[i_h])
         tr.length = float(np.nanmax([g[0].length[g[1]] for g in got]))
         tr.width = float(np.nanmax([g[0].width[g[1]] for g in got]))
 
@@ -413,18 +430,32 @@ class ObjectFusion:
             [dict(t.members) for t in ts])
 
 
+def _same_velocity(vel: np.ndarray, var_v: np.ndarray) -> np.ndarray:
+    """(A, A): velocities (A, 2) that agree within :data:`MERGE_SPEED_MPS`, or within their own σ (``var_v`` (A, 2),
+    the χ² of the difference under :data:`GATE_CHI2`): a radar that tracks a car beside it from its glinting
+    reflections knows its lateral speed only to a few m/s, and says so."""
+    dv = vel[:, None, :] - vel[None, :, :]
+    return (np.hypot(dv[..., 0], dv[..., 1]) < MERGE_SPEED_MPS) | (
+        (dv * dv / (var_v[:, None, :] + var_v[None, :, :])).sum(axis=-1) < GATE_CHI2)
+
+
+def _track_headings(tracks: list) -> tuple[np.ndarray, np.ndarray]:
+    return np.array([t.heading for t in tracks]), np.array([t.heading_sigma for t in tracks])
+
+
 def _distances(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: np.ndarray,
                max_across_m: float = MAX_ACROSS_M) -> np.ndarray:
     """The Mahalanobis distance² of every pair, with both covariances and the extent term (reference points spread
     along and across the object's heading): positions (A, 2) and (B, 2), covariances (A, 2, 2) and (B, 2, 2), the
-    headings (B,) of the second set → (A, B); ∞ where a pair lies more than ``max_across_m`` apart across it."""
+    object's orientation, (B,) (the second set's) or (A, B) (each pair's) → (A, B); ∞ where a pair lies more than
+    ``max_across_m`` apart across it."""
     d = p2[None, :, :] - p1[:, None, :]                                          # (A, B, 2)
-    c, s = np.cos(heading), np.sin(heading)                                     # (B,)
-    across = np.abs(-s[None, :] * d[..., 0] + c[None, :] * d[..., 1])
+    c, s = np.broadcast_to(np.cos(heading), d.shape[:2]), np.broadcast_to(np.sin(heading), d.shape[:2])   # (A, B)
+    across = np.abs(-s * d[..., 0] + c * d[..., 1])
     el, et = EXTENT_SIGMA_LONG_M ** 2, EXTENT_SIGMA_LAT_M ** 2
     ext = np.stack([np.stack([el * c * c + et * s * s, (el - et) * c * s], axis=-1),
-                    np.stack([(el - et) * c * s, el * s * s + et * c * c], axis=-1)], axis=-2)    # (B, 2, 2)
-    m = c1[:, None] + c2[None, :] + ext[None, :]                                # (A, B, 2, 2)
+                    np.stack([(el - et) * c * s, el * s * s + et * c * c], axis=-1)], axis=-2)    # (A, B, 2, 2)
+    m = c1[:, None] + c2[None, :] + ext                                         # (A, B, 2, 2)
     a, b, cc, dd = m[..., 0, 0], m[..., 0, 1], m[..., 1, 0], m[..., 1, 1]
     det = a * dd - b * cc
     x, y = d[..., 0], d[..., 1]
