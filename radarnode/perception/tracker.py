@@ -3,8 +3,10 @@
 A short composition of single-purpose roles (Stone Soup style), each a plain
 function that can be tested alone:
 
-* :func:`group_detections` — DBSCAN over position and radial speed; one
-  measurement per group (nearest-face position, mean radial speed, extent);
+* :func:`group_detections` — DBSCAN over position and radial speed, and groups
+  of one near body joined by the rigid motion that explains them
+  (:func:`join_rigid`); one measurement per group (nearest-face position, mean
+  radial speed, extent; a joined body's centroid and fitted velocity);
 * :func:`predict` — constant-velocity Kalman prediction;
 * :func:`update` — extended Kalman update with position and radial speed;
 * :func:`associate` — Mahalanobis gating and global nearest neighbour
@@ -78,9 +80,23 @@ class Groups:
     actor_index: np.ndarray     # most common truth tag of the group (-1 if none)
     labels: np.ndarray | None = None   # per detection: its group (shape (detections,))
     cross_sigma_m: np.ndarray | None = None   # glint across the line of sight: half the span its reflector shows
+    velocity: np.ndarray | None = None        # (n, 2) a joined near body's fitted relative velocity (NaN: none)
+    velocity_cov: np.ndarray | None = None    # (n, 2, 2) its covariance
 
     def __len__(self) -> int:
         return int(self.x_m.shape[0])
+
+
+#: two groups whose nearest detections lie this close are joined when one rigid motion explains both (below)
+RIGID_TOUCH_M = 1.5
+#: … within this radial speed at every detection (the chain measures radial speed to a few cm/s) …
+RIGID_RESIDUAL_MPS = 0.5
+#: … over at least this span of azimuth (narrower, the speed across the line of sight is not observable) …
+RIGID_MIN_SPAN_RAD = math.radians(10.0)
+#: … at a relative speed no road user exceeds
+RIGID_MAX_SPEED_MPS = 70.0
+#: the least σ of a radial speed in the fit of a joined group's velocity
+RIGID_SPEED_FLOOR_MPS = 0.1
 
 
 def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, eps_long_m: float = 4.5) -> Groups:
@@ -88,13 +104,19 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
 
     Longer along x than across: the side of a truck or a bus comes out as detections 3–4 m apart (its
     reflection points merge within a resolution cell), lanes are 3.5 m apart (1.25 eps: never one group), a car's
-    rear and its side on a bend some 2 m (one group)."""
+    rear and its side on a bend some 2 m (one group).
+
+    Near the sensor one body spans tens of degrees, and its radial speed v·u changes across it by more than
+    ``eps_mps`` (a car passing 2 m from a corner radar: −2 … +4.5 m/s over 90°): groups that touch and that one
+    rigid velocity explains are one group (:func:`join_rigid`), measured with that velocity's radial part."""
     n = len(det)
     if n == 0:
         z = np.zeros(0)
-        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), z)
+        return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), z,
+                      np.zeros((0, 2)), np.zeros((0, 2, 2)))
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
+    labels, rigid_v, rigid_cov = join_rigid(det, labels)
     g = labels.max() + 1
     power = 10.0 ** (det.snr_db / 10.0)
     wsum = np.bincount(labels, weights=power, minlength=g)
@@ -109,6 +131,14 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     np.maximum.at(ymax, labels, y)
     gy = np.bincount(labels, weights=power * y, minlength=g) / wsum
     vr = np.bincount(labels, weights=power * det.range_rate_mps, minlength=g) / wsum
+    gx = xmin
+    joined = np.isfinite(rigid_v[:, 0])
+    if joined.any():
+        # a joined near body wraps around the sensor (a car beside a corner radar): its nearest x and mean y may lie
+        # off the body, its power centroid does not; measured with the rigid velocity's radial part there
+        gx = np.where(joined, np.bincount(labels, weights=power * x, minlength=g) / wsum, xmin)
+        r = np.maximum(np.hypot(gx, gy), 1e-6)
+        vr = np.where(joined, (rigid_v[:, 0] * gx + rigid_v[:, 1] * gy) / r, vr)
     rcs = 10.0 * np.log10(np.bincount(labels, weights=10.0 ** (det.rcs_dbsm / 10.0), minlength=g))
     snr = 10.0 * np.log10(wsum)
     tags = np.full(g, -1, dtype=np.int64)
@@ -121,7 +151,111 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     # across the line of sight is the group's position uncertainty from glint
     glint = np.zeros(g)
     np.maximum.at(glint, labels, 0.5 * det.range_m * det.azimuth_spread_rad)
-    return Groups(xmin, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint)
+    return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov)
+
+
+def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Groups (``labels``, DBSCAN's) whose nearest detections lie within :data:`RIGID_TOUCH_M` and whose radial
+    speeds one relative velocity v explains — |v_r − v·u| ≤ :data:`RIGID_RESIDUAL_MPS` at every detection, u its
+    line of sight, over at least :data:`RIGID_MIN_SPAN_RAD` of azimuth, |v| ≤ :data:`RIGID_MAX_SPEED_MPS` — are
+    joined (a least-squares fit per candidate pair from per-group sums; a chain of joins is kept only where the
+    whole joined group passes the same test). Returns the new labels, renumbered in order of first detection, and
+    per new group the fitted v (sensor axes; NaN for a group that was not joined), shape (g, 2), and its covariance
+    (g, 2, 2)."""
+    g = int(labels.max()) + 1 if labels.size else 0
+    none = (labels, np.full((g, 2), np.nan), np.full((g, 2, 2), np.nan))
+    if g < 2:
+        return none
+    import scipy.spatial  # imported when first needed: a faster start
+    pairs = scipy.spatial.cKDTree(np.stack([det.x_m, det.y_m], axis=1)).query_pairs(RIGID_TOUCH_M,
+                                                                                   output_type="ndarray")
+    if pairs.size == 0:
+        return none
+    la, lb = labels[pairs[:, 0]], labels[pairs[:, 1]]
+    cand = np.unique(np.stack([np.minimum(la, lb), np.maximum(la, lb)], axis=1)[la != lb], axis=0)
+    if cand.size == 0:
+        return none
+    ok = _rigid_fit_ok(det, labels, cand)
+    if not ok.any():
+        return none
+    import scipy.sparse
+    import scipy.sparse.csgraph
+    edges = cand[ok]
+    graph = scipy.sparse.coo_array((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(g, g))
+    _, comp = scipy.sparse.csgraph.connected_components(graph, directed=False)
+    # a component joined through a chain (a–b, b–c) must pass the test as a whole; else its groups stay apart
+    size = np.bincount(comp, minlength=comp.max() + 1)
+    whole = np.flatnonzero(size > 1)
+    good = _rigid_fit_ok(det, comp[labels], whole[:, None].repeat(2, axis=1))
+    comp = np.where(np.isin(comp, whole[~good]), g + np.arange(g), comp)       # the failed ones: their own labels
+    _, new = np.unique(comp[labels], return_inverse=True)
+    # renumber in order of first detection (as DBSCAN numbers its clusters)
+    first = np.full(new.max() + 1, labels.size)
+    np.minimum.at(first, new, np.arange(labels.size))
+    rank = np.empty_like(first)
+    rank[np.argsort(first, kind="stable")] = np.arange(first.size)
+    new = rank[new]
+    v, cov = np.full((first.size, 2), np.nan), np.full((first.size, 2, 2), np.nan)
+    parts = np.bincount(np.unique(np.stack([new, labels], axis=1), axis=0)[:, 0], minlength=first.size)
+    joined = np.flatnonzero(parts > 1)                                  # new groups made of several old ones
+    v[joined], cov[joined] = _rigid_velocity(det, new, joined)
+    return new, v, cov
+
+
+def _rigid_sums(det: Detections, labels: np.ndarray) -> np.ndarray:
+    """Per label the sums of the normal equations of v_r = v·u: (L, 7) [Σc², Σcs, Σs², Σc·v_r, Σs·v_r, n, Σv_r²]."""
+    c, s, vr = np.cos(det.azimuth_rad), np.sin(det.azimuth_rad), det.range_rate_mps
+    n = int(labels.max()) + 1
+    return np.stack([np.bincount(labels, weights=w, minlength=n) for w in (c * c, c * s, s * s, c * vr, s * vr)]
+                    + [np.bincount(labels, minlength=n).astype(np.float64),
+                       np.bincount(labels, weights=vr * vr, minlength=n)], axis=1)
+
+
+def _solve_rigid(sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """v (P, 2) from summed normal equations (P, 6), and whether the 2×2 system is solvable."""
+    a, b, d, e, f = sums[:, 0], sums[:, 1], sums[:, 2], sums[:, 3], sums[:, 4]
+    det_ = a * d - b * b
+    ok = det_ > 1e-9 * np.maximum(a + d, 1e-300) ** 2
+    safe = np.where(ok, det_, 1.0)
+    return np.stack([(d * e - b * f) / safe, (a * f - b * e) / safe], axis=1), ok
+
+
+def _rigid_velocity(det: Detections, labels: np.ndarray, which: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The fitted v (P, 2) of labels ``which`` and its covariance (P, 2, 2): s²·(AᵀA)⁻¹, s² the residual variance
+    (at least :data:`RIGID_SPEED_FLOOR_MPS` squared: a fit through two or three detections is exact)."""
+    sums = _rigid_sums(det, labels)[which]
+    v, _ = _solve_rigid(sums)
+    a, b, d, n = sums[:, 0], sums[:, 1], sums[:, 2], sums[:, 5]
+    rss = np.maximum(sums[:, 6] - v[:, 0] * sums[:, 3] - v[:, 1] * sums[:, 4], 0.0)
+    s2 = np.maximum(rss / np.maximum(n - 2.0, 1.0), RIGID_SPEED_FLOOR_MPS ** 2)
+    det_ = a * d - b * b
+    cov = np.stack([np.stack([d, -b], axis=-1), np.stack([-b, a], axis=-1)], axis=-2) * (s2 / det_)[:, None, None]
+    return v, cov
+
+
+def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray) -> np.ndarray:
+    """For label pairs ``cand`` (P, 2) (a pair (k, k) is label k alone): whether one rigid velocity explains the
+    detections of both (see :func:`join_rigid`), shape (P,)."""
+    sums = _rigid_sums(det, labels)
+    a, b = cand[:, 0], cand[:, 1]
+    union = sums[a] + np.where((a != b)[:, None], sums[b], 0.0)
+    v, solvable = _solve_rigid(union)
+    # the members of each pair, contiguous: the detections sorted by label, each pair's two runs side by side
+    order = np.argsort(labels, kind="stable")
+    count = np.bincount(labels, minlength=sums.shape[0])
+    start = np.concatenate([[0], np.cumsum(count)])
+    na, nb = count[a], np.where(a != b, count[b], 0)
+    per = na + nb
+    pair = np.repeat(np.arange(len(cand)), per)
+    offset = np.arange(per.sum()) - np.repeat(np.cumsum(per) - per, per)
+    member = order[np.where(offset < na[pair], start[a][pair] + offset, start[b][pair] + offset - na[pair])]
+    az = det.azimuth_rad[member]
+    resid = np.abs(det.range_rate_mps[member] - (v[pair, 0] * np.cos(az) + v[pair, 1] * np.sin(az)))
+    bounds = np.cumsum(per) - per
+    worst = np.maximum.reduceat(resid, bounds)
+    span = np.maximum.reduceat(az, bounds) - np.minimum.reduceat(az, bounds)
+    return (solvable & (worst <= RIGID_RESIDUAL_MPS) & (span >= RIGID_MIN_SPAN_RAD)
+            & (np.hypot(v[:, 0], v[:, 1]) <= RIGID_MAX_SPEED_MPS))
 
 
 def extents_along(det: Detections, labels: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
@@ -217,6 +351,21 @@ def update(x, p, z, r_cov):
     return x_new, p_new
 
 
+def tangential_update(x, p, z, v, v_cov):
+    """Kalman update of states (n, 4) with the part of a measured velocity ``v`` (n, 2), covariance ``v_cov``
+    (n, 2, 2), across the line of sight to the measured positions ``z`` (n, ≥ 2): the radial part is already in the
+    radial-speed update, and is not counted twice."""
+    r = np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)
+    t = np.stack([-z[:, 1] / r, z[:, 0] / r], axis=1)                     # across the line of sight
+    h = np.zeros((len(x), 4))
+    h[:, 2:4] = t
+    innov = np.einsum("ni,ni->n", t, v) - np.einsum("ni,ni->n", h, x)
+    ph = np.einsum("nij,nj->ni", p, h)
+    s = np.einsum("ni,ni->n", h, ph) + np.einsum("ni,nij,nj->n", t, v_cov, t)
+    k = ph / s[:, None]
+    return x + k * innov[:, None], p - k[:, :, None] * ph[:, None, :]
+
+
 class ObjectTracker:
     """Turns each cycle's detections into the ARS 408 object list.
 
@@ -264,6 +413,11 @@ class ObjectTracker:
         if pairs:
             ti, gi = np.array(pairs).T
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
+            fit = np.isfinite(groups.velocity[gi, 0])
+            if fit.any():      # a joined near body: its fitted velocity across the line of sight too
+                t, g = ti[fit], gi[fit]
+                self.x[t], self.p[t] = tangential_update(self.x[t], self.p[t], z[g], groups.velocity[g],
+                                                         groups.velocity_cov[g])
             hit[ti], used[gi] = True, True
             # extent: what the detections spanned over the last cycles (a decaying maximum: one cycle sees only a
             # part of a body, and a far one is a single detection until its parts are resolved)
@@ -332,6 +486,7 @@ class ObjectTracker:
         vr_prior = vx0 * ux + vy0 * uy
         x0[:, 2] = vx0 + (z[idx, 2] - vr_prior) * ux
         x0[:, 3] = vy0 + (z[idx, 2] - vr_prior) * uy
+        fit = np.isfinite(groups.velocity[idx, 0])          # a joined near body: its fitted velocity
         # initial covariance: the position as measured; the velocity's radial part as measured, its tangential
         # part from the stationary prior (2 m/s). A looser position (it was 1 m) let a new track of a guardrail
         # post take the next post 4 m on, and leave at a false speed.
@@ -340,6 +495,9 @@ class ObjectTracker:
         u = np.stack([ux, uy], axis=1)
         p0[:, 2:4, 2:4] = (self.r_cov[2, 2] * u[:, :, None] * u[:, None, :]
                            + 4.0 * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
+        if fit.any():
+            x0[fit, 2:4] = groups.velocity[idx[fit]]
+            p0[fit, 2:4, 2:4] = groups.velocity_cov[idx[fit]] + self.r_cov[2, 2] * np.eye(2)[None]
         self.x = np.concatenate([self.x, x0])
         self.p = np.concatenate([self.p, p0])
         self.hist = np.concatenate([self.hist, np.ones(k, dtype=np.uint8)])

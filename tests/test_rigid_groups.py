@@ -1,0 +1,180 @@
+"""A near body's detections joined by the one rigid motion that explains them (radarnode.perception.tracker).
+
+Near a radar one car spans tens of degrees, and its radial speed v·u changes across it by more than the grouping's
+1.5 m/s: DBSCAN over (x, y, radial speed) cuts it into several groups, the tracker into several short-lived objects.
+Groups that touch and that one relative velocity explains are one (``join_rigid``); the tests sweep each of its
+limits (radial-speed residual, azimuth span, touching distance) below, at and above it, and check the cases it must
+keep apart (a pedestrian beside a car, two far objects at different speeds).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from radarnode.dsp.cluster import dbscan
+from radarnode.perception import tracker as T
+from radarnode.perception.tracker import ObjectTracker, group_detections, join_rigid
+from radarnode.perception.types import Detections
+from radarnode.radar.setup import load_scenario
+from radarnode.wire.group import ego_motion_for, make_node
+from radarnode.wire.runner import SimulatedClock, run_node
+from tests.conftest import SCENARIOS
+
+
+def _detections(x, y, v, actor=0, extra_vr=None):
+    """Detections at points (x, y) of a body moving at relative velocity v = (vx, vy) (sensor axes)."""
+    x, y = np.asarray(x, float), np.asarray(y, float)
+    r, az = np.hypot(x, y), np.arctan2(y, x)
+    vr = v[0] * np.cos(az) + v[1] * np.sin(az)
+    if extra_vr is not None:
+        vr = vr + extra_vr
+    n = x.size
+    return Detections(r, vr, az, np.full(n, 5.0), np.full(n, 30.0), np.full(n, actor, dtype=np.int64))
+
+
+def _cat(parts):
+    return Detections(*(np.concatenate([getattr(p, f.name) for p in parts]) for f in dataclasses.fields(Detections)
+                        if f.name not in ("ambig_state", "azimuth_spread_rad")))
+
+
+def _arc(r, az_deg, v, extra_vr=0.0, actor=0):
+    az = np.radians(np.asarray(az_deg, float))
+    return _detections(r * np.cos(az), r * np.sin(az), v, actor=actor, extra_vr=extra_vr)
+
+
+def _dbscan(det):
+    return dbscan(np.stack([det.x_m / 4.5, det.y_m / 2.8, det.range_rate_mps / 1.5], axis=1), 1.0, 1)
+
+
+def _worst_lstsq(det):
+    """The worst radial-speed residual of the least-squares rigid velocity (an independent reference: lstsq)."""
+    a = np.stack([np.cos(det.azimuth_rad), np.sin(det.azimuth_rad)], axis=1)
+    v, *_ = np.linalg.lstsq(a, det.range_rate_mps, rcond=None)
+    return float(np.max(np.abs(det.range_rate_mps - a @ v)))
+
+
+# a car's side 2 m from the sensor, from −20° to 70° of azimuth, overtaking at (3.5, −3.4) m/s relative
+_SIDE_X = np.array([3.73, 3.09, 2.45, 1.82, 1.31, 0.67])
+_SIDE_Y = np.array([-1.08, -0.45, 0.19, 0.83, 1.34, 1.97])
+_V = (3.5, -3.4)
+
+
+def test_a_car_beside_the_sensor_is_one_group_with_its_velocity():
+    det = _detections(_SIDE_X, _SIDE_Y, _V)
+    assert np.ptp(det.range_rate_mps) > 4.0                         # DBSCAN alone: several groups
+    assert _dbscan(det).max() >= 2
+    g = group_detections(det)
+    assert len(g) == 1
+    assert np.allclose(g.velocity[0], _V, atol=1e-9)
+    # measured at the power centroid, with the velocity's radial part there
+    cx, cy = det.x_m.mean(), det.y_m.mean()
+    assert abs(g.x_m[0] - cx) < 1e-9 and abs(g.y_m[0] - cy) < 1e-9
+    assert abs(g.range_rate_mps[0] - (_V[0] * cx + _V[1] * cy) / math.hypot(cx, cy)) < 1e-9
+    assert np.all(np.linalg.eigvalsh(g.velocity_cov[0]) > 0)
+
+
+@pytest.mark.parametrize("worst_mps", [0.45, 0.499, 0.501, 1.0])
+def test_joined_only_within_the_radial_speed_residual(worst_mps):
+    """Two speed groups 4 m from the sensor, 19° apart where nearest: the second's radial speeds off the first's motion by δ. The
+    least-squares fit's worst residual is linear in δ; δ is chosen to put it just below, at and above the limit."""
+    v = (0.0, 8.0)
+    a, b = _arc(4.0, [0.0, 3.0, 6.0], v), _arc(4.0, [25.0, 29.0], v)
+    unit = _worst_lstsq(_cat([a, _arc(4.0, [25.0, 29.0], v, extra_vr=1.0)]))
+    det = _cat([a, _arc(4.0, [25.0, 29.0], v, extra_vr=worst_mps / unit)])
+    assert abs(_worst_lstsq(det) - worst_mps) < 1e-9
+    labels = _dbscan(det)
+    assert labels.max() == 1                                          # two speed groups to begin with
+    new, fitted, _ = join_rigid(det, labels)
+    assert (new.max() == 0) == (worst_mps <= T.RIGID_RESIDUAL_MPS)
+    assert np.isfinite(fitted[0, 0]) == (worst_mps <= T.RIGID_RESIDUAL_MPS)
+
+
+@pytest.mark.parametrize("span_deg, joined", [(9.9, False), (10.1, True), (20.0, True)])
+def test_joined_only_over_an_azimuth_span_that_shows_the_speed_across(span_deg, joined):
+    """Two speed groups at the two ends of ``span_deg`` of azimuth, 4 m away, one motion: below 10° the speed across
+    the line of sight is not observable and they stay two, however well a fitted velocity explains them."""
+    h = span_deg / 2
+    v_t = 3.0 / (2.0 * math.sin(math.radians(h)))                   # radial speeds 3 m/s apart end to end
+    det = _cat([_arc(4.0, [-h, -h + 0.5], (0.0, v_t)), _arc(4.0, [h - 0.5, h], (0.0, v_t))])
+    assert _dbscan(det).max() == 1
+    assert (len(group_detections(det)) == 1) == joined
+
+
+@pytest.mark.parametrize("gap_m, joined", [(1.45, True), (1.55, False), (3.0, False)])
+def test_joined_only_where_the_groups_touch(gap_m, joined):
+    """Two speed groups of one motion whose nearest detections lie ``gap_m`` apart: within 1.5 m they are one."""
+    r, v = 4.0, (0.0, 8.0)
+    delta = math.degrees(2.0 * math.asin(gap_m / (2.0 * r)))
+    det = _cat([_arc(r, [-8.0, -7.5], v), _arc(r, [-7.5 + delta, -7.0 + delta], v)])
+    assert _dbscan(det).max() == 1
+    assert (len(group_detections(det)) == 1) == joined
+
+
+def test_a_chain_of_joins_that_one_motion_does_not_explain_stays_apart():
+    """a–b fit one velocity (0, 8) m/s, b–c another (0, −8): b, straight ahead, fits both; a and c moving apart do not
+    make one body, and no group comes out that one rigid motion does not explain."""
+    a = _arc(3.0, [-30.0, -28.0], (0.0, 8.0))
+    b = _detections(3.0 * np.cos(np.radians([0.0, 1.0])), 3.0 * np.sin(np.radians([0.0, 1.0])), (0.0, 0.0))
+    c = _arc(3.0, [29.0, 31.0], (0.0, -8.0))
+    det = _cat([a, b, c])
+    labels = _dbscan(det)
+    assert labels.max() == 2
+    new, _, _ = join_rigid(det, labels)
+    assert new[0] != new[-1]                                          # a and c never one group
+    for k in range(new.max() + 1):
+        m = new == k
+        if len(np.unique(labels[m])) > 1:
+            sub = Detections(det.range_m[m], det.range_rate_mps[m], det.azimuth_rad[m], det.rcs_dbsm[m],
+                             det.snr_db[m], det.actor_index[m])
+            assert _worst_lstsq(sub) <= T.RIGID_RESIDUAL_MPS + 1e-9
+
+
+def test_a_pedestrian_beside_a_car_stays_a_group_of_its_own():
+    """A car standing 3 m ahead (the ego at 5 m/s) and a pedestrian walking away from it beside it: no one velocity
+    explains both."""
+    car = _detections([3.0, 3.0, 3.0, 3.0], [-1.6, -0.9, -0.2, 0.5], (-5.0, 0.0), actor=0)
+    ped = _detections([3.6], [1.4], (-5.0, 0.0), actor=1, extra_vr=2.0)
+    g = group_detections(_cat([car, ped]))
+    assert sorted(g.actor_index.tolist()) == [0, 1]
+
+
+def test_far_objects_split_by_speed_are_not_joined():
+    """At 40 m two reflectors one metre apart at radial speeds 2 m/s apart: a span of 1.4°, never joined."""
+    det = Detections(np.array([40.0, 40.0]), np.array([-3.0, -1.0]), np.array([0.0, 0.025]), np.full(2, 5.0),
+                     np.full(2, 30.0), np.array([0, 1]))
+    assert len(group_detections(det)) == 2
+
+
+def test_the_tracker_initiates_a_joined_body_with_its_fitted_velocity():
+    """A body first seen beside the sensor starts with its fitted velocity, not the stationary-world prior: the next
+    cycle's prediction lands on it and the track is confirmed."""
+    trk = ObjectTracker()
+    sv = (17.7, -17.7)                                # a corner radar at 45° on an ego at 25 m/s
+    for k in range(3):
+        shift = np.array(_V) * 0.072 * k
+        out = trk.step(0.072 * k, _detections(_SIDE_X + shift[0], _SIDE_Y + shift[1], _V), sv)
+    assert len(out) == 1 and abs(out.vrel_long_mps[0] - _V[0]) < 0.5 and abs(out.vrel_lat_mps[0] - _V[1]) < 0.5
+
+
+def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
+    """front_and_corners: the car overtaking on the left passes 2 m from the left corner radar. Its objects there come
+    one at a time (before the joining: up to three, born and lost every few cycles)."""
+    sc = load_scenario(SCENARIOS / "front_and_corners.yaml")
+    node = make_node(sc, fidelity="detection")
+    corner, per_cycle = node.nodes[1], []
+    cycle = corner.cycle
+
+    def counted(t_s, timestamp=None):
+        out = cycle(t_s, timestamp)
+        per_cycle.append(int(np.count_nonzero(out.frame.objects.actor_index == 1)))
+        return out
+
+    corner.cycle = counted
+    run_node(node, clock=SimulatedClock(), sinks=[lambda m: None], vehicle=ego_motion_for(node))
+    seen = np.array([c for c in per_cycle if c > 0])
+    assert seen.size >= 20
+    assert seen.max() <= 2 and np.mean(seen > 1) <= 0.1
