@@ -159,7 +159,8 @@ def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndar
     speeds one relative velocity v explains — |v_r − v·u| ≤ :data:`RIGID_RESIDUAL_MPS` at every detection, u its
     line of sight, over at least :data:`RIGID_MIN_SPAN_RAD` of azimuth, |v| ≤ :data:`RIGID_MAX_SPEED_MPS` — are
     joined (a least-squares fit per candidate pair from per-group sums; a chain of joins is kept only where the
-    whole joined group passes the same test). Returns the new labels, renumbered in order of first detection, and
+    whole joined group passes the same test). Returns the new labels, in the order of the groups' least label (of
+    first detection, as DBSCAN numbers them), and
     per new group the fitted v (sensor axes; NaN for a group that was not joined), shape (g, 2), and its covariance
     (g, 2, 2)."""
     g = int(labels.max()) + 1 if labels.size else 0
@@ -172,32 +173,34 @@ def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndar
     if pairs.size == 0:
         return none
     la, lb = labels[pairs[:, 0]], labels[pairs[:, 1]]
-    cand = np.unique(np.stack([np.minimum(la, lb), np.maximum(la, lb)], axis=1)[la != lb], axis=0)
-    if cand.size == 0:
+    apart = la != lb
+    key = np.unique(np.minimum(la, lb)[apart] * g + np.maximum(la, lb)[apart])      # candidate group pairs
+    if key.size == 0:
         return none
+    cand = np.stack([key // g, key % g], axis=1)
     ok = _rigid_fit_ok(det, labels, cand)
     if not ok.any():
         return none
-    import scipy.sparse
-    import scipy.sparse.csgraph
-    edges = cand[ok]
-    graph = scipy.sparse.coo_array((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(g, g))
-    _, comp = scipy.sparse.csgraph.connected_components(graph, directed=False)
+    # connected components of the accepted pairs: each group takes the least group index it is joined to
+    # (min-label propagation with pointer jumping; a few passes over a handful of edges)
+    a, b = cand[ok, 0], cand[ok, 1]
+    comp = np.arange(g)
+    while True:
+        before = comp.copy()
+        m = np.minimum(comp[a], comp[b])
+        np.minimum.at(comp, a, m)
+        np.minimum.at(comp, b, m)
+        comp = comp[comp]
+        if np.array_equal(comp, before):
+            break
     # a component joined through a chain (a–b, b–c) must pass the test as a whole; else its groups stay apart
-    size = np.bincount(comp, minlength=comp.max() + 1)
-    whole = np.flatnonzero(size > 1)
-    good = _rigid_fit_ok(det, comp[labels], whole[:, None].repeat(2, axis=1))
-    comp = np.where(np.isin(comp, whole[~good]), g + np.arange(g), comp)       # the failed ones: their own labels
-    _, new = np.unique(comp[labels], return_inverse=True)
-    # renumber in order of first detection (as DBSCAN numbers its clusters)
-    first = np.full(new.max() + 1, labels.size)
-    np.minimum.at(first, new, np.arange(labels.size))
-    rank = np.empty_like(first)
-    rank[np.argsort(first, kind="stable")] = np.arange(first.size)
-    new = rank[new]
-    v, cov = np.full((first.size, 2), np.nan), np.full((first.size, 2, 2), np.nan)
-    parts = np.bincount(np.unique(np.stack([new, labels], axis=1), axis=0)[:, 0], minlength=first.size)
-    joined = np.flatnonzero(parts > 1)                                  # new groups made of several old ones
+    whole = np.flatnonzero(np.bincount(comp, minlength=g) > 1)
+    good = _rigid_fit_ok(det, comp[labels], np.stack([whole, whole], axis=1))
+    comp = np.where(np.isin(comp, whole[~good]), np.arange(g), comp)
+    # renumbered by their least group index (DBSCAN numbers its groups in order of first detection: so are these)
+    uniq, new = np.unique(comp[labels], return_inverse=True)
+    v, cov = np.full((uniq.size, 2), np.nan), np.full((uniq.size, 2, 2), np.nan)
+    joined = np.searchsorted(uniq, np.flatnonzero(np.bincount(comp, minlength=g) > 1))   # made of several groups
     v[joined], cov[joined] = _rigid_velocity(det, new, joined)
     return new, v, cov
 
