@@ -213,3 +213,15 @@ def test_lapack_failures_fall_back_to_the_reference_routines(method, monkeypatch
         u2, ok2 = ss.ESTIMATORS[method](r, m, d)
         assert np.array_equal(ok, ok2)
         assert np.max(circular_distance(u, u2, d)) < 1e-9
+
+
+def test_root_music_without_enough_cayley_roots_inside_falls_back_to_the_complex_roots(monkeypatch):
+    # _nearest_inside (the Python-float selection of the roots closest to the circle) declines when fewer than
+    # n_sources roots lie inside (never seen: finite roots give N − 1 inside); the complex-root path then selects
+    cases = random_cases(7, 60, n_choices=(12, 8, 5))
+    want = [ss.root_music(r, m, d) for r, m, d in cases]
+    monkeypatch.setattr(ss, "_nearest_inside", lambda *args: None)
+    for (r, m, d), (u, ok) in zip(cases, want):
+        u2, ok2 = ss.root_music(r, m, d)
+        assert np.array_equal(ok, ok2)
+        assert np.max(circular_distance(u, u2, d)) < 1e-9

@@ -33,6 +33,7 @@ TASSP 1990 (stochastic CRB, :func:`crb_sin`).
 
 from __future__ import annotations
 
+import cmath
 import functools
 import math
 from dataclasses import dataclass
@@ -615,27 +616,53 @@ def root_music(r: np.ndarray, n_sources: int, d: float = 0.5) -> tuple[np.ndarra
         roots = tr[np.isfinite(tr)]
         inside = roots[np.abs(roots) <= 1.0]
     else:
-        up = ti > 0.0                                           # |z| < 1
-        t = (tr + 1j * ti)[up]
-        if 2 * t.size < tr.size:
-            # real t: |z| = 1. P ≥ 0 on the circle, so a root there is double, split by rounding into two real
-            # t or a conjugate pair; keep one of each two (in order), as np.roots' radial split keeps one inside
-            t = np.concatenate((t, np.sort(tr[ti == 0.0])[::2]))
-        if t.size >= n_sources:
-            v = (t - 1j) / (t + 1j)                             # z / w
-            # inside, 1 − |z| is the distance to the circle: the n_sources largest |z|
-            return _roots_to_u(w * v[np.abs(v).argsort()[:-n_sources - 1:-1]], d, n_sources)
-        else:                                                   # P's roots at ∞ (t = −j) are not roots
-            t = tr + 1j * ti
-            with np.errstate(divide="ignore", invalid="ignore"):
-                roots = w * (t - 1j) / (t + 1j)
-            roots = roots[np.isfinite(roots)]
-            inside = roots[np.abs(roots) <= 1.0]
+        found = _nearest_inside(tr, ti, w, d, n_sources)
+        if found is not None:
+            return found
+        t = tr + 1j * ti                                        # P's roots at ∞ (t = −j) are not roots
+        with np.errstate(divide="ignore", invalid="ignore"):
+            roots = w * (t - 1j) / (t + 1j)
+        roots = roots[np.isfinite(roots)]
+        inside = roots[np.abs(roots) <= 1.0]
     if roots.size == 0:
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
     cand = inside if inside.size >= n_sources else roots
     z = cand[np.abs(1.0 - np.abs(cand)).argsort()[:n_sources]]
     return _roots_to_u(z, d, n_sources)
+
+
+def _nearest_inside(tr: np.ndarray, ti: np.ndarray, w: complex, d: float,
+                    n_sources: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """The ``n_sources`` roots ``z = w·(t − j)/(t + j)`` inside (or on) the unit circle closest to it, from the
+    Cayley roots ``t = tr + j·ti`` (:func:`_polynomial_roots`), as :func:`_roots_to_u`'s ``(u, resolved)``; None
+    when fewer than ``n_sources`` lie inside.
+
+    Inside is ``Im t > 0``, where ``1 − |z|² = 4·Im t / |t + j|²``: the closest are the smallest
+    ``Im t / |t + j|²``. The few (n_sources) chosen are turned into angles on Python floats and complex numbers:
+    a dozen roots are too few for numpy's per-call cost to pay (issue 11 item 7).
+    """
+    trl = tr.tolist()
+    til = ti.tolist()
+    cand = [(b / (a * a + (b + 1.0) * (b + 1.0)), a, b) for a, b in zip(trl, til) if b > 0.0]
+    if 2 * len(cand) < len(trl):
+        # real t: |z| = 1. P ≥ 0 on the circle, so a root there is double, split by rounding into two real
+        # t or a conjugate pair; keep one of each two (in order), as np.roots' radial split keeps one inside
+        cand += [(0.0, a, 0.0) for a in sorted([a for a, b in zip(trl, til) if b == 0.0])[::2]]
+    if len(cand) < n_sources:
+        return None
+    cand.sort()
+    scale = 2.0 * math.pi * d
+    u = []
+    for _, a, b in cand[:n_sources]:
+        t = complex(a, b)
+        u.append(cmath.phase(w * ((t - 1j) / (t + 1j))) / scale)       # arg z
+    if _periodic(d):
+        u = [(v + 1.0) % 2.0 - 1.0 for v in u]
+    else:
+        u = [min(max(v, -1.0), 1.0) for v in u]
+    u.sort()
+    ok = [True] + [u[i] - u[i - 1] >= 1e-9 for i in range(1, n_sources)]   # a repeated angle is not resolved
+    return np.array(u), np.array(ok)
 
 
 def _roots_to_u(z: np.ndarray, d: float, n_sources: int) -> tuple[np.ndarray, np.ndarray]:
