@@ -116,14 +116,16 @@ def _check_subarray(q: object, n: int) -> None:
 
 @functools.lru_cache(maxsize=64)
 def _stack_index(n: int, q: int, k: int, fb: bool) -> np.ndarray:
-    """Flat index of ``Z`` (:func:`_covariance`) into ``x.ravel()`` (N·K), followed for FB by its conjugate: (Q, L·K)
-    or (Q, 2·L·K); column (l, k) of the forward part is sub-array l's snapshot k, ``x[l + i, k]`` in row i, of the
-    backward part ``x*[l + Q − 1 − i, k]``."""
+    """Flat index of ``Zᵀ`` (:func:`_covariance`) into ``x.ravel()`` (N·K), followed for FB by its conjugate: (L·K, Q)
+    or (2·L·K, Q), row-major, so that ``Z`` is its transpose in column-major order, as BLAS takes it (no copy);
+    column (l, k) of Z's forward part is sub-array l's snapshot k, ``x[l + i, k]`` in row i, of the backward part
+    ``x*[l + Q − 1 − i, k]``."""
     i = np.arange(q)[:, None, None]
     lk = (np.arange(n - q + 1)[None, :, None], np.arange(k)[None, None, :])
     idx = ((lk[0] + i) * k + lk[1]).reshape(q, -1)
     if fb:
         idx = np.concatenate((idx, (n * k + (lk[0] + q - 1 - i) * k + lk[1]).reshape(q, -1)), axis=1)
+    idx = np.ascontiguousarray(idx.T)
     idx.setflags(write=False)
     return idx
 
@@ -138,7 +140,7 @@ def _covariance(x: np.ndarray, q: int, fb: bool) -> np.ndarray:
         z = x
     else:
         flat = x.reshape(-1)
-        z = (np.concatenate((flat, np.conj(flat))) if fb else flat).take(_stack_index(n, q, k, fb))
+        z = (np.concatenate((flat, np.conj(flat))) if fb else flat).take(_stack_index(n, q, k, fb)).T
     return _gram(z, 1.0 / z.shape[1])
 
 
@@ -652,16 +654,16 @@ def _nearest_inside(tr: np.ndarray, ti: np.ndarray, w: complex, d: float,
         return None
     cand.sort()
     scale = 2.0 * math.pi * d
+    periodic = _periodic(d)
     u = []
     for _, a, b in cand[:n_sources]:
         t = complex(a, b)
-        u.append(cmath.phase(w * ((t - 1j) / (t + 1j))) / scale)       # arg z
-    if _periodic(d):
-        u = [(v + 1.0) % 2.0 - 1.0 for v in u]
-    else:
-        u = [min(max(v, -1.0), 1.0) for v in u]
+        v = cmath.phase(w * ((t - 1j) / (t + 1j))) / scale           # arg z
+        u.append((v + 1.0) % 2.0 - 1.0 if periodic else min(max(v, -1.0), 1.0))
     u.sort()
-    ok = [True] + [u[i] - u[i - 1] >= 1e-9 for i in range(1, n_sources)]   # a repeated angle is not resolved
+    ok = [True] * n_sources
+    for i in range(1, n_sources):
+        ok[i] = u[i] - u[i - 1] >= 1e-9                         # a repeated angle is not resolved
     return np.array(u), np.array(ok)
 
 
