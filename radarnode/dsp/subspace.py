@@ -748,7 +748,14 @@ class SubspaceEstimate:
         return np.degrees(np.arcsin(np.clip(self.sin_theta, -1.0, 1.0)))
 
 
+_COMPLEX128 = np.dtype(np.complex128)
+_FLOAT64 = np.dtype(np.float64)
+_BOOL = np.dtype(bool)
+
+
 def _check_snapshots(x: object) -> np.ndarray:
+    if type(x) is np.ndarray and x.dtype is _COMPLEX128 and x.ndim == 2 and x.shape[0] >= 2 and x.shape[1] >= 1:
+        return x                                        # the common case, as the checks below would return it
     try:
         x = np.asarray(x)
     except Exception as exc:  # ragged lists and the like
@@ -839,8 +846,10 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
     except (np.linalg.LinAlgError, FloatingPointError):
         # the safety net the stability tests check is never needed; kept so the contract holds
         u, ok = np.zeros(n_used), np.zeros(n_used, dtype=bool)
-    u = np.asarray(u, dtype=float)
-    ok = np.asarray(ok, dtype=bool)
+    if type(u) is not np.ndarray or u.dtype is not _FLOAT64:
+        u = np.asarray(u, dtype=float)
+    if type(ok) is not np.ndarray or ok.dtype is not _BOOL:
+        ok = np.asarray(ok, dtype=bool)
     if not math.isfinite(u @ u):                       # a NaN or inf (or |u| > 1e154: then nothing changes)
         finite = np.isfinite(u)
         ok = ok & finite
