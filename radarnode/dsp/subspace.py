@@ -51,6 +51,10 @@ DEFAULT_FLOOR_DB = {"bartlett": 10.0, "capon": 20.0, "music": 20.0, "unitary_mus
 #: a MUSIC peak whose null spectrum ‖Enᴴa‖² is below this fraction of ‖a‖² = N counts whatever its height
 #: relative to the strongest (a steering vector in a random M-dim subspace has ≈ 1 − M/N there)
 MUSIC_ACCEPT = 0.5
+#: dtypes compared by identity on the fast paths (numpy's built-in descriptors are singletons)
+_COMPLEX128 = np.dtype(np.complex128)
+_FLOAT64 = np.dtype(np.float64)
+_BOOL = np.dtype(bool)
 #: coarse grid points per unit of sin θ per element (≥ 256 points over [-1, 1])
 GRID_PER_ELEMENT = 16
 #: fine-grid points on each side of a coarse peak in the local refinement
@@ -278,8 +282,10 @@ def _diag_sum_matrix(n: int, sign: float = 1.0) -> np.ndarray:
 def _diag_sums(s: np.ndarray, sign: float = 1.0) -> np.ndarray:
     """Real diagonal-sum vector (2N − 1,) of an (N, N) Hermitian matrix (see :func:`_diag_sum_matrix`), times
     ``sign``."""
-    v = np.ascontiguousarray(s, dtype=np.complex128).reshape(-1).view(np.float64)
-    return _diag_sum_matrix(s.shape[0], sign) @ v
+    v = s.ravel()                                       # row-major (a copy of zgemm's column-major output)
+    if v.dtype is not _COMPLEX128:
+        v = v.astype(np.complex128)
+    return _diag_sum_matrix(s.shape[0], sign) @ v.view(np.float64)
 
 
 def _null_sums(es: np.ndarray) -> np.ndarray:
@@ -746,11 +752,6 @@ class SubspaceEstimate:
     def azimuth_deg(self) -> np.ndarray:
         """(n,) azimuth in degrees, broadside 0."""
         return np.degrees(np.arcsin(np.clip(self.sin_theta, -1.0, 1.0)))
-
-
-_COMPLEX128 = np.dtype(np.complex128)
-_FLOAT64 = np.dtype(np.float64)
-_BOOL = np.dtype(bool)
 
 
 def _check_snapshots(x: object) -> np.ndarray:
