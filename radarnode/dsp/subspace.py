@@ -547,13 +547,14 @@ _CAYLEY_PROBES = 4
 
 
 @functools.lru_cache(maxsize=16)
-def _cayley_tables(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _cayley_tables(n: int) -> tuple[np.ndarray, tuple[np.ndarray, ...], tuple[complex, ...], np.ndarray]:
     """For a noise projector's diagonal-sum vector ``c`` (2N − 1,) (:func:`_diag_sums`):
 
     * ``probe`` (G, 2N − 1): ``probe @ c`` is P's modulus |z^{−(N−1)}·P(z)| at ``z_g = e^{j2πg/G}``;
-    * ``real`` (G, D + 1, 2N − 1): ``real[g] @ c`` the coefficients (ascending powers of t) of the real
-      polynomial whose roots t map to P's roots by ``z = z_g·(t − j)/(t + j)``;
-    * ``w`` (G,) complex: ``z_g``;
+    * ``real`` G × (D + 1, 2N − 1): ``real[g] @ c`` the coefficients (ascending powers of t) of the real
+      polynomial whose roots t map to P's roots by ``z = z_g·(t − j)/(t + j)`` (a tuple of views of one array:
+      one is picked per call, and a tuple is cheaper to index than an array);
+    * ``w`` G × complex: ``z_g`` (a tuple of Python complex numbers, likewise);
     * ``companion`` (D, D) Fortran-ordered template: ones on the sub-diagonal.
     """
     deg = 2 * n - 2
@@ -581,10 +582,9 @@ def _cayley_tables(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     real = np.real(np.einsum("ki,gi,ic->gkc", cayley, rot, to_coef))
     companion = np.zeros((deg, deg), order="F")
     companion[np.arange(1, deg), np.arange(deg - 1)] = 1.0
-    w = np.exp(1j * omega)
-    for a in (probe, real, w, companion):
+    for a in (probe, real, companion):
         a.setflags(write=False)
-    return probe, real, w, companion
+    return probe, tuple(real), tuple(complex(v) for v in np.exp(1j * omega)), companion
 
 
 def _root_music_coef(c: np.ndarray, n: int) -> np.ndarray:
@@ -605,7 +605,7 @@ def _polynomial_roots(c: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, co
     np.divide(q[-2::-1], -q[-1], out=comp[0])
     tr, ti, _, _, info = _lapack.dgeev(comp, compute_vl=0, compute_vr=0, overwrite_a=1)
     if info == 0:
-        return tr, ti, complex(w[g])
+        return tr, ti, w[g]
     return np.roots(_root_music_coef(c, n)[::-1]), None, None
 
 
@@ -809,12 +809,11 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
         raise ConfigError(f"subspace d: value {d!r} is not allowed; expected a finite spacing > 0 wavelengths")
     x = _check_snapshots(x)
     n, k = x.shape
-    if subarray is True:
-        q = default_subarray(n)
-    elif subarray is None or subarray is False:
-        q = n
+    given = not (subarray is True or subarray is None or subarray is False)
+    if given:
+        q = subarray                                    # checked below (after X's own checks)
     else:
-        q = subarray
+        q = default_subarray(n) if subarray is True else n      # both in 2 … N
     # the energy Σ|x|² (one BLAS call) bounds the peak: peak² ≤ Σ|x|² ≤ N·K·peak². Within these bounds (with a
     # margin of √10 for rounding) x is finite, not zero and its peak inside 1e±100, so the common case needs
     # neither the peak nor the scaling; otherwise the peak decides as it always did
@@ -827,7 +826,8 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
             raise ConfigError("subspace X: a non-finite value (NaN or inf) is not allowed; expected finite samples")
         if peak > 0 and not 1e-100 < peak < 1e100:    # angles are scale invariant; keep x·xᴴ in range
             x = x / peak
-    _check_subarray(q, n)
+    if given:
+        _check_subarray(q, n)
     r = _covariance(x, int(q), bool(fb))
     m_max = q - 1
     if n_sources is None:
