@@ -225,3 +225,15 @@ def test_root_music_without_enough_cayley_roots_inside_falls_back_to_the_complex
         u2, ok2 = ss.root_music(r, m, d)
         assert np.array_equal(ok, ok2)
         assert np.max(circular_distance(u, u2, d)) < 1e-9
+
+
+def test_root_music_null_sums_read_column_major_equal_the_row_major_ones():
+    # root-MUSIC reads zgemm's Es·Esᴴ in place (column-major) with the Im rows' signs flipped: the same sums as
+    # _null_sums' row-major copy up to the order of summation
+    for r, m, _ in random_cases(8, 100):
+        es = ss._signal_subspace(r, m)
+        want = ss._null_sums(es)
+        got = ss._null_sums_columns(es)
+        assert np.max(np.abs(got - want)) <= 4 * np.finfo(float).eps * r.shape[0]
+        got = ss._null_sums_columns(np.ascontiguousarray(es))           # any layout: ravel("F") copies then
+        assert np.max(np.abs(got - want)) <= 4 * np.finfo(float).eps * r.shape[0]
