@@ -240,16 +240,21 @@ def test_root_music_null_sums_read_column_major_equal_the_row_major_ones():
 
 
 def test_lapack_calls_by_position_equal_the_calls_by_keyword(monkeypatch):
-    # _eigvecs and root-MUSIC's dgeev pass f2py's optional arguments by position when the installed scipy documents
-    # their order (cheaper to parse); the keyword calls they replace give the same numbers
+    # zgemm (covariances, Gram matrices), _eigvecs and root-MUSIC's dgeev pass f2py's optional arguments by position
+    # when the installed scipy documents their order (cheaper to parse); the keyword calls give the same numbers
     assert not ss._takes_in_order(object(), "w")
     if not ss._POSITIONAL:
         pytest.skip("this scipy's wrappers document another argument order: the keyword calls are the only path")
     cases = random_cases(9, 60, n_choices=(12, 8, 5))
     want = {method: [ss.ESTIMATORS[method](r, m, d) for r, m, d in cases]
-            for method in ("music", "unitary_music", "root_music", "esprit")}
+            for method in ("capon", "music", "unitary_music", "root_music", "esprit")}
+    rng = np.random.default_rng(9)
+    xs = [snapshots(rng, [-0.3, 0.2], 20.0, k) for k in (1, 16)]
+    covs = [ss._covariance(x, q, fb) for x in xs for q, fb in ((12, False), (8, True))]
     monkeypatch.setattr(ss, "_POSITIONAL", False)
     for method, results in want.items():
         for (r, m, d), (u, ok) in zip(cases, results):
             u2, ok2 = ss.ESTIMATORS[method](r, m, d)
             assert np.array_equal(u, u2) and np.array_equal(ok, ok2)
+    assert all(np.array_equal(r, ss._covariance(x, q, fb))
+               for r, (x, (q, fb)) in zip(covs, [(x, qf) for x in xs for qf in ((12, False), (8, True))]))

@@ -61,6 +61,26 @@ GRID_PER_ELEMENT = 16
 REFINE_HALF = 4
 
 
+def _takes_in_order(fn: object, head: str) -> bool:
+    """Whether scipy's f2py wrapper ``fn`` documents its signature as beginning with ``head`` (the first line of its
+    docstring, spaces removed)."""
+    doc = getattr(fn, "__doc__", None) or ""
+    return doc.split("\n", 1)[0].replace(" ", "").startswith(head)
+
+
+#: f2py parses keyword arguments at a cost (≈ 0.3–0.5 µs a call measured alone, about twice that within an
+#: estimate), so this module's BLAS/LAPACK calls pass them by position — the values the keywords had, or the
+#: wrappers' documented defaults — when the installed scipy documents that order, and by name otherwise
+_POSITIONAL = all(_takes_in_order(getattr(module, name), head) for module, name, head in (
+    (_blas, "zgemm", "c=zgemm(alpha,a,b,[beta,c,trans_a,trans_b,overwrite_c]"),
+    (_lapack, "zheevr", "w,z,m,isuppz,info=zheevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
+    (_lapack, "dsyevr", "w,z,m,isuppz,info=dsyevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
+    (_lapack, "zheev", "w,v,info=zheev(a,[compute_v,lower,"),
+    (_lapack, "dsyev", "w,v,info=dsyev(a,[compute_v,lower,"),
+    (_lapack, "dgeev", "wr,wi,vl,vr,info=dgeev(a,[compute_vl,compute_vr,lwork,overwrite_a]"),
+))
+
+
 # ---------------------------------------------------------------------------------------------
 # covariance preprocessing (broadcast over leading axes)
 
@@ -149,7 +169,9 @@ def _covariance(x: np.ndarray, q: int, fb: bool) -> np.ndarray:
 
 
 def _gram(a: np.ndarray, scale: float = 1.0) -> np.ndarray:
-    """``scale · a·aᴴ`` (complex) in one BLAS call (no conjugate copy, no separate scaling)."""
+    """``scale · a·aᴴ`` (complex) in one BLAS call (no conjugate copy, no separate scaling); column-major."""
+    if _POSITIONAL:                                    # beta = 0, c = None (none given), trans_a = 0: the defaults
+        return _blas.zgemm(scale, a, a, 0.0, None, 0, 2)
     return _blas.zgemm(scale, a, a, trans_b=2)
 
 
@@ -232,25 +254,6 @@ def _periodic(d: float) -> bool:
     return abs(2.0 * d - 1.0) < 1e-12
 
 
-def _takes_in_order(fn: object, head: str) -> bool:
-    """Whether scipy's f2py wrapper ``fn`` documents its signature as beginning with ``head`` (the first line of its
-    docstring, spaces removed)."""
-    doc = getattr(fn, "__doc__", None) or ""
-    return doc.split("\n", 1)[0].replace(" ", "").startswith(head)
-
-
-#: f2py parses keyword arguments at a cost (≈ 0.5 µs a ?heevr call when measured alone, about twice that in a
-#: full estimate), so the LAPACK calls below pass them by position — with the values the keywords had, or the
-#: wrapper's documented defaults — when the installed scipy documents that order, and by name otherwise
-_POSITIONAL = all(_takes_in_order(getattr(_lapack, name), head) for name, head in (
-    ("zheevr", "w,z,m,isuppz,info=zheevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
-    ("dsyevr", "w,z,m,isuppz,info=dsyevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
-    ("zheev", "w,v,info=zheev(a,[compute_v,lower,"),
-    ("dsyev", "w,v,info=dsyev(a,[compute_v,lower,"),
-    ("dgeev", "wr,wi,vl,vr,info=dgeev(a,[compute_vl,compute_vr,lwork,overwrite_a]"),
-))
-
-
 def _eigvecs(h: np.ndarray, lo: int, hi: int) -> np.ndarray:
     """Eigenvectors of the ``lo``-th … ``hi``-th smallest eigenvalues (1-based, inclusive) of a Hermitian
     (complex) or symmetric (real) ``h`` (N, N), read from its upper triangle: (N, hi − lo + 1), ascending.
@@ -329,8 +332,8 @@ def _null_sum_matrix_columns(n: int) -> np.ndarray:
 
 
 def _null_sums_columns(es: np.ndarray) -> np.ndarray:
-    """:func:`_null_sums` (root-MUSIC's): zgemm's Es·Esᴴ read where it lies, column-major, instead of a row-major copy.
-    The same sums but for rounding (they are added in another order): one call and one copy fewer."""
+    """:func:`_null_sums` for root-MUSIC: zgemm's Es·Esᴴ read where it lies, column-major, not from a row-major
+    copy. The same sums but for rounding (they are added in another order); one call and one copy fewer."""
     n = es.shape[0]
     c = _null_sum_matrix_columns(n) @ _gram(es).ravel("F").view(np.float64)
     c[0] += n
