@@ -335,7 +335,7 @@ def _null_sums_columns(es: np.ndarray) -> np.ndarray:
     """:func:`_null_sums` for root-MUSIC: zgemm's Es·Esᴴ read where it lies, column-major, not from a row-major
     copy. The same sums but for rounding (they are added in another order); one call and one copy fewer."""
     n = es.shape[0]
-    c = _null_sum_matrix_columns(n) @ _gram(es).ravel("F").view(np.float64)
+    c = _null_sum_matrix_columns(n).dot(_gram(es).ravel("F").view(np.float64))
     c[0] += n
     return c
 
@@ -643,8 +643,8 @@ def _polynomial_roots(c: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, co
     ``t = tr + j·ti`` of the real Cayley polynomial: returns ``(tr, ti, w)``, ``z = w·(t − j)/(t + j)``. Should
     LAPACK fail (never seen), ``w`` is None and ``tr`` holds P's roots z from ``np.roots`` (the reference)."""
     probe, real, w, template = _cayley_tables(n)
-    g = int((probe @ c).argmax())
-    q = real[g] @ c                                             # ascending powers of t; |q[-1]| = max |P|
+    g = int(probe.dot(c).argmax())
+    q = real[g].dot(c)                                            # ascending powers of t; |q[-1]| = max |P|
     comp = template.copy(order="F")
     np.divide(q[-2::-1], -q[-1], out=comp[0])
     if _POSITIONAL:                                             # lwork = 4·D: the default
@@ -898,7 +898,7 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
         u = np.asarray(u, dtype=float)
     if type(ok) is not np.ndarray or ok.dtype is not _BOOL:
         ok = np.asarray(ok, dtype=bool)
-    if not math.isfinite(u @ u):                       # a NaN or inf (or |u| > 1e154: then nothing changes)
+    if not math.isfinite(u.dot(u)):                       # a NaN or inf (or |u| > 1e154: then nothing changes)
         finite = np.isfinite(u)
         ok = ok & finite
         u = np.where(finite, u, 0.0)
