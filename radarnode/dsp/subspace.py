@@ -71,7 +71,7 @@ def _takes_in_order(fn: object, head: str) -> bool:
 #: f2py parses keyword arguments at a cost (≈ 0.3–0.5 µs a call measured alone, about twice that within an
 #: estimate), so this module's BLAS/LAPACK calls pass them by position — the values the keywords had, or the
 #: wrappers' documented defaults — when the installed scipy documents that order, and by name otherwise
-_POSITIONAL = all(_takes_in_order(getattr(module, name), head) for module, name, head in (
+_POSITIONAL = all(_takes_in_order(getattr(module, name, None), head) for module, name, head in (
     (_blas, "zgemm", "c=zgemm(alpha,a,b,[beta,c,trans_a,trans_b,overwrite_c]"),
     (_lapack, "zheevr", "w,z,m,isuppz,info=zheevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
     (_lapack, "dsyevr", "w,z,m,isuppz,info=dsyevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
@@ -644,7 +644,7 @@ def _polynomial_roots(c: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, co
     LAPACK fail (never seen), ``w`` is None and ``tr`` holds P's roots z from ``np.roots`` (the reference)."""
     probe, real, w, template = _cayley_tables(n)
     g = int(probe.dot(c).argmax())
-    q = real[g].dot(c)                                            # ascending powers of t; |q[-1]| = max |P|
+    q = real[g].dot(c)                                          # ascending powers of t; |q[-1]| = max |P|
     comp = template.copy(order="F")
     np.divide(q[-2::-1], -q[-1], out=comp[0])
     if _POSITIONAL:                                             # lwork = 4·D: the default
@@ -898,7 +898,7 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
         u = np.asarray(u, dtype=float)
     if type(ok) is not np.ndarray or ok.dtype is not _BOOL:
         ok = np.asarray(ok, dtype=bool)
-    if not math.isfinite(u.dot(u)):                       # a NaN or inf (or |u| > 1e154: then nothing changes)
+    if not math.isfinite(u.dot(u)):                    # a NaN or inf (or |u| > 1e154: then nothing changes)
         finite = np.isfinite(u)
         ok = ok & finite
         u = np.where(finite, u, 0.0)
