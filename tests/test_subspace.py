@@ -256,3 +256,40 @@ def test_errors_name_the_field_the_value_and_what_is_allowed(kwargs, field):
         ss.estimate(args.pop("method"), args.pop("x"), **args)
     text = str(info.value)
     assert f"subspace {field}" in text and ("expected" in text)
+
+
+@pytest.mark.parametrize("peak", [1e-300, 1e-101, 2e-100, 3.1e-100, 3.3e-100, 1e-99, 1.0, 3e99, 3.3e99, 9.9e99,
+                                  1.1e100, 1e300])
+@pytest.mark.parametrize("k", [1, 16])
+def test_scaling_is_decided_by_the_peak_whatever_the_energy_shortcut(peak, k):
+    # estimate() scales x to unit peak when the peak lies outside 1e±100 and leaves it otherwise; it reads the
+    # energy Σ|x|² first and looks at the peak only when the energy cannot tell (the peaks here straddle the
+    # shortcut's bounds, √10 inside 1e±100): the angles are those of the rule, bit for bit
+    rng = np.random.default_rng(int(k + 1000 * math.log10(peak) % 997))
+    x = snapshots(rng, [-0.2, 0.3], 20.0, k)
+    x = x * (peak / float(np.max(np.abs(x))))
+    true_peak = float(np.max(np.abs(x)))
+    scaled = x / true_peak if not 1e-100 < true_peak < 1e100 else x
+    for opts, q, fb in (({}, N, False), ({"fb": True, "subarray": True}, ss.default_subarray(N), True)):
+        want = ss.root_music(ss._covariance(scaled, q, fb), 2)
+        got = ss.estimate("root_music", x, 2, **opts)
+        assert np.array_equal(got.sin_theta, want[0]) and np.array_equal(got.resolved, want[1])
+
+
+@pytest.mark.parametrize("bad", [np.inf, -np.inf, np.nan, complex(np.inf, np.nan), complex(0.0, -np.inf)])
+@pytest.mark.parametrize("scale", [1e-200, 1.0, 1e200])
+def test_one_non_finite_sample_is_an_error_at_any_scale(bad, scale):
+    x = snapshots(np.random.default_rng(5), [-0.2, 0.3], 20.0, 16) * scale
+    x[7, 3] = bad
+    with pytest.raises(ConfigError, match="subspace X: a non-finite value"):
+        ss.estimate("root_music", x, 2)
+
+
+def test_one_huge_sample_among_ordinary_ones_is_scaled_not_overflowed():
+    # Σ|x|² overflows (1e400) though every sample is finite: the peak rule scales x by 1/1e200
+    x = snapshots(np.random.default_rng(6), [-0.2, 0.3], 20.0, 16)
+    x[2, 5] = 1e200
+    want = ss.root_music(ss._covariance(x / 1e200, N, False), 2)
+    got = ss.estimate("root_music", x, 2)
+    check_contract(got, 2)
+    assert np.array_equal(got.sin_theta, want[0]) and np.array_equal(got.resolved, want[1])

@@ -213,3 +213,48 @@ def test_lapack_failures_fall_back_to_the_reference_routines(method, monkeypatch
         u2, ok2 = ss.ESTIMATORS[method](r, m, d)
         assert np.array_equal(ok, ok2)
         assert np.max(circular_distance(u, u2, d)) < 1e-9
+
+
+def test_root_music_without_enough_cayley_roots_inside_falls_back_to_the_complex_roots(monkeypatch):
+    # _nearest_inside (the Python-float selection of the roots closest to the circle) declines when fewer than
+    # n_sources roots lie inside (never seen: finite roots give N − 1 inside); the complex-root path then selects
+    cases = random_cases(7, 60, n_choices=(12, 8, 5))
+    want = [ss.root_music(r, m, d) for r, m, d in cases]
+    monkeypatch.setattr(ss, "_nearest_inside", lambda *args: None)
+    for (r, m, d), (u, ok) in zip(cases, want):
+        u2, ok2 = ss.root_music(r, m, d)
+        assert np.array_equal(ok, ok2)
+        assert np.max(circular_distance(u, u2, d)) < 1e-9
+
+
+def test_root_music_null_sums_read_column_major_equal_the_row_major_ones():
+    # root-MUSIC reads zgemm's Es·Esᴴ in place (column-major) with the Im rows' signs flipped: the same sums as
+    # _null_sums' row-major copy up to the order of summation
+    for r, m, _ in random_cases(8, 100):
+        es = ss._signal_subspace(r, m)
+        want = ss._null_sums(es)
+        got = ss._null_sums_columns(es)
+        assert np.max(np.abs(got - want)) <= 4 * np.finfo(float).eps * r.shape[0]
+        got = ss._null_sums_columns(np.ascontiguousarray(es))           # any layout: ravel("F") copies then
+        assert np.max(np.abs(got - want)) <= 4 * np.finfo(float).eps * r.shape[0]
+
+
+def test_lapack_calls_by_position_equal_the_calls_by_keyword(monkeypatch):
+    # zgemm (covariances, Gram matrices), _eigvecs and root-MUSIC's dgeev pass f2py's optional arguments by position
+    # when the installed scipy documents their order (cheaper to parse); the keyword calls give the same numbers
+    assert not ss._takes_in_order(object(), "w")
+    if not ss._POSITIONAL:
+        pytest.skip("this scipy's wrappers document another argument order: the keyword calls are the only path")
+    cases = random_cases(9, 60, n_choices=(12, 8, 5))
+    want = {method: [ss.ESTIMATORS[method](r, m, d) for r, m, d in cases]
+            for method in ("capon", "music", "unitary_music", "root_music", "esprit")}
+    rng = np.random.default_rng(9)
+    xs = [snapshots(rng, [-0.3, 0.2], 20.0, k) for k in (1, 16)]
+    covs = [ss._covariance(x, q, fb) for x in xs for q, fb in ((12, False), (8, True))]
+    monkeypatch.setattr(ss, "_POSITIONAL", False)
+    for method, results in want.items():
+        for (r, m, d), (u, ok) in zip(cases, results):
+            u2, ok2 = ss.ESTIMATORS[method](r, m, d)
+            assert np.array_equal(u, u2) and np.array_equal(ok, ok2)
+    assert all(np.array_equal(r, ss._covariance(x, q, fb))
+               for r, (x, (q, fb)) in zip(covs, [(x, qf) for x in xs for qf in ((12, False), (8, True))]))

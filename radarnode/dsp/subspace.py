@@ -33,6 +33,7 @@ TASSP 1990 (stochastic CRB, :func:`crb_sin`).
 
 from __future__ import annotations
 
+import cmath
 import functools
 import math
 from dataclasses import dataclass
@@ -50,10 +51,34 @@ DEFAULT_FLOOR_DB = {"bartlett": 10.0, "capon": 20.0, "music": 20.0, "unitary_mus
 #: a MUSIC peak whose null spectrum ‖Enᴴa‖² is below this fraction of ‖a‖² = N counts whatever its height
 #: relative to the strongest (a steering vector in a random M-dim subspace has ≈ 1 − M/N there)
 MUSIC_ACCEPT = 0.5
+#: dtypes compared by identity on the fast paths (numpy's built-in descriptors are singletons)
+_COMPLEX128 = np.dtype(np.complex128)
+_FLOAT64 = np.dtype(np.float64)
+_BOOL = np.dtype(bool)
 #: coarse grid points per unit of sin θ per element (≥ 256 points over [-1, 1])
 GRID_PER_ELEMENT = 16
 #: fine-grid points on each side of a coarse peak in the local refinement
 REFINE_HALF = 4
+
+
+def _takes_in_order(fn: object, head: str) -> bool:
+    """Whether scipy's f2py wrapper ``fn`` documents its signature as beginning with ``head`` (the first line of its
+    docstring, spaces removed)."""
+    doc = getattr(fn, "__doc__", None) or ""
+    return doc.split("\n", 1)[0].replace(" ", "").startswith(head)
+
+
+#: f2py parses keyword arguments at a cost (≈ 0.3–0.5 µs a call measured alone, about twice that within an
+#: estimate), so this module's BLAS/LAPACK calls pass them by position — the values the keywords had, or the
+#: wrappers' documented defaults — when the installed scipy documents that order, and by name otherwise
+_POSITIONAL = all(_takes_in_order(getattr(module, name, None), head) for module, name, head in (
+    (_blas, "zgemm", "c=zgemm(alpha,a,b,[beta,c,trans_a,trans_b,overwrite_c]"),
+    (_lapack, "zheevr", "w,z,m,isuppz,info=zheevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
+    (_lapack, "dsyevr", "w,z,m,isuppz,info=dsyevr(a,[compute_v,range,lower,vl,vu,il,iu,"),
+    (_lapack, "zheev", "w,v,info=zheev(a,[compute_v,lower,"),
+    (_lapack, "dsyev", "w,v,info=dsyev(a,[compute_v,lower,"),
+    (_lapack, "dgeev", "wr,wi,vl,vr,info=dgeev(a,[compute_vl,compute_vr,lwork,overwrite_a]"),
+))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -115,14 +140,16 @@ def _check_subarray(q: object, n: int) -> None:
 
 @functools.lru_cache(maxsize=64)
 def _stack_index(n: int, q: int, k: int, fb: bool) -> np.ndarray:
-    """Flat index of ``Z`` (:func:`_covariance`) into ``x.ravel()`` (N·K), followed for FB by its conjugate: (Q, L·K)
-    or (Q, 2·L·K); column (l, k) of the forward part is sub-array l's snapshot k, ``x[l + i, k]`` in row i, of the
-    backward part ``x*[l + Q − 1 − i, k]``."""
+    """Flat index of ``Zᵀ`` (:func:`_covariance`) into ``x.ravel()`` (N·K), followed for FB by its conjugate: (L·K, Q)
+    or (2·L·K, Q), row-major, so that ``Z`` is its transpose in column-major order, as BLAS takes it (no copy);
+    column (l, k) of Z's forward part is sub-array l's snapshot k, ``x[l + i, k]`` in row i, of the backward part
+    ``x*[l + Q − 1 − i, k]``."""
     i = np.arange(q)[:, None, None]
     lk = (np.arange(n - q + 1)[None, :, None], np.arange(k)[None, None, :])
     idx = ((lk[0] + i) * k + lk[1]).reshape(q, -1)
     if fb:
         idx = np.concatenate((idx, (n * k + (lk[0] + q - 1 - i) * k + lk[1]).reshape(q, -1)), axis=1)
+    idx = np.ascontiguousarray(idx.T)
     idx.setflags(write=False)
     return idx
 
@@ -137,12 +164,14 @@ def _covariance(x: np.ndarray, q: int, fb: bool) -> np.ndarray:
         z = x
     else:
         flat = x.reshape(-1)
-        z = (np.concatenate((flat, np.conj(flat))) if fb else flat).take(_stack_index(n, q, k, fb))
+        z = (np.concatenate((flat, np.conj(flat))) if fb else flat).take(_stack_index(n, q, k, fb)).T
     return _gram(z, 1.0 / z.shape[1])
 
 
 def _gram(a: np.ndarray, scale: float = 1.0) -> np.ndarray:
-    """``scale · a·aᴴ`` (complex) in one BLAS call (no conjugate copy, no separate scaling)."""
+    """``scale · a·aᴴ`` (complex) in one BLAS call (no conjugate copy, no separate scaling); column-major."""
+    if _POSITIONAL:                                    # beta = 0, c = None (none given), trans_a = 0: the defaults
+        return _blas.zgemm(scale, a, a, 0.0, None, 0, 2)
     return _blas.zgemm(scale, a, a, trans_b=2)
 
 
@@ -235,11 +264,14 @@ def _eigvecs(h: np.ndarray, lo: int, hi: int) -> np.ndarray:
     """
     complex_ = h.dtype.kind == "c"
     if h.shape[0] <= 8:
-        _, v, info = (_lapack.zheev if complex_ else _lapack.dsyev)(h, lower=0)
+        fn = _lapack.zheev if complex_ else _lapack.dsyev
+        _, v, info = fn(h, 1, 0) if _POSITIONAL else fn(h, lower=0)
         if info == 0:
             return v[:, lo - 1:hi]
     else:
-        _, v, found, _, info = (_lapack.zheevr if complex_ else _lapack.dsyevr)(h, range="I", il=lo, iu=hi)
+        fn = _lapack.zheevr if complex_ else _lapack.dsyevr
+        # vl = 0, vu = 1: the defaults (unused for range "I")
+        _, v, found, _, info = fn(h, 1, "I", 0, 0.0, 1.0, lo, hi) if _POSITIONAL else fn(h, range="I", il=lo, iu=hi)
         if info == 0 and found == hi - lo + 1:
             return v
     _, v = np.linalg.eigh(0.5 * (h + np.conj(h.T)))
@@ -275,14 +307,35 @@ def _diag_sum_matrix(n: int, sign: float = 1.0) -> np.ndarray:
 def _diag_sums(s: np.ndarray, sign: float = 1.0) -> np.ndarray:
     """Real diagonal-sum vector (2N − 1,) of an (N, N) Hermitian matrix (see :func:`_diag_sum_matrix`), times
     ``sign``."""
-    v = np.ascontiguousarray(s, dtype=np.complex128).reshape(-1).view(np.float64)
-    return _diag_sum_matrix(s.shape[0], sign) @ v
+    v = s.ravel()                                       # row-major (a copy of zgemm's column-major output)
+    if v.dtype is not _COMPLEX128:
+        v = v.astype(np.complex128)
+    return _diag_sum_matrix(s.shape[0], sign) @ v.view(np.float64)
 
 
 def _null_sums(es: np.ndarray) -> np.ndarray:
     """Diagonal-sum vector of the noise projector ``I − Es·Esᴴ`` from the signal subspace ``es`` (N, M)."""
     n = es.shape[0]
     c = _diag_sums(_gram(es), -1.0)
+    c[0] += n
+    return c
+
+
+@functools.lru_cache(maxsize=32)
+def _null_sum_matrix_columns(n: int) -> np.ndarray:
+    """(2N − 1, 2N²) float64: :func:`_null_sums`' map (``−_diag_sum_matrix(n)``) for the *column-major* float view
+    of a Hermitian S. That view is Sᵀ = S* read row-major, whose diagonal sums are the conjugates: the Im rows change
+    sign."""
+    out = _diag_sum_matrix(n) * np.concatenate((-np.ones(n), np.ones(n - 1)))[:, None]
+    out.setflags(write=False)
+    return out
+
+
+def _null_sums_columns(es: np.ndarray) -> np.ndarray:
+    """:func:`_null_sums` for root-MUSIC: zgemm's Es·Esᴴ read where it lies, column-major, not from a row-major
+    copy. The same sums but for rounding (they are added in another order); one call and one copy fewer."""
+    n = es.shape[0]
+    c = _null_sum_matrix_columns(n).dot(_gram(es).ravel("F").view(np.float64))
     c[0] += n
     return c
 
@@ -538,13 +591,14 @@ _CAYLEY_PROBES = 4
 
 
 @functools.lru_cache(maxsize=16)
-def _cayley_tables(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _cayley_tables(n: int) -> tuple[np.ndarray, tuple[np.ndarray, ...], tuple[complex, ...], np.ndarray]:
     """For a noise projector's diagonal-sum vector ``c`` (2N − 1,) (:func:`_diag_sums`):
 
     * ``probe`` (G, 2N − 1): ``probe @ c`` is P's modulus |z^{−(N−1)}·P(z)| at ``z_g = e^{j2πg/G}``;
-    * ``real`` (G, D + 1, 2N − 1): ``real[g] @ c`` the coefficients (ascending powers of t) of the real
-      polynomial whose roots t map to P's roots by ``z = z_g·(t − j)/(t + j)``;
-    * ``w`` (G,) complex: ``z_g``;
+    * ``real`` G × (D + 1, 2N − 1): ``real[g] @ c`` the coefficients (ascending powers of t) of the real
+      polynomial whose roots t map to P's roots by ``z = z_g·(t − j)/(t + j)`` (a tuple of views of one array:
+      one is picked per call, and a tuple is cheaper to index than an array);
+    * ``w`` G × complex: ``z_g`` (a tuple of Python complex numbers, likewise);
     * ``companion`` (D, D) Fortran-ordered template: ones on the sub-diagonal.
     """
     deg = 2 * n - 2
@@ -572,10 +626,9 @@ def _cayley_tables(n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarr
     real = np.real(np.einsum("ki,gi,ic->gkc", cayley, rot, to_coef))
     companion = np.zeros((deg, deg), order="F")
     companion[np.arange(1, deg), np.arange(deg - 1)] = 1.0
-    w = np.exp(1j * omega)
-    for a in (probe, real, w, companion):
+    for a in (probe, real, companion):
         a.setflags(write=False)
-    return probe, real, w, companion
+    return probe, tuple(real), tuple(complex(v) for v in np.exp(1j * omega)), companion
 
 
 def _root_music_coef(c: np.ndarray, n: int) -> np.ndarray:
@@ -590,13 +643,16 @@ def _polynomial_roots(c: np.ndarray, n: int) -> tuple[np.ndarray, np.ndarray, co
     ``t = tr + j·ti`` of the real Cayley polynomial: returns ``(tr, ti, w)``, ``z = w·(t − j)/(t + j)``. Should
     LAPACK fail (never seen), ``w`` is None and ``tr`` holds P's roots z from ``np.roots`` (the reference)."""
     probe, real, w, template = _cayley_tables(n)
-    g = int((probe @ c).argmax())
-    q = real[g] @ c                                             # ascending powers of t; |q[-1]| = max |P|
+    g = int(probe.dot(c).argmax())
+    q = real[g].dot(c)                                          # ascending powers of t; |q[-1]| = max |P|
     comp = template.copy(order="F")
     np.divide(q[-2::-1], -q[-1], out=comp[0])
-    tr, ti, _, _, info = _lapack.dgeev(comp, compute_vl=0, compute_vr=0, overwrite_a=1)
+    if _POSITIONAL:                                             # lwork = 4·D: the default
+        tr, ti, _, _, info = _lapack.dgeev(comp, 0, 0, 4 * comp.shape[0], 1)
+    else:
+        tr, ti, _, _, info = _lapack.dgeev(comp, compute_vl=0, compute_vr=0, overwrite_a=1)
     if info == 0:
-        return tr, ti, complex(w[g])
+        return tr, ti, w[g]
     return np.roots(_root_music_coef(c, n)[::-1]), None, None
 
 
@@ -609,33 +665,59 @@ def root_music(r: np.ndarray, n_sources: int, d: float = 0.5) -> tuple[np.ndarra
     """
     n = r.shape[0]
     es = _signal_subspace(r, n_sources)
-    c = _null_sums(es)                                          # En Enᴴ = I − Es Esᴴ
+    c = _null_sums_columns(es)                                  # En Enᴴ = I − Es Esᴴ
     tr, ti, w = _polynomial_roots(c, n)
     if w is None:                                               # np.roots' z
         roots = tr[np.isfinite(tr)]
         inside = roots[np.abs(roots) <= 1.0]
     else:
-        up = ti > 0.0                                           # |z| < 1
-        t = (tr + 1j * ti)[up]
-        if 2 * t.size < tr.size:
-            # real t: |z| = 1. P ≥ 0 on the circle, so a root there is double, split by rounding into two real
-            # t or a conjugate pair; keep one of each two (in order), as np.roots' radial split keeps one inside
-            t = np.concatenate((t, np.sort(tr[ti == 0.0])[::2]))
-        if t.size >= n_sources:
-            v = (t - 1j) / (t + 1j)                             # z / w
-            # inside, 1 − |z| is the distance to the circle: the n_sources largest |z|
-            return _roots_to_u(w * v[np.abs(v).argsort()[:-n_sources - 1:-1]], d, n_sources)
-        else:                                                   # P's roots at ∞ (t = −j) are not roots
-            t = tr + 1j * ti
-            with np.errstate(divide="ignore", invalid="ignore"):
-                roots = w * (t - 1j) / (t + 1j)
-            roots = roots[np.isfinite(roots)]
-            inside = roots[np.abs(roots) <= 1.0]
+        found = _nearest_inside(tr, ti, w, d, n_sources)
+        if found is not None:
+            return found
+        t = tr + 1j * ti                                        # P's roots at ∞ (t = −j) are not roots
+        with np.errstate(divide="ignore", invalid="ignore"):
+            roots = w * (t - 1j) / (t + 1j)
+        roots = roots[np.isfinite(roots)]
+        inside = roots[np.abs(roots) <= 1.0]
     if roots.size == 0:
         return np.zeros(n_sources), np.zeros(n_sources, dtype=bool)
     cand = inside if inside.size >= n_sources else roots
     z = cand[np.abs(1.0 - np.abs(cand)).argsort()[:n_sources]]
     return _roots_to_u(z, d, n_sources)
+
+
+def _nearest_inside(tr: np.ndarray, ti: np.ndarray, w: complex, d: float,
+                    n_sources: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """The ``n_sources`` roots ``z = w·(t − j)/(t + j)`` inside (or on) the unit circle closest to it, from the
+    Cayley roots ``t = tr + j·ti`` (:func:`_polynomial_roots`), as :func:`_roots_to_u`'s ``(u, resolved)``; None
+    when fewer than ``n_sources`` lie inside.
+
+    Inside is ``Im t > 0``, where ``1 − |z|² = 4·Im t / |t + j|²``: the closest are the smallest
+    ``Im t / |t + j|²``. The few (n_sources) chosen are turned into angles on Python floats and complex numbers:
+    a dozen roots are too few for numpy's per-call cost to pay (issue 11 item 7).
+    """
+    trl = tr.tolist()
+    til = ti.tolist()
+    cand = [(b / (a * a + (b + 1.0) * (b + 1.0)), a, b) for a, b in zip(trl, til) if b > 0.0]
+    if 2 * len(cand) < len(trl):
+        # real t: |z| = 1. P ≥ 0 on the circle, so a root there is double, split by rounding into two real
+        # t or a conjugate pair; keep one of each two (in order), as np.roots' radial split keeps one inside
+        cand += [(0.0, a, 0.0) for a in sorted([a for a, b in zip(trl, til) if b == 0.0])[::2]]
+    if len(cand) < n_sources:
+        return None
+    cand.sort()
+    scale = 2.0 * math.pi * d
+    periodic = _periodic(d)
+    u = []
+    for _, a, b in cand[:n_sources]:
+        t = complex(a, b)
+        v = cmath.phase(w * ((t - 1j) / (t + 1j))) / scale           # arg z
+        u.append((v + 1.0) % 2.0 - 1.0 if periodic else min(max(v, -1.0), 1.0))
+    u.sort()
+    ok = [True] * n_sources
+    for i in range(1, n_sources):
+        ok[i] = u[i] - u[i - 1] >= 1e-9                         # a repeated angle is not resolved
+    return np.array(u), np.array(ok)
 
 
 def _roots_to_u(z: np.ndarray, d: float, n_sources: int) -> tuple[np.ndarray, np.ndarray]:
@@ -720,6 +802,8 @@ class SubspaceEstimate:
 
 
 def _check_snapshots(x: object) -> np.ndarray:
+    if type(x) is np.ndarray and x.dtype is _COMPLEX128 and x.ndim == 2 and x.shape[0] >= 2 and x.shape[1] >= 1:
+        return x                                        # the common case, as the checks below would return it
     try:
         x = np.asarray(x)
     except Exception as exc:  # ragged lists and the like
@@ -772,18 +856,25 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
         raise ConfigError(f"subspace d: value {d!r} is not allowed; expected a finite spacing > 0 wavelengths")
     x = _check_snapshots(x)
     n, k = x.shape
-    if subarray is True:
-        q = default_subarray(n)
-    elif subarray is None or subarray is False:
-        q = n
+    given = not (subarray is True or subarray is None or subarray is False)
+    if given:
+        q = subarray                                    # checked below (after X's own checks)
     else:
-        q = subarray
-    peak = float(np.maximum.reduce(np.abs(x), axis=None))   # NaN or inf anywhere makes this non-finite
-    if not math.isfinite(peak):
-        raise ConfigError("subspace X: a non-finite value (NaN or inf) is not allowed; expected finite samples")
-    if peak > 0 and not 1e-100 < peak < 1e100:        # angles are scale invariant; keep x·xᴴ in range
-        x = x / peak
-    _check_subarray(q, n)
+        q = default_subarray(n) if subarray is True else n      # both in 2 … N
+    # the energy Σ|x|² (one BLAS call) bounds the peak: peak² ≤ Σ|x|² ≤ N·K·peak². Within these bounds (with a
+    # margin of √10 for rounding) x is finite, not zero and its peak inside 1e±100, so the common case needs
+    # neither the peak nor the scaling; otherwise the peak decides as it always did
+    energy = np.vdot(x, x).real                        # NaN or inf anywhere makes this non-finite
+    if 1e-199 * n * k < energy < 1e199:
+        peak = 1.0
+    else:
+        peak = float(np.maximum.reduce(np.abs(x), axis=None))   # NaN or inf anywhere makes this non-finite
+        if not math.isfinite(peak):
+            raise ConfigError("subspace X: a non-finite value (NaN or inf) is not allowed; expected finite samples")
+        if peak > 0 and not 1e-100 < peak < 1e100:    # angles are scale invariant; keep x·xᴴ in range
+            x = x / peak
+    if given:
+        _check_subarray(q, n)
     r = _covariance(x, int(q), bool(fb))
     m_max = q - 1
     if n_sources is None:
@@ -803,10 +894,13 @@ def estimate(method: str, x: np.ndarray, n_sources: int | None = None, d: float 
     except (np.linalg.LinAlgError, FloatingPointError):
         # the safety net the stability tests check is never needed; kept so the contract holds
         u, ok = np.zeros(n_used), np.zeros(n_used, dtype=bool)
-    u = np.asarray(u, dtype=float)
-    finite = np.isfinite(u)
-    ok = np.asarray(ok, dtype=bool) & finite
-    if not np.logical_and.reduce(finite):
+    if type(u) is not np.ndarray or u.dtype is not _FLOAT64:
+        u = np.asarray(u, dtype=float)
+    if type(ok) is not np.ndarray or ok.dtype is not _BOOL:
+        ok = np.asarray(ok, dtype=bool)
+    if not math.isfinite(u.dot(u)):                    # a NaN or inf (or |u| > 1e154: then nothing changes)
+        finite = np.isfinite(u)
+        ok = ok & finite
         u = np.where(finite, u, 0.0)
     return SubspaceEstimate(u, ok, n_used, method)
 
