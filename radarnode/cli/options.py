@@ -21,18 +21,46 @@ class Parser(argparse.ArgumentParser):
 
     argparse prints the usage and ``prog: error: argument --x: …``; here it is ``error: option --x: value … is not
     allowed; expected …`` (``argument X`` for a positional), so every usage error of every subcommand looks the
-    same. ``--help`` shows the usage.
+    same. ``--help`` shows the usage. Options are never abbreviated: ``report --seed 7`` would otherwise be taken
+    for ``--seeds 7`` and run seeds 1–7 instead of seed 7.
     """
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
+
+    def parse_args(self, args=None, namespace=None):  # noqa: D102 - argparse's; the words kept for _did_you_mean
+        self._words = list(sys.argv[1:] if args is None else args)
+        return super().parse_args(args, namespace)
 
     def error(self, message: str) -> None:  # noqa: D102 - argparse's hook
         if message.startswith("argument -"):
             message = "option " + message[len("argument "):]
+        if message.startswith("unrecognized arguments: "):
+            message += self._did_you_mean(message[len("unrecognized arguments: "):].split())
         choice = re.search(r"invalid choice: (.*) \(choose from (.*)\)$", message)
         if choice:
             allowed = ", ".join(c.strip().strip("'") for c in choice.group(2).split(","))
             message = message[:choice.start()] + f"value {choice.group(1)} is not allowed; expected one of {allowed}"
         print(f"error: {message}", file=sys.stderr)
         sys.exit(2)
+
+    def _did_you_mean(self, words: list[str]) -> str:
+        """``; did you mean --seeds?`` for an unknown option that begins one of this parser's options or is close to
+        one (options are not abbreviated: an abbreviation is refused, with the option it would have been)."""
+        import difflib
+        parsers = [self]
+        for action in self._actions:        # argparse reports a subcommand's unknown options from the main parser
+            if isinstance(action, argparse._SubParsersAction):
+                parsers += [p for name, p in action.choices.items() if name in getattr(self, "_words", ())][:1]
+        known = [o for p in parsers for a in p._actions for o in a.option_strings if o.startswith("--")]
+        for w in words:
+            if w.startswith("--"):
+                name = w.split("=", 1)[0]
+                near = [o for o in known if o.startswith(name)] or difflib.get_close_matches(name, known, n=1)
+                if near:
+                    return f"; did you mean {' or '.join(near[:3])}?"
+        return ""
 
 
 def _shown(text: str) -> str:
