@@ -178,3 +178,67 @@ def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
     seen = np.array([c for c in per_cycle if c > 0])
     assert seen.size >= 20
     assert seen.max() <= 2 and np.mean(seen > 1) <= 0.1
+
+
+# --- wide groups cut across their motion (split_wide) -------------------------------------------------------------
+
+
+def _side(x0, y0, length, v, step=0.5, actor=0):
+    """Detections every ``step`` m along a body's side from (x0, y0), ``length`` m along x (sensor axes)."""
+    xs = x0 + np.arange(0.0, length + 1e-9, step)
+    return _detections(xs, np.full(xs.size, y0), v, actor=actor)
+
+
+@pytest.mark.parametrize("gap_m, cut", [(0.9, False), (1.1, True), (2.0, True)])
+def test_two_cars_abreast_are_cut_at_the_gap_between_them(gap_m, cut):
+    """Two cars abreast 5 m ahead at the ego's speed (relative velocity 0: one rigid motion, along the road), their
+    facing sides ``gap_m`` apart: one DBSCAN group 1.8 + gap + 1.8 m wide across their motion, cut when the gap is
+    1 m or more. The front radar of an ego at 20 m/s (sensor velocity along x)."""
+    a = _cat([_detections([5.0, 5.0, 5.0, 5.0], [-0.9, -0.3, 0.3, 0.9], (0.0, 0.0), actor=0)])
+    b = _detections([5.0, 5.0, 5.0, 5.0], 0.9 + gap_m + np.array([0.0, 0.6, 1.2, 1.8]), (0.0, 0.0), actor=1)
+    det = _cat([a, b])
+    assert _dbscan(det).max() == 0                                     # DBSCAN alone: one group
+    g = group_detections(det, sensor_velocity=(20.0, 0.0))
+    assert len(g) == (2 if cut else 1)
+    if cut:
+        assert sorted(g.actor_index.tolist()) == [0, 1]
+    assert len(group_detections(det)) == 1                             # without the ego motion: not judged
+
+
+@pytest.mark.parametrize("width_m, cut", [(2.5, False), (2.7, True)])
+def test_only_a_group_wider_than_a_truck_is_cut(width_m, cut):
+    """A group with a 1.2 m gap across its motion: cut only when it is wider than 2.6 m (a truck is 2.55 m)."""
+    y = np.concatenate([np.linspace(-0.5 * width_m, -0.6, 3), np.linspace(0.6, 0.5 * width_m, 3)])
+    det = _detections(np.full(6, 4.0), y, (0.0, 0.0))
+    assert _dbscan(det).max() == 0
+    assert len(group_detections(det, sensor_velocity=(20.0, 0.0))) == (2 if cut else 1)
+
+
+def test_a_car_crossing_in_front_is_not_cut_across_the_road():
+    """A car crossing 6 m ahead at 8 m/s, its 4.5 m side across the road with a 1.2 m gap in its detections: 4.5 m
+    wide across the road, 0 m across its own motion — one body (a cut across the road would make it two)."""
+    v = (-5.0, 8.0)                                          # relative: the ego at 5 m/s, the car crossing at 8
+    y = np.concatenate([np.arange(-2.25, -0.55, 0.5), np.arange(0.65, 2.3, 0.5)])
+    det = _detections(np.full(y.size, 6.0), y, v)
+    assert np.max(np.diff(np.sort(y))) >= 1.0 and np.ptp(y) > T.MAX_BODY_ACROSS_M
+    assert len(group_detections(det, sensor_velocity=(5.0, 0.0))) == 1
+    # the same detections standing still (a parked row across a driveway): across the road they are cut
+    still = _detections(np.full(y.size, 6.0), y, (-5.0, 0.0))
+    assert len(group_detections(still, sensor_velocity=(5.0, 0.0))) == 2
+
+
+def test_far_groups_whose_motion_is_not_known_are_not_cut():
+    """Two cars abreast 60 m ahead: their detections span under 10° of azimuth, the motion across the line of sight
+    is not observable, and the group is left as DBSCAN made it."""
+    det = _detections(np.full(4, 60.0), np.array([-0.9, 0.9, 2.6, 4.4]), (0.0, 0.0))
+    assert len(group_detections(det, sensor_velocity=(20.0, 0.0))) == len(group_detections(det))
+
+
+def test_split_wide_returns_which_groups_are_whole():
+    det = _cat([_detections([5.0] * 4, [-0.9, -0.3, 0.3, 0.9], (0.0, 0.0)),
+                _detections([5.0] * 4, [2.6, 3.2, 3.8, 4.4], (0.0, 0.0)),
+                _detections([30.0], [-8.0], (0.0, 0.0))])
+    labels = _dbscan(det)
+    assert labels.max() == 1
+    new, src = T.split_wide(det, labels, (20.0, 0.0))
+    assert new.max() == 2 and sorted(src.tolist()) == [-1, -1, 1]
