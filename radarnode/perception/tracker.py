@@ -3,10 +3,9 @@
 A short composition of single-purpose roles (Stone Soup style), each a plain
 function that can be tested alone:
 
-* :func:`group_detections` — DBSCAN over position and radial speed, groups
+* :func:`group_detections` — DBSCAN over position and radial speed, and groups
   of one near body joined by the rigid motion that explains them
-  (:func:`join_rigid`), and near groups wider across their motion than any
-  road user cut at their gap (:func:`split_wide`); one measurement per group (nearest-face position, mean
+  (:func:`join_rigid`); one measurement per group (nearest-face position, mean
   radial speed, extent; a joined body's centroid and fitted velocity);
 * :func:`predict` — constant-velocity Kalman prediction;
 * :func:`update` — extended Kalman update with position and radial speed;
@@ -100,8 +99,7 @@ RIGID_MAX_SPEED_MPS = 70.0
 RIGID_SPEED_FLOOR_MPS = 0.1
 
 
-def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, eps_long_m: float = 4.5,
-                     sensor_velocity: tuple[float, float] | None = None, along_rad: float = 0.0) -> Groups:
+def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, eps_long_m: float = 4.5) -> Groups:
     """DBSCAN over (x, y, radial speed) scaled by (eps_long_m, eps_m, eps_mps); a group per cluster.
 
     Longer along x than across: the side of a truck or a bus comes out as detections 3–4 m apart (its
@@ -110,12 +108,7 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
 
     Near the sensor one body spans tens of degrees, and its radial speed v·u changes across it by more than
     ``eps_mps`` (a car passing 2 m from a corner radar: −2 … +4.5 m/s over 90°): groups that touch and that one
-    rigid velocity explains are one group (:func:`join_rigid`), measured with that velocity's radial part.
-
-    Two cars abreast in adjacent lanes lie only 1.7 m apart face to face (3.5 m centre to centre, not "never one
-    group"): a near group whose rigid motion is known and that is wider across it than any road user, with a gap
-    there, is cut at the gap (:func:`split_wide`; needs ``sensor_velocity``, the sensor's over ground in its axes,
-    and ``along_rad``, the road's direction, for a group standing still)."""
+    rigid velocity explains are one group (:func:`join_rigid`), measured with that velocity's radial part."""
     n = len(det)
     if n == 0:
         z = np.zeros(0)
@@ -124,12 +117,6 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
     labels, rigid_v, rigid_cov = join_rigid(det, labels)
-    if sensor_velocity is not None:
-        labels, src = split_wide(det, labels, sensor_velocity, along_rad)
-        if src.size != rigid_v.shape[0] or (src != np.arange(src.size)).any():
-            whole = src >= 0                     # a group that was cut is no longer the fitted body: no velocity
-            rigid_v = np.where(whole[:, None], rigid_v[np.maximum(src, 0)], np.nan)
-            rigid_cov = np.where(whole[:, None, None], rigid_cov[np.maximum(src, 0)], np.nan)
     g = labels.max() + 1
     power = 10.0 ** (det.snr_db / 10.0)
     wsum = np.bincount(labels, weights=power, minlength=g)
@@ -165,85 +152,6 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     glint = np.zeros(g)
     np.maximum.at(glint, labels, 0.5 * det.range_m * det.azimuth_spread_rad)
     return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov)
-
-
-#: no road user is wider across its own motion than this (a truck: 2.55 m) …
-MAX_BODY_ACROSS_M = 2.6
-#: … so a group wider than that across its motion is cut at its widest gap there, if that gap is at least this
-MIN_GAP_ACROSS_M = 1.0
-
-
-def split_wide(det: Detections, labels: np.ndarray, sensor_velocity: tuple[float, float], along_rad: float = 0.0,
-               passes: int = 2) -> tuple[np.ndarray, np.ndarray]:
-    """Near groups wider across their own motion than :data:`MAX_BODY_ACROSS_M`, cut at their widest gap across it
-    when that gap is at least :data:`MIN_GAP_ACROSS_M` (two cars abreast in adjacent lanes seen by a corner radar).
-
-    Only a group whose motion is known is judged: one rigid velocity explains its radial speeds (as in
-    :func:`join_rigid`: within :data:`RIGID_RESIDUAL_MPS`, over :data:`RIGID_MIN_SPAN_RAD` of azimuth). Its motion
-    over ground (that velocity plus ``sensor_velocity``) gives the direction "across"; a group standing still is
-    measured across the road (``along_rad``, the sensor's direction of travel in its axes). A car crossing in
-    front, 4.5 m long across the road, is 1.8 m wide across its motion, and is not cut. Returns the new labels (in
-    order of first detection) and, per new group, the old group it is whole, else -1: shape (g_new,)."""
-    n = labels.size
-    g0 = int(labels.max()) + 1 if n else 0
-    same = (labels, np.arange(g0))
-    if g0 == 0:
-        return same
-    az, vr = det.azimuth_rad, det.range_rate_mps
-    sums = _rigid_sums(det, labels)
-    v, ok = _solve_rigid(sums)
-    resid = np.abs(vr - (v[labels, 0] * np.cos(az) + v[labels, 1] * np.sin(az)))
-    worst, lo_az, hi_az = np.zeros(g0), np.full(g0, np.inf), np.full(g0, -np.inf)
-    np.maximum.at(worst, labels, resid)
-    np.minimum.at(lo_az, labels, az)
-    np.maximum.at(hi_az, labels, az)
-    known = (ok & (worst <= RIGID_RESIDUAL_MPS) & (hi_az - lo_az >= RIGID_MIN_SPAN_RAD)
-             & (np.hypot(v[:, 0], v[:, 1]) <= RIGID_MAX_SPEED_MPS))
-    if not known.any():
-        return same
-    gx, gy = v[:, 0] + sensor_velocity[0], v[:, 1] + sensor_velocity[1]
-    speed = np.hypot(gx, gy)
-    moving = speed > MOVING_THRESHOLD_MPS
-    dx = np.where(moving, gx / np.maximum(speed, 1e-9), math.cos(along_rad))
-    dy = np.where(moving, gy / np.maximum(speed, 1e-9), math.sin(along_rad))
-    across = -dy[labels] * det.x_m + dx[labels] * det.y_m               # each detection across its group's motion
-    lab, eligible = labels, known
-    for _ in range(passes):
-        g = int(lab.max()) + 1
-        lo, hi = np.full(g, np.inf), np.full(g, -np.inf)
-        np.minimum.at(lo, lab, across)
-        np.maximum.at(hi, lab, across)
-        wide = eligible & ((hi - lo) > MAX_BODY_ACROSS_M)
-        if not wide.any():
-            break
-        order = np.lexsort((across, lab))
-        ls, ws = lab[order], across[order]
-        gap = np.where(ls[1:] == ls[:-1], np.diff(ws), -np.inf)          # between neighbours across, in one group
-        best = np.full(g, -np.inf)
-        np.maximum.at(best, ls[1:], gap)
-        idx = np.flatnonzero(wide[ls[1:]] & (best[ls[1:]] >= MIN_GAP_ACROSS_M) & (gap == best[ls[1:]]))
-        if idx.size == 0:
-            break
-        _, one = np.unique(ls[1:][idx], return_index=True)            # one cut a group: its first widest gap
-        cut = np.zeros(n - 1, dtype=bool)
-        cut[idx[one]] = True
-        piece = np.concatenate([[0], np.cumsum((ls[1:] != ls[:-1]) | cut)])
-        new = np.empty(n, dtype=np.int64)
-        new[order] = piece
-        first = np.full(int(piece.max()) + 1, n)                        # numbered in order of first detection
-        np.minimum.at(first, new, np.arange(n))
-        rank = np.empty_like(first)
-        rank[np.argsort(first, kind="stable")] = np.arange(first.size)
-        new = rank[new]
-        parent = np.zeros(first.size, dtype=np.int64)
-        parent[new] = lab
-        eligible = eligible[parent]                                      # the pieces may be cut again
-        lab = new
-    g_new = int(lab.max()) + 1
-    src = np.zeros(g_new, dtype=np.int64)
-    src[lab] = labels
-    pieces = np.bincount(np.unique(labels * g_new + lab) // g_new, minlength=g0)
-    return lab, np.where(pieces[src] == 1, src, -1)
 
 
 def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -488,15 +396,11 @@ class ObjectTracker:
         self.power = np.zeros(0)      # RCS in m², averaged in power
         self.tag = np.zeros(0, dtype=np.int64)
         self.last_t: float | None = None
-        self.along_rad = 0.0          # the road's direction in sensor axes: where the sensor last travelled
 
     def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float], yaw_rate_rps: float = 0.0
              ) -> ObjectList:
         """One cycle: ``sensor_velocity`` (sensor axes) and ``yaw_rate_rps`` are the ego motion the radar knows."""
-        if math.hypot(sensor_velocity[0], sensor_velocity[1]) > MOVING_THRESHOLD_MPS:   # standing: as last moved
-            self.along_rad = math.atan2(sensor_velocity[1], sensor_velocity[0])
-        groups = group_detections(det, sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])),
-                                  along_rad=self.along_rad)
+        groups = group_detections(det)
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
         if dt > 0:
