@@ -286,10 +286,7 @@ class ObjectFusion:
             best = None
             open_ = [tr for tr in started if so.sensor_id not in tr.members]
             if open_:
-                d = _distances(np.array([tr.pos for tr in open_]), np.array([tr.cov for tr in open_]),
-                               (so.pos[i] + so.vel[i] * (t_s - so.t_s))[None], so.cov[i][None],
-                               _pair_heading(*_track_headings(open_), so.heading[i:i + 1],
-                                             so.heading_sigma[i:i + 1]))[:, 0]
+                d = _track_distances(open_, so, np.array([i]), (so.pos[i] + so.vel[i] * (t_s - so.t_s))[None])[:, 0]
                 k = int(np.argmin(d))
                 best = open_[k] if d[k] < GATE_CHI2 else None
             if best is None:
@@ -358,9 +355,7 @@ class ObjectFusion:
                 pairs.append((tr, int(hit[0])))
         if pairs:
             idx = np.array([j for _, j in pairs])
-            d = np.diagonal(_distances(np.array([tr.pos for tr, _ in pairs]), np.array([tr.cov for tr, _ in pairs]),
-                                       pos[idx], so.cov[idx], _pair_heading(*_track_headings([tr for tr, _ in pairs]),
-                                                                            so.heading[idx], so.heading_sigma[idx])))
+            d = np.diagonal(_track_distances([tr for tr, _ in pairs], so, idx, pos[idx]))
             for (tr, j), dj in zip(pairs, d):
                 if dj < GATE_CHI2 and not taken[j]:
                     assigned[id(tr)].append((so, j))
@@ -369,9 +364,7 @@ class ObjectFusion:
         # 2. the rest by a global assignment on the Mahalanobis distance
         rest = np.flatnonzero(~taken)
         if rest.size and free:
-            cost = _distances(np.array([tr.pos for tr in free]), np.array([tr.cov for tr in free]), pos[rest],
-                              so.cov[rest], _pair_heading(*_track_headings(free), so.heading[rest],
-                                                          so.heading_sigma[rest]))
+            cost = _track_distances(free, so, rest, pos[rest])
             import scipy.optimize  # imported when first needed: a faster start
             big = 1e6
             rows, cols = scipy.optimize.linear_sum_assignment(np.where(cost < GATE_CHI2, cost, big))
@@ -443,14 +436,21 @@ def _track_headings(tracks: list) -> tuple[np.ndarray, np.ndarray]:
     return np.array([t.heading for t in tracks]), np.array([t.heading_sigma for t in tracks])
 
 
+def _track_distances(tracks: list, so: SensorObjects, idx: np.ndarray, pos: np.ndarray) -> np.ndarray:
+    """:func:`_distances` of fused tracks (A) to a sensor's objects ``idx`` (B) at positions ``pos`` (B, 2) (predicted
+    to the fusion time), each pair judged by the better-known orientation: (A, B)."""
+    return _distances(np.array([t.pos for t in tracks]), np.array([t.cov for t in tracks]), pos, so.cov[idx],
+                      _pair_heading(*_track_headings(tracks), so.heading[idx], so.heading_sigma[idx]))
+
+
 def _distances(p1: np.ndarray, c1: np.ndarray, p2: np.ndarray, c2: np.ndarray, heading: np.ndarray,
                max_across_m: float = MAX_ACROSS_M) -> np.ndarray:
     """The Mahalanobis distance² of every pair, with both covariances and the extent term (reference points spread
-    along and across the object's heading): positions (A, 2) and (B, 2), covariances (A, 2, 2) and (B, 2, 2), the
-    object's orientation, (B,) (the second set's) or (A, B) (each pair's) → (A, B); ∞ where a pair lies more than
-    ``max_across_m`` apart across it."""
+    along and across the object's heading): positions (A, 2) and (B, 2), covariances (A, 2, 2) and (B, 2, 2), each
+    pair's orientation (A, B) (:func:`_pair_heading`) → (A, B); ∞ where a pair lies more than ``max_across_m`` apart
+    across it."""
     d = p2[None, :, :] - p1[:, None, :]                                          # (A, B, 2)
-    c, s = np.broadcast_to(np.cos(heading), d.shape[:2]), np.broadcast_to(np.sin(heading), d.shape[:2])   # (A, B)
+    c, s = np.cos(heading), np.sin(heading)                                     # (A, B)
     across = np.abs(-s * d[..., 0] + c * d[..., 1])
     el, et = EXTENT_SIGMA_LONG_M ** 2, EXTENT_SIGMA_LAT_M ** 2
     ext = np.stack([np.stack([el * c * c + et * s * s, (el - et) * c * s], axis=-1),

@@ -154,7 +154,7 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov)
 
 
-def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Groups (``labels``, DBSCAN's) whose nearest detections lie within :data:`RIGID_TOUCH_M` and whose radial
     speeds one relative velocity v explains — |v_r − v·u| ≤ :data:`RIGID_RESIDUAL_MPS` at every detection, u its
     line of sight, over at least :data:`RIGID_MIN_SPAN_RAD` of azimuth, |v| ≤ :data:`RIGID_MAX_SPEED_MPS` — are
@@ -215,7 +215,7 @@ def _rigid_sums(det: Detections, labels: np.ndarray) -> np.ndarray:
 
 
 def _solve_rigid(sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """v (P, 2) from summed normal equations (P, 6), and whether the 2×2 system is solvable."""
+    """v (P, 2) from summed normal equations (P, 7) (:func:`_rigid_sums`), and whether the 2×2 system is solvable."""
     a, b, d, e, f = sums[:, 0], sums[:, 1], sums[:, 2], sums[:, 3], sums[:, 4]
     det_ = a * d - b * b
     ok = det_ > 1e-9 * np.maximum(a + d, 1e-300) ** 2
