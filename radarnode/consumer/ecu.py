@@ -326,6 +326,9 @@ class Ecu:
         # history; one at the place of a track still alive is another object)
         self.landmarks.forget({t.id for t in tracks}, ox, oy)
         self.landmarks.next_cycle()
+        # a structure across the road lies across the road *where it stands*: on a bend that is the predicted
+        # path's heading there (the ego's heading plus the path's curvature times the distance), not the ego's now
+        kappa = curvature(self.ego_speed_mps, self.ego_yaw_rate_rps)
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
             ground = math.hypot(vx + self.ego_speed_mps, vy)
@@ -357,8 +360,8 @@ class Ecu:
                     # stopped marks its place, so that a track the radar creates there anew is still one
                     wx = ox + co * xv[i] - so * yv[i]
                     wy = oy + so * xv[i] + co * yv[i]
-                    landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, oh, rng, float(ol.rcs_dbsm[k]),
-                                                      moved=t.id in self._moved)
+                    landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, oh + kappa * max(xv[i], 0.0),
+                                                      rng, float(ol.rcs_dbsm[k]), moved=t.id in self._moved)
                     if landmark.moved:
                         self._moved.add(t.id)
                 # a stationary object counts by what it reflects over its track's life (power average: one
@@ -378,7 +381,7 @@ class Ecu:
             if not overhead and landmark is None and t.id not in self._moved and self.landmarks.landmarks:
                 wx = ox + co * xv[i] - so * yv[i]
                 wy = oy + so * xv[i] + co * yv[i]
-                overhead = self.landmarks.match(wx, wy, oh, overhead_only=True,
+                overhead = self.landmarks.match(wx, wy, oh + kappa * max(xv[i], 0.0), overhead_only=True,
                                                 beyond_m=OVERHEAD_DEPTH_M) is not None
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead

@@ -24,6 +24,7 @@ plus Poisson false alarms at the preset's false-alarm rate.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -121,6 +122,75 @@ def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) ->
     return inside & (range_m >= preset.min_range_m)
 
 
+def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray
+                   ) -> tuple[np.ndarray, np.ndarray]:
+    """The point of each actor's box nearest to the sensor *within the field of view*, sensor frame (x, y).
+
+    ``view.x_m``/``view.y_m`` is the box's nearest point anywhere. A wide body the beam crosses — a bridge deck on a
+    bend, a car half in the beam — has it outside the field of view while part of the body is inside: the radar
+    sees that part, and its nearest point is what it reports (the detection and signal levels, which sample the
+    outline, see the same). Where the nearest point is inside a sector already, or no part of the box is, the
+    nearest point is returned unchanged. Each box edge is clipped to each sector's wedge (two half-planes,
+    Liang–Barsky) and the point of the clipped edge nearest to the sensor taken; the minimum over edges and
+    sectors within the sector's range. Shapes like ``view.x_m``; sectors of half-angle ≥ 90° are not clipped
+    (none of the presets has one).
+    """
+    x, y = view.x_m, view.y_m
+    r_xy = np.hypot(x, y)
+    z = np.zeros_like(x) if view.z_m is None else view.z_m
+    inside = in_fov(preset, np.sqrt(r_xy * r_xy + z * z), np.arctan2(y, x))
+    sectors = [s for s in preset.fov if s.half_angle_deg < 90.0]
+    if inside.all() or not sectors:
+        return x, y
+    ch, sh = np.cos(view.orientation_rad)[..., None], np.sin(view.orientation_rad)[..., None]
+    hl, hw = (length_m / 2.0)[..., None], (width_m / 2.0)[..., None]
+    ux = np.array([1.0, 1.0, -1.0, -1.0])          # corners in box axes, in order round the box
+    uy = np.array([1.0, -1.0, -1.0, 1.0])
+    ax = view.centre_x_m[..., None] + ch * hl * ux - sh * hw * uy               # (..., 4)
+    ay = view.centre_y_m[..., None] + sh * hl * ux + ch * hw * uy
+    bx, by = np.roll(ax, -1, axis=-1), np.roll(ay, -1, axis=-1)                 # each edge A → B
+    dx, dy = bx - ax, by - ay
+    best = np.full(x.shape, np.inf)
+    bx_out, by_out = x.copy(), y.copy()
+    for sector in sectors:                                                      # a few sectors
+        h = math.radians(sector.half_angle_deg)
+        lo, hi = np.zeros(ax.shape), np.ones(ax.shape)
+        empty = np.zeros(ax.shape, dtype=bool)
+        # the wedge |azimuth| ≤ h as two half-planes: sin h·x ∓ cos h·y ≥ 0
+        for sign in (1.0, -1.0):
+            ga = math.sin(h) * ax - sign * math.cos(h) * ay
+            gb = math.sin(h) * bx - sign * math.cos(h) * by
+            with np.errstate(divide="ignore", invalid="ignore"):
+                cut = ga / (ga - gb)
+            lo = np.where((ga < 0.0) & (gb >= 0.0), np.maximum(lo, cut), lo)
+            hi = np.where((ga >= 0.0) & (gb < 0.0), np.minimum(hi, cut), hi)
+            empty |= (ga < 0.0) & (gb < 0.0)
+        dd = np.maximum(dx * dx + dy * dy, 1e-300)
+        foot = -(ax * dx + ay * dy) / dd
+        t = np.clip(foot, lo, np.maximum(lo, hi))
+        zz = z[..., None] ** 2
+        px, py = ax + t * dx, ay + t * dy
+        # nearer than the minimum range: where the edge leaves that circle instead (a body touching the sensor)
+        near = px * px + py * py + zz < preset.min_range_m ** 2
+        if near.any():
+            fx, fy = ax + foot * dx, ay + foot * dy
+            half = np.sqrt(np.maximum(preset.min_range_m ** 2 - zz - fx * fx - fy * fy, 0.0) / dd)
+            t1, t2 = foot - half, foot + half
+            t = np.where(near, np.where(t1 >= lo, t1, t2), t)
+            empty |= near & (t1 < lo) & (t2 > hi)
+            px, py = ax + t * dx, ay + t * dy
+        rng = np.sqrt(px * px + py * py + zz)
+        rng = np.where(empty | (lo > hi) | (rng > sector.max_range_m) | (rng < preset.min_range_m * (1.0 - 1e-9)),
+                       np.inf, rng)
+        k = np.argmin(rng, axis=-1)[..., None]
+        r_k = np.take_along_axis(rng, k, axis=-1)[..., 0]
+        take = (r_k < best) & ~inside
+        best = np.where(take, r_k, best)
+        bx_out = np.where(take, np.take_along_axis(px, k, axis=-1)[..., 0], bx_out)
+        by_out = np.where(take, np.take_along_axis(py, k, axis=-1)[..., 0], by_out)
+    return bx_out, by_out
+
+
 def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, occluder: np.ndarray,
                      elevation: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Fraction of each actor's azimuth extent not covered by any nearer occluding actor.
@@ -211,7 +281,10 @@ class ObjectModel:
     def _chunk(self, k0: int, times: np.ndarray, config: RuntimeConfig) -> dict:
         """Everything of cycles k0 … that does not depend on the tracker's state, as (T, n) arrays."""
         p, sc = self.preset, self.scene
-        view = sc.views(times)
+        truth = sc.views(times)
+        # what the radar measures of a body is its nearest point within the field of view
+        view = dataclasses.replace(truth, **dict(zip(("x_m", "y_m"), nearest_in_fov(p, truth, sc.length_m,
+                                                                                      sc.width_m))))
         rng_m, az = view.range_m, view.azimuth_rad
         fov = in_fov(p, rng_m, az)
         observable = fov & (rng_m <= config.max_distance_m)
@@ -282,7 +355,7 @@ class ObjectModel:
             "orientation": view.orientation_rad + sig_orient * z[:, 9],
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
-            "k0": k0, "times": times, "config": config, "view": view, "fov": fov,
+            "k0": k0, "times": times, "config": config, "view": truth, "fov": fov,
             "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
             "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
             "rcs_rep": sc.rcs_dbsm + z[:, 4],
