@@ -47,6 +47,9 @@ GROUND_REFLECTION = -0.7          # the road's reflection coefficient the ECU as
 HEIGHT_MIN_M, HEIGHT_MAX_M, HEIGHT_STEP_M = 4.0, 8.0, 0.1
 REFERENCE_HEIGHT_M = 5.0
 MAX_PHASE_STEP = 0.25             # lobes per radar cycle
+#: a radar track is reported from its confirmation, which follows its first detection by this many cycles at least
+#: (2 hits: radarnode.perception.tracker, radarnode.radar.object_model): its RCS average began there
+TRACK_LEAD_CYCLES = 1
 MIN_RANGE_M = 60.0
 MIN_LOBES = 2.5
 MIN_SAMPLES = 40
@@ -77,19 +80,24 @@ def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float,
     return 10.0 * np.log10(np.maximum(f, 1e-12))
 
 
-def averaged_db(pattern_db: np.ndarray, starts: np.ndarray, gain: float = RCS_FILTER_GAIN) -> np.ndarray:
+def averaged_db(pattern_db: np.ndarray, starts: np.ndarray, gain: float = RCS_FILTER_GAIN,
+                before_db: np.ndarray | None = None) -> np.ndarray:
     """What the sensor reports of a pattern (H, N) (dB): its power average along the samples, restarted at each
-    index in ``starts`` (a new radar track starts its average at its first value)."""
+    index in ``starts``. A new radar track starts its average at its first detection; ``before_db`` (H, len(starts)),
+    where given, is the pattern in the cycle before each track's first report — the detection that began the track
+    one cycle before its confirmation (:data:`TRACK_LEAD_CYCLES`) — and otherwise the average starts at the first
+    value reported."""
     import scipy.signal  # imported when first needed: a faster start
     x = 10.0 ** (pattern_db / 10.0)
+    first = None if before_db is None else 10.0 ** (np.asarray(before_db) / 10.0)
     out = np.empty_like(x)
     bounds = list(starts) + [x.shape[1]]
-    for a, b in zip(bounds[:-1], bounds[1:]):        # one filter per radar track (a handful), over all heights
+    for j, (a, b) in enumerate(zip(bounds[:-1], bounds[1:])):   # one filter per radar track (a handful)
         if b <= a:
             continue
         seg = x[:, a:b]
-        out[:, a:b], _ = scipy.signal.lfilter([gain], [1.0, gain - 1.0], seg, axis=1,
-                                               zi=((1.0 - gain) * seg[:, :1]))
+        init = seg[:, :1] if first is None else first[:, j:j + 1]
+        out[:, a:b], _ = scipy.signal.lfilter([gain], [1.0, gain - 1.0], seg, axis=1, zi=((1.0 - gain) * init))
     return 10.0 * np.log10(np.maximum(out, 1e-12))
 
 
@@ -171,7 +179,13 @@ def fit_history(range_m: np.ndarray, rcs_dbsm: np.ndarray, starts: np.ndarray, r
     lobes = covered_lobes(r[ref_ok], radar_height_m, wavelength_m) if n_ok else 0.0
     if lobes < MIN_LOBES or n_ok < MIN_SAMPLES:
         return Fit(False, lobes=lobes, samples=n_ok)
-    t = averaged_db(two_ray_db(r, heights, radar_height_m, wavelength_m), np.flatnonzero(new))
+    # each track's average began at its first detection, TRACK_LEAD_CYCLES before its first report: the pattern
+    # there, at the range extrapolated back along the track's first two samples
+    first = np.flatnonzero(new)
+    nxt = np.minimum(first + 1, r.size - 1)
+    step = np.where(new[nxt] | (nxt == first), 0.0, r[first] - r[nxt])
+    t = averaged_db(two_ray_db(r, heights, radar_height_m, wavelength_m), first,
+                    before_db=two_ray_db(r[first] + TRACK_LEAD_CYCLES * step, heights, radar_height_m, wavelength_m))
     w = usable.astype(np.float64)
     # both without their straight-line trend in range: a slow drift of the RCS (a car turning in a bend, the
     # azimuth pattern, a fade) is no lobing; the lobes of a reflector 4 m up and more repeat within the history

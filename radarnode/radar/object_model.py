@@ -300,9 +300,6 @@ class ObjectModel:
             gain = np.where(sc.elevated, elevation.propagation_db(p, np.hypot(view.x_m, view.y_m), sc.z_m,
                                                                   sc.mount_z_m), 0.0)
             rcs_eff = rcs_eff + gain
-            # the object's reported RCS is the tracker's average in power over the cycles (RCS_GAIN per cycle, as
-            # the detection level's tracker and the real sensor report it): so is this range-dependent factor
-            rcs_body = rcs_body + self._averaged_gain_db(k0, gain)
         snr = equation.snr_db(p, rng_m, rcs_eff, config.power_reduction_db, az)
         stat = self.statistic
         pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
@@ -334,6 +331,11 @@ class ObjectModel:
         sx, sy = sigma_to_xy(rng_m, az, sig_r, sig_az)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
         flags = self._track_flags(observable & (u < pd), fov, ground < MOVING_THRESHOLD_MPS)
+        if sc.elevated.any():
+            # the object's reported RCS is its track's average in power (RCS_GAIN per measured cycle, from the
+            # track's first detection, as the detection level's tracker and the real sensor report it): so is this
+            # range-dependent factor
+            rcs_body = rcs_body + self._averaged_gain_db(k0, gain, flags["detected"], flags["first_hit"])
         # the object list's fields that follow from the flags, for every cycle of the chunk
         det, misses, hits = flags["detected"], flags["misses"], flags["hits"]
         coast = np.where(det, 1.0, 1.0 + misses)                 # σ grows while coasting
@@ -415,17 +417,24 @@ class ObjectModel:
         return np.where(sc.swerling == 0, stat.masking_factor(snr, interference, 0),
                         stat.masking_factor(snr, interference, 1))
 
-    def _averaged_gain_db(self, k0: int, gain_db: np.ndarray) -> np.ndarray:
-        """The power average (gain RCS_GAIN per cycle) of the elevation factor ``gain_db`` (T, n) over the cycles
-        k0 … k0+T−1, continued from the cycles before k0 (one ``lfilter`` along time; a chunk recomputed from
-        the same k0 starts from the same state)."""
+    def _averaged_gain_db(self, k0: int, gain_db: np.ndarray, detected: np.ndarray, first_hit: np.ndarray
+                          ) -> np.ndarray:
+        """The track's power average (gain RCS_GAIN per cycle) of the elevation factor ``gain_db`` (T, n) over
+        the cycles k0 … k0+T−1, as the tracker keeps it: started at a track's first detection (``first_hit``),
+        moved only in the cycles it is measured (``detected``), held while it coasts; continued from the cycles
+        before k0 (a chunk recomputed from the same k0 starts from the same state). The ECU's overhead test
+        models exactly this (a new radar track starts its average at its first value:
+        :func:`radarnode.consumer.overhead.averaged_db`). A recurrence over the chunk's cycles, vectorised over
+        the actors (it runs only for scenes with structures above the road)."""
         x = 10.0 ** (gain_db / 10.0)
         before = self._gain_state.get(k0)
-        prev = x[0] if before is None else before
-        import scipy.signal  # imported when first needed: a faster start
-        y, _ = scipy.signal.lfilter([RCS_GAIN], [1.0, RCS_GAIN - 1.0], x, axis=0,
-                                    zi=((1.0 - RCS_GAIN) * prev)[None, :])
-        self._gain_state = {k0: prev, k0 + x.shape[0]: y[-1]}
+        prev = x[0].copy() if before is None else before.copy()
+        y = np.empty_like(x)
+        for k in range(x.shape[0]):
+            moved = prev + RCS_GAIN * (x[k] - prev)
+            prev = np.where(first_hit[k], x[k], np.where(detected[k], moved, prev))
+            y[k] = prev
+        self._gain_state = {k0: x[0].copy() if before is None else before, k0 + x.shape[0]: prev}
         return 10.0 * np.log10(np.maximum(y, 1e-30))
 
     def _reported_body(self, view, rng_m, az, rcs_eff, snr, z, ground) -> dict[str, np.ndarray]:
@@ -497,8 +506,10 @@ class ObjectModel:
         cols = np.broadcast_to(np.arange(n), at.shape)
         alive = np.where(at >= 0, event[np.maximum(at, 0), cols] == 1, self.alive[None, :])
         before = np.concatenate([self.alive[None, :], alive[:-1]])
+        # the first detection of a track in the making: no other hit in its confirmation window, not alive before
+        first_hit = det & ~before & (recent == 1)
         return {"detected": det, "hist": hist, "hits": _POPCOUNT[hist], "misses": misses, "alive": alive,
-                "new": alive & ~before, "lost": before & ~alive}
+                "new": alive & ~before, "lost": before & ~alive, "first_hit": first_hit}
 
     def _row(self, t_s: float, config: RuntimeConfig) -> tuple[dict, int]:
         period = self.period_s
