@@ -117,13 +117,8 @@ seed: {seed}
 radar: {{preset: ars408_like}}
 ego: {{speed_mps: {v}}}
 road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {kappa}}}
-ecu:
-  acc_enabled: true
-  set_speed_mps: {v}
-  closed_loop: true
-  expect: {{no_fcw: true, no_braking: true}}
-actors:
-  - {{id: bridge, class: bridge, x_m: 250.0, y_m: 0.0}}
+ecu: {{acc_enabled: true, set_speed_mps: {v}, closed_loop: true, expect: {{no_fcw: true, no_braking: true}}}}
+actors: [{{id: bridge, class: bridge, x_m: 250.0, y_m: 0.0}}]
 """
 
 
