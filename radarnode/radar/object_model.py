@@ -423,8 +423,8 @@ class ObjectModel:
         the cycles k0 … k0+T−1, as the tracker keeps it: started at a track's first detection (``first_hit``),
         moved only in the cycles it is measured (``detected``), held while it coasts; continued from the cycles
         before k0 (a chunk recomputed from the same k0 starts from the same state). The ECU's overhead test
-        models exactly this (a new radar track starts its average at its first value:
-        :func:`radarnode.consumer.overhead.averaged_db`). A recurrence over the chunk's cycles, vectorised over
+        estimates this start from the wire (:func:`radarnode.consumer.overhead.averaged_db`: the first detection
+        taken one cycle before the track's first report). A recurrence over the chunk's cycles, vectorised over
         the actors (it runs only for scenes with structures above the road)."""
         x = 10.0 ** (gain_db / 10.0)
         before = self._gain_state.get(k0)
