@@ -194,7 +194,11 @@ def test_fused_ids_stay_while_an_object_passes_from_one_radar_to_another():
     ids = {int(i) for _, f in rounds for i in f.id[f.sensors > 0]}
     seen_by = [int(s) for _, f in rounds for s in f.sensors[f.sensors > 0]]
     assert ids == {0}                                                  # one object, one fused ID all along
-    assert {0b100, 0b010} <= set(seen_by) and any(bin(s).count("1") >= 2 for s in seen_by)
+    # every radar takes part, one alone at times and several together at the hand-overs (each sees the part of the
+    # car inside its own sectors: the left corner radar shares it with the front one all the while it sees it)
+    bits = set(seen_by)
+    assert all(any(s & b for s in bits) for b in (0b001, 0b010, 0b100)), bits
+    assert any(bin(s).count("1") == 1 for s in bits) and any(bin(s).count("1") >= 2 for s in bits), bits
     # against the truth (vehicle frame: the sensor-0 view plus the mount), within a car's half length
     m0 = sc.radars[0].mount
     errs = []
