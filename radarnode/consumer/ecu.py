@@ -339,6 +339,10 @@ class Ecu:
                 continue
             k = by_id.get(t.meas_id)
             landmark = self.landmarks.by_track.get(t.id)
+            # its place in the odometry frame, and the road's heading there
+            wx = ox + co * xv[i] - so * yv[i]
+            wy = oy + so * xv[i] + co * yv[i]
+            heading_there = oh + kappa * max(xv[i], 0.0)
             if k is not None:
                 dyn = int(ol.dyn_prop[k])
                 trail[i] = (dyn == DYN_MOVING and vx + self.ego_speed_mps > MOVING_MPS
@@ -358,10 +362,8 @@ class Ecu:
                 if abs(radial) < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
-                    wx = ox + co * xv[i] - so * yv[i]
-                    wy = oy + so * xv[i] + co * yv[i]
-                    landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, oh + kappa * max(xv[i], 0.0),
-                                                      rng, float(ol.rcs_dbsm[k]), moved=t.id in self._moved)
+                    landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, heading_there, rng,
+                                                      float(ol.rcs_dbsm[k]), moved=t.id in self._moved)
                     if landmark.moved:
                         self._moved.add(t.id)
                 # a stationary object counts by what it reflects over its track's life (power average: one
@@ -379,9 +381,7 @@ class Ecu:
             # (the radar reports its parts as objects of their own, moving or not as its Doppler makes them)
             overhead = landmark is not None and landmark.overhead
             if not overhead and landmark is None and t.id not in self._moved and self.landmarks.landmarks:
-                wx = ox + co * xv[i] - so * yv[i]
-                wy = oy + so * xv[i] + co * yv[i]
-                overhead = self.landmarks.match(wx, wy, oh + kappa * max(xv[i], 0.0), overhead_only=True,
+                overhead = self.landmarks.match(wx, wy, heading_there, overhead_only=True,
                                                 beyond_m=OVERHEAD_DEPTH_M) is not None
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead

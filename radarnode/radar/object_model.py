@@ -283,8 +283,8 @@ class ObjectModel:
         p, sc = self.preset, self.scene
         truth = sc.views(times)
         # what the radar measures of a body is its nearest point within the field of view
-        view = dataclasses.replace(truth, **dict(zip(("x_m", "y_m"), nearest_in_fov(p, truth, sc.length_m,
-                                                                                      sc.width_m))))
+        x_in, y_in = nearest_in_fov(p, truth, sc.length_m, sc.width_m)
+        view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
         rng_m, az = view.range_m, view.azimuth_rad
         fov = in_fov(p, rng_m, az)
         observable = fov & (rng_m <= config.max_distance_m)
