@@ -130,3 +130,25 @@ def test_a_bridge_on_a_bend_draws_no_warning_at_the_object_level(kappa, v):
                                                                    kappa=kappa)), cycle_period_s=0.072)
     r = simulate(sc, fidelity="object")
     assert r.passed and r.checked, r.reasons
+
+
+@pytest.mark.parametrize("phi_deg", [8.9, 9.0, 9.1, 18.0])
+def test_a_deck_square_to_a_line_of_sight_just_inside_at_and_beyond_the_far_beams_edge(phi_deg):
+    # a deck 60 m wide, 1 m deep, its near face square to the line of sight at azimuth φ, 200 m out (beyond the
+    # 70 m near sectors: only the ±9° far beam counts), reaching 50 m towards the boresight: its nearest point
+    # anywhere is the foot at φ; inside the beam (φ ≤ 9°) that is what is measured, beyond it the face's point on
+    # the beam's edge, at the closed-form range D / cos(φ − 9°)
+    d, phi = 200.0, math.radians(phi_deg)
+    u, w = np.array([math.cos(phi), math.sin(phi)]), np.array([math.sin(phi), -math.cos(phi)])   # ray, across
+    centre = (d + 0.5) * u + 20.0 * w
+    view = _view(centre[0], centre[1], phi)
+    view = dataclasses.replace(view, x_m=np.array([d * u[0]]), y_m=np.array([d * u[1]]))
+    length, width = np.array([1.0]), np.array([60.0])
+    assert np.allclose(_nearest_anywhere(np.array([centre[0]]), np.array([centre[1]]), np.array([phi]), length,
+                                         width), (view.x_m, view.y_m))
+    x, y = nearest_in_fov(ARS, view, length, width)
+    if phi_deg <= 9.0:
+        assert (x[0], y[0]) == (view.x_m[0], view.y_m[0])
+    else:
+        assert math.degrees(math.atan2(y[0], x[0])) == pytest.approx(9.0, abs=1e-9)
+        assert math.hypot(x[0], y[0]) == pytest.approx(d / math.cos(phi - math.radians(9.0)), rel=1e-12)
