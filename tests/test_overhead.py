@@ -384,3 +384,26 @@ def test_the_object_levels_rcs_average_is_its_tracks():
             elif det[k, j]:
                 y[j] += 0.2 * (x[k, j] - y[j])
         np.testing.assert_allclose(whole[k], 10.0 * np.log10(y), rtol=0, atol=1e-9)
+
+
+def test_the_parts_of_a_deck_on_a_bend_are_one_place_along_the_road_where_it_stands():
+    # a deck across an R 667 m bend 200 m ahead: there the road has turned by κ·200 = 0.3 rad, so two of the deck's
+    # glinting parts 20 m apart across the road lie 6 m apart along the ego's heading now (beyond MATCH_LONG_M) and
+    # at one place along the road's heading where the deck stands, which the ECU gives (heading + κ·distance)
+    kappa, s = 0.0015, 200.0
+    across = np.array([-math.sin(kappa * s), math.cos(kappa * s)])
+    centre = np.array([s, 0.5 * kappa * s * s])
+    p1, p2 = centre - 10.0 * across, centre + 10.0 * across
+    assert abs(p1[0] - p2[0]) > O.MATCH_LONG_M
+    m = O.LandmarkMap(0.5, LAM)
+    m.next_cycle()
+    a = m.observe(1, 1, *p1, kappa * s, 200.0, 10.0)
+    m.next_cycle()
+    b = m.observe(2, 2, *p2, kappa * s, 200.0, 10.0)
+    assert m.pool(a, kappa * s) == [b] and m.pool(b, kappa * s) == [a]
+    assert m.pool(a, 0.0) == []                   # along the ego's heading now they are two places
+    # a track at the deck's middle is matched to the overhead landmark along the road's heading there, not the ego's
+    a.overhead = True
+    assert m.match(*centre, kappa * s, overhead_only=True) is a
+    assert m.match(*(centre + 12.0 * across), kappa * s, overhead_only=True) is a     # 22 m across a's place
+    assert m.match(*(centre + 12.0 * across), 0.0, overhead_only=True) is None         # 6.5 m along the ego's
