@@ -407,3 +407,27 @@ def test_the_parts_of_a_deck_on_a_bend_are_one_place_along_the_road_where_it_sta
     assert m.match(*centre, kappa * s, overhead_only=True) is a
     assert m.match(*(centre + 12.0 * across), kappa * s, overhead_only=True) is a     # 22 m across a's place
     assert m.match(*(centre + 12.0 * across), 0.0, overhead_only=True) is None         # 6.5 m along the ego's
+
+
+@pytest.mark.parametrize("edge, hidden", [(0.0199, True), (0.02, True), (0.0201, False), (0.04, False)])
+def test_an_elevated_body_is_hidden_where_its_lower_edge_is(edge, hidden):
+    # the object level tests the reflecting point as the detection level tests each scatterer: a deck whose lower
+    # edge lies within a nearer truck's elevation extent (up to 0.02 rad) is hidden, one just above it is not
+    from radarnode.radar.object_model import visible_fraction
+    frac = visible_fraction(np.array([50.0, 150.0]), np.array([-0.05, -0.02]), np.array([0.05, 0.02]),
+                            np.array([True, True]), (np.array([-0.01, edge]), np.array([0.02, edge + 0.01]),
+                                                     np.array([False, True])))
+    assert frac[1] == (0.0 if hidden else 1.0) and frac[0] == 1.0
+
+
+def test_a_second_deck_is_not_hidden_by_the_first_whose_extent_its_upper_part_shares():
+    # two decks 40 m apart, 1.5 m deep, lower edges 4.5 m above the sensor, the first 150 m ahead: the second's
+    # elevation extent overlaps the first's, its lower edge (where it reflects) does not; before, the object level
+    # hid it until about 160 m and the ECU's two-ray history of it began too late at 90 km/h
+    from radarnode.radar.object_model import visible_fraction
+    r = np.array([150.0, 190.0])
+    lo, hi = np.arctan2(4.5, r), np.arctan2(6.0, r)
+    assert hi[1] > lo[0]                                              # the extents overlap
+    frac = visible_fraction(r, np.array([-0.1, -0.08]), np.array([0.1, 0.08]), np.array([True, True]),
+                            (lo, hi, np.array([True, True])))
+    assert frac[1] == 1.0

@@ -197,8 +197,11 @@ def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, 
 
     Shapes: all inputs (..., n) — any leading axes, e.g. time; returns (..., n). ``elevation`` is
     (bottom, top, elevated): the actors' elevation extents (rad) and which are off the ground; a pair of which
-    one is elevated occludes only where their elevation extents overlap (a car is not hidden by the bridge it
-    stands under or beyond; two actors on the road occlude by azimuth alone, as before).
+    one is elevated occludes only where the target's reflecting point — an elevated body's lower edge, a body on
+    the road at the sensor's height (``SensorView.z_m``) — lies within the occluder's elevation extent, as the
+    detection level tests each scatterer (:func:`radarnode.radar.scatterers.visible`): a car is not hidden by the
+    bridge it stands under or beyond, nor a second bridge's lower edge by the deck before it; two actors on the
+    road occlude by azimuth alone.
     Cost O(n²·16) per leading index, fine for the tens of actors of a scene.
     """
     n = range_m.shape[-1]
@@ -209,8 +212,9 @@ def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, 
     nearer = (range_m[..., None, :] < range_m[..., :, None]) & occluder[..., None, :]    # (..., target, occluder)
     if elevation is not None:
         lo, hi, up = elevation
-        overlap = (lo[..., :, None] <= hi[..., None, :]) & (lo[..., None, :] <= hi[..., :, None])
-        nearer &= overlap | ~(up[..., :, None] | up[..., None, :])
+        point = np.where(up, lo, 0.0)                                                    # (..., n)
+        behind = (lo[..., None, :] <= point[..., :, None]) & (point[..., :, None] <= hi[..., None, :])
+        nearer &= behind | ~(up[..., :, None] | up[..., None, :])
     covered = ((samples[..., None] >= az_lo[..., None, None, :]) & (samples[..., None] <= az_hi[..., None, None, :])
                & nearer[..., :, None, :]).any(axis=-1)                                  # (..., n, S)
     return 1.0 - covered.mean(axis=-1)
