@@ -2,9 +2,10 @@
 
 Per scenario and seed (``--seeds``, default 1, 2, 3: one seed is not enough where a car stands at the edge of
 the chain's resolution, beside guardrail posts), the first ``--frames`` cycles at four levels (object, detection,
-signal, auto), the same seed at every level. Accuracy is judged on the object list each level sends: an actor-cycle counts as reported when an object lies within
-2.5 m of the actor's reported point (after the levels' trackers have had 5 cycles to confirm); the rest of the
-objects are extra (false or split). Fractions are means over the seeds; ``auto − signal`` is the difference of
+signal, auto), the same seed at every level. Accuracy is judged on the object list each level sends: an actor with a part inside the field of view counts as
+reported in a cycle when an object lies within 2.5 m of its point the radar can see — the nearest point of its outline
+inside the field of view (``nearest_in_fov``) — after the levels' trackers have had 5 cycles to confirm; the rest of
+the objects are extra (false or split). Fractions are means over the seeds; ``auto − signal`` is the difference of
 the reported fractions, with its smallest and largest value over the seeds. Cost is the median time per cycle of
 the radar model (scene, radar and perception, no wire) over every seed's cycles.
 
@@ -27,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from radarnode.radar.models import make_model  # noqa: E402
-from radarnode.radar.object_model import RuntimeConfig, in_fov  # noqa: E402
+from radarnode.radar.object_model import RuntimeConfig, in_fov, nearest_in_fov  # noqa: E402
 from radarnode.radar.setup import load_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
 
@@ -54,11 +55,15 @@ def run(path: Path, level: str, frames: int, seed: int | None = None) -> dict:
         if k < 5:
             continue
         ol = frame.objects
-        seen = visible & in_fov(p, view.range_m, view.azimuth_rad)
+        # each actor's point the radar can see: its outline's nearest point inside the field of view (a car half in
+        # a sector is seen at its part there, at every level)
+        x_in, y_in = nearest_in_fov(p, view, scene.length_m, scene.width_m)
+        r_in = np.hypot(x_in, y_in) if view.z_m is None else np.sqrt(x_in ** 2 + y_in ** 2 + view.z_m ** 2)
+        seen = visible & in_fov(p, r_in, np.arctan2(y_in, x_in))
         used = np.zeros(len(ol), dtype=bool)
         for i in np.flatnonzero(seen):
             trials += 1
-            d = np.hypot(ol.dist_long_m - view.x_m[i], ol.dist_lat_m - view.y_m[i])
+            d = np.hypot(ol.dist_long_m - x_in[i], ol.dist_lat_m - y_in[i])
             if d.size and d.min() <= GATE_M:
                 reported += 1
                 used[int(np.argmin(d))] = True
