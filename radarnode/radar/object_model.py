@@ -45,6 +45,7 @@ from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
 
 MIN_VISIBLE_FRACTION = 0.25
+FOV_EDGE_TOLERANCE = 1e-9   # rad and m: a field-of-view edge computed to the last bit is inside (in_fov)
 COAST_CYCLES = 3
 CONFIRM_HITS = 2          # detections in the last CONFIRM_WINDOW cycles that make an object
 CONFIRM_WINDOW = 3
@@ -114,12 +115,16 @@ def _cluster_rows(*columns) -> np.ndarray:
 
 
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
-    """True where (range, azimuth) lies inside any of the preset's sectors and above the minimum range."""
+    """True where (range, azimuth) lies inside any of the preset's sectors and above the minimum range.
+
+    The edges belong to the sectors within ``FOV_EDGE_TOLERANCE`` (1e-9 rad and m): a point that
+    :func:`nearest_in_fov` puts on an edge is inside, whatever the last bit of its rounding."""
     inside = np.zeros(np.shape(range_m), dtype=bool)
     abs_az = np.abs(azimuth_rad)
+    tol = FOV_EDGE_TOLERANCE
     for sector in preset.fov:
-        inside |= (range_m <= sector.max_range_m) & (abs_az <= math.radians(sector.half_angle_deg))
-    return inside & (range_m >= preset.min_range_m)
+        inside |= (range_m <= sector.max_range_m + tol) & (abs_az <= math.radians(sector.half_angle_deg) + tol)
+    return inside & (range_m >= preset.min_range_m - tol)
 
 
 def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray
