@@ -15,7 +15,7 @@ from radarnode.consumer.evaluate import simulate
 from radarnode.errors import FieldError
 from radarnode.radar import elevation
 from radarnode.radar.presets import get_preset
-from radarnode.radar.setup import load_scenario
+from radarnode.radar.setup import load_scenario, parse_scenario
 from radarnode.scene.scenario import read_scenario_text
 from radarnode.wire.node import RadarNode
 from tests.conftest import SCENARIOS
@@ -220,6 +220,55 @@ def test_landmarks_match_within_their_distances():
                    beyond_m=O.OVERHEAD_DEPTH_M) is a
     assert m.match(100.0 + O.MATCH_LONG_M + O.OVERHEAD_DEPTH_M + 0.1, 0.0, 0.0, overhead_only=True,
                    beyond_m=O.OVERHEAD_DEPTH_M) is None
+
+
+def _structure_and_newcomer(together: list[bool], first_range_m: float, deck_first: bool = True):
+    """A recognised structure whose track (1) is measured in every cycle, and a new track (2) 15 m across the road
+    at its place, first filed at ``first_range_m``, measured in every cycle; ``together[k]``: whether the
+    structure's track is measured too in the newcomer's k-th cycle. Returns the map and the newcomer's landmarks."""
+    m = O.LandmarkMap(0.5, LAM)
+    deck = m.observe(1, 1, 300.0, 0.0, 0.0, first_range_m + 20.0, 25.0)
+    deck.overhead = True
+    seen = []
+    for k, both in enumerate(together):
+        m.next_cycle()
+        r = first_range_m - k
+        if both and deck_first:
+            m.observe(1, 1, 300.0, 0.0, 0.0, r - 1.0, 25.0)
+        seen.append(m.observe(2, 2, 301.0, 15.0, 0.0, r, 10.0))
+        if both and not deck_first:
+            m.observe(1, 1, 300.0, 0.0, 0.0, r - 1.0, 25.0)
+    return m, deck, seen
+
+
+@pytest.mark.parametrize("deck_first", [True, False])
+@pytest.mark.parametrize("together, other", [(4, False), (5, True), (6, True)])
+def test_a_new_track_measured_with_a_recognised_structure_is_another_object(together, other, deck_first):
+    # TOGETHER_SHARE (0.75) of its first TOGETHER_CYCLES (6) cycles: 4.5; below, above, all; the order in which
+    # the two are filed within a cycle does not matter
+    n = O.TOGETHER_CYCLES
+    assert O.TOGETHER_SHARE * n == 4.5
+    flags = [True] * together + [False] * (n - together) + [True] * 4
+    m, deck, seen = _structure_and_newcomer(flags, 150.0, deck_first)
+    assert all(lm is deck for lm in seen[:n])                 # on probation: filed at the structure meanwhile
+    last = seen[-1]
+    assert (last is not deck) == other
+    if other:
+        # an object of its own, never part of a structure, never pooled with its parts
+        assert last.ground and not last.overhead and m.by_track[2] is last and m.pool(last, 0.0) == []
+        assert last.range_m[0] == pytest.approx(150.0)       # its history from its first sample on
+
+
+def test_a_new_track_taking_turns_with_a_structure_or_first_seen_in_the_near_scan_is_its_part():
+    n = O.TOGETHER_CYCLES
+    alternating = [k % 2 == 0 for k in range(n + 4)]          # glint: one reflector, two tracks in turns
+    _, deck, seen = _structure_and_newcomer(alternating, 150.0)
+    assert seen[-1] is deck
+    # first seen within the near scan (70 m) + margin, the radar resolves a structure's parts, measured together
+    for first, other in ((O.TOGETHER_MIN_RANGE_M - 0.1, False), (O.TOGETHER_MIN_RANGE_M, True),
+                         (2 * O.TOGETHER_MIN_RANGE_M, True)):
+        _, deck, seen = _structure_and_newcomer([True] * (n + 2), first)
+        assert (seen[-1] is not deck) == other, first
 
 
 def test_what_elevation_makes_of_a_stationary_object_is_not_moving():
@@ -431,3 +480,23 @@ def test_a_second_deck_is_not_hidden_by_the_first_whose_extent_its_upper_part_sh
     frac = visible_fraction(r, np.array([-0.1, -0.08]), np.array([0.1, 0.08]), np.array([True, True]),
                             (lo, hi, np.array([True, True])))
     assert frac[1] == 1.0
+
+
+@pytest.mark.parametrize("curvature", [0.002, -0.002])
+def test_a_car_under_a_bridge_on_a_bend_is_warned_for_at_the_object_level(curvature):
+    # the deck is recognised before the car, 4 m under it, comes into the far beam (benchmarks/overhead_layouts.py)
+    text = f"""name: car_under_bridge_bend
+duration_s: 17.6
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 13.889}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {curvature}}}
+ecu: {{acc_enabled: false, set_speed_mps: 13.889, expect: {{lead: car, fcw_ttc_min_s: 2.1}}}}
+actors:
+  - {{id: bridge, class: bridge, x_m: 250.0, y_m: 0.0}}
+  - {{id: car, class: car, x_m: 250.25, lane: 1, speed_mps: 0.0}}
+"""
+    r = simulate(parse_scenario(text), fidelity="object")
+    assert r.checked and r.passed, r.reasons
+    lms = r.trace["ecu"].landmarks.landmarks
+    assert any(lm.overhead for lm in lms) and any(lm.ground for lm in lms)   # the deck recognised, the car its own

@@ -68,6 +68,13 @@ OVERHEAD_DEPTH_M = 20.0
 #: landmarks take turns (are parts of one glinting structure) when measured together in at most this fraction of the
 #: cycles the less frequent one was measured
 POOL_SHARED = 0.25
+#: a new track at a recognised structure's landmark while the structure's own track is alive is on probation for
+#: this many of its samples; measured together with the structure in more than TOGETHER_SHARE of them, it is
+#: another object (parts of one structure take turns)
+TOGETHER_CYCLES, TOGETHER_SHARE = 6, 0.75
+#: … if it was first seen beyond the near scan (the ARS 408's reaches 70 m: within it the radar resolves a
+#: structure's parts, which it then measures together) by a margin for the track's confirmation
+TOGETHER_MIN_RANGE_M = 80.0
 
 
 def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float, wavelength_m: float,
@@ -214,6 +221,7 @@ class Landmark:
     last_object: int | None = None
     overhead: bool = False                          # latched once the test says so
     moved: bool = False                             # a track seen moving stopped here: a vehicle, never overhead
+    ground: bool = False                            # an object of its own beside a structure: never overhead
     fit: Fit | None = None
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
     latched_range_m: float | None = None            # the range at which the overhead decision was latched
@@ -250,7 +258,7 @@ class Landmark:
                                         or abs(self.fit.height_m - self._last_height) <= HEIGHT_STABLE_M + 1e-9)
         self.streak = self.streak + 1 if steady else (1 if self.fit.overhead else 0)
         self._last_height = self.fit.height_m
-        if not self.overhead and self.streak >= CONSECUTIVE and not self.moved:
+        if not self.overhead and self.streak >= CONSECUTIVE and not self.moved and not self.ground:
             self.overhead, self.latched_range_m, self.latched_fit = True, self.range_m[-1], self.fit
         return self.fit
 
@@ -265,13 +273,21 @@ class LandmarkMap:
     the road (within :data:`MATCH_LONG_M`) anywhere across it (:data:`OVERHEAD_MATCH_LAT_M`) that take turns —
     measured together in at most :data:`POOL_SHARED` of the cycles the less frequent one was measured — and never
     moved. A stopped car under the bridge is measured in the same cycles as the deck (two resolved reflectors):
-    it keeps its own, flat history."""
+    it keeps its own, flat history.
+
+    **Probation.** A structure recognised, a new standing track across the road where it stands is taken for one of
+    its parts (the radar reports a deck's parts as objects of their own as they come into view). On a bend a car
+    standing under the deck comes into the far beam after the deck was recognised; so a new track first seen
+    beyond the near scan (:data:`TOGETHER_MIN_RANGE_M`) while the structure's own track is alive is on probation
+    for :data:`TOGETHER_CYCLES` samples, and measured together with the structure in more than
+    :data:`TOGETHER_SHARE` of them it becomes an object of its own (``ground``: never overhead, never pooled)."""
 
     def __init__(self, radar_height_m: float, wavelength_m: float) -> None:
         self.radar_height_m = radar_height_m
         self.wavelength_m = wavelength_m
         self.landmarks: list[Landmark] = []
         self.by_track: dict[int, Landmark] = {}
+        self.own: dict[int, Landmark] = {}         # tracks on probation at a structure's landmark
         self.cycle = 0
 
     def next_cycle(self) -> None:
@@ -280,13 +296,13 @@ class LandmarkMap:
 
     def pool(self, lm: Landmark, heading_rad: float) -> list[Landmark]:
         """The other landmarks whose histories :meth:`Landmark.evaluate` pools with ``lm``'s (class docstring)."""
-        if lm.moved:
+        if lm.moved or lm.ground:
             return []
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         mine = set(lm.cycles)
         out = []
         for cand in self.landmarks:
-            if cand is lm or cand.moved or not cand.range_m:
+            if cand is lm or cand.moved or cand.ground or not cand.range_m:
                 continue
             dx, dy = cand.x_m - lm.x_m, cand.y_m - lm.y_m
             if abs(c * dx + s * dy) > MATCH_LONG_M or abs(-s * dx + c * dy) > OVERHEAD_MATCH_LAT_M:
@@ -311,12 +327,31 @@ class LandmarkMap:
             if lm is None:
                 lm = Landmark(x_m, y_m)
                 self.landmarks.append(lm)
+            elif lm.overhead and id(lm) in busy and range_m >= TOGETHER_MIN_RANGE_M:
+                # a recognised structure's track is alive: this one is one of its parts if the two take turns
+                # (glint), another object if they are measured together (a car that came into view under it)
+                self.own[track_id] = Landmark(x_m, y_m)
             self.by_track[track_id] = lm
         lm.moved |= moved
         if math.isfinite(rcs_dbsm) and math.isfinite(range_m) and not lm.moved:
             lm.add(object_id, range_m, rcs_dbsm, self.cycle)
             if not lm.overhead:
                 lm.evaluate(self.radar_height_m, self.wavelength_m, self.pool(lm, heading_rad))
+            own = self.own.get(track_id)
+            if own is not None:
+                own.add(object_id, range_m, rcs_dbsm, self.cycle)
+                if len(own.cycles) > TOGETHER_CYCLES:
+                    # the cycles before this one, now that every track of them was filed
+                    mine = own.cycles[:-1]
+                    counts = {}
+                    for c in lm.cycles:
+                        counts[c] = counts.get(c, 0) + 1
+                    together = sum(counts.get(c, 0) >= 2 for c in mine)
+                    del self.own[track_id]
+                    if together > TOGETHER_SHARE * len(mine):
+                        own.ground = True
+                        self.landmarks.append(own)
+                        self.by_track[track_id] = lm = own
         return lm
 
     def match(self, x_m: float, y_m: float, heading_rad: float, overhead_only: bool = False,
@@ -339,6 +374,7 @@ class LandmarkMap:
     def forget(self, alive: set[int], ego_x_m: float, ego_y_m: float, keep_m: float = 300.0) -> None:
         """Drop the tracks that ended and the landmarks far behind the ego."""
         self.by_track = {k: v for k, v in self.by_track.items() if k in alive}
+        self.own = {k: v for k, v in self.own.items() if k in alive}
         kept = set(map(id, self.by_track.values()))
         self.landmarks = [lm for lm in self.landmarks
                           if id(lm) in kept or math.hypot(lm.x_m - ego_x_m, lm.y_m - ego_y_m) <= keep_m]
