@@ -222,7 +222,8 @@ def test_landmarks_match_within_their_distances():
                    beyond_m=O.OVERHEAD_DEPTH_M) is None
 
 
-def _structure_and_newcomer(together: list[bool], first_range_m: float, deck_first: bool = True):
+def _structure_and_newcomer(together: list[bool], first_range_m: float, deck_first: bool = True,
+                            in_path: list[bool] | None = None):
     """A recognised structure whose track (1) is measured in every cycle, and a new track (2) 15 m across the road
     at its place, first filed at ``first_range_m``, measured in every cycle; ``together[k]``: whether the
     structure's track is measured too in the newcomer's k-th cycle. Returns the map and the newcomer's landmarks."""
@@ -235,7 +236,7 @@ def _structure_and_newcomer(together: list[bool], first_range_m: float, deck_fir
         r = first_range_m - k
         if both and deck_first:
             m.observe(1, 1, 300.0, 0.0, 0.0, r - 1.0, 25.0)
-        seen.append(m.observe(2, 2, 301.0, 15.0, 0.0, r, 10.0))
+        seen.append(m.observe(2, 2, 301.0, 15.0, 0.0, r, 10.0, in_path=True if in_path is None else in_path[k]))
         if both and not deck_first:
             m.observe(1, 1, 300.0, 0.0, 0.0, r - 1.0, 25.0)
     return m, deck, seen
@@ -257,6 +258,17 @@ def test_a_new_track_measured_with_a_recognised_structure_is_another_object(toge
         # an object of its own, never part of a structure, never pooled with its parts
         assert last.ground and not last.overhead and m.by_track[2] is last and m.pool(last, 0.0) == []
         assert last.range_m[0] == pytest.approx(150.0)       # its history from its first sample on
+
+
+def test_a_new_track_measured_with_a_structure_is_released_only_in_the_path():
+    # a deck's ends beyond the road are resolved from it and measured together with it: off the path a newcomer
+    # stays on probation (and with the structure), and is released once it is in the path
+    n = O.TOGETHER_CYCLES
+    m, deck, seen = _structure_and_newcomer([True] * (n + 4), 150.0, in_path=[False] * (n + 4))
+    assert all(lm is deck for lm in seen) and 2 in m.own
+    m, deck, seen = _structure_and_newcomer([True] * (n + 6), 150.0, in_path=[False] * (n + 4) + [True] * 2)
+    assert all(lm is deck for lm in seen[: n + 4])
+    assert seen[-2] is not deck and seen[-2].ground and 2 not in m.own
 
 
 def test_a_new_track_taking_turns_with_a_structure_or_first_seen_in_the_near_scan_is_its_part():

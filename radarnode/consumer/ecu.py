@@ -363,7 +363,8 @@ class Ecu:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
                     landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, heading_there, rng,
-                                                      float(ol.rcs_dbsm[k]), moved=t.id in self._moved)
+                                                      float(ol.rcs_dbsm[k]), moved=t.id in self._moved,
+                                                      in_path=self._in_path.get(t.id, 0) > 0)
                     if landmark.moved:
                         self._moved.add(t.id)
                 # a stationary object counts by what it reflects over its track's life (power average: one
