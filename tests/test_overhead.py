@@ -261,14 +261,14 @@ def test_a_new_track_measured_with_a_recognised_structure_is_another_object(toge
 
 
 def test_a_new_track_measured_with_a_structure_is_released_only_in_the_path():
-    # a deck's ends beyond the road are resolved from it and measured together with it: off the path a newcomer
-    # stays on probation (and with the structure), and is released once it is in the path
+    # a deck's ends beyond the road are resolved from it and measured together with it: a newcomer out of the path
+    # when its probation ends is one of the structure's parts for good, one in the path an object of its own
     n = O.TOGETHER_CYCLES
-    m, deck, seen = _structure_and_newcomer([True] * (n + 4), 150.0, in_path=[False] * (n + 4))
-    assert all(lm is deck for lm in seen) and 2 in m.own
-    m, deck, seen = _structure_and_newcomer([True] * (n + 6), 150.0, in_path=[False] * (n + 4) + [True] * 2)
-    assert all(lm is deck for lm in seen[: n + 4])
-    assert seen[-2] is not deck and seen[-2].ground and 2 not in m.own
+    for path_at_end, other in ((False, False), (True, True)):
+        path = [not path_at_end] * n + [path_at_end] + [True] * 3
+        m, deck, seen = _structure_and_newcomer([True] * len(path), 150.0, in_path=path)
+        assert all(lm is deck for lm in seen[:n]) and 2 not in m.own
+        assert all((lm is not deck) == other for lm in seen[n:]), path_at_end
 
 
 def test_a_new_track_taking_turns_with_a_structure_or_first_seen_in_the_near_scan_is_its_part():

@@ -280,9 +280,9 @@ class LandmarkMap:
     standing under the deck comes into the far beam after the deck was recognised; so a new track first seen
     beyond the near scan (:data:`TOGETHER_MIN_RANGE_M`) while the structure's own track is alive is on probation
     for :data:`TOGETHER_CYCLES` samples, and measured together with the structure in more than
-    :data:`TOGETHER_SHARE` of them, in the ego's path, it becomes an object of its own (``ground``: never overhead,
-    never pooled). Off the path it stays on probation: a deck's ends beyond the road are resolved from it in angle
-    from about 130 m and measured together with it, and matter to no warning."""
+    :data:`TOGETHER_SHARE` of them, and in the ego's path then, it becomes an object of its own (``ground``: never
+    overhead, never pooled); otherwise it is one of the structure's parts for good. (A deck's ends beyond the road
+    are resolved from it in angle from about 130 m and measured together with it, and matter to no warning.)"""
 
     def __init__(self, radar_height_m: float, wavelength_m: float) -> None:
         self.radar_height_m = radar_height_m
@@ -320,8 +320,9 @@ class LandmarkMap:
         (matching is along and across the ego's heading); returns its landmark, re-evaluated. ``moved``: the
         track was seen moving (a vehicle that stopped: its landmark is never overhead, and a new track the radar
         creates there later inherits that it moved). ``in_path``: the track is in the ego's predicted path (a track
-        on probation at a structure is released as an object of its own only there, where a car under the structure
-        matters: the structure's parts beyond the road are measured together with it too)."""
+        on probation at a structure is released as an object of its own only if it is there when its probation ends,
+        where a car under the structure matters: the structure's parts beyond the road are measured together with
+        it too)."""
         lm = self.by_track.get(track_id)
         if lm is None:
             # a landmark another live track is filed at is that track's: two objects seen at once are two
@@ -344,7 +345,7 @@ class LandmarkMap:
             own = self.own.get(track_id)
             if own is not None:
                 own.add(object_id, range_m, rcs_dbsm, self.cycle)
-                if len(own.cycles) > TOGETHER_CYCLES and in_path:
+                if len(own.cycles) > TOGETHER_CYCLES:
                     # the cycles before this one, now that every track of them was filed
                     mine = own.cycles[:-1]
                     counts = {}
@@ -352,7 +353,7 @@ class LandmarkMap:
                         counts[c] = counts.get(c, 0) + 1
                     together = sum(counts.get(c, 0) >= 2 for c in mine)
                     del self.own[track_id]
-                    if together > TOGETHER_SHARE * len(mine):
+                    if in_path and together > TOGETHER_SHARE * len(mine):
                         own.ground = True
                         self.landmarks.append(own)
                         self.by_track[track_id] = lm = own
