@@ -384,6 +384,20 @@ def test_a_pooled_history_fits_as_the_same_history_in_one_piece():
     assert O.covered_lobes(rr, 0.5, LAM) == pytest.approx(O.covered_lobes(r, 0.5, LAM))
 
 
+def test_a_landmark_measured_only_after_another_ended_takes_no_turns_with_it():
+    # a car that came into view after a deck's first track ended: their cycles do not overlap, nothing is shared,
+    # yet the two never took turns
+    m = O.LandmarkMap(0.5, LAM)
+    a, b = O.Landmark(300.0, -4.0), O.Landmark(300.5, 4.0)
+    a.cycles, b.cycles = list(range(0, 40)), list(range(40, 80))
+    for lm in (a, b):
+        lm.range_m = [150.0] * len(lm.cycles)
+    m.landmarks = [a, b]
+    assert m.pool(a, 0.0) == [] and m.pool(b, 0.0) == []
+    b.cycles = list(range(39, 79))                 # one cycle of overlap, measured together: turns, and shared 1
+    assert m.pool(a, 0.0) == [b]
+
+
 @pytest.mark.parametrize("shared, pooled", [(4, True), (5, True), (6, False), (10, False)])
 def test_landmarks_measured_together_in_more_than_a_quarter_of_cycles_are_not_pooled(shared, pooled):
     # POOL_SHARED (0.25) of the less frequent one's 20 cycles: 5; just below, at, just above and at twice the limit
@@ -457,10 +471,11 @@ def test_the_parts_of_a_deck_on_a_bend_are_one_place_along_the_road_where_it_sta
     p1, p2 = centre - 10.0 * across, centre + 10.0 * across
     assert abs(p1[0] - p2[0]) > O.MATCH_LONG_M
     m = O.LandmarkMap(0.5, LAM)
-    m.next_cycle()
-    a = m.observe(1, 1, *p1, kappa * s, 200.0, 10.0)
-    m.next_cycle()
-    b = m.observe(2, 2, *p2, kappa * s, 200.0, 10.0)
+    for _ in range(2):                              # the two parts take turns
+        m.next_cycle()
+        a = m.observe(1, 1, *p1, kappa * s, 200.0, 10.0)
+        m.next_cycle()
+        b = m.observe(2, 2, *p2, kappa * s, 200.0, 10.0)
     assert m.pool(a, kappa * s) == [b] and m.pool(b, kappa * s) == [a]
     assert m.pool(a, 0.0) == []                   # along the ego's heading now they are two places
     # a track at the deck's middle is matched to the overhead landmark along the road's heading there, not the ego's

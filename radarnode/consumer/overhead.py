@@ -309,6 +309,10 @@ class LandmarkMap:
             dx, dy = cand.x_m - lm.x_m, cand.y_m - lm.y_m
             if abs(c * dx + s * dy) > MATCH_LONG_M or abs(-s * dx + c * dy) > OVERHEAD_MATCH_LAT_M:
                 continue
+            # taking turns: measured over the same stretch of time (a track that ended before the other began
+            # takes no turns with it: a car that came into view after a deck's first track ended is no part)
+            if cand.cycles[0] > lm.cycles[-1] or lm.cycles[0] > cand.cycles[-1]:
+                continue
             shared = len(mine.intersection(cand.cycles))
             if shared <= POOL_SHARED * min(len(mine), len(cand.cycles)):
                 out.append(cand)
