@@ -57,24 +57,19 @@ CAR_LAYOUTS = {
     "bend R333 left, rear 4 m under": (0.003, 4.0),
 }
 DECK_HALF_DEPTH_M, CAR_HALF_LENGTH_M = 6.0, 2.25     # radarnode.scene: a bridge's deck, a car
-CAR_TEMPLATE = """name: car_under_bridge
-duration_s: {dur}
+#: what both tables' scenarios share: the run, the radar, the ego and the road
+HEADER = """duration_s: {dur}
 seed: {seed}
 radar: {{preset: ars408_like}}
 ego: {{speed_mps: {v}}}
 road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {kappa}}}
-ecu: {{acc_enabled: false, set_speed_mps: {v}, expect: {{lead: car, fcw_ttc_min_s: 2.1}}}}
+"""
+CAR_TEMPLATE = "name: car_under_bridge\n" + HEADER + """ecu: {{acc_enabled: false, set_speed_mps: {v}, expect: {{lead: car, fcw_ttc_min_s: 2.1}}}}
 actors:
   - {{id: bridge, class: bridge, x_m: 250.0, y_m: 0.0}}
   - {{id: car, class: car, x_m: {x_car}, lane: 1, speed_mps: 0.0}}
 """
-TEMPLATE = """name: overhead_layout
-duration_s: {dur}
-seed: {seed}
-radar: {{preset: ars408_like}}
-ego: {{speed_mps: {v}}}
-road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {kappa}}}
-ecu:
+TEMPLATE = "name: overhead_layout\n" + HEADER + """ecu:
   acc_enabled: true
   set_speed_mps: {v}
   closed_loop: true
