@@ -37,6 +37,7 @@ radar drops a track and creates another at the same place (as it does with wide 
 from __future__ import annotations
 
 import math
+from collections import Counter
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -352,10 +353,8 @@ class LandmarkMap:
                 if len(own.cycles) > TOGETHER_CYCLES:
                     # the cycles before this one, now that every track of them was filed
                     mine = own.cycles[:-1]
-                    counts = {}
-                    for c in lm.cycles:
-                        counts[c] = counts.get(c, 0) + 1
-                    together = sum(counts.get(c, 0) >= 2 for c in mine)
+                    counts = Counter(lm.cycles)          # this track's own sample and another's: measured together
+                    together = sum(counts[c] >= 2 for c in mine)
                     del self.own[track_id]
                     if in_path and together > TOGETHER_SHARE * len(mine):
                         own.ground = True
