@@ -131,6 +131,10 @@ def main() -> None:
     args = ap.parse_args()
     levels, speeds = args.levels.split(","), [float(s) for s in args.speeds.split(",")]
     tables = args.tables.split(",")
+    unknown = sorted(set(tables) - {"quiet", "car"})
+    if unknown:
+        ap.error(f"--tables: value {args.tables!r} is not allowed ({', '.join(unknown)}); expected quiet, car or both, "
+                 "comma-separated")
     if "quiet" in tables:
         _table("No warning, no braking under overhead structures", LAYOUTS, _one, args, levels, speeds,
                "runs without a warning")
