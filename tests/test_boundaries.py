@@ -122,13 +122,24 @@ def test_estimator_restarts_after_the_guardrail_ends():
     assert not left.valid
 
 
-def test_polyfit_matches_numpy_at_long_range():
-    from radarnode.perception.boundaries import polyfit
+def test_the_masked_fits_match_numpys_polyfit_row_by_row_at_long_range():
+    """Two rows of one mask (a line and a quadratic, as the two road sides), each the least-squares fit of numpy's
+    polyfit on the points its row selects, out to 220 m; a line also over a short stretch far out (a quadratic is
+    fitted only over more than 40 m)."""
+    from radarnode.perception.boundaries import masked_fit, powers
     rng = np.random.default_rng(1)
     x = rng.uniform(2.0, 220.0, 300)
     y = -2.9 + 0.01 * x + 2e-4 * x * x + rng.normal(0.0, 0.2, x.size)
-    for deg in (1, 2):
-        assert np.allclose(polyfit(x, y, deg), np.polynomial.polynomial.polyfit(x, y, deg), rtol=1e-9, atol=1e-12)
+    mask = np.stack([x > 60.0, (x > 160.0) & (x < 201.0)])
+    for deg2 in ([True, False], [False, True], [False, False], [True, True]):
+        got = masked_fit(powers(x, y), mask, np.array(deg2))
+        for k in range(2):
+            want = np.polynomial.polynomial.polyfit(x[mask[k]], y[mask[k]], 2 if deg2[k] else 1)
+            assert np.allclose(got[k, :want.size], want, rtol=1e-9, atol=1e-12)
+            assert deg2[k] or got[k, 2] == 0.0
+    short = np.stack([(x > 190.0) & (x < 200.0)])
+    np.testing.assert_allclose(masked_fit(powers(x, y), short, np.array([False]))[0, :2],
+                               np.polynomial.polynomial.polyfit(x[short[0]], y[short[0]], 1), rtol=1e-9)
 
 
 def test_a_followed_boundary_stays_on_an_off_grid_line_and_a_nearer_one_is_found_again():

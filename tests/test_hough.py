@@ -128,3 +128,20 @@ def test_peaks_on_plateaus_are_taken_strongest_first_and_each_strikes_its_neighb
             break
     assert ti.size > 3 * len(plain)                 # candidates were skipped
     assert got == plain and len(got) == 3
+
+
+@pytest.mark.parametrize("fraction", [0.3, 0.5, 0.9])
+def test_a_minimum_fraction_keeps_the_strong_peaks_of_the_full_search(fraction):
+    """min_fraction looks only around the strong cells: the lines are the full search's, less those below the
+    fraction of the strongest (three lines of 60, 45 and 25 points and scattered clutter)."""
+    rng = np.random.default_rng(5)
+    x = np.concatenate([np.linspace(5, 150, 60), np.linspace(5, 110, 45), np.linspace(5, 60, 25),
+                        rng.uniform(0, 150, 200)])
+    y = np.concatenate([np.full(60, 3.5), np.full(45, -7.0), 0.05 * np.linspace(5, 60, 25) + 12.0,
+                        rng.uniform(-30, 30, 200)])
+    acc = accumulate(x + rng.normal(0, 0.05, x.size), y + rng.normal(0, 0.05, y.size), GRID)
+    full = strongest_lines(acc, GRID, max_lines=6, min_votes=4.0)
+    part = strongest_lines(acc, GRID, max_lines=6, min_votes=4.0, min_fraction=fraction)
+    assert len(full) >= 3
+    assert part == [ln for ln in full if ln.votes >= fraction * full[0].votes]
+    assert 0 < len(part) < len(full)

@@ -65,40 +65,54 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     n_t, n_r = grid.theta_rad.size, grid.rho_m.size
     if x.size == 0:
         return np.zeros((n_t, n_r))
-    # every step in place on the one (n, n_theta) array: a few passes over it, not a dozen (the arithmetic, and so
-    # every cell a point votes for, is the same as x·cosθ + y·sinθ, minus ρ₀, over the step, rounded)
-    rho = np.multiply.outer(x, np.cos(grid.theta_rad))
-    rho += np.multiply.outer(y, np.sin(grid.theta_rad))
-    rho -= grid.rho_m[0]
-    rho /= grid.rho_m[1] - grid.rho_m[0]
-    np.rint(rho, out=rho)
-    idx = rho.astype(np.int64)
-    beyond = (idx < 0) | (idx >= n_r)
-    idx += np.arange(n_t) * n_r
-    idx[beyond] = n_t * n_r                     # one cell past the grid collects the votes that fall outside it
+    # the cell of every (point, θ) in one matrix product: [x, y, 1] @ [cosθ/Δρ, sinθ/Δρ, 1.5 − ρ₀/Δρ] is the
+    # ρ cell counted from 1, plus ½, so that truncation rounds it; each θ row has a cell before and after the
+    # grid (0 and n_rho + 1) that collect the votes falling outside it, so that a clip replaces the masking
+    step = grid.rho_m[1] - grid.rho_m[0]
+    pts = np.empty((x.size, 3))
+    pts[:, 0], pts[:, 1], pts[:, 2] = x, y, 1.0
+    coef = np.empty((3, n_t))
+    coef[0], coef[1], coef[2] = np.cos(grid.theta_rad) / step, np.sin(grid.theta_rad) / step, 1.5 - grid.rho_m[0] / step
+    cell = pts @ coef                                                    # (n, n_theta)
+    np.clip(cell, 0.0, n_r + 1.0, out=cell)
+    cell += np.arange(n_t) * (n_r + 2.0)                                 # each θ row's own cells
+    idx = cell.astype(np.int32).ravel()                                  # truncation: every value is ≥ 0
     if weights is None:
-        votes = np.bincount(idx.ravel(), minlength=n_t * n_r + 1).astype(np.float64)
+        votes = np.bincount(idx, minlength=n_t * (n_r + 2)).astype(np.float64)
     else:
         w = np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
-        votes = np.bincount(idx.ravel(), weights=np.broadcast_to(w[:, None], idx.shape).ravel(),
-                            minlength=n_t * n_r + 1)
-    return votes[:-1].reshape(n_t, n_r)
+        votes = np.bincount(idx, weights=np.broadcast_to(w[:, None], (x.size, n_t)).ravel(),
+                            minlength=n_t * (n_r + 2))
+    return votes.reshape(n_t, n_r + 2)[:, 1:-1]
 
 
 def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_votes: float = 3.0,
-                    suppress_rho_m: float = 1.0, suppress_theta_deg: float = 5.0) -> list[Line]:
+                    suppress_rho_m: float = 1.0, suppress_theta_deg: float = 5.0, min_fraction: float = 0.0
+                    ) -> list[Line]:
     """Up to ``max_lines`` accumulator peaks with at least ``min_votes``, strongest first.
 
-    A peak suppresses its neighbourhood (±``suppress_rho_m`` and ±``suppress_theta_deg``) so that one line
-    is not reported twice.
+    A peak is a cell that no cell within ±``suppress_rho_m`` and ±``suppress_theta_deg`` exceeds; a peak
+    taken suppresses that neighbourhood so that one line is not reported twice. With ``min_fraction`` > 0
+    only peaks with at least that fraction of the strongest's votes are returned (the same peaks as without it,
+    less the weaker ones; the search then looks only at the cells around the strong ones).
     """
-    if acc.size == 0 or acc.max() < min_votes:
+    top = acc.max() if acc.size else 0.0
+    if acc.size == 0 or top < min_votes:
         return []
     step_r = grid.rho_m[1] - grid.rho_m[0]
     step_t = np.degrees(grid.theta_rad[1] - grid.theta_rad[0]) if grid.theta_rad.size > 1 else 1.0
     half = (max(int(round(suppress_theta_deg / step_t)), 0), max(int(round(suppress_rho_m / step_r)), 0))
-    local = acc >= max_filter(acc, half)
-    ti, ri = np.nonzero(local & (acc >= min_votes))
+    cand = acc >= max(min_votes, min_fraction * top)
+    # the maximum filter over the box that holds the candidates and the cells that can exceed them (half a window
+    # beyond): cells further from every candidate are never tested. Where the box is cut by the accumulator's
+    # edge the filter extends the edge, as over the whole accumulator; elsewhere its extension reaches only cells
+    # more than half a window from every candidate
+    rows, cols = np.flatnonzero(cand.any(axis=1)), np.flatnonzero(cand.any(axis=0))
+    r0, r1 = max(int(rows[0]) - half[0], 0), min(int(rows[-1]) + half[0] + 1, acc.shape[0])
+    c0, c1 = max(int(cols[0]) - half[1], 0), min(int(cols[-1]) + half[1] + 1, acc.shape[1])
+    local = np.zeros(acc.shape, dtype=bool)
+    local[r0:r1, c0:c1] = acc[r0:r1, c0:c1] >= max_filter(acc[r0:r1, c0:c1], half)
+    ti, ri = np.nonzero(local & cand)
     order = np.argsort(-acc[ti, ri], kind="stable")
     ti, ri = ti[order], ri[order]
     theta, rho, votes = grid.theta_rad[ti], grid.rho_m[ri], acc[ti, ri]
