@@ -112,6 +112,28 @@ def test_dbscan_groups_chains_and_marks_noise():
         dbscan(pts, 0.0)
 
 
+
+@pytest.mark.parametrize("n, k", [(1, 0), (6, 0), (60, 40), (400, 500), (1500, 4000)])
+def test_components_are_scipys_connected_components(n, k):
+    """The same partition as scipy's connected_components on random graphs (labels: the smallest node of each)."""
+    import scipy.sparse
+    import scipy.sparse.csgraph
+
+    from radarnode.dsp.cluster import components
+    edges = np.random.default_rng(n + k).integers(0, n, (k, 2))
+    _, want = scipy.sparse.csgraph.connected_components(
+        scipy.sparse.coo_matrix((np.ones(k), (edges[:, 0], edges[:, 1])), shape=(n, n)), directed=False)
+    got = components(n, edges)
+    assert len(set(zip(want.tolist(), got.tolist()))) == len(set(want.tolist())) == len(set(got.tolist()))
+    assert all(got[i] == i for i in set(got.tolist())) and np.all(got <= np.arange(n))
+
+
+def test_components_of_a_chain_in_any_order_settle_to_one_label():
+    from radarnode.dsp.cluster import components
+    perm = np.random.default_rng(2).permutation(2000)         # a row of guardrail posts, numbered at random
+    assert np.all(components(2000, np.stack([perm[:-1], perm[1:]], axis=1)) == 0)
+    assert components(3, np.zeros((0, 2), dtype=np.int64)).tolist() == [0, 1, 2]
+
 def _tone_map(m, n, xd, xr, amp, rng=None, noise=1.0):
     """Windowed range–Doppler spectra (channel, doppler, range) of one tone at (xd, xr) bins, Doppler unshifted."""
     t_d, t_r = np.arange(m), np.arange(n)

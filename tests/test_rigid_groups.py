@@ -178,3 +178,16 @@ def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
     seen = np.array([c for c in per_cycle if c > 0])
     assert seen.size >= 20
     assert seen.max() <= 2 and np.mean(seen > 1) <= 0.1
+
+
+def test_the_mahalanobis_distance_by_adjugate_is_the_inverse_covariances():
+    from radarnode.perception.tracker import mahalanobis3
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(7, 9, 3, 3))
+    s = a @ np.swapaxes(a, -1, -2) + 0.01 * np.eye(3)         # symmetric positive definite, some ill-conditioned
+    nu = rng.normal(size=(7, 9, 3))
+    want = np.einsum("nmi,nmij,nmj->nm", nu, np.linalg.inv(s), nu)
+    np.testing.assert_allclose(mahalanobis3(nu, s), want, rtol=1e-9)
+    # one covariance per track, broadcast over the measurements
+    np.testing.assert_allclose(mahalanobis3(nu, s[:, :1]), np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s[:, 0]), nu),
+                               rtol=1e-9)

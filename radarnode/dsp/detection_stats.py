@@ -432,9 +432,42 @@ class DetectionStatistic:
     def ring_kernel(self, delta_d: np.ndarray, delta_r: np.ndarray) -> np.ndarray:
         """The share of a target's on-bin energy in the training ring of a cell ``delta`` bins from it (any
         shape): the box ±(guard + train) less the box ±guard, each a product of two tabulated sums."""
-        (gd, gr), (td, tr) = self.cfar.guard, self.cfar.train
-        return (self._box_sum("d", gd + td, delta_d) * self._box_sum("r", gr + tr, delta_r)
-                - self._box_sum("d", gd, delta_d) * self._box_sum("r", gr, delta_r))
+        d_outer, d_inner = self._ring_boxes("d", delta_d)
+        r_outer, r_inner = self._ring_boxes("r", delta_r)
+        return d_outer * r_outer - d_inner * r_inner
+
+    def _ring_boxes(self, axis: str, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The outer (±(guard + train)) and inner (±guard) box sums of one axis at ``delta``: :meth:`_box_sum`'s
+        two tables on the outer one's grid (1/32 bin; the inner one zero beyond its own), each with its slope from
+        one grid point to the next, read by index (linear interpolation). One index serves both boxes, without the
+        binary search of a general interpolation on every pair of the ring sum (the detection level's costliest
+        step). NaN in, NaN out."""
+        tables = self.__dict__.setdefault("_ring_tables", {})
+        if axis not in tables:
+            g, t = (self.cfar.guard[0], self.cfar.train[0]) if axis == "d" else (self.cfar.guard[1], self.cfar.train[1])
+            grid = np.arange(-(g + t + self.BOX_REACH), g + t + self.BOX_REACH + 1e-9, 1.0 / 32.0)
+            cols = []
+            for half in (g + t, g):
+                value = np.zeros(grid.size + 1)                    # one zero after the grid: "outside"
+                value[:grid.size] = self._box_sum(axis, half, grid)
+                slope = np.zeros(grid.size + 1)
+                slope[:grid.size - 1] = np.diff(value[:grid.size])
+                cols += [value, slope]
+            tables[axis] = (float(grid[0]), grid.size, cols)
+        x0, size, (v_out, s_out, v_in, s_in) = tables[axis]
+        pos = np.asarray(delta, dtype=np.float64) - x0
+        pos *= 32.0
+        cell = np.floor(pos)
+        outside = ~((pos >= 0.0) & (pos <= size - 1))           # beyond the tables (and NaN): the zero entry
+        cell[outside] = size
+        frac = pos - cell
+        i = cell.astype(np.intp)
+        outer = np.take(v_out, i) + frac * np.take(s_out, i)
+        inner = np.take(v_in, i) + frac * np.take(s_in, i)
+        if outside.any():
+            bad = np.isnan(pos)
+            outer[bad] = inner[bad] = np.nan
+        return outer, inner
 
     #: grids of :meth:`masking_factor`'s table: ρ in dB, interference over the noise's mean training sum (log10)
     MASK_RHO_DB = np.arange(-10.0, 80.001, 1.0)

@@ -324,6 +324,18 @@ def innovation(x, p, z, r_cov):
     return z[None, :, :] - h[:, None, :], s, jac
 
 
+def mahalanobis3(nu: np.ndarray, s: np.ndarray) -> np.ndarray:
+    """νᵀ S⁻¹ ν for 3-vectors ν (..., 3) and symmetric 3×3 covariances S (..., 3, 3) (broadcast), by the
+    adjugate: elementwise over every track–measurement pair instead of a batched matrix inverse."""
+    s00, s01, s02 = s[..., 0, 0], s[..., 0, 1], s[..., 0, 2]
+    s11, s12, s22 = s[..., 1, 1], s[..., 1, 2], s[..., 2, 2]
+    a, b, c = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
+    d, e, f = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
+    det = s00 * a + s01 * b + s02 * c
+    n0, n1, n2 = nu[..., 0], nu[..., 1], nu[..., 2]
+    return (a * n0 * n0 + d * n1 * n1 + f * n2 * n2 + 2.0 * (b * n0 * n1 + c * n0 * n2 + e * n1 * n2)) / det
+
+
 def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, int]]:
     """Global nearest neighbour on the squared Mahalanobis distance, inside the gate.
 
@@ -334,10 +346,10 @@ def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, i
     if r_cov.ndim == 3:     # one covariance per measurement (m, 3, 3)
         nu, s, _ = innovation(x, p, z, 0.0)
         s = s[:, None] + r_cov[None]
-        d2 = np.einsum("nmi,nmij,nmj->nm", nu, np.linalg.inv(s), nu)
     else:
         nu, s, _ = innovation(x, p, z, r_cov)
-        d2 = np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s), nu)
+        s = s[:, None]
+    d2 = mahalanobis3(nu, s)
     cost = np.where(d2 <= gate, d2, 1e9)
     import scipy.optimize  # imported when first needed: a faster start
     rows, cols = scipy.optimize.linear_sum_assignment(cost)
