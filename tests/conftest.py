@@ -1,10 +1,17 @@
 from __future__ import annotations
 
+import os
+import tempfile
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
+
+# the detection statistic's table cache (radarnode.radar.tables) of this test run, not the user's: every test
+# process and the CLI runs it starts share it, and it starts empty
+if "RADARNODE_CACHE_DIR" not in os.environ:
+    os.environ["RADARNODE_CACHE_DIR"] = tempfile.mkdtemp(prefix="radarnode-test-cache-")
 SHARED = ROOT.parent / "shared"
 REFERENCE = SHARED / "reference" / "ars408"
 SCENARIOS = ROOT / "scenarios"

@@ -354,6 +354,7 @@ class DetectionStatistic:
             grid = np.arange(-30.0, 60.0001, 0.05)
             table = np.interp(grid[:, None] + offset[None, :], e_grid, pd_e).mean(axis=1)
             self._pd_tables[swerling] = (grid, table)
+            self._table_built()
         grid, table = self._pd_tables[swerling]
         return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
 
@@ -454,6 +455,7 @@ class DetectionStatistic:
                 slope[:grid.size - 1] = np.diff(value[:grid.size])
                 cols += [value, slope]
             tables[axis] = (float(grid[0]), grid.size, cols)
+            self._table_built()
         x0, size, (v_out, s_out, v_in, s_in) = tables[axis]
         pos = np.asarray(delta, dtype=np.float64) - x0
         pos *= 32.0
@@ -473,6 +475,18 @@ class DetectionStatistic:
     MASK_RHO_DB = np.arange(-10.0, 80.001, 1.0)
     MASK_LOG_I = np.arange(-2.0, 7.001, 0.25)
 
+    def _mask_table(self, swerling: int) -> np.ndarray:
+        """:meth:`masking_factor`'s table over MASK_RHO_DB × MASK_LOG_I (built once per Swerling case)."""
+        tables = self.__dict__.setdefault("_mask_tables", {})
+        if swerling not in tables:
+            mean_z = self.n_channels * self.eigenvalues.sum()
+            rho, log_i = np.meshgrid(self.MASK_RHO_DB, self.MASK_LOG_I, indexing="ij")
+            with_i = self.pd_interfered(rho, 10.0 ** log_i * mean_z, swerling)
+            without = self.pd_interfered(self.MASK_RHO_DB, np.zeros(self.MASK_RHO_DB.size), swerling)
+            tables[swerling] = np.clip(with_i / np.maximum(without, 1e-300)[:, None], 0.0, 1.0)
+            self._table_built()
+        return tables[swerling]
+
     def masking_factor(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:
         """Pd with ``interference`` in the training ring over Pd without (:meth:`pd_interfered`), from a table
         over ρ (1 dB) and log I (a quarter decade), interpolated bilinearly; 1 below 1 % of the noise's sum."""
@@ -480,13 +494,7 @@ class DetectionStatistic:
         rel = np.asarray(interference, dtype=np.float64) / mean_z
         if not np.any(rel >= 0.01):                  # nothing in any ring: the table is not even built
             return np.ones(np.broadcast(np.asarray(rho_db), rel).shape)
-        tables = self.__dict__.setdefault("_mask_tables", {})
-        if swerling not in tables:
-            rho, log_i = np.meshgrid(self.MASK_RHO_DB, self.MASK_LOG_I, indexing="ij")
-            with_i = self.pd_interfered(rho, 10.0 ** log_i * mean_z, swerling)
-            without = self.pd_interfered(self.MASK_RHO_DB, np.zeros(self.MASK_RHO_DB.size), swerling)
-            tables[swerling] = np.clip(with_i / np.maximum(without, 1e-300)[:, None], 0.0, 1.0)
-        table = tables[swerling]
+        table = self._mask_table(swerling)
         x = np.clip(np.asarray(rho_db, dtype=np.float64), self.MASK_RHO_DB[0], self.MASK_RHO_DB[-1])
         y = np.clip(np.log10(np.maximum(rel, 1e-300)), self.MASK_LOG_I[0], self.MASK_LOG_I[-1])
         fx = (x - self.MASK_RHO_DB[0]) / (self.MASK_RHO_DB[1] - self.MASK_RHO_DB[0])
@@ -534,6 +542,78 @@ class DetectionStatistic:
             tables[key] = (grid, k[idx].sum(axis=1))
         grid, table = tables[key]
         return np.interp(delta, grid, table, left=0.0, right=0.0)
+
+    # --- the tables, for a cache outside this module ----------------------------------------------------------
+
+    #: the version of the tables' layout: a cache keyed on :meth:`table_key` holds tables of this layout
+    TABLE_LAYOUT = 1
+
+    def table_key(self) -> bytes:
+        """Everything the tables are computed from: the CFAR's kind, threshold factor and training eigenvalues,
+        the channel count, both windows and the tables' grids (bytes; a cache adds the code's own version)."""
+        parts = [self.cfar.name.encode(), repr((self.TABLE_LAYOUT, self.n_channels, float(self.alpha_ca),
+                                                tuple(self.cfar.guard), tuple(self.cfar.train),
+                                                self.STRADDLE_POINTS, self.BOX_REACH)).encode()]
+        for a in (self.eigenvalues, self.range_window, self.doppler_window, self.MASK_RHO_DB, self.MASK_LOG_I):
+            parts.append(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+        return b"|".join(parts)
+
+    #: called with no argument after a table was built (a cache's way to keep it; None: nobody listens)
+    on_table_built = None
+
+    def _table_built(self) -> None:
+        if self.on_table_built is not None:
+            self.on_table_built()
+
+    def build_tables(self) -> None:
+        """Build every table the levels read (Pd and masking for both Swerling cases, the ring's box sums)."""
+        for swerling in (0, 1):
+            self.pd_of_snr(np.zeros(1), swerling)
+            self._mask_table(swerling)
+        for axis in ("d", "r"):
+            self._ring_boxes(axis, np.zeros(1))
+
+    def export_tables(self) -> dict[str, np.ndarray]:
+        """The tables built so far, as named arrays."""
+        out = {}
+        for swerling, (grid, table) in self._pd_tables.items():
+            out[f"pd{swerling}_grid"], out[f"pd{swerling}"] = grid, table
+        for swerling, table in self.__dict__.get("_mask_tables", {}).items():
+            out[f"mask{swerling}"] = table
+        for axis, (_, _, cols) in self.__dict__.get("_ring_tables", {}).items():
+            out[f"ring_{axis}"] = np.stack(cols)
+        return out
+
+    def import_tables(self, arrays: dict[str, np.ndarray]) -> None:
+        """Take tables that :meth:`export_tables` gave (for this :meth:`table_key`); raises ValueError, leaving
+        this statistic as it was, where a name, shape or value is not what this statistic builds."""
+        pd, mask, ring = {}, {}, {}
+        for name, a in arrays.items():
+            a = np.asarray(a)
+            if a.dtype != np.float64 or not np.all(np.isfinite(a)):
+                raise ValueError(f"table {name}: dtype {a.dtype} or a non-finite value; expected finite float64")
+            if name in ("pd0", "pd1") and f"{name}_grid" in arrays:
+                grid = np.asarray(arrays[f"{name}_grid"])
+                if a.ndim != 1 or grid.shape != a.shape:
+                    raise ValueError(f"table {name}: shape {a.shape} against its grid's {grid.shape}")
+                pd[int(name[2])] = (grid, a)
+            elif name in ("mask0", "mask1"):
+                if a.shape != (self.MASK_RHO_DB.size, self.MASK_LOG_I.size):
+                    raise ValueError(f"table {name}: shape {a.shape}; expected "
+                                     f"{(self.MASK_RHO_DB.size, self.MASK_LOG_I.size)}")
+                mask[int(name[4])] = a
+            elif name in ("ring_d", "ring_r"):
+                axis = name[-1]
+                g, t = (self.cfar.guard[0], self.cfar.train[0]) if axis == "d" else (self.cfar.guard[1], self.cfar.train[1])
+                size = 64 * (g + t + self.BOX_REACH) + 1
+                if a.shape != (4, size + 1):
+                    raise ValueError(f"table {name}: shape {a.shape}; expected {(4, size + 1)}")
+                ring[axis] = (-float(g + t + self.BOX_REACH), size, list(a))
+            elif not name.endswith("_grid"):
+                raise ValueError(f"table {name}: not a table this statistic builds")
+        self._pd_tables.update(pd)
+        self.__dict__.setdefault("_mask_tables", {}).update(mask)
+        self.__dict__.setdefault("_ring_tables", {}).update(ring)
 
     def threshold_mean(self) -> float:
         """The mean threshold in units of σ²: α·E[Z]/N_T."""

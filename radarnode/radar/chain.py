@@ -21,7 +21,7 @@ from radarnode.dsp.peaks import PatchFit, interpolate, local_maxima, patch_halve
 from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
-from radarnode.radar import equation
+from radarnode.radar import equation, tables
 from radarnode.radar.presets import RadarPreset
 
 
@@ -70,7 +70,9 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
     cfar = make_cfar(config.cfar, pfa=config.pfa, guard=(config.guard_doppler, config.guard_range),
                      train=(config.train_doppler, config.train_range), n_channels=n_channels,
                      correlation=(noise_correlation(w_d), noise_correlation(w_r)))
-    return DetectionStatistic(cfar, w_r, w_d)
+    stat = DetectionStatistic(cfar, w_r, w_d)
+    tables.warm(stat)                 # its tables from the disk cache (radarnode.radar.tables), or built and kept
+    return stat
 
 
 class DspChain:

@@ -1,0 +1,102 @@
+"""The detection statistic's table cache (radarnode.radar.tables): the same tables, loaded instead of computed."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from radarnode.dsp import detection_stats
+from radarnode.radar import tables
+from radarnode.radar.chain import DspConfig, detection_statistic
+
+
+def _fresh(pfa: float = 1e-6):
+    """A statistic built as the chain builds it, but not the chain's memoised one (no tables, no cache)."""
+    cfg = DspConfig(pfa=pfa)
+    stat = detection_statistic.__wrapped__(cfg, 12, 64, 64)
+    stat.on_table_built = None
+    for name in ("_mask_tables", "_ring_tables"):
+        stat.__dict__.pop(name, None)
+    stat._pd_tables.clear()
+    return stat
+
+
+def _use(stat) -> None:
+    """What a level asks of the statistic: Pd of both Swerling cases, masking, the ring kernel."""
+    stat.pd_of_snr(np.array([10.0, 20.0]), 0)
+    stat.pd_of_snr(np.array([10.0, 20.0]), 1)
+    stat.masking_factor(np.array([15.0]), np.array([50.0]), 1)
+    stat.ring_kernel(np.array([3.25]), np.array([-7.5]))
+
+
+def test_a_second_run_loads_the_tables_the_first_computed_bit_for_bit(tmp_path, monkeypatch):
+    monkeypatch.setenv(tables.CACHE_ENV, str(tmp_path))
+    first = _fresh()
+    assert tables.warm(first) == "empty"
+    _use(first)
+    assert len(list(tmp_path.glob("*.npz"))) == 1            # written as the tables were built
+    second = _fresh()
+    assert tables.warm(second) == "loaded"
+
+    def no_computing(*args, **kwargs):
+        raise AssertionError("a cached table was computed again")
+    monkeypatch.setattr(detection_stats, "sf_swerling1", no_computing)
+    monkeypatch.setattr(detection_stats, "sf_swerling0", no_computing)
+    monkeypatch.setattr(detection_stats.DetectionStatistic, "_box_sum", no_computing)
+    rho = np.linspace(-5.0, 40.0, 50)
+    for swerling in (0, 1):
+        assert np.array_equal(second.pd_of_snr(rho, swerling), first.pd_of_snr(rho, swerling))
+    assert np.array_equal(second.masking_factor(rho, np.full(50, 80.0)), first.masking_factor(rho, np.full(50, 80.0)))
+    d = np.linspace(-30.0, 30.0, 101)
+    assert np.array_equal(second.ring_kernel(d, d[::-1]), first.ring_kernel(d, d[::-1]))
+    a, b = first.export_tables(), second.export_tables()
+    assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+
+
+def test_another_configuration_has_its_own_file(tmp_path, monkeypatch):
+    monkeypatch.setenv(tables.CACHE_ENV, str(tmp_path))
+    one, other = _fresh(1e-6), _fresh(1e-4)
+    assert tables.cache_file(one, tmp_path) != tables.cache_file(other, tmp_path)
+    tables.warm(one)
+    one.pd_of_snr(np.array([10.0]), 1)
+    assert tables.warm(other) == "empty"
+
+
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "wrong shape", "nan"])
+def test_a_damaged_file_is_ignored_and_replaced(tmp_path, monkeypatch, damage):
+    monkeypatch.setenv(tables.CACHE_ENV, str(tmp_path))
+    good = _fresh()
+    tables.warm(good)
+    good.pd_of_snr(np.array([10.0]), 1)
+    path = tables.cache_file(good, tmp_path)
+    want = good.pd_of_snr(np.linspace(0, 30, 7), 1)
+    if damage == "garbage":
+        path.write_bytes(b"not a numpy file")
+    elif damage == "truncated":
+        path.write_bytes(path.read_bytes()[:200])
+    else:
+        arrays = dict(np.load(path))
+        arrays["pd1"] = arrays["pd1"][:-3] if damage == "wrong shape" else np.full_like(arrays["pd1"], np.nan)
+        np.savez(path, **arrays)
+    again = _fresh()
+    assert tables.warm(again) == "empty"
+    assert again.export_tables() == {}                      # nothing half-taken from the bad file
+    assert np.array_equal(again.pd_of_snr(np.linspace(0, 30, 7), 1), want)
+    assert tables.warm(_fresh()) == "loaded"                # and the file is good again
+
+
+def test_turned_off_nothing_is_written_and_unwritable_is_no_error(tmp_path, monkeypatch):
+    monkeypatch.setenv(tables.CACHE_ENV, "off")
+    stat = _fresh()
+    assert tables.warm(stat) == "off"
+    _use(stat)
+    blocked = tmp_path / "file"
+    blocked.write_text("a file where the cache directory should be")
+    monkeypatch.setenv(tables.CACHE_ENV, str(blocked / "cache"))
+    stat = _fresh()
+    assert tables.warm(stat) == "empty"
+    _use(stat)                                               # the tables are built; writing them fails quietly
+    assert not (blocked / "cache").exists()
+    monkeypatch.delenv(tables.CACHE_ENV)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "xdg"))
+    assert tables.cache_dir() == tmp_path / "xdg" / "radarnode"
