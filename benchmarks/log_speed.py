@@ -9,7 +9,8 @@ floor of every command. The last row is the issue's target case: ``highway_cut_i
 Run: ``.venv/bin/python benchmarks/log_speed.py [--runs N] [--suffix .blf] [--only SUBSTRING] [--before DIR]``.
 Prints a Markdown table. ``--before DIR`` (a tree of another version, e.g. ``git archive REV | tar -x -C DIR``)
 times that tree and this one interleaved — before, after, before, after, … — so that both see the same load, and
-prints both times and their ratio.
+prints both times and their ratio. The runs use the detection statistic's table cache as a user's do
+(``radarnode.radar.tables``; ``RADARNODE_CACHE_DIR=off`` times them computing the tables every run).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from radarnode.radar import tables  # noqa: E402
 from radarnode.radar.setup import load_scenario  # noqa: E402
 
 
@@ -50,7 +52,10 @@ def main() -> None:
     py = sys.executable
     roots = (ROOT,) if args.before is None else (args.before.resolve(), ROOT)
     start = wall([py, "-c", "import radarnode.cli.main"], args.runs, roots)
+    where = tables.cache_dir()
     print(f"### `radarnode log … --fidelity object -o x{args.suffix}`, median of {args.runs} runs\n")
+    print(f"(the detection statistic's table cache: {where if where is not None else 'off (RADARNODE_CACHE_DIR)'}; "
+          "filled by the first run of each configuration)\n")
     if args.before is None:
         print("| scenario | simulated | cycles | wall time | real-time factor |")
         print("|---|---:|---:|---:|---:|")

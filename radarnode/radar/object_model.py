@@ -107,8 +107,7 @@ _CL_X, _CL_Y, _CL_VX, _CL_VY, _CL_RCS, _CL_SIG_R, _CL_SIG_AZ, _CL_SIG_V, _CL_ACT
 def _cluster_rows(*columns) -> np.ndarray:
     """Rows of the ``_CL_*`` columns from arrays of one shape (…, m) and scalars: shape (…, m, 10), float64 (the
     actor index and AmbigState are small integers, exact in it)."""
-    shape = np.broadcast_shapes(*(np.shape(c) for c in columns))
-    out = np.empty(shape + (len(columns),))
+    out = np.empty(np.broadcast(*columns).shape + (len(columns),))
     for k, c in enumerate(columns):
         out[..., k] = c
     return out

@@ -17,6 +17,7 @@ ARS 408-21 data sheet (ars408_like).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass
 
@@ -117,36 +118,36 @@ class RadarPreset:
             raise FieldError("fov", self.fov, "a non-empty tuple of FovSector")
 
     # --- derived figures -------------------------------------------------
-    @property
+    @functools.cached_property
     def wavelength_m(self) -> float:
         return SPEED_OF_LIGHT_MPS / self.carrier_hz
 
-    @property
+    @functools.cached_property
     def range_resolution_m(self) -> float:
         """ΔR = c / (2B)."""
         return SPEED_OF_LIGHT_MPS / (2.0 * self.bandwidth_hz)
 
-    @property
+    @functools.cached_property
     def num_range_bins(self) -> int:
         """Range bins of a processed frame: N with complex (IQ) sampling, N/2 with real sampling."""
         return self.num_samples if self.complex_sampling else self.num_samples // 2
 
-    @property
+    @functools.cached_property
     def unambiguous_range_m(self) -> float:
         """Range of the last FFT bin: N·ΔR with complex (IQ) sampling, N/2·ΔR with real sampling."""
         return self.num_range_bins * self.range_resolution_m
 
-    @property
+    @functools.cached_property
     def frame_chirp_period_s(self) -> float:
         """Repetition period of one virtual channel (TDM over the transmitters)."""
         return self.num_tx * self.chirp_period_s
 
-    @property
+    @functools.cached_property
     def max_unambiguous_speed_mps(self) -> float:
         """v_max = λ / (4 T), T the repetition period of one virtual channel."""
         return self.wavelength_m / (4.0 * self.frame_chirp_period_s)
 
-    @property
+    @functools.cached_property
     def centre_wavelength_m(self) -> float:
         """Wavelength at the middle of the sweep, λ_c = c/(f₀ + B/2).
 
@@ -158,17 +159,17 @@ class RadarPreset:
         """
         return SPEED_OF_LIGHT_MPS / (self.carrier_hz + 0.5 * self.bandwidth_hz)
 
-    @property
+    @functools.cached_property
     def doppler_bin_mps(self) -> float:
         """Range rate of one Doppler bin of the processed frame: λ_c / (2 N T)."""
         return self.centre_wavelength_m / (2.0 * self.num_chirps * self.frame_chirp_period_s)
 
-    @property
+    @functools.cached_property
     def alias_speed_mps(self) -> float:
         """Half the period at which the processed range rate wraps: N/2 Doppler bins (λ_c / 4T)."""
         return 0.5 * self.num_chirps * self.doppler_bin_mps
 
-    @property
+    @functools.cached_property
     def range_rate_coupling_s(self) -> float:
         """Metres of apparent range per m/s of range rate in a processed frame.
 
@@ -181,7 +182,7 @@ class RadarPreset:
         """
         return 2.0 * self.chirp_period_s * self.range_resolution_m / self.wavelength_m + 0.5 * self.integration_time_s
 
-    @property
+    @functools.cached_property
     def range_rate_span_mps(self) -> tuple[float, float]:
         """(lowest, highest) range rate the sensor reports: the data sheet's, else ±v_max."""
         v = self.max_unambiguous_speed_mps
@@ -195,31 +196,31 @@ class RadarPreset:
             raise ConfigError(f"preset {self.name} has no second chirp sequence (stagger_chirp_period_s is 0)")
         return dataclasses.replace(self, chirp_period_s=self.stagger_chirp_period_s, stagger_chirp_period_s=0.0)
 
-    @property
+    @functools.cached_property
     def speed_resolution_mps(self) -> float:
         """Δv = λ / (2 N T)."""
         return self.wavelength_m / (2.0 * self.num_chirps * self.frame_chirp_period_s)
 
-    @property
+    @functools.cached_property
     def num_virtual(self) -> int:
         return self.num_tx * self.num_rx
 
-    @property
+    @functools.cached_property
     def angular_resolution_rad(self) -> float:
         """Rayleigh resolution of the virtual ULA at boresight, 1/(K·d/λ) rad (2/K for d = λ/2)."""
         return 1.0 / (self.num_virtual * self.element_spacing_wl)
 
-    @property
+    @functools.cached_property
     def integration_time_s(self) -> float:
         """Coherent dwell of one frame: all chirps of all transmitters."""
         return self.num_chirps * self.frame_chirp_period_s
 
-    @property
+    @functools.cached_property
     def num_cells(self) -> int:
         """Range–Doppler cells tested by CFAR in one frame (sets the false-alarm count)."""
         return self.num_range_bins * self.num_chirps
 
-    @property
+    @functools.cached_property
     def max_half_fov_rad(self) -> float:
         return math.radians(max(s.half_angle_deg for s in self.fov))
 
