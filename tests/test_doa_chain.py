@@ -116,7 +116,18 @@ def test_super_resolution_on_degenerate_snapshots_stays_finite():
 
 
 def test_doa_choices_of_the_cli_are_the_chains():
+    from radarnode.dsp import subspace
     assert options.DOA_CHOICES == DOA_METHODS
+    assert DOA_METHODS == ("fft", *sorted(m for m in subspace.ESTIMATORS if m != "bartlett"))
+
+
+def test_the_chain_does_not_import_the_estimators_until_one_is_asked_for():
+    import subprocess
+    import sys
+    code = ("import sys; import radarnode.radar.chain, radarnode.radar.object_model; "
+            "print('radarnode.dsp.subspace' in sys.modules, 'scipy.linalg' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["False", "False"]
 
 
 def test_scenario_selects_the_estimator_and_it_runs_in_the_node():

@@ -58,7 +58,6 @@ import functools
 import math
 
 import numpy as np
-import scipy.special
 
 from radarnode.errors import ConfigError
 
@@ -132,6 +131,7 @@ def ca_alpha(pfa: float, n_channels: int, eig: np.ndarray) -> float:
 
 def gamma_sf(n_channels: int, t: np.ndarray) -> np.ndarray:
     """P(X > t) for X ~ Gamma(N, 1): the noise-only cell."""
+    import scipy.special  # imported when first needed: a faster start (cached tables need none)
     return scipy.special.gammaincc(n_channels, t)
 
 
@@ -158,6 +158,7 @@ def os_rank_samples(n_channels: int, offsets: np.ndarray, rho_d: np.ndarray, rho
 
 def os_log_pfa(alpha: float, n_channels: int, ranked: np.ndarray) -> float:
     """log Pfa of OS-CFAR (threshold α·Y_(k)) from the simulated order statistics ``ranked``."""
+    import scipy.special  # imported when first needed: a faster start (cached tables need none)
     return float(scipy.special.logsumexp(_log_gamma_sf(n_channels, alpha * ranked)) - math.log(ranked.size))
 
 
@@ -186,6 +187,7 @@ def _root_decreasing(f, lo: float) -> float:
 
 def _log_gamma_sf(n: int, t: np.ndarray) -> np.ndarray:
     """log Q_N(t), accurate far in the tail (where gammaincc underflows): log Γ(N, t) − log Γ(N)."""
+    import scipy.special  # imported when first needed: a faster start (cached tables need none)
     t = np.asarray(t, dtype=np.float64)
     q = scipy.special.gammaincc(n, t)
     with np.errstate(divide="ignore"):
@@ -215,6 +217,7 @@ def training_sum_quantiles(n_channels: int, eig: np.ndarray, count: int = Z_QUAN
     first two moments is accurate to far better than what a detection
     probability needs (Pd depends on Z only through the small CFAR loss).
     """
+    import scipy.special  # imported when first needed: a faster start (cached tables need none)
     eig = np.asarray(eig, dtype=np.float64)
     mean = n_channels * eig.sum()
     var = n_channels * np.sum(eig ** 2)
@@ -231,6 +234,7 @@ def sf_swerling0(t: np.ndarray, energy: np.ndarray, n_channels: int) -> np.ndarr
 
 def sf_swerling1(t: np.ndarray, energy: np.ndarray, n_channels: int) -> np.ndarray:
     """P(X > t) for a Rayleigh-fluctuating target of mean total energy ``energy`` in N channels."""
+    import scipy.special  # imported when first needed: a faster start (cached tables need none)
     t = np.asarray(t, dtype=np.float64)
     e = np.maximum(np.asarray(energy, dtype=np.float64), 1e-12)
     mu = 1.0 + e
@@ -621,5 +625,6 @@ class DetectionStatistic:
 
     def noise_floor(self, power: np.ndarray) -> float:
         """Per-channel noise σ² of a power map, unbiased: its median over the median of Gamma(N, 1)."""
+        import scipy.special  # imported when first needed: a faster start (cached tables need none)
         med = float(np.median(power))
         return max(med / float(scipy.special.gammaincinv(self.n_channels, 0.5)), np.finfo(np.float64).tiny)

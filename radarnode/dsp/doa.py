@@ -14,10 +14,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-import scipy.fft
-import scipy.special
 
-from radarnode.dsp import subspace
 from radarnode.errors import ConfigError
 
 
@@ -53,13 +50,14 @@ class FftBeamformer(Doa):
         if n_fft < num_elements:
             raise ConfigError(f"doa n_fft: value {n_fft!r} is not allowed; expected >= num_elements")
         self.n_fft = n_fft
-        u = scipy.fft.fftfreq(n_fft)                       # cycles per element
+        u = np.fft.fftfreq(n_fft)                          # cycles per element
         self.sin_grid = u / spacing_wl
         self.valid = np.abs(self.sin_grid) <= 1.0
 
     def spectrum(self, snapshots: np.ndarray) -> np.ndarray:
         """|FFT|² of the snapshots along elements: shape (n, n_fft), in FFT bin order."""
         # a source at sinθ has element phase +2π·d·k·sinθ; Σ_k x_k e^{-j2πku/n} peaks at u/n = d·sinθ
+        import scipy.fft  # imported when first needed: the object level builds a chain but never beamforms
         spec = scipy.fft.fft(snapshots, n=self.n_fft, axis=-1)
         return (spec.real ** 2 + spec.imag ** 2)
 
@@ -162,6 +160,7 @@ class SuperResolution(FftBeamformer):
 
     def __init__(self, num_elements: int, spacing_wl: float = 0.5, n_fft: int = 256, method: str = "music",
                  gate: bool = True) -> None:
+        from radarnode.dsp import subspace  # the estimators only where they run: a faster start
         super().__init__(num_elements, spacing_wl, n_fft)
         if method not in subspace.ESTIMATORS:
             raise ConfigError(f"doa method: value {method!r} is not allowed; expected one of "
@@ -173,6 +172,7 @@ class SuperResolution(FftBeamformer):
         self.gate = gate
         self.subarray = subspace.default_subarray(num_elements)
         # the residual's energy over σ² is χ² with 2(N−1) degrees of freedom, halved (complex noise)
+        import scipy.special  # the super-resolution stage only: a faster start
         self.gate_ratio = float(scipy.special.gammainccinv(num_elements - 1, self.GATE_PFA))
         self.stats = {"cells": 0, "super": 0}
 
@@ -195,6 +195,7 @@ class SuperResolution(FftBeamformer):
 
     def multi_source(self, snapshots: np.ndarray, noise_power: float | None) -> np.ndarray:
         """(n,) bool: cells whose snapshot one plane wave does not explain (see the class docstring)."""
+        from radarnode.dsp import subspace  # the estimators only where they run: a faster start
         x = np.atleast_2d(snapshots).astype(np.complex128)
         if x.shape[0] == 0:
             return np.zeros(0, dtype=bool)
@@ -212,6 +213,7 @@ class SuperResolution(FftBeamformer):
     def estimate_peaks(self, snapshots: np.ndarray, floor_db: float = 9.0, noise_power: float | None = None,
                        secondary_snr_db: float = 12.0, max_sources: int = 4
                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        from radarnode.dsp import subspace  # the estimators only where they run: a faster start
         x = np.atleast_2d(snapshots).astype(np.complex128)
         row, sin_t, rel = super().estimate_peaks(x, floor_db, noise_power, secondary_snr_db, max_sources)
         n = x.shape[0]
@@ -254,7 +256,9 @@ class SuperResolution(FftBeamformer):
 
 
 #: "fft" is beam scanning (Bartlett); the rest are the subspace estimators, as super-resolution
-DOA_METHODS: tuple[str, ...] = ("fft", *sorted(m for m in subspace.ESTIMATORS if m != "bartlett"))
+#: (written out, so that importing this module does not import the estimators and scipy.linalg;
+#: tests/test_doa_chain.py checks it against radarnode.dsp.subspace.ESTIMATORS)
+DOA_METHODS: tuple[str, ...] = ("fft", "capon", "esprit", "music", "root_music", "unitary_music")
 
 
 def make_doa(name: str, num_elements: int, spacing_wl: float = 0.5, **kwargs) -> Doa:

@@ -11,7 +11,6 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-import scipy.fft
 
 from radarnode.errors import ConfigError
 
@@ -53,6 +52,7 @@ def range_doppler(cube: np.ndarray, *, range_window: str = "hann", doppler_windo
     c, m, n = cube.shape
     real = np.float32 if cube.dtype == np.complex64 else np.float64
     x = cube * window(range_window, n, np.dtype(real).name)[None, None, :]
+    import scipy.fft  # imported when first needed: the object level never transforms a cube
     x = scipy.fft.fft(x, axis=2, workers=workers, overwrite_x=True)
     if num_range_bins is not None:
         x = x[:, :, :num_range_bins]
