@@ -9,6 +9,12 @@ unavailable. The SNR column is the per-cell SNR of one guardrail post at
 50 m.
 
 Run: ``python benchmarks/boundaries.py``. Prints a Markdown table.
+
+``python benchmarks/boundaries.py --speed 300 [--root DIR]`` times the estimator instead: the inputs its
+``update`` receives in ``radarnode log scenarios/highway_cut_in.yaml --fidelity object --duration 300`` (recorded
+from a run of the node, object level) are replayed into a new estimator three times; it prints the median time a
+cycle. ``--root DIR`` imports radarnode from another tree (e.g. ``git archive REV | tar -x -C DIR``), so that two
+versions are timed with the same script.
 """
 
 from __future__ import annotations
@@ -18,7 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+ROOT = Path(__file__).resolve().parents[1]
+# --root DIR: radarnode from another tree (read before the imports below)
+sys.path.insert(0, str(Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv[:-1] else ROOT))
 
 from radarnode.radar import equation  # noqa: E402
 from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
@@ -59,7 +67,45 @@ actors:
     return np.array(err), snr
 
 
+def update_speed(seconds: float, runs: int = 3) -> tuple[float, int]:
+    """Median seconds a cycle of RoadBoundaryEstimator.update over the inputs it receives in ``seconds`` of
+    highway_cut_in at the object level; and the number of cycles."""
+    import dataclasses
+    import statistics
+    import time
+
+    from radarnode.perception import boundaries
+    from radarnode.radar.setup import load_scenario
+    sc = load_scenario(ROOT / "scenarios" / "highway_cut_in.yaml")
+    sc = dataclasses.replace(sc, duration_s=seconds)
+    inputs = []
+
+    class Recorder(boundaries.RoadBoundaryEstimator):
+        def update(self, *args):
+            inputs.append(tuple(a.copy() if isinstance(a, np.ndarray) else a for a in args))
+            return super().update(*args)
+
+    node = RadarNode(sc, fidelity="object")
+    node.boundaries = Recorder()
+    run_node(node, clock=SimulatedClock(), sinks=[lambda m: None], vehicle=EgoMotionSender(node.scene))
+    times = []
+    for _ in range(runs):
+        est = boundaries.RoadBoundaryEstimator()
+        t0 = time.perf_counter()
+        for args in inputs:
+            est.update(*args)
+        times.append((time.perf_counter() - t0) / len(inputs))
+    return statistics.median(times), len(inputs)
+
+
 def main() -> None:
+    if "--speed" in sys.argv[:-1]:
+        seconds = float(sys.argv[sys.argv.index("--speed") + 1])
+        per_cycle, cycles = update_speed(seconds)
+        import radarnode
+        print(f"RoadBoundaryEstimator.update ({Path(radarnode.__file__).parents[1]}): {per_cycle * 1e6:.0f} µs a "
+              f"cycle, median of 3 replays of the {cycles} cycles of highway_cut_in.yaml --duration {seconds:g}")
+        return
     print("| road | guardrail post RCS | post SNR at 50 m | available | median error | 95th percentile | "
           "≤ 0.5 m | ≤ 1.5 m |")
     print("|---|---:|---:|---:|---:|---:|---:|---:|")

@@ -29,9 +29,14 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+# --root DIR: radarnode from another tree (read before the imports below; the scenarios stay this tree's)
+sys.path.insert(0, str(Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv[:-1] else ROOT))
 
-from radarnode.radar import equation, tables  # noqa: E402
+from radarnode.radar import equation  # noqa: E402
+try:
+    from radarnode.radar import tables  # noqa: E402
+except ImportError:        # a tree from before the table cache
+    tables = None
 from radarnode.radar.models import make_model  # noqa: E402
 from radarnode.radar.object_model import RuntimeConfig, nearest_in_fov  # noqa: E402
 from radarnode.radar.setup import load_scenario, radar_config, with_signal  # noqa: E402
@@ -121,10 +126,14 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--frames", type=int, default=60)
     ap.add_argument("--object-only", action="store_true", help="only the object level's speed figures")
+    ap.add_argument("--speed-only", action="store_true", help="only the speed table (every level) and the object "
+                    "level's highway_cut_in line")
+    ap.add_argument("--root", type=Path, help="import radarnode from this tree (another version) instead")
     args = ap.parse_args()
-    where = tables.cache_dir()
-    print(f"(the detection statistic's table cache: {where if where is not None else 'off'}; the object level's "
-          "mean includes computing the tables it does not hold)\n")
+    where = tables.cache_dir() if tables is not None else None
+    print(f"(radarnode from {Path(equation.__file__).parents[2]}; the detection statistic's table cache: "
+          f"{where if where is not None else 'off'}; the object level's mean includes computing the tables it "
+          "does not hold)\n")
     points = ROOT / "scenarios" / "point_targets_mimo12.yaml"
     highway = ROOT / "scenarios" / "highway_mimo12.yaml"
     if args.object_only:
@@ -135,20 +144,21 @@ def main() -> None:
         print(f"| object | - | {s['median_s'] * 1e3:.2f} ms | {s['fps']:.0f} | {s['rtf']:.1f}× |\n")
         _object_list_line(args.frames)
         return
-    print(f"### Accuracy: {points.name}, {args.frames} frames, mimo12\n")
-    print("| level | range RMSE | range-rate RMSE | azimuth RMSE | range RMSE/CRB | range-rate RMSE/CRB | "
-          "azimuth RMSE/CRB | Pd | false alarms/frame |")
-    print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     rows = [("object", "complex128"), ("detection", "complex128"), ("signal", "complex128"),
             ("signal", "complex64")]
-    for level, dtype in rows:
-        a = accuracy(points, level, args.frames, dtype)
-        name = level if level != "signal" else f"signal ({dtype})"
-        print(f"| {name} | {a['rmse'][0] * 100:.1f} cm | {a['rmse'][1] * 100:.1f} cm/s | "
-              f"{math.degrees(a['rmse'][2]):.3f}° | {a['ratio'][0]:.2f} | {a['ratio'][1]:.2f} | {a['ratio'][2]:.2f} | "
-              f"{a['pd']:.3f} | {a['fa']:.2f} |", flush=True)
-    print(f"\n(CRB at the targets' SNR: range {a['crb'][0] * 100:.2f} cm, range rate {a['crb'][1] * 100:.2f} cm/s, "
-          f"azimuth {math.degrees(a['crb'][2]):.3f}°)\n")
+    if not args.speed_only:
+        print(f"### Accuracy: {points.name}, {args.frames} frames, mimo12\n")
+        print("| level | range RMSE | range-rate RMSE | azimuth RMSE | range RMSE/CRB | range-rate RMSE/CRB | "
+              "azimuth RMSE/CRB | Pd | false alarms/frame |")
+        print("|---|---:|---:|---:|---:|---:|---:|---:|---:|")
+        for level, dtype in rows:
+            a = accuracy(points, level, args.frames, dtype)
+            name = level if level != "signal" else f"signal ({dtype})"
+            print(f"| {name} | {a['rmse'][0] * 100:.1f} cm | {a['rmse'][1] * 100:.1f} cm/s | "
+                  f"{math.degrees(a['rmse'][2]):.3f}° | {a['ratio'][0]:.2f} | {a['ratio'][1]:.2f} | {a['ratio'][2]:.2f} | "
+                  f"{a['pd']:.3f} | {a['fa']:.2f} |", flush=True)
+        print(f"\n(CRB at the targets' SNR: range {a['crb'][0] * 100:.2f} cm, range rate {a['crb'][1] * 100:.2f} cm/s, "
+              f"azimuth {math.degrees(a['crb'][2]):.3f}°)\n")
     print(f"### Speed: {highway.name}, {args.frames} frames, cycle 72 ms\n")
     print("| level | scatterers/frame | frame time (median) | frames/s | real-time factor |")
     print("|---|---:|---:|---:|---:|")

@@ -1,6 +1,8 @@
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -12,6 +14,7 @@ ROOT = Path(__file__).resolve().parents[1]
 # process and the CLI runs it starts share it, and it starts empty
 if "RADARNODE_CACHE_DIR" not in os.environ:
     os.environ["RADARNODE_CACHE_DIR"] = tempfile.mkdtemp(prefix="radarnode-test-cache-")
+    atexit.register(shutil.rmtree, os.environ["RADARNODE_CACHE_DIR"], ignore_errors=True)
 SHARED = ROOT.parent / "shared"
 REFERENCE = SHARED / "reference" / "ars408"
 SCENARIOS = ROOT / "scenarios"

@@ -113,7 +113,8 @@ def test_an_object_level_log_with_its_tables_cached_imports_no_heavy_scipy_modul
     code = ("import sys; from radarnode.cli.main import main; "
             f"main(['log', {str(SCENARIOS / 'ncap_ccrs.yaml')!r}, '--fidelity', 'object', '--duration', '1', "
             f"'-o', {str(tmp_path / 'x.blf')!r}]); "
-            "print(sorted(m for m in ('scipy.special', 'scipy.fft', 'scipy.linalg', 'scipy.stats') if m in sys.modules))")
+            "print(sorted(m for m in ('scipy.special', 'scipy.fft', 'scipy.linalg', 'scipy.stats') "
+            "if m in sys.modules))")
     env = {**os.environ, tables.CACHE_ENV: str(tmp_path / "cache")}
     runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True).stdout
             for _ in range(2)]

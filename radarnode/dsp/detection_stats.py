@@ -441,6 +441,11 @@ class DetectionStatistic:
         r_outer, r_inner = self._ring_boxes("r", delta_r)
         return d_outer * r_outer - d_inner * r_inner
 
+    def _guard_train(self, axis: str) -> tuple[int, int]:
+        """The CFAR's guard and training cells along one axis ("d": Doppler, "r": range)."""
+        k = 0 if axis == "d" else 1
+        return self.cfar.guard[k], self.cfar.train[k]
+
     def _ring_boxes(self, axis: str, delta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The outer (±(guard + train)) and inner (±guard) box sums of one axis at ``delta``: :meth:`_box_sum`'s
         two tables on the outer one's grid (1/32 bin; the inner one zero beyond its own), each with its slope from
@@ -449,7 +454,7 @@ class DetectionStatistic:
         step). NaN in, NaN out."""
         tables = self.__dict__.setdefault("_ring_tables", {})
         if axis not in tables:
-            g, t = (self.cfar.guard[0], self.cfar.train[0]) if axis == "d" else (self.cfar.guard[1], self.cfar.train[1])
+            g, t = self._guard_train(axis)
             grid = np.arange(-(g + t + self.BOX_REACH), g + t + self.BOX_REACH + 1e-9, 1.0 / 32.0)
             cols = []
             for half in (g + t, g):
@@ -608,7 +613,7 @@ class DetectionStatistic:
                 mask[int(name[4])] = a
             elif name in ("ring_d", "ring_r"):
                 axis = name[-1]
-                g, t = (self.cfar.guard[0], self.cfar.train[0]) if axis == "d" else (self.cfar.guard[1], self.cfar.train[1])
+                g, t = self._guard_train(axis)
                 size = 64 * (g + t + self.BOX_REACH) + 1
                 if a.shape != (4, size + 1):
                     raise ValueError(f"table {name}: shape {a.shape}; expected {(4, size + 1)}")
