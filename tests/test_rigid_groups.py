@@ -180,7 +180,7 @@ def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
     assert seen.max() <= 2 and np.mean(seen > 1) <= 0.1
 
 
-def test_the_mahalanobis_distance_by_adjugate_is_the_inverse_covariances():
+def test_the_mahalanobis_distance_by_ldl_is_the_inverse_covariances():
     from radarnode.perception.tracker import mahalanobis3
     rng = np.random.default_rng(3)
     a = rng.normal(size=(7, 9, 3, 3))
@@ -191,3 +191,20 @@ def test_the_mahalanobis_distance_by_adjugate_is_the_inverse_covariances():
     # one covariance per track, broadcast over the measurements
     np.testing.assert_allclose(mahalanobis3(nu, s[:, :1]), np.einsum("nmi,nij,nmj->nm", nu, np.linalg.inv(s[:, 0]), nu),
                                rtol=1e-9)
+
+
+@pytest.mark.parametrize("condition", [1e6, 1e10, 1e12, 1e14])
+def test_the_mahalanobis_distance_is_never_negative_and_a_broken_covariance_never_passes(condition):
+    from radarnode.perception.tracker import mahalanobis3
+    rng = np.random.default_rng(int(np.log10(condition)))
+    q, _ = np.linalg.qr(rng.normal(size=(500, 3, 3)))
+    s = q @ (np.array([1.0, 1.0 / np.sqrt(condition), 1.0 / condition])[:, None] * np.swapaxes(q, -1, -2))
+    s = 0.5 * (s + np.swapaxes(s, -1, -2))
+    nu = rng.normal(size=(500, 3))
+    d2 = mahalanobis3(nu, s)
+    assert np.all(d2 >= 0.0)
+    if condition <= 1e10:      # against an independent solve, where the inverse itself is accurate
+        want = np.einsum("ni,ni->n", nu, np.linalg.solve(s, nu[..., None])[..., 0])
+        np.testing.assert_allclose(d2, want, rtol=1e-4)
+    bad = np.stack([np.zeros((3, 3)), -np.eye(3), np.full((3, 3), np.nan), np.diag([1.0, 1.0, 0.0])])
+    assert np.all(mahalanobis3(np.ones((4, 3)), bad) == np.inf)

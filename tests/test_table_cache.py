@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import os
+import time
+
 import numpy as np
 import pytest
 
@@ -62,8 +65,9 @@ def test_another_configuration_has_its_own_file(tmp_path, monkeypatch):
     assert tables.warm(other) == "empty"
 
 
-@pytest.mark.parametrize("damage", ["garbage", "truncated", "wrong shape", "nan"])
-def test_a_damaged_file_is_ignored_and_replaced(tmp_path, monkeypatch, damage):
+@pytest.mark.parametrize("damage", ["garbage", "truncated", "wrong shape", "nan", "one array (np.save)",
+                                    "another configuration's file", "an edited table", "no key"])
+def test_a_damaged_or_foreign_file_is_ignored_and_replaced(tmp_path, monkeypatch, damage):
     monkeypatch.setenv(tables.CACHE_ENV, str(tmp_path))
     good = _fresh()
     tables.warm(good)
@@ -74,9 +78,24 @@ def test_a_damaged_file_is_ignored_and_replaced(tmp_path, monkeypatch, damage):
         path.write_bytes(b"not a numpy file")
     elif damage == "truncated":
         path.write_bytes(path.read_bytes()[:200])
+    elif damage == "one array (np.save)":
+        with open(path, "wb") as f:
+            np.save(f, np.arange(5.0))
+    elif damage == "another configuration's file":
+        other = _fresh(1e-4)
+        tables.warm(other)
+        other.pd_of_snr(np.array([10.0]), 1)              # a valid file of its own key …
+        tables.cache_file(other, tmp_path).replace(path)  # … under this key's name
     else:
         arrays = dict(np.load(path))
-        arrays["pd1"] = arrays["pd1"][:-3] if damage == "wrong shape" else np.full_like(arrays["pd1"], np.nan)
+        if damage == "wrong shape":
+            arrays["pd1"] = arrays["pd1"][:-3]
+        elif damage == "nan":
+            arrays["pd1"] = np.full_like(arrays["pd1"], np.nan)
+        elif damage == "an edited table":
+            arrays["pd1"] = arrays["pd1"] * 0.5          # well formed, still in [0, 1]: only the digest tells
+        else:
+            del arrays[tables.KEY_NAME]
         np.savez(path, **arrays)
     again = _fresh()
     assert tables.warm(again) == "empty"
@@ -85,11 +104,33 @@ def test_a_damaged_file_is_ignored_and_replaced(tmp_path, monkeypatch, damage):
     assert tables.warm(_fresh()) == "loaded"                # and the file is good again
 
 
+def test_a_killed_writes_temporary_file_is_removed_by_the_next_write(tmp_path, monkeypatch):
+    monkeypatch.setenv(tables.CACHE_ENV, str(tmp_path))
+    stale, fresh = tmp_path / ".tables-killed.npz", tmp_path / ".tables-writing.npz"
+    stale.write_bytes(b"half")
+    fresh.write_bytes(b"half")
+    old = time.time() - tables.STALE_TMP_S - 60
+    os.utime(stale, (old, old))
+    stat = _fresh()
+    tables.warm(stat)
+    stat.pd_of_snr(np.array([10.0]), 1)
+    assert not stale.exists() and fresh.exists()            # another process may still be writing the fresh one
+    assert [p.name for p in tmp_path.glob("detection-statistic-*.npz")] == [tables.cache_file(stat, tmp_path).name]
+
+
+@pytest.mark.parametrize("off", ["off", "OFF", "", " ", "0", "no", "none", "False"])
+def test_the_words_that_turn_it_off(monkeypatch, off):
+    monkeypatch.setenv(tables.CACHE_ENV, off)
+    assert tables.cache_dir() is None
+
+
 def test_turned_off_nothing_is_written_and_unwritable_is_no_error(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
     monkeypatch.setenv(tables.CACHE_ENV, "off")
     stat = _fresh()
     assert tables.warm(stat) == "off"
     _use(stat)
+    assert list(tmp_path.iterdir()) == []
     blocked = tmp_path / "file"
     blocked.write_text("a file where the cache directory should be")
     monkeypatch.setenv(tables.CACHE_ENV, str(blocked / "cache"))
@@ -120,3 +161,11 @@ def test_an_object_level_log_with_its_tables_cached_imports_no_heavy_scipy_modul
             for _ in range(2)]
     assert runs[0].strip().endswith("['scipy.special']")        # the first run computes its tables
     assert runs[1].strip().endswith("[]")                       # the second loads them
+
+
+def test_the_key_changes_with_the_processors_blas_kernel(monkeypatch):
+    stat = _fresh()
+    monkeypatch.delenv("OPENBLAS_CORETYPE", raising=False)
+    here = tables.cache_key(stat)
+    monkeypatch.setenv("OPENBLAS_CORETYPE", "Prescott")
+    assert tables.cache_key(stat) != here

@@ -56,25 +56,26 @@ def components(n: int, edges: np.ndarray) -> np.ndarray:
     """Connected components of the undirected graph of ``n`` nodes and ``edges`` (k, 2): each node's label is the
     smallest node index of its component.
 
-    Label propagation over all edges at once (each end takes the smaller label of the two), with pointer jumping
-    (a label takes its own node's label) so that a long chain — guardrail posts one after the other — settles in
-    a few passes; it stops when no edge joins two labels. A few numpy passes over the edges: for the few hundred
-    edges of a radar cycle, a tenth of building a sparse matrix for scipy's connected_components.
+    Hooking and pointer jumping (Shiloach–Vishkin): every node points to the root of its tree; each pass hooks the
+    larger root of every edge whose ends lie in two trees to the smallest root it meets (pointers only ever go to
+    smaller indices, so no cycle forms), then jumps pointers until each points to its root again. The trees at
+    least pair up every pass, so a chain of guardrail posts in any order settles in about log₂ n passes of a few
+    numpy calls over the edges: for the few hundred edges of a radar cycle, a tenth of building a sparse matrix
+    for scipy's connected_components, and within a few times its cost at 10⁵ nodes.
     """
-    labels = np.arange(n)
+    parent = np.arange(n)
     if len(edges) == 0:
-        return labels
+        return parent
     i, j = edges[:, 0], edges[:, 1]
     while True:
-        low = np.minimum(labels[i], labels[j])
-        new = labels.copy()
-        np.minimum.at(new, i, low)
-        np.minimum.at(new, j, low)
-        while True:                       # pointer jumping to the fixed point: new[k] is a root
-            jumped = new[new]
-            if np.array_equal(jumped, new):
+        ri, rj = parent[i], parent[j]                    # roots: every node points to its root here
+        low, high = np.minimum(ri, rj), np.maximum(ri, rj)
+        join = low != high
+        if not join.any():
+            return parent
+        np.minimum.at(parent, high[join], low[join])
+        while True:
+            jumped = parent[parent]
+            if np.array_equal(jumped, parent):
                 break
-            new = jumped
-        if np.array_equal(new, labels):
-            return labels
-        labels = new
+            parent = jumped

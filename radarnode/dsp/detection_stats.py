@@ -466,18 +466,16 @@ class DetectionStatistic:
             tables[axis] = (float(grid[0]), grid.size, cols)
             self._table_built()
         x0, size, (v_out, s_out, v_in, s_in) = tables[axis]
-        pos = np.asarray(delta, dtype=np.float64) - x0
-        pos *= 32.0
-        cell = np.floor(pos)
-        outside = ~((pos >= 0.0) & (pos <= size - 1))           # beyond the tables (and NaN): the zero entry
-        cell[outside] = size
-        frac = pos - cell
+        pos = (np.asarray(delta, dtype=np.float64) - x0) * 32.0
+        outside = ~((pos >= 0.0) & (pos <= size - 1))           # beyond the tables (±inf, NaN): the zero entry
+        cell = np.where(outside, size, np.floor(np.where(outside, 0.0, pos)))
+        frac = np.where(outside, 0.0, pos - cell)
         i = cell.astype(np.intp)
         outer = np.take(v_out, i) + frac * np.take(s_out, i)
         inner = np.take(v_in, i) + frac * np.take(s_in, i)
-        if outside.any():
+        if np.any(outside):
             bad = np.isnan(pos)
-            outer[bad] = inner[bad] = np.nan
+            outer, inner = np.where(bad, np.nan, outer), np.where(bad, np.nan, inner)
         return outer, inner
 
     #: grids of :meth:`masking_factor`'s table: ρ in dB, interference over the noise's mean training sum (log10)
@@ -602,13 +600,15 @@ class DetectionStatistic:
             if a.dtype != np.float64 or not np.all(np.isfinite(a)):
                 raise ValueError(f"table {name}: dtype {a.dtype} or a non-finite value; expected finite float64")
             if name in ("pd0", "pd1") and f"{name}_grid" in arrays:
-                grid = np.asarray(arrays[f"{name}_grid"])
-                if a.ndim != 1 or grid.shape != a.shape:
+                grid = np.asarray(arrays[f"{name}_grid"], dtype=np.float64)
+                if a.ndim != 1 or grid.shape != a.shape or a.size < 2:
                     raise ValueError(f"table {name}: shape {a.shape} against its grid's {grid.shape}")
+                if not (np.all(np.diff(grid) > 0) and np.all((a >= 0.0) & (a <= 1.0))):
+                    raise ValueError(f"table {name}: a grid not increasing or a probability outside [0, 1]")
                 pd[int(name[2])] = (grid, a)
             elif name in ("mask0", "mask1"):
-                if a.shape != (self.MASK_RHO_DB.size, self.MASK_LOG_I.size):
-                    raise ValueError(f"table {name}: shape {a.shape}; expected "
+                if a.shape != (self.MASK_RHO_DB.size, self.MASK_LOG_I.size) or not np.all((a >= 0.0) & (a <= 1.0)):
+                    raise ValueError(f"table {name}: shape {a.shape} or a factor outside [0, 1]; expected "
                                      f"{(self.MASK_RHO_DB.size, self.MASK_LOG_I.size)}")
                 mask[int(name[4])] = a
             elif name in ("ring_d", "ring_r"):

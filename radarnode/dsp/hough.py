@@ -66,15 +66,17 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     if x.size == 0:
         return np.zeros((n_t, n_r))
     # the cell of every (point, θ) in one matrix product: [x, y, 1] @ [cosθ/Δρ, sinθ/Δρ, 1.5 − ρ₀/Δρ] is the
-    # ρ cell counted from 1, plus ½, so that truncation rounds it; each θ row has a cell before and after the
-    # grid (0 and n_rho + 1) that collect the votes falling outside it, so that a clip replaces the masking
+    # ρ cell counted from 1, plus ½, so that truncation rounds it (a point exactly half a cell between two votes
+    # for the upper one); each θ row has a cell before and after the grid (0 and n_rho + 1) that collect the votes
+    # falling outside it, so that a clip replaces the masking
     step = grid.rho_m[1] - grid.rho_m[0]
     pts = np.empty((x.size, 3))
     pts[:, 0], pts[:, 1], pts[:, 2] = x, y, 1.0
     coef = np.empty((3, n_t))
     coef[0], coef[1], coef[2] = np.cos(grid.theta_rad) / step, np.sin(grid.theta_rad) / step, 1.5 - grid.rho_m[0] / step
     cell = pts @ coef                                                    # (n, n_theta)
-    np.clip(cell, 0.0, n_r + 1.0, out=cell)
+    # fmin/fmax, not clip: a NaN (a NaN or infinite point) goes to the cell after the grid and votes nowhere
+    np.fmax(np.fmin(cell, n_r + 1.0, out=cell), 0.0, out=cell)
     cell += np.arange(n_t) * (n_r + 2.0)                                 # each θ row's own cells
     idx = cell.astype(np.int32).ravel()                                  # truncation: every value is ≥ 0
     if weights is None:
@@ -103,6 +105,8 @@ def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_vo
     step_t = np.degrees(grid.theta_rad[1] - grid.theta_rad[0]) if grid.theta_rad.size > 1 else 1.0
     half = (max(int(round(suppress_theta_deg / step_t)), 0), max(int(round(suppress_rho_m / step_r)), 0))
     cand = acc >= max(min_votes, min_fraction * top)
+    if not cand.any():                    # (a NaN cell: no strongest line to measure the others by)
+        return []
     # the maximum filter over the box that holds the candidates and the cells that can exceed them (half a window
     # beyond): cells further from every candidate are never tested. Where the box is cut by the accumulator's
     # edge the filter extends the edge, as over the whole accumulator; elsewhere its extension reaches only cells

@@ -325,15 +325,25 @@ def innovation(x, p, z, r_cov):
 
 
 def mahalanobis3(nu: np.ndarray, s: np.ndarray) -> np.ndarray:
-    """νᵀ S⁻¹ ν for 3-vectors ν (..., 3) and symmetric 3×3 covariances S (..., 3, 3) (broadcast), by the
-    adjugate: elementwise over every track–measurement pair instead of a batched matrix inverse."""
+    """νᵀ S⁻¹ ν for 3-vectors ν (..., 3) and symmetric positive definite 3×3 covariances S (..., 3, 3)
+    (broadcast), elementwise over every track–measurement pair instead of a batched matrix inverse.
+
+    By S's LDLᵀ factorisation: νᵀS⁻¹ν = Σ_k y_k²/d_k with L·y = ν, a sum of squares over the positive pivots
+    d_k, so never negative however ill-conditioned S is (an adjugate formula loses that at condition 1e12). A pair
+    whose S is not positive definite (a pivot ≤ 0 or NaN) is at infinite distance: it never passes a gate.
+    """
     s00, s01, s02 = s[..., 0, 0], s[..., 0, 1], s[..., 0, 2]
     s11, s12, s22 = s[..., 1, 1], s[..., 1, 2], s[..., 2, 2]
-    a, b, c = s11 * s22 - s12 * s12, s02 * s12 - s01 * s22, s01 * s12 - s02 * s11
-    d, e, f = s00 * s22 - s02 * s02, s01 * s02 - s00 * s12, s00 * s11 - s01 * s01
-    det = s00 * a + s01 * b + s02 * c
-    n0, n1, n2 = nu[..., 0], nu[..., 1], nu[..., 2]
-    return (a * n0 * n0 + d * n1 * n1 + f * n2 * n2 + 2.0 * (b * n0 * n1 + c * n0 * n2 + e * n1 * n2)) / det
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        l10, l20 = s01 / s00, s02 / s00
+        d1 = s11 - l10 * s01
+        l21 = (s12 - l20 * s01) / d1
+        d2 = s22 - l20 * s02 - l21 * (s12 - l20 * s01)
+        y0 = nu[..., 0]
+        y1 = nu[..., 1] - l10 * y0
+        y2 = nu[..., 2] - l20 * y0 - l21 * y1
+        out = y0 * y0 / s00 + y1 * y1 / d1 + y2 * y2 / d2
+    return np.where((s00 > 0) & (d1 > 0) & (d2 > 0) & np.isfinite(out), out, np.inf)
 
 
 def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, int]]:
