@@ -67,9 +67,9 @@ actors:
     return np.array(err), snr
 
 
-def update_speed(seconds: float, runs: int = 3) -> tuple[float, int]:
+def update_speed(seconds: float, runs: int = 3) -> tuple[float, int, list]:
     """Median seconds a cycle of RoadBoundaryEstimator.update over the inputs it receives in ``seconds`` of
-    highway_cut_in at the object level; and the number of cycles."""
+    highway_cut_in at the object level; the number of cycles; the boundaries of the last replay."""
     import dataclasses
     import statistics
     import time
@@ -92,19 +92,31 @@ def update_speed(seconds: float, runs: int = 3) -> tuple[float, int]:
     for _ in range(runs):
         est = boundaries.RoadBoundaryEstimator()
         t0 = time.perf_counter()
-        for args in inputs:
-            est.update(*args)
+        out = [est.update(*args) for args in inputs]
         times.append((time.perf_counter() - t0) / len(inputs))
-    return statistics.median(times), len(inputs)
+    return statistics.median(times), len(inputs), out
+
+
+def digest(out) -> str:
+    """A short hash of the boundaries a replay computed, each number rounded to 1e-9: two versions that print the
+    same digest agree to that."""
+    import hashlib
+    h = hashlib.sha1()
+    for pair in out:
+        for b in pair:
+            h.update(repr((b.valid, *(round(v, 9) for v in (b.offset_m, b.heading_rad, b.curvature_1pm,
+                                                              b.range_start_m, b.range_end_m, b.confidence)))).encode())
+    return h.hexdigest()[:12]
 
 
 def main() -> None:
     if "--speed" in sys.argv[:-1]:
         seconds = float(sys.argv[sys.argv.index("--speed") + 1])
-        per_cycle, cycles = update_speed(seconds)
+        per_cycle, cycles, out = update_speed(seconds)
         import radarnode
         print(f"RoadBoundaryEstimator.update ({Path(radarnode.__file__).parents[1]}): {per_cycle * 1e6:.0f} µs a "
-              f"cycle, median of 3 replays of the {cycles} cycles of highway_cut_in.yaml --duration {seconds:g}")
+              f"cycle, median of 3 replays of the {cycles} cycles of highway_cut_in.yaml --duration {seconds:g}; "
+              f"boundaries' digest (1e-9) {digest(out)}")
         return
     print("| road | guardrail post RCS | post SNR at 50 m | available | median error | 95th percentile | "
           "≤ 0.5 m | ≤ 1.5 m |")
