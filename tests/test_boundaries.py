@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import can
 import numpy as np
 import pytest
@@ -180,3 +182,23 @@ def test_the_e2e_crc_by_table_is_cantools_profile2_crc():
         payload = bytes(rnd.randrange(256) for _ in range(rnd.randrange(2, 9)))
         did = rnd.randrange(256)
         assert profile2_crc(payload, did) == compute_profile2_crc(payload, did)
+
+
+@pytest.mark.parametrize("span, count, quadratic", [(39.9, 20, False), (40.0, 20, False), (40.1, 20, True),
+                                                    (80.0, 20, True), (60.0, 7, False), (60.0, 8, True)])
+def test_a_boundary_is_a_quadratic_beyond_40_m_and_8_points_else_a_line(span, count, quadratic):
+    """_fit's switch (span > 40 m and at least 8 inliers) just below, at and above each limit and at twice the span:
+    the reported curvature is numpy's quadratic fit (plus the path's) where it switches, zero (a line) where not."""
+    est = RoadBoundaryEstimator()
+    x = np.linspace(10.0, 10.0 + span, count)
+    y = 3.0 + 0.01 * x + 0.5 * 2e-3 * x * x                   # a curve of 2e-3 1/m
+    b = est._fit(x, y, np.ones((1, count), dtype=bool), np.ones(1, dtype=bool), kappa=0.0)[0]
+    assert b.valid
+    if quadratic:
+        want = np.polynomial.polynomial.polyfit(x, y, 2)
+        assert b.curvature_1pm == pytest.approx(2.0 * want[2], rel=1e-6)
+        assert b.curvature_1pm == pytest.approx(2e-3, rel=1e-6)
+    else:
+        assert b.curvature_1pm == 0.0
+        want = np.polynomial.polynomial.polyfit(x, y, 1)
+        assert b.offset_m == pytest.approx(want[0], rel=1e-9) and math.tan(b.heading_rad) == pytest.approx(want[1])
