@@ -572,14 +572,6 @@ class DetectionStatistic:
         if self.on_table_built is not None:
             self.on_table_built()
 
-    def build_tables(self) -> None:
-        """Build every table the levels read (Pd and masking for both Swerling cases, the ring's box sums)."""
-        for swerling in (0, 1):
-            self.pd_of_snr(np.zeros(1), swerling)
-            self._mask_table(swerling)
-        for axis in ("d", "r"):
-            self._ring_boxes(axis, np.zeros(1))
-
     def export_tables(self) -> dict[str, np.ndarray]:
         """The tables built so far, as named arrays."""
         out = {}
