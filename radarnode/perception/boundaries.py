@@ -201,7 +201,7 @@ class RoadBoundaryEstimator:
         sides = np.stack([py > 0.5, py < -0.5])                 # (2, n): left, right
         found = [UNAVAILABLE, UNAVAILABLE]
         if self._cycle % self.reacquire_cycles:                  # the full search runs every reacquire_cycles
-            found = self._follow(px, py, powers(px, py), sides, kappa)
+            found = self._follow(px, py, sides, kappa)
         for k, sign in enumerate(SIDES):
             if not found[k].valid:
                 found[k] = self._side(px[sides[k]], py[sides[k]], kappa)
@@ -216,8 +216,7 @@ class RoadBoundaryEstimator:
         x = _linspace(b.range_start_m, b.range_end_m)
         return self._to_odometry(x, b.y_at(x))
 
-    def _follow(self, px: np.ndarray, py: np.ndarray, pw: np.ndarray, sides: np.ndarray, kappa: float
-                ) -> list[Boundary]:
+    def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float) -> list[Boundary]:
         """Both sides' boundaries near last cycle's: each curve moved into this frame and straightened, its
         inliers fitted (UNAVAILABLE for a side that had none or lost it). The two sides in one pass each."""
         curves = [self._curves[sign] for sign in SIDES]
@@ -232,6 +231,7 @@ class RoadBoundaryEstimator:
         # starting from the prediction, the gate centres itself on the points instead of on last cycle's error.
         # A side whose inliers settled keeps them in the passes left (the fit of a settled set is the same line)
         line = masked_fit(powers(cx.ravel(), cy.ravel()), _CURVE_ROWS, _LINES)
+        pw = powers(px, py)                              # the points' moments, for every fit of this cycle
         inliers = sides & (np.abs(py - (line[:, :1] + line[:, 1:2] * px)) <= self.band_m)
         for _ in range(FOLLOW_PASSES):
             follow &= np.add.reduce(inliers, axis=1) >= 4
