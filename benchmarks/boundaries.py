@@ -24,9 +24,9 @@ from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-# --root DIR: radarnode from another tree (read before the imports below)
-sys.path.insert(0, str(Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv[:-1] else ROOT))
+from tree import ROOT, use_tree  # --root DIR: radarnode from another tree
+
+use_tree()
 
 from radarnode.radar import equation  # noqa: E402
 from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402

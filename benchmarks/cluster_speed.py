@@ -11,14 +11,14 @@ table.
 from __future__ import annotations
 
 import statistics
-import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(Path(sys.argv[sys.argv.index("--root") + 1]).resolve() if "--root" in sys.argv[:-1] else ROOT))
+from tree import ROOT, use_tree  # --root DIR: radarnode from another tree
+
+use_tree()
 
 from radarnode.dsp.cluster import dbscan  # noqa: E402
 

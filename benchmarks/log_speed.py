@@ -54,8 +54,8 @@ def main() -> None:
     start = wall([py, "-c", "import radarnode.cli.main"], args.runs, roots)
     where = tables.cache_dir()
     print(f"### `radarnode log … --fidelity object -o x{args.suffix}`, median of {args.runs} runs\n")
-    print(f"(the detection statistic's table cache: {where if where is not None else 'off (RADARNODE_CACHE_DIR)'}; "
-          "filled by the first run of each configuration)\n")
+    print(f"(the detection statistic's table cache: {where}; filled by the first run of each configuration)\n"
+          if where is not None else "(the detection statistic's table cache: off (RADARNODE_CACHE_DIR))\n")
     if args.before is None:
         print("| scenario | simulated | cycles | wall time | real-time factor |")
         print("|---|---:|---:|---:|---:|")
