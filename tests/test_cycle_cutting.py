@@ -378,3 +378,75 @@ def test_fuzz_over_a_hundred_thousand_frames():
     print(f"fuzz: {len(stream)} frames, {counts['garbage']} garbage, {counts['stray_state_off']} stray RadarState "
           f"with both groups off, {len(expected)} cycles intact, {counts['lost']} lost and {counts['truncated']} "
           f"truncated on the way, {extra} bogus empty cycles, stats {asm.stats.as_dict()}")
+
+
+def _header_of(frames) -> can.Message:
+    return next(m for m in frames if m.arbitration_id == P.OBJ_STATUS)
+
+
+def test_a_stale_header_inside_a_cycle_cannot_strip_its_groups():
+    """An old Obj_0_Status (a gateway's or a replay's, two cycles back) between any two frames of a cycle: the
+    cycle still arrives whole (an independent tester's finding: one such header delivered it without 0x60C/0x60D)."""
+    cycles = _node_cycles(12)
+    stale = _header_of(cycles[2][0])
+    target = 6
+    frames = cycles[target][0]
+    h = frames.index(_header_of(frames))
+    for cut in range(h + 1, len(frames) + 1):
+        stream = [m for c in cycles[:target] for m in c[0]] + frames[:cut] + [stale] + frames[cut:] \
+            + [m for c in cycles[target + 1:] for m in c[0]]
+        asm = CycleAssembler()
+        got = list(asm.feed(stream))
+        matched, extra = _match(got, cycles)
+        assert matched == len(cycles) and not extra, f"stale header after frame {cut}"
+        st = asm.stats
+        assert st.stray_headers == 1 and st.counter_resets == st.lost_cycles == st.incomplete_cycles == 0
+
+
+def test_a_stale_or_forged_header_between_cycles_delivers_nothing():
+    """Headers that do not advance MeasCounter — a repeat of an old one, one announcing no objects, one with
+    garbage list frames after it — are held, continued by no header, and dropped as stray; no bogus cycle."""
+    cycles = _node_cycles(12)
+    db = load_database()
+    old = _header_of(cycles[1][0])
+    empty = _msg(P.OBJ_STATUS, db.encode_message(P.OBJ_STATUS, {"Obj_NofObjects": 0, "Obj_MeasCounter": 2,
+                                                               "Obj_InterfaceVersion": 1}))
+    rng = np.random.default_rng(3)
+    junk = [_msg(P.OBJ_GENERAL, rng.integers(0, 256, 8, dtype=np.uint8)) for _ in range(3)]
+    stream = []
+    for k, (frames, *_) in enumerate(cycles):
+        stream += {4: [old], 6: [empty], 8: [old] + junk}.get(k, []) + frames
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    matched, extra = _match(got, cycles)
+    assert matched == len(cycles) and not extra
+    assert asm.stats.stray_headers == 3 and asm.stats.counter_resets == asm.stats.lost_cycles == 0
+    assert asm.stats.orphan_frames == len(junk)
+
+
+def test_a_restarted_sensor_is_followed_from_its_first_cycle():
+    """A sensor that restarts counts MeasCounter from 0 again: its first header is held, the second continues
+    it, and from there on every cycle arrives — the first one too, delivered one header late."""
+    before, after = _node_cycles(10), _node_cycles(10, seed=2)
+    asm = CycleAssembler()
+    got = list(asm.feed([m for c in before + after for m in c[0]]))
+    matched, extra = _match(got, before + after)
+    assert matched == len(before) + len(after) and not extra
+    assert asm.stats.counter_resets == 1 and asm.stats.stray_headers == 0 and asm.stats.dropped() == 0
+
+
+def test_a_sensor_restarted_in_the_middle_of_a_cycle():
+    """The old cycle is cut after its first general frame; the restarted sensor's cycles follow. Nothing of two
+    cycles is ever delivered as one; from its second cycle on every cycle arrives."""
+    before, after = _node_cycles(8), _node_cycles(10, seed=2)
+    last = before[-1][0]
+    cut = last.index(next(m for m in last if m.arbitration_id == P.OBJ_GENERAL)) + 1
+    stream = [m for c in before[:-1] for m in c[0]] + last[:cut] + [m for c in after for m in c[0]]
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    assert [c.meas_counter for c in got[:len(before) - 1]] == [c[4] for c in before[:-1]]
+    rest = got[len(before) - 1:]
+    matched, extra = _match(rest, after[1:])
+    assert matched == len(after) - 1
+    assert all(_intact(c, *after[0][1:]) for c in extra)       # at most the restart's first cycle, whole
+    assert asm.stats.counter_resets == 1

@@ -27,6 +27,12 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 * RadarState's SendQuality/SendExtInfo bits can only *add* groups to the
   layout, for ``LAYOUT_MEMORY`` headers (so a configuration change that adds a
   group is waited for); bits that are off are ignored;
+* a header whose MeasCounter does not move on from the last accepted one (a
+  stale, replayed or forged header, or the first of a restarted sensor) cuts
+  nothing: it is held beside the cycle in progress with the frames that fit
+  its own cycle and not the one in progress; a next header that continues its
+  count shows a restart (counted in ``counter_resets``; its cycle is delivered
+  if whole), one that continues the old count drops it (``stray_headers``);
 * otherwise the cycle ends at the next header of its kind (an object and a
   cluster cycle are assembled side by side, so a stray header of the other
   kind cuts nothing), after ``cycle_timeout_s`` of
@@ -115,6 +121,7 @@ class ConsumerStats:
     orphan_frames: int = 0          # list frames with no header before them
     late_frames: int = 0            # list frames of a group that came after their cycle was delivered
     duplicate_frames: int = 0       # exact repeats, ignored
+    stray_headers: int = 0          # headers that did not advance MeasCounter and that no cycle followed: ignored
     conflicting_frames: int = 0     # same object ID twice with different content
     unexpected_ids: int = 0         # quality/extended for an ID the general group lacks
     extra_frames: int = 0           # more general frames than the header announced
@@ -129,7 +136,7 @@ class ConsumerStats:
 
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
-                + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
+                + self.stray_headers + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
                 + self.e2e_errors + self.e2e_repeated + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
@@ -148,6 +155,12 @@ CONFIG_STATE = (P.FILTER_STATE_HEADER, P.FILTER_STATE_CFG, P.COLL_DET_STATE, P.C
 GENERAL = {"obj": P.OBJ_GENERAL, "cl": P.CLUSTER_GENERAL}
 HEADERS = {P.OBJ_STATUS: "obj", P.CLUSTER_STATUS: "cl"}
 LIST_KIND = {g: kind for kind, groups in GROUPS.items() for g in groups}
+
+
+def _advances(counter: int, last: int) -> bool:
+    """True when MeasCounter ``counter`` follows ``last`` (16 bits, wrapping): forward by less than half the range."""
+    gap = (counter - last) & 0xFFFF
+    return 0 < gap <= 0x8000
 
 
 class _Pending:
@@ -212,6 +225,8 @@ class CycleAssembler(can.Listener):
         self._pending: dict[str, _Pending] = {}
         self._last_done: dict[str, _Pending] = {}
         self._last_counter: dict[str, int] = {}
+        # a header that did not advance MeasCounter, held until frames show whether the sensor restarted
+        self._suspects: dict[str, _Pending] = {}
         self._stride: dict[str, int] = {}
         # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
         self._seen_layouts: dict[str, collections.deque] = {k: collections.deque(maxlen=LAYOUT_MEMORY)
@@ -315,6 +330,10 @@ class CycleAssembler(can.Listener):
             for p in sorted(waiting, key=lambda p: p.arrival):
                 del self._pending[p.kind]
                 self._finish(p)
+            if kind is None:            # end of data: a header still held was continued by none
+                for suspect in self._suspects.values():
+                    self._drop_suspect(suspect)
+                self._suspects.clear()
 
     def expire(self, now: float | None = None) -> bool:
         """Close the cycle being assembled when nothing arrived for it for ``cycle_timeout_s``.
@@ -429,71 +448,126 @@ class CycleAssembler(can.Listener):
         if int(state["RadarState_SendExtInfoCfg"]):
             self._announced["obj"][P.OBJ_EXTENDED] = LAYOUT_MEMORY
 
+    def _learned_groups(self, kind: str) -> set[int]:
+        """Groups of the last complete cycles of ``kind`` (before the first: the default layout)."""
+        seen = self._seen_layouts[kind]
+        return set().union(*seen) if seen else set(INITIAL_GROUPS[kind])
+
     def expected_groups(self, kind: str) -> set[int]:
         """Groups a cycle of ``kind`` ('obj' or 'cl') must hold before it is delivered without waiting."""
-        seen = self._seen_layouts[kind]
-        groups = set().union(*seen) if seen else set(INITIAL_GROUPS[kind])
-        return groups | {GENERAL[kind]} | set(self._announced[kind])
+        return self._learned_groups(kind) | {GENERAL[kind]} | set(self._announced[kind])
 
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
         kind = HEADERS[base]
-        for known in (self._pending.get(kind), self._last_done.get(kind)):
+        for known in (self._pending.get(kind), self._last_done.get(kind), self._suspects.get(kind)):
             if known is not None and known.header == data:
                 self.stats.duplicate_frames += 1     # the same header again: not a new cycle
                 return
-        self.flush(kind)
         if kind == "obj":
             n, n_near, counter = int(values["Obj_NofObjects"]), 0, int(values["Obj_MeasCounter"])
         else:
             n_near = int(values["Cluster_NofClustersNear"])
             counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
+        header = _Pending(kind, n, counter, timestamp, data, n_near)
         last = self._last_counter.get(kind)
+        suspect = self._suspects.pop(kind, None)
+        if last is not None and not _advances(counter, last):
+            # MeasCounter did not move on: a stale, replayed or forged header — or the first of a restarted
+            # sensor. It is held beside the cycle in progress and cuts nothing; the frames that fit its cycle
+            # are kept with it. A next header that continues its count shows a restart (its cycle is then
+            # delivered, if whole); one that continues the old count drops it (stray_headers)
+            if suspect is None or not _advances(counter, suspect.meas_counter):
+                if suspect is not None:
+                    self._drop_suspect(suspect)
+                self._suspects[kind] = header
+                return
+            # a second header continuing the first: the sensor restarted
+            self.stats.counter_resets += 1
+            self.flush(kind)
+            self._last_counter[kind] = last = suspect.meas_counter
+            self._finish(suspect)
+        elif suspect is not None:
+            self._drop_suspect(suspect)
+        self.flush(kind)
         if last is not None:
             gap = (counter - last) & 0xFFFF
-            if gap == 0 or gap > 0x8000:
-                self.stats.counter_resets += 1
-            else:
-                # The real ARS 408 advances MeasCounter by 2 per object cycle (near and far scans);
-                # radarnode by 1. The stride is the smallest step seen.
-                stride = self._stride.get(kind)
-                if stride is None or gap < stride:
-                    self._stride[kind] = stride = gap
-                if gap > stride:
-                    self.stats.lost_cycles += gap // stride - 1
+            # The real ARS 408 advances MeasCounter by 2 per object cycle (near and far scans);
+            # radarnode by 1. The stride is the smallest step seen.
+            stride = self._stride.get(kind)
+            if stride is None or gap < stride:
+                self._stride[kind] = stride = gap
+            if gap > stride:
+                self.stats.lost_cycles += gap // stride - 1
         self._last_counter[kind] = counter
         announced = self._announced[kind]
         for g in list(announced):
             announced[g] -= 1
             if announced[g] < 0:
                 del announced[g]
-        self._pending[kind] = _Pending(kind, n, counter, timestamp, data, n_near)
+        self._pending[kind] = header
         self._maybe_complete(kind)
+
+    def _drop_suspect(self, suspect: _Pending) -> None:
+        """A held header that no header continued: stray; the frames it collected are counted as orphans."""
+        self.stats.stray_headers += 1
+        self.stats.orphan_frames += sum(len(group) for group in suspect.groups.values())
+
+    @staticmethod
+    def _fits(p: _Pending, base: int, oid: int) -> bool:
+        """Whether a list frame has a place in cycle ``p``: a general frame while the header's count is not
+        reached, another group's frame for an object of the general group that this group lacks."""
+        general = p.groups.get(GENERAL[p.kind], {})
+        if base == GENERAL[p.kind]:
+            return len(general) < p.expected and oid not in general
+        return oid in general and oid not in p.groups.get(base, {})
 
     def _list_frame(self, base: int, values: dict, data: bytes) -> None:
         kind = LIST_KIND[base]
         pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
+        suspect = self._suspects.get(kind)
+        if suspect is not None:
+            # beside a held header a frame goes with the cycle it fits. A general frame: the one in progress while
+            # its count is not reached (a stale header inside a cycle steals nothing), else the held one (a
+            # restarted sensor's cycle). Another group's frame: the held one when it holds that object, else the
+            # one in progress where it has a place in a group the last complete cycles had (its groups after a
+            # stale header; a group only announced is not waited for then). An exact repeat of a frame of the
+            # cycle in progress is its duplicate; anything else goes with the held one, and is dropped with it
+            # unless a header continues its count
+            mine = pending.groups.get(base, {}) if pending is not None else {}
+            if not (oid in mine and mine[oid][0] == data):
+                general = base == GENERAL[kind]
+                place = pending is not None and self._fits(pending, base, oid) and (
+                    general or base in self._learned_groups(kind))
+                if not place or (not general and self._fits(suspect, base, oid)):
+                    self._add(suspect, base, oid, data, values)
+                    return
         if pending is None:
             self._stray_list_frame(kind, base, oid, data)
             return
         pending.arrival = time.monotonic()
-        group = pending.groups.setdefault(base, {})
+        if self._add(pending, base, oid, data, values):
+            self._maybe_complete(kind)
+
+    def _add(self, p: _Pending, base: int, oid: int, data: bytes, values: dict) -> bool:
+        """Put a list frame into cycle ``p``; False when it was a repeat, a conflict or one too many."""
+        group = p.groups.setdefault(base, {})
         if oid in group:
             if group[oid][0] == data:
                 self.stats.duplicate_frames += 1
             else:
                 self.stats.conflicting_frames += 1
-                pending.bad = True
-            return
-        if base == GENERAL[kind]:
-            if len(group) >= pending.expected:
+                p.bad = True
+            return False
+        if base == GENERAL[p.kind]:
+            if len(group) >= p.expected:
                 self.stats.extra_frames += 1
-                pending.bad = True
-                return
-            pending.order.append(oid)
+                p.bad = True
+                return False
+            p.order.append(oid)
         group[oid] = (data, values)
-        self._maybe_complete(kind)
+        return True
 
     def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
         """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
