@@ -134,6 +134,13 @@ class MessageCodec:
             word |= (round((v - f.offset) / f.scale) & ((1 << f.bits) - 1)) << f.shift
         return np.frombuffer(word.to_bytes(8, "big")[: self.length], dtype=np.uint8).reshape(1, self.length)
 
+    def as_sent(self, name: str, value: np.ndarray) -> np.ndarray:
+        """Signal ``name``'s physical values as a receiver decodes them: clipped to its range and rounded to its
+        grid, the arithmetic of :meth:`encode` (without counting saturation) and of the decoder."""
+        f = self.fields[self.signal_names.index(name)]
+        raw = np.rint((np.clip(np.asarray(value, dtype=np.float64), f.minimum, f.maximum) - f.offset) / f.scale)
+        return raw * f.scale + f.offset
+
     def decode(self, payload: np.ndarray) -> dict[str, np.ndarray]:
         """Decode payloads of shape (n, length) (uint8) back to physical values."""
         payload = np.asarray(payload, dtype=np.uint8)

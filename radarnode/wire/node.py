@@ -20,6 +20,7 @@ Pacing and I/O are the runner's job (``radarnode.wire.runner``).
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 from collections import Counter
@@ -371,6 +372,22 @@ class RadarNode:
         self._born[slot] = born
         return t_s - born
 
+    def _as_sent(self, lst, general: int, extended: int | None = None):
+        """The list with the fields the filters test as a receiver decodes them (on their wire grids, clipped to
+        their ranges), so that a filter's [Min, Max] holds for the values sent; the list itself when no filter
+        is active."""
+        if not self.filters.active(TYPE_OBJECT if extended is not None else TYPE_CLUSTER):
+            return lst
+        g = self.codecs[general]
+        prefix = g.signal_names[0].split("_")[0]           # Obj / Cluster
+        sent = {"dist_long_m": "DistLong", "dist_lat_m": "DistLat", "vrel_long_mps": "VrelLong",
+                "vrel_lat_mps": "VrelLat", "rcs_dbsm": "RCS"}
+        values = {attr: g.as_sent(f"{prefix}_{sig}", getattr(lst, attr)) for attr, sig in sent.items()}
+        if extended is not None:
+            e = self.codecs[extended]
+            values.update(length_m=e.as_sent("Obj_Length", lst.length_m), width_m=e.as_sent("Obj_Width", lst.width_m))
+        return dataclasses.replace(lst, **values)
+
     def _priority(self, ranges: np.ndarray, rcs: np.ndarray) -> np.ndarray:
         """Indices from most to least important: by RCS when SortIndex says so, else nearest first."""
         return np.argsort(-rcs, kind="stable") if self.config.sort_index == 2 else np.argsort(ranges, kind="stable")
@@ -424,7 +441,7 @@ class RadarNode:
         evaluated = False
         if cfg.output_type == P.OUTPUT_OBJECTS:
             ol = frame.objects
-            mask = self.filters.object_mask(ol, lifetime)
+            mask = self.filters.object_mask(self._as_sent(ol, P.OBJ_GENERAL, P.OBJ_EXTENDED), lifetime)
             filtered = int((~mask).sum())
             keep = self._priority(ol.range_m, ol.rcs_dbsm)
             keep = keep[mask[keep]][:MAX_OBJECTS]
@@ -461,7 +478,7 @@ class RadarNode:
                         {"Obj_ID": ol.id, "Obj_CollDetRegionBitfield": result.bits})]
         elif cfg.output_type == P.OUTPUT_CLUSTERS:
             cl = frame.clusters
-            mask = self.filters.cluster_mask(cl)
+            mask = self.filters.cluster_mask(self._as_sent(cl, P.CLUSTER_GENERAL))
             cap = self.filters.max_count(TYPE_CLUSTER)
             if cap is not None and int(mask.sum()) > cap:      # keep the nearest, in near-before-far order
                 idx = np.flatnonzero(mask)
