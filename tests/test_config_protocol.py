@@ -429,3 +429,17 @@ def test_a_scenario_max_distance_beyond_the_preset_is_an_error():
     with pytest.raises(ScenarioError, match=r"field 'radar.max_distance_m': value 300 is not allowed; expected "
                                             r"2\.\.250 m \(what preset ars408_like can see\)"):
         RadarNode(sc)
+
+
+def test_relay_frames_of_another_sensor_are_not_taken_for_ours(bench):
+    """0x008 is not shifted by SensorID (as on the ARS 408): with only sensor 1 driving its relay, sensor 0's
+    consumer (whose RadarState says CtrlRelay off) counts its 0x008 as another sensor's (an independent tester
+    found sensor 0's consumer reporting sensor 1's relay state as its own)."""
+    bench.run(16)                                      # RadarState of both sensors seen (once a second)
+    bench.send(region_cfg(0, *REGIONS[0], sensor=1), coll_det_cfg(1, min_time=0.0, sensor=1),
+               radar_cfg(1, RadarCfg_CtrlRelay_valid=1, RadarCfg_CtrlRelay=1))
+    steps = bench.run(20)
+    on_bus = sum(m.arbitration_id == P.COLL_DET_RELAY for s in steps for m in s[1]["frames"])
+    assert on_bus > 0 and bench.asm[1].relay is not None and bench.asm[1].relay["CollDetRelayCtrl_Param"] == 1
+    assert bench.asm[0].relay is None and bench.asm[0].stats.other_sensor_frames >= on_bus
+    _consumers_unharmed(bench)

@@ -48,7 +48,8 @@ ARS 408 IDs of its sensor, its sensor's own messages, the ECU's; frames of the
 other seven sensors are counted in ``other_sensor_frames``, never decoded as
 this sensor's. The sensor's configuration replies (FilterState 0x203/0x204,
 CollDetState 0x408, CollDetRegionState 0x402, CollDetRelayCtrl 0x008) are
-counted in ``config_state_frames`` and kept as last decoded
+counted in ``config_state_frames`` (0x008, which no sensor shifts, only while
+this sensor's RadarState does not say CtrlRelay off: another sensor's then) and kept as last decoded
 (:attr:`CycleAssembler.filter_state`, :attr:`CycleAssembler.coll_det_regions`, …);
 they never cut a cycle.
 """
@@ -424,6 +425,12 @@ class CycleAssembler(can.Listener):
         filter table (the FilterState_Cfg frames that follow it fill it), a CollDetState a new region table (the
         CollDetRegionState frames that follow it); CollDetState with Active set announces
         Obj_4_Warning, like RadarState announces groups (it can only add a group, never remove one)."""
+        if base == P.COLL_DET_RELAY and self.radar_state is not None \
+                and not int(self.radar_state["RadarState_CtrlRelayCfg"]):
+            # 0x008 is not shifted by SensorID (as on the ARS 408): this sensor's RadarState says it does not
+            # drive its relay, so the frame is another sensor's
+            self.stats.other_sensor_frames += 1
+            return
         self.stats.config_state_frames += 1
         if base == P.FILTER_STATE_HEADER:
             self.filter_header = v
