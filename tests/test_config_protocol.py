@@ -443,3 +443,37 @@ def test_relay_frames_of_another_sensor_are_not_taken_for_ours(bench):
     assert on_bus > 0 and bench.asm[1].relay is not None and bench.asm[1].relay["CollDetRelayCtrl_Param"] == 1
     assert bench.asm[0].relay is None and bench.asm[0].stats.other_sensor_frames >= on_bus
     _consumers_unharmed(bench)
+
+
+def test_filter_cfg_of_continentals_sensor_1_dbc_is_understood(bench, reference_dir):
+    """Continental's public DBC for sensor 1 gives FilterCfg 0x212 five bytes (sensor 0's: eight); a tool built on
+    it is answered and obeyed (an independent tester found the 5-byte frame dropped as a wrong DLC, unanswered)."""
+    import cantools
+    db1 = cantools.database.load_file(str(reference_dir / "ARS408_id1.dbc"), encoding="latin-1", strict=False)
+    m = db1.get_message_by_frame_id(0x212)
+    assert m.length == 5
+    data = m.encode({"FilterCfg_Valid": 1, "FilterCfg_Active": 1, "FilterCfg_Type": 1, "FilterCfg_Index": 1,
+                     "FilterCfg_Min_Distance": 0.0, "FilterCfg_Max_Distance": 50.0}, strict=False)
+    bench.run(3)
+    bench.send(can.Message(arbitration_id=0x212, data=data, is_extended_id=False))
+    first, *after = bench.run(10)
+    ids = _ids(first[1])
+    assert ids.count(P.FILTER_STATE_HEADER) == 1 and ids.count(P.FILTER_STATE_CFG) == 1
+    assert bench.asm[1].filter_state[(1, 1)]["FilterState_Max_Distance"] == pytest.approx(50.0)
+    assert all(np.all(c.objects.range_m <= 50.0 + 1e-9) for c in _objects([first, *after], sensor=1))
+    assert bench.nodes[1].counters["rx_wrong_dlc"] == 0 and not bench.nodes[0].filters.filters
+
+
+def test_nvm_write_status_is_the_last_writes(bench):
+    """NVMwriteStatus reports the last write of the configuration (0 before any, as the public capture shows a
+    parked sensor): StoreInNVM on writes it (1); StoreInNVM off writes nothing and leaves the status."""
+    def status():
+        (s0, _), = bench.run(1)
+        return [bench.decode(m)["RadarState_NVMwriteStatus"] for m in s0["frames"]
+                if m.arbitration_id == P.RADAR_STATE]
+    bench.run(1)
+    assert bench.nodes[0].config.nvm_write_ok is False
+    bench.send(radar_cfg(RadarCfg_StoreInNVM_valid=1, RadarCfg_StoreInNVM=1))
+    assert status() == [1]
+    bench.send(radar_cfg(RadarCfg_StoreInNVM_valid=1, RadarCfg_StoreInNVM=0))
+    assert status() == [1]

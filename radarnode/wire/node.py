@@ -51,6 +51,7 @@ MOTION_TIMEOUT_S = 1.0     # ego-motion input older than this is "missing"
 MIN_MAX_DISTANCE_M = 10    # the smallest RadarCfg_MaxDistance accepted
 # what the node receives (base IDs, shifted by 0x10 x SensorID on the bus)
 RX_IDS = (P.RADAR_CFG, P.FILTER_CFG, P.SPEED_INFO, P.YAW_RATE_INFO, P.COLL_DET_CFG, P.COLL_DET_REGION_CFG)
+FILTER_CFG_MIN_DLC = 5     # FilterCfg: 5 bytes in Continental's DBC for sensor 1, 8 in sensor 0's
 STATUS_PERIOD_S = 1.0      # RadarState and VersionID
 
 
@@ -173,14 +174,19 @@ class RadarNode:
             self.counters["rx_remote_frames"] += 1
             return
         length = self._rx_length[base]
-        if len(msg.data) != length:
+        data = bytes(msg.data)
+        if base == P.FILTER_CFG and FILTER_CFG_MIN_DLC <= len(data) < length:
+            # Continental's DBC for sensor 1 gives FilterCfg 5 bytes (every signal lies in them), sensor 0's 8:
+            # a tool built on either is understood (the missing bytes are zero, as in an 8-byte frame)
+            data = data + bytes(length - len(data))
+        if len(data) != length:
             self.counters["rx_wrong_dlc"] += 1
             self._warn_once(f"dlc{base}", "frame 0x%X has DLC %d, expected %d; dropped (counted in rx_wrong_dlc, "
                             "warned once)", msg.arbitration_id, len(msg.data), length)
             return
         if base == P.FILTER_CFG:         # multiplexed: decoded by cantools
             self.counters["rx_filter_cfg"] += 1
-            f, why = self.filters.configure(bytes(msg.data))
+            f, why = self.filters.configure(data)
             if why is not None:
                 self._refuse("filter", "FilterCfg: %s; the filter table is unchanged", why)
             elif f is not None:
@@ -188,7 +194,7 @@ class RadarNode:
             self._reply_filters = True
             return
         # one frame: cantools' compiled decoder (the vectorised codec pays numpy's per-call cost for every signal)
-        values = self._rx_messages[base].decode(bytes(msg.data), decode_choices=False, scaling=True)
+        values = self._rx_messages[base].decode(data, decode_choices=False, scaling=True)
         if base == P.SPEED_INFO:
             direction = int(values["RadarDevice_SpeedDirection"])
             if direction == 3:
@@ -278,8 +284,11 @@ class RadarNode:
             cfg.send_ext_info = bool(x)
         if (x := take("RadarCfg_SortIndex_valid", "RadarCfg_SortIndex", range(3))) is not None:
             cfg.sort_index = x
-        if (x := take("RadarCfg_StoreInNVM_valid", "RadarCfg_StoreInNVM")) is not None:
-            cfg.nvm_write_ok = bool(x)
+        if (x := take("RadarCfg_StoreInNVM_valid", "RadarCfg_StoreInNVM")) is not None and x:
+            # storing switched on: the configuration is written (NVMwriteStatus is the last write's status;
+            # switching it off writes nothing and leaves that status). No NVM outlives the process: a restarted
+            # node starts from its scenario, as a sensor whose NVM was never written
+            cfg.nvm_write_ok = True
         if (x := take("RadarCfg_CtrlRelay_valid", "RadarCfg_CtrlRelay")) is not None:
             cfg.ctrl_relay = bool(x)
         if (x := take("RadarCfg_RCS_Threshold_Valid", "RadarCfg_RCS_Threshold", range(2))) is not None:
