@@ -306,8 +306,8 @@ def abuse_frames(rng, db):
     while True:
         kind = int(rng.integers(16))
         base = int(rng.choice(list(dlc)))
-        if kind <= 3:               # a wrong DLC on any input
-            n = int(rng.choice([d for d in range(9) if d != dlc[base]]))
+        if kind <= 3:               # a wrong DLC on any input (FilterCfg is taken with 5 to 8 bytes: 0…4 are wrong)
+            n = int(rng.choice([d for d in range(9) if d != dlc[base] and not (base == 0x202 and d >= 5)]))
             yield msg(base, bytes(rng.integers(0, 256, n, dtype="u1"))), "rx_wrong_dlc"
         elif kind == 4:             # RadarConfiguration with one refused field
             yield msg(0x200, enc("RadarConfiguration", **refused_200[int(rng.integers(len(refused_200)))])), \
