@@ -86,14 +86,20 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
     k2 = np.rint((cand - det2.range_rate_mps[None, :, None]) / (2 * v2max))
     miss = np.abs(det2.range_rate_mps[None, :, None] + 2 * v2max * k2 - cand)
     miss = np.where(inside & near[:, :, None], miss, np.inf)
-    flat = miss.reshape(len(det1), -1)
-    best = np.argmin(flat, axis=1)
-    err = flat[np.arange(len(det1)), best]
-    j, kk = np.divmod(best, _K.size)
-    ok = err <= STAGGER_TOLERANCE_MPS
+    kk_all = np.argmin(miss, axis=2)                                              # (n1, n2): best wrap per pair
+    m = np.take_along_axis(miss, kk_all[:, :, None], axis=2)[:, :, 0]
+    # one reflector, one pair: each detection of either sequence pairs with at most one of the other, the two
+    # choosing each other (mutually best by speed mismatch, then by distance in the cell). A reflector that the
+    # second sequence missed would otherwise borrow its neighbour's second detection, whose lattice meets its
+    # own within the tolerance for about one speed pair in five: a wrong speed flagged "resolved"
+    cost = np.where(m <= STAGGER_TOLERANCE_MPS, m / STAGGER_TOLERANCE_MPS + (dr / 1.5) ** 2 + da ** 2, np.inf)
+    j = np.argmin(cost, axis=1)
+    rows = np.arange(len(det1))
+    ok = np.isfinite(cost[rows, j]) & (np.argmin(cost, axis=0)[j] == rows)
+    kk = kk_all[rows, j]
     # the speed: the mean of the two unwrapped estimates (each as accurate as the other)
     v1 = det1.range_rate_mps + 2 * v1max * _K[kk]
-    v2 = det2.range_rate_mps[j] + 2 * v2max * k2[np.arange(len(det1)), j, kk]
+    v2 = det2.range_rate_mps[j] + 2 * v2max * k2[rows, j, kk]
     out.range_rate_mps = np.where(ok, 0.5 * (v1 + v2), det1.range_rate_mps)
     out.range_m = _recouple(preset, det1, out.range_rate_mps)
     out.ambig_state = np.where(ok, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
