@@ -251,3 +251,25 @@ def test_bad_inputs_to_the_chain_and_the_detection_level_name_the_problem():
                                    **kw)
     with pytest.raises(FieldError, match="num_chirps.*even"):
         p.with_overrides({"num_chirps": 1})
+
+
+@pytest.mark.parametrize("overrides, field", [
+    (dict(stagger_chirp_period_s=2 * ARS.chirp_period_s), "stagger_chirp_period_s"),   # lattices coincide: T₂ = 2T₁
+    (dict(min_range_rate_mps=50.0, max_range_rate_mps=-50.0), "min_range_rate_mps"),    # an inverted span
+    (dict(min_range_rate_mps=-300.0, max_range_rate_mps=300.0), "min_range_rate_mps"),  # beyond the wraps searched
+])
+def test_a_staggered_pair_that_cannot_resolve_its_span_is_refused(overrides, field):
+    """An independent tester's finding: T₂ = 2·T₁ was accepted, and the detection level then reported −10 m/s
+    as −87.8 m/s, "resolved". The preset now refuses it, naming the field."""
+    import dataclasses
+    from radarnode.errors import FieldError
+    with pytest.raises(FieldError, match=field):
+        dataclasses.replace(ARS, **overrides)
+
+
+def test_the_shipped_staggered_pair_tells_its_span_apart():
+    """ars408_like's pair (T₂/T₁ = 8/7) passes the same check: the nearest beat within its span is 4.9 m/s."""
+    v1, v2 = ARS.alias_speed_mps, ARS.second_sequence().alias_speed_mps
+    lo, hi = ARS.range_rate_span_mps
+    beats = [abs(n * 2 * v1 - round(n * v1 / v2) * 2 * v2) for n in range(1, int((hi - lo) // (2 * v1)) + 1)]
+    assert min(beats) == pytest.approx(2 * v1 / 8, rel=1e-6) and min(beats) > 2.0

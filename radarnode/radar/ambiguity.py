@@ -25,13 +25,11 @@ from __future__ import annotations
 import numpy as np
 
 from radarnode.perception.types import AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, Detections
-from radarnode.radar.presets import RadarPreset
+from radarnode.radar.presets import STAGGER_MAX_WRAPS, STAGGER_TOLERANCE_MPS, RadarPreset
 
-#: largest mismatch (m/s) between the two sequences' unwrapped speeds that still counts as the same speed
-STAGGER_TOLERANCE_MPS = 1.0
 #: a detection within this many Doppler bins of the stationary hypothesis is a stationary candidate
 STATIONARY_TOLERANCE_BINS = 2.0
-_K = np.arange(-6, 7)          # wraps considered on each side (covers ±6·2·v_max)
+_K = np.arange(-STAGGER_MAX_WRAPS, STAGGER_MAX_WRAPS + 1)     # wraps considered on each side
 
 
 def stationary_range_rate(azimuth_rad: np.ndarray, sensor_velocity: tuple[float, float]) -> np.ndarray:

@@ -25,6 +25,10 @@ from radarnode import validate
 from radarnode.errors import ConfigError, FieldError
 
 SPEED_OF_LIGHT_MPS = 299_792_458.0
+#: largest mismatch (m/s) between the two staggered sequences' unwrapped speeds that still counts as one speed
+STAGGER_TOLERANCE_MPS = 1.0
+#: wraps of the first sequence searched on each side of its measured speed (radarnode.radar.ambiguity)
+STAGGER_MAX_WRAPS = 6
 BOLTZMANN_J_PER_K = 1.380649e-23
 REFERENCE_TEMPERATURE_K = 290.0
 
@@ -110,12 +114,36 @@ class RadarPreset:
         for f in ("min_range_rate_mps", "max_range_rate_mps"):
             if getattr(self, f) is not None:
                 validate.number(f, getattr(self, f), lo=-500.0, hi=500.0)
+        lo, hi = self.range_rate_span_mps
+        if not lo < hi:
+            raise FieldError("min_range_rate_mps", self.min_range_rate_mps,
+                             f"less than max_range_rate_mps ({hi:g}; the span of range rates the sensor reports)")
+        if self.stagger_chirp_period_s:
+            self._check_stagger(lo, hi)
         validate.number("pfa", self.pfa, lo=0.0, hi=0.5, lo_open=True)
         validate.number("elevation_beamwidth_deg", self.elevation_beamwidth_deg, lo=0.5, hi=180.0)
         if self.min_range_m >= self.max_range_m:
             raise FieldError("min_range_m", self.min_range_m, f"less than max_range_m ({self.max_range_m})")
         if not self.fov or not all(isinstance(s, FovSector) for s in self.fov):
             raise FieldError("fov", self.fov, "a non-empty tuple of FovSector")
+
+    def _check_stagger(self, lo: float, hi: float) -> None:
+        """The two chirp sequences must tell every speed of the span from every other: two candidates of the
+        first sequence n wraps apart (n·2·v₁ ≤ the span) must not meet the second's lattice (2·v₂) within twice
+        ``STAGGER_TOLERANCE_MPS`` (each sequence's error), or the resolver would take one for the other."""
+        v1, v2 = self.alias_speed_mps, self.second_sequence().alias_speed_mps
+        n_max = math.floor((hi - lo) / (2.0 * v1))
+        if n_max > STAGGER_MAX_WRAPS:
+            raise FieldError("min_range_rate_mps", self.min_range_rate_mps,
+                             f"a span of range rates within {2 * STAGGER_MAX_WRAPS} wraps of 2·v_max "
+                             f"({2 * STAGGER_MAX_WRAPS * 2 * v1:.1f} m/s; max_range_rate_mps {hi:g})")
+        for n in range(1, n_max + 1):
+            beat = abs(n * 2.0 * v1 - round(n * v1 / v2) * 2.0 * v2)
+            if beat <= 2.0 * STAGGER_TOLERANCE_MPS:
+                raise FieldError("stagger_chirp_period_s", self.stagger_chirp_period_s,
+                                 f"a second chirp period whose speeds tell the span {lo:g}…{hi:g} m/s apart: with "
+                                 f"this one, speeds {n * 2 * v1:.1f} m/s apart alias alike in both sequences "
+                                 f"(within {beat:.2f} m/s); narrow the span or choose another period")
 
     # --- derived figures -------------------------------------------------
     @functools.cached_property
