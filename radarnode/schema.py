@@ -115,9 +115,14 @@ def quoted_number_hint(value: object) -> str:
     return ""
 
 
-def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra: dict | None = None):
-    """Build dataclass ``cls`` from the parsed mapping ``data`` found at dotted ``path``; errors name file and line."""
+def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra: dict | None = None,
+          who: str = ""):
+    """Build dataclass ``cls`` from the parsed mapping ``data`` found at dotted ``path``; errors name file and line,
+    and the list item they are in by its ``id`` where it has one (``who``: "actor 'lead'")."""
     where = path or "top level"
+    if path.endswith("]") and isinstance(data, dict) and isinstance(data.get("id"), str):
+        who = f"{path.rsplit('.', 1)[-1].split('[')[0].removesuffix('s')} {data['id']!r}"
+    named = f" ({who})" if who else ""
     if not isinstance(data, dict):
         what = "a mapping" if path else "a mapping of the scenario's fields (name, duration_s, seed, …)"
         raise src.error(path, f"field '{where}': value {short_repr(data)} is not allowed; expected {what}")
@@ -138,9 +143,9 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
                 if not isinstance(value, list):
                     raise src.error(child, f"field '{child}': value {short_repr(value)} is not allowed; expected a "
                                     "list")
-                value = tuple(build(sub, v, f"{child}[{i}]", src, schema) for i, v in enumerate(value))
+                value = tuple(build(sub, v, f"{child}[{i}]", src, schema, who=who) for i, v in enumerate(value))
             else:
-                value = build(sub, value, child, src, schema)
+                value = build(sub, value, child, src, schema, who=who)
         kwargs[name] = value
     for name, f in fields.items():
         required = f.default is dataclasses.MISSING and f.default_factory is dataclasses.MISSING
@@ -153,7 +158,7 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         key = inverse.get(exc.field.split(".")[0], exc.field.split(".")[0])
         rest = exc.field[len(exc.field.split(".")[0]):]
         child = (f"{path}.{key}" if path else key) + rest
-        raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
+        raise src.error(child, f"field '{child}'{named}: value {short_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}{quoted_number_hint(exc.value)}") from None
     except TypeError as exc:  # pragma: no cover - defensive: a field the schema does not describe
         raise src.error(path, f"{where}: {exc}") from None

@@ -140,3 +140,12 @@ def test_ecu_block_is_validated(tmp_path):
     _fails(tmp_path, GOOD + "ecu: {expect: {lead: ghost}}\n", "ecu.expect.lead", "ghost", "a")
     _fails(tmp_path, GOOD + "ecu: {expect: {fcw_ttc_min_s: -1}}\n", "ecu.expect.fcw_ttc_min_s", "-1")
     _fails(tmp_path, GOOD + "ecu: {closed_loop: yes please}\n", "ecu.closed_loop", "true or false")
+
+
+@pytest.mark.parametrize("value", [".nan", ".inf", "-.inf", "1e400"])
+def test_a_non_finite_actor_field_names_the_actor(tmp_path, value):
+    """Issue 9 item 5: NaN or infinite values are refused naming the actor (by its id) and the field; the
+    accelerations of an actor's profile too (an independent tester found only its index named)."""
+    _fails(tmp_path, GOOD.replace("x_m: 30.0", f"x_m: {value}"), "actors[0].x_m", "(actor 'a')", "finite")
+    accel = GOOD + f"    accel: [{{t_s: 0.5, accel_mps2: {value}}}]\n"
+    _fails(tmp_path, accel, "actors[0].accel[0].accel_mps2", "(actor 'a')", "finite")
