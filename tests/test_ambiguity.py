@@ -273,3 +273,23 @@ def test_the_shipped_staggered_pair_tells_its_span_apart():
     lo, hi = ARS.range_rate_span_mps
     beats = [abs(n * 2 * v1 - round(n * v1 / v2) * 2 * v2) for n in range(1, int((hi - lo) // (2 * v1)) + 1)]
     assert min(beats) == pytest.approx(2 * v1 / 8, rel=1e-6) and min(beats) > 2.0
+
+
+@pytest.mark.parametrize("level", LEVELS)
+def test_a_single_ramp_that_cannot_alias_a_road_user_says_unambiguous(level):
+    """acc_lrr (one ramp, v_max 132.7 m/s, beyond the data sheet's 400 km/h closing): every cluster is
+    "unambiguous" (AmbigState 3), at every level — an independent tester found it flagged "ambiguous"; a preset
+    that aliases within road speeds (mimo12) never says so."""
+    from radarnode.perception.types import AMBIG_UNAMBIGUOUS
+    assert ambiguity.unambiguous(PRESETS["acc_lrr"]) and not ambiguity.unambiguous(PRESETS["mimo12"])
+    assert not ambiguity.unambiguous(ARS)
+    sc = scenario("  - {id: a, class: car, x_m: 60.0, lane: 1, speed_mps: 40.0, heading_deg: 180.0}\n",
+                  radar="{preset: acc_lrr, output: clusters}", duration=1.0)
+    p = radar_config(sc).preset
+    model = make_model(level, Scene(sc), p, np.random.default_rng(1), radar_config(sc).signal,
+                       clusters_wanted=True)
+    states = []
+    for k in range(5):
+        frame, _ = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m))
+        states += frame.clusters.ambig_state.tolist()
+    assert states and set(states) == {AMBIG_UNAMBIGUOUS}

@@ -16,7 +16,11 @@ modulo 2·v_max, v_max = λ/(4T). Two things resolve it:
   a detection that equals it modulo 2·v_max is unwrapped to it.
 
 Everything else keeps its measured (aliased) speed and is flagged
-ambiguous (AmbigState 1): never silently wrapped. All levels call the same
+ambiguous (AmbigState 1): never silently wrapped. A single ramp whose
+alias speed reaches ``UNAMBIGUOUS_SPEED_MPS`` (the ARS 408 data sheet's
+400 km/h closing, faster than any two road users) has nothing to resolve:
+its detections are "unambiguous" (AmbigState 3). AmbigState 0 ("invalid")
+is never given: every detection has a measured speed. All levels call the same
 functions on their detections, so aliasing and its resolution agree.
 """
 
@@ -24,11 +28,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from radarnode.perception.types import AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, Detections
+from radarnode.perception.types import AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, AMBIG_UNAMBIGUOUS, Detections
 from radarnode.radar.presets import STAGGER_MAX_WRAPS, STAGGER_TOLERANCE_MPS, RadarPreset
 
 #: a detection within this many Doppler bins of the stationary hypothesis is a stationary candidate
 STATIONARY_TOLERANCE_BINS = 2.0
+#: a single ramp that measures this range rate without aliasing measures every road user's (400 km/h closing)
+UNAMBIGUOUS_SPEED_MPS = 400.0 / 3.6
 _K = np.arange(-STAGGER_MAX_WRAPS, STAGGER_MAX_WRAPS + 1)     # wraps considered on each side
 
 
@@ -48,12 +54,20 @@ def _stationary_unwrap(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth_
     return unwrapped, np.abs(unwrapped - vs) <= STATIONARY_TOLERANCE_BINS * preset.doppler_bin_mps
 
 
+def unambiguous(preset: RadarPreset) -> bool:
+    """A single ramp whose alias speed covers every road user's range rate: no speed it measures is aliased."""
+    return not preset.stagger_chirp_period_s and preset.alias_speed_mps >= UNAMBIGUOUS_SPEED_MPS
+
+
 def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple[float, float]) -> Detections:
     """Unwrap detections that match the stationary hypothesis modulo 2·v_max; flag the rest of a single-ramp
     radar ambiguous (``ambig_state`` of detections already resolved by staggered ramps is kept)."""
+    out = det.take(np.arange(len(det)))
+    if unambiguous(preset):
+        out.ambig_state = np.full(len(det), AMBIG_UNAMBIGUOUS, dtype=np.int64)
+        return out
     unwrapped, candidate = _stationary_unwrap(preset, det.range_rate_mps, det.azimuth_rad, sensor_velocity)
     resolved = det.ambig_state == AMBIG_STAGGERED
-    out = det.take(np.arange(len(det)))
     take = candidate & ~resolved
     out.range_rate_mps = np.where(take, unwrapped, det.range_rate_mps)
     out.range_m = _recouple(preset, det, out.range_rate_mps)
@@ -142,5 +156,7 @@ def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth
         lo, hi = preset.range_rate_span_mps
         inside = (v >= lo) & (v <= hi)
         return np.where(inside, v, alias), np.where(inside, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
+    if unambiguous(preset):
+        return alias, np.full(np.shape(alias), AMBIG_UNAMBIGUOUS, dtype=np.int64)
     unwrapped, candidate = _stationary_unwrap(preset, alias, azimuth_rad, sensor_velocity)
     return np.where(candidate, unwrapped, alias), np.where(candidate, AMBIG_STATIONARY, AMBIG_AMBIGUOUS).astype(np.int64)

@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from radarnode.perception.types import (
-    AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
+    AMBIG_AMBIGUOUS, AMBIG_UNAMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
 from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify,
@@ -679,7 +679,8 @@ class ObjectModel:
             f_snr = np.full(fr.size, 13.0)
             blocks.append(_cluster_rows(fr * cf, fr * sf, fv * cf, fv * sf, f_snr - equation.snr_db(p, fr, np.zeros(fr.size)),
                                         p.range_resolution_m / 2, p.angular_resolution_rad / 2,
-                                        p.speed_resolution_mps / 2, -1, AMBIG_AMBIGUOUS))
+                                        p.speed_resolution_mps / 2, -1,
+                                        AMBIG_UNAMBIGUOUS if ambiguity.unambiguous(p) else AMBIG_AMBIGUOUS))
         rows = np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
         r = np.hypot(rows[:, _CL_X], rows[:, _CL_Y])
         near = r <= p.near_range_m
