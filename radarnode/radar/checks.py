@@ -176,6 +176,7 @@ def _check_visibility(scenario: Scenario, src: Source) -> None:
 def _seen_by(scenario: Scenario, candidates: list[int]) -> tuple[np.ndarray, ...]:
     """Which actors the scenario's (one) radar ever has in its field of view; the closest range, its azimuth and
     time of each."""
+    from radarnode.radar.object_model import nearest_in_fov
     from radarnode.radar.setup import radar_config
     from radarnode.scene.world import Scene
     preset = radar_config(scenario).preset
@@ -190,7 +191,10 @@ def _seen_by(scenario: Scenario, candidates: list[int]) -> tuple[np.ndarray, ...
     for k0 in range(0, n_cycles, CHUNK_CYCLES):
         times = np.arange(k0, min(k0 + CHUNK_CYCLES, n_cycles)) * scenario.period_s
         v = scene.views(times)
-        for x, y in ((v.x_m, v.y_m), (v.centre_x_m, v.centre_y_m)):
+        # the nearest point, the centre, and the nearest point inside the field of view (where the radar measures a
+        # body a sector's edge crosses)
+        for x, y in ((v.x_m, v.y_m), (v.centre_x_m, v.centre_y_m), nearest_in_fov(preset, v, scene.length_m,
+                                                                                  scene.width_m)):
             rng, az = np.hypot(x, y), np.arctan2(y, x)
             inside = np.zeros(rng.shape, dtype=bool)
             for sector in preset.fov:

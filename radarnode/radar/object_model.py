@@ -338,7 +338,10 @@ class ObjectModel:
         meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
         sx, sy = sigma_to_xy(rng_m, az, sig_r, sig_az)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
-        flags = self._track_flags(observable & (u < pd), fov, ground < MOVING_THRESHOLD_MPS)
+        # a detection is reported where it was measured inside the field of view, as the other levels report
+        # theirs (radarnode.radar.models.reportable): a body at a sector's edge is seen on its inner side only
+        measured_in = in_fov(p, m_r, m_az) & (m_r <= config.max_distance_m)
+        flags = self._track_flags(observable & (u < pd) & measured_in, fov, ground < MOVING_THRESHOLD_MPS)
         if sc.elevated.any():
             # the object's reported RCS is its track's average in power (RCS_GAIN per measured cycle, from the
             # track's first detection, as the detection level's tracker and the real sensor report it): so is this

@@ -12,13 +12,14 @@ seed 002 (multi-point model of a vehicle).
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from radarnode.perception.types import _Columns
 from radarnode.radar import elevation
-from radarnode.radar.object_model import in_fov
+from radarnode.radar.object_model import in_fov, nearest_in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
 
@@ -206,7 +207,11 @@ def scene_scatterers(scene: Scene, t_s: float, view: SensorView, preset: RadarPr
     what the elevation beam and the road's reflection make of it (:func:`radarnode.radar.elevation.propagation_db`
     with ``ground_reflection``; 0 leaves the reflection to the signal level's ``multipath`` impairment).
     """
-    parts = [actor_scatterers(scene, view, spacing_m), guardrail_scatterers(scene, t_s, view, max_range_m)]
+    # a small actor is one point at its nearest point inside the field of view, where the object level measures it
+    # (a body at a sector's edge is seen on its inner side)
+    x_in, y_in = nearest_in_fov(preset, view, scene.length_m, scene.width_m)
+    inner = dataclasses.replace(view, x_m=x_in, y_m=y_in) if (x_in is not view.x_m) else view
+    parts = [actor_scatterers(scene, inner, spacing_m), guardrail_scatterers(scene, t_s, view, max_range_m)]
     if clutter_density_per_m2 > 0 and rng is not None:
         parts.append(clutter_scatterers(rng, preset, view, clutter_density_per_m2, clutter_rcs_dbsm))
     scat = Scatterers.concat(parts)
