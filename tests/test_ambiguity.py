@@ -3,6 +3,8 @@ ars408_like, stationary candidates, AmbigState filled truthfully, never a silent
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -320,3 +322,31 @@ def test_a_small_body_on_a_sector_edge_is_seen_alike_at_every_level(preset, r, a
             hits += bool(near.any())
         seen[level] = hits
     assert min(seen.values()) >= 8 and max(seen.values()) - min(seen.values()) <= 8, seen
+
+
+@pytest.mark.parametrize("level", LEVELS)
+def test_a_sparse_array_folds_the_angle_alike_at_every_level(level):
+    """Element spacing λ (an override of mimo12): a target at 39.6° is seen in its grating lobe at −21°, at the
+    object level as at the others (an independent tester found the object level at +39.6°, and auto switching
+    between the two then dropped the track and made a ghost 40 m away)."""
+    az = math.radians(39.58)
+    x, y = 40.1 * math.cos(az) + 3.7, 40.1 * math.sin(az)
+    sc = scenario(f"  - {{id: p, class: point, x_m: {x:.3f}, y_m: {y:.3f}, rcs_dbsm: 10.0}}\n", ego="{speed_mps: 0.0}",
+                  radar="{preset: mimo12, overrides: {element_spacing_wl: 1.0}}", duration=1.0)
+    p = radar_config(sc).preset
+    model = make_model(level, Scene(sc), p, np.random.default_rng(2), radar_config(sc).signal)
+    seen = []
+    for k in range(4):
+        model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m))
+        seen += np.degrees(model.info.detections.azimuth_rad).tolist()
+    folded = math.degrees(math.asin((math.sin(az) + 0.5) % 1.0 - 0.5))          # d·sinθ modulo 1, d = λ
+    assert float(np.degrees(ambiguity.apparent_azimuth(p, az))) == pytest.approx(folded, abs=1e-9)
+    assert folded < -20.0 and seen and all(abs(a - folded) < 1.0 for a in seen), seen
+
+
+def test_auto_is_refused_on_a_one_channel_radar():
+    from radarnode.errors import ConfigError
+    sc = scenario("  - {id: a, class: car, x_m: 60.0, lane: 1, speed_mps: 20.0}\n", radar="{preset: scanning_ka}")
+    p = radar_config(sc).preset
+    with pytest.raises(ConfigError, match="'auto' is not allowed with preset scanning_ka"):
+        make_model("auto", Scene(sc), p, np.random.default_rng(1), radar_config(sc).signal)

@@ -182,6 +182,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
     est_az = np.arcsin(sin_t) + ea * equation.crb_azimuth_rad(p, snr_peak, np.arcsin(sin_t)) * nz[2]
     est_az = np.clip(est_az, -math.pi / 2, math.pi / 2)
+    if p.num_virtual < 2:       # one channel measures no angle: boresight, as the chain reports it
+        sin_t, est_az = np.zeros(idx.size), np.zeros(idx.size)
     # the chain divides the window and straddle losses out of the measured energy
     loss = statistic.energy(1.0, c_r[idx] - np.rint(c_r[idx]), c_v[idx] - np.rint(c_v[idx]))
     snr_est = 10.0 * np.log10(measured / np.maximum(loss, 1e-30))
@@ -255,6 +257,8 @@ def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.ran
     fr = rng.uniform(0, n_r, n_fa) * p.range_resolution_m
     fv = rng.uniform(-m / 2, m / 2, n_fa) * p.doppler_bin_mps
     faz = np.arcsin(np.clip(rng.uniform(-0.5, 0.5, n_fa) / p.element_spacing_wl, -1.0, 1.0))
+    if p.num_virtual < 2:
+        faz = np.zeros(n_fa)
     # Gamma(N) past the threshold: the excess is nearly exponential with unit mean
     x = statistic.threshold_mean() + rng.exponential(1.0, n_fa)
     fs = 10.0 * np.log10(np.maximum(x - statistic.n_channels, 1e-30) / statistic.window_gain)

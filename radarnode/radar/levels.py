@@ -46,5 +46,11 @@ def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Gen
     if level == "signal":
         return models.SignalModel(scene, preset, rng, options)
     if level == "auto":
+        if preset.num_virtual < 2:
+            # the object level reports a scanning radar's beam angle, the others measure none (one channel): a
+            # frame mixing them would put one actor at its angle and its neighbour at boresight
+            raise ConfigError(f"fidelity: value 'auto' is not allowed with preset {preset.name} (one channel: the "
+                              "detection and signal levels measure no angle, the object level the beam's); expected "
+                              "object, detection or signal")
         return models.AutoModel(scene, preset, rng, options, clusters_wanted)
     raise ConfigError(f"fidelity: value {level!r} is not allowed; expected one of {', '.join(FIDELITY_LEVELS)}")

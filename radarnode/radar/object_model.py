@@ -321,10 +321,12 @@ class ObjectModel:
         ext = self.extended
         sig_r = np.hypot(er * equation.crb_range_m(p, snr), np.where(ext, p.range_sigma_floor_m, 0.0))
         sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
-        sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az),
+        # where the array sees the actor: a sparse array's grating lobe folds it (the other levels' beamformer does)
+        az_seen = ambiguity.apparent_azimuth(p, az)
+        sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az_seen),
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = rng_m + sig_r * z[:, 0]
-        m_az = az + sig_az * z[:, 1]
+        m_az = az_seen + sig_az * z[:, 1]
         c, s = np.cos(az), np.sin(az)
         v_rad = view.vx_mps * c + view.vy_mps * s
         if sc.elevated.any():
@@ -336,7 +338,7 @@ class ObjectModel:
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
-        sx, sy = sigma_to_xy(rng_m, az, sig_r, sig_az)
+        sx, sy = sigma_to_xy(rng_m, az_seen, sig_r, sig_az)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
         # a detection is reported where it was measured inside the field of view, as the other levels report
         # theirs (radarnode.radar.models.reportable): a body at a sector's edge is seen on its inner side only
@@ -640,11 +642,13 @@ class ObjectModel:
         g_rcs = np.full(g_r.shape, g.rcs_dbsm)
         g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
         er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
+        g_seen = ambiguity.apparent_azimuth(p, g_az)
         ch["posts"] = {
             "starts": np.searchsorted(row, np.arange(starts.size)), "pd": self.statistic.pd_of_snr(g_snr, 1),
-            # (N, 8): range, azimuth, RCS, σ range, σ azimuth, σ speed, cos and sin of the azimuth
-            "table": np.stack([g_r, g_az, g_rcs, er * equation.crb_range_m(p, g_snr),
-                               ea * equation.crb_azimuth_rad(p, g_snr, g_az), ev * equation.crb_speed_mps(p, g_snr),
+            # (N, 8): range, azimuth as the array sees it, RCS, σ range, σ azimuth, σ speed, cos and sin of the
+            # true azimuth (the radial speed)
+            "table": np.stack([g_r, g_seen, g_rcs, er * equation.crb_range_m(p, g_snr),
+                               ea * equation.crb_azimuth_rad(p, g_snr, g_seen), ev * equation.crb_speed_mps(p, g_snr),
                                np.cos(g_az), np.sin(g_az)], axis=1)}
         return ch["posts"]
 
