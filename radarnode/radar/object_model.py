@@ -45,6 +45,7 @@ from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
 
 MIN_VISIBLE_FRACTION = 0.25
+POINT_SIZE_M = 1.0        # actors shorter and narrower than this are one point (the scatterer levels' too)
 FOV_EDGE_TOLERANCE = 1e-9   # rad and m: a field-of-view edge computed to the last bit is inside (in_fov)
 COAST_CYCLES = 3
 CONFIRM_HITS = 2          # detections in the last CONFIRM_WINDOW cycles that make an object
@@ -327,6 +328,14 @@ class ObjectModel:
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = rng_m + sig_r * z[:, 0]
         m_az = az_seen + sig_az * z[:, 1]
+        # a body a sector's edge crosses is measured at its point on the edge, but reflects from its parts inside:
+        # its measured azimuth is mirrored back about the edge (the scatterer levels report its inner points); a
+        # small body is one point, reported only where it is measured inside (as at the other levels)
+        crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & ~((sc.length_m <= POINT_SIZE_M)
+                                                                    & (sc.width_m <= POINT_SIZE_M))
+        if crossing.any():
+            past = crossing & (np.abs(m_az) > np.abs(az_seen))
+            m_az = np.where(past, np.sign(m_az) * (2.0 * np.abs(az_seen) - np.abs(m_az)), m_az)
         c, s = np.cos(az), np.sin(az)
         v_rad = view.vx_mps * c + view.vy_mps * s
         if sc.elevated.any():

@@ -19,12 +19,9 @@ import numpy as np
 
 from radarnode.perception.types import _Columns
 from radarnode.radar import elevation
-from radarnode.radar.object_model import in_fov, nearest_in_fov
+from radarnode.radar.object_model import POINT_SIZE_M, in_fov, nearest_in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
-
-#: actors shorter and narrower than this are one point
-POINT_SIZE_M = 1.0
 
 
 @dataclass
