@@ -108,8 +108,8 @@ def main() -> None:
     print("|---:|---:|---:|---:|---:|---:|---:|")
     for v in (float(s) for s in args.speeds.split(",")):
         r = run(p, v, args.trials)
-        print(f"| {v:g} m/s | {r['mu']:.2f} bins | {r['found']}/{args.trials} | {r['chain_v']:.2f} | {r['chain_r']:.2f} "
-              f"| {r['fit_v']:.2f} | {r['fit_r']:.2f} |", flush=True)
+        print(f"| {v:g} m/s | {r['mu']:.2f} bins | {r['found']}/{args.trials} | {r['chain_v']:.2f} "
+              f"| {r['chain_r']:.2f} | {r['fit_v']:.2f} | {r['fit_r']:.2f} |", flush=True)
 
 
 if __name__ == "__main__":

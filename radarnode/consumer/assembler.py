@@ -49,8 +49,8 @@ other seven sensors are counted in ``other_sensor_frames``, never decoded as
 this sensor's. The sensor's configuration replies (FilterState 0x203/0x204,
 CollDetState 0x408, CollDetRegionState 0x402, CollDetRelayCtrl 0x008) are
 counted in ``config_state_frames`` (0x008, which no sensor shifts, only while
-this sensor's RadarState does not say CtrlRelay off: another sensor's then) and kept as last decoded
-(:attr:`CycleAssembler.filter_state`, :attr:`CycleAssembler.coll_det_regions`, …);
+this sensor's RadarState does not say CtrlRelay off: another sensor's then)
+and kept as last decoded (:attr:`CycleAssembler.filter_state`, :attr:`CycleAssembler.coll_det_regions`, …);
 they never cut a cycle.
 """
 
@@ -137,8 +137,8 @@ class ConsumerStats:
 
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
-                + self.stray_headers + self.conflicting_frames + self.unexpected_ids + self.extra_frames + self.errors_frames
-                + self.e2e_errors + self.e2e_repeated + self.bus_errors)
+                + self.stray_headers + self.conflicting_frames + self.unexpected_ids + self.extra_frames
+                + self.errors_frames + self.e2e_errors + self.e2e_repeated + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)

@@ -31,7 +31,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from radarnode.perception.types import (
-    AMBIG_AMBIGUOUS, AMBIG_UNAMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
+    AMBIG_AMBIGUOUS, AMBIG_UNAMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED,
+    MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
 from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify,
