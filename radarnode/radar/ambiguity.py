@@ -38,16 +38,20 @@ UNAMBIGUOUS_SPEED_MPS = 400.0 / 3.6
 _K = np.arange(-STAGGER_MAX_WRAPS, STAGGER_MAX_WRAPS + 1)     # wraps considered on each side
 
 
+def spatial_frequency(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
+    """d·sinθ modulo 1, in [−½, ½): the phase step between elements the beamformer measures, cycles."""
+    return np.mod(preset.element_spacing_wl * np.sin(azimuth_rad) + 0.5, 1.0) - 0.5
+
+
 def apparent_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
-    """The azimuth an array measures: d·sinθ modulo 1 (grating lobes where the element spacing d exceeds λ/2),
-    as the signal chain's beamformer and the detection level see it. A one-channel radar measures no angle
-    (its beam's direction is its angle): the azimuth is returned as it is, as for d ≤ λ/2."""
+    """The azimuth an array measures: :func:`spatial_frequency` back to an angle (grating lobes where the element
+    spacing d exceeds λ/2), as the signal chain's beamformer and the detection level see it. A one-channel radar
+    measures no angle (its beam's direction is its angle): the azimuth is returned as it is, as for d ≤ λ/2."""
     az = np.asarray(azimuth_rad, dtype=np.float64)
     d = preset.element_spacing_wl
     if preset.num_virtual < 2 or d <= 0.5:
         return az
-    u = np.mod(d * np.sin(az) + 0.5, 1.0) - 0.5
-    return np.arcsin(np.clip(u / d, -1.0, 1.0))
+    return np.arcsin(np.clip(spatial_frequency(preset, az) / d, -1.0, 1.0))
 
 
 def stationary_range_rate(azimuth_rad: np.ndarray, sensor_velocity: tuple[float, float]) -> np.ndarray:

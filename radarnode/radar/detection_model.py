@@ -44,7 +44,7 @@ from radarnode.dsp import spread
 from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
-from radarnode.radar import equation
+from radarnode.radar import ambiguity, equation
 from radarnode.radar.calibration import DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION, chain_efficiency
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers
@@ -87,7 +87,7 @@ def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarra
     m = p.num_chirps
     rb = np.mod(scat.range_m / p.range_resolution_m, n_r)
     vb = np.mod(scat.range_rate_mps / p.doppler_bin_mps + m / 2, m) - m / 2
-    u = np.mod(p.element_spacing_wl * np.sin(scat.azimuth_rad) + 0.5, 1.0) - 0.5
+    u = ambiguity.spatial_frequency(p, scat.azimuth_rad)
     return rb, vb, u
 
 
