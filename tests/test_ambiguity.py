@@ -350,3 +350,17 @@ def test_auto_is_refused_on_a_one_channel_radar():
     p = radar_config(sc).preset
     with pytest.raises(ConfigError, match="'auto' is not allowed with preset scanning_ka"):
         make_model("auto", Scene(sc), p, np.random.default_rng(1), radar_config(sc).signal)
+
+
+@pytest.mark.parametrize("factor, expected", [(1 - 1e-6, False), (1.0, True), (1 + 1e-6, True), (2.0, True)])
+def test_unambiguous_switches_at_400_kmh(factor, expected):
+    """Just below, at, just above and at twice the 400-km/h alias speed (the chirp period scaled to put it there)."""
+    import dataclasses
+    base = PRESETS["fast_chirp"]
+    p = dataclasses.replace(base, chirp_period_s=base.chirp_period_s * base.alias_speed_mps
+                            / (ambiguity.UNAMBIGUOUS_SPEED_MPS * factor))
+    assert p.alias_speed_mps == pytest.approx(ambiguity.UNAMBIGUOUS_SPEED_MPS * factor, rel=1e-9)
+    assert ambiguity.unambiguous(p) is expected
+    _, state = ambiguity.apparent_range_rate(p, np.array([-30.0]), np.array([0.1]), (20.0, 0.0))
+    from radarnode.perception.types import AMBIG_UNAMBIGUOUS
+    assert bool(state[0] == AMBIG_UNAMBIGUOUS) == expected
