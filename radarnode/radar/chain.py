@@ -17,7 +17,7 @@ from radarnode.errors import ConfigError
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
-from radarnode.dsp.peaks import PatchFit, interpolate, local_maxima, patch_halves
+from radarnode.dsp.peaks import MigrationFit, PatchFit, interpolate, local_maxima, patch_halves
 from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
@@ -44,6 +44,10 @@ class DspConfig:
     range_ml: bool = True          # maximum-likelihood range and Doppler refinement of the strongest peaks
     range_ml_max_peaks: int = 128
     ml_patch_half: int = 12        # its patch: ±12 bins each way where no other peak is near
+    #: beyond the alias speed, fit the wrapped peaks again with a range-migrating target's response (TDM presets:
+    #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 50–70 m/s, at about 4× the
+    #: frame's cost at motorway speed (BENCHMARKS.md, benchmarks/migration_fit.py); off by default
+    migration_fit: bool = False
     max_detections: int = 1000
 
     def __post_init__(self) -> None:
@@ -60,6 +64,7 @@ class DspConfig:
         validate.boolean("range_ml", self.range_ml)
         validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
         validate.integer("ml_patch_half", self.ml_patch_half, lo=1, hi=32)
+        validate.boolean("migration_fit", self.migration_fit)
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
@@ -73,6 +78,18 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
     stat = DetectionStatistic(cfar, w_r, w_d)
     tables.warm(stat)                 # its tables from the disk cache (radarnode.radar.tables), or built and kept
     return stat
+
+
+#: the largest patch half-width of the migrating fit (radarnode.dsp.peaks.MigrationFit): several times the separable
+#: fit's cost a cell, so it fits a smaller patch
+MIGRATION_HALF = 12
+#: a wrap hypothesis is taken where its beam's log-likelihood (beam peak power over one channel's noise power times
+#: the channels) beats no wrap's by this much. Both hypotheses have the same free parameters (offsets, angle,
+#: amplitude), so the likelier one is taken; the margin keeps noise from wrapping weak unaliased targets (a 3σ
+#: excursion of the difference). A margin proportional to the beam's power (6/√SNR of it, the rule before) took the
+#: wrap in only 0–20 % of the frames at ρ = 20 dB beyond the alias speed: the angle of a wrapped target was wrong
+#: (tests/test_ambiguity.py)
+WRAP_LL_MARGIN = 9.0
 
 
 class DspChain:
@@ -91,6 +108,7 @@ class DspChain:
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
         self._patch_fits: dict[tuple[int, int], PatchFit] = {}
+        self._migration_fits: dict[tuple[int, int], MigrationFit] = {}
 
     def _patch_fit(self, m: int, n: int) -> PatchFit:
         """The patch fit for maps of m Doppler × n range bins (built once per shape)."""
@@ -101,32 +119,90 @@ class DspChain:
                                                 max(half, 1))
         return self._patch_fits[(m, n)]
 
-    def _tdm_hypotheses(self, snap: np.ndarray, sigma2: float) -> np.ndarray:
-        """Undo the TDM phase of an aliased speed: each snapshot under the N_tx hypotheses of its wrap count.
+    def _tdm_hypotheses(self, snap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each snapshot under the N_tx hypotheses of its wrap count, and each one's beam peak.
 
         With N_tx transmitters in TDM, a speed that aliases by k·2·v_max leaves a
         phase step of 2π·k/N_tx from one transmitter's slot to the next after the
         (aliased) Doppler correction: for k not a multiple of N_tx the virtual
         array is broken into sub-arrays and the beam splits into ghosts (a post
-        at motorway speed seen at two wrong angles). The hypothesis whose beam
-        peak is highest restores the array (production TDM-MIMO radars do this).
-        Returns the snapshots with the chosen correction, shape (n, channels).
+        at motorway speed seen at two wrong angles). The hypothesis h ≡ k (mod
+        N_tx) whose beam peak is highest restores the array (production TDM-MIMO
+        radars do this). Returns the corrected snapshots, shape (n, N_tx,
+        channels), and the beam peaks, shape (n, N_tx).
         """
         p = self.preset
         h = np.arange(p.num_tx)
         fix = np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)       # (hyp, channel)
         trial = snap[:, None, :] * fix[None, :, :]                                       # (n, hyp, channel)
-        peak = self.doa.spectrum(trial).max(axis=-1)                                      # (n, hyp)
-        # another wrap count only where it beats "no wrap" by more than noise can: the beam peak's power
-        # fluctuates by about 2/√SNR of itself, so the margin is three times that (2 dB at a beam SNR of
-        # 20 dB, 0.7 dB at 30 dB). A fixed 2 dB kept the wrong hypothesis of a 3-transmitter array (its
-        # staircase costs only ~1.5 dB) at every SNR; none at all scattered weak unaliased targets.
-        best = np.argmax(peak, axis=1)
-        with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
-            beam_snr = peak[:, 0] / (snap.shape[1] * max(sigma2, np.finfo(np.float64).tiny))
-        margin = 1.0 + 6.0 / np.sqrt(np.maximum(beam_snr, 1.0))
-        best = np.where(peak[np.arange(peak.shape[0]), best] > peak[:, 0] * margin, best, 0)
-        return trial[np.arange(snap.shape[0]), best]
+        return trial, self.doa.spectrum(trial).max(axis=-1)                              # (n, hyp)
+
+    def _positions(self, d, r, dd, dr, m: int, n: int):
+        """Range bins, speed (positive: opening; λ at mid-sweep) and range of peaks at cells (d, r) + offsets."""
+        p = self.preset
+        r_bins = r + dr
+        speed = (d - m // 2 + dd) * p.doppler_bin_mps
+        # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative
+        # range); coupling and migration to mid-frame are taken out (RadarPreset.range_rate_coupling_s)
+        range_m = np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s, n * p.range_resolution_m)
+        return r_bins, speed, range_m
+
+    def _tdm_phase(self, speed: np.ndarray) -> np.ndarray:
+        """The factor that takes each channel's TDM Doppler phase out of snapshots at ``speed``, (n, channels)."""
+        fd = 2.0 * speed / self.preset.centre_wavelength_m
+        return np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * self.preset.chirp_period_s)
+
+    def _refit_migrating(self, rd, again, wrap, d, r, dd, dr, speed, halves, trial, peak, snap
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Fit the peaks ``again`` once more as targets that migrate in range (radarnode.dsp.peaks.MigrationFit).
+
+        Their TDM beam says the speed wrapped: k ≡ ``wrap`` (mod N_tx) alias numbers, so the true speed is the
+        measured one plus k·2·v_max, and the target moved μ = v·T_frame/Δr range bins during the frame. Of the
+        two counts next to zero, k = wrap and wrap − N_tx (further ones are more than N_tx·v_max away, beyond
+        what a road holds for N_tx ≤ 3), the one whose migrating response explains the patch better at the still
+        fit's offsets is fitted; the fit replaces the still one where its beam is stronger than the still fit's
+        under the same wrap: ``trial`` (the snapshots under each hypothesis) and ``peak`` (their beam peaks)
+        are updated in place, and (peaks, Doppler offsets, range offsets) of the fits that replaced the still
+        ones are returned, for the caller to take where the wrap is taken. ``snap``: the patch fit's snapshots,
+        whose channel vectors the search projects the patches on.
+        """
+        p = self.preset
+        m, n = rd.shape[1], rd.shape[2]
+        fit = self._migration_fit(m, n)
+        two = np.concatenate([again, again])
+        k = np.concatenate([wrap[again], wrap[again] - p.num_tx])
+        mu = (speed[two] + k * (2.0 * p.max_unambiguous_speed_mps)) * p.integration_time_s / p.range_resolution_m
+        # the two alias numbers judged at the still fit's offsets (one evaluation each), the better one fitted
+        like = np.full(two.size, -np.inf)
+        ok = np.abs(mu) <= MigrationFit.MAX_MIGRATION
+        if ok.any():
+            s0 = fit(rd, d[two[ok]], r[two[ok]], dd[two[ok]], dr[two[ok]], mu[ok], halves[two[ok]], search=False)[2]
+            like[ok] = np.sum(s0.real ** 2 + s0.imag ** 2, axis=1)
+        pick = np.argmax(like.reshape(2, -1), axis=0)
+        j = pick * again.size + np.arange(again.size)
+        keep = np.isfinite(like[j])
+        again, j = again[keep], j[keep]
+        if not again.size:
+            return again, np.zeros(0), np.zeros(0)
+        fd, fr, fitted = fit(rd, d[again], r[again], dd[again], dr[again], mu[j], halves[again], snap[again])
+        _, moved, _ = self._positions(d[again], r[again], fd, fr, m, n)
+        h = wrap[again]
+        fitted *= self._tdm_phase(moved) * np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)
+        beam = self.doa.spectrum(fitted).max(axis=-1)
+        better = beam > peak[again, h]
+        take = again[better]
+        trial[take, wrap[take]] = fitted[better]
+        peak[take, wrap[take]] = beam[better]
+        return take, fd[better], fr[better]
+
+    def _migration_fit(self, m: int, n: int) -> MigrationFit:
+        """The migrating-target fit for maps of m Doppler × n range bins (built once per shape)."""
+        if (m, n) not in self._migration_fits:
+            cfg = self.config
+            half = max(min(MIGRATION_HALF, (min(m, n) - 1) // 2), 1)
+            self._migration_fits[(m, n)] = MigrationFit(window(cfg.doppler_window, m), window(cfg.range_window, n),
+                                                        half)
+        return self._migration_fits[(m, n)]
 
     def process(self, cube: np.ndarray, decimation: int = 1, power_reduction_db: float = 0.0) -> Detections:
         """Detections of one cube (shape (channel, chirp, sample)); see the module docstring."""
@@ -161,6 +237,7 @@ class DspChain:
             d, r = d[keep], r[keep]
         dd, dr = interpolate(power, d, r, cfg.range_window if cfg.range_window == cfg.doppler_window else "")
         snap = rd[:, d, r].T                                            # (detection, channel): the peak cell
+        fitted_half = None                  # the patch half-widths of the peaks the patch fit refined (0: not)
         if cfg.range_ml and d.size:
             # the strongest peaks get the joint maximum-likelihood fit over a patch of cells around them
             # (radarnode.dsp.peaks.PatchFit: ~1.1-1.2× the CRB where the three-bin interpolator is ~2.7× in range
@@ -172,20 +249,32 @@ class DspChain:
             fd, fr, s_top = fit(rd, d[top], r[top], dd[top], dr[top], half)
             dd, dr, snap = dd.copy(), dr.copy(), snap.copy()
             dd[top], dr[top], snap[top] = fd, fr, s_top
-        r_bins = r + dr
-        speed = (d - m // 2 + dd) * p.doppler_bin_mps               # positive: opening (λ at mid-sweep)
-        # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative
-        # range); coupling and migration to mid-frame are taken out (RadarPreset.range_rate_coupling_s)
-        range_m = np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s,
-                         n * p.range_resolution_m)
+            fitted_half = np.zeros(d.size, dtype=np.int64)
+            fitted_half[top] = half
+        r_bins, speed, range_m = self._positions(d, r, dd, dr, m, n)
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
-        fd = 2.0 * speed / p.centre_wavelength_m
-        snap = snap * np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * p.chirp_period_s)
+        raw, snap = snap, snap * self._tdm_phase(speed)
         # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
         # which a strong target's sidelobes inflate
         sigma2 = stat.noise_floor(power)
         if p.num_tx > 1 and d.size:
-            snap = self._tdm_hypotheses(snap, sigma2)
+            trial, peak = self._tdm_hypotheses(snap)
+            rows = np.arange(d.size)
+            wrap = 1 + np.argmax(peak[:, 1:], axis=1)           # the best wrap hypothesis other than none
+            if fitted_half is not None and cfg.migration_fit:
+                # a wrap count is also a true speed, and with it a range migration over the frame: the fitted peaks
+                # where a wrap looks better than none are fitted again with that migrating target's response
+                # (radarnode.dsp.peaks.MigrationFit), and the wrap is judged on that fit's beam
+                again = np.flatnonzero((fitted_half > 0) & (peak[rows, wrap] > peak[:, 0]))
+                moved = self._refit_migrating(rd, again, wrap, d, r, dd, dr, speed, fitted_half, trial, peak, raw) \
+                    if again.size else None
+            wrap = np.where(peak[rows, wrap] - peak[:, 0] > WRAP_LL_MARGIN * c * sigma2, wrap, 0)
+            if fitted_half is not None and cfg.migration_fit and moved is not None:
+                take, fd, fr = moved
+                taken = wrap[take] != 0              # the migrating fit's offsets where its wrap was taken
+                dd[take[taken]], dr[take[taken]] = fd[taken], fr[taken]
+                r_bins, speed, range_m = self._positions(d, r, dd, dr, m, n)
+            snap = trial[rows, wrap]
         with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
             energy = np.minimum(np.maximum(power[d, r] / sigma2 - c, 1e-30), 1e300)
         delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))
