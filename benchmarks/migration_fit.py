@@ -1,24 +1,32 @@
-"""What the signal chain's estimates lose to range migration: the chain against a fit that knows the migration.
+"""What range migration costs the chain's estimates, and what the chain's migration fit wins back.
 
 The patch fit of the chain (``radarnode.dsp.peaks.PatchFit``) models a peak as one
 window response in Doppler times one in range: a target that does not move
 between chirps. On the mimo12 preset (TDM, 7.7 ms of chirps) a target moves
 v·7.7 ms during the frame, 1.23 range bins at 70 m/s, and its peak is smeared
-across range bins along slow time. This script measures how much of the gap to
-the Cramér–Rao bound that costs: per radial speed, the chain's range-rate RMSE
-and range standard deviation against the bound, beside those of a fit on the
-same 25 × 25-cell patch whose template is the exact noise-free response of the
-point target (``synthesize_rd`` without noise, so migration, coupling and the
-in-chirp term are all in it) at the candidate range and speed, with the true
-alias number (what a fit knows that has resolved the ambiguity), the channels'
-amplitudes concentrated out and the windows' noise correlation whitened
-(Nelder–Mead from the chain's estimate).
+across range bins along slow time. ``signal.dsp.migration_fit`` (off by
+default) fits the wrapped peaks again with the migrating target's response
+(``radarnode.dsp.peaks.MigrationFit``; the true speed, and so the migration,
+from the TDM wrap count).
 
-Scene as in ``benchmarks/signal_speed.py``: a point target at ρ = 20 dB, 50 m,
-10°, radial speed as given. Slow (each template is a whole synthesis): about
-3 minutes for 20 trials at one speed.
+Table 1, accuracy: a point target at ρ = 20 dB, 50 m, 10°, per radial speed, the
+chain without and with the option — range-rate RMSE, range standard deviation
+(the chain's range carries the coupling of the aliased speed beyond v_max, a
+bias of about 40 cm that neither fit removes) and azimuth RMSE, each over its
+Cramér–Rao bound (``radarnode.radar.equation``), ``--trials`` noise draws a row.
 
-Run: ``.venv/bin/python benchmarks/migration_fit.py [--speeds -70,0] [--trials 20]``. Prints a Markdown table.
+Table 2, cost: the mimo12 highway frame (``scenarios/highway_mimo12.yaml``, as in
+``benchmarks/signal_speed.py``: synthesize_rd + process_rd, median of ``--frames``
+frames, OpenBLAS on one thread) at ego speeds 0–70 m/s, without and with the option.
+
+``--exact-trials N`` adds the independent reference of the previous runs: a fit on
+the same 25 × 25-cell patch whose template is the exact noise-free response of
+the target (``synthesize_rd`` without noise, so migration, coupling and the
+in-chirp term are all in it) at the true alias number, Nelder–Mead from the
+chain's estimate (slow: about 3 minutes for 20 trials at one speed).
+
+Run: ``.venv/bin/python benchmarks/migration_fit.py [--speeds -70,-60,-50,-40,-32,0,50] [--trials 200]
+[--frames 9] [--exact-trials 0]``. Prints Markdown tables.
 """
 
 from __future__ import annotations
@@ -38,10 +46,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from radarnode.radar import equation  # noqa: E402
-from radarnode.radar.chain import DspChain  # noqa: E402
+from radarnode.radar.chain import DspChain, DspConfig  # noqa: E402
 from radarnode.radar.scatterers import point_targets  # noqa: E402
 from radarnode.radar.setup import load_scenario, radar_config  # noqa: E402
 from radarnode.radar.signal_model import num_range_samples, synthesize_rd  # noqa: E402
+from benchmarks.signal_speed import _median_ms, highway_frames  # noqa: E402
 
 RHO_DB, R0_M, AZ_DEG, HALF = 20.0, 50.0, 10.0, 12
 
@@ -95,21 +104,73 @@ def run(p, speed_mps: float, trials: int) -> dict:
             "fit_v": np.sqrt(np.mean(fe[:, 1] ** 2)) / crb_v, "fit_r": np.sqrt(np.mean(fe[:, 0] ** 2)) / crb_r}
 
 
+def chain_errors(p, speed_mps: float, trials: int, migration: bool) -> dict:
+    """The chain's (range, wrapped range-rate, azimuth) errors of the detection nearest the truth, per trial."""
+    chain = DspChain(p, DspConfig(migration_fit=migration))
+    n, m, c = num_range_samples(p), p.num_chirps, p.num_virtual
+    vmax = p.alias_speed_mps
+    errs = []
+    for t in range(trials):
+        rd = synthesize_rd(p, point_targets([R0_M], [AZ_DEG], [speed_mps], 0.0), np.random.default_rng(1000 + t),
+                           snr_db=RHO_DB - 10.0 * math.log10(n * m * c))
+        det = chain.process_rd(rd)
+        dv = (det.range_rate_mps - speed_mps + vmax) % (2.0 * vmax) - vmax
+        cost = np.abs(det.range_m - R0_M) / 1.5 + np.abs(dv) / 1.0
+        if len(det) and cost.min() <= 1.0:
+            j = int(np.argmin(cost))
+            errs.append((det.range_m[j] - R0_M, dv[j], det.azimuth_rad[j] - math.radians(AZ_DEG)))
+    e = np.array(errs).reshape(-1, 3)
+    crb_r, crb_v = float(equation.crb_range_m(p, RHO_DB)), float(equation.crb_speed_mps(p, RHO_DB))
+    crb_a = float(equation.crb_azimuth_rad(p, RHO_DB, math.radians(AZ_DEG)))
+    return {"found": len(e), "rate": np.sqrt(np.mean(e[:, 1] ** 2)) / crb_v, "range": e[:, 0].std() / crb_r,
+            "az": np.sqrt(np.mean(e[:, 2] ** 2)) / crb_a}
+
+
+def frame_ms(ego_mps: float, frames: int, migration: bool, dtype) -> float:
+    p, scats = highway_frames(ego_mps, frames)
+    chain = DspChain(p, DspConfig(migration_fit=migration))
+    rng = np.random.default_rng(1)
+    return _median_ms(lambda s: chain.process_rd(synthesize_rd(p, s, rng, dtype=dtype)), scats)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--speeds", default="-70,0", help="radial speeds, m/s, comma-separated (default -70,0)")
-    ap.add_argument("--trials", type=int, default=20, help="noise draws per speed (default 20)")
+    ap.add_argument("--speeds", default="-70,-60,-50,-40,-32,0,50", help="radial speeds, m/s, comma-separated")
+    ap.add_argument("--trials", type=int, default=200, help="noise draws per speed (default 200; 0: no table)")
+    ap.add_argument("--frames", type=int, default=9, help="highway frames per ego speed for the cost (0: none)")
+    ap.add_argument("--exact-trials", type=int, default=0, help="noise draws of the exact-template reference")
     args = ap.parse_args()
     p = radar_config(load_scenario(ROOT / "scenarios" / "highway_mimo12.yaml")).preset
-    print(f"Point target, ρ = {RHO_DB:g} dB, {R0_M:g} m, {AZ_DEG:g}°, preset {p.name}; {args.trials} trials a row; "
-          "RMSE (range: standard deviation for the chain, whose range carries the aliased coupling) over the CRB.\n")
-    print("| radial speed | migration over the frame | chain detected | chain: rate RMSE/CRB | chain: range std/CRB "
-          "| exact-migration fit: rate RMSE/CRB | exact-migration fit: range RMSE/CRB |")
-    print("|---:|---:|---:|---:|---:|---:|---:|")
-    for v in (float(s) for s in args.speeds.split(",")):
-        r = run(p, v, args.trials)
-        print(f"| {v:g} m/s | {r['mu']:.2f} bins | {r['found']}/{args.trials} | {r['chain_v']:.2f} "
-              f"| {r['chain_r']:.2f} | {r['fit_v']:.2f} | {r['fit_r']:.2f} |", flush=True)
+    speeds = [float(x) for x in args.speeds.split(",")]
+    if args.trials:
+        print(f"Point target, ρ = {RHO_DB:g} dB, {R0_M:g} m, {AZ_DEG:g}°, preset {p.name} (alias speed "
+              f"{p.alias_speed_mps:.2f} m/s); {args.trials} trials a row; each figure over its CRB.\n")
+        print("| radial speed | migration over the frame | detected | rate RMSE | range std | azimuth RMSE "
+              "| with migration_fit: rate RMSE | range std | azimuth RMSE |")
+        print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    for v in speeds if args.trials else ():
+        a, b = (chain_errors(p, v, args.trials, mig) for mig in (False, True))
+        mu = abs(v) * p.integration_time_s / p.range_resolution_m
+        print(f"| {v:g} m/s | {mu:.2f} bins | {a['found']}/{args.trials} | {a['rate']:.2f} | {a['range']:.2f} "
+              f"| {a['az']:.2f} | {b['rate']:.2f} | {b['range']:.2f} | {b['az']:.2f} |", flush=True)
+    if args.frames:
+        print(f"\nhighway_mimo12.yaml frame, synthesize_rd + process_rd, median of {args.frames} frames, "
+              f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}:\n")
+        print("| ego speed | complex64 | with migration_fit | ratio | complex128 | with migration_fit | ratio |")
+        print("|---:|---:|---:|---:|---:|---:|---:|")
+        for ego in (0.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0):
+            t = [frame_ms(ego, args.frames, mig, dt) for dt in (np.complex64, np.complex128) for mig in (False, True)]
+            print(f"| {ego:g} m/s | {t[0]:.1f} ms | {t[1]:.1f} ms | {t[1] / t[0]:.2f} | {t[2]:.1f} ms "
+                  f"| {t[3]:.1f} ms | {t[3] / t[2]:.2f} |", flush=True)
+    if args.exact_trials:
+        print("\nThe exact-template reference (Nelder–Mead on the whole synthesis):\n")
+        print("| radial speed | migration over the frame | chain detected | chain: rate RMSE/CRB "
+              "| chain: range std/CRB | exact-migration fit: rate RMSE/CRB | exact-migration fit: range RMSE/CRB |")
+        print("|---:|---:|---:|---:|---:|---:|---:|")
+        for v in speeds:
+            r = run(p, v, args.exact_trials)
+            print(f"| {v:g} m/s | {r['mu']:.2f} bins | {r['found']}/{args.exact_trials} | {r['chain_v']:.2f} "
+                  f"| {r['chain_r']:.2f} | {r['fit_v']:.2f} | {r['fit_r']:.2f} |", flush=True)
 
 
 if __name__ == "__main__":
