@@ -61,6 +61,24 @@ class FftBeamformer(Doa):
         spec = scipy.fft.fft(snapshots, n=self.n_fft, axis=-1)
         return (spec.real ** 2 + spec.imag ** 2)
 
+    def explained(self, snapshots: np.ndarray, sources: int = 2) -> np.ndarray:
+        """The energy of each snapshot that 1, 2, … ``sources`` plane waves explain, found one after another (the
+        beam's peak on the FFT grid, its projection taken out, the residual searched again): shape
+        snapshots.shape[:-1] + (sources,), cumulative."""
+        x = np.array(snapshots, dtype=np.complex128)
+        n_el = x.shape[-1]
+        k = np.arange(n_el)
+        out = np.zeros(x.shape[:-1] + (sources,))
+        total = np.zeros(x.shape[:-1])
+        for q in range(sources):
+            spec = self.spectrum(x)
+            b = np.argmax(spec, axis=-1)
+            total = total + np.take_along_axis(spec, b[..., None], axis=-1)[..., 0] / n_el
+            out[..., q] = total
+            a = np.exp(2j * np.pi * k * b[..., None] / self.n_fft)                  # the peak's steering vector
+            x = x - a * (np.sum(a.conj() * x, axis=-1, keepdims=True) / n_el)
+        return out
+
     def estimate(self, snapshots: np.ndarray) -> np.ndarray:
         snapshots = np.atleast_2d(snapshots)
         p = np.where(self.valid[None, :], self.spectrum(snapshots), 0.0)

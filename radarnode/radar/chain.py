@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode import validate
-from radarnode.errors import ConfigError
+from radarnode.errors import ConfigError, FieldError
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
@@ -45,8 +45,8 @@ class DspConfig:
     range_ml_max_peaks: int = 128
     ml_patch_half: int = 12        # its patch: ±12 bins each way where no other peak is near
     #: beyond the alias speed, fit the wrapped peaks again with a range-migrating target's response (TDM presets:
-    #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 50–70 m/s, at about 4× the
-    #: frame's cost at motorway speed (BENCHMARKS.md, benchmarks/migration_fit.py); off by default
+    #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 40–70 m/s, at 2–2.7× the
+    #: frame's cost at 60–70 m/s ego speed (BENCHMARKS.md, benchmarks/migration_fit.py); off by default
     migration_fit: bool = False
     max_detections: int = 1000
 
@@ -65,6 +65,9 @@ class DspConfig:
         validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
         validate.integer("ml_patch_half", self.ml_patch_half, lo=1, hi=32)
         validate.boolean("migration_fit", self.migration_fit)
+        if self.migration_fit and not self.range_ml:
+            raise FieldError("migration_fit", self.migration_fit,
+                             "false while range_ml is false (the migration fit refines the patch fit's peaks)")
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
@@ -83,13 +86,17 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
 #: the largest patch half-width of the migrating fit (radarnode.dsp.peaks.MigrationFit): several times the separable
 #: fit's cost a cell, so it fits a smaller patch
 MIGRATION_HALF = 12
-#: a wrap hypothesis is taken where its beam's log-likelihood (beam peak power over one channel's noise power times
-#: the channels) beats no wrap's by this much. Both hypotheses have the same free parameters (offsets, angle,
-#: amplitude), so the likelier one is taken; the margin keeps noise from wrapping weak unaliased targets (a 3σ
-#: excursion of the difference). A margin proportional to the beam's power (6/√SNR of it, the rule before) took the
-#: wrap in only 0–20 % of the frames at ρ = 20 dB beyond the alias speed: the angle of a wrapped target was wrong
-#: (tests/test_ambiguity.py)
+#: a wrap hypothesis is taken where its score (DspChain._wrap_score: the energy one plane wave, or two less a
+#: penalty, explain under it, over one channel's noise power: a log-likelihood) beats no wrap's by this much; the
+#: margin keeps noise from wrapping weak unaliased targets (a 3σ excursion of the difference). A margin
+#: proportional to the beam's power (6/√SNR of it, the rule before) took the wrap in only 0–20 % of the frames at
+#: ρ = 20 dB beyond the alias speed: the angle of a wrapped target was wrong (tests/test_ambiguity.py)
 WRAP_LL_MARGIN = 9.0
+#: a second plane wave counts in a wrap hypothesis' score only for what it explains beyond this (log-likelihood):
+#: about what the strongest of the beam's independent looks at noise explains
+WRAP_SOURCE_PENALTY = 20.0
+#: the margin's growth for a wrap judged on a migrating fit (signal.dsp.migration_fit), log-likelihood
+MIGRATION_EXTRA_MARGIN = 3.0
 
 
 class DspChain:
@@ -104,6 +111,10 @@ class DspChain:
             raise ConfigError(f"signal.dsp.doa: value {config.doa!r} is not allowed with preset {preset.name} "
                               f"({preset.num_virtual} virtual channel(s)); expected 'fft' (super-resolution needs "
                               "3 channels or more)")
+        if config.migration_fit and preset.num_tx < 2:
+            raise ConfigError(f"signal.dsp.migration_fit: value true is not allowed with preset {preset.name} "
+                              f"({preset.num_tx} transmitter): the true speed of a wrapped peak comes from the TDM "
+                              "wrap count; expected false")
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
@@ -119,7 +130,7 @@ class DspChain:
                                                 max(half, 1))
         return self._patch_fits[(m, n)]
 
-    def _tdm_hypotheses(self, snap: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def _tdm_hypotheses(self, snap: np.ndarray, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
         """Each snapshot under the N_tx hypotheses of its wrap count, and each one's beam peak.
 
         With N_tx transmitters in TDM, a speed that aliases by k·2·v_max leaves a
@@ -129,13 +140,21 @@ class DspChain:
         at motorway speed seen at two wrong angles). The hypothesis h ≡ k (mod
         N_tx) whose beam peak is highest restores the array (production TDM-MIMO
         radars do this). Returns the corrected snapshots, shape (n, N_tx,
-        channels), and the beam peaks, shape (n, N_tx).
+        channels), and each one's score (:meth:`_wrap_score`), shape (n, N_tx).
         """
         p = self.preset
         h = np.arange(p.num_tx)
         fix = np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)       # (hyp, channel)
         trial = snap[:, None, :] * fix[None, :, :]                                       # (n, hyp, channel)
-        return trial, self.doa.spectrum(trial).max(axis=-1)                              # (n, hyp)
+        return trial, self._wrap_score(trial, sigma2)                                    # (n, hyp)
+
+    def _wrap_score(self, snapshots: np.ndarray, sigma2: float) -> np.ndarray:
+        """How well a snapshot is explained under a wrap hypothesis, in units of one channel's noise power
+        times σ² (a log-likelihood): by one plane wave, or by two less WRAP_SOURCE_PENALTY, whichever is more.
+        One plane wave alone would take the ghost lobes of two sources in one cell (posts left and right) for a
+        wrap; two alone would explain the split beam of one wrapped source nearly as well as its wrap."""
+        e = self.doa.explained(snapshots, 2)
+        return np.maximum(e[..., 0], e[..., 1] - WRAP_SOURCE_PENALTY * sigma2)
 
     def _positions(self, d, r, dd, dr, m: int, n: int):
         """Range bins, speed (positive: opening; λ at mid-sweep) and range of peaks at cells (d, r) + offsets."""
@@ -152,7 +171,7 @@ class DspChain:
         fd = 2.0 * speed / self.preset.centre_wavelength_m
         return np.exp(-2j * np.pi * fd[:, None] * self._tx_of[None, :] * self.preset.chirp_period_s)
 
-    def _refit_migrating(self, rd, again, wrap, d, r, dd, dr, speed, halves, trial, peak, snap
+    def _refit_migrating(self, rd, again, wrap, d, r, dd, dr, speed, halves, trial, peak, snap, sigma2
                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fit the peaks ``again`` once more as targets that migrate in range (radarnode.dsp.peaks.MigrationFit).
 
@@ -171,7 +190,7 @@ class DspChain:
         fit = self._migration_fit(m, n)
         two = np.concatenate([again, again])
         k = np.concatenate([wrap[again], wrap[again] - p.num_tx])
-        mu = (speed[two] + k * (2.0 * p.max_unambiguous_speed_mps)) * p.integration_time_s / p.range_resolution_m
+        mu = (speed[two] + k * (2.0 * p.alias_speed_mps)) * p.integration_time_s / p.range_resolution_m
         # the two alias numbers judged at the still fit's offsets (one evaluation each), the better one fitted
         like = np.full(two.size, -np.inf)
         ok = np.abs(mu) <= MigrationFit.MAX_MIGRATION
@@ -188,7 +207,7 @@ class DspChain:
         _, moved, _ = self._positions(d[again], r[again], fd, fr, m, n)
         h = wrap[again]
         fitted *= self._tdm_phase(moved) * np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)
-        beam = self.doa.spectrum(fitted).max(axis=-1)
+        beam = self._wrap_score(fitted, sigma2)
         better = beam > peak[again, h]
         take = again[better]
         trial[take, wrap[take]] = fitted[better]
@@ -258,7 +277,7 @@ class DspChain:
         # which a strong target's sidelobes inflate
         sigma2 = stat.noise_floor(power)
         if p.num_tx > 1 and d.size:
-            trial, peak = self._tdm_hypotheses(snap)
+            trial, peak = self._tdm_hypotheses(snap, sigma2)
             rows = np.arange(d.size)
             wrap = 1 + np.argmax(peak[:, 1:], axis=1)           # the best wrap hypothesis other than none
             if fitted_half is not None and cfg.migration_fit:
@@ -266,9 +285,15 @@ class DspChain:
                 # where a wrap looks better than none are fitted again with that migrating target's response
                 # (radarnode.dsp.peaks.MigrationFit), and the wrap is judged on that fit's beam
                 again = np.flatnonzero((fitted_half > 0) & (peak[rows, wrap] > peak[:, 0]))
-                moved = self._refit_migrating(rd, again, wrap, d, r, dd, dr, speed, fitted_half, trial, peak, raw) \
+                moved = self._refit_migrating(rd, again, wrap, d, r, dd, dr, speed, fitted_half, trial, peak, raw,
+                                              sigma2) \
                     if again.size else None
-            wrap = np.where(peak[rows, wrap] - peak[:, 0] > WRAP_LL_MARGIN * c * sigma2, wrap, 0)
+            margin = np.full(d.size, WRAP_LL_MARGIN * sigma2)
+            if fitted_half is not None and cfg.migration_fit and moved is not None:
+                # a wrap judged on a migrating fit had the better of two alias numbers and a fit of its own: the
+                # margin grows by what that choice can win from noise
+                margin[moved[0]] += MIGRATION_EXTRA_MARGIN * sigma2
+            wrap = np.where(peak[rows, wrap] - peak[:, 0] > margin, wrap, 0)
             if fitted_half is not None and cfg.migration_fit and moved is not None:
                 take, fd, fr = moved
                 taken = wrap[take] != 0              # the migrating fit's offsets where its wrap was taken
