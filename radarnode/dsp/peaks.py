@@ -140,6 +140,18 @@ class _PatchAxis:
         return out                                                           # (..., J)
 
 
+#: patch sizes computed together: a peak's patch is embedded in the smallest of these that holds it
+PATCH_BUCKETS = (3, 12, 32)
+
+
+def _patch_axes(doppler_window: np.ndarray, range_window: np.ndarray, max_half: int):
+    """(max_half, buckets, {bucket: (Doppler axis, range axis)}) of a patch fit of half-width up to ``max_half``."""
+    if not (isinstance(max_half, (int, np.integer)) and 1 <= max_half <= 32):
+        raise ValueError(f"max_half: value {max_half!r} is not allowed; expected an integer in 1…32")
+    buckets = sorted({b for b in PATCH_BUCKETS if b < max_half} | {int(max_half)})
+    return int(max_half), buckets, {b: (_PatchAxis(doppler_window, b), _PatchAxis(range_window, b)) for b in buckets}
+
+
 class PatchFit:
     """Maximum-likelihood range and Doppler of single peaks from a patch of the windowed range–Doppler spectrum.
 
@@ -172,15 +184,8 @@ class PatchFit:
     #: alternate searches: (half-span, points) of each round's grid around the current estimate, bins
     ROUNDS = ((0.5, 9), (1.0 / 16.0, 5), (1.0 / 64.0, 5))
 
-    #: patch sizes computed together: a peak's patch is embedded in the smallest of these that holds it
-    BUCKETS = (3, 12, 32)
-
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
-        if not (isinstance(max_half, (int, np.integer)) and 1 <= max_half <= 32):
-            raise ValueError(f"max_half: value {max_half!r} is not allowed; expected an integer in 1…32")
-        self.max_half = int(max_half)
-        self.buckets = sorted({b for b in self.BUCKETS if b < self.max_half} | {self.max_half})
-        self.axes = {b: (_PatchAxis(doppler_window, b), _PatchAxis(range_window, b)) for b in self.buckets}
+        self.max_half, self.buckets, self.axes = _patch_axes(doppler_window, range_window, max_half)
 
     def __call__(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
                  half: np.ndarray | int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -353,12 +358,8 @@ class MigrationFit:
               (1.0 / 256.0, 5))
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
-        if not (isinstance(max_half, (int, np.integer)) and 1 <= max_half <= 32):
-            raise ValueError(f"max_half: value {max_half!r} is not allowed; expected an integer in 1…32")
-        self.max_half = int(max_half)
         # patches embedded in the smallest bucket that holds them, as PatchFit does
-        self.buckets = sorted({b for b in PatchFit.BUCKETS if b < self.max_half} | {self.max_half})
-        self.axes = {b: (_PatchAxis(doppler_window, b), _PatchAxis(range_window, b)) for b in self.buckets}
+        self.max_half, self.buckets, self.axes = _patch_axes(doppler_window, range_window, max_half)
         wd = np.asarray(doppler_window, dtype=np.float64)
         wr = np.asarray(range_window, dtype=np.float64)
         M = wd.size
