@@ -152,6 +152,19 @@ def _patch_axes(doppler_window: np.ndarray, range_window: np.ndarray, max_half: 
     return int(max_half), buckets, {b: (_PatchAxis(doppler_window, b), _PatchAxis(range_window, b)) for b in buckets}
 
 
+def _per_bucket(buckets, halves: np.ndarray, fd: np.ndarray, fr: np.ndarray, channels: int, fit):
+    """Run ``fit(sel, bucket)`` -> (δ_d, δ_r, snapshot) on the peaks of each patch size bucket (a loop over a few
+    sizes) and gather the results: (δ_d (K,), δ_r (K,), snapshots (K, channels))."""
+    out_d, out_r = fd.copy(), fr.copy()
+    snap = np.zeros((fd.size, channels), dtype=np.complex128)
+    bucket = np.asarray(buckets)[np.searchsorted(buckets, halves)]
+    for b in buckets:
+        sel = np.flatnonzero(bucket == b)
+        if sel.size:
+            out_d[sel], out_r[sel], snap[sel] = fit(sel, b)
+    return out_d, out_r, snap
+
+
 class PatchFit:
     """Maximum-likelihood range and Doppler of single peaks from a patch of the windowed range–Doppler spectrum.
 
@@ -215,15 +228,8 @@ class PatchFit:
         halves = np.full(k, self.max_half) if half is None else np.broadcast_to(np.asarray(half), (k,))
         if np.any((halves < 1) | (halves > self.max_half)):
             raise ValueError(f"half: values must lie in 1…{self.max_half}")
-        out_d, out_r = fd.copy(), fr.copy()
-        snap = np.zeros((k, rd.shape[0]), dtype=np.complex128)
-        bucket = np.asarray(self.buckets)[np.searchsorted(self.buckets, halves)]
-        for b in self.buckets:                                   # a loop over a few patch sizes
-            sel = np.flatnonzero(bucket == b)
-            if sel.size:
-                out_d[sel], out_r[sel], snap[sel] = self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], halves[sel],
-                                                              *self.axes[b])
-        return out_d, out_r, snap
+        return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0],
+                           lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], halves[sel], *self.axes[b]))
 
     def _fit(self, rd, d, r, fd, fr, halves, axis_d: _PatchAxis, axis_r: _PatchAxis):
         """:meth:`__call__` for peaks whose patches fit in the axes' size."""
@@ -420,16 +426,10 @@ class MigrationFit:
                             self.max_half)
         if np.any(halves < 1):
             raise ValueError("half: values must be at least 1")
-        out_d, out_r = fd.copy(), fr.copy()
-        snap = np.zeros((k, rd.shape[0]), dtype=np.complex128)
-        bucket = np.asarray(self.buckets)[np.searchsorted(self.buckets, halves)]
-        for b in self.buckets:                                   # a loop over a few patch sizes
-            sel = np.flatnonzero(bucket == b)
-            if sel.size:
-                out_d[sel], out_r[sel], snap[sel] = self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], mu[sel],
-                                                              halves[sel], *self.axes[b],
-                                                              None if channels is None else channels[sel], search)
-        return out_d, out_r, snap
+        return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0],
+                           lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], mu[sel], halves[sel],
+                                                    *self.axes[b], None if channels is None else channels[sel],
+                                                    search))
 
     def _fit(self, rd, d, r, fd, fr, mu, halves, axis_d: _PatchAxis, axis_r: _PatchAxis, channels=None,
              search_offsets: bool = True):
