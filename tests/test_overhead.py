@@ -337,8 +337,13 @@ def test_a_glinting_deck_is_one_object_whose_detections_show_their_spread(level)
     seen = [s for s in ids if s]
     assert len(seen) >= 0.9 * len(ids[20:]) - 2
     # one object most of the way, as the real sensor's tracker holds an extended reflector; without the spread in
-    # the gate the deck's glint made a new object every few cycles (8 IDs on the way at detection level)
-    assert len(set().union(*seen)) <= 3, seen
+    # the gate the deck's glint made a new object every few cycles (8 IDs on the way at detection level). In the
+    # last 20 cycles (75–100 m) the deck spans ±17°, beyond the beam, and the chain reports it in up to 4 places
+    # across its width (−14 … +15 m; 3 before the TDM wrap test put its wrapped cells at their angles): up to 4
+    # objects, each held for at least 10 cycles, not a new one every few cycles
+    assert len(set().union(*seen)) <= 4, seen
+    life = {i: sum(i in s for s in seen) for i in set().union(*seen)}
+    assert min(life.values()) >= 10, life
     assert np.median(spreads) > 0.03          # the deck spans most of a 14° beam: its snapshot says so
 
 
