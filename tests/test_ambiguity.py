@@ -480,3 +480,16 @@ def test_the_migration_fit_is_refused_where_it_cannot_work():
     with pytest.raises(FieldError, match="migration_fit.*range_ml"):
         DspConfig(migration_fit=True, range_ml=False)
     DspChain(PRESETS["ars408_like"], DspConfig(migration_fit=True))        # two transmitters: allowed
+
+
+@pytest.mark.parametrize("dsp, said", [("{migration_fit: maybe}", "value 'maybe' is not allowed; expected true or false"),
+                                       ("{migration_fit: 1}", "expected true or false"),
+                                       ("{migration_fit: true, range_ml: false}", "while range_ml is false")])
+def test_a_scenario_with_a_bad_migration_fit_says_the_file_field_and_value(tmp_path, dsp, said):
+    from radarnode.errors import ScenarioError
+    from radarnode.radar.setup import load_scenario
+    f = tmp_path / "s.yaml"
+    f.write_text(f"name: t\nduration_s: 1.0\nseed: 1\nradar: {{preset: mimo12}}\nsignal: {{dsp: {dsp}}}\nactors: []\n")
+    with pytest.raises(ScenarioError) as err:
+        radar_config(load_scenario(f))
+    assert str(f) in str(err.value) and "signal.dsp.migration_fit" in str(err.value) and said in str(err.value)

@@ -290,3 +290,19 @@ def test_migration_fit_reaches_the_cramer_rao_bound_where_the_separable_fit_does
     rmse_sep = np.sqrt(np.mean(np.square(err_sep), axis=0)) / crb
     rmse_mig = np.sqrt(np.mean(np.square(err_mig), axis=0)) / crb
     assert np.all(rmse_mig < 1.3) and np.any(rmse_sep > 1.5), (rmse_mig, rmse_sep)
+
+
+@pytest.mark.parametrize("mu, ok", [(2.9, True), (3.0, True), (3.1, False), (6.0, False), (-3.1, False)])
+def test_migration_fit_takes_migrations_up_to_its_limit_and_refuses_beyond(mu, ok):
+    """MAX_MIGRATION = 3 bins (the Chebyshev response's error there: 1.3e-3 of its norm): below and at it a fit,
+    above it and at twice it an error that says the limit."""
+    from radarnode.dsp.peaks import MigrationFit
+    m = n = 64
+    rd = _migrating_map(m, n, 30.2, 20.4, 0.0, np.ones(2))
+    fit = MigrationFit(window("hann", m), window("hann", n), 12)
+    args = (rd, np.array([30]), np.array([20]), np.zeros(1), np.zeros(1), np.array([mu]))
+    if ok:
+        assert np.all(np.isfinite(fit(*args)[2]))
+    else:
+        with pytest.raises(ValueError, match="within ±3"):
+            fit(*args)

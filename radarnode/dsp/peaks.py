@@ -435,7 +435,6 @@ class MigrationFit:
              search_offsets: bool = True):
         m, k = axis_d.max_half, d.size
         off = np.arange(-m, m + 1, dtype=np.float64)
-        j = off.size
         di = (d[:, None] + np.arange(-m, m + 1)[None, :]) % rd.shape[1]
         ri = (r[:, None] + np.arange(-m, m + 1)[None, :]) % rd.shape[2]
         x = rd[:, di[:, :, None], ri[:, None, :]].astype(np.complex128, copy=False)       # (C, K, J_d, J_r)

@@ -83,8 +83,9 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
     return stat
 
 
-#: the largest patch half-width of the migrating fit (radarnode.dsp.peaks.MigrationFit): several times the separable
-#: fit's cost a cell, so it fits a smaller patch
+#: the largest patch half-width of the migrating fit (radarnode.dsp.peaks.MigrationFit): the separable fit's default;
+#: smaller patches lost accuracy (half-widths 3 and 6: 1.5× and 1.3× the CRB in range rate at −70 m/s, measured on
+#: an earlier version of the fit)
 MIGRATION_HALF = 12
 #: a wrap hypothesis is taken where its score (DspChain._wrap_score: the energy one plane wave, or two less a
 #: penalty, explain under it, over one channel's noise power: a log-likelihood) beats no wrap's by this much; the
@@ -187,6 +188,8 @@ class DspChain:
         """
         p = self.preset
         m, n = rd.shape[1], rd.shape[2]
+        if not again.size:
+            return again, np.zeros(0), np.zeros(0)
         fit = self._migration_fit(m, n)
         two = np.concatenate([again, again])
         k = np.concatenate([wrap[again], wrap[again] - p.num_tx])
@@ -280,22 +283,20 @@ class DspChain:
             trial, peak = self._tdm_hypotheses(snap, sigma2)
             rows = np.arange(d.size)
             wrap = 1 + np.argmax(peak[:, 1:], axis=1)           # the best wrap hypothesis other than none
+            margin = np.full(d.size, WRAP_LL_MARGIN * sigma2)
+            take = None                         # the peaks a migrating fit was judged on (signal.dsp.migration_fit)
             if fitted_half is not None and cfg.migration_fit:
                 # a wrap count is also a true speed, and with it a range migration over the frame: the fitted peaks
                 # where a wrap looks better than none are fitted again with that migrating target's response
                 # (radarnode.dsp.peaks.MigrationFit), and the wrap is judged on that fit's beam
                 again = np.flatnonzero((fitted_half > 0) & (peak[rows, wrap] > peak[:, 0]))
-                moved = self._refit_migrating(rd, again, wrap, d, r, dd, dr, speed, fitted_half, trial, peak, raw,
-                                              sigma2) \
-                    if again.size else None
-            margin = np.full(d.size, WRAP_LL_MARGIN * sigma2)
-            if fitted_half is not None and cfg.migration_fit and moved is not None:
+                take, fd, fr = self._refit_migrating(rd, again, wrap, d, r, dd, dr, speed, fitted_half, trial, peak,
+                                                     raw, sigma2)
                 # a wrap judged on a migrating fit had the better of two alias numbers and a fit of its own: the
                 # margin grows by what that choice can win from noise
-                margin[moved[0]] += MIGRATION_EXTRA_MARGIN * sigma2
+                margin[take] += MIGRATION_EXTRA_MARGIN * sigma2
             wrap = np.where(peak[rows, wrap] - peak[:, 0] > margin, wrap, 0)
-            if fitted_half is not None and cfg.migration_fit and moved is not None:
-                take, fd, fr = moved
+            if take is not None and take.size:
                 taken = wrap[take] != 0              # the migrating fit's offsets where its wrap was taken
                 dd[take[taken]], dr[take[taken]] = fd[taken], fr[taken]
                 r_bins, speed, range_m = self._positions(d, r, dd, dr, m, n)
