@@ -152,6 +152,19 @@ def _tone_map(m, n, xd, xr, amp, rng=None, noise=1.0):
     return np.fft.fft(np.fft.fft(x, axis=2), axis=1)
 
 
+def _rmse_over_crb(errors, rho):
+    """RMSE of (Doppler, range) errors in bins over the CRB of one tone's frequency, √6/(2π√ρ) bins."""
+    return np.sqrt(np.mean(np.square(errors), axis=0)) / (math.sqrt(6) / (2 * math.pi * math.sqrt(rho)))
+
+
+def _strongest_cell(rd, lo, hi):
+    """The non-coherent power map of ``rd`` and its strongest cell within [lo, hi) on both axes, as (1,) arrays."""
+    p = (np.abs(rd) ** 2).sum(axis=0)
+    sub = p[lo:hi, lo:hi]
+    d, r = np.unravel_index(np.argmax(sub), sub.shape)
+    return p, np.array([d + lo]), np.array([r + lo])
+
+
 @pytest.mark.parametrize("xd, xr", [(10.3, 20.0), (20.5, 7.25), (0.2, 63.6), (31.0, 0.5)])
 def test_patch_fit_is_exact_without_noise_and_keeps_the_channel_phases(xd, xr):
     from radarnode.dsp.peaks import PatchFit
@@ -180,17 +193,12 @@ def test_patch_fit_reaches_the_cramer_rao_bound_where_the_interpolator_does_not(
         xd, xr = 30.0 + rng.random(), 30.0 + rng.random()
         amp = np.exp(2j * np.pi * rng.random(c))                   # unit amplitude: ρ = m·n·c / noise
         rd = _tone_map(m, n, xd, xr, amp, rng, noise=m * n * c / rho)
-        p = (np.abs(rd) ** 2).sum(axis=0)
-        sub = p[28:34, 28:34]
-        d, r = np.unravel_index(np.argmax(sub), sub.shape)
-        d, r = np.array([d + 28]), np.array([r + 28])
+        p, d, r = _strongest_cell(rd, 28, 34)
         dd, dr = interpolate(p, d, r)
         fd, fr, _ = fit(rd, d, r, dd, dr)
         err_fit.append(((d + fd)[0] - xd, (r + fr)[0] - xr))
         err_3.append(((d + dd)[0] - xd, (r + dr)[0] - xr))
-    crb = math.sqrt(6) / (2 * math.pi * math.sqrt(rho))
-    rmse_fit = np.sqrt(np.mean(np.square(err_fit), axis=0)) / crb
-    rmse_3 = np.sqrt(np.mean(np.square(err_3), axis=0)) / crb
+    rmse_fit, rmse_3 = _rmse_over_crb(err_fit, rho), _rmse_over_crb(err_3, rho)
     assert np.all(rmse_fit < 1.3) and np.all(rmse_3 > 1.5), (rmse_fit, rmse_3)
 
 
@@ -276,19 +284,14 @@ def test_migration_fit_reaches_the_cramer_rao_bound_where_the_separable_fit_does
         xd, xr = 30.0 + rng.random(), 30.0 + rng.random()
         amp = np.exp(2j * np.pi * rng.random(c))
         rd = _migrating_map(m, n, xd, xr, mu, amp, rng, noise=m * n * c / rho)
-        p = (np.abs(rd) ** 2).sum(axis=0)
-        sub = p[28:35, 28:35]
-        d, r = np.unravel_index(np.argmax(sub), sub.shape)
-        d, r = np.array([d + 28]), np.array([r + 28])
+        p, d, r = _strongest_cell(rd, 28, 35)
         dd, dr = interpolate(p, d, r)
         fd, fr, s = sep(rd, d, r, dd, dr)
         gd, gr, _ = mig(rd, d, r, fd, fr, np.array([mu]), channels=s)
         truth_d = xd + mu * (n - 1) / (2 * n)
         err_sep.append(((d + fd)[0] - truth_d, (r + fr)[0] - xr))
         err_mig.append(((d + gd)[0] - truth_d, (r + gr)[0] - xr))
-    crb = math.sqrt(6) / (2 * math.pi * math.sqrt(rho))
-    rmse_sep = np.sqrt(np.mean(np.square(err_sep), axis=0)) / crb
-    rmse_mig = np.sqrt(np.mean(np.square(err_mig), axis=0)) / crb
+    rmse_sep, rmse_mig = _rmse_over_crb(err_sep, rho), _rmse_over_crb(err_mig, rho)
     assert np.all(rmse_mig < 1.3) and np.any(rmse_sep > 1.5), (rmse_mig, rmse_sep)
 
 
