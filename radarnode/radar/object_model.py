@@ -56,7 +56,9 @@ MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are
 MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
-CHUNK_CYCLES = 256        # cycles whose physics is computed in one vectorised pass (fewer for crowded scenes)
+CHUNK_CYCLES = 1024       # at most this many cycles' physics in one vectorised pass (fewer for crowded scenes) …
+FIRST_CHUNK_CYCLES = 128  # … the first chunk after a start or a configuration change this many, …
+CHUNK_GROWTH = 4          # … each next one this many times the last
 CHUNK_OCCLUSION_CELLS = 16_000_000   # bound on the (cycles, actors, samples, actors) occlusion test
 DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixed, for reproducibility)
 _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
@@ -64,8 +66,8 @@ _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW5 = np.array([bin(i & ((1 << 5) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
-#: the object list's fields of a chunk, gathered in two (T, n, F) tables so that a cycle takes its objects' rows
-#: with one fancy index per table instead of one per field (ObjectList field, chunk key)
+#: the object list's fields of a chunk after position and velocity, gathered in row tables (ObjectModel._track)
+#: so that a cycle takes its objects with one slice per table (ObjectList field, chunk key)
 _OBJECT_FLOATS = (("rcs_dbsm", "rcs_obj"), ("dist_long_sigma_m", "sig_long"), ("dist_lat_sigma_m", "sig_lat"),
                   ("vrel_long_sigma_mps", "sig_vlong"), ("vrel_lat_sigma_mps", "sig_vlat"),
                   ("arel_long_sigma_mps2", "sig_along"), ("arel_lat_sigma_mps2", "sig_alat"),
@@ -89,6 +91,49 @@ class StepInfo:
     #: signal level with ``keep_rd`` set: the non-coherent range–Doppler power of the cycle's first chirp sequence,
     #: shape (doppler, range), Doppler fftshifted (bin M/2 is zero speed), range bins of ``range_resolution_m``
     rd_power: np.ndarray | None = None
+
+
+def _expand(values, rows: np.ndarray, t_n: int):
+    """An array computed at the cycles ``rows`` (axis 0) as one of all ``t_n`` cycles, zeros (False) elsewhere."""
+    if not isinstance(values, np.ndarray) or values.ndim == 0:
+        return values
+    out = np.zeros((t_n,) + values.shape[1:], dtype=values.dtype)
+    out[rows] = values
+    return out
+
+
+def _dyn_codes(gx: np.ndarray, gy: np.ndarray, speed: np.ndarray, moving: np.ndarray, ever: np.ndarray
+               ) -> np.ndarray:
+    """ARS 408 DynProp from the ground velocity (sensor axes) and whether the object was ever seen moving: the
+    heading against the sensor's x axis, > 135° oncoming, 45°–135° crossing; standing: stopped or stationary."""
+    cos45 = 0.7071067811865476
+    dyn = np.where(gx < -cos45 * speed, DYN_ONCOMING, np.where(gx < cos45 * speed, DYN_CROSSING_MOVING, DYN_MOVING))
+    return np.where(moving, dyn, np.where(ever, DYN_STOPPED, DYN_STATIONARY))
+
+
+class ObjectStepInfo:
+    """:class:`StepInfo` of the object level: the last step's detections, built from its chunk when asked for."""
+
+    level = "object"
+    scatterers = None
+    cube = None
+    rd_power = None
+
+    def __init__(self) -> None:
+        self.seconds: dict = {}
+        self._at: tuple | None = None
+
+    def at(self, ch: dict, i: int, reportable: np.ndarray) -> None:
+        self._at = (ch, i, reportable)
+
+    @property
+    def detections(self) -> Detections | None:
+        if self._at is None:
+            return None
+        ch, i, reportable = self._at
+        seen = np.flatnonzero(ch["detected"][i] & reportable)
+        d = ch["detection_floats"][i, seen]
+        return Detections(d[:, 0], d[:, 1], d[:, 2], d[:, 3], d[:, 4], seen, ch["ambig"][i, seen])
 
 
 @dataclass(frozen=True)
@@ -148,12 +193,33 @@ def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, 
     sectors = [s for s in preset.fov if s.half_angle_deg < 90.0]
     if inside.all() or not sectors:
         return x, y
-    ch, sh = np.cos(view.orientation_rad)[..., None], np.sin(view.orientation_rad)[..., None]
+    # only the boxes whose nearest point is outside while part of them may be inside: beyond every sector's range,
+    # or with an azimuth extent (from the corners: every direction for a box round the sensor or behind it) clear
+    # of every sector, no part is; computed on the others, put back in place
+    h_max = max(math.radians(sc.half_angle_deg) for sc in sectors)
+    out = (~inside & (r_xy <= max(sc.max_range_m for sc in sectors)) & (view.az_hi_rad >= -h_max)
+           & (view.az_lo_rad <= h_max))
+    if not out.any():
+        return x, y
+    bx, by = _nearest_on_sectors(preset, sectors, x[out], y[out], z[out], view.centre_x_m[out],
+                                 view.centre_y_m[out], view.orientation_rad[out],
+                                 np.broadcast_to(length_m, x.shape)[out], np.broadcast_to(width_m, x.shape)[out])
+    x_out, y_out = x.copy(), y.copy()
+    x_out[out], y_out[out] = bx, by
+    return x_out, y_out
+
+
+def _nearest_on_sectors(preset: RadarPreset, sectors: list, x: np.ndarray, y: np.ndarray, z: np.ndarray,
+                        centre_x: np.ndarray, centre_y: np.ndarray, orientation: np.ndarray, length_m: np.ndarray,
+                        width_m: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`nearest_in_fov` for boxes whose nearest point is outside every sector, flat arrays (m,): the point of
+    each box nearest to the sensor within the sectors, or (x, y) where no part of the box is in one."""
+    ch, sh = np.cos(orientation)[..., None], np.sin(orientation)[..., None]
     hl, hw = (length_m / 2.0)[..., None], (width_m / 2.0)[..., None]
     ux = np.array([1.0, 1.0, -1.0, -1.0])          # corners in box axes, in order round the box
     uy = np.array([1.0, -1.0, -1.0, 1.0])
-    ax = view.centre_x_m[..., None] + ch * hl * ux - sh * hw * uy               # (..., 4)
-    ay = view.centre_y_m[..., None] + sh * hl * ux + ch * hw * uy
+    ax = centre_x[..., None] + ch * hl * ux - sh * hw * uy               # (..., 4)
+    ay = centre_y[..., None] + sh * hl * ux + ch * hw * uy
     bx, by = np.roll(ax, -1, axis=-1), np.roll(ay, -1, axis=-1)                 # each edge A → B
     dx, dy = bx - ax, by - ay
     best = np.full(x.shape, np.inf)
@@ -190,7 +256,7 @@ def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, 
                        np.inf, rng)
         k = np.argmin(rng, axis=-1)[..., None]
         r_k = np.take_along_axis(rng, k, axis=-1)[..., 0]
-        take = (r_k < best) & ~inside
+        take = r_k < best
         best = np.where(take, r_k, best)
         bx_out = np.where(take, np.take_along_axis(px, k, axis=-1)[..., 0], bx_out)
         by_out = np.where(take, np.take_along_axis(py, k, axis=-1)[..., 0], by_out)
@@ -213,17 +279,27 @@ def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, 
     n = range_m.shape[-1]
     if n == 0:
         return np.ones(range_m.shape)
-    u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
-    samples = az_lo[..., :, None] + u * (az_hi - az_lo)[..., :, None]                   # (..., n, S)
     nearer = (range_m[..., None, :] < range_m[..., :, None]) & occluder[..., None, :]    # (..., target, occluder)
     if elevation is not None:
         lo, hi, up = elevation
         point = np.where(up, lo, 0.0)                                                    # (..., n)
         behind = (lo[..., None, :] <= point[..., :, None]) & (point[..., :, None] <= hi[..., None, :])
         nearer &= behind | ~(up[..., :, None] | up[..., None, :])
-    covered = ((samples[..., None] >= az_lo[..., None, None, :]) & (samples[..., None] <= az_hi[..., None, None, :])
-               & nearer[..., :, None, :]).any(axis=-1)                                  # (..., n, S)
-    return 1.0 - covered.mean(axis=-1)
+    # the sampled test only at the times where a nearer occluder's extent meets a target's (a margin of 1e-9 rad
+    # for the samples' rounding): elsewhere nothing is covered, the fraction is exactly 1
+    nearer &= ((az_lo[..., None, :] <= az_hi[..., :, None] + 1e-9)
+               & (az_hi[..., None, :] >= az_lo[..., :, None] - 1e-9))
+    nearer = nearer.reshape(-1, n, n)
+    rows = np.flatnonzero(nearer.any(axis=(1, 2)))
+    frac = np.ones(nearer.shape[:2])
+    if rows.size:
+        lo, hi = az_lo.reshape(-1, n)[rows], az_hi.reshape(-1, n)[rows]
+        u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
+        smp = lo[..., :, None] + u * (hi - lo)[..., :, None]                              # (rows, n, S)
+        covered = ((smp[..., None] >= lo[:, None, None, :]) & (smp[..., None] <= hi[:, None, None, :])
+                   & nearer[rows][:, :, None, :]).any(axis=-1)                          # (rows, n, S)
+        frac[rows] = 1.0 - covered.mean(axis=-1)
+    return frac.reshape(range_m.shape)
 
 
 def sigma_to_xy(range_m, azimuth_rad, sigma_r, sigma_az):
@@ -232,6 +308,46 @@ def sigma_to_xy(range_m, azimuth_rad, sigma_r, sigma_az):
     sx = np.sqrt((c * sigma_r) ** 2 + (range_m * s * sigma_az) ** 2)
     sy = np.sqrt((s * sigma_r) ** 2 + (range_m * c * sigma_az) ** 2)
     return sx, sy
+
+
+_TRACKER_FIELDS = ("hist", "misses", "alive", "obj_id", "state", "was_moving")
+
+
+class _TrackerField:
+    """One field of the internal tracker's state after the last step (``_TRACKER_FIELDS``): the row of the chunk
+    that step took (a chunk holds every cycle's, computed in one pass), or the value last set."""
+
+    def __set_name__(self, owner, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj, owner=None):
+        if obj is None:
+            return self
+        pos = obj.__dict__.get("_pos")
+        if pos is not None:
+            return pos[0]["trk"][self.name][pos[1]]
+        return obj.__dict__["_trk"][self.name]
+
+    def __set__(self, obj, value) -> None:
+        obj._settle()
+        obj.__dict__.setdefault("_trk", {})[self.name] = value
+
+
+def affine_scan(alpha: np.ndarray, beta: np.ndarray, x0: np.ndarray) -> np.ndarray:
+    """x_k = alpha_k·x_(k−1) + beta_k for k = 0 … T−1 (axis 0) from x_(−1) = x0, every k at once.
+
+    The maps are composed by a log-depth (Hillis–Steele) scan: about 3·log2(T) array operations instead of a
+    loop over k. ``alpha`` broadcasts against ``beta`` (shape (T, …)), ``x0`` against ``beta[0]``. The sum is
+    taken in another order than the loop's, so the result differs from it in the last bits (about 1e-16
+    relative per term); a factor 0 restarts the recurrence exactly."""
+    a = np.array(np.broadcast_to(alpha, beta.shape), dtype=np.float64)
+    b = np.array(beta, dtype=np.float64)
+    s = 1
+    while s < a.shape[0]:
+        b[s:] = a[s:] * b[:-s] + b[s:]       # the right sides are evaluated before the assignment
+        a[s:] = a[s:] * a[:-s]
+        s *= 2
+    return a * x0 + b
 
 
 class ObjectModel:
@@ -245,6 +361,13 @@ class ObjectModel:
         The only source of randomness; seed it from the scenario.
     """
 
+    hist = _TrackerField()          # detection history, bit 0 = the last cycle (n,) uint8
+    misses = _TrackerField()        # consecutive misses (n,)
+    alive = _TrackerField()         # confirmed and not lost (n,) bool
+    obj_id = _TrackerField()        # the object's ID, −1 when none (n,)
+    state = _TrackerField()         # last reported x, y, vx, vy (n, 4)
+    was_moving = _TrackerField()    # seen moving while listed, ever (n,) bool: "stopped" rather than "stationary"
+
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                  options: SignalOptions = SignalOptions()) -> None:
         self.scene = scene
@@ -253,17 +376,17 @@ class ObjectModel:
         # the signal chain's detection test: every level detects with the same law (issue 9)
         self.statistic = DspChain(preset, options.dsp).statistic
         self.extended = (scene.length_m > 1.0) | (scene.width_m > 1.0)
-        self.info = StepInfo(level="object")
+        self.info = ObjectStepInfo()
         n = scene.n
-        self.hist = np.zeros(n, dtype=np.uint8)      # detection history, bit 0 = this cycle
-        self.alive = np.zeros(n, dtype=bool)
-        self.obj_id = np.full(n, -1, dtype=np.int64)
-        self.misses = np.zeros(n, dtype=np.int64)
-        self.was_moving = np.zeros(n, dtype=bool)
-        self.state = np.zeros((n, 4))                  # last reported x, y, vx, vy
+        self._pos: tuple[dict, int] | None = None     # the chunk and row of the last step
+        self._trk = {"hist": np.zeros(n, dtype=np.uint8), "misses": np.zeros(n, dtype=np.int64),
+                     "alive": np.zeros(n, dtype=bool), "obj_id": np.full(n, -1, dtype=np.int64),
+                     "state": np.zeros((n, 4)), "was_moving": np.zeros(n, dtype=bool)}
         self.last_t = 0.0
         self.cycle = 0
         self.period_s = scene.scenario.period_s
+        #: the cycles the run will step (0 … planned_cycles − 1), when its runner knows (None: the scenario's)
+        self.planned_cycles: int | None = None
         self._cache: dict | None = None
         self._gain_state: dict[int, np.ndarray] = {}   # power-averaged elevation factor before cycle k
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
@@ -289,9 +412,44 @@ class ObjectModel:
                 for name in ("u", "z")}
 
     def _chunk(self, k0: int, times: np.ndarray, config: RuntimeConfig) -> dict:
-        """Everything of cycles k0 … that does not depend on the tracker's state, as (T, n) arrays."""
-        p, sc = self.preset, self.scene
+        """Everything of cycles k0 … that does not depend on the tracker's state, as (T, n) arrays.
+
+        The physics (:meth:`_physics`) is computed only at the cycles where some actor may have a part inside a
+        sector (:meth:`_cycles_in_view`; every cycle in a scene with structures above the road, whose averaged
+        gain runs over all of them): at the others none is in the field of view, so none is detected, listed or
+        coasting, and their rows hold zeros that nothing reads."""
+        sc = self.scene
         truth = sc.views(times)
+        draws = self._draws(k0, times.size)
+        u, z = draws["u"], draws["z"]
+        rows = None if sc.elevated.any() else self._cycles_in_view(truth)
+        if rows is None or rows.size == times.size:
+            ph = self._physics(truth, u, z, config)
+        else:
+            ph = {key: _expand(val, rows, times.size)
+                  for key, val in self._physics(truth.take_times(rows), u[rows], z[rows], config).items()}
+        return self._derived(k0, times, config, truth, z, ph)
+
+    def _cycles_in_view(self, truth: SensorView) -> np.ndarray:
+        """The cycles (indices) where some actor may have a part inside a sector: its nearest point within the
+        farthest sector's range and its azimuth extent (from its corners; every direction for a box round the
+        sensor or behind it) meeting the widest sector's. A necessary condition of :func:`in_fov` of the point
+        :func:`nearest_in_fov` gives (1e-6 m and rad to spare), and where every sector looks forward, a part in
+        front of the sensor."""
+        r_max = max(sector.max_range_m for sector in self.preset.fov) + 1e-6
+        h_max = max(math.radians(sector.half_angle_deg) for sector in self.preset.fov) + 1e-6
+        may = ((np.hypot(truth.x_m, truth.y_m) <= r_max) & (truth.az_hi_rad >= -h_max)
+               & (truth.az_lo_rad <= h_max))
+        if h_max < 0.5 * math.pi:       # sectors in front of the sensor: a box wholly behind it is in none
+            c, s_ = np.abs(np.cos(truth.orientation_rad)), np.abs(np.sin(truth.orientation_rad))
+            may &= truth.centre_x_m + 0.5 * (c * self.scene.length_m + s_ * self.scene.width_m) > -1e-6
+        return np.flatnonzero(may.any(axis=-1))
+
+    def _physics(self, truth: SensorView, u: np.ndarray, z: np.ndarray, config: RuntimeConfig) -> dict:
+        """What the radar measures of each actor at the times of ``truth`` ((T, n) arrays): field of view,
+        occlusion, SNR, Pd, the measurements and their σ, and the reported body; ``u`` and ``z`` are the cycles'
+        draws."""
+        p, sc = self.preset, self.scene
         # what the radar measures of a body is its nearest point within the field of view
         x_in, y_in = nearest_in_fov(p, truth, sc.length_m, sc.width_m)
         view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
@@ -315,8 +473,6 @@ class ObjectModel:
         pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
             np.where(sc.swerling == 0, stat.pd_of_snr(snr, 0), stat.pd_of_snr(snr, 1))
         pd = pd * self._masking(view, rng_m, snr, observable)
-        draws = self._draws(k0, times.size)
-        u, z = draws["u"], draws["z"]
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
         er, ev, ea = chain_efficiency(snr)
@@ -353,12 +509,34 @@ class ObjectModel:
         # a detection is reported where it was measured inside the field of view, as the other levels report
         # theirs (radarnode.radar.models.reportable): a body at a sector's edge is seen on its inner side only
         measured_in = in_fov(p, m_r, m_az) & (m_r <= config.max_distance_m)
-        flags = self._track_flags(observable & (u < pd) & measured_in, fov, ground < MOVING_THRESHOLD_MPS)
-        if sc.elevated.any():
+        out = {"det_in": observable & (u < pd) & measured_in, "fov": fov, "still": ground < MOVING_THRESHOLD_MPS,
+               "az": az, "pd": pd, "sx": sx, "sy": sy, "orientation_truth": view.orientation_rad,
+               "meas": meas, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr,
+               "ambig": ambig, "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
+               # the acceleration reported keeps the model's small noise: drawn with σ_alat (about 1 m/s² from the
+               # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
+               "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6]}
+        if sc.elevated.any():     # the reported body after the track's averaged gain (_derived; every cycle)
+            out["body"] = (view, rng_m, az, rcs_body, snr, gain, ground)
+        else:
+            out.update(self._reported_body(view, rng_m, az, rcs_body, snr, z, ground))
+        return out
+
+    def _derived(self, k0: int, times: np.ndarray, config: RuntimeConfig, truth: SensorView, z: np.ndarray,
+                 ph: dict) -> dict:
+        """The tracker's flags over the chunk (:meth:`_track_flags`) and the object list's fields that follow
+        from them and the physics ``ph``, for every cycle of the chunk."""
+        p, sc = self.preset, self.scene
+        flags = self._track_flags(ph.pop("det_in"), ph["fov"], ph.pop("still"))
+        if "body" in ph:
             # the object's reported RCS is its track's average in power (RCS_GAIN per measured cycle, from the
             # track's first detection, as the detection level's tracker and the real sensor report it): so is this
             # range-dependent factor
+            view, rng_m, az_b, rcs_body, snr_b, gain, ground = ph.pop("body")
             rcs_body = rcs_body + self._averaged_gain_db(k0, gain, flags["detected"], flags["first_hit"])
+            ph.update(self._reported_body(view, rng_m, az_b, rcs_body, snr_b, z, ground))
+        az, pd, sx, sy, sig_v = ph.pop("az"), ph["pd"], ph.pop("sx"), ph.pop("sy"), ph["sig_v"]
+        orientation = ph.pop("orientation_truth")
         # the object list's fields that follow from the flags, for every cycle of the chunk
         det, misses, hits = flags["detected"], flags["misses"], flags["hits"]
         coast = np.where(det, 1.0, 1.0 + misses)                 # σ grows while coasting
@@ -374,29 +552,21 @@ class ObjectModel:
         sig_along = accel_sigma_mps2(sig_vlong, self.period_s) * coast
         sig_alat = accel_sigma_mps2(sig_vlat, self.period_s) * coast
         sig_orient = orientation_sigma_rad(np.sqrt(0.5 * (sig_long ** 2 + sig_lat ** 2)), sc.length_m)
-        return {**flags,
+        return {**ph, **flags,
             "sig_long": sig_long, "sig_lat": sig_lat, "sig_vlong": sig_vlong, "sig_vlat": sig_vlat,
             "sig_along": sig_along, "sig_alat": sig_alat, "sig_orient": sig_orient,
-            "orientation": view.orientation_rad + sig_orient * z[:, 9],
+            "orientation": orientation + sig_orient * z[:, 9],
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
-            "k0": k0, "times": times, "config": config, "view": truth, "fov": fov,
-            "meas": meas, "pd": pd, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr, "ambig": ambig,
-            "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
-            "rcs_rep": sc.rcs_dbsm + z[:, 4],
-            **self._reported_body(view, rng_m, az, rcs_body, snr, z, ground),
-            # the acceleration reported keeps the model's small noise: drawn with σ_alat (about 1 m/s² from the
-            # lateral speed's 0.5 m/s) it would saturate ArelLat (−2.5…2.61 m/s²); its σ fields are conservative
-            "arel_long": view.ax_mps2 + 0.1 * z[:, 5], "arel_lat": view.ay_mps2 + 0.05 * z[:, 6],
+            "k0": k0, "times": times, "config": config, "view": truth, "rcs_rep": sc.rcs_dbsm + z[:, 4],
         }
 
-    @staticmethod
-    def _tables(ch: dict) -> dict:
-        """The per-cycle lists' fields of a chunk as (T, n, F) tables (float64 and int64, the fields' own dtypes)."""
-        ch["object_floats"] = np.stack([ch[key] for _, key in _OBJECT_FLOATS], axis=-1)
-        ch["object_ints"] = np.stack([ch[key] for _, key in _OBJECT_INTS], axis=-1).astype(np.int64, copy=False)
+    def _tables(self, ch: dict) -> dict:
+        """The tracker over the chunk (:meth:`_track`) and the per-cycle lists' fields as row tables, so that a
+        cycle takes its object list with one slice per table (``obj_f`` float64 and ``obj_i`` int64, shape
+        (F, rows), the rows of cycle i ``starts[i]`` … ``starts[i+1]``)."""
+        self._track(ch)
         ch["detection_floats"] = np.stack([ch[key] for key in _DETECTION_FLOATS], axis=-1)
-        ch["arel"] = np.stack([ch["arel_long"], ch["arel_lat"]], axis=-1)
         if ch["config"].clusters:      # the actors' rows of the cluster list (_CL_* columns)
             t_n, n = ch["snr"].shape
             ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), ch["rcs_eff"], ch["sig_r"],
@@ -534,6 +704,78 @@ class ObjectModel:
         return {"detected": det, "hist": hist, "hits": _POPCOUNT[hist], "misses": misses, "alive": alive,
                 "new": alive & ~before, "lost": before & ~alive, "first_hit": first_hit}
 
+    def _track(self, ch: dict) -> None:
+        """The internal tracker over a chunk's cycles, from its state before the chunk: positions and velocities,
+        the objects' IDs, DynProp, and the object list's rows.
+
+        A detected actor takes its measurement; a continuing track's velocity is smoothed (an alpha filter, gain
+        ``VELOCITY_GAIN``) from its prediction with the acceleration it reports (so a braking lead's speed does
+        not lag by a·dt·(1−g)/g); an undetected one is predicted. Both are linear recurrences in the cycle,
+        evaluated by :func:`affine_scan`. IDs change only where a track is confirmed or lost: a loop over those
+        cycles gives a new object the lowest free ID. DynProp is computed from the sensor's true velocity; a
+        step given the ego-motion input's estimate uses it unless the estimate is closer to the truth than every
+        listed object is to a DynProp boundary (``slack``), where both give the same codes (:meth:`step`)."""
+        times, trk = ch["times"], self._trk
+        t_n, n = ch["detected"].shape
+        det, alive, new = ch["detected"], ch["alive"], ch["new"]
+        prev_t = self.last_t if self.cycle else times[0]
+        dt = (times - np.concatenate([[prev_t], times[:-1]]))[:, None, None]
+        meas = ch["meas"]
+        g = VELOCITY_GAIN
+        smooth = (det & alive & ~new)[..., None]
+        a_dt = np.stack([ch["arel_long"], ch["arel_lat"]], axis=-1) * dt
+        d3 = det[..., None]
+        v = affine_scan(np.where(d3, np.where(smooth, 1.0 - g, 0.0), 1.0),
+                        np.where(d3, np.where(smooth, (1.0 - g) * a_dt + g * meas[..., 2:4], meas[..., 2:4]), a_dt),
+                        trk["state"][:, 2:4])
+        v_before = np.concatenate([trk["state"][None, :, 2:4], v[:-1]])
+        xy = affine_scan(np.where(d3, 0.0, 1.0), np.where(d3, meas[..., :2], v_before * dt), trk["state"][:, :2])
+        state = np.concatenate([xy, v], axis=-1)
+        # IDs: the lowest free one to each newly confirmed object, freed when it is lost
+        ids = np.empty((t_n, n), dtype=np.int64)
+        cur, k_prev = trk["obj_id"].copy(), 0
+        for k in np.flatnonzero(new.any(axis=1) | ch["lost"].any(axis=1)):
+            ids[k_prev:k] = cur
+            cur[ch["lost"][k]] = -1
+            used = set(cur[cur >= 0].tolist())
+            free = (j for j in range(256) if j not in used)
+            for a in np.flatnonzero(new[k]):      # the (rare) newly confirmed objects only
+                cur[a] = next(free)
+            k_prev = k
+        ids[k_prev:] = cur
+        # DynProp with the true sensor velocity; "stopped" once seen moving while listed
+        svx, svy = ch["view"].sensor_vx_mps, ch["view"].sensor_vy_mps
+        gx, gy = v[..., 0] + svx[:, None], v[..., 1] + svy[:, None]
+        speed = np.hypot(gx, gy)
+        moving = speed >= MOVING_THRESHOLD_MPS
+        ever = np.logical_or.accumulate(alive & moving, axis=0) | trk["was_moving"]
+        dyn = _dyn_codes(gx, gy, speed, moving, ever)
+        # how far each object's ground velocity is from a DynProp boundary: the moving threshold's circle and
+        # the ±45°/±135° heading lines (their full lines: a smaller slack, never a larger one)
+        slack = np.abs(speed - MOVING_THRESHOLD_MPS)
+        slack = np.where(moving, np.minimum(slack, np.minimum(np.abs(gx - gy), np.abs(gx + gy)) * math.sqrt(0.5)),
+                         slack)
+        ch["slack"] = np.min(np.where(alive, slack, np.inf), axis=1, initial=np.inf)
+        ch["sv"] = (svx, svy)
+        ch["ever0"] = trk["was_moving"]
+        ch["by_cycle"] = False
+        ch["trk"] = {"hist": ch["hist"], "misses": ch["misses"], "alive": alive, "obj_id": ids, "state": state,
+                     "was_moving": ever}
+        kk, aa = np.nonzero(alive)
+        ch["starts"] = np.searchsorted(kk, np.arange(t_n + 1)).tolist()
+        ch["obj_f"] = np.stack([state[kk, aa, 0], state[kk, aa, 1], state[kk, aa, 2], state[kk, aa, 3]]
+                               + [ch[key][kk, aa] for _, key in _OBJECT_FLOATS])
+        ch["obj_i"] = np.stack([ids[kk, aa], dyn[kk, aa]] + [ch[key][kk, aa].astype(np.int64, copy=False)
+                                                            for _, key in _OBJECT_INTS] + [aa])
+
+    def _settle(self) -> None:
+        """Take the tracker's state out of the chunk row of the last step (before a new chunk is computed)."""
+        pos = self.__dict__.get("_pos")
+        if pos is not None:
+            ch, i = pos
+            self.__dict__["_trk"] = {name: np.array(ch["trk"][name][i]) for name in _TRACKER_FIELDS}
+            self._pos = None
+
     def _row(self, t_s: float, config: RuntimeConfig) -> tuple[dict, int]:
         period = self.period_s
         k = int(round(t_s / period))
@@ -543,11 +785,23 @@ class ObjectModel:
                 and abs(ch["times"][k - ch["k0"]] - t_s) <= 1e-9 * max(1.0, abs(t_s))):
             return ch, k - ch["k0"]
         n = max(self.scene.n, 1)
-        size = int(min(CHUNK_CYCLES, max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
+        # a run's chunks grow (64, 128, … cycles) while each follows the last under the same configuration: a
+        # start or a change costs a short chunk, a long run few passes
+        follows = ch is not None and ch["config"] == config and k == ch["k0"] + ch["times"].size
+        grown = int(min(CHUNK_CYCLES, CHUNK_GROWTH * ch["grown"] if follows else FIRST_CHUNK_CYCLES))
+        size = int(min(grown, max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
+        if self.planned_cycles is not None:          # not past the run's last cycle …
+            size = max(1, min(size, self.planned_cycles - k))
+        else:                                        # … or, not knowing it, the scenario's (a run may go beyond)
+            left = int(math.floor(self.scene.scenario.duration_s / period + 1e-9)) + 1 - k
+            if left > 0:
+                size = min(size, max(left, 8))
         if self.scene.dynamic_ego is not None:
             size = 1          # closed loop: the ego's future is not known in advance
         times = (k + np.arange(size)) * period if on_grid else np.array([t_s])
+        self._settle()
         self._cache = self._tables(self._chunk(k, times, config))
+        self._cache["grown"] = grown
         return self._cache, 0
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
@@ -556,81 +810,48 @@ class ObjectModel:
 
         ``sensor_velocity_est`` is the sensor's velocity over ground (sensor axes)
         as the radar knows it from the ego-motion input; ``None`` uses the truth.
-        The physics of the next ``CHUNK_CYCLES`` cycles is computed in one
-        vectorised pass and reused while the configuration stays the same.
+        The physics and the tracker of the next cycles (a chunk of up to
+        ``CHUNK_CYCLES``) are computed in one vectorised pass and reused while the
+        configuration stays the same: a step takes its cycle's rows. The lists'
+        arrays are views of the chunk's tables: read them, do not write to them.
         """
         if sensor_velocity_est is not None and len(sensor_velocity_est) == 3:
             sensor_velocity_est = (sensor_velocity_est[0], sensor_velocity_est[1])   # (the yaw rate: truth here)
         ch, i = self._row(t_s, config)
-        view = ch["view"].row(i)
-        detected = ch["detected"][i]
-        meas = ch["meas"][i]
-
-        # --- tracker bookkeeping (flags precomputed for the chunk) -------------
-        dt = t_s - self.last_t if self.cycle else 0.0
-        self.hist, self.misses, self.alive = ch["hist"][i], ch["misses"][i], ch["alive"][i]
-        new, lost = ch["new"][i], ch["lost"][i]
-        if lost.any():
-            self.obj_id[lost] = -1
-        if new.any():
-            self._assign_ids(np.flatnonzero(new))
-        predicted = self.state.copy()
-        predicted[:, 0:2] += predicted[:, 2:4] * dt
-        # the tracker models acceleration (it reports it in Obj_3_Extended): a braking lead's speed is
-        # predicted with it, so the smoothed speed does not lag by a·dt·(1−g)/g
-        predicted[:, 2:4] += ch["arel"][i] * dt
-        # a detected actor takes its measurement; the velocity of a continuing track is smoothed like a tracker
-        # would (the lateral part is poorly measured)
-        state = np.where(detected[:, None], meas, predicted)
-        smooth = detected & self.alive & ~new
-        if smooth.any():
-            p = predicted[smooth, 2:4]
-            state[smooth, 2:4] = p + VELOCITY_GAIN * (meas[smooth, 2:4] - p)
-        self.state = state
+        self._pos = (ch, i)
         self.last_t, self.cycle = t_s, self.cycle + 1
-
-        seen = np.flatnonzero(detected & self.reportable)
-        d = ch["detection_floats"][i, seen]
-        self.info.detections = Detections(d[:, 0], d[:, 1], d[:, 2], d[:, 3], d[:, 4], seen, ch["ambig"][i, seen])
-        idx = np.flatnonzero(self.alive)
-        objects = self._object_list(ch, i, idx, view, detected, new, sensor_velocity_est)
-        clusters = (self._cluster_list(ch, i, view, detected, meas, config, sensor_velocity_est)
+        view = ch["view"].row(i)
+        s, e = ch["starts"][i], ch["starts"][i + 1]
+        f, g = list(ch["obj_f"][:, s:e]), list(ch["obj_i"][:, s:e])
+        sv = (ch["sv"][0][i], ch["sv"][1][i]) if sensor_velocity_est is None else sensor_velocity_est
+        if ch["by_cycle"] or (sensor_velocity_est is not None
+                              and not math.hypot(sv[0] - ch["sv"][0][i], sv[1] - ch["sv"][1][i]) + 1e-9
+                              < ch["slack"][i]):
+            g[1] = self._dyn_cycle(ch, i, g[-1], f[2], f[3], sv)
+        objects = ObjectList(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
+                             f[14], f[15], f[16], g[5])
+        self.info.at(ch, i, self.reportable)
+        clusters = (self._cluster_list(ch, i, view, ch["detected"][i], ch["meas"][i], config, sv)
                     if config.clusters else _NO_CLUSTERS)
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
-    def _assign_ids(self, newcomers: np.ndarray) -> None:
-        used = set(self.obj_id[self.obj_id >= 0].tolist())
-        free = (i for i in range(256) if i not in used)
-        for k in newcomers:  # only the (rare) newly confirmed objects, not every object
-            self.obj_id[k] = next(free)
-
-    def _dyn_prop(self, idx, vx, vy, sensor_velocity_est, view):
-        svx, svy = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps,
-                                                                                  view.sensor_vy_mps)
-        gx, gy = vx + svx, vy + svy
+    def _dyn_cycle(self, ch: dict, i: int, idx: np.ndarray, vx: np.ndarray, vy: np.ndarray, sv) -> np.ndarray:
+        """DynProp of cycle i's objects with the sensor velocity ``sv`` (the ego-motion input's estimate), where
+        the chunk's codes from the truth may differ; the rest of the chunk then goes the same way, its "seen
+        moving" latch kept from the cycles stepped."""
+        if ch["by_cycle"]:
+            before = ch["ever_last"]
+        else:
+            before = ch["trk"]["was_moving"][i - 1] if i > 0 else ch["ever0"]
+            ch["by_cycle"] = True
+        gx, gy = vx + sv[0], vy + sv[1]
         speed = np.hypot(gx, gy)
         moving = speed >= MOVING_THRESHOLD_MPS
-        if idx is not None:
-            self.was_moving[idx] |= moving
-            ever = self.was_moving[idx]
-        else:
-            ever = np.zeros_like(moving)
-        # heading of the ground velocity against the sensor's x axis: > 135° oncoming, 45°–135° crossing
-        cos45 = 0.7071067811865476
-        dyn = np.where(gx < -cos45 * speed, DYN_ONCOMING, np.where(gx < cos45 * speed, DYN_CROSSING_MOVING,
-                                                                    DYN_MOVING))
-        return np.where(moving, dyn, np.where(ever, DYN_STOPPED, DYN_STATIONARY))
-
-    def _object_list(self, ch: dict, i: int, idx: np.ndarray, view: SensorView, detected: np.ndarray,
-                     new: np.ndarray, sensor_velocity_est) -> ObjectList:
-        st = self.state[idx]
-        f, g = ch["object_floats"][i, idx], ch["object_ints"][i, idx]      # (m, F): one gather per table
-        return ObjectList(
-            id=self.obj_id[idx].copy(),
-            dist_long_m=st[:, 0], dist_lat_m=st[:, 1], vrel_long_mps=st[:, 2], vrel_lat_mps=st[:, 3],
-            dyn_prop=self._dyn_prop(idx, st[:, 2], st[:, 3], sensor_velocity_est, view),
-            **{name: f[:, j] for j, (name, _) in enumerate(_OBJECT_FLOATS)},
-            **{name: g[:, j] for j, (name, _) in enumerate(_OBJECT_INTS)}, actor_index=idx)
+        ever = before.copy()
+        ever[idx] |= moving
+        ch["trk"]["was_moving"][i] = ever
+        ch["ever_last"] = ever
+        return _dyn_codes(gx, gy, speed, moving, ever[idx])
 
     def _posts(self, ch: dict) -> dict | None:
         """The guardrail posts of a chunk's cycles that the radar can see, and what does not depend on the draws:

@@ -76,11 +76,31 @@ class SensorView:
     def azimuth_rad(self) -> np.ndarray:
         return np.arctan2(self.y_m, self.x_m)
 
+    def take_times(self, rows: np.ndarray) -> SensorView:
+        """The times ``rows`` of a view computed for several times: a view of those times only."""
+        return SensorView(np.asarray(self.t_s)[rows], *(getattr(self, name)[rows] for name in _VIEW_ARRAYS),
+                          self.sensor_vx_mps[rows], self.sensor_vy_mps[rows], None if self.z_m is None else self.z_m[rows])
+
     def row(self, k: int) -> SensorView:
-        """Time ``k`` of a view computed for several times (see :meth:`Scene.views`)."""
-        f = [getattr(self, name)[k] for name in _VIEW_ARRAYS]
-        return SensorView(float(self.t_s[k]), *f, float(self.sensor_vx_mps[k]), float(self.sensor_vy_mps[k]),
-                          None if self.z_m is None else self.z_m[k])
+        """Time ``k`` of a view computed for several times (see :meth:`Scene.views`).
+
+        A view of many times (the object level's chunk) keeps its arrays stacked by time, (T, 13, n), on the first
+        call, so that each later row is one index; the row is filled without the frozen dataclass's per-field
+        ``__setattr__`` (the same fields, the same values)."""
+        rows = self.__dict__.get("_rows")
+        if rows is None:
+            if np.size(self.t_s) == 1:
+                f = [getattr(self, name)[k] for name in _VIEW_ARRAYS]
+                return SensorView(float(self.t_s[k]), *f, float(self.sensor_vx_mps[k]),
+                                  float(self.sensor_vy_mps[k]), None if self.z_m is None else self.z_m[k])
+            rows = (np.stack([getattr(self, name) for name in _VIEW_ARRAYS], axis=1), np.asarray(self.t_s).tolist(),
+                    np.asarray(self.sensor_vx_mps).tolist(), np.asarray(self.sensor_vy_mps).tolist())
+            object.__setattr__(self, "_rows", rows)
+        table, t, svx, svy = rows
+        out = object.__new__(SensorView)
+        out.__dict__.update(zip(_VIEW_FIELDS, (t[k], *table[k], svx[k], svy[k],
+                                               None if self.z_m is None else self.z_m[k])))
+        return out
 
 
 #: cycles of a scripted ego computed together by :meth:`Scene.ego_state` (the vehicle's 0x300/0x301 every cycle)
@@ -88,6 +108,7 @@ EGO_BLOCK = 256
 
 _VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
                 "orientation_rad", "az_lo_rad", "az_hi_rad", "centre_x_m", "centre_y_m")
+_VIEW_FIELDS = ("t_s", *_VIEW_ARRAYS, "sensor_vx_mps", "sensor_vy_mps", "z_m")
 
 
 def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
