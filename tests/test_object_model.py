@@ -237,3 +237,32 @@ def test_chunked_physics_gives_the_same_frames_as_cycle_by_cycle(monkeypatch):
     for (codes_a, state_a), (codes_b, state_b) in zip(one, many):
         np.testing.assert_array_equal(codes_a, codes_b)
         np.testing.assert_allclose(state_a, state_b, rtol=1e-12, atol=1e-12)
+
+
+def test_the_cluster_list_is_each_cycles_nearest_up_to_its_capacity(monkeypatch):
+    """The object level sorts every cycle's clusters of a chunk at once (near first, then far, each by range) and
+    keeps each cycle's first MAX_CLUSTERS: with the capacity lowered to 20 each cycle's list is the first 20 of the
+    same cycle's list uncapped (the same draws)."""
+    import radarnode.radar.object_model as om
+    sc = scenario("  - {id: a, class: car, x_m: 30.0, lane: 1, speed_mps: 20.0}", ego="{speed_mps: 20.0}",
+                  road="{lanes: 3, ego_lane: 1, guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, "
+                       "post_spacing_m: 2.0}}", duration=3.0)
+    preset = radar_config(sc).preset
+
+    def lists(cap):
+        monkeypatch.setattr(om, "MAX_CLUSTERS", cap)
+        model = ObjectModel(Scene(sc), preset, np.random.default_rng(4))
+        cfg = RuntimeConfig(max_distance_m=preset.max_range_m)
+        return [model.step(k * sc.period_s, cfg)[0].clusters for k in range(30)]
+
+    whole, capped = lists(10_000), lists(20)
+    assert min(len(c) for c in whole) > 20
+    for c_all, c20 in zip(whole, capped):
+        assert len(c20) == 20
+        for name in ("dist_long_m", "dist_lat_m", "vrel_long_mps", "rcs_dbsm", "dyn_prop", "ambig_state",
+                     "is_near", "actor_index"):
+            np.testing.assert_array_equal(getattr(c20, name), getattr(c_all, name)[:20])
+        near, r = c_all.is_near, c_all.range_m
+        assert not (~near[:-1] & near[1:]).any()                      # near first, then far
+        for part in (near, ~near):
+            assert (np.diff(r[part]) >= 0).all()                      # each by range

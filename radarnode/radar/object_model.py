@@ -53,6 +53,7 @@ CONFIRM_HITS = 2          # detections in the last CONFIRM_WINDOW cycles that ma
 CONFIRM_WINDOW = 3
 MAX_OBJECTS = 100         # ARS 408 object list capacity
 MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are 8 bits each)
+CLUSTER_BLOCK = 32        # cycles whose cluster lists are built together
 MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
@@ -388,11 +389,15 @@ class ObjectModel:
         #: the cycles the run will step (0 … planned_cycles − 1), when its runner knows (None: the scenario's)
         self.planned_cycles: int | None = None
         self._cache: dict | None = None
+        self._physics_layout: tuple | None = None       # _physics' fields: (key, (shape after T, dtype))
         self._gain_state: dict[int, np.ndarray] = {}   # power-averaged elevation factor before cycle k
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
         self._drawn_upto = -1
-        # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own stream
-        self._cluster_rng = np.random.default_rng(int(rng.integers(0, 2**63)))
+        # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own streams, one per
+        # quantity, each read in cycle order, so that a chunk's draws are the same whatever the chunks
+        hit, noise, count, value = np.random.SeedSequence(int(rng.integers(0, 2**63))).spawn(4)
+        self._cluster_rngs = {"hit": np.random.default_rng(hit), "noise": np.random.default_rng(noise),
+                              "count": np.random.default_rng(count), "value": np.random.default_rng(value)}
         self.occluder = ~scene.is_guardrail
         self.reportable = ~scene.is_guardrail         # guardrails show up as clusters only
 
@@ -425,9 +430,13 @@ class ObjectModel:
         rows = None if sc.elevated.any() else self._cycles_in_view(truth)
         if rows is None or rows.size == times.size:
             ph = self._physics(truth, u, z, config)
+        elif rows.size == 0 and self._physics_layout is not None:      # nothing in view: zeros of each field
+            ph = {key: np.zeros((times.size, *tail), dtype=dtype) for key, (tail, dtype) in self._physics_layout}
         else:
             ph = {key: _expand(val, rows, times.size)
                   for key, val in self._physics(truth.take_times(rows), u[rows], z[rows], config).items()}
+        if self._physics_layout is None and "body" not in ph:
+            self._physics_layout = tuple((key, (val.shape[1:], val.dtype)) for key, val in ph.items())
         return self._derived(k0, times, config, truth, z, ph)
 
     def _cycles_in_view(self, truth: SensorView) -> np.ndarray:
@@ -831,8 +840,7 @@ class ObjectModel:
         objects = ObjectList(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
                              f[14], f[15], f[16], g[5])
         self.info.at(ch, i, self.reportable)
-        clusters = (self._cluster_list(ch, i, view, ch["detected"][i], ch["meas"][i], config, sv)
-                    if config.clusters else _NO_CLUSTERS)
+        clusters = self._cluster_list(ch, i, sv) if config.clusters else _NO_CLUSTERS
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
 
     def _dyn_cycle(self, ch: dict, i: int, idx: np.ndarray, vx: np.ndarray, vy: np.ndarray, sv) -> np.ndarray:
@@ -853,92 +861,111 @@ class ObjectModel:
         ch["ever_last"] = ever
         return _dyn_codes(gx, gy, speed, moving, ever[idx])
 
-    def _posts(self, ch: dict) -> dict | None:
-        """The guardrail posts of a chunk's cycles that the radar can see, and what does not depend on the draws:
-        range, azimuth, SNR, Pd and the chain's σ, each flat over the chunk with ``starts`` (T + 1,) marking where
-        each cycle's begin (None: the scene has no guardrail posts). Computed once per chunk, element by element
-        the same numbers as a cycle's own posts."""
-        if "posts" in ch:
-            return ch["posts"]
+    def _posts(self, ch: dict, lo: int, hi: int) -> dict | None:
+        """The guardrail posts the radar can see at the chunk's cycles lo … hi−1, and what does not depend on the
+        draws: range, azimuth, SNR, Pd and the chain's σ, flat, with each post's cycle (None: the scene has no
+        guardrail posts). Element by element the same numbers as a cycle's own posts."""
         p, sc, config = self.preset, self.scene, ch["config"]
         g = sc.scenario.road.guardrails
         if not sc.is_guardrail.any() and g.left_offset_m is None and g.right_offset_m is None:
-            ch["posts"] = None
             return None
-        gx, gy, starts = sc.guardrail_posts_many(ch["times"], p.max_range_m)
+        gx, gy, starts = sc.guardrail_posts_many(ch["times"][lo:hi], p.max_range_m)
         g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
         keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
-        row = np.repeat(np.arange(starts.size - 1), np.diff(starts))[keep]
         g_r, g_az = g_r[keep], g_az[keep]
-        g_rcs = np.full(g_r.shape, g.rcs_dbsm)
-        g_snr = equation.snr_db(p, g_r, g_rcs, config.power_reduction_db, g_az)
+        g_snr = equation.snr_db(p, g_r, np.full(g_r.shape, g.rcs_dbsm), config.power_reduction_db, g_az)
         er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
         g_seen = ambiguity.apparent_azimuth(p, g_az)
-        ch["posts"] = {
-            "starts": np.searchsorted(row, np.arange(starts.size)), "pd": self.statistic.pd_of_snr(g_snr, 1),
-            # (N, 8): range, azimuth as the array sees it, RCS, σ range, σ azimuth, σ speed, cos and sin of the
-            # true azimuth (the radial speed)
-            "table": np.stack([g_r, g_seen, g_rcs, er * equation.crb_range_m(p, g_snr),
-                               ea * equation.crb_azimuth_rad(p, g_snr, g_seen), ev * equation.crb_speed_mps(p, g_snr),
-                               np.cos(g_az), np.sin(g_az)], axis=1)}
-        return ch["posts"]
+        return {"cycle": lo + np.repeat(np.arange(starts.size - 1), np.diff(starts))[keep],
+                "pd": self.statistic.pd_of_snr(g_snr, 1), "range": g_r, "azimuth": g_seen, "rcs": g.rcs_dbsm,
+                "sig_r": er * equation.crb_range_m(p, g_snr), "sig_az": ea * equation.crb_azimuth_rad(p, g_snr, g_seen),
+                "sig_v": ev * equation.crb_speed_mps(p, g_snr), "cos": np.cos(g_az), "sin": np.sin(g_az)}
 
-    def _cluster_list(self, ch, i, view, detected, meas, config, sensor_velocity_est):
-        """This cycle's detections, guardrail posts and false alarms as a cluster list; each part is a block of
-        rows of the ``_CL_*`` columns, so that the list is one concatenation and one gather in the sent order."""
-        p, rng = self.preset, self._cluster_rng
-        a_idx = np.flatnonzero(detected & self.reportable)
-        blocks = [ch["cluster_actors"][i, a_idx]]
+    def _cluster_table(self, ch: dict, i: int) -> tuple[dict, int]:
+        """The cluster lists of the block of ``CLUSTER_BLOCK`` cycles holding the chunk's cycle i, and i's index in
+        it (:meth:`_cluster_block`); the blocks are built in order, each when a cycle first asks for it, so that the
+        cluster streams are read in cycle order."""
+        blocks = ch.setdefault("cluster_blocks", [])
+        while len(blocks) <= i // CLUSTER_BLOCK:
+            lo = len(blocks) * CLUSTER_BLOCK
+            blocks.append(self._cluster_block(ch, lo, min(lo + CLUSTER_BLOCK, ch["times"].size)))
+        return blocks[i // CLUSTER_BLOCK], i % CLUSTER_BLOCK
+
+    def _cluster_block(self, ch: dict, lo: int, hi: int) -> dict:
+        """The cluster lists of the chunk's cycles lo … hi−1, before DynProp: the detected actors, the guardrail
+        posts the draws detect and the false alarms, each cycle's rows near first, then far, each by range (ties in
+        the order actors, posts, false alarms), at most ``MAX_CLUSTERS``; flat tables with ``starts`` like the
+        objects'. Column by column, a block of cycles at once (a block, not the chunk: its arrays stay in cache)."""
+        p, config, rngs, view = self.preset, ch["config"], self._cluster_rngs, ch["view"]
+        t_n = hi - lo
+        svx, svy = view.sensor_vx_mps, view.sensor_vy_mps
+        kk, aa = np.nonzero(ch["detected"][lo:hi] & self.reportable)
+        act = ch["cluster_actors"][lo + kk, aa]
+        # the _CL_* columns of each part, and the part's cycles (0 … t_n − 1)
+        parts = [(list(act.T), kk)]
         # guardrail posts: stationary point targets
-        posts = self._posts(ch)
-        if posts is not None:
-            a, b = posts["starts"][i], posts["starts"][i + 1]
-            hit = rng.random(b - a) < posts["pd"][a:b]
-            g = posts["table"][a:b][hit]
-            g_r, g_az, g_rcs, gs_r, gs_az, gs_v, cos_az, sin_az = g.T
-            nz = rng.standard_normal((3, g_r.size))
-            mr, maz = g_r + gs_r * nz[0], g_az + gs_az * nz[1]
+        g = self._posts(ch, lo, hi)
+        if g is not None:
+            hit = rngs["hit"].random(g["range"].size) < g["pd"]
+            g = {key: val[hit] if isinstance(val, np.ndarray) else val for key, val in g.items()}
+            k = g["cycle"]
+            nz = rngs["noise"].standard_normal((k.size, 3))
+            mr, maz = g["range"] + g["sig_r"] * nz[:, 0], g["azimuth"] + g["sig_az"] * nz[:, 1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
-            vr = -(view.sensor_vx_mps * cos_az + view.sensor_vy_mps * sin_az) + gs_v * nz[2]
-            vr, g_amb = ambiguity.apparent_range_rate(p, vr, g_az, (view.sensor_vx_mps, view.sensor_vy_mps))
+            vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
+            vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]))
             cm, sm = np.cos(maz), np.sin(maz)
-            blocks.append(_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g_rcs, gs_r, gs_az, gs_v, -1, g_amb))
-        # false alarms
+            full = np.full(k.size, 1.0)
+            parts.append(([mr * cm, mr * sm, vr * cm, vr * sm, full * g["rcs"], g["sig_r"], g["sig_az"], g["sig_v"],
+                           -full, g_amb], k - lo))
+        # false alarms: a Poisson count a cycle, uniform in range, azimuth and speed, kept inside the sectors
         rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
                 * (10.0 if config.high_sensitivity else 1.0))
-        n_fa = int(rng.poisson(rate))
-        if n_fa:
-            fr = rng.uniform(p.min_range_m, min(p.max_range_m, config.max_distance_m), n_fa)
-            faz = rng.uniform(-p.max_half_fov_rad, p.max_half_fov_rad, n_fa)
+        counts = rngs["count"].poisson(rate, size=t_n)
+        u = rngs["value"].random((int(counts.sum()), 3))
+        if u.shape[0]:
+            r_hi, h, v_hi = min(p.max_range_m, config.max_distance_m), p.max_half_fov_rad, p.max_unambiguous_speed_mps
+            fr = p.min_range_m + (r_hi - p.min_range_m) * u[:, 0]
+            faz = -h + 2.0 * h * u[:, 1]
+            fv = -v_hi + 2.0 * v_hi * u[:, 2]
             ok = in_fov(p, fr, faz)
-            fr, faz = fr[ok], faz[ok]
-            fv = rng.uniform(-p.max_unambiguous_speed_mps, p.max_unambiguous_speed_mps, fr.size)
+            fr, faz, fv, k = fr[ok], faz[ok], fv[ok], np.repeat(np.arange(t_n), counts)[ok]
             cf, sf = np.cos(faz), np.sin(faz)
-            f_snr = np.full(fr.size, 13.0)
-            blocks.append(_cluster_rows(fr * cf, fr * sf, fv * cf, fv * sf, f_snr - equation.snr_db(p, fr, np.zeros(fr.size)),
-                                        p.range_resolution_m / 2, p.angular_resolution_rad / 2,
-                                        p.speed_resolution_mps / 2, -1,
-                                        AMBIG_UNAMBIGUOUS if ambiguity.unambiguous(p) else AMBIG_AMBIGUOUS))
-        rows = np.concatenate(blocks) if len(blocks) > 1 else blocks[0]
-        r = np.hypot(rows[:, _CL_X], rows[:, _CL_Y])
-        near = r <= p.near_range_m
-        order = np.lexsort((r, ~near))[:MAX_CLUSTERS]    # near first, then far, each by range
-        n = order.size
-        sel, r = rows[order], r[order]
-        x, y, vx, vy = sel[:, _CL_X], sel[:, _CL_Y], sel[:, _CL_VX], sel[:, _CL_VY]
-        actor = sel[:, _CL_ACTOR].astype(np.int64)
-        sv = sensor_velocity_est if sensor_velocity_est is not None else (view.sensor_vx_mps, view.sensor_vy_mps)
+            full = np.full(k.size, 1.0)
+            parts.append(([fr * cf, fr * sf, fv * cf, fv * sf, 13.0 - equation.snr_db(p, fr, np.zeros(fr.size)),
+                           full * (p.range_resolution_m / 2), full * (p.angular_resolution_rad / 2),
+                           full * (p.speed_resolution_mps / 2), -full,
+                           full * (AMBIG_UNAMBIGUOUS if ambiguity.unambiguous(p) else AMBIG_AMBIGUOUS)], k))
+        cols = [np.concatenate([np.asarray(part[0][j], dtype=np.float64) for part in parts]) for j in range(10)]
+        cyc = np.concatenate([part[1] for part in parts])
+        r = np.hypot(cols[_CL_X], cols[_CL_Y])
+        # by cycle; near first, then far, each by range; lexsort is stable: ties keep the parts' order
+        order = np.lexsort((r, r > p.near_range_m, cyc))
+        by_cycle = cyc[order]
+        order = order[np.arange(order.size) - np.searchsorted(by_cycle, np.arange(t_n + 1))[by_cycle] < MAX_CLUSTERS]
+        x, y, vx, vy, rcs, s_r, s_az, s_v, actor, ambig = (c.take(order) for c in cols)
+        r = r.take(order)
         az = np.arctan2(y, x)
-        c, s = np.cos(az), np.sin(az)
-        s_r, s_az, s_v = sel[:, _CL_SIG_R], sel[:, _CL_SIG_AZ], sel[:, _CL_SIG_V]
-        ac, as_ = np.abs(c), np.abs(s)
-        return ClusterList(
-            id=np.arange(n, dtype=np.int64), dist_long_m=x, dist_lat_m=y, vrel_long_mps=vx, vrel_lat_mps=vy,
-            dyn_prop=cluster_dyn_prop(vx * c + vy * s, az, sv), rcs_dbsm=sel[:, _CL_RCS],
-            # sigma_to_xy(r, az, s_r, s_az), its cos and sin taken once
-            dist_long_sigma_m=np.sqrt((c * s_r) ** 2 + (r * s * s_az) ** 2),
-            dist_lat_sigma_m=np.sqrt((s * s_r) ** 2 + (r * c * s_az) ** 2),
-            vrel_long_sigma_mps=ac * s_v + as_ * p.lateral_speed_sigma_mps,
-            vrel_lat_sigma_mps=as_ * s_v + ac * p.lateral_speed_sigma_mps,
-            pdh0=np.where(actor >= 0, 1, 2).astype(np.int64), ambig_state=sel[:, _CL_AMBIG].astype(np.int64),
-            invalid_state=np.zeros(n, dtype=np.int64), is_near=near[order], actor_index=actor)
+        c, s_ = np.cos(az), np.sin(az)
+        ac, as_ = np.abs(c), np.abs(s_)
+        lat = p.lateral_speed_sigma_mps
+        actor = actor.astype(np.int64)
+        return {
+            "starts": np.searchsorted(cyc.take(order), np.arange(t_n + 1)).tolist(),
+            # ClusterList's float fields after DynProp: RCS, then sigma_to_xy(r, az, σr, σaz) with its cos and sin
+            # taken once, the speeds' σ; and the radial speed and azimuth DynProp is computed from
+            "f": np.stack([x, y, vx, vy, rcs, np.sqrt((c * s_r) ** 2 + (r * s_ * s_az) ** 2),
+                           np.sqrt((s_ * s_r) ** 2 + (r * c * s_az) ** 2), ac * s_v + as_ * lat, as_ * s_v + ac * lat,
+                           vx * c + vy * s_, az]),
+            "i": np.stack([np.where(actor >= 0, 1, 2), ambig.astype(np.int64), np.zeros(actor.size, dtype=np.int64),
+                           actor]),
+            "near": r <= p.near_range_m}
+
+    def _cluster_list(self, ch: dict, i: int, sv) -> ClusterList:
+        """Cycle i's cluster list: its rows of the chunk's table (:meth:`_cluster_table`), DynProp from the sensor
+        velocity ``sv`` the step was given."""
+        tab, j = self._cluster_table(ch, i)
+        a, b = tab["starts"][j], tab["starts"][j + 1]
+        f, g = list(tab["f"][:, a:b]), list(tab["i"][:, a:b])
+        return ClusterList(np.arange(b - a, dtype=np.int64), f[0], f[1], f[2], f[3],
+                           cluster_dyn_prop(f[9], f[10], sv), *f[4:9], g[0], g[1], g[2], tab["near"][a:b], g[3])
