@@ -68,14 +68,17 @@ def test_the_ego_on_the_cycle_grid_is_the_ego_computed_on_its_own(name):
 
 def _node_frames(text: str, cycles: int, reconfigure_at: tuple[int, ...] = ()) -> list[tuple[int, bytes]]:
     """A node's frames over ``cycles`` cycles (simulated time, no vehicle), with MaxDistance changed by 0x200 before
-    each cycle of ``reconfigure_at`` (alternately 120 m and back to 250 m)."""
+    each cycle of ``reconfigure_at`` (alternately 120 m and back to 250 m). ``text``: the actors, or a shipped
+    scenario's file name."""
+    from radarnode.radar.setup import load_scenario
     from radarnode.wire import ars408 as P
     from radarnode.wire.dbc import load_database
     from radarnode.wire.node import RadarNode
     from tests.helpers import scenario
     db = load_database()
     msg = db.get_message_by_frame_id(P.RADAR_CFG)
-    node = RadarNode(scenario(text, ego="{speed_mps: 25.0}", duration=cycles * 0.072 + 0.1))
+    node = RadarNode(load_scenario(SCENARIOS / text) if text.endswith(".yaml") else
+                     scenario(text, ego="{speed_mps: 25.0}", duration=cycles * 0.072 + 0.1))
     out = []
     for k in range(cycles):
         if k in reconfigure_at:
@@ -95,16 +98,89 @@ PASSING = """
 """
 
 
-def test_configuration_changes_restart_the_chunks_without_changing_a_frame(monkeypatch):
+@pytest.mark.parametrize("scene", [PASSING, "bridge_stopped_car_50.yaml"], ids=["road", "bridge"])
+def test_configuration_changes_restart_the_chunks_without_changing_a_frame(scene, monkeypatch):
     """A 0x200 that changes MaxDistance makes the object level compute a new chunk from that cycle (the chunks
-    grow again from FIRST_CHUNK_CYCLES): the frames are those computed one cycle at a time."""
+    grow again from FIRST_CHUNK_CYCLES): the frames are those computed one cycle at a time. Under a bridge too,
+    whose averaged elevation factor the tracker carries across the restart."""
     import radarnode.radar.object_model as om
-    changes = (5, 40, 41, 200, 330)
-    batched = _node_frames(PASSING, 400, changes)
+    changes = (5, 40, 41, 60, 200)
+    batched = _node_frames(scene, 260, changes)
     monkeypatch.setattr(om, "CHUNK_CYCLES", 1)
-    single = _node_frames(PASSING, 400, changes)
-    assert len(batched) == len(single) > 400
+    single = _node_frames(scene, 260, changes)
+    assert len(batched) == len(single) > 260
     assert batched == single
+
+
+def _model_rows(steps: list[int], chunk: int | None, monkeypatch) -> list[np.ndarray]:
+    """The object lists of highway_cut_in's object level stepped at the cycles ``steps`` (in that order)."""
+    import radarnode.radar.object_model as om
+    from radarnode.radar.setup import load_scenario, radar_config
+    from radarnode.scene.world import Scene
+    if chunk is not None:
+        monkeypatch.setattr(om, "CHUNK_CYCLES", chunk)
+    sc = load_scenario(SCENARIOS / "highway_cut_in.yaml")
+    preset = radar_config(sc).preset
+    model = om.ObjectModel(Scene(sc), preset, np.random.default_rng(sc.seed))
+    model.planned_cycles = 208
+    cfg = om.RuntimeConfig(max_distance_m=preset.max_range_m, clusters=True)
+    out = []
+    for k in steps:
+        frame, _ = model.step(k * sc.period_s, cfg, (27.8, 0.0))
+        ol = frame.objects
+        out.append(np.concatenate([ol.id, ol.dist_long_m, ol.dist_lat_m, ol.vrel_long_mps, ol.vrel_lat_mps,
+                                   ol.dyn_prop, ol.meas_state, [len(frame.clusters)]]))
+    return out
+
+
+@pytest.mark.parametrize("steps", [[*range(10), 12, 13, 14, *range(20, 60, 3)],     # cycles skipped, as when late
+                                   [*range(150), 100, 101, 102, 3, 4],              # steps back, within and before
+                                   [*range(20), 19, 19, 20, 21]],                    # a cycle repeated
+                         ids=["skipped", "back", "repeated"])
+def test_steps_off_the_sequence_give_what_the_cycle_by_cycle_tracker_gives(steps, monkeypatch):
+    """A step that is not the chunk's next cycle starts a chunk there from the tracker's state after the last step,
+    as the cycle-by-cycle tracker continues: the real-time runner skips the cycles it cannot compute in time, and a
+    library user may step back (the draws of a block let go are drawn again from where it began)."""
+    batched = _model_rows(steps, None, monkeypatch)
+    single = _model_rows(steps, 1, monkeypatch)
+    assert len(batched) == len(steps)
+    for k, (a, b) in enumerate(zip(batched, single)):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-12, err_msg=f"step {k} (cycle {steps[k]})")
+
+
+def test_a_shorter_run_is_the_start_of_a_longer_one_at_every_level(tmp_path):
+    """The object level's chunks end with the run (``planned_cycles``), so their schedule depends on its length; what
+    they draw must not: ``auto``, which runs the object and detection levels side by side, gives a 1.5-s run's frames
+    as the first of a 3-s run's."""
+    logs = []
+    for duration in ("1.5", "3"):
+        out = tmp_path / f"auto_{duration}.blf"
+        assert main(["log", str(SCENARIOS / "pedestrian_crossing.yaml"), "--fidelity", "auto", "--duration", duration,
+                     "-o", str(out)]) == 0
+        logs.append(_frames(out))
+    short, long_ = logs
+    assert 100 < len(short) < len(long_)
+    assert long_[:len(short)] == short
+
+
+def test_a_chunk_of_many_actors_is_short():
+    """A chunk's cost grows with its cycles × actors: a real-time node computes it within one cycle, so a scene of
+    40 cars gets chunks of at most CHUNK_ACTOR_CYCLES // 40 cycles."""
+    import radarnode.radar.object_model as om
+    from radarnode.radar.setup import radar_config
+    from radarnode.scene.world import Scene
+    from tests.helpers import scenario
+    cars = "\n".join(f"  - {{id: c{i}, class: car, x_m: {20 + 6 * i}, lane: {i % 3}, speed_mps: 25.0}}"
+                     for i in range(40))
+    sc = scenario(cars, ego="{speed_mps: 25.0}", road="{lanes: 3, ego_lane: 1}", duration=60.0)
+    preset = radar_config(sc).preset
+    model = om.ObjectModel(Scene(sc), preset, np.random.default_rng(1))
+    cfg = om.RuntimeConfig(max_distance_m=preset.max_range_m, clusters=False)
+    sizes = set()
+    for k in range(400):
+        model.step(k * sc.period_s, cfg)
+        sizes.add(model._cache["times"].size)
+    assert max(sizes) == om.CHUNK_ACTOR_CYCLES // 40
 
 
 def test_cycles_with_nothing_in_view_are_skipped_without_changing_a_frame(monkeypatch):

@@ -223,7 +223,9 @@ class AutoModel:
 
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                  options: SignalOptions = SignalOptions(), clusters_wanted: bool = False) -> None:
-        self.object = ObjectModel(scene, preset, rng, options)
+        # the object level's own stream: it draws a block of cycles when it computes a chunk, and how its chunks
+        # fall (the run's length) must not change what the detection level draws from ``rng``
+        self.object = ObjectModel(scene, preset, np.random.default_rng(int(rng.integers(0, 2**63))), options)
         self.detection = DetectionModel(scene, preset, rng, options)
         self.signal = SignalModel(scene, preset, rng, options)
         self.scene = scene

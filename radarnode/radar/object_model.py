@@ -61,6 +61,7 @@ CHUNK_CYCLES = 1024       # at most this many cycles' physics in one vectorised 
 FIRST_CHUNK_CYCLES = 128  # … the first chunk after a start or a configuration change this many, …
 CHUNK_GROWTH = 4          # … each next one this many times the last
 CHUNK_OCCLUSION_CELLS = 16_000_000   # bound on the (cycles, actors, samples, actors) occlusion test
+CHUNK_ACTOR_CYCLES = 4096   # bound on cycles × actors of a chunk: about 20 ms to compute (a real-time node's cycle)
 DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixed, for reproducibility)
 _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
@@ -390,8 +391,8 @@ class ObjectModel:
         self.planned_cycles: int | None = None
         self._cache: dict | None = None
         self._physics_layout: tuple | None = None       # _physics' fields: (key, (shape after T, dtype))
-        self._gain_state: dict[int, np.ndarray] = {}   # power-averaged elevation factor before cycle k
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
+        self._block_states: list[dict] = []            # the generator's state where each block began
         self._drawn_upto = -1
         # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own streams, one per
         # quantity, each read in cycle order, so that a chunk's draws are the same whatever the chunks
@@ -408,10 +409,16 @@ class ObjectModel:
         first, last = k0 // DRAW_BLOCK, (k0 + count - 1) // DRAW_BLOCK
         while self._drawn_upto < last:
             self._drawn_upto += 1
+            self._block_states.append(self.rng.bit_generator.state)
             self._blocks[self._drawn_upto] = {"u": self.rng.random((DRAW_BLOCK, n)),
                                               "z": self.rng.standard_normal((DRAW_BLOCK, 11, n))}
         for b in [b for b in self._blocks if b < first]:
             del self._blocks[b]
+        for b in range(first, last + 1):
+            if b not in self._blocks:      # a step back to a block let go: drawn again from the state it began at
+                again = np.random.Generator(type(self.rng.bit_generator)())
+                again.bit_generator.state = self._block_states[b]
+                self._blocks[b] = {"u": again.random((DRAW_BLOCK, n)), "z": again.standard_normal((DRAW_BLOCK, 11, n))}
         off = k0 - first * DRAW_BLOCK
         return {name: np.concatenate([self._blocks[b][name] for b in range(first, last + 1)])[off:off + count]
                 for name in ("u", "z")}
@@ -542,7 +549,8 @@ class ObjectModel:
             # track's first detection, as the detection level's tracker and the real sensor report it): so is this
             # range-dependent factor
             view, rng_m, az_b, rcs_body, snr_b, gain, ground = ph.pop("body")
-            rcs_body = rcs_body + self._averaged_gain_db(k0, gain, flags["detected"], flags["first_hit"])
+            gain_db, ph["gain_power"] = self._averaged_gain_db(k0, gain, flags["detected"], flags["first_hit"])
+            rcs_body = rcs_body + gain_db
             ph.update(self._reported_body(view, rng_m, az_b, rcs_body, snr_b, z, ground))
         az, pd, sx, sy, sig_v = ph.pop("az"), ph["pd"], ph.pop("sx"), ph.pop("sy"), ph["sig_v"]
         orientation = ph.pop("orientation_truth")
@@ -620,24 +628,23 @@ class ObjectModel:
                         stat.masking_factor(snr, interference, 1))
 
     def _averaged_gain_db(self, k0: int, gain_db: np.ndarray, detected: np.ndarray, first_hit: np.ndarray
-                          ) -> np.ndarray:
+                          ) -> tuple[np.ndarray, np.ndarray]:
         """The track's power average (gain RCS_GAIN per cycle) of the elevation factor ``gain_db`` (T, n) over
         the cycles k0 … k0+T−1, as the tracker keeps it: started at a track's first detection (``first_hit``),
-        moved only in the cycles it is measured (``detected``), held while it coasts; continued from the cycles
-        before k0 (a chunk recomputed from the same k0 starts from the same state). The ECU's overhead test
+        moved only in the cycles it is measured (``detected``), held while it coasts; continued from the tracker's
+        state after the last cycle stepped (``gain``, in power; the second array returned). The ECU's overhead test
         estimates this start from the wire (:func:`radarnode.consumer.overhead.averaged_db`: the first detection
         taken one cycle before the track's first report). A recurrence over the chunk's cycles, vectorised over
         the actors (it runs only for scenes with structures above the road)."""
         x = 10.0 ** (gain_db / 10.0)
-        before = self._gain_state.get(k0)
+        before = self._trk.get("gain")
         prev = x[0].copy() if before is None else before.copy()
         y = np.empty_like(x)
         for k in range(x.shape[0]):
             moved = prev + RCS_GAIN * (x[k] - prev)
             prev = np.where(first_hit[k], x[k], np.where(detected[k], moved, prev))
             y[k] = prev
-        self._gain_state = {k0: x[0].copy() if before is None else before, k0 + x.shape[0]: prev}
-        return 10.0 * np.log10(np.maximum(y, 1e-30))
+        return 10.0 * np.log10(np.maximum(y, 1e-30)), y
 
     def _reported_body(self, view, rng_m, az, rcs_eff, snr, z, ground) -> dict[str, np.ndarray]:
         """RCS, extent and class as the detection-level tracker reports them (``radarnode.perception.tracker``),
@@ -770,6 +777,8 @@ class ObjectModel:
         ch["by_cycle"] = False
         ch["trk"] = {"hist": ch["hist"], "misses": ch["misses"], "alive": alive, "obj_id": ids, "state": state,
                      "was_moving": ever}
+        if "gain_power" in ch:          # structures above the road: their averaged elevation factor
+            ch["trk"]["gain"] = ch["gain_power"]
         kk, aa = np.nonzero(alive)
         ch["starts"] = np.searchsorted(kk, np.arange(t_n + 1)).tolist()
         ch["obj_f"] = np.stack([state[kk, aa, 0], state[kk, aa, 1], state[kk, aa, 2], state[kk, aa, 3]]
@@ -782,7 +791,7 @@ class ObjectModel:
         pos = self.__dict__.get("_pos")
         if pos is not None:
             ch, i = pos
-            self.__dict__["_trk"] = {name: np.array(ch["trk"][name][i]) for name in _TRACKER_FIELDS}
+            self.__dict__["_trk"] = {name: np.array(values[i]) for name, values in ch["trk"].items()}
             self._pos = None
 
     def _row(self, t_s: float, config: RuntimeConfig) -> tuple[dict, int]:
@@ -790,7 +799,12 @@ class ObjectModel:
         k = int(round(t_s / period))
         on_grid = abs(t_s - k * period) <= 1e-9 * max(1.0, abs(t_s))
         ch = self._cache
-        if (ch is not None and ch["config"] == config and ch["k0"] <= k < ch["k0"] + ch["times"].size
+        pos = self.__dict__.get("_pos")
+        # the chunk's next row: its tracker ran through every cycle before it. Any other step (a skipped cycle, a
+        # step back, a time repeated or off the grid) starts a chunk there, from the state after the last step,
+        # as a cycle-by-cycle tracker does
+        if (ch is not None and pos is not None and pos[0] is ch and k == ch["k0"] + pos[1] + 1
+                and k < ch["k0"] + ch["times"].size and ch["config"] == config
                 and abs(ch["times"][k - ch["k0"]] - t_s) <= 1e-9 * max(1.0, abs(t_s))):
             return ch, k - ch["k0"]
         n = max(self.scene.n, 1)
@@ -798,7 +812,8 @@ class ObjectModel:
         # start or a change costs a short chunk, a long run few passes
         follows = ch is not None and ch["config"] == config and k == ch["k0"] + ch["times"].size
         grown = int(min(CHUNK_CYCLES, CHUNK_GROWTH * ch["grown"] if follows else FIRST_CHUNK_CYCLES))
-        size = int(min(grown, max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
+        size = int(min(grown, max(8, CHUNK_ACTOR_CYCLES // n),
+                       max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
         if self.planned_cycles is not None:          # not past the run's last cycle …
             size = max(1, min(size, self.planned_cycles - k))
         else:                                        # … or, not knowing it, the scenario's (a run may go beyond)
@@ -808,6 +823,8 @@ class ObjectModel:
         if self.scene.dynamic_ego is not None:
             size = 1          # closed loop: the ego's future is not known in advance
         times = (k + np.arange(size)) * period if on_grid else np.array([t_s])
+        if pos is not None:
+            self._rewind_clusters(*pos)
         self._settle()
         self._cache = self._tables(self._chunk(k, times, config))
         self._cache["grown"] = grown
@@ -891,6 +908,25 @@ class ObjectModel:
             blocks.append(self._cluster_block(ch, lo, min(lo + CLUSTER_BLOCK, ch["times"].size)))
         return blocks[i // CLUSTER_BLOCK], i % CLUSTER_BLOCK
 
+    def _rewind_clusters(self, ch: dict, i: int) -> None:
+        """Leaving a chunk after its row i: the cluster streams back to where cycle i's draws end, as if only the
+        cycles up to i had drawn (its last block drew for the cycles after i too). The block's draws are taken
+        again from its start up to cycle i: each stream is read in order, so they are the same numbers."""
+        blocks = ch.get("cluster_blocks")
+        if not blocks or i // CLUSTER_BLOCK >= len(blocks):
+            return
+        block = blocks[i // CLUSTER_BLOCK]
+        m = i % CLUSTER_BLOCK + 1                        # the block's cycles kept
+        if m == block["cycles"]:
+            return
+        rngs = self._cluster_rngs
+        for name, state in block["states"].items():
+            rngs[name].bit_generator.state = state
+        rngs["hit"].random(int(np.count_nonzero(block["post_cycle"] < m)))
+        rngs["noise"].standard_normal((int(np.count_nonzero(block["hit_cycle"] < m)), 3))
+        counts = rngs["count"].poisson(block["rate"], size=m)
+        rngs["value"].random((int(counts.sum()), 3))
+
     def _cluster_block(self, ch: dict, lo: int, hi: int) -> dict:
         """The cluster lists of the chunk's cycles lo … hi−1, before DynProp: the detected actors, the guardrail
         posts the draws detect and the false alarms, each cycle's rows near first, then far, each by range (ties in
@@ -898,6 +934,8 @@ class ObjectModel:
         objects'. Column by column, a block of cycles at once (a block, not the chunk: its arrays stay in cache)."""
         p, config, rngs, view = self.preset, ch["config"], self._cluster_rngs, ch["view"]
         t_n = hi - lo
+        states = {name: g.bit_generator.state for name, g in rngs.items()}    # for _rewind_clusters
+        post_cycle = hit_cycle = np.zeros(0, dtype=np.int64)
         svx, svy = view.sensor_vx_mps, view.sensor_vy_mps
         kk, aa = np.nonzero(ch["detected"][lo:hi] & self.reportable)
         act = ch["cluster_actors"][lo + kk, aa]
@@ -907,8 +945,10 @@ class ObjectModel:
         g = self._posts(ch, lo, hi)
         if g is not None:
             hit = rngs["hit"].random(g["range"].size) < g["pd"]
+            post_cycle = g["cycle"] - lo
             g = {key: val[hit] if isinstance(val, np.ndarray) else val for key, val in g.items()}
             k = g["cycle"]
+            hit_cycle = k - lo
             nz = rngs["noise"].standard_normal((k.size, 3))
             mr, maz = g["range"] + g["sig_r"] * nz[:, 0], g["azimuth"] + g["sig_az"] * nz[:, 1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
@@ -951,6 +991,7 @@ class ObjectModel:
         lat = p.lateral_speed_sigma_mps
         actor = actor.astype(np.int64)
         return {
+            "cycles": t_n, "states": states, "post_cycle": post_cycle, "hit_cycle": hit_cycle, "rate": rate,
             "starts": np.searchsorted(cyc.take(order), np.arange(t_n + 1)).tolist(),
             # ClusterList's float fields after DynProp: RCS, then sigma_to_xy(r, az, σr, σaz) with its cos and sin
             # taken once, the speeds' σ; and the radial speed and azimuth DynProp is computed from

@@ -166,9 +166,10 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
     period = node.period_s
     total = node.scenario.duration_s if duration_s is None else duration_s
     n_cycles = int(total / period + 1e-9)
-    for model in (node.model, getattr(node.model, "object", None)):
-        if hasattr(model, "planned_cycles"):   # the object level computes its cycles in chunks: none past the end
-            model.planned_cycles = n_cycles
+    for one in getattr(node, "nodes", [node]):         # every radar of a group
+        for model in (one.model, getattr(one.model, "object", None)):
+            if hasattr(model, "planned_cycles"):   # the object level computes its cycles in chunks: none past the end
+                model.planned_cycles = n_cycles
     rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
 
     def poll(timeout: float) -> None:
