@@ -8,7 +8,8 @@ valid range, if shorter); a cycle without a valid boundary counts as
 unavailable. The SNR column is the per-cell SNR of one guardrail post at
 50 m.
 
-Run: ``python benchmarks/boundaries.py``. Prints a Markdown table.
+Run: ``python benchmarks/boundaries.py [--seeds 3] [--root DIR]``. Prints a Markdown table; ``--seeds 1,2,3``
+pools the cycles of several seeds (one scene each, the same roads), default seed 3.
 
 ``python benchmarks/boundaries.py --speed 300 [--root DIR]`` times the estimator instead: the inputs its
 ``update`` receives in ``radarnode log scenarios/highway_cut_in.yaml --fidelity object --duration 300`` (recorded
@@ -36,11 +37,11 @@ from radarnode.wire.runner import SimulatedClock, run_node  # noqa: E402
 CYCLES = 140
 
 
-def run(curvature: float, rcs: float, tx_dbm: float, fidelity: str = "object"):
+def run(curvature: float, rcs: float, tx_dbm: float, fidelity: str = "object", seed: int = 3):
     sc = parse_scenario(f"""
 name: boundaries
 duration_s: {CYCLES * 0.072 + 0.05}
-seed: 3
+seed: {seed}
 radar: {{preset: ars408_like, overrides: {{tx_power_dbm: {tx_dbm}}}}}
 ego: {{speed_mps: 22.0}}
 road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, curvature_1pm: {curvature},
@@ -123,8 +124,10 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     rows = [(0.0, -5.0, 0.0), (0.0, -15.0, 0.0), (0.0, -25.0, 0.0), (0.0, -5.0, -20.0), (0.0, -5.0, -30.0),
             (1 / 500, -5.0, 0.0), (1 / 250, -5.0, 0.0)]
+    seeds = [int(x) for x in sys.argv[sys.argv.index("--seeds") + 1].split(",")] if "--seeds" in sys.argv[:-1] else [3]
     for curvature, rcs, tx in rows:
-        err, snr = run(curvature, rcs, tx)
+        parts = [run(curvature, rcs, tx, seed=seed) for seed in seeds]
+        err, snr = np.concatenate([e for e, _ in parts]), parts[0][1]
         ok = np.isfinite(err)
         road = "straight" if curvature == 0 else f"R {1 / curvature:.0f} m"
         med = np.median(err[ok]) if ok.any() else float("nan")
