@@ -24,7 +24,8 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import SensorMount, VehicleTrails, boundary_reference, curvature, in_path, trail_fits
+from radarnode.consumer.path import (SensorMount, VehicleTrails, boundary_reference, curvature, in_path,
+                                     measured_reach_m, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
@@ -398,6 +399,16 @@ class Ecu:
                            if self.acc.settings.path_from_trails else [])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
                      self.boundaries, self.mount, self.trail_fits)
+        # beyond where the road's course is measured (the boundaries' valid range, the trails' farthest point) the
+        # course is extrapolated: on a curve entry it bends too little, and a car standing in the outer lane a
+        # hundred metres ahead lies in it. A stationary object never seen moving becomes FCW's only where the path
+        # there is known — measured, or the yaw-rate circle puts it in the path too (on a straight road and a
+        # constant bend the two agree)
+        reach = measured_reach_m(self.boundaries, self.trail_fits, self.mount)
+        known = np.ones(len(tracks), dtype=bool)
+        if reach is not None:
+            known = (x <= reach) | in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps,
+                                           self.acc.settings.path_half_width_m, None, self.mount, None)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
         self._moved &= alive
@@ -425,7 +436,7 @@ class Ecu:
                           float(ax + self.ego_accel_mps2))
 
         acc = pick(moved, self._target_id)
-        fcw = pick(moved | (obstacle & stationary_ok), self._fcw_target_id)
+        fcw = pick(moved | (obstacle & stationary_ok & known), self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
         self._fcw_target_id = fcw.track_id if fcw is not None else None
         return acc, fcw

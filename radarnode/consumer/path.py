@@ -155,6 +155,18 @@ def road_course(x: np.ndarray, boundaries: dict | None) -> tuple[np.ndarray, np.
     return np.where(n > 0, shift / np.maximum(n, 1), 0.0), (n > 0).astype(np.float64)
 
 
+def measured_reach_m(boundaries: dict | None, trails: list | None, mount: SensorMount) -> float | None:
+    """How far ahead of the sensor the road's course is measured, not extrapolated: the farthest valid range of the
+    boundaries :func:`road_course` uses and the farthest point of the trails :func:`trail_course` uses; None when
+    neither is used (the yaw-rate circle alone predicts the path, nothing to tell apart)."""
+    reach = []
+    if road_course(np.zeros(1), boundaries) is not None:
+        reach.append(max(b.range_end_m for _, b in plausible(boundaries)))
+    if trails and trail_course(np.zeros(1), trails) is not None:
+        reach.append(max(f.x_max for f in trails) - mount.x_m)
+    return max(reach) if reach else None
+
+
 # --- the course from the trails of vehicles ahead ------------------------------------------------------------------
 TRAIL_MAX_AGE_S = 3.0          # a trail keeps the points of the last 3 s …
 TRAIL_MAX_POINTS = 60          # … and at most this many (60 × 72 ms ≈ 4.3 s)
