@@ -203,3 +203,14 @@ def test_cycles_with_nothing_in_view_are_skipped_without_changing_a_frame(monkey
     every = _node_frames(PASSING, 700)
     assert len(skipped) == len(every) > 700
     assert skipped == every
+
+
+def test_a_step_back_beyond_the_kept_random_state_is_refused(monkeypatch):
+    """The object level keeps the random state where each of its last KEEP_DRAW_STATES blocks of draws began (a
+    node running for days must not grow): a step back within them is drawn again, one beyond them is refused with
+    a clear error, not a KeyError from inside."""
+    import radarnode.radar.object_model as om
+    monkeypatch.setattr(om, "KEEP_DRAW_STATES", 2)
+    _model_rows([*range(5 * om.DRAW_BLOCK), 3 * om.DRAW_BLOCK + 1], None, monkeypatch)     # two blocks back: kept
+    with pytest.raises(ValueError, match="cannot step back to cycle 10"):
+        _model_rows([*range(5 * om.DRAW_BLOCK), 10], None, monkeypatch)

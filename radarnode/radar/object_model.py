@@ -63,6 +63,7 @@ CHUNK_GROWTH = 4          # … each next one this many times the last
 CHUNK_OCCLUSION_CELLS = 16_000_000   # bound on the (cycles, actors, samples, actors) occlusion test
 CHUNK_ACTOR_CYCLES = 4096   # bound on cycles × actors of a chunk: about 20 ms to compute (a real-time node's cycle)
 DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixed, for reproducibility)
+KEEP_DRAW_STATES = 4096   # blocks whose starting random state is kept (a step back that far: about 5 h at 72 ms)
 _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
@@ -392,7 +393,7 @@ class ObjectModel:
         self._cache: dict | None = None
         self._physics_layout: tuple | None = None       # _physics' fields: (key, (shape after T, dtype))
         self._blocks: dict[int, dict[str, np.ndarray]] = {}
-        self._block_states: list[dict] = []            # the generator's state where each block began
+        self._block_states: dict[int, dict] = {}      # the generator's state where each recent block began
         self._drawn_upto = -1
         # clusters (guardrail posts, false alarms) draw a variable count of numbers: their own streams, one per
         # quantity, each read in cycle order, so that a chunk's draws are the same whatever the chunks
@@ -409,13 +410,17 @@ class ObjectModel:
         first, last = k0 // DRAW_BLOCK, (k0 + count - 1) // DRAW_BLOCK
         while self._drawn_upto < last:
             self._drawn_upto += 1
-            self._block_states.append(self.rng.bit_generator.state)
+            self._block_states[self._drawn_upto] = self.rng.bit_generator.state
+            self._block_states.pop(self._drawn_upto - KEEP_DRAW_STATES, None)
             self._blocks[self._drawn_upto] = {"u": self.rng.random((DRAW_BLOCK, n)),
                                               "z": self.rng.standard_normal((DRAW_BLOCK, 11, n))}
         for b in [b for b in self._blocks if b < first]:
             del self._blocks[b]
         for b in range(first, last + 1):
             if b not in self._blocks:      # a step back to a block let go: drawn again from the state it began at
+                if b not in self._block_states:
+                    raise ValueError(f"the object level cannot step back to cycle {k0}: it keeps the random state of "
+                                     f"the last {KEEP_DRAW_STATES * DRAW_BLOCK} cycles only")
                 again = np.random.Generator(type(self.rng.bit_generator)())
                 again.bit_generator.state = self._block_states[b]
                 self._blocks[b] = {"u": again.random((DRAW_BLOCK, n)), "z": again.standard_normal((DRAW_BLOCK, 11, n))}
