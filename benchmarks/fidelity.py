@@ -118,8 +118,7 @@ def speed(path: Path, level: str, frames: int, dtype: str = "complex128") -> dic
             scat.append(len(info.scatterers))
     med = statistics.median(times[2:])
     mean = statistics.fmean(times)
-    return {"median_s": med, "mean_s": mean, "rtf_mean": sc.period_s / mean, "fps": 1.0 / med,
-            "rtf": sc.period_s / med,
+    return {"median_s": med, "mean_s": mean, "rtf_mean": sc.period_s / mean,
             "scatterers": statistics.median(scat) if scat else float("nan"),
             "choices": getattr(model, "choices", None)}
 

@@ -196,12 +196,8 @@ def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, 
     sectors = [s for s in preset.fov if s.half_angle_deg < 90.0]
     if inside.all() or not sectors:
         return x, y
-    # only the boxes whose nearest point is outside while part of them may be inside: beyond every sector's range,
-    # or with an azimuth extent (from the corners: every direction for a box round the sensor or behind it) clear
-    # of every sector, no part is; computed on the others, put back in place
-    h_max = max(math.radians(sc.half_angle_deg) for sc in sectors)
-    out = (~inside & (r_xy <= max(sc.max_range_m for sc in sectors)) & (view.az_hi_rad >= -h_max)
-           & (view.az_lo_rad <= h_max))
+    # only the boxes whose nearest point is outside while part of them may be inside: computed on those, put back
+    out = ~inside & may_be_in_fov(preset, view, length_m, width_m)
     if not out.any():
         return x, y
     bx, by = _nearest_on_sectors(preset, sectors, x[out], y[out], z[out], view.centre_x_m[out],
@@ -210,6 +206,20 @@ def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, 
     x_out, y_out = x.copy(), y.copy()
     x_out[out], y_out[out] = bx, by
     return x_out, y_out
+
+
+def may_be_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray) -> np.ndarray:
+    """Where a part of each actor's box may lie inside a sector: a necessary condition of :func:`in_fov` for any of
+    its points (1e-6 m and rad to spare). Its nearest point within the farthest sector's range, its azimuth extent
+    (from its corners; every direction for a box round the sensor or behind it) meeting the widest sector's, and
+    where every sector looks forward, a part in front of the sensor. Shapes like ``view.x_m``."""
+    r_max = max(sector.max_range_m for sector in preset.fov) + 1e-6
+    h_max = max(math.radians(sector.half_angle_deg) for sector in preset.fov) + 1e-6
+    may = (np.hypot(view.x_m, view.y_m) <= r_max) & (view.az_hi_rad >= -h_max) & (view.az_lo_rad <= h_max)
+    if h_max < 0.5 * math.pi:       # sectors in front of the sensor: a box wholly behind it is in none
+        c, s = np.abs(np.cos(view.orientation_rad)), np.abs(np.sin(view.orientation_rad))
+        may &= view.centre_x_m + 0.5 * (c * length_m + s * width_m) > -1e-6
+    return may
 
 
 def _nearest_on_sectors(preset: RadarPreset, sectors: list, x: np.ndarray, y: np.ndarray, z: np.ndarray,
@@ -313,11 +323,8 @@ def sigma_to_xy(range_m, azimuth_rad, sigma_r, sigma_az):
     return sx, sy
 
 
-_TRACKER_FIELDS = ("hist", "misses", "alive", "obj_id", "state", "was_moving")
-
-
 class _TrackerField:
-    """One field of the internal tracker's state after the last step (``_TRACKER_FIELDS``): the row of the chunk
+    """One field of the internal tracker's state after the last step (``ObjectModel.hist`` …): the row of the chunk
     that step took (a chunk holds every cycle's, computed in one pass), or the value last set."""
 
     def __set_name__(self, owner, name: str) -> None:
@@ -452,19 +459,8 @@ class ObjectModel:
         return self._derived(k0, times, config, truth, z, ph)
 
     def _cycles_in_view(self, truth: SensorView) -> np.ndarray:
-        """The cycles (indices) where some actor may have a part inside a sector: its nearest point within the
-        farthest sector's range and its azimuth extent (from its corners; every direction for a box round the
-        sensor or behind it) meeting the widest sector's. A necessary condition of :func:`in_fov` of the point
-        :func:`nearest_in_fov` gives (1e-6 m and rad to spare), and where every sector looks forward, a part in
-        front of the sensor."""
-        r_max = max(sector.max_range_m for sector in self.preset.fov) + 1e-6
-        h_max = max(math.radians(sector.half_angle_deg) for sector in self.preset.fov) + 1e-6
-        may = ((np.hypot(truth.x_m, truth.y_m) <= r_max) & (truth.az_hi_rad >= -h_max)
-               & (truth.az_lo_rad <= h_max))
-        if h_max < 0.5 * math.pi:       # sectors in front of the sensor: a box wholly behind it is in none
-            c, s_ = np.abs(np.cos(truth.orientation_rad)), np.abs(np.sin(truth.orientation_rad))
-            may &= truth.centre_x_m + 0.5 * (c * self.scene.length_m + s_ * self.scene.width_m) > -1e-6
-        return np.flatnonzero(may.any(axis=-1))
+        """The cycles (indices) where some actor may have a part inside a sector (:func:`may_be_in_fov`)."""
+        return np.flatnonzero(may_be_in_fov(self.preset, truth, self.scene.length_m, self.scene.width_m).any(axis=-1))
 
     def _physics(self, truth: SensorView, u: np.ndarray, z: np.ndarray, config: RuntimeConfig) -> dict:
         """What the radar measures of each actor at the times of ``truth`` ((T, n) arrays): field of view,
@@ -813,7 +809,7 @@ class ObjectModel:
                 and abs(ch["times"][k - ch["k0"]] - t_s) <= 1e-9 * max(1.0, abs(t_s))):
             return ch, k - ch["k0"]
         n = max(self.scene.n, 1)
-        # a run's chunks grow (64, 128, … cycles) while each follows the last under the same configuration: a
+        # a run's chunks grow (128, 512, 1024 cycles) while each follows the last under the same configuration: a
         # start or a change costs a short chunk, a long run few passes
         follows = ch is not None and ch["config"] == config and k == ch["k0"] + ch["times"].size
         grown = int(min(CHUNK_CYCLES, CHUNK_GROWTH * ch["grown"] if follows else FIRST_CHUNK_CYCLES))
@@ -943,9 +939,8 @@ class ObjectModel:
         post_cycle = hit_cycle = np.zeros(0, dtype=np.int64)
         svx, svy = view.sensor_vx_mps, view.sensor_vy_mps
         kk, aa = np.nonzero(ch["detected"][lo:hi] & self.reportable)
-        act = ch["cluster_actors"][lo + kk, aa]
-        # the _CL_* columns of each part, and the part's cycles (0 … t_n − 1)
-        parts = [(list(act.T), kk)]
+        # each part's rows of the _CL_* columns, and its cycles (0 … t_n − 1)
+        parts = [(ch["cluster_actors"][lo + kk, aa], kk)]
         # guardrail posts: stationary point targets
         g = self._posts(ch, lo, hi)
         if g is not None:
@@ -960,9 +955,8 @@ class ObjectModel:
             vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]))
             cm, sm = np.cos(maz), np.sin(maz)
-            full = np.full(k.size, 1.0)
-            parts.append(([mr * cm, mr * sm, vr * cm, vr * sm, full * g["rcs"], g["sig_r"], g["sig_az"], g["sig_v"],
-                           -full, g_amb], k - lo))
+            parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g["rcs"], g["sig_r"], g["sig_az"],
+                                        g["sig_v"], -1, g_amb), k - lo))
         # false alarms: a Poisson count a cycle, uniform in range, azimuth and speed, kept inside the sectors
         rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
                 * (10.0 if config.high_sensitivity else 1.0))
@@ -976,12 +970,11 @@ class ObjectModel:
             ok = in_fov(p, fr, faz)
             fr, faz, fv, k = fr[ok], faz[ok], fv[ok], np.repeat(np.arange(t_n), counts)[ok]
             cf, sf = np.cos(faz), np.sin(faz)
-            full = np.full(k.size, 1.0)
-            parts.append(([fr * cf, fr * sf, fv * cf, fv * sf, 13.0 - equation.snr_db(p, fr, np.zeros(fr.size)),
-                           full * (p.range_resolution_m / 2), full * (p.angular_resolution_rad / 2),
-                           full * (p.speed_resolution_mps / 2), -full,
-                           full * (AMBIG_UNAMBIGUOUS if ambiguity.unambiguous(p) else AMBIG_AMBIGUOUS)], k))
-        cols = [np.concatenate([np.asarray(part[0][j], dtype=np.float64) for part in parts]) for j in range(10)]
+            parts.append((_cluster_rows(fr * cf, fr * sf, fv * cf, fv * sf,
+                                        13.0 - equation.snr_db(p, fr, np.zeros(fr.size)), p.range_resolution_m / 2,
+                                        p.angular_resolution_rad / 2, p.speed_resolution_mps / 2, -1,
+                                        AMBIG_UNAMBIGUOUS if ambiguity.unambiguous(p) else AMBIG_AMBIGUOUS), k))
+        cols = np.concatenate([part[0] for part in parts]).T
         cyc = np.concatenate([part[1] for part in parts])
         r = np.hypot(cols[_CL_X], cols[_CL_Y])
         # by cycle; near first, then far, each by range; lexsort is stable: ties keep the parts' order
