@@ -58,3 +58,16 @@ def test_implausible_boundaries_are_ignored():
         assert bool(plausible(b)) == kept, heading
     invalid = {"left": Boundary(False), "right": Boundary(False)}
     assert plausible(invalid) == [] and road_course(np.array([50.0]), invalid) is None
+
+
+def test_the_measured_reach_is_the_farthest_boundary_range_used_and_nothing_without_a_course():
+    """``measured_reach_m`` says how far the road's course is measured (the ECU lets a stationary object never seen
+    moving become FCW's target only within it, or where the yaw-rate circle agrees): the farthest valid range of the
+    boundaries the course uses; None without one, or when the course is not used (the ego crossing the road)."""
+    mount = SensorMount()
+    assert P.measured_reach_m(_road(end=77.0), None, mount) == 77.0
+    one = {"left": Boundary(True, 5.25, 0.0, 0.004, 0.0, 60.0, 1.0), "right": Boundary(False)}
+    assert P.measured_reach_m(one, None, mount) == 60.0
+    assert P.measured_reach_m(None, None, mount) is None
+    assert P.measured_reach_m({"left": Boundary(False), "right": Boundary(False)}, [], mount) is None
+    assert P.measured_reach_m(_road(heading_deg=10.0), None, mount) is None        # crossing: no course
