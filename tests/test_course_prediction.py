@@ -71,3 +71,23 @@ def test_the_measured_reach_is_the_farthest_boundary_range_used_and_nothing_with
     assert P.measured_reach_m(None, None, mount) is None
     assert P.measured_reach_m({"left": Boundary(False), "right": Boundary(False)}, [], mount) is None
     assert P.measured_reach_m(_road(heading_deg=10.0), None, mount) is None        # crossing: no course
+
+
+def test_a_stationary_object_is_on_a_known_course_just_below_and_at_the_reach_not_above_or_at_twice_it():
+    """The ECU's rule (``course_known``): a stationary object never seen moving may become FCW's target within the
+    measured course (x ≤ reach, inclusive), or beyond it where the yaw-rate circle alone also puts it in the path.
+    Swept just below, at and just above the reach and at twice it, on a straight circle and on a left-hand one, in
+    the own lane and in the lane beside it; the sensor ahead of the rear axle, 0.5 m left of the centre line."""
+    m = SensorMount(3.7, 0.5, 0.0)
+    reach = 60.0
+    x = np.array([np.nextafter(reach, 0.0), reach, np.nextafter(reach, np.inf), 2.0 * reach])
+    speed, half = 25.0, 1.6
+    for yaw_rate in (0.0, 25.0 * 0.002):                  # a straight circle; a 500-m left bend
+        kappa = yaw_rate / speed
+        xv = x + m.x_m
+        own = 0.5 * kappa * xv ** 2 - m.y_m                # the circle's centre line, in the sensor frame
+        beside = own - 3.5                                 # the lane to the right of it
+        assert P.course_known(x, own, reach, speed, yaw_rate, half, m).tolist() == [True] * 4
+        assert P.course_known(x, beside, reach, speed, yaw_rate, half, m).tolist() == [True, True, False, False]
+        # nothing measured: the circle is the only prediction, and nothing is held back
+        assert P.course_known(x, beside, None, speed, yaw_rate, half, m).tolist() == [True] * 4

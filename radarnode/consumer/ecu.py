@@ -24,8 +24,8 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import (SensorMount, VehicleTrails, boundary_reference, curvature, in_path,
-                                     measured_reach_m, trail_fits)
+from radarnode.consumer.path import (SensorMount, VehicleTrails, boundary_reference, course_known, curvature,
+                                     in_path, measured_reach_m, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
@@ -404,11 +404,8 @@ class Ecu:
         # hundred metres ahead lies in it. A stationary object never seen moving becomes FCW's only where the path
         # there is known — measured, or the yaw-rate circle puts it in the path too (on a straight road and a
         # constant bend the two agree)
-        reach = measured_reach_m(self.boundaries, self.trail_fits, self.mount)
-        known = np.ones(len(tracks), dtype=bool)
-        if reach is not None:
-            known = (x <= reach) | in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps,
-                                           self.acc.settings.path_half_width_m, None, self.mount, None)
+        known = course_known(x, y, measured_reach_m(self.boundaries, self.trail_fits, self.mount), self.ego_speed_mps,
+                             self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
         self._moved &= alive

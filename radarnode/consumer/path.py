@@ -167,6 +167,17 @@ def measured_reach_m(boundaries: dict | None, trails: list | None, mount: Sensor
     return max(reach) if reach else None
 
 
+def course_known(x: np.ndarray, y: np.ndarray, reach_m: float | None, ego_speed_mps: float, yaw_rate_rps: float,
+                 half_width_m: float, mount: SensorMount) -> np.ndarray:
+    """Which sensor-frame points lie where the ego's path is known: within the measured course (x ≤ ``reach_m``,
+    :func:`measured_reach_m`), or in the path the yaw-rate circle alone predicts. Everywhere when nothing is
+    measured (``reach_m`` None: the circle is then the only prediction there is)."""
+    x = np.asarray(x, dtype=np.float64)
+    if reach_m is None:
+        return np.ones(x.shape, dtype=bool)
+    return (x <= reach_m) | in_path(x, y, ego_speed_mps, yaw_rate_rps, half_width_m, None, mount, None)
+
+
 # --- the course from the trails of vehicles ahead ------------------------------------------------------------------
 TRAIL_MAX_AGE_S = 3.0          # a trail keeps the points of the last 3 s …
 TRAIL_MAX_POINTS = 60          # … and at most this many (60 × 72 ms ≈ 4.3 s)
