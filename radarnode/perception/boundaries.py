@@ -39,21 +39,15 @@ CURVE_SAMPLES = 12
 #: at most this many re-fits of a followed boundary's line to its inliers
 FOLLOW_PASSES = 2
 _CURVE_STEPS = np.arange(CURVE_SAMPLES, dtype=np.float64)
-#: the sides in the order of the (2, n) masks: left (+1, y > 0) and right (−1)
-SIDES = (+1, -1)
-_NO_CURVE = np.zeros((CURVE_SAMPLES, 2))
-_LINES = np.zeros(2, dtype=bool)                 # masked_fit's deg2 for two straight lines
-_CURVE_ROWS = np.kron(np.eye(2, dtype=bool), np.ones(CURVE_SAMPLES, dtype=bool))   # two curves' samples, in a row
+_LINES = np.zeros(2, dtype=bool)                 # solve's deg2 for two straight lines
 
 
-def _linspace(start: float, stop: float) -> np.ndarray:
-    """``numpy.linspace(start, stop, CURVE_SAMPLES)``, the same numbers without its generic wrapper."""
-    delta = stop - start
-    step = delta / (CURVE_SAMPLES - 1)
-    y = _CURVE_STEPS / (CURVE_SAMPLES - 1) * delta if step == 0 else _CURVE_STEPS * step
-    y += start
-    y[-1] = stop
-    return y
+def curve_x(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
+    """``numpy.linspace(start[k], stop[k], CURVE_SAMPLES)`` for every k, a row each, without its generic wrapper."""
+    x = np.multiply.outer((stop - start) / (CURVE_SAMPLES - 1), _CURVE_STEPS)
+    x += start[:, None]
+    x[:, -1] = stop
+    return x
 
 
 #: the fits' variable u = (x − FIT_CENTRE_M) / FIT_SCALE_M: within about ±1.5 over the radar's range, so that the
@@ -83,12 +77,22 @@ def masked_fit(pw: np.ndarray, mask: np.ndarray, deg2: np.ndarray) -> np.ndarray
 
     pw: the points' :func:`powers` (n, 8); mask: (S, n) bool, each row with at least 2 points (3 for a
     quadratic); deg2: (S,) bool, a quadratic for the rows where it is set. Returns (S, 3), lowest power first
-    (c2 = 0 for a line). Every row's moments are one matrix product (S, n) @ (n, 8); the 2×2 or 3×3 normal
-    equations in u are solved in Python numbers: the fits of both road sides cost one numpy call. Accurate to
-    about 1e-9 relative for a line over any stretch and for a quadratic over tens of metres (the estimator fits a
-    quadratic only over more than 40 m: over 10 m at 200 m it would lose digits to the moments' cancellation).
+    (c2 = 0 for a line). Every row's moments are one matrix product (S, n) @ (n, 8) (:func:`moments`); the 2×2 or
+    3×3 normal equations in u are solved in Python numbers (:func:`solve`): the fits of both road sides cost one
+    numpy call. Accurate to about 1e-9 relative for a line over any stretch and for a quadratic over tens of
+    metres (the estimator fits a quadratic only over more than 40 m: over 10 m at 200 m it would lose digits to
+    the moments' cancellation).
     """
-    mom = (mask.astype(np.float64) @ pw).tolist()
+    return solve(moments(pw, mask), deg2)
+
+
+def moments(pw: np.ndarray, mask: np.ndarray) -> list[list[float]]:
+    """The sums of :func:`powers`' columns over the points each row of ``mask`` (S, n) selects: S lists of 8."""
+    return (mask.astype(np.float64) @ pw).tolist()
+
+
+def solve(mom: list[list[float]], deg2) -> np.ndarray:
+    """:func:`masked_fit` from the rows' :func:`moments`."""
     out = np.zeros((len(mom), 3))
     for k, (n, s1, s2, s3, s4, sy, suy, su2y) in enumerate(mom):
         if n < 2.0:                 # a row with no fit to make (its caller does not use it)
@@ -156,24 +160,14 @@ class RoadBoundaryEstimator:
         # (one continuous range through 90°, where the full [−90°, 90°) grid would split them at its ends)
         full = HoughGrid.make(rho_max_m=max_offset_m + 5.0, rho_step_m=0.25, theta_step_deg=0.5)
         self.grid = HoughGrid(np.radians(np.arange(60.0, 120.0, 0.5)), full.rho_m)
-        self._points: list[np.ndarray] = []          # per cycle: (n, 2) in the odometry frame
-        self._pose = np.zeros(3)                     # odometry: x, y, heading of the sensor
-        self._curves: dict[int, np.ndarray | None] = {+1: None, -1: None}   # followed boundaries, odometry frame
+        self._points: list[np.ndarray] = []          # per cycle: (2, n), the rows x and y in the odometry frame
+        self._pose = (0.0, 0.0, 0.0)                 # odometry: x, y, heading of the sensor
+        # the followed boundaries' samples in the odometry frame, (side, x/y, CURVE_SAMPLES), and which are followed
+        self._curves = np.zeros((2, 2, CURVE_SAMPLES))
+        self._followed = [False, False]
         self._cycle = 0
         self.left = UNAVAILABLE
         self.right = UNAVAILABLE
-
-    def _to_odometry(self, x, y):
-        c, s = math.cos(self._pose[2]), math.sin(self._pose[2])
-        out = np.empty((np.size(x), 2))
-        out[:, 0] = self._pose[0] + c * x - s * y
-        out[:, 1] = self._pose[1] + s * x + c * y
-        return out
-
-    def _to_sensor(self, pts):
-        c, s = math.cos(self._pose[2]), math.sin(self._pose[2])
-        dx, dy = pts[:, 0] - self._pose[0], pts[:, 1] - self._pose[1]
-        return c * dx + s * dy, -s * dx + c * dy
 
     def update(self, x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarray, dt_s: float,
                sensor_velocity: tuple[float, float], yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
@@ -184,66 +178,107 @@ class RoadBoundaryEstimator:
         """
         # move the odometry pose by the ego motion since the last cycle
         vx, vy = sensor_velocity
-        c, s = math.cos(self._pose[2]), math.sin(self._pose[2])
-        self._pose += np.array([(c * vx - s * vy) * dt_s, (s * vx + c * vy) * dt_s, yaw_rate_rps * dt_s])
+        ox, oy, h = self._pose
+        c, s = math.cos(h), math.sin(h)
+        ox, oy, h = ox + (c * vx - s * vy) * dt_s, oy + (s * vx + c * vy) * dt_s, h + yaw_rate_rps * dt_s
+        self._pose = (ox, oy, h)
+        c, s = math.cos(h), math.sin(h)
+        origin = ((ox,), (oy,))
         r = np.maximum(np.hypot(x_m, y_m), 1e-6)
         ground = range_rate_mps + (vx * x_m + vy * y_m) / r
         still = np.abs(ground) < STATIONARY_MPS
-        self._points.append(self._to_odometry(x_m[still], y_m[still]))
-        self._points = self._points[-self.cycles:]
-        px, py = self._to_sensor(np.concatenate(self._points))
-        ahead = px > 0.0
-        px, py = px[ahead], py[ahead]
+        # into the odometry frame: x = ox + c·x − s·y, y = oy + s·x + c·y (as rows: one outer product a column)
+        pts = np.multiply.outer((c, s), x_m[still])
+        pts += origin
+        pts += np.multiply.outer((-s, c), y_m[still])
+        self._points.append(pts)
+        del self._points[:-self.cycles]
+        # every accumulated point into the sensor frame: x = c·dx + s·dy, y = −s·dx + c·dy
+        d = np.concatenate(self._points, axis=1) - origin
+        p = np.multiply.outer((c, -s), d[0])
+        p += np.multiply.outer((s, c), d[1])
+        p = p.compress(p[0] > 0.0, axis=1)                    # ahead
+        px, py = p[0], p[1]
         speed = math.hypot(vx, vy)
         kappa = yaw_rate_rps / speed if speed > 1.0 else 0.0
-        py -= 0.5 * kappa * px * px          # straighten along the predicted path
+        if kappa:
+            py -= 0.5 * kappa * px * px          # straighten along the predicted path
         self._cycle += 1
-        sides = np.stack([py > 0.5, py < -0.5])                 # (2, n): left, right
+        sides = np.empty((2, px.size), dtype=bool)            # (2, n): left, right
+        np.greater(py, 0.5, out=sides[0])
+        np.less(py, -0.5, out=sides[1])
         found = [UNAVAILABLE, UNAVAILABLE]
-        if self._cycle % self.reacquire_cycles:                  # the full search runs every reacquire_cycles
-            found = self._follow(px, py, sides, kappa)
-        for k, sign in enumerate(SIDES):
+        if self._cycle % self.reacquire_cycles and (self._followed[0] or self._followed[1]):
+            found = self._follow(px, py, sides, kappa, origin, c, s)  # the full search runs every reacquire_cycles
+        for k in range(2):
             if not found[k].valid:
                 found[k] = self._side(px[sides[k]], py[sides[k]], kappa)
-            self._curves[sign] = self._curve(found[k]) if found[k].valid else None
+        self._keep_curves(found, origin, c, s)
         self.left, self.right = found
         if not self.left.valid and not self.right.valid and len(self._points) >= self.cycles:
-            self._points = self._points[-1:]         # restart the search (seed 002)
+            del self._points[:-1]         # restart the search (seed 002)
         return self.left, self.right
 
-    def _curve(self, b: Boundary) -> np.ndarray:
-        """Samples of a boundary (sensor frame, as reported) in the odometry frame, shape (CURVE_SAMPLES, 2)."""
-        x = _linspace(b.range_start_m, b.range_end_m)
-        return self._to_odometry(x, b.y_at(x))
+    def _keep_curves(self, found: list[Boundary], origin, c: float, s: float) -> None:
+        """Samples of the boundaries found (sensor frame, as reported) in the odometry frame, to follow them."""
+        self._followed = [b.valid for b in found]
+        if not (found[0].valid or found[1].valid):
+            return
+        col = np.array([[b.range_start_m, b.range_end_m, b.offset_m, math.tan(b.heading_rad),
+                         0.5 * b.curvature_1pm] for b in found])
+        x = curve_x(col[:, 0], col[:, 1])
+        y = col[:, 2:3] + col[:, 3:4] * x + col[:, 4:5] * x * x
+        cv = np.multiply.outer((c, s), x)                # (x/y, side, sample)
+        cv += np.reshape(origin, (2, 1, 1))
+        cv += np.multiply.outer((-s, c), y)
+        self._curves = cv.transpose(1, 0, 2)
 
-    def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float) -> list[Boundary]:
+    def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float, origin, c: float,
+                s: float) -> list[Boundary]:
         """Both sides' boundaries near last cycle's: each curve moved into this frame and straightened, its
         inliers fitted (UNAVAILABLE for a side that had none or lost it). The two sides in one pass each."""
-        curves = [self._curves[sign] for sign in SIDES]
-        follow = np.array([cv is not None for cv in curves])
-        if not follow.any():
+        d = self._curves - np.reshape(origin, (1, 2, 1))
+        q = np.multiply.outer((c, -s), d[:, 0])           # (x/y, side, sample)
+        q += np.multiply.outer((s, c), d[:, 1])
+        if kappa:
+            q[1] -= 0.5 * kappa * q[0] * q[0]
+        # the curves' least-squares lines, y = a + b·x, a row a side
+        mean = np.add.reduce(q, axis=2) / CURVE_SAMPLES  # (x/y, side)
+        q -= mean[:, :, None]
+        sxx, sxy = np.einsum("sk,isk->is", q[0], q).tolist()
+        follow = [self._followed[k] and sxx[k] > 0.0 and np.count_nonzero(sides[k]) >= 4 for k in range(2)]
+        if not (follow[0] or follow[1]):
             return [UNAVAILABLE, UNAVAILABLE]
-        cx, cy = self._to_sensor(np.concatenate([cv if cv is not None else _NO_CURVE for cv in curves]))
-        cx, cy = cx.reshape(2, CURVE_SAMPLES), cy.reshape(2, CURVE_SAMPLES)
-        cy -= 0.5 * kappa * cx * cx
-        follow &= (np.add.reduce(sides, axis=1) >= 4) & (np.ptp(cx, axis=1) > 0.0)
+        (mx0, mx1), (my0, my1) = mean.tolist()
+        b0, b1 = (sxy[0] / sxx[0] if follow[0] else 0.0), (sxy[1] / sxx[1] if follow[1] else 0.0)
+        line = np.array([[my0 - b0 * mx0, b0], [my1 - b1 * mx1, b1]])
         # the line is re-fitted to the points within band_m of it until the inliers settle (a few passes):
-        # starting from the prediction, the gate centres itself on the points instead of on last cycle's error.
-        # A side whose inliers settled keeps them in the passes left (the fit of a settled set is the same line)
-        line = masked_fit(powers(cx.ravel(), cy.ravel()), _CURVE_ROWS, _LINES)
+        # starting from the prediction, the gate centres itself on the points instead of on last cycle's error
         pw = powers(px, py)                              # the points' moments, for every fit of this cycle
-        inliers = sides & (np.abs(py - (line[:, :1] + line[:, 1:2] * px)) <= self.band_m)
+        allowed = sides if follow[0] and follow[1] else sides & np.array(follow)[:, None]
+        inliers = self._gate(px, py, line, allowed)
+        mom = None
         for _ in range(FOLLOW_PASSES):
-            follow &= np.add.reduce(inliers, axis=1) >= 4
-            if not follow.any():
-                return [UNAVAILABLE, UNAVAILABLE]
-            inliers &= follow[:, None]
-            line = masked_fit(pw, inliers, _LINES)
-            again = sides & follow[:, None] & (np.abs(py - (line[:, :1] + line[:, 1:2] * px)) <= self.band_m)
-            if not (again ^ inliers).any():
+            mom = moments(pw, inliers)
+            lost = [follow[k] and mom[k][0] < 4.0 for k in range(2)]
+            if lost[0] or lost[1]:
+                follow = [follow[k] and not lost[k] for k in range(2)]
+                if not (follow[0] or follow[1]):
+                    return [UNAVAILABLE, UNAVAILABLE]
+                allowed = sides & np.array(follow)[:, None]
+                inliers &= allowed
+                mom = moments(pw, inliers)
+            again = self._gate(px, py, solve(mom, _LINES)[:, :2], allowed)
+            if np.array_equal(again, inliers):
                 break
-            inliers = again
-        return self._fit(px, py, inliers, follow, kappa, pw)
+            inliers, mom = again, None
+        return self._fit(px, py, inliers, follow, kappa, pw, mom)
+
+    def _gate(self, px: np.ndarray, py: np.ndarray, line: np.ndarray, allowed: np.ndarray) -> np.ndarray:
+        """The points ``allowed`` (2, n) within band_m of each row's line y = line[k, 0] + line[k, 1]·x."""
+        near = np.abs(py - (line[:, :1] + line[:, 1:2] * px)) <= self.band_m
+        near &= allowed
+        return near
 
     def _side(self, x: np.ndarray, y: np.ndarray, kappa: float) -> Boundary:
         """The nearest strong near-longitudinal Hough line among a side's points (straightened frame), fitted."""
@@ -264,41 +299,41 @@ class RoadBoundaryEstimator:
         return self._fit(x, y, inliers[None, :], np.ones(1, dtype=bool), kappa)[0]
 
     def _fit(self, x: np.ndarray, y: np.ndarray, inliers: np.ndarray, use: np.ndarray, kappa: float,
-             pw: np.ndarray | None = None) -> list[Boundary]:
+             pw: np.ndarray | None = None, mom: list[list[float]] | None = None) -> list[Boundary]:
         """Seed 002's gap rule on each row's inliers (``inliers`` (S, n), rows where ``use``), then
         y = c0 + c1·x (+ c2·x²) with the path curvature added back; one Boundary per row (``pw``: the points'
-        :func:`powers`, if known)."""
-        count = np.add.reduce(inliers, axis=1)
-        use = use & (count >= 4)
-        if not use.any():
-            return [UNAVAILABLE] * inliers.shape[0]
-        x_min = np.minimum.reduce(np.where(inliers, x, np.inf), axis=1)
-        x_max = np.maximum.reduce(np.where(inliers, x, -np.inf), axis=1)
-        start = np.maximum(np.where(use, x_min, 0.0), 0.0)
+        :func:`powers`, if known; ``mom``: the inliers' :func:`moments`, if known)."""
+        rows = inliers.shape[0]
+        if mom is None:
+            mom = moments(powers(x, y) if pw is None else pw, inliers)
+        count = [int(mom[k][0]) if use[k] else 0 for k in range(rows)]
+        if max(count) < 4:
+            return [UNAVAILABLE] * rows
+        x_min = np.minimum.reduce(np.where(inliers, x, np.inf), axis=1).tolist()
+        x_max = np.maximum.reduce(np.where(inliers, x, -np.inf), axis=1).tolist()
+        start = [max(x_min[k], 0.0) if count[k] >= 4 else 0.0 for k in range(rows)]
         # seed 002: M cross-sections along x, at most k of them without a boundary point
-        cell = np.floor((x - start[:, None]) / self.section_m)
-        take = inliers & (cell < self.sections)
-        cell += (np.arange(inliers.shape[0]) * self.sections)[:, None]        # each row's own sections
-        present = np.bincount(cell[take].astype(np.intp), minlength=inliers.shape[0] * self.sections)
-        present = (present.reshape(-1, self.sections) > 0).tolist()
-        span = x_max - x_min
-        deg2 = (span > 40.0) & (count >= 8)
-        ok, seen = [], []
+        cell = np.floor((x - np.array(start)[:, None]) / self.section_m)
+        cell = np.where(inliers & (cell < self.sections), cell, self.sections)     # (the sections' count: none)
+        cell += (np.arange(rows) * (self.sections + 1))[:, None]                   # each row's own sections
+        present = np.bincount(cell.astype(np.intp).ravel(), minlength=rows * (self.sections + 1))
+        present = (present.reshape(rows, -1)[:, :-1] > 0).tolist()
+        ok, seen, deg2 = [], [], []
         for k, p in enumerate(present):
             reach = max((j + 1 for j, q in enumerate(p) if q), default=0)
             seen.append(sum(p[:reach]))
             missing = (reach - seen[k]) + max(0, self.sections - reach - self.max_missing)
-            ok.append(bool(use[k]) and missing <= self.max_missing and reach >= 2)
+            ok.append(count[k] >= 4 and missing <= self.max_missing and reach >= 2)
+            deg2.append(ok[k] and x_max[k] - x_min[k] > 40.0 and count[k] >= 8)
         if not any(ok):
-            return [UNAVAILABLE] * inliers.shape[0]
-        ok = np.array(ok)
-        coef = masked_fit(powers(x, y) if pw is None else pw, inliers, deg2 & ok)
+            return [UNAVAILABLE] * rows
+        coef = solve(mom, deg2).tolist()
         out = []
-        for k in range(len(present)):
+        for k in range(rows):
             if not ok[k]:
                 out.append(UNAVAILABLE)
                 continue
-            c0, c1, c2 = coef[k].tolist()
-            out.append(Boundary(True, c0, math.atan(c1), 2.0 * c2 + kappa, float(start[k]), float(x_max[k]),
+            c0, c1, c2 = coef[k]
+            out.append(Boundary(True, c0, math.atan(c1), 2.0 * c2 + kappa, start[k], x_max[k],
                                 seen[k] / self.sections))
         return out

@@ -15,6 +15,9 @@ import numpy as np
 
 def frame_bits(dlc: int | np.ndarray, extended: bool = False, worst_case: bool = True) -> int | np.ndarray:
     """Bits one data frame occupies on the bus, interframe space included."""
+    if isinstance(dlc, int):              # one frame: in Python numbers (several calls a cycle)
+        base, stuffable = (67, 54) if extended else (47, 34)
+        return base + 8 * dlc + ((stuffable + 8 * dlc - 1) // 4 if worst_case else 0)
     n = np.asarray(dlc)
     base, stuffable = (67, 54) if extended else (47, 34)
     bits = base + 8 * n

@@ -409,7 +409,7 @@ class RadarNode:
     def _fit(self, n: int, frames_per_item: list[int], fixed_bits: int) -> int:
         """How many list items fit in the cycle's bus-load budget."""
         budget = self.bus_load_limit * self.bitrate * self.period_s - fixed_bits
-        per_item = int(np.sum(frame_bits(np.asarray(frames_per_item))))
+        per_item = sum(frame_bits(int(d)) for d in frames_per_item)
         return max(0, min(n, int(budget // per_item))) if per_item else n
 
     def cycle(self, t_s: float, timestamp: float | None = None) -> CycleOutput:
@@ -443,7 +443,7 @@ class RadarNode:
         relay = self.coll_det.active and cfg.ctrl_relay
         fixed = [len(p) for _, p in out + own] + [8] + (self.coll_det.state_dlcs() if coll_det_now else []) \
             + ([1] if relay else [])
-        fixed_bits = int(np.sum(frame_bits(np.array(fixed, dtype=np.int64))))
+        fixed_bits = sum(frame_bits(d) for d in fixed)
         lifetime = self._lifetimes(frame.objects, t_s)
         dropped = filtered = 0
         header_at = len(out)
@@ -531,14 +531,15 @@ class RadarNode:
                             t_s, 100 * self.bus_load_limit, self.bitrate, 1e3 * self.period_s, dropped)
         self._meas_counter = (self._meas_counter + 1) & 0xFFFF
         out += own
-        dlcs = np.array([len(p) for _, p in out], dtype=np.int64)
-        nominal = frame_bits(dlcs, worst_case=False)
+        dlcs = [len(p) for _, p in out]
         t0 = t_s if timestamp is None else timestamp
-        offsets = t0 + np.concatenate([[0.0], np.cumsum(nominal[:-1])]) / self.bitrate
-        messages = [self._msg(base, payload, float(ts)) for (base, payload), ts in zip(out, offsets)]
+        messages, elapsed = [], 0                  # frame k at t0 + the nominal bits of the frames before it
+        for (base, payload), dlc in zip(out, dlcs):
+            messages.append(self._msg(base, payload, t0 + elapsed / self.bitrate))
+            elapsed += frame_bits(dlc, worst_case=False)
         self.counters["cycles"] += 1
         self.counters["frames"] += len(messages)
-        return CycleOutput(t_s, messages, frame, view, int(np.sum(frame_bits(dlcs))), dropped,
+        return CycleOutput(t_s, messages, frame, view, sum(frame_bits(d) for d in dlcs), dropped,
                            boundaries=(self.last_boundaries if own else None))
 
     def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0, computed: bool = True) -> None:
