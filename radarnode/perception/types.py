@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,8 +31,10 @@ def _empty(n: int, dtype: type = np.float64) -> np.ndarray:
 
 
 @functools.cache
+@functools.cache
 def _names(cls: type) -> tuple[str, ...]:
-    """A list class's field names, in order (``dataclasses.fields`` costs more than a cycle's selection)."""
+    """A list class's field names, in order (once a class: ``dataclasses.fields`` costs more than a cycle's
+    selection)."""
     return tuple(f.name for f in dataclasses.fields(cls))
 
 
@@ -49,6 +52,14 @@ class _Columns:
             dtype = bool if name in cls.BOOL_FIELDS else np.int64 if name in cls.INT_FIELDS else np.float64
             kw[name] = _empty(n, dtype)
         return cls(**kw)
+
+    @classmethod
+    def of(cls, *values):
+        """A list from its fields' arrays, in the fields' order: what ``cls(*values)`` makes, without the dataclass's
+        ``__init__`` (the object level builds a list this way every cycle)."""
+        out = object.__new__(cls)
+        out.__dict__.update(zip(_names(cls), values))
+        return out
 
     def __len__(self) -> int:
         return int(getattr(self, _names(type(self))[0]).shape[0])

@@ -58,7 +58,7 @@ MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
 CHUNK_CYCLES = 1024       # at most this many cycles' physics in one vectorised pass (fewer for crowded scenes) …
-FIRST_CHUNK_CYCLES = 128  # … the first chunk after a start or a configuration change this many, …
+FIRST_CHUNK_CYCLES = 128  # … the first chunk after a restart (a configuration change, a step off sequence), …
 CHUNK_GROWTH = 4          # … each next one this many times the last
 CHUNK_OCCLUSION_CELLS = 16_000_000   # bound on the (cycles, actors, samples, actors) occlusion test
 CHUNK_ACTOR_CYCLES = 4096   # bound on cycles × actors of a chunk: about 20 ms to compute (a real-time node's cycle)
@@ -796,11 +796,16 @@ class ObjectModel:
             self._pos = None
 
     def _row(self, t_s: float, config: RuntimeConfig) -> tuple[dict, int]:
+        ch = self._cache
+        pos = self.__dict__.get("_pos")
+        if ch is not None and pos is not None and pos[0] is ch:      # the chunk's next row, at its time exactly
+            i = pos[1] + 1
+            times = ch["times_list"]
+            if i < len(times) and t_s == times[i] and (config is ch["config"] or config == ch["config"]):
+                return ch, i
         period = self.period_s
         k = int(round(t_s / period))
         on_grid = abs(t_s - k * period) <= 1e-9 * max(1.0, abs(t_s))
-        ch = self._cache
-        pos = self.__dict__.get("_pos")
         # the chunk's next row: its tracker ran through every cycle before it. Any other step (a skipped cycle, a
         # step back, a time repeated or off the grid) starts a chunk there, from the state after the last step,
         # as a cycle-by-cycle tracker does
@@ -809,10 +814,12 @@ class ObjectModel:
                 and abs(ch["times"][k - ch["k0"]] - t_s) <= 1e-9 * max(1.0, abs(t_s))):
             return ch, k - ch["k0"]
         n = max(self.scene.n, 1)
-        # a run's chunks grow (128, 512, 1024 cycles) while each follows the last under the same configuration: a
-        # start or a change costs a short chunk, a long run few passes
+        # a run starts with a full chunk (its length bounds it below); after a restart — a configuration change, a
+        # skipped cycle, a step back — the chunks grow (128, 512, 1024 cycles) while each follows the last under the
+        # same configuration: a flood of changes costs short chunks, a long run few passes
         follows = ch is not None and ch["config"] == config and k == ch["k0"] + ch["times"].size
-        grown = int(min(CHUNK_CYCLES, CHUNK_GROWTH * ch["grown"] if follows else FIRST_CHUNK_CYCLES))
+        grown = int(min(CHUNK_CYCLES, CHUNK_GROWTH * ch["grown"] if follows
+                        else CHUNK_CYCLES if ch is None else FIRST_CHUNK_CYCLES))
         size = int(min(grown, max(8, CHUNK_ACTOR_CYCLES // n),
                        max(8, CHUNK_OCCLUSION_CELLS // (n * n * OCCLUSION_SAMPLES))))
         if self.planned_cycles is not None:          # not past the run's last cycle …
@@ -829,6 +836,7 @@ class ObjectModel:
         self._settle()
         self._cache = self._tables(self._chunk(k, times, config))
         self._cache["grown"] = grown
+        self._cache["times_list"] = times.tolist()
         return self._cache, 0
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
@@ -855,8 +863,8 @@ class ObjectModel:
                               and not math.hypot(sv[0] - ch["sv"][0][i], sv[1] - ch["sv"][1][i]) + 1e-9
                               < ch["slack"][i]):
             g[1] = self._dyn_cycle(ch, i, g[-1], f[2], f[3], sv)
-        objects = ObjectList(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
-                             f[14], f[15], f[16], g[5])
+        objects = ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
+                                f[14], f[15], f[16], g[5])
         self.info.at(ch, i, self.reportable)
         clusters = self._cluster_list(ch, i, sv) if config.clusters else _NO_CLUSTERS
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view

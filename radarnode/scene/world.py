@@ -84,23 +84,42 @@ class SensorView:
     def row(self, k: int) -> SensorView:
         """Time ``k`` of a view computed for several times (see :meth:`Scene.views`).
 
-        A view of many times (the object level's chunk) keeps its arrays stacked by time, (T, 13, n), on the first
-        call, so that each later row is one index; the row is filled without the frozen dataclass's per-field
-        ``__setattr__`` (the same fields, the same values)."""
+        The row of a view of many times (the object level's chunk) is a :class:`_ViewRow`: its times and sensor
+        velocity are set at once, its arrays indexed out of this view's when one of them is first read (the same
+        fields, the same values), so that a cycle whose truth nobody reads costs no array views."""
         rows = self.__dict__.get("_rows")
         if rows is None:
             if np.size(self.t_s) == 1:
                 f = [getattr(self, name)[k] for name in _VIEW_ARRAYS]
                 return SensorView(float(self.t_s[k]), *f, float(self.sensor_vx_mps[k]),
                                   float(self.sensor_vy_mps[k]), None if self.z_m is None else self.z_m[k])
-            rows = (np.stack([getattr(self, name) for name in _VIEW_ARRAYS], axis=1), np.asarray(self.t_s).tolist(),
-                    np.asarray(self.sensor_vx_mps).tolist(), np.asarray(self.sensor_vy_mps).tolist())
+            rows = (np.asarray(self.t_s).tolist(), np.asarray(self.sensor_vx_mps).tolist(),
+                    np.asarray(self.sensor_vy_mps).tolist())
             object.__setattr__(self, "_rows", rows)
-        table, t, svx, svy = rows
-        out = object.__new__(SensorView)
-        out.__dict__.update(zip(_VIEW_FIELDS, (t[k], *table[k], svx[k], svy[k],
-                                               None if self.z_m is None else self.z_m[k])))
+        t, svx, svy = rows
+        out = object.__new__(_ViewRow)
+        d = out.__dict__
+        d["t_s"], d["sensor_vx_mps"], d["sensor_vy_mps"] = t[k], svx[k], svy[k]
+        d["z_m"] = None if self.z_m is None else self.z_m[k]
+        d["_of"] = (self, k)
         return out
+
+
+class _ViewRow(SensorView):
+    """Time k of a view of many times (:meth:`SensorView.row`), a SensorView in every respect: its arrays are
+    indexed out of that view's on the first read of any of them. Pickled and copied as a plain SensorView."""
+
+    def __getattr__(self, name: str):            # (only for what the instance does not hold yet)
+        d = self.__dict__
+        if name in _VIEW_ARRAY_SET and "_of" in d:
+            view, k = d.pop("_of")
+            for a in _VIEW_ARRAYS:
+                d[a] = getattr(view, a)[k]
+            return d[name]
+        raise AttributeError(f"'SensorView' object has no attribute {name!r}")
+
+    def __reduce__(self):
+        return SensorView, tuple(getattr(self, name) for name in _VIEW_FIELDS)
 
 
 #: cycles of a scripted ego computed together by :meth:`Scene.ego_state` (the vehicle's 0x300/0x301 every cycle)
@@ -109,6 +128,7 @@ EGO_BLOCK = 256
 _VIEW_ARRAYS = ("x_m", "y_m", "vx_mps", "vy_mps", "ax_mps2", "ay_mps2", "ground_vx_mps", "ground_vy_mps",
                 "orientation_rad", "az_lo_rad", "az_hi_rad", "centre_x_m", "centre_y_m")
 _VIEW_FIELDS = ("t_s", *_VIEW_ARRAYS, "sensor_vx_mps", "sensor_vy_mps", "z_m")
+_VIEW_ARRAY_SET = frozenset(_VIEW_ARRAYS)
 
 
 def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
