@@ -65,6 +65,8 @@ CHUNK_ACTOR_CYCLES = 4096   # bound on cycles × actors of a chunk: about 20 ms 
 DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixed, for reproducibility)
 KEEP_DRAW_STATES = 4096   # blocks whose starting random state is kept (a step back that far: about 5 h at 72 ms)
 _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
+# the float and integer rows of an empty object list, shared by every cycle without objects (empty: nothing to modify)
+_NO_OBJECT_ROWS = (tuple(np.zeros(0) for _ in range(17)), tuple(np.zeros(0, dtype=np.int64) for _ in range(6)))
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW5 = np.array([bin(i & ((1 << 5) - 1)).count("1") for i in range(256)], dtype=np.int64)
@@ -303,15 +305,20 @@ def visible_fraction(range_m: np.ndarray, az_lo: np.ndarray, az_hi: np.ndarray, 
     nearer &= ((az_lo[..., None, :] <= az_hi[..., :, None] + 1e-9)
                & (az_hi[..., None, :] >= az_lo[..., :, None] - 1e-9))
     nearer = nearer.reshape(-1, n, n)
-    rows = np.flatnonzero(nearer.any(axis=(1, 2)))
     frac = np.ones(nearer.shape[:2])
-    if rows.size:
-        lo, hi = az_lo.reshape(-1, n)[rows], az_hi.reshape(-1, n)[rows]
+    # the (time, target, occluder) pairs that may cover something, in that order: each target's samples tested
+    # against its own occluders only, the samples covered by any of them an OR of the pairs' bit masks
+    row, tgt, occ = np.nonzero(nearer)
+    if row.size:
+        lo, hi = az_lo.reshape(-1, n), az_hi.reshape(-1, n)
+        t_lo, t_hi = lo[row, tgt], hi[row, tgt]
         u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
-        smp = lo[..., :, None] + u * (hi - lo)[..., :, None]                              # (rows, n, S)
-        covered = ((smp[..., None] >= lo[:, None, None, :]) & (smp[..., None] <= hi[:, None, None, :])
-                   & nearer[rows][:, :, None, :]).any(axis=-1)                          # (rows, n, S)
-        frac[rows] = 1.0 - covered.mean(axis=-1)
+        smp = t_lo[:, None] + u * (t_hi - t_lo)[:, None]                                   # (pairs, S)
+        hit = np.packbits((smp >= lo[row, occ][:, None]) & (smp <= hi[row, occ][:, None]), axis=1)
+        cell = row * n + tgt
+        first = np.flatnonzero(np.r_[True, cell[1:] != cell[:-1]])                          # each target's pairs
+        count = _POPCOUNT[np.bitwise_or.reduceat(hit, first, axis=0)].sum(axis=1)          # samples covered
+        frac.reshape(-1)[cell[first]] = 1.0 - count / OCCLUSION_SAMPLES
     return frac.reshape(range_m.shape)
 
 
@@ -857,11 +864,12 @@ class ObjectModel:
         self.last_t, self.cycle = t_s, self.cycle + 1
         view = ch["view"].row(i)
         s, e = ch["starts"][i], ch["starts"][i + 1]
-        f, g = list(ch["obj_f"][:, s:e]), list(ch["obj_i"][:, s:e])
+        f, g = (list(ch["obj_f"][:, s:e]), list(ch["obj_i"][:, s:e])) if e > s else _NO_OBJECT_ROWS
         sv = (ch["sv"][0][i], ch["sv"][1][i]) if sensor_velocity_est is None else sensor_velocity_est
         if ch["by_cycle"] or (sensor_velocity_est is not None
                               and not math.hypot(sv[0] - ch["sv"][0][i], sv[1] - ch["sv"][1][i]) + 1e-9
                               < ch["slack"][i]):
+            g = list(g)
             g[1] = self._dyn_cycle(ch, i, g[-1], f[2], f[3], sv)
         objects = ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
                                 f[14], f[15], f[16], g[5])

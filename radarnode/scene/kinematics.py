@@ -131,6 +131,9 @@ class MoverTable:
         self.cos_h = np.cos(np.asarray(heading_rad, dtype=np.float64))
         self.sin_h = np.sin(np.asarray(heading_rad, dtype=np.float64))
         self._rows = np.arange(n)
+        # the knots' columns side by side, so that a time's knot is one gather: t, a, v, dist, px, py
+        self._knots = np.stack([self.t, self.a, self.v, self.dist, self.px, self.py], axis=-1)
+        self._sorted = bool(np.all(self.t[:, 1:] >= self.t[:, :-1]))
 
     def state(self, t_s: float | np.ndarray) -> MoverState:
         """Road-frame position, velocity and acceleration of every mover at ``t_s``.
@@ -142,16 +145,25 @@ class MoverTable:
             idx = np.maximum(np.sum(self.t <= t, axis=1) - 1, 0)
             r = self._rows
         else:
+            if self._sorted and t.ndim == 1 and not np.isnan(t).any():    # a binary search a mover, all times
+                idx = np.empty((t.size, self.n), dtype=np.intp)
+                for j in range(self.n):
+                    idx[:, j] = np.searchsorted(self.t[j], t, side="right")
+                idx -= 1
+                np.maximum(idx, 0, out=idx)
+            else:
+                idx = np.maximum(np.sum(self.t[None, :, :] <= t[:, None, None], axis=2) - 1, 0)
             t = t[:, None]
-            idx = np.maximum(np.sum(self.t[None, :, :] <= t[:, :, None], axis=2) - 1, 0)
             r = self._rows[None, :]
         t_s = t
-        t0 = np.where(np.isfinite(self.t[r, idx]), self.t[r, idx], 0.0)
+        knot = self._knots[r, idx]                       # (..., n, 6): t, a, v, dist, px, py
+        t_k = knot[..., 0]
+        t0 = np.where(np.isfinite(t_k), t_k, 0.0)
         dt = np.maximum(t_s - t0, 0.0)
         # speed-profile movers
-        a = self.a[r, idx]
-        v = self.v[r, idx] + a * dt
-        dist = self.dist[r, idx] + self.v[r, idx] * dt + 0.5 * a * dt * dt
+        a = knot[..., 1]
+        v = knot[..., 2] + a * dt
+        dist = knot[..., 3] + knot[..., 2] * dt + 0.5 * a * dt * dt
         sx = self.x0 + dist * self.cos_h
         sy = self.y0 + dist * self.sin_h
         svx, svy = v * self.cos_h, v * self.sin_h
@@ -177,14 +189,16 @@ class MoverTable:
             return MoverState(sx, sy, svx, svy, sax, say)
         # waypoint movers: before the first waypoint they wait at it
         nxt = np.minimum(idx + 1, self.t.shape[1] - 1)
-        t1 = self.t[r, nxt]
+        knot1 = self._knots[r, nxt]
+        t1 = knot1[..., 0]
         seg = np.where(np.isfinite(t1) & (t1 > t0) & (t_s >= self.t[:, 0]), t1 - t0, np.inf)
         frac = np.clip(dt / seg, 0.0, 1.0)
-        px = self.px[r, idx] + frac * (self.px[r, nxt] - self.px[r, idx])
-        py = self.py[r, idx] + frac * (self.py[r, nxt] - self.py[r, idx])
+        dpx, dpy = knot1[..., 4] - knot[..., 4], knot1[..., 5] - knot[..., 5]
+        px = knot[..., 4] + frac * dpx
+        py = knot[..., 5] + frac * dpy
         moving = np.isfinite(seg) & (frac < 1.0)
-        pvx = np.where(moving, (self.px[r, nxt] - self.px[r, idx]) / np.where(moving, seg, 1.0), 0.0)
-        pvy = np.where(moving, (self.py[r, nxt] - self.py[r, idx]) / np.where(moving, seg, 1.0), 0.0)
+        pvx = np.where(moving, dpx / np.where(moving, seg, 1.0), 0.0)
+        pvy = np.where(moving, dpy / np.where(moving, seg, 1.0), 0.0)
         p = self.is_path
         zero = np.zeros_like(sx)
         return MoverState(np.where(p, px, sx), np.where(p, py, sy), np.where(p, pvx, svx),
