@@ -214,3 +214,29 @@ def test_a_step_back_beyond_the_kept_random_state_is_refused(monkeypatch):
     _model_rows([*range(5 * om.DRAW_BLOCK), 3 * om.DRAW_BLOCK + 1], None, monkeypatch)     # two blocks back: kept
     with pytest.raises(ValueError, match="cannot step back to cycle 10"):
         _model_rows([*range(5 * om.DRAW_BLOCK), 10], None, monkeypatch)
+
+
+@pytest.mark.parametrize("name", sorted(p.name for p in SCENARIOS.glob("*.yaml")))
+def test_the_movers_states_of_many_times_are_each_times_own(name):
+    """MoverTable.state of an array of times finds each mover's knot by a binary search and gathers the knot's
+    columns at once: every state is the one of its time alone (and the counting search's), for every shipped
+    scenario's actors and ego, from before the start to beyond the end, at the knots' own times too."""
+    from radarnode.radar.setup import load_scenario
+    from radarnode.scene.world import Scene
+    sc = load_scenario(SCENARIOS / name)
+    scene = Scene(sc)
+    for table in (scene._movers, scene._ego):
+        knots = table.t[np.isfinite(table.t)]
+        t = np.concatenate([np.linspace(-1.0, sc.duration_s + 5.0, 257), knots, [np.inf]])
+        many = vars(table.state(t))
+        for k in range(0, t.size, 7):
+            alone = vars(table.state(float(t[k])))
+            for field, value in alone.items():
+                np.testing.assert_array_equal(many[field][k], value, err_msg=f"{field} at t={t[k]}")
+        counted = table._sorted
+        table._sorted = False                         # the counting search, (times, movers, knots) at once
+        try:
+            for field, value in vars(table.state(t)).items():
+                np.testing.assert_array_equal(many[field], value, err_msg=field)
+        finally:
+            table._sorted = counted

@@ -70,6 +70,53 @@ def test_visible_fraction_of_a_car_behind_a_car():
     assert frac.tolist() == [1.0, 0.0, 1.0]
 
 
+def test_visible_fraction_is_the_plain_sampled_formula_on_random_scenes():
+    """visible_fraction tests only the (time, target, occluder) pairs that overlap, with the samples as bit masks:
+    every fraction is the plain formula's — each target's OCCLUSION_SAMPLES samples across its extent, covered when
+    inside a nearer occluder's extent (and, with elevations, that occluder at the target's height) — exactly,
+    over random scenes with ties in range, zero-width targets, elevated bodies and no overlap at all."""
+    from radarnode.radar.object_model import OCCLUSION_SAMPLES
+
+    def plain(r, lo, hi, occ, elev):
+        t_n, n = r.shape
+        out = np.ones((t_n, n))
+        u = (np.arange(OCCLUSION_SAMPLES) + 0.5) / OCCLUSION_SAMPLES
+        for t in range(t_n):
+            for i in range(n):
+                smp = lo[t, i] + u * (hi[t, i] - lo[t, i])
+                cov = np.zeros(OCCLUSION_SAMPLES, dtype=bool)
+                for j in range(n):
+                    if not (occ[j] and r[t, j] < r[t, i]):
+                        continue
+                    if elev is not None:
+                        e_lo, e_hi, up = elev
+                        point = e_lo[t, i] if up[t, i] else 0.0
+                        if (up[t, i] or up[t, j]) and not (e_lo[t, j] <= point <= e_hi[t, j]):
+                            continue
+                    cov |= (smp >= lo[t, j]) & (smp <= hi[t, j])
+                out[t, i] = 1.0 - cov.sum() / OCCLUSION_SAMPLES
+        return out
+
+    rng = np.random.default_rng(3)
+    for trial in range(60):
+        t_n, n = int(rng.integers(1, 12)), int(rng.integers(1, 7))
+        r = rng.uniform(5.0, 100.0, (t_n, n))
+        if trial % 5 == 0 and n > 1:
+            r[:, 0] = r[:, -1]                                   # a tie in range: neither hides the other
+        c, w = rng.uniform(-0.3, 0.3, (t_n, n)), rng.uniform(0.0, 0.1, (t_n, n))
+        lo, hi = c - w, c + w
+        if trial % 7 == 0:
+            lo[:, 0] = hi[:, 0]                                  # a target of no width
+        if trial % 11 == 0:
+            lo, hi = lo + np.arange(n) * 1.0, hi + np.arange(n) * 1.0    # nothing overlaps
+        occ = rng.random(n) < 0.8
+        elev = None
+        if trial % 3 == 0:
+            up = np.broadcast_to(rng.random(n) < 0.4, (t_n, n))
+            elev = (rng.uniform(-0.05, 0.02, (t_n, n)), rng.uniform(0.02, 0.1, (t_n, n)), up)
+        np.testing.assert_array_equal(visible_fraction(r, lo, hi, occ, elev), plain(r, lo, hi, occ, elev))
+
+
 def test_target_outside_the_fov_and_behind_a_truck_is_not_reported():
     sc = scenario("""
   - {id: lead, class: truck, x_m: 40.0, lane: 1, speed_mps: 20.0}
