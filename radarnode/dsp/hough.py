@@ -65,6 +65,12 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     n_t, n_r = grid.theta_rad.size, grid.rho_m.size
     if x.size == 0:
         return np.zeros((n_t, n_r))
+    # a NaN or infinite point votes nowhere
+    finite = np.isfinite(x) & np.isfinite(y)
+    w = None if weights is None else np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
+    if not finite.all():
+        x, y = x[finite], y[finite]
+        w = None if w is None else w[finite]
     # the cell of every (point, θ) in one matrix product: [x, y, 1] @ [cosθ/Δρ, sinθ/Δρ, 1.5 − ρ₀/Δρ] is the
     # ρ cell counted from 1, plus ½, so that truncation rounds it (a point exactly half a cell between two votes
     # for the upper one); each θ row has a cell before and after the grid (0 and n_rho + 1) that collect the votes
@@ -75,14 +81,13 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     coef = np.empty((3, n_t))
     coef[0], coef[1], coef[2] = np.cos(grid.theta_rad) / step, np.sin(grid.theta_rad) / step, 1.5 - grid.rho_m[0] / step
     cell = pts @ coef                                                    # (n, n_theta)
-    # fmin/fmax, not clip: a NaN (a NaN or infinite point) goes to the cell after the grid and votes nowhere
-    np.fmax(np.fmin(cell, n_r + 1.0, out=cell), 0.0, out=cell)
-    cell += np.arange(n_t) * (n_r + 2.0)                                 # each θ row's own cells
-    idx = cell.astype(np.int32).ravel()                                  # truncation: every value is ≥ 0
-    if weights is None:
+    np.clip(cell, 0.0, n_r + 1.0, out=cell)
+    idx = cell.astype(np.intp)                                           # truncation: every value is ≥ 0
+    idx += np.arange(0, n_t * (n_r + 2), n_r + 2)                        # each θ row's own cells
+    idx = idx.ravel()
+    if w is None:
         votes = np.bincount(idx, minlength=n_t * (n_r + 2)).astype(np.float64)
     else:
-        w = np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
         votes = np.bincount(idx, weights=np.broadcast_to(w[:, None], (x.size, n_t)).ravel(),
                             minlength=n_t * (n_r + 2))
     return votes.reshape(n_t, n_r + 2)[:, 1:-1]
@@ -114,9 +119,10 @@ def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_vo
     rows, cols = np.flatnonzero(cand.any(axis=1)), np.flatnonzero(cand.any(axis=0))
     r0, r1 = max(int(rows[0]) - half[0], 0), min(int(rows[-1]) + half[0] + 1, acc.shape[0])
     c0, c1 = max(int(cols[0]) - half[1], 0), min(int(cols[-1]) + half[1] + 1, acc.shape[1])
-    local = np.zeros(acc.shape, dtype=bool)
-    local[r0:r1, c0:c1] = acc[r0:r1, c0:c1] >= max_filter(acc[r0:r1, c0:c1], half)
-    ti, ri = np.nonzero(local & cand)
+    box = acc[r0:r1, c0:c1]
+    ti, ri = np.nonzero((box >= max_filter(box, half)) & cand[r0:r1, c0:c1])      # (row-major, as over the whole)
+    ti += r0
+    ri += c0
     order = np.argsort(-acc[ti, ri], kind="stable")
     ti, ri = ti[order], ri[order]
     theta, rho, votes = grid.theta_rad[ti], grid.rho_m[ri], acc[ti, ri]
@@ -139,10 +145,21 @@ def max_filter(a: np.ndarray, half: tuple[int, int]) -> np.ndarray:
     """The maximum over the (2·half[0] + 1) × (2·half[1] + 1) window around each cell of a 2-D array, edges
     extended (what ``scipy.ndimage.maximum_filter(a, size, mode="nearest")`` gives), by doubling windows along
     each axis: a few numpy passes instead of one per window cell."""
-    out = np.pad(a, ((half[0], half[0]), (0, 0)), mode="edge")
-    out = _running_max(out, 2 * half[0] + 1, axis=0)
-    out = np.pad(out, ((0, 0), (half[1], half[1])), mode="edge")
-    return _running_max(out, 2 * half[1] + 1, axis=1)
+    out = _running_max(_pad_edge(a, half[0], axis=0), 2 * half[0] + 1, axis=0)
+    return _running_max(_pad_edge(out, half[1], axis=1), 2 * half[1] + 1, axis=1)
+
+
+def _pad_edge(a: np.ndarray, h: int, axis: int) -> np.ndarray:
+    """``numpy.pad(a, h, mode="edge")`` along one axis of a 2-D array (without its generic wrapper)."""
+    if h == 0:
+        return a
+    if axis == 1:
+        return _pad_edge(a.T, h, 0).T
+    out = np.empty((a.shape[0] + 2 * h, a.shape[1]), dtype=a.dtype)
+    out[h:h + a.shape[0]] = a
+    out[:h] = a[0]
+    out[h + a.shape[0]:] = a[-1]
+    return out
 
 
 def _running_max(a: np.ndarray, width: int, axis: int) -> np.ndarray:

@@ -309,22 +309,23 @@ class RoadBoundaryEstimator:
         count = [int(mom[k][0]) if use[k] else 0 for k in range(rows)]
         if max(count) < 4:
             return [UNAVAILABLE] * rows
-        x_min = np.minimum.reduce(np.where(inliers, x, np.inf), axis=1).tolist()
-        x_max = np.maximum.reduce(np.where(inliers, x, -np.inf), axis=1).tolist()
-        start = [max(x_min[k], 0.0) if count[k] >= 4 else 0.0 for k in range(rows)]
-        # seed 002: M cross-sections along x, at most k of them without a boundary point
-        cell = np.floor((x - np.array(start)[:, None]) / self.section_m)
-        cell = np.where(inliers & (cell < self.sections), cell, self.sections)     # (the sections' count: none)
-        cell += (np.arange(rows) * (self.sections + 1))[:, None]                   # each row's own sections
-        present = np.bincount(cell.astype(np.intp).ravel(), minlength=rows * (self.sections + 1))
-        present = (present.reshape(rows, -1)[:, :-1] > 0).tolist()
-        ok, seen, deg2 = [], [], []
-        for k, p in enumerate(present):
-            reach = max((j + 1 for j, q in enumerate(p) if q), default=0)
-            seen.append(sum(p[:reach]))
+        ok, seen, deg2 = [False] * rows, [0] * rows, [False] * rows
+        start, x_max = [0.0] * rows, [0.0] * rows
+        for k in range(rows):
+            if count[k] < 4:
+                continue
+            # seed 002: M cross-sections along x from the nearest inlier, at most k of them without a point
+            xi = x.compress(inliers[k])
+            lo, x_max[k] = float(xi.min()), float(xi.max())
+            start[k] = max(lo, 0.0)
+            cell = np.floor((xi - start[k]) / self.section_m)
+            cell = cell.compress((cell >= 0.0) & (cell < self.sections)).astype(np.intp)
+            present = (np.bincount(cell, minlength=self.sections) > 0).tolist()
+            reach = max((j + 1 for j, q in enumerate(present) if q), default=0)
+            seen[k] = sum(present[:reach])
             missing = (reach - seen[k]) + max(0, self.sections - reach - self.max_missing)
-            ok.append(count[k] >= 4 and missing <= self.max_missing and reach >= 2)
-            deg2.append(ok[k] and x_max[k] - x_min[k] > 40.0 and count[k] >= 8)
+            ok[k] = missing <= self.max_missing and reach >= 2
+            deg2[k] = ok[k] and x_max[k] - lo > 40.0 and count[k] >= 8
         if not any(ok):
             return [UNAVAILABLE] * rows
         coef = solve(mom, deg2).tolist()

@@ -628,13 +628,16 @@ def classify(length_m, width_m, rcs_dbsm, ground_speed_mps, moving) -> np.ndarra
                     np.where(extent > 1.2, np.where(width_m > 3.0, 6, body), small)).astype(np.int64)
 
 
-def cluster_dyn_prop(range_rate_mps: np.ndarray, azimuth_rad: np.ndarray, sensor_velocity) -> np.ndarray:
+def cluster_dyn_prop(range_rate_mps: np.ndarray, azimuth_rad: np.ndarray, sensor_velocity,
+                     cos_sin: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """DynProp of a single detection from what it measures: its radial speed over ground (ego-compensated).
 
     A cluster has no lateral speed of its own; its radial ground speed decides
     stationary (below ``MOVING_THRESHOLD_MPS``), oncoming (closing) or moving.
+    ``cos_sin``: the azimuths' cosine and sine, where the caller has them.
     """
-    ground = range_rate_mps + sensor_velocity[0] * np.cos(azimuth_rad) + sensor_velocity[1] * np.sin(azimuth_rad)
+    c, s = (np.cos(azimuth_rad), np.sin(azimuth_rad)) if cos_sin is None else cos_sin
+    ground = range_rate_mps + sensor_velocity[0] * c + sensor_velocity[1] * s
     return np.where(np.abs(ground) < MOVING_THRESHOLD_MPS, DYN_STATIONARY,
                     np.where(ground < 0, DYN_ONCOMING, DYN_MOVING)).astype(np.int64)
 

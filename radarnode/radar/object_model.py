@@ -1011,10 +1011,10 @@ class ObjectModel:
             "cycles": t_n, "states": states, "post_cycle": post_cycle, "hit_cycle": hit_cycle, "rate": rate,
             "starts": np.searchsorted(cyc.take(order), np.arange(t_n + 1)).tolist(),
             # ClusterList's float fields after DynProp: RCS, then sigma_to_xy(r, az, σr, σaz) with its cos and sin
-            # taken once, the speeds' σ; and the radial speed and azimuth DynProp is computed from
+            # taken once, the speeds' σ; and the radial speed, azimuth, and its cos and sin DynProp is computed from
             "f": np.stack([x, y, vx, vy, rcs, np.sqrt((c * s_r) ** 2 + (r * s_ * s_az) ** 2),
                            np.sqrt((s_ * s_r) ** 2 + (r * c * s_az) ** 2), ac * s_v + as_ * lat, as_ * s_v + ac * lat,
-                           vx * c + vy * s_, az]),
+                           vx * c + vy * s_, az, c, s_]),
             "i": np.stack([np.where(actor >= 0, 1, 2), ambig.astype(np.int64), np.zeros(actor.size, dtype=np.int64),
                            actor]),
             "near": r <= p.near_range_m}
@@ -1025,5 +1025,6 @@ class ObjectModel:
         tab, j = self._cluster_table(ch, i)
         a, b = tab["starts"][j], tab["starts"][j + 1]
         f, g = list(tab["f"][:, a:b]), list(tab["i"][:, a:b])
-        return ClusterList(np.arange(b - a, dtype=np.int64), f[0], f[1], f[2], f[3],
-                           cluster_dyn_prop(f[9], f[10], sv), *f[4:9], g[0], g[1], g[2], tab["near"][a:b], g[3])
+        return ClusterList.of(np.arange(b - a, dtype=np.int64), f[0], f[1], f[2], f[3],
+                              cluster_dyn_prop(f[9], f[10], sv, (f[11], f[12])), *f[4:9], g[0], g[1], g[2],
+                              tab["near"][a:b], g[3])

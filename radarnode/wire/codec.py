@@ -72,6 +72,10 @@ class MessageCodec:
         self._tol = 1e-6 * self._scale
         self._mask = np.array([(1 << f.bits) - 1 for f in fields], dtype=np.uint64)[:, None]
         self._shift = np.array([f.shift for f in fields], dtype=np.uint64)[:, None]
+        # each field for one frame in Python numbers (:meth:`_encode_one`): its limits, where saturation starts (a
+        # millionth of an LSB beyond them), offset, scale, mask and shift
+        self._scalar = tuple((f.name, f.minimum, f.maximum, f.minimum - 1e-6 * f.scale, f.maximum + 1e-6 * f.scale,
+                              f.offset, f.scale, (1 << f.bits) - 1, f.shift) for f in fields)
 
     def encode(self, values: dict[str, np.ndarray | float]) -> np.ndarray:
         """Encode physical values to frame payloads.
@@ -91,7 +95,10 @@ class MessageCodec:
         except KeyError:
             missing = [name for name in self.signal_names if name not in values]
             raise WireError(f"message {self.name}: no value for signal(s) {', '.join(missing)}") from None
-        if all(isinstance(c, _SCALARS) or (isinstance(c, np.ndarray) and c.ndim == 0) for c in cols):
+        for c in cols:
+            if not (isinstance(c, _SCALARS) or (isinstance(c, np.ndarray) and c.ndim == 0)):
+                break
+        else:
             return self._encode_one(cols)
         n = max([np.size(c) for c in cols] + [1])
         v = np.empty((len(cols), n), dtype=np.float64)
@@ -126,12 +133,11 @@ class MessageCodec:
                 raise WireError(f"message {self.name}: signal {f.name} got NaN; expected a number in "
                                 f"[{f.minimum:g}, {f.maximum:g}]")
         word = 0
-        for f, v in zip(self.fields, values):
-            tol = 1e-6 * f.scale
-            if v < f.minimum - tol or v > f.maximum + tol:
-                self.saturated[f.name] += 1
-            v = min(max(v, f.minimum), f.maximum)
-            word |= (round((v - f.offset) / f.scale) & ((1 << f.bits) - 1)) << f.shift
+        for (name, lo, hi, below, above, offset, scale, mask, shift), v in zip(self._scalar, values):
+            if v < below or v > above:
+                self.saturated[name] += 1
+            v = lo if v < lo else hi if v > hi else v
+            word |= (round((v - offset) / scale) & mask) << shift
         return np.frombuffer(word.to_bytes(8, "big")[: self.length], dtype=np.uint8).reshape(1, self.length)
 
     def as_sent(self, name: str, value: np.ndarray) -> np.ndarray:

@@ -373,6 +373,9 @@ class RadarNode:
         """Seconds since the model's tracker first reported each object (for the Lifetime filter), shape (n,).
 
         An object is born when its ID was not in the previous cycle's list or its MeasState is "new"."""
+        if not len(ol):
+            self._born.fill(np.nan)
+            return np.zeros(0)
         slot = np.clip(ol.id, 0, MAX_OBJECT_ID)
         born = self._born[slot]
         new = np.isnan(born) | (ol.meas_state == MEAS_NEW)
@@ -450,21 +453,22 @@ class RadarNode:
         evaluated = False
         if cfg.output_type == P.OUTPUT_OBJECTS:
             ol = frame.objects
-            mask = self.filters.object_mask(self._as_sent(ol, P.OBJ_GENERAL, P.OBJ_EXTENDED), lifetime)
-            filtered = int((~mask).sum())
-            keep = self._priority(ol.range_m, ol.rcs_dbsm)
-            keep = keep[mask[keep]][:MAX_OBJECTS]
-            cap = self.filters.max_count(TYPE_OBJECT)
-            if cap is not None and len(keep) > cap:
-                filtered += len(keep) - cap
-                keep = keep[:cap]
-            groups = [8] + ([7] if cfg.send_quality else []) + ([8] if cfg.send_ext_info else []) \
-                + ([4] if warnings else [])
-            n_fit = self._fit(len(keep), groups, fixed_bits)
-            dropped = len(keep) - n_fit
-            ol = ol.take(keep[:n_fit])
-            ol = ol.take(self._send_order(ol.id, ol.range_m, ol.rcs_dbsm))
-            frame.objects = ol
+            if len(ol):                  # (an empty list: nothing to filter, fit or order)
+                mask = self.filters.object_mask(self._as_sent(ol, P.OBJ_GENERAL, P.OBJ_EXTENDED), lifetime)
+                filtered = int((~mask).sum())
+                keep = self._priority(ol.range_m, ol.rcs_dbsm)
+                keep = keep[mask[keep]][:MAX_OBJECTS]
+                cap = self.filters.max_count(TYPE_OBJECT)
+                if cap is not None and len(keep) > cap:
+                    filtered += len(keep) - cap
+                    keep = keep[:cap]
+                groups = [8] + ([7] if cfg.send_quality else []) + ([8] if cfg.send_ext_info else []) \
+                    + ([4] if warnings else [])
+                n_fit = self._fit(len(keep), groups, fixed_bits)
+                dropped = len(keep) - n_fit
+                ol = ol.take(keep[:n_fit])
+                ol = ol.take(self._send_order(ol.id, ol.range_m, ol.rcs_dbsm))
+                frame.objects = ol
             out.append((P.OBJ_STATUS, self.codecs[P.OBJ_STATUS].encode({
                 "Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
                 "Obj_InterfaceVersion": P.INTERFACE_VERSION})[0]))
