@@ -183,7 +183,7 @@ class RoadBoundaryEstimator:
         ox, oy, h = ox + (c * vx - s * vy) * dt_s, oy + (s * vx + c * vy) * dt_s, h + yaw_rate_rps * dt_s
         self._pose = (ox, oy, h)
         c, s = math.cos(h), math.sin(h)
-        origin = ((ox,), (oy,))
+        origin = np.array([[ox], [oy]])                  # (2, 1)
         r = np.maximum(np.hypot(x_m, y_m), 1e-6)
         ground = range_rate_mps + (vx * x_m + vy * y_m) / r
         still = np.abs(ground) < STATIONARY_MPS
@@ -229,7 +229,7 @@ class RoadBoundaryEstimator:
         x = curve_x(col[:, 0], col[:, 1])
         y = col[:, 2:3] + col[:, 3:4] * x + col[:, 4:5] * x * x
         cv = np.multiply.outer((c, s), x)                # (x/y, side, sample)
-        cv += np.reshape(origin, (2, 1, 1))
+        cv += origin[:, :, None]
         cv += np.multiply.outer((-s, c), y)
         self._curves = cv.transpose(1, 0, 2)
 
@@ -237,7 +237,7 @@ class RoadBoundaryEstimator:
                 s: float) -> list[Boundary]:
         """Both sides' boundaries near last cycle's: each curve moved into this frame and straightened, its
         inliers fitted (UNAVAILABLE for a side that had none or lost it). The two sides in one pass each."""
-        d = self._curves - np.reshape(origin, (1, 2, 1))
+        d = self._curves - origin                        # (side, x/y, sample) less (x/y, 1)
         q = np.multiply.outer((c, -s), d[:, 0])           # (x/y, side, sample)
         q += np.multiply.outer((s, c), d[:, 1])
         if kappa:
