@@ -241,3 +241,37 @@ def test_the_movers_states_of_many_times_are_each_times_own(name):
                 np.testing.assert_array_equal(many[field], value, err_msg=field)
         finally:
             table._sorted = counted
+
+
+def test_a_chunks_truth_row_is_a_sensor_view_filled_when_read():
+    """The object level's step returns its cycle's truth as a row of the chunk's many-time view, whose arrays are
+    indexed out when first read: every field the eager row's, and it prints, compares, copies, pickles and
+    replaces as a SensorView does."""
+    import copy
+    import dataclasses
+    import pickle
+
+    from radarnode.scene.world import _VIEW_FIELDS, SensorView
+    from radarnode.radar.setup import load_scenario
+    from radarnode.scene.world import Scene
+    sc = load_scenario(SCENARIOS / "highway_cut_in.yaml")
+    scene = Scene(sc)
+    times = np.arange(40) * sc.period_s
+    many = scene.views(times)
+    for k in (0, 17, 39):
+        row = many.row(k)
+        alone = scene.views(times[k:k + 1])
+        assert isinstance(row, SensorView) and repr(row).startswith("SensorView(t_s=")
+        for field in _VIEW_FIELDS:
+            want = getattr(many, field)
+            want = None if want is None else np.asarray(want)[k]
+            np.testing.assert_array_equal(getattr(row, field), want, err_msg=field)
+            if field not in ("t_s", "sensor_vx_mps", "sensor_vy_mps", "z_m"):
+                np.testing.assert_array_equal(getattr(row, field), getattr(alone, field)[0], err_msg=field)
+        assert row == copy.copy(row)
+        back = pickle.loads(pickle.dumps(many.row(k)))
+        assert type(back) is SensorView and np.array_equal(back.x_m, row.x_m)
+        moved = dataclasses.replace(many.row(k), t_s=1.5)
+        assert moved.t_s == 1.5 and np.array_equal(moved.vx_mps, row.vx_mps)
+        with pytest.raises(AttributeError, match="no attribute 'nope'"):
+            many.row(k).nope

@@ -71,6 +71,8 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     if not finite.all():
         x, y = x[finite], y[finite]
         w = None if w is None else w[finite]
+        if x.size == 0:
+            return np.zeros((n_t, n_r))
     # the cell of every (point, θ) in one matrix product: [x, y, 1] @ [cosθ/Δρ, sinθ/Δρ, 1.5 − ρ₀/Δρ] is the
     # ρ cell counted from 1, plus ½, so that truncation rounds it (a point exactly half a cell between two votes
     # for the upper one); each θ row has a cell before and after the grid (0 and n_rho + 1) that collect the votes
@@ -82,9 +84,8 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     coef[0], coef[1], coef[2] = np.cos(grid.theta_rad) / step, np.sin(grid.theta_rad) / step, 1.5 - grid.rho_m[0] / step
     cell = pts @ coef                                                    # (n, n_theta)
     np.clip(cell, 0.0, n_r + 1.0, out=cell)
-    idx = cell.astype(np.intp)                                           # truncation: every value is ≥ 0
-    idx += np.arange(0, n_t * (n_r + 2), n_r + 2)                        # each θ row's own cells
-    idx = idx.ravel()
+    cell += np.arange(n_t) * (n_r + 2.0)                                 # each θ row's own cells
+    idx = cell.astype(np.intp).ravel()                                   # truncation: every value is ≥ 0
     if w is None:
         votes = np.bincount(idx, minlength=n_t * (n_r + 2)).astype(np.float64)
     else:
@@ -145,6 +146,8 @@ def max_filter(a: np.ndarray, half: tuple[int, int]) -> np.ndarray:
     """The maximum over the (2·half[0] + 1) × (2·half[1] + 1) window around each cell of a 2-D array, edges
     extended (what ``scipy.ndimage.maximum_filter(a, size, mode="nearest")`` gives), by doubling windows along
     each axis: a few numpy passes instead of one per window cell."""
+    if half == (0, 0):
+        return a.copy()
     out = _running_max(_pad_edge(a, half[0], axis=0), 2 * half[0] + 1, axis=0)
     return _running_max(_pad_edge(out, half[1], axis=1), 2 * half[1] + 1, axis=1)
 

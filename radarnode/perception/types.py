@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import dataclasses
 import functools
-import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -30,7 +29,6 @@ def _empty(n: int, dtype: type = np.float64) -> np.ndarray:
     return np.zeros(n, dtype=dtype)
 
 
-@functools.cache
 @functools.cache
 def _names(cls: type) -> tuple[str, ...]:
     """A list class's field names, in order (once a class: ``dataclasses.fields`` costs more than a cycle's

@@ -121,6 +121,16 @@ class _ViewRow(SensorView):
     def __reduce__(self):
         return SensorView, tuple(getattr(self, name) for name in _VIEW_FIELDS)
 
+    def __repr__(self) -> str:
+        return SensorView.__repr__(self).replace(type(self).__qualname__, "SensorView", 1)
+
+    def __eq__(self, other):             # SensorView's dataclass __eq__, across the two classes
+        if not isinstance(other, SensorView):
+            return NotImplemented
+        return tuple(getattr(self, f) for f in _VIEW_FIELDS) == tuple(getattr(other, f) for f in _VIEW_FIELDS)
+
+    __hash__ = SensorView.__hash__
+
 
 #: cycles of a scripted ego computed together by :meth:`Scene.ego_state` (the vehicle's 0x300/0x301 every cycle)
 EGO_BLOCK = 256
