@@ -65,8 +65,6 @@ CHUNK_ACTOR_CYCLES = 4096   # bound on cycles × actors of a chunk: about 20 ms 
 DRAW_BLOCK = 64           # cycles whose random numbers are drawn together (fixed, for reproducibility)
 KEEP_DRAW_STATES = 4096   # blocks whose starting random state is kept (a step back that far: about 5 h at 72 ms)
 _NO_CLUSTERS = ClusterList.empty(0)   # shared by every cycle that sends objects: never modified
-# the float and integer rows of an empty object list, shared by every cycle without objects (empty: nothing to modify)
-_NO_OBJECT_ROWS = (tuple(np.zeros(0) for _ in range(17)), tuple(np.zeros(0, dtype=np.int64) for _ in range(6)))
 _POPCOUNT = np.array([bin(i).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW3 = np.array([bin(i & ((1 << 3) - 1)).count("1") for i in range(256)], dtype=np.int64)
 _POPCOUNT_LOW5 = np.array([bin(i & ((1 << 5) - 1)).count("1") for i in range(256)], dtype=np.int64)
@@ -80,6 +78,10 @@ _OBJECT_FLOATS = (("rcs_dbsm", "rcs_obj"), ("dist_long_sigma_m", "sig_long"), ("
                   ("arel_lat_mps2", "arel_lat"), ("orientation_rad", "orientation"), ("length_m", "length"),
                   ("width_m", "width"))
 _OBJECT_INTS = (("meas_state", "meas_state"), ("prob_of_exist", "prob_of_exist"), ("obj_class", "obj_class"))
+# the float and integer rows of an empty object list (obj_f: x, y, vx, vy and the floats above; obj_i: ID, DynProp, the
+# integers above and the actor), shared by every cycle without objects (empty: nothing to modify)
+_NO_OBJECT_ROWS = (tuple(np.zeros(0) for _ in range(4 + len(_OBJECT_FLOATS))),
+                   tuple(np.zeros(0, dtype=np.int64) for _ in range(3 + len(_OBJECT_INTS))))
 #: the detections' fields (Detections' order after the actor index: range, range rate, azimuth, RCS, SNR)
 _DETECTION_FLOATS = ("m_r", "m_vr", "m_az", "rcs_rep", "snr")
 
