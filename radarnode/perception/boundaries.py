@@ -242,7 +242,8 @@ class RoadBoundaryEstimator:
         q += np.multiply.outer((s, c), d[:, 1])
         if kappa:
             q[1] -= 0.5 * kappa * q[0] * q[0]
-        # the curves' least-squares lines, y = a + b·x, a row a side
+        # the curves' least-squares lines, y = a + b·x, a row a side, from centred sums (the line masked_fit would give
+        # the samples, but for the last bits: a point within ~1e-15 m of the band's edge may fall the other way)
         mean = np.add.reduce(q, axis=2) / CURVE_SAMPLES  # (x/y, side)
         q -= mean[:, :, None]
         sxx, sxy = np.einsum("sk,isk->is", q[0], q).tolist()
