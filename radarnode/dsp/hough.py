@@ -63,16 +63,14 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     if x.shape != y.shape or x.ndim != 1:
         raise ConfigError(f"hough points: shapes {x.shape} and {y.shape} are not allowed; expected two (n,) arrays")
     n_t, n_r = grid.theta_rad.size, grid.rho_m.size
-    if x.size == 0:
-        return np.zeros((n_t, n_r))
     # a NaN or infinite point votes nowhere
     finite = np.isfinite(x) & np.isfinite(y)
     w = None if weights is None else np.broadcast_to(np.asarray(weights, dtype=np.float64), x.shape)
     if not finite.all():
         x, y = x[finite], y[finite]
         w = None if w is None else w[finite]
-        if x.size == 0:
-            return np.zeros((n_t, n_r))
+    if x.size == 0:
+        return np.zeros((n_t, n_r))
     # the cell of every (point, θ) in one matrix product: [x, y, 1] @ [cosθ/Δρ, sinθ/Δρ, 1.5 − ρ₀/Δρ] is the
     # ρ cell counted from 1, plus ½, so that truncation rounds it (a point exactly half a cell between two votes
     # for the upper one); each θ row has a cell before and after the grid (0 and n_rho + 1) that collect the votes

@@ -114,6 +114,23 @@ def solve(mom: list[list[float]], deg2) -> np.ndarray:
     return out
 
 
+def _to_odometry(x: np.ndarray, y: np.ndarray, origin: np.ndarray, c: float, s: float) -> np.ndarray:
+    """Sensor-frame points into the odometry frame of a sensor at ``origin`` (2, 1) with heading cos c, sin s:
+    x = ox + c·x − s·y, y = oy + s·x + c·y; shape (2, *x.shape), the rows x and y (one outer product a column)."""
+    out = np.multiply.outer((c, s), x)
+    out += origin.reshape(2, *([1] * x.ndim))
+    out += np.multiply.outer((-s, c), y)
+    return out
+
+
+def _to_sensor(dx: np.ndarray, dy: np.ndarray, c: float, s: float) -> np.ndarray:
+    """Odometry-frame offsets from the sensor into its frame: x = c·dx + s·dy, y = −s·dx + c·dy; shape
+    (2, *dx.shape)."""
+    out = np.multiply.outer((c, -s), dx)
+    out += np.multiply.outer((s, c), dy)
+    return out
+
+
 @dataclass(frozen=True)
 class Boundary:
     """One road boundary in the sensor frame: y(x) = offset + tan(heading)·x + curvature·x²/2."""
@@ -187,16 +204,10 @@ class RoadBoundaryEstimator:
         r = np.maximum(np.hypot(x_m, y_m), 1e-6)
         ground = range_rate_mps + (vx * x_m + vy * y_m) / r
         still = np.abs(ground) < STATIONARY_MPS
-        # into the odometry frame: x = ox + c·x − s·y, y = oy + s·x + c·y (as rows: one outer product a column)
-        pts = np.multiply.outer((c, s), x_m[still])
-        pts += origin
-        pts += np.multiply.outer((-s, c), y_m[still])
-        self._points.append(pts)
+        self._points.append(_to_odometry(x_m[still], y_m[still], origin, c, s))
         del self._points[:-self.cycles]
-        # every accumulated point into the sensor frame: x = c·dx + s·dy, y = −s·dx + c·dy
-        d = np.concatenate(self._points, axis=1) - origin
-        p = np.multiply.outer((c, -s), d[0])
-        p += np.multiply.outer((s, c), d[1])
+        d = np.concatenate(self._points, axis=1) - origin    # every accumulated point into the sensor frame
+        p = _to_sensor(d[0], d[1], c, s)
         p = p.compress(p[0] > 0.0, axis=1)                    # ahead
         px, py = p[0], p[1]
         speed = math.hypot(vx, vy)
@@ -228,18 +239,14 @@ class RoadBoundaryEstimator:
                          0.5 * b.curvature_1pm] for b in found])
         x = curve_x(col[:, 0], col[:, 1])
         y = col[:, 2:3] + col[:, 3:4] * x + col[:, 4:5] * x * x
-        cv = np.multiply.outer((c, s), x)                # (x/y, side, sample)
-        cv += origin[:, :, None]
-        cv += np.multiply.outer((-s, c), y)
-        self._curves = cv.transpose(1, 0, 2)
+        self._curves = _to_odometry(x, y, origin, c, s).transpose(1, 0, 2)      # (side, x/y, sample)
 
     def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float, origin, c: float,
                 s: float) -> list[Boundary]:
         """Both sides' boundaries near last cycle's: each curve moved into this frame and straightened, its
         inliers fitted (UNAVAILABLE for a side that had none or lost it). The two sides in one pass each."""
         d = self._curves - origin                        # (side, x/y, sample) less (x/y, 1)
-        q = np.multiply.outer((c, -s), d[:, 0])           # (x/y, side, sample)
-        q += np.multiply.outer((s, c), d[:, 1])
+        q = _to_sensor(d[:, 0], d[:, 1], c, s)           # (x/y, side, sample)
         if kappa:
             q[1] -= 0.5 * kappa * q[0] * q[0]
         # the curves' least-squares lines, y = a + b·x, a row a side, from centred sums (the line masked_fit would give
