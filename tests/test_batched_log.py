@@ -183,6 +183,40 @@ def test_a_chunk_of_many_actors_is_short():
     assert max(sizes) == om.CHUNK_ACTOR_CYCLES // 40
 
 
+@pytest.mark.parametrize("planned", [1023, 1024, 1025, 2048])
+def test_a_run_starts_with_a_full_chunk_and_grows_again_only_after_a_restart(planned):
+    """The chunks of a run of ``planned`` cycles, just below, at and just above CHUNK_CYCLES and at twice it: the
+    first is full (the run's length bounds it), the next takes what is left up to CHUNK_CYCLES; a configuration
+    change restarts at FIRST_CHUNK_CYCLES and grows CHUNK_GROWTH-fold while the configuration holds."""
+    import dataclasses
+
+    import radarnode.radar.object_model as om
+    from radarnode.radar.setup import load_scenario, radar_config
+    from radarnode.scene.world import Scene
+    sc = load_scenario(SCENARIOS / "highway_cut_in.yaml")
+    preset = radar_config(sc).preset
+    model = om.ObjectModel(Scene(sc), preset, np.random.default_rng(1))
+    model.planned_cycles = planned
+    cfg = om.RuntimeConfig(max_distance_m=preset.max_range_m, clusters=False)
+    starts = {}
+    for k in range(planned):
+        model.step(k * sc.period_s, cfg)
+        starts.setdefault(model._cache["k0"], model._cache["times"].size)
+    full = om.CHUNK_CYCLES
+    assert starts == ({0: planned} if planned <= full else {0: full, full: min(planned - full, full)})
+    # a 0x200 MaxDistance change restarts the chunks short and lets them grow
+    model = om.ObjectModel(Scene(sc), preset, np.random.default_rng(1))
+    model.planned_cycles = 2000
+    near = dataclasses.replace(cfg, max_distance_m=150.0)
+    starts = {}
+    for k in range(2000):
+        model.step(k * sc.period_s, cfg if k < 10 else near)
+        starts.setdefault(model._cache["k0"], model._cache["times"].size)
+    first, growth = om.FIRST_CHUNK_CYCLES, om.CHUNK_GROWTH
+    grown = 10 + first + first * growth
+    assert starts == {0: full, 10: first, 10 + first: first * growth, grown: full, grown + full: 2000 - grown - full}
+
+
 def test_cycles_with_nothing_in_view_are_skipped_without_changing_a_frame(monkeypatch):
     """The object level computes its physics only at the cycles where some actor may be in a sector: here the slow
     car falls behind, the fast one drives out of range and the oncoming one passes, so most of the run has
