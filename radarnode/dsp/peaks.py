@@ -234,31 +234,32 @@ class PatchFit:
     def _fit(self, rd, d, r, fd, fr, halves, axis_d: _PatchAxis, axis_r: _PatchAxis):
         """:meth:`__call__` for peaks whose patches fit in the axes' size."""
         m, k = axis_d.max_half, d.size
-        off = np.arange(-m, m + 1)
-        di = (d[:, None] + off[None, :]) % rd.shape[1]
-        ri = (r[:, None] + off[None, :]) % rd.shape[2]
-        patch = rd[:, di[:, :, None], ri[:, None, :]].astype(np.complex128, copy=False)   # (C, K, J_d, J_r)
-        c, j = patch.shape[0], 2 * m + 1
-        # two layouts, so that each collapse is one (1 × J) @ (J × C·J) product per peak
-        by_d = np.ascontiguousarray(patch.transpose(1, 2, 0, 3)).reshape(k, j, c * j)      # (K, J_d, C·J_r)
-        by_r = np.ascontiguousarray(patch.transpose(1, 3, 0, 2)).reshape(k, j, c * j)      # (K, J_r, C·J_d)
-        inv_d, inv_r = axis_d.inverse[halves], axis_r.inverse[halves]                    # (K, J, J)
-        gd = (axis_d.response(fd)[:, None, :] @ inv_d)[:, 0]                           # R⁻¹h (Hermitian R⁻¹)
+        c, j = rd.shape[0], 2 * m + 1
+        x = _patches(rd, d, r, m, (1, 2, 0, 3))                                          # (K, J_d, C, J_r)
+        # one layout, two views: collapsing over Doppler is a (1 × J_d) @ (J_d × C·J_r) product per peak, over range
+        # a (J_d·C × J_r) @ (J_r × 1) one
+        by_d, by_r = x.reshape(k, j, c * j), x.reshape(k, j * c, j)
+        # R⁻¹ is real: its products run on real and imaginary parts side by side (_real_left)
+        inv_d, inv_r = axis_d.inverse[halves].real, axis_r.inverse[halves].real          # (K, J, J)
+
+        def over_range(g):            # Σ_j conj(g_j)·X_c[i, j] for templates g (K, J_r): (K, C, J_d)
+            return (by_r @ g.conj()[:, :, None]).reshape(k, j, c).transpose(0, 2, 1)
+
+        gd = _real_left(inv_d, axis_d.response(fd)[:, :, None])[:, :, 0]                # R⁻¹h
         for span, points in self.ROUNDS:
             grid = np.linspace(-span, span, points)
             # range with the Doppler template fixed (the patch collapsed over Doppler), then Doppler likewise;
             # u = R⁻¹v once, so each candidate costs its template and one product: Σ_c |h^H u_c|² / h^H R⁻¹ h.
             # Each collapse uses the other axis' best grid template (within half a step of its estimate)
-            u = (gd[:, None, :].conj() @ by_d).reshape(k, c, j) @ inv_r                      # (K, C, J_r)
-            fr, hr = self._search(axis_r, u, fr, grid, halves)
-            v = ((hr[:, None, :] @ inv_r).conj() @ by_r).reshape(k, c, j)                    # (K, C, J_d)
-            fd, hd = self._search(axis_d, v @ inv_d, fd, grid, halves)
-            gd = (hd[:, None, :] @ inv_d)[:, 0]
+            u = _real_left(inv_r, (gd[:, None, :].conj() @ by_d).reshape(k, c, j).transpose(0, 2, 1))   # (K, J_r, C)
+            fr, hr = self._search(axis_r, u.transpose(0, 2, 1), fr, grid, halves)
+            v = _real_left(inv_d, over_range(_real_left(inv_r, hr[:, :, None])[:, :, 0]).transpose(0, 2, 1))
+            fd, hd = self._search(axis_d, v.transpose(0, 2, 1), fd, grid, halves)
+            gd = _real_left(inv_d, hd[:, :, None])[:, :, 0]
         # the snapshot with both templates at the final estimates
-        gr = (axis_r.response(fr)[:, None, :] @ inv_r)
-        v = (gr.conj() @ by_r).reshape(k, c, j)
-        gd = (axis_d.response(fd)[:, None, :] @ inv_d)
-        s = (v @ gd[:, 0, :, None].conj())[..., 0]                                       # (K, C)
+        v = over_range(_real_left(inv_r, axis_r.response(fr)[:, :, None])[:, :, 0])     # (K, C, J_d)
+        gd = _real_left(inv_d, axis_d.response(fd)[:, :, None])[:, :, 0]
+        s = (v @ gd[:, :, None].conj())[..., 0]                                          # (K, C)
         nd = axis_d.norm(fd[:, None], halves)
         nr = axis_r.norm(fr[:, None], halves)
         return fd, fr, s / np.sqrt(nd[:, :1] * nr[:, :1])
@@ -302,23 +303,66 @@ def patch_halves(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[i
 
 def _tone_table(weights: np.ndarray, reach: float, steps: int) -> tuple[np.ndarray, float]:
     """G(u) = Σ_n weights[n]·e^{j2π·u·n/L} for u on a grid of ``steps`` points a bin over [−reach, reach] (L =
-    len(weights); one zero-padded FFT); returns (table, −reach) for :func:`_lookup`."""
+    len(weights); one zero-padded FFT); returns (table, −reach) for :class:`_ShiftTable`."""
     L = weights.size
     full = np.fft.ifft(weights, L * steps) * (L * steps)           # u = k/steps, k = 0 … L·steps − 1
     k = np.arange(-int(np.ceil(reach * steps)), int(np.ceil(reach * steps)) + 2)
     return full[k % full.size], k[0] / steps
 
 
-def _lookup(table: np.ndarray, start: float, steps: int, u: np.ndarray) -> np.ndarray:
-    """``table`` (from :func:`_tone_table`, or several side by side: (U, T)) at ``u``, linearly interpolated
-    (about 1e-6 of the peak off): shape u.shape + table.shape[1:]."""
-    pos = (u - start) * steps
-    i0 = np.minimum(pos.astype(np.intp), table.shape[0] - 2)          # pos ≥ 0 within the table's reach
-    frac = pos - i0
-    if table.ndim > 1:
-        frac = frac[..., None]
-    lo = table[i0]
-    return lo + frac * (table[i0 + 1] - lo)
+class _ShiftTable:
+    """A table from :func:`_tone_table` (or several side by side: (U, T)) read at u, u + 1, …, u + J − 1 at once,
+    linearly interpolated (about 1e-6 of the peak off). The table is kept by the phase of u within a bin
+    (``by_phase[f, k]`` = table[k·steps + f]), with each point's slope to the next, so that the J values of one
+    read share one interpolation weight and lie side by side: a read gathers two rows instead of 2·J scattered
+    values."""
+
+    def __init__(self, table: np.ndarray, start: float, steps: int) -> None:
+        self.start, self.steps = start, steps
+        bins = (table.shape[0] - 1) // steps
+        by_phase = table[np.arange(bins) * steps + np.arange(steps + 1)[:, None]]       # (steps + 1, bins, ...)
+        self.value, self.slope = by_phase[:-1], np.diff(by_phase, axis=0)               # (steps, bins, ...)
+        self._windows: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+
+    def read(self, u: np.ndarray, length: int) -> np.ndarray:
+        """The table at u + 0, 1, …, length − 1 (u within its reach): shape u.shape + table.shape[1:] + (length,)."""
+        win = self._windows.get(length)
+        if win is None:                            # (steps, k, ..., J): views, made once per length
+            win = self._windows[length] = tuple(np.lib.stride_tricks.sliding_window_view(t, length, axis=1)
+                                                for t in (self.value, self.slope))
+        pos = (u - self.start) * self.steps
+        i0 = pos.astype(np.intp)                                          # pos ≥ 0 within the table's reach
+        frac = pos - i0
+        k, f = np.divmod(i0, self.steps)
+        k = np.minimum(k, win[0].shape[1] - 1)
+        out = win[1][f, k]
+        out *= frac.reshape(frac.shape + (1,) * (win[0].ndim - 2))
+        out += win[0][f, k]
+        return out
+
+
+def _patches(rd: np.ndarray, d: np.ndarray, r: np.ndarray, m: int, axes: tuple[int, ...] = (1, 0, 2, 3)
+             ) -> np.ndarray:
+    """The (2m + 1) × (2m + 1) cells around each peak (d, r) of ``rd`` (channel, doppler, range; both axes
+    circular), complex128, with the axes (channel, peak, Doppler offset, range offset) in the order ``axes``
+    (default (K, C, J_d, J_r)). One ``take`` over the flattened map, then one copy into place (a fancy index on
+    the three axes costs several times more)."""
+    c, rows, cols = rd.shape
+    step = np.arange(-m, m + 1)
+    di = (np.asarray(d)[:, None] + step) % rows
+    ri = (np.asarray(r)[:, None] + step) % cols
+    flat = (di[:, :, None] * cols + ri[:, None, :]).ravel()
+    x = np.take(rd.reshape(c, rows * cols), flat, axis=1).reshape(c, d.size, 2 * m + 1, 2 * m + 1).transpose(axes)
+    out = np.empty(x.shape, dtype=np.complex128)
+    out[...] = x
+    return out
+
+
+def _real_left(m: np.ndarray, z: np.ndarray) -> np.ndarray:
+    """``m @ z`` for a real ``m`` (..., J, J) and a complex ``z`` (..., J, P): one real product on z's real and
+    imaginary parts side by side (a complex product would multiply m's zero imaginary part too)."""
+    z = np.ascontiguousarray(z, dtype=np.complex128)
+    return (m @ z.view(np.float64)).view(np.complex128)
 
 
 class MigrationFit:
@@ -340,9 +384,10 @@ class MigrationFit:
     response computed sample by sample: 2e-7 of its norm at μ = 0.5 bin, 1e-5
     at 1.5, 1.3e-3 at 3 (MAX_MIGRATION). The fit maximises the same
     concentrated likelihood as :class:`PatchFit` (channel amplitudes out,
-    noise correlation R_d ⊗ R_r whitened), by alternate one-dimensional
-    searches around the separable fit's estimate, at a μ the caller knows
-    (the chain knows it beyond the alias speed from the TDM wrap count).
+    noise correlation R_d ⊗ R_r whitened), by Newton steps on a 3 × 3 grid
+    from the separable fit's estimate (:meth:`_newton`), at a μ the caller
+    knows (the chain knows it beyond the alias speed from the TDM wrap count,
+    up to two alias numbers, between which the fit chooses).
 
     Parameters
     ----------
@@ -357,11 +402,10 @@ class MigrationFit:
     STEPS = 2048
     #: the largest |μ| fitted (bins over the frame): 171 m/s on mimo12
     MAX_MIGRATION = 3.0
-    #: rounds of alternate searches around the separable estimate: (half-span, points), bins. Migration couples the
-    #: two axes, so the alternate searches climb its ridge in steps: with four rounds a 3-bin migration stopped
-    #: 0.07 bin short of the optimum (tests/test_dsp.py); these seven reach it to 2e-4 bin
-    ROUNDS = ((1.0 / 4.0, 5), (1.0 / 16.0, 5), (1.0 / 16.0, 5), (1.0 / 16.0, 5), (1.0 / 64.0, 5), (1.0 / 64.0, 5),
-              (1.0 / 256.0, 5))
+    #: Newton steps on a 3 × 3 grid (:meth:`_newton`): the grid step starts at NEWTON_STEP[0] bin and shrinks by
+    #: NEWTON_SHRINK after each step within half of it, until it is below NEWTON_STEP[1], in at most
+    #: NEWTON_ITERATIONS steps of at most NEWTON_REACH grid steps each
+    NEWTON_STEP, NEWTON_SHRINK, NEWTON_ITERATIONS, NEWTON_REACH = (1.0 / 16.0, 1.0 / 512.0), 8.0, 8, 2.0
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         # patches embedded in the smallest bucket that holds them, as PatchFit does
@@ -381,38 +425,47 @@ class MigrationFit:
         reach = self.max_half + 2.0 + self.MAX_MIGRATION / 2.0
         # the Doppler tables side by side, (U, ORDER): one lookup gathers every term of a cell
         tables = [_tone_table(wd * basis[:, a], reach, self.STEPS) for a in range(self.ORDER)]
-        self._doppler = (np.stack([t for t, _ in tables], axis=1), tables[0][1])
-        self._range = _tone_table(wr, reach + self.MAX_MIGRATION / 2.0, self.STEPS)
+        self._doppler = _ShiftTable(np.stack([t for t, _ in tables], axis=1), tables[0][1], self.STEPS)
+        self._range = _ShiftTable(*_tone_table(wr, reach + self.MAX_MIGRATION / 2.0, self.STEPS), self.STEPS)
         self._centre = (wr.size - 1) / (2.0 * wr.size)
 
     def _doppler_terms(self, fd: np.ndarray, off: np.ndarray) -> np.ndarray:
-        """A_q(δ_d − i) for offsets ``fd`` (shape S) and patch offsets ``off`` (J,): shape S + (J, ORDER)."""
-        return _lookup(*self._doppler, self.STEPS, np.asarray(fd)[..., None] - off)
+        """A_q(δ_d − i) for offsets ``fd`` (K,) or (K, I) and the patch offsets ``off`` (J,: −m … m): shape
+        (K, J, ORDER) or (K, J, I, ORDER) (the patch axis second: each peak's product with R⁻¹ is then one matrix
+        product)."""
+        fd = np.asarray(fd)
+        t = self._doppler.read(fd + off[0], off.size)[..., ::-1]          # (K, [I,] Q, J): δ_d − m … δ_d + m read
+        return np.moveaxis(t, -1, 1)
 
     def _range_terms(self, fr: np.ndarray, mu: np.ndarray, off: np.ndarray) -> np.ndarray:
-        """G_r(δ_r − j + μ·s_q)·e^{−jπμ·s_q(N−1)/N} for ``fr`` (shape S), ``mu`` broadcast to it: shape S + (J,
-        ORDER). G_r(u) is e^{jπu(N−1)/N} times a smooth real kernel: the phase that turns with the migrating beat
-        is a Doppler shift (the chirps' phase at mid-chirp runs μ·(N − 1)/2N bins ahead of that at their first
-        sample), so it is taken out of the terms the Chebyshev nodes interpolate over s, and δ_d is the Doppler
-        at mid-chirp, which the separable fit and the chain's speed measure."""
-        t, u0 = self._range
-        mu = np.asarray(mu)[..., None, None]
-        u = np.asarray(fr)[..., None, None] - off[:, None] + mu * self.nodes
-        return _lookup(t, u0, self.STEPS, u) * np.exp(-2j * np.pi * self._centre * mu * self.nodes)
+        """G_r(δ_r − j + μ·s_q)·e^{−jπμ·s_q(N−1)/N} for ``fr`` (K,) or (K, P) and ``mu`` of the same shape (or
+        (K, 1)), patch offsets ``off`` (J,: −m … m): shape (K, J, ORDER) or (K, J, P, ORDER). G_r(u) is
+        e^{jπu(N−1)/N} times a smooth real kernel: the phase that turns with the migrating beat is a Doppler shift
+        (the chirps' phase at mid-chirp runs μ·(N − 1)/2N bins ahead of that at their first sample), so it is taken
+        out of the terms the Chebyshev nodes interpolate over s, and δ_d is the Doppler at mid-chirp, which the
+        separable fit and the chain's speed measure."""
+        fr = np.asarray(fr)
+        mu = np.asarray(mu)[..., None]                                                   # (K, [P,] 1)
+        t = self._range.read(fr[..., None] + off[0] + mu * self.nodes, off.size)       # (K, [P,] Q, J), a new array
+        t *= np.exp(-2j * np.pi * self._centre * mu * self.nodes)[..., None]
+        return np.moveaxis(t[..., ::-1], -1, 1)
 
     def __call__(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
-                 mu: np.ndarray, half: np.ndarray | int | None = None, channels: np.ndarray | None = None,
-                 search: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                 mu: np.ndarray, half: np.ndarray | int | None = None, channels: np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fit the peaks at cells (d, r) of ``rd`` (channel, doppler, range) that migrate by ``mu`` bins over the
-        frame (shape (K,), |μ| ≤ MAX_MIGRATION), from the offsets ``delta_d``, ``delta_r`` (e.g. the separable
-        fit's), on patches of half-width ``half`` (at most ``max_half``). Returns (delta_d, delta_r, snapshot) as
+        frame (|μ| ≤ MAX_MIGRATION), from the offsets ``delta_d``, ``delta_r`` (e.g. the separable fit's), on
+        patches of half-width ``half`` (at most ``max_half``). Returns (delta_d, delta_r, snapshot) as
         :meth:`PatchFit.__call__` does.
 
+        ``mu``: shape (K,), each peak's migration; or (K, H), each peak's candidate migrations (NaN: none), of
+        which the one whose response explains the patch best at the starting offsets is fitted (a wrap count
+        that the TDM phase leaves open between two alias numbers).
         ``channels`` (K, C), optional: each peak's channel amplitudes as far as known (the separable fit's
-        snapshot). One target's channels are one vector times one template, so the search runs on the patch
-        projected on that vector (one channel instead of C, C times cheaper; the part of the patch it leaves out
-        is the other directions' noise), and only the final snapshot uses every channel. ``search=False``: no
-        search, the snapshot at the given offsets (its squared norm is the likelihood there)."""
+        snapshot). One target's channels are one vector times one template, so the candidates are judged and
+        the search runs on the patch projected on that vector (one channel instead of C, C times cheaper; the
+        part of the patch it leaves out is the other directions' noise), and only the final snapshot uses every
+        channel."""
         d, r = np.asarray(d), np.asarray(r)
         k = d.size
         fd = np.clip(np.asarray(delta_d, dtype=np.float64), -1.0, 1.0)
@@ -420,74 +473,108 @@ class MigrationFit:
         mu = np.asarray(mu, dtype=np.float64)
         if k == 0:
             return fd, fr, np.zeros((0, rd.shape[0]), dtype=np.complex128)
-        if mu.shape != (k,) or not np.all(np.abs(mu) <= self.MAX_MIGRATION):
-            raise ValueError(f"mu: expected {k} migrations within ±{self.MAX_MIGRATION} bins")
+        mu = mu[:, None] if mu.shape == (k,) else mu
+        given = ~np.isnan(mu)
+        if mu.ndim != 2 or mu.shape[0] != k or not np.all(np.abs(mu[given]) <= self.MAX_MIGRATION) \
+                or not np.all(given.any(axis=1)):
+            raise ValueError(f"mu: expected {k} migrations (or rows of candidates, NaN for none, at least one a "
+                             f"row) within ±{self.MAX_MIGRATION} bins")
         halves = np.minimum(np.full(k, self.max_half) if half is None else np.broadcast_to(np.asarray(half), (k,)),
                             self.max_half)
         if np.any(halves < 1):
             raise ValueError("half: values must be at least 1")
         return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0],
                            lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], mu[sel], halves[sel],
-                                                    *self.axes[b], None if channels is None else channels[sel],
-                                                    search))
+                                                    *self.axes[b], None if channels is None else channels[sel]))
 
-    def _fit(self, rd, d, r, fd, fr, mu, halves, axis_d: _PatchAxis, axis_r: _PatchAxis, channels=None,
-             search_offsets: bool = True):
-        m, k = axis_d.max_half, d.size
+    def _fit(self, rd, d, r, fd, fr, mu, halves, axis_d: _PatchAxis, axis_r: _PatchAxis, channels=None):
+        k, m = d.size, axis_d.max_half
         off = np.arange(-m, m + 1, dtype=np.float64)
-        di = (d[:, None] + np.arange(-m, m + 1)[None, :]) % rd.shape[1]
-        ri = (r[:, None] + np.arange(-m, m + 1)[None, :]) % rd.shape[2]
-        x = rd[:, di[:, :, None], ri[:, None, :]].astype(np.complex128, copy=False)       # (C, K, J_d, J_r)
-        x_all = np.ascontiguousarray(x.transpose(1, 0, 2, 3))                            # (K, C, J_d, J_r)
+        x_all = _patches(rd, d, r, m)                                                    # (K, C, J_d, J_r)
+        # R⁻¹ is real (the noise correlation of a real window): products with it run on the real and imaginary
+        # parts side by side (_real_left), half the arithmetic of a complex product
+        inv_d, inv_r = axis_d.inverse[halves].real, axis_r.inverse[halves].real          # (K, J, J)
         if channels is None:
             x = x_all
         else:                                         # the patch along the channel vector: (K, 1, J_d, J_r)
             u = np.asarray(channels, dtype=np.complex128)
             u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), np.finfo(np.float64).tiny)
-            x = np.einsum("kc,kcij->kij", u.conj(), x_all)[:, None]
-        c = x.shape[1]
-        inv_d, inv_r = axis_d.inverse[halves], axis_r.inverse[halves]                   # (K, J, J)
-        rows = np.arange(k)
-        # the template T = Σ_q a_q·b_qᵀ (a: Doppler terms, b: range terms, (J, Q) each); with ga = R_d⁻¹a and
-        # gb = R_r⁻¹b the whitened products are <T, X_c> = Σ_q ga_q^H·X_c·conj(gb_q) and
-        # <T, T> = Σ_qq' (a^H R_d⁻¹ a)_qq'·(b^H R_r⁻¹ b)_qq'; the likelihood is Σ_c |<T, X_c>|² / <T, T>
-
-        def over_range(a, b):
-            """Likelihood of Doppler terms a (K, J, Q) with each of P range terms b (K, P, J, Q): (K, P)."""
-            ga = inv_d @ a
-            z = ga.conj().transpose(0, 2, 1)[:, None] @ x                                 # (K, C, Q, J_r)
-            gb = inv_r[:, None] @ b                                                        # (K, P, J, Q)
-            num = z.reshape(k, c, -1) @ gb.conj().transpose(0, 3, 2, 1).reshape(k, -1, b.shape[1])   # (K, C, P)
-            den = np.einsum("kqr,kpqr->kp", a.conj().transpose(0, 2, 1) @ ga, b.conj().transpose(0, 1, 3, 2) @ gb)
-            return (num.real ** 2 + num.imag ** 2).sum(axis=1) / np.maximum(den.real, np.finfo(np.float64).tiny)
-
-        def over_doppler(a, b):
-            """Likelihood of each of P Doppler terms a (K, P, J, Q) with range terms b (K, J, Q): (K, P)."""
-            gb = inv_r @ b
-            w = x @ gb.conj()[:, None]                                                    # (K, C, J_d, Q)
-            ga = inv_d[:, None] @ a                                                        # (K, P, J, Q)
-            num = w.reshape(k, c, -1) @ ga.conj().transpose(0, 2, 3, 1).reshape(k, -1, a.shape[1])   # (K, C, P)
-            den = np.einsum("kpqr,kqr->kp", a.conj().transpose(0, 1, 3, 2) @ ga, b.conj().transpose(0, 2, 1) @ gb)
-            return (num.real ** 2 + num.imag ** 2).sum(axis=1) / np.maximum(den.real, np.finfo(np.float64).tiny)
-
-        def search(cand, objective):
-            best = np.clip(np.argmax(objective, axis=1), 1, cand.shape[1] - 2)
-            o_m, o_0, o_p = objective[rows, best - 1], objective[rows, best], objective[rows, best + 1]
-            den = o_m - 2.0 * o_0 + o_p
-            with np.errstate(divide="ignore", invalid="ignore"):
-                frac = np.where(den < 0, 0.5 * (o_m - o_p) / den, 0.0)
-            step = cand[0, 1] - cand[0, 0]
-            return np.clip(cand[rows, best] + np.clip(frac, -1.0, 1.0) * step, -1.0, 1.0)
-
-        for span, points in self.ROUNDS if search_offsets else ():
-            grid = np.linspace(-span, span, points)
-            cand = np.clip(fr[:, None] + grid, -1.0, 1.0)                               # range, Doppler fixed
-            fr = search(cand, over_range(self._doppler_terms(fd, off), self._range_terms(cand, mu[:, None], off)))
-            cand = np.clip(fd[:, None] + grid, -1.0, 1.0)                               # Doppler, range fixed
-            fd = search(cand, over_doppler(self._doppler_terms(cand, off), self._range_terms(fr, mu, off)))
+            x = (u.conj()[:, None, :] @ x_all.reshape(k, x_all.shape[1], -1)).reshape(k, 1, 2 * m + 1, 2 * m + 1)
+        # the patches whitened once: Y_c = R_d⁻¹·X_c·R_r⁻¹ (R real and symmetric)
+        y = _real_left(inv_d[:, None], x)
+        y = _real_left(inv_r[:, None], y.transpose(0, 1, 3, 2)).transpose(0, 1, 3, 2)  # (K, C, J_d, J_r)
+        if mu.shape[1] > 1:                           # the candidate that explains the patch best, at the start
+            given = ~np.isnan(mu)
+            like = self._likelihood(self._doppler_terms(fd[:, None], off),
+                                    self._range_terms(fr[:, None], np.where(given, mu, 0.0), off), y, inv_d, inv_r)
+            mu = mu[np.arange(k), np.argmax(np.where(given, like[:, 0], -np.inf), axis=1)]
+        else:
+            mu = mu[:, 0]
+        fd, fr = self._newton(y, fd, fr, mu, off, inv_d, inv_r)
         a, b = self._doppler_terms(fd, off), self._range_terms(fr, mu, off)
-        ga, gb = inv_d @ a, inv_r @ b
+        ga, gb = _real_left(inv_d, a), _real_left(inv_r, b)
         num = np.einsum("kiq,kciq->kc", ga.conj(), x_all @ gb.conj()[:, None])
         den = np.einsum("kqr,kqr->k", a.conj().transpose(0, 2, 1) @ ga, b.conj().transpose(0, 2, 1) @ gb).real
         # <T, X_c> = <T, T>·a_c for a noise-free X_c = a_c·T: over √<T, T>, the amplitude with one cell's noise
         return fd, fr, num / np.sqrt(np.maximum(den, np.finfo(np.float64).tiny))[:, None]
+
+    @staticmethod
+    def _likelihood(a, b, y, inv_d, inv_r) -> np.ndarray:
+        """The concentrated likelihood Σ_c |<T, X_c>|² / <T, T> of every pair of I Doppler terms ``a`` (n, J, I, Q)
+        and P range terms ``b`` (n, J, P, Q) on the whitened patches ``y`` (n, C, J_d, J_r): shape (n, I, P).
+
+        With T = Σ_q a_q·b_qᵀ and Y_c = R_d⁻¹·X_c·R_r⁻¹, <T, X_c> = Σ_q a_q^H·Y_c·conj(b_q) and
+        <T, T> = Σ_qq' (a^H R_d⁻¹ a)_qq'·(b^H R_r⁻¹ b)_qq': the pairs cost the terms of I + P offsets, and each
+        product is one matrix product a peak."""
+        n, j, i, q = a.shape
+        p, c = b.shape[2], y.shape[1]
+        ga = _real_left(inv_d, a.reshape(n, j, i * q)).reshape(n, j, i, q)
+        gb = _real_left(inv_r, b.reshape(n, j, p * q)).reshape(n, j, p, q)
+        aa = a.conj().transpose(0, 2, 3, 1) @ ga.transpose(0, 2, 1, 3)                  # (n, I, Q, Q)
+        bb = b.conj().transpose(0, 2, 3, 1) @ gb.transpose(0, 2, 1, 3)                  # (n, P, Q, Q)
+        den = (aa.reshape(n, i, q * q) @ bb.reshape(n, p, q * q).transpose(0, 2, 1)).real          # (n, I, P)
+        z = a.reshape(n, 1, j, i * q).conj().transpose(0, 1, 3, 2) @ y                  # (n, C, I·Q, J_r)
+        bq = np.ascontiguousarray(b.conj().transpose(0, 3, 1, 2)).reshape(n, q * j, p)   # (n, Q·J_r, P)
+        num = z.reshape(n, c * i, q * j) @ bq                                            # (n, C·I, P)
+        like = (num.real ** 2 + num.imag ** 2).reshape(n, c, i, p).sum(axis=1)
+        return like / np.maximum(den, np.finfo(np.float64).tiny)
+
+    def _newton(self, y, fd, fr, mu, off, inv_d, inv_r):
+        """The offsets that maximise the likelihood (:meth:`_likelihood`) of the whitened patches ``y`` (K, C,
+        J_d, J_r), from (fd, fr): Newton steps on the quadratic through a 3 × 3 grid around the estimate.
+
+        Migration couples the axes (the likelihood's ridge runs across both), which the grid's cross term sees:
+        the step goes along the ridge, where alternate one-axis searches zig-zag. A peak whose quadratic has no
+        maximum moves to the best of its nine points; its grid shrinks once its step is within half a grid step."""
+        k = y.shape[0]
+        three = np.array([-1.0, 0.0, 1.0])
+        fd, fr = fd.copy(), fr.copy()
+        h = np.full(k, self.NEWTON_STEP[0])                 # each peak's grid step
+        going = np.arange(k)                                # the peaks still searching (the others cost nothing)
+        for _ in range(self.NEWTON_ITERATIONS):
+            going = going[h[going] >= self.NEWTON_STEP[1]]
+            if not going.size:
+                break
+            n, g, e_d, e_r = going.size, h[going], fd[going], fr[going]
+            cd = np.clip(e_d[:, None] + g[:, None] * three, -1.0, 1.0)                     # (n, 3)
+            cr = np.clip(e_r[:, None] + g[:, None] * three, -1.0, 1.0)
+            like = self._likelihood(self._doppler_terms(cd, off), self._range_terms(cr, mu[going, None], off),
+                                    y[going], inv_d[going], inv_r[going])                # (n, i: Doppler, j: range)
+            # the quadratic through the nine points (central differences), its maximum within ±reach·h
+            gx = (like[:, 2, 1] - like[:, 0, 1]) / (2.0 * g)
+            gy = (like[:, 1, 2] - like[:, 1, 0]) / (2.0 * g)
+            hxx = (like[:, 2, 1] - 2.0 * like[:, 1, 1] + like[:, 0, 1]) / (g * g)
+            hyy = (like[:, 1, 2] - 2.0 * like[:, 1, 1] + like[:, 1, 0]) / (g * g)
+            hxy = (like[:, 2, 2] - like[:, 2, 0] - like[:, 0, 2] + like[:, 0, 0]) / (4.0 * g * g)
+            det = hxx * hyy - hxy * hxy
+            peak = (hxx < 0.0) & (det > 0.0)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                sx = (hxy * gy - hyy * gx) / det
+                sy = (hxy * gx - hxx * gy) / det
+            best = np.argmax(like.reshape(n, 9), axis=1)
+            reach = self.NEWTON_REACH * g
+            sx = np.where(peak, np.clip(sx, -reach, reach), (best // 3 - 1) * g)
+            sy = np.where(peak, np.clip(sy, -reach, reach), (best % 3 - 1) * g)
+            fd[going], fr[going] = np.clip(e_d + sx, -1.0, 1.0), np.clip(e_r + sy, -1.0, 1.0)
+            h[going] = np.where(peak & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g), g / self.NEWTON_SHRINK, g)
+        return fd, fr

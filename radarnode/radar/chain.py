@@ -179,9 +179,9 @@ class DspChain:
         Their TDM beam says the speed wrapped: k ≡ ``wrap`` (mod N_tx) alias numbers, so the true speed is the
         measured one plus k·2·v_max, and the target moved μ = v·T_frame/Δr range bins during the frame. Of the
         two counts next to zero, k = wrap and wrap − N_tx (further ones are more than N_tx·v_max away, beyond
-        what a road holds for N_tx ≤ 3), the one whose migrating response explains the patch better at the still
-        fit's offsets is fitted; the fit replaces the still one where its beam is stronger than the still fit's
-        under the same wrap: ``trial`` (the snapshots under each hypothesis) and ``peak`` (their beam peaks)
+        what a road holds for N_tx ≤ 3), the one whose migrating response explains the patch (along the still
+        fit's channel vector) better at the still fit's offsets is fitted; the fit replaces the still one where
+        its beam is stronger than the still fit's under the same wrap: ``trial`` (the snapshots under each hypothesis) and ``peak`` (their beam peaks)
         are updated in place, and (peaks, Doppler offsets, range offsets) of the fits that replaced the still
         ones are returned, for the caller to take where the wrap is taken. ``snap``: the patch fit's snapshots,
         whose channel vectors the search projects the patches on.
@@ -191,22 +191,15 @@ class DspChain:
         if not again.size:
             return again, np.zeros(0), np.zeros(0)
         fit = self._migration_fit(m, n)
-        two = np.concatenate([again, again])
-        k = np.concatenate([wrap[again], wrap[again] - p.num_tx])
-        mu = (speed[two] + k * (2.0 * p.alias_speed_mps)) * p.integration_time_s / p.range_resolution_m
-        # the two alias numbers judged at the still fit's offsets (one evaluation each), the better one fitted
-        like = np.full(two.size, -np.inf)
-        ok = np.abs(mu) <= MigrationFit.MAX_MIGRATION
-        if ok.any():
-            s0 = fit(rd, d[two[ok]], r[two[ok]], dd[two[ok]], dr[two[ok]], mu[ok], halves[two[ok]], search=False)[2]
-            like[ok] = np.sum(s0.real ** 2 + s0.imag ** 2, axis=1)
-        pick = np.argmax(like.reshape(2, -1), axis=0)
-        j = pick * again.size + np.arange(again.size)
-        keep = np.isfinite(like[j])
-        again, j = again[keep], j[keep]
+        k = np.stack([wrap[again], wrap[again] - p.num_tx], axis=1)                     # (peaks, 2) alias numbers
+        mu = (speed[again, None] + k * (2.0 * p.alias_speed_mps)) * p.integration_time_s / p.range_resolution_m
+        mu[np.abs(mu) > MigrationFit.MAX_MIGRATION] = np.nan                              # beyond what the fit models
+        keep = ~np.all(np.isnan(mu), axis=1)
+        again, mu = again[keep], mu[keep]
         if not again.size:
             return again, np.zeros(0), np.zeros(0)
-        fd, fr, fitted = fit(rd, d[again], r[again], dd[again], dr[again], mu[j], halves[again], snap[again])
+        # the fit judges the two alias numbers at the still fit's offsets and fits the better one
+        fd, fr, fitted = fit(rd, d[again], r[again], dd[again], dr[again], mu, halves[again], snap[again])
         _, moved, _ = self._positions(d[again], r[again], fd, fr, m, n)
         h = wrap[again]
         fitted *= self._tdm_phase(moved) * np.exp(-2j * np.pi * h[:, None] * self._tx_of[None, :] / p.num_tx)
