@@ -545,10 +545,14 @@ class MigrationFit:
 
         Migration couples the axes (the likelihood's ridge runs across both), which the grid's cross term sees:
         the step goes along the ridge, where alternate one-axis searches zig-zag. A peak whose quadratic has no
-        maximum moves to the best of its nine points; its grid shrinks once its step is within half a grid step."""
+        maximum moves to the best of its nine points; its grid shrinks once its step is within half a grid step.
+        A step that lowered the likelihood (a noisy, many-peaked likelihood at low SNR) is taken back and the grid
+        made finer, so that the answer is never less likely than the start."""
         k = y.shape[0]
         three = np.array([-1.0, 0.0, 1.0])
         fd, fr = fd.copy(), fr.copy()
+        held = np.full(k, -np.inf)                          # the likelihood at the last point that was not worse …
+        kept_d, kept_r = fd.copy(), fr.copy()               # … and that point
         h = np.full(k, self.NEWTON_STEP[0])                 # each peak's grid step
         going = np.arange(k)                                # the peaks still searching (the others cost nothing)
         for _ in range(self.NEWTON_ITERATIONS):
@@ -560,6 +564,9 @@ class MigrationFit:
             cr = np.clip(e_r[:, None] + g[:, None] * three, -1.0, 1.0)
             like = self._likelihood(self._doppler_terms(cd, off), self._range_terms(cr, mu[going, None], off),
                                     y[going], inv_d[going], inv_r[going])                # (n, i: Doppler, j: range)
+            worse = like[:, 1, 1] < held[going]             # the last step went down: back, on a finer grid
+            better = going[~worse]
+            held[better], kept_d[better], kept_r[better] = like[~worse, 1, 1], e_d[~worse], e_r[~worse]
             # the quadratic through the nine points (central differences), its maximum within ±reach·h
             gx = (like[:, 2, 1] - like[:, 0, 1]) / (2.0 * g)
             gy = (like[:, 1, 2] - like[:, 1, 0]) / (2.0 * g)
@@ -575,6 +582,16 @@ class MigrationFit:
             reach = self.NEWTON_REACH * g
             sx = np.where(peak, np.clip(sx, -reach, reach), (best // 3 - 1) * g)
             sy = np.where(peak, np.clip(sy, -reach, reach), (best % 3 - 1) * g)
-            fd[going], fr[going] = np.clip(e_d + sx, -1.0, 1.0), np.clip(e_r + sy, -1.0, 1.0)
-            h[going] = np.where(peak & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g), g / self.NEWTON_SHRINK, g)
+            fd[going] = np.where(worse, kept_d[going], np.clip(e_d + sx, -1.0, 1.0))
+            fr[going] = np.where(worse, kept_r[going], np.clip(e_r + sy, -1.0, 1.0))
+            small = peak & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g)
+            h[going] = np.where(worse | small, g / self.NEWTON_SHRINK, g)
+        # the last steps, not yet judged: each kept where it is at least as likely as the point before it
+        moved = np.flatnonzero((fd != kept_d) | (fr != kept_r))
+        if moved.size:
+            last = self._likelihood(self._doppler_terms(fd[moved, None], off),
+                                    self._range_terms(fr[moved, None], mu[moved, None], off),
+                                    y[moved], inv_d[moved], inv_r[moved])[:, 0, 0]
+            back = moved[last < held[moved]]
+            fd[back], fr[back] = kept_d[back], kept_r[back]
         return fd, fr
