@@ -585,7 +585,7 @@ class MigrationFit:
             fd[going] = np.where(worse, kept_d[going], np.clip(e_d + sx, -1.0, 1.0))
             fr[going] = np.where(worse, kept_r[going], np.clip(e_r + sy, -1.0, 1.0))
             small = peak & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g)
-            h[going] = np.where(worse | small, g / self.NEWTON_SHRINK, g)
+            h[going] = np.where(worse, 0.5 * g, np.where(small, g / self.NEWTON_SHRINK, g))
         # the last steps, not yet judged: each kept where it is at least as likely as the point before it
         moved = np.flatnonzero((fd != kept_d) | (fr != kept_r))
         if moved.size:
