@@ -148,8 +148,30 @@ def _patch_axes(doppler_window: np.ndarray, range_window: np.ndarray, max_half: 
     """(max_half, buckets, {bucket: (Doppler axis, range axis)}) of a patch fit of half-width up to ``max_half``."""
     if not (isinstance(max_half, (int, np.integer)) and 1 <= max_half <= 32):
         raise ValueError(f"max_half: value {max_half!r} is not allowed; expected an integer in 1…32")
+    shortest = min(len(doppler_window), len(range_window))
+    if 2 * max_half + 1 > shortest:         # a patch longer than the map repeats cells: its noise is singular
+        raise ValueError(f"max_half: value {max_half!r} is not allowed for a map of {len(doppler_window)} × "
+                         f"{len(range_window)} bins; expected at most {(shortest - 1) // 2} (a patch within the map)")
     buckets = sorted({b for b in PATCH_BUCKETS if b < max_half} | {int(max_half)})
     return int(max_half), buckets, {b: (_PatchAxis(doppler_window, b), _PatchAxis(range_window, b)) for b in buckets}
+
+
+def _checked(rd: np.ndarray, d, r, delta_d, delta_r, half, max_half: int):
+    """The fits' common arguments as arrays, or a ValueError that names the argument: (d, r, δ_d, δ_r clipped to
+    ±1 bin, half-widths (K,) at most ``max_half``)."""
+    d, r = np.asarray(d), np.asarray(r)
+    if rd.ndim != 3 or d.ndim != 1 or d.shape != r.shape or not (np.issubdtype(d.dtype, np.integer)
+                                                                 and np.issubdtype(r.dtype, np.integer)):
+        raise ValueError(f"rd, d, r: shapes {rd.shape}, {d.shape}, {r.shape} are not allowed; expected a (channel, "
+                         "doppler, range) map and two (K,) integer arrays of peak cells")
+    k = d.size
+    fd, fr = (np.broadcast_to(np.asarray(x, dtype=np.float64), (k,)) for x in (delta_d, delta_r))
+    if not (np.all(np.isfinite(fd)) and np.all(np.isfinite(fr))):
+        raise ValueError("delta_d, delta_r: NaN or infinite offsets are not allowed; expected finite bins")
+    halves = np.full(k, max_half) if half is None else np.broadcast_to(np.asarray(half), (k,))
+    if not np.issubdtype(halves.dtype, np.integer) or np.any(halves < 1):
+        raise ValueError(f"half: values {np.unique(halves)[:5]} are not allowed; expected integers of at least 1")
+    return d, r, np.clip(fd, -1.0, 1.0), np.clip(fr, -1.0, 1.0), halves
 
 
 def _per_bucket(buckets, halves: np.ndarray, fd: np.ndarray, fr: np.ndarray, channels: int, fit):
@@ -219,14 +241,11 @@ class PatchFit:
         channels' amplitudes, shape (K, channel), scaled so that the noise in each has the variance of one
         cell (their common phase is arbitrary).
         """
-        d, r = np.asarray(d), np.asarray(r)
+        d, r, fd, fr, halves = _checked(rd, d, r, delta_d, delta_r, half, self.max_half)
         k = d.size
-        fd = np.clip(np.asarray(delta_d, dtype=np.float64), -1.0, 1.0)
-        fr = np.clip(np.asarray(delta_r, dtype=np.float64), -1.0, 1.0)
         if k == 0:
             return fd, fr, np.zeros((0, rd.shape[0]), dtype=np.complex128)
-        halves = np.full(k, self.max_half) if half is None else np.broadcast_to(np.asarray(half), (k,))
-        if np.any((halves < 1) | (halves > self.max_half)):
+        if np.any(halves > self.max_half):
             raise ValueError(f"half: values must lie in 1…{self.max_half}")
         return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0],
                            lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], halves[sel], *self.axes[b]))
@@ -331,10 +350,12 @@ class _ShiftTable:
             win = self._windows[length] = tuple(np.lib.stride_tricks.sliding_window_view(t, length, axis=1)
                                                 for t in (self.value, self.slope))
         pos = (u - self.start) * self.steps
-        i0 = pos.astype(np.intp)                                          # pos ≥ 0 within the table's reach
+        if pos.size and not (pos.min() >= 0.0 and pos.max() < win[0].shape[1] * self.steps):    # (NaN: refused)
+            raise ValueError(f"u: values from {self.start:g} to {self.start + win[0].shape[1] - 1 / self.steps:g} "
+                             f"are allowed for windows of {length}; got {np.min(u):g} … {np.max(u):g}")
+        i0 = pos.astype(np.intp)
         frac = pos - i0
         k, f = np.divmod(i0, self.steps)
-        k = np.minimum(k, win[0].shape[1] - 1)
         out = win[1][f, k]
         out *= frac.reshape(frac.shape + (1,) * (win[0].ndim - 2))
         out += win[0][f, k]
@@ -404,8 +425,10 @@ class MigrationFit:
     MAX_MIGRATION = 3.0
     #: Newton steps on a 3 × 3 grid (:meth:`_newton`): the grid step starts at NEWTON_STEP[0] bin and shrinks by
     #: NEWTON_SHRINK after each step within half of it, until it is below NEWTON_STEP[1], in at most
-    #: NEWTON_ITERATIONS steps of at most NEWTON_REACH grid steps each
-    NEWTON_STEP, NEWTON_SHRINK, NEWTON_ITERATIONS, NEWTON_REACH = (1.0 / 16.0, 1.0 / 512.0), 8.0, 8, 2.0
+    #: NEWTON_ITERATIONS steps of at most NEWTON_REACH grid steps each (a peak that has converged costs nothing)
+    NEWTON_STEP, NEWTON_SHRINK, NEWTON_ITERATIONS, NEWTON_REACH = (1.0 / 16.0, 1.0 / 512.0), 8.0, 12, 2.0
+    #: the widest grid step (bins) a search far from the peak grows to
+    NEWTON_WIDEST = 0.25
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         # patches embedded in the smallest bucket that holds them, as PatchFit does
@@ -466,23 +489,21 @@ class MigrationFit:
         the search runs on the patch projected on that vector (one channel instead of C, C times cheaper; the
         part of the patch it leaves out is the other directions' noise), and only the final snapshot uses every
         channel."""
-        d, r = np.asarray(d), np.asarray(r)
+        d, r, fd, fr, halves = _checked(rd, d, r, delta_d, delta_r, half, self.max_half)
         k = d.size
-        fd = np.clip(np.asarray(delta_d, dtype=np.float64), -1.0, 1.0)
-        fr = np.clip(np.asarray(delta_r, dtype=np.float64), -1.0, 1.0)
         mu = np.asarray(mu, dtype=np.float64)
         if k == 0:
             return fd, fr, np.zeros((0, rd.shape[0]), dtype=np.complex128)
-        mu = mu[:, None] if mu.shape == (k,) else mu
+        mu = np.broadcast_to(mu, (k,))[:, None] if mu.ndim < 2 and mu.size in (1, k) else mu
         given = ~np.isnan(mu)
         if mu.ndim != 2 or mu.shape[0] != k or not np.all(np.abs(mu[given]) <= self.MAX_MIGRATION) \
                 or not np.all(given.any(axis=1)):
             raise ValueError(f"mu: expected {k} migrations (or rows of candidates, NaN for none, at least one a "
                              f"row) within ±{self.MAX_MIGRATION} bins")
-        halves = np.minimum(np.full(k, self.max_half) if half is None else np.broadcast_to(np.asarray(half), (k,)),
-                            self.max_half)
-        if np.any(halves < 1):
-            raise ValueError("half: values must be at least 1")
+        halves = np.minimum(halves, self.max_half)                   # (a larger patch is cut to the largest)
+        if channels is not None and np.shape(channels) != (k, rd.shape[0]):
+            raise ValueError(f"channels: shape {np.shape(channels)} is not allowed; expected ({k}, {rd.shape[0]}): "
+                             "each peak's amplitude in every channel of rd")
         return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0],
                            lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], mu[sel], halves[sel],
                                                     *self.axes[b], None if channels is None else channels[sel]))
@@ -579,13 +600,18 @@ class MigrationFit:
                 sx = (hxy * gy - hyy * gx) / det
                 sy = (hxy * gx - hxx * gy) / det
             best = np.argmax(like.reshape(n, 9), axis=1)
+            best[~peak & (like.reshape(n, 9)[np.arange(n), best] <= like[:, 1, 1])] = 4    # flat (a zero patch): stay
             reach = self.NEWTON_REACH * g
             sx = np.where(peak, np.clip(sx, -reach, reach), (best // 3 - 1) * g)
             sy = np.where(peak, np.clip(sy, -reach, reach), (best % 3 - 1) * g)
             fd[going] = np.where(worse, kept_d[going], np.clip(e_d + sx, -1.0, 1.0))
             fr[going] = np.where(worse, kept_r[going], np.clip(e_r + sy, -1.0, 1.0))
-            small = peak & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g)
-            h[going] = np.where(worse, 0.5 * g, np.where(small, g / self.NEWTON_SHRINK, g))
+            small = (peak | (best == 4)) & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g)
+            # outside the concave region, uphill to an edge of the grid: the next grid twice as wide (a start half
+            # a bin or more off the peak is reached in a few steps instead of one grid step at a time)
+            wider = ~peak & (best != 4)
+            h[going] = np.where(worse, 0.5 * g, np.where(small, g / self.NEWTON_SHRINK,
+                                                         np.where(wider, np.minimum(2.0 * g, self.NEWTON_WIDEST), g)))
         # the last steps, not yet judged: each kept where it is at least as likely as the point before it
         moved = np.flatnonzero((fd != kept_d) | (fr != kept_r))
         if moved.size:
