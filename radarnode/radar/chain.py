@@ -45,8 +45,9 @@ class DspConfig:
     range_ml_max_peaks: int = 128
     ml_patch_half: int = 12        # its patch: ±12 bins each way where no other peak is near
     #: beyond the alias speed, fit the wrapped peaks again with a range-migrating target's response (TDM presets:
-    #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 40–70 m/s, at 1.5–2.3× the
-    #: frame's cost at 40–70 m/s ego speed (BENCHMARKS.md, benchmarks/migration_fit.py); off by default
+    #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 40–70 m/s, at 1.15–1.65× the
+    #: frame's cost at 40–70 m/s ego speed (BENCHMARKS.md, benchmarks/migration_fit.py); off by default (complex64
+    #: frames then miss the 30 ms target)
     migration_fit: bool = False
     max_detections: int = 1000
 
