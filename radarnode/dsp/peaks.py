@@ -534,7 +534,9 @@ class MigrationFit:
         fd, fr = self._newton(y, fd, fr, mu, off, inv_d, inv_r)
         a, b = self._doppler_terms(fd, off), self._range_terms(fr, mu, off)
         ga, gb = _real_left(inv_d, a), _real_left(inv_r, b)
-        num = np.einsum("kiq,kciq->kc", ga.conj(), x_all @ gb.conj()[:, None])
+        # <T, X_c> = Σ_ij X_c[i, j]·conj(Σ_q ga[i, q]·gb[j, q]): the whitened template once, then one product a peak
+        tmpl = (ga @ gb.transpose(0, 2, 1)).conj()                                       # (K, J_d, J_r)
+        num = (x_all.reshape(k, x_all.shape[1], -1) @ tmpl.reshape(k, -1, 1))[..., 0]   # (K, C)
         den = np.einsum("kqr,kqr->k", a.conj().transpose(0, 2, 1) @ ga, b.conj().transpose(0, 2, 1) @ gb).real
         # <T, X_c> = <T, T>·a_c for a noise-free X_c = a_c·T: over √<T, T>, the amplitude with one cell's noise
         return fd, fr, num / np.sqrt(np.maximum(den, np.finfo(np.float64).tiny))[:, None]
