@@ -568,9 +568,10 @@ class MigrationFit:
 
         Migration couples the axes (the likelihood's ridge runs across both), which the grid's cross term sees:
         the step goes along the ridge, where alternate one-axis searches zig-zag. A peak whose quadratic has no
-        maximum moves to the best of its nine points; its grid shrinks once its step is within half a grid step.
-        A step that lowered the likelihood (a noisy, many-peaked likelihood at low SNR) is taken back and the grid
-        made finer, so that the answer is never less likely than the start."""
+        maximum moves to the best of its nine points, and its grid widens (up to NEWTON_WIDEST) while that point is
+        on the grid's edge; its grid shrinks by NEWTON_SHRINK once its step is within half a grid step. A step that
+        lowered the likelihood (a noisy, many-peaked likelihood at low SNR) is taken back and the grid halved, so
+        that the answer is never less likely than the start."""
         k = y.shape[0]
         three = np.array([-1.0, 0.0, 1.0])
         fd, fr = fd.copy(), fr.copy()
