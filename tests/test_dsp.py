@@ -390,9 +390,14 @@ def test_the_fits_say_which_argument_is_wrong():
     with pytest.raises(ValueError, match=r"channels: shape \(1, 3\) is not allowed; expected \(1, 2\)"):
         fit(rd, one, np.array([20]), z, z, np.array([0.5]), channels=np.ones((1, 3)))
     for cls in (MigrationFit, PatchFit):
-        with pytest.raises(ValueError, match="max_half: value 32 is not allowed for a map of 64 × 64 bins; expected "
-                                             "at most 31"):
-            cls(window("hann", m), window("hann", n), 32)
+        cls(window("hann", 63), window("hann", 64), 31)                   # at the limit: a 63-cell patch
+        for half, said in ((32, " for a map of 64 × 64 bins; expected at most 31"),      # just above it
+                           (62, "; expected an integer in 1…32")):                         # twice it
+            with pytest.raises(ValueError, match=f"max_half: value {half} is not allowed{said}"):
+                cls(window("hann", m), window("hann", n), half)
+        with pytest.raises(ValueError, match="max_half: value 31 is not allowed for a map of 61 × 64 bins; expected "
+                                             "at most 30"):
+            cls(window("hann", 61), window("hann", 64), 31)                # the shorter axis sets it
     fd, fr, _ = fit(rd, one, np.array([20]), np.array([0.3]), np.array([-0.2]), np.array([0.5]),
                     channels=np.zeros((1, 2)))
     assert (fd[0], fr[0]) == (0.3, -0.2)
