@@ -429,7 +429,7 @@ def test_the_migration_fit_brings_the_signal_level_to_the_bound_beyond_the_alias
                                snr_db=rho - 10.0 * math.log10(n * m * c))
             det = chain.process_rd(rd)
             if v == 0.0 and seed < 10:
-                plain = DspChain(p).process_rd(rd)
+                plain = DspChain(p, DspConfig(migration_fit=False)).process_rd(rd)
                 same &= np.array_equal(plain.range_rate_mps, det.range_rate_mps)
             dv = (det.range_rate_mps - v + vmax) % (2 * vmax) - vmax
             cost = np.abs(det.range_m - 50.0) / 1.0 + np.abs(dv) / 0.5
@@ -480,10 +480,39 @@ def test_the_migration_fit_is_refused_where_it_cannot_work():
     with pytest.raises(FieldError, match="migration_fit.*range_ml"):
         DspConfig(migration_fit=True, range_ml=False)
     DspChain(PRESETS["ars408_like"], DspConfig(migration_fit=True))        # two transmitters: allowed
+    # "auto" (the default) asks for nothing it cannot do: off there, without an error
+    assert not DspChain(PRESETS["fast_chirp"]).migrates(np.complex128)
+    assert not DspChain(PRESETS["mimo12"], DspConfig(range_ml=False)).migrates(np.complex128)
 
 
-@pytest.mark.parametrize("dsp, said", [("{migration_fit: maybe}", "value 'maybe' is not allowed; expected true or false"),
-                                       ("{migration_fit: 1}", "expected true or false"),
+def test_auto_fits_the_migration_of_complex128_spectra_and_not_of_complex64_ones():
+    """migration_fit: auto (the default) — a complex128 spectrum (the default dtype) gets the migration fit beyond
+    the alias speed, exactly as with migration_fit: true; a complex64 one (the fast setting) the still fit, exactly
+    as with false; at rest the three agree."""
+    from radarnode.radar.chain import DspConfig
+    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
+    p = PRESETS["mimo12"]
+    n, m, c = num_range_samples(p), p.num_chirps, p.num_virtual
+    chains = {mode: DspChain(p, DspConfig(migration_fit=mode)) for mode in (True, False, "auto")}
+    assert DspChain(p).config.migration_fit == "auto"
+    for v in (-70.0, 45.0, 0.0):
+        for dtype, same_as in ((np.complex128, True), (np.complex64, False)):
+            moved = 0
+            for seed in range(3):
+                rd = synthesize_rd(p, point_targets([50.0, 80.0], [10.0, -20.0], [v, v], 0.0),
+                                   np.random.default_rng(seed), snr_db=30.0 - 10.0 * math.log10(n * m * c),
+                                   dtype=dtype)
+                got = {mode: chain.process_rd(rd) for mode, chain in chains.items()}
+                for f in ("range_m", "range_rate_mps", "azimuth_rad"):
+                    assert np.array_equal(getattr(got["auto"], f), getattr(got[same_as], f)), (v, dtype, f)
+                moved += not np.array_equal(got[True].range_m, got[False].range_m)
+            # beyond the alias the two fits differ, so the comparison above can tell them apart; at rest they agree
+            assert (moved == 3) if v else (moved == 0), (v, dtype, moved)
+
+
+@pytest.mark.parametrize("dsp, said", [("{migration_fit: maybe}", "value 'maybe' is not allowed; expected true, "
+                                                                  "false or auto"),
+                                       ("{migration_fit: 1}", "expected true, false or auto"),
                                        ("{migration_fit: true, range_ml: false}", "while range_ml is false")])
 def test_a_scenario_with_a_bad_migration_fit_says_the_file_field_and_value(tmp_path, dsp, said):
     from radarnode.errors import ScenarioError

@@ -46,9 +46,10 @@ class DspConfig:
     ml_patch_half: int = 12        # its patch: ±12 bins each way where no other peak is near
     #: beyond the alias speed, fit the wrapped peaks again with a range-migrating target's response (TDM presets:
     #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 40–70 m/s, at 1.15–1.65× the
-    #: frame's cost at 40–70 m/s ego speed (BENCHMARKS.md, benchmarks/migration_fit.py); off by default (complex64
-    #: frames then miss the 30 ms target)
-    migration_fit: bool = False
+    #: frame's cost at 40–70 m/s ego speed (BENCHMARKS.md, benchmarks/migration_fit.py). true, false, or "auto" (the
+    #: default): on for complex128 spectra of presets with two transmitters or more, off for complex64 ones (the
+    #: fast setting: with the fit its frames miss the 30 ms target at 60–70 m/s) and single-transmitter presets
+    migration_fit: bool | str = "auto"
     max_detections: int = 1000
 
     def __post_init__(self) -> None:
@@ -65,10 +66,12 @@ class DspConfig:
         validate.boolean("range_ml", self.range_ml)
         validate.integer("range_ml_max_peaks", self.range_ml_max_peaks, lo=0, hi=10_000)
         validate.integer("ml_patch_half", self.ml_patch_half, lo=1, hi=32)
-        validate.boolean("migration_fit", self.migration_fit)
-        if self.migration_fit and not self.range_ml:
+        if self.migration_fit is not True and self.migration_fit is not False and self.migration_fit != "auto":
+            raise FieldError("migration_fit", self.migration_fit, "true, false or auto")
+        if self.migration_fit is True and not self.range_ml:
             raise FieldError("migration_fit", self.migration_fit,
-                             "false while range_ml is false (the migration fit refines the patch fit's peaks)")
+                             "false or auto while range_ml is false (the migration fit refines the patch fit's "
+                             "peaks)")
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
@@ -113,7 +116,7 @@ class DspChain:
             raise ConfigError(f"signal.dsp.doa: value {config.doa!r} is not allowed with preset {preset.name} "
                               f"({preset.num_virtual} virtual channel(s)); expected 'fft' (super-resolution needs "
                               "3 channels or more)")
-        if config.migration_fit and preset.num_tx < 2:
+        if config.migration_fit is True and preset.num_tx < 2:
             raise ConfigError(f"signal.dsp.migration_fit: value true is not allowed with preset {preset.name} "
                               f"({preset.num_tx} transmitter): the true speed of a wrapped peak comes from the TDM "
                               "wrap count; expected false")
@@ -122,6 +125,15 @@ class DspChain:
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)
         self._patch_fits: dict[tuple[int, int], PatchFit] = {}
         self._migration_fits: dict[tuple[int, int], MigrationFit] = {}
+
+    def migrates(self, dtype) -> bool:
+        """Whether spectra of ``dtype`` get the migration fit beyond the alias speed (``DspConfig.migration_fit``:
+        "auto" fits complex128 spectra, and only with two transmitters or more, whose wrap count gives the true
+        speed)."""
+        mode = self.config.migration_fit
+        if mode == "auto":
+            return self.config.range_ml and self.preset.num_tx > 1 and np.dtype(dtype) == np.complex128
+        return bool(mode)
 
     def _patch_fit(self, m: int, n: int) -> PatchFit:
         """The patch fit for maps of m Doppler × n range bins (built once per shape)."""
@@ -279,7 +291,7 @@ class DspChain:
             wrap = 1 + np.argmax(peak[:, 1:], axis=1)           # the best wrap hypothesis other than none
             margin = np.full(d.size, WRAP_LL_MARGIN * sigma2)
             take = None                         # the peaks a migrating fit was judged on (signal.dsp.migration_fit)
-            if fitted_half is not None and cfg.migration_fit:
+            if fitted_half is not None and self.migrates(rd.dtype):
                 # a wrap count is also a true speed, and with it a range migration over the frame: the fitted peaks
                 # where a wrap looks better than none are fitted again with that migrating target's response
                 # (radarnode.dsp.peaks.MigrationFit), and the wrap is judged on that fit's beam
