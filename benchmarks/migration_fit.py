@@ -41,6 +41,7 @@ Run: ``.venv/bin/python benchmarks/migration_fit.py [--speeds -70,-60,-50,-40,-3
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import os
 import sys
@@ -155,6 +156,47 @@ def wrap_right(p, factor: float, rho_db: float, trials: int, migration: bool) ->
     return right, seen
 
 
+def threshold_row(p, speed_mps: float, trials: int) -> dict:
+    """The still fit against the migration fit on the same frames (point target at ρ = 20 dB, 50 m, 10°): each one's
+    range std, range-rate RMSE and azimuth RMSE over the frames whose wrap it found, over the CRB; the median and
+    90th percentile of |migration fit − still fit| over the CRB per axis; and whether ``auto`` fits this target
+    (complex128) — its detections equal the migration fit's, or the still fit's."""
+    n, m, c = num_range_samples(p), p.num_chirps, p.num_virtual
+    vmax = p.alias_speed_mps
+    crb = np.array([float(equation.crb_range_m(p, RHO_DB)), float(equation.crb_speed_mps(p, RHO_DB)),
+                    float(equation.crb_azimuth_rad(p, RHO_DB, math.radians(AZ_DEG)))])
+    chains = {mode: DspChain(p, DspConfig(migration_fit=mode)) for mode in (False, True, "auto")}
+    errs, diff, auto_fits, auto_still = {False: [], True: []}, [], 0, 0
+    for t in range(trials):
+        rd = synthesize_rd(p, point_targets([R0_M], [AZ_DEG], [speed_mps], 0.0), np.random.default_rng(3000 + t),
+                           snr_db=RHO_DB - 10.0 * math.log10(n * m * c))
+        got = {}
+        for mode, chain in chains.items():
+            det = chain.process_rd(rd)
+            dv = (det.range_rate_mps - speed_mps + vmax) % (2.0 * vmax) - vmax
+            cost = np.abs(det.range_m - R0_M) / 3.0 + np.abs(dv) / 1.0
+            if len(det) and cost.min() <= 1.0:
+                j = int(np.argmin(cost))
+                got[mode] = np.array([det.range_m[j] - R0_M, dv[j], det.azimuth_rad[j] - math.radians(AZ_DEG)])
+        for mode in (False, True):
+            if mode in got:
+                errs[mode].append(got[mode])
+        if False in got and True in got and "auto" in got:
+            diff.append(np.abs(got[True] - got[False]) / crb)
+            if not np.array_equal(got[True], got[False]):       # frames where the two fits differ tell auto's choice
+                auto_fits += np.array_equal(got["auto"], got[True])
+                auto_still += np.array_equal(got["auto"], got[False])
+    out = {"mu": abs(speed_mps) * p.integration_time_s / p.range_resolution_m, "auto": (auto_fits, auto_still)}
+    for mode in (False, True):
+        e = np.array(errs[mode]).reshape(-1, 3)
+        found = np.abs(np.degrees(e[:, 2])) <= 2.0
+        out[mode] = (e[:, 0].std() / crb[0], np.sqrt(np.mean(e[:, 1] ** 2)) / crb[1],
+                     np.sqrt(np.mean(e[found, 2] ** 2)) / crb[2], int((~found).sum()), len(e))
+    d = np.array(diff).reshape(-1, 3)
+    out["median"], out["p90"] = np.median(d, axis=0), np.percentile(d, 90, axis=0)
+    return out
+
+
 def frame_ms(ego_mps: float, frames: int, migration: bool, dtype) -> float:
     p, scats = highway_frames(ego_mps, frames)
     chain = DspChain(p, DspConfig(migration_fit=migration))
@@ -169,6 +211,8 @@ def main() -> None:
     ap.add_argument("--frames", type=int, default=9, help="highway frames per ego speed for the cost (0: none)")
     ap.add_argument("--exact-trials", type=int, default=0, help="noise draws of the exact-template reference")
     ap.add_argument("--wrap-trials", type=int, default=60, help="noise draws a row of the wrap table (0: none)")
+    ap.add_argument("--threshold-trials", type=int, default=60,
+                    help="noise draws a row of the auto threshold table (0: none)")
     args = ap.parse_args()
     p = radar_config(load_scenario(ROOT / "scenarios" / "highway_mimo12.yaml")).preset
     speeds = [float(x) for x in args.speeds.split(",")]
@@ -195,6 +239,28 @@ def main() -> None:
             a, b = (wrap_right(p, factor, rho, args.wrap_trials, mig) for mig in (False, True))
             print(f"| {factor:g} × v_alias | {rho:g} dB | {a[0]}/{a[1]} ({100 * a[0] / max(a[1], 1):.0f} %) "
                   f"| {b[0]}/{b[1]} ({100 * b[0] / max(b[1], 1):.0f} %) |", flush=True)
+    if args.threshold_trials:
+        from radarnode.radar.chain import MIGRATION_AUTO_MIN_BINS
+        from radarnode.radar.presets import PRESETS
+        m12 = PRESETS["mimo12"]
+        half_bw = dataclasses.replace(m12, name="mimo12 at half bandwidth", bandwidth_hz=m12.bandwidth_hz / 2.0)
+        print(f"\nWhere auto fits: {args.threshold_trials} trials a row (seeds 3000 …), ρ = {RHO_DB:g} dB, 50 m, "
+              f"10°, complex128; auto fits a wrapped peak one of whose alias numbers migrates "
+              f"≥ {MIGRATION_AUTO_MIN_BINS:g} bin. Still fit and migration fit: range std, range-rate RMSE, azimuth "
+              "RMSE over the frames whose wrap was found, each over its CRB, (wrap missed / frames); "
+              "|migration − still| over the CRB, median and 90th percentile per axis (range, rate, azimuth); "
+              "auto: of the frames where the fits differ, how many equal the migration fit's / the still fit's:\n")
+        print("| preset | radial speed | migration | still fit | migration fit | median |Δ| | p90 |Δ| | auto: fit / still |")
+        print("|---|---:|---:|---|---|---|---|---:|")
+        rows = [(PRESETS["ars408_like"], -36.0), (PRESETS["ars408_like"], -70.0)]
+        rows += [(half_bw, -mu * half_bw.range_resolution_m / half_bw.integration_time_s) for mu in (0.3, 0.4, 0.5, 0.6)]
+        for preset, v in rows:
+            t = threshold_row(preset, v, args.threshold_trials)
+            a, b = t[False], t[True]
+            print(f"| {preset.name} | {v:.1f} m/s | {t['mu']:.2f} bins | {a[0]:.2f} / {a[1]:.2f} / {a[2]:.2f} "
+                  f"({a[3]}/{a[4]}) | {b[0]:.2f} / {b[1]:.2f} / {b[2]:.2f} ({b[3]}/{b[4]}) "
+                  f"| {' / '.join(f'{x:.2f}' for x in t['median'])} | {' / '.join(f'{x:.2f}' for x in t['p90'])} "
+                  f"| {t['auto'][0]} / {t['auto'][1]} |", flush=True)
     if args.frames:
         print(f"\nhighway_mimo12.yaml frame, synthesize_rd + process_rd, median of {args.frames} frames, "
               f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS')}:\n")

@@ -510,6 +510,35 @@ def test_auto_fits_the_migration_of_complex128_spectra_and_not_of_complex64_ones
             assert (moved == 3) if v else (moved == 0), (v, dtype, moved)
 
 
+@pytest.mark.parametrize("threshold, fits", [(0.12, True), (0.14, True), (0.16, False), (0.30, False)])
+def test_auto_fits_only_peaks_that_migrate_enough(monkeypatch, threshold, fits):
+    """migration_fit: auto skips the peaks whose alias numbers all migrate less than MIGRATION_AUTO_MIN_BINS (0.3
+    bin; below it the fit moves the estimates by a few hundredths of the CRB, BENCHMARKS.md). ars408_like at
+    −36 m/s: the wrap's two alias numbers give −36 and +41.8 m/s, 0.129 and 0.149 bin over the frame. With the
+    threshold just below both, between them, just above both, and at twice the latter (the default), auto's
+    detections equal those of migration_fit: true, true, false and false."""
+    from radarnode.radar import chain as chain_module
+    from radarnode.radar.chain import DspConfig
+    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
+    p = PRESETS["ars408_like"]
+    n, m, c = num_range_samples(p), p.num_chirps, p.num_virtual
+    mus = [abs(v) * p.integration_time_s / p.range_resolution_m for v in (-36.0, -36.0 + 4 * p.alias_speed_mps)]
+    assert 0.12 < min(mus) < 0.14 < max(mus) < 0.16
+    monkeypatch.setattr(chain_module, "MIGRATION_AUTO_MIN_BINS", threshold)
+    chains = {mode: DspChain(p, DspConfig(migration_fit=mode)) for mode in (True, False, "auto")}
+    differ = 0
+    for seed in range(6):
+        rd = synthesize_rd(p, point_targets([50.0], [10.0], [-36.0], 0.0), np.random.default_rng(seed),
+                           snr_db=25.0 - 10.0 * math.log10(n * m * c))
+        got = {mode: ch.process_rd(rd) for mode, ch in chains.items()}
+        if np.array_equal(got[True].range_m, got[False].range_m):
+            continue
+        differ += 1
+        for f in ("range_m", "range_rate_mps", "azimuth_rad"):
+            assert np.array_equal(getattr(got["auto"], f), getattr(got[fits], f)), (threshold, seed, f)
+    assert differ >= 3          # frames where the two fits differ: the comparison can tell which one auto ran
+
+
 @pytest.mark.parametrize("dsp, said", [("{migration_fit: maybe}", "value 'maybe' is not allowed; expected true, "
                                                                   "false or auto"),
                                        ("{migration_fit: 1}", "expected true, false or auto"),

@@ -47,8 +47,9 @@ class DspConfig:
     #: beyond the alias speed, fit the wrapped peaks again with a range-migrating target's response (TDM presets:
     #: the wrap count from the TDM phase gives the true speed): RMSE near the CRB at 40–70 m/s, at 1.15–1.65× the
     #: frame's cost at 40–70 m/s ego speed (BENCHMARKS.md, benchmarks/migration_fit.py). true, false, or "auto" (the
-    #: default): on for complex128 spectra of presets with two transmitters or more, off for complex64 ones (the
-    #: fast setting: with the fit its frames miss the 30 ms target at 60–70 m/s) and single-transmitter presets
+    #: default): on for complex128 spectra of presets with two transmitters or more, for the peaks that migrate at
+    #: least MIGRATION_AUTO_MIN_BINS; off for complex64 ones (the fast setting: with the fit its frames miss the 30 ms
+    #: target at 60–70 m/s) and single-transmitter presets
     migration_fit: bool | str = "auto"
     max_detections: int = 1000
 
@@ -102,6 +103,11 @@ WRAP_LL_MARGIN = 9.0
 WRAP_SOURCE_PENALTY = 20.0
 #: the margin's growth for a wrap judged on a migrating fit (signal.dsp.migration_fit), log-likelihood
 MIGRATION_EXTRA_MARGIN = 3.0
+#: migration_fit "auto" fits a wrapped peak only where one of its alias numbers moves it at least this far (range
+#: bins over the frame): below it the fit moved the estimates by a median 0.03–0.04 of the CRB (ars408_like, 0.1–0.25
+#: bin) and 0.1–0.2 at 0.4 bin, with the same RMSE (benchmarks/migration_fit.py, --threshold-trials); ars408_like
+#: migrates 0.25 bin at 70 m/s, so its frames skip the fit's cost; every wrapped mimo12 peak migrates 0.57 bin or more
+MIGRATION_AUTO_MIN_BINS = 0.3
 
 
 class DspChain:
@@ -129,7 +135,7 @@ class DspChain:
     def migrates(self, dtype) -> bool:
         """Whether spectra of ``dtype`` get the migration fit beyond the alias speed (``DspConfig.migration_fit``:
         "auto" fits complex128 spectra, and only with two transmitters or more, whose wrap count gives the true
-        speed)."""
+        speed; of those, the peaks that migrate at least MIGRATION_AUTO_MIN_BINS)."""
         mode = self.config.migration_fit
         if mode == "auto":
             return self.config.range_ml and self.preset.num_tx > 1 and np.dtype(dtype) == np.complex128
@@ -208,6 +214,8 @@ class DspChain:
         mu = (speed[again, None] + k * (2.0 * p.alias_speed_mps)) * p.integration_time_s / p.range_resolution_m
         mu[np.abs(mu) > MigrationFit.MAX_MIGRATION] = np.nan                              # beyond what the fit models
         keep = ~np.all(np.isnan(mu), axis=1)
+        if self.config.migration_fit == "auto":         # only where the migration is enough to matter
+            keep &= np.any(np.abs(mu) >= MIGRATION_AUTO_MIN_BINS, axis=1)
         again, mu = again[keep], mu[keep]
         if not again.size:
             return again, np.zeros(0), np.zeros(0)
