@@ -249,8 +249,8 @@ def _migrating_map(m, n, xd, xr, mu, amp, rng=None, noise=1.0):
 
 @pytest.mark.parametrize("xd, xr, mu", [(10.3, 20.0, 0.0), (20.5, 7.25, 1.2), (30.2, 40.6, -1.5), (5.0, 33.5, 3.0)])
 def test_migration_fit_is_exact_without_noise(xd, xr, mu):
-    """The migrating-target fit recovers a moving tone's offsets (Doppler at mid-chirp: the first sample's plus
-    μ·(N − 1)/2N) and its channel phases; at μ = 0 it is the separable patch fit."""
+    """The migrating-target fit recovers a moving tone's offsets (Doppler at mid-chirp, sample N/2, where the chain
+    takes λ: the first sample's plus μ/2) and its channel phases; at μ = 0 it is the separable patch fit."""
     from radarnode.dsp.peaks import MigrationFit, PatchFit
     m = n = 64
     amp = np.exp(2j * np.pi * np.array([0.0, 0.1, 0.37, 0.8]))
@@ -260,7 +260,7 @@ def test_migration_fit_is_exact_without_noise(xd, xr, mu):
     # from the separable fit's estimate, as the chain starts it
     sd, sr, ssnap = PatchFit(window("hann", m), window("hann", n), 12)(rd, d, r, np.zeros(1), np.zeros(1))
     fd, fr, snap = MigrationFit(window("hann", m), window("hann", n), 12)(rd, d, r, sd, sr, np.array([mu]))
-    assert (d + fd)[0] == pytest.approx(xd + mu * (n - 1) / (2 * n), abs=2e-4)
+    assert (d + fd)[0] == pytest.approx(xd + mu / 2, abs=2e-4)
     assert (r + fr)[0] == pytest.approx(xr, abs=2e-4)
     assert np.allclose(snap[0] / snap[0, 0], amp / amp[0], atol=1e-6)
     if mu == 0.0:
@@ -288,7 +288,7 @@ def test_migration_fit_reaches_the_cramer_rao_bound_where_the_separable_fit_does
         dd, dr = interpolate(p, d, r)
         fd, fr, s = sep(rd, d, r, dd, dr)
         gd, gr, _ = mig(rd, d, r, fd, fr, np.array([mu]), channels=s)
-        truth_d = xd + mu * (n - 1) / (2 * n)
+        truth_d = xd + mu / 2
         err_sep.append(((d + fd)[0] - truth_d, (r + fr)[0] - xr))
         err_mig.append(((d + gd)[0] - truth_d, (r + gr)[0] - xr))
     rmse_sep, rmse_mig = _rmse_over_crb(err_sep, rho), _rmse_over_crb(err_mig, rho)
@@ -311,7 +311,7 @@ def test_migration_fit_chooses_the_candidate_migration_that_explains_the_patch(m
     for cand in ([[mu, other]], [[other, mu]]):
         both = fit(rd, d, r, sd, sr, np.array(cand), channels=snap)
         assert both[0][0] == pytest.approx(alone[0][0], abs=1e-12) and both[1][0] == pytest.approx(alone[1][0], abs=1e-12)
-    assert (d + alone[0])[0] == pytest.approx(20.4 + mu * (n - 1) / (2 * n), abs=2e-4)
+    assert (d + alone[0])[0] == pytest.approx(20.4 + mu / 2, abs=2e-4)
     assert (r + alone[1])[0] == pytest.approx(30.3, abs=2e-4)
 
 
@@ -339,7 +339,7 @@ def test_migration_fit_climbs_from_far_off_the_optimum(mu, xd, xr, start):
     from radarnode.dsp.peaks import MigrationFit
     m = n = 64
     rd = _migrating_map(m, n, xd, xr, mu, np.exp(2j * np.pi * np.array([0.0, 0.4])))
-    mid = xd + mu * (n - 1) / (2 * n)                  # the Doppler at mid-chirp
+    mid = xd + mu / 2                  # the Doppler at mid-chirp
     d, r = np.array([int(np.rint(mid))]), np.array([int(np.rint(xr))])
     truth_d, truth_r = mid - d[0], xr - r[0]
     fd, fr, _ = MigrationFit(window("hann", m), window("hann", n), 12)(

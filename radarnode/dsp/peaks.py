@@ -450,7 +450,11 @@ class MigrationFit:
         tables = [_tone_table(wd * basis[:, a], reach, self.STEPS) for a in range(self.ORDER)]
         self._doppler = _ShiftTable(np.stack([t for t, _ in tables], axis=1), tables[0][1], self.STEPS)
         self._range = _ShiftTable(*_tone_table(wr, reach + self.MAX_MIGRATION / 2.0, self.STEPS), self.STEPS)
-        self._centre = (wr.size - 1) / (2.0 * wr.size)
+        # δ_d is the Doppler of the phase at the chirp's middle in time, sample N/2, where the chain's speed takes
+        # λ (mid-sweep): the range terms carry the turning phase of the window's centre, sample (N − 1)/2, less
+        # that of sample N/2 (taken at (N − 1)/2, δ_d was μ/2N bins off: 0.6 mm/s at 70 m/s on mimo12, against
+        # the exact time-domain cube; 5e-6 bins now)
+        self._centre = 0.5
 
     def _doppler_terms(self, fd: np.ndarray, off: np.ndarray) -> np.ndarray:
         """A_q(δ_d − i) for offsets ``fd`` (K,) or (K, I) and the patch offsets ``off`` (J,: −m … m): shape
@@ -461,12 +465,12 @@ class MigrationFit:
         return np.moveaxis(t, -1, 1)
 
     def _range_terms(self, fr: np.ndarray, mu: np.ndarray, off: np.ndarray) -> np.ndarray:
-        """G_r(δ_r − j + μ·s_q)·e^{−jπμ·s_q(N−1)/N} for ``fr`` (K,) or (K, P) and ``mu`` of the same shape (or
-        (K, 1)), patch offsets ``off`` (J,: −m … m): shape (K, J, ORDER) or (K, J, P, ORDER). G_r(u) is
-        e^{jπu(N−1)/N} times a smooth real kernel: the phase that turns with the migrating beat is a Doppler shift
-        (the chirps' phase at mid-chirp runs μ·(N − 1)/2N bins ahead of that at their first sample), so it is taken
-        out of the terms the Chebyshev nodes interpolate over s, and δ_d is the Doppler at mid-chirp, which the
-        separable fit and the chain's speed measure."""
+        """G_r(δ_r − j + μ·s_q)·e^{−jπμ·s_q} for ``fr`` (K,) or (K, P) and ``mu`` of the same shape (or (K, 1)),
+        patch offsets ``off`` (J,: −m … m): shape (K, J, ORDER) or (K, J, P, ORDER). G_r(u) is e^{jπu(N−1)/N} times
+        a smooth real kernel: the phase that turns with the migrating beat is a Doppler shift (the chirps' phase at
+        their middle in time, sample N/2, runs μ/2 bins ahead of that at their first sample), so it is taken out of
+        the terms the Chebyshev nodes interpolate over s (but for e^{−jπμ·s/N}, smooth), and δ_d is the Doppler at
+        mid-chirp, which the separable fit and the chain's speed (λ at mid-sweep) measure."""
         fr = np.asarray(fr)
         mu = np.asarray(mu)[..., None]                                                   # (K, [P,] 1)
         t = self._range.read(fr[..., None] + off[0] + mu * self.nodes, off.size)       # (K, [P,] Q, J), a new array
