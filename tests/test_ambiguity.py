@@ -560,6 +560,25 @@ def test_auto_fits_only_peaks_that_migrate_enough(monkeypatch, threshold, fits):
     assert differ >= 3          # frames where the two fits differ: the comparison can tell which one auto ran
 
 
+@pytest.mark.parametrize("preset, dsp, said", [
+    ("fast_chirp", "{migration_fit: true}", "value True is not allowed; expected false or auto with preset fast_chirp"),
+    ("scanning_ka", "{doa: capon}", "value 'capon' is not allowed; expected 'fft' with preset scanning_ka")])
+def test_a_scenario_whose_preset_cannot_run_its_dsp_option_is_refused_with_file_and_line(tmp_path, preset, dsp, said):
+    """An option the preset cannot run is refused when the scenario is loaded, with the file, the line, the field,
+    the value and what is allowed — not when the first signal-level cycle builds the chain (an error without the
+    file, an independent tester found). "auto" is what migration_fit may be there."""
+    from radarnode.errors import ScenarioError
+    from radarnode.radar.setup import load_scenario
+    f = tmp_path / "s.yaml"
+    f.write_text(f"name: t\nduration_s: 1.0\nseed: 1\nradar: {{preset: {preset}}}\nsignal:\n  dsp: {dsp}\nactors: []\n")
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(f)
+    field = "signal.dsp." + dsp.strip("{}").split(":")[0]
+    assert f"{f}:6" in str(err.value) and field in str(err.value) and said in str(err.value), str(err.value)
+    f.write_text(f"name: t\nduration_s: 1.0\nseed: 1\nradar: {{preset: {preset}}}\nsignal:\n  dsp: {{}}\nactors: []\n")
+    load_scenario(f)                        # the defaults (auto, fft) are what every preset can run
+
+
 @pytest.mark.parametrize("dsp, said", [("{migration_fit: maybe}", "value 'maybe' is not allowed; expected true, "
                                                                   "false or auto"),
                                        ("{migration_fit: 1}", "expected true, false or auto"),

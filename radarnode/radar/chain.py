@@ -125,7 +125,7 @@ class DspChain:
         if config.migration_fit is True and preset.num_tx < 2:
             raise ConfigError(f"signal.dsp.migration_fit: value true is not allowed with preset {preset.name} "
                               f"({preset.num_tx} transmitter): the true speed of a wrapped peak comes from the TDM "
-                              "wrap count; expected false")
+                              "wrap count; expected false or auto")
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)

@@ -53,9 +53,27 @@ def radar_config(scenario: Scenario) -> RadarConfig:
         raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}") from None
     signal = build(SignalOptions, scenario.signal, "signal", src, SIGNAL_SCHEMA)
+    _check_dsp_for_preset(signal.dsp, preset, src, root)
     cfg = RadarConfig(preset=preset, signal=signal)
     object.__setattr__(scenario, "_radar_config", cfg)  # a cache on a frozen dataclass, like functools.cached_property
     return cfg
+
+
+def _check_dsp_for_preset(dsp: DspConfig, preset: RadarPreset, src: Source, root: str) -> None:
+    """The signal chain's options that the preset cannot run, refused at load time with the file and line (the
+    chain refuses them too, without the file, when it is built from code)."""
+    refused = (
+        ("migration_fit", dsp.migration_fit is True and preset.num_tx < 2,
+         f"false or auto with preset {preset.name} of {root} ({preset.num_tx} transmitter: the true speed of a "
+         "wrapped peak comes from the TDM wrap count)"),
+        ("doa", dsp.doa != "fft" and preset.num_virtual < 3,
+         f"'fft' with preset {preset.name} of {root} ({preset.num_virtual} virtual channel(s): super-resolution "
+         "needs 3 channels or more)"))
+    for field, bad, allowed in refused:
+        if bad:
+            child = f"signal.dsp.{field}"
+            raise src.error(child, f"field '{child}': value {short_repr(getattr(dsp, field))} is not allowed; "
+                                   f"expected {allowed}")
 
 
 def with_signal(scenario: Scenario, **changes) -> Scenario:
