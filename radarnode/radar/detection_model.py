@@ -81,15 +81,11 @@ def _glint(z: np.ndarray, x: np.ndarray, field: np.ndarray, inv: np.ndarray, mar
 
 
 def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½)).
-
-    The range bin is that of its peak in the chain's map: its range plus the range–Doppler coupling of its true
-    speed (``RadarPreset.range_rate_coupling_s``; 0.014 bin per m/s on mimo12), which the chain takes out again
-    with the speed it measures; so the straddle, the cells and the resolution are those the chain has."""
+    """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½))."""
     p = preset
     n_r = p.num_range_bins
     m = p.num_chirps
-    rb = np.mod((scat.range_m + scat.range_rate_mps * p.range_rate_coupling_s) / p.range_resolution_m, n_r)
+    rb = np.mod(scat.range_m / p.range_resolution_m, n_r)
     vb = np.mod(scat.range_rate_mps / p.doppler_bin_mps + m / 2, m) - m / 2
     u = ambiguity.spatial_frequency(p, scat.azimuth_rad)
     return rb, vb, u
@@ -144,9 +140,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     c_v = _glint(z, vb, field, inv, 0.5)
     c_u = _glint(z, u, field, inv, 0.5 * beam)
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
-    # the speed the chain measures (aliased), with which it takes the coupling out of the peak's range
-    # (RadarPreset.range_rate_coupling_s): the peak sits at the true speed's coupling, so a wrapped speed leaves some
-    c_alias = np.bincount(inv, weights=amp ** 2 * (vb * p.doppler_bin_mps), minlength=uniq.size) / wsafe
+    # what the chain's coupling correction with the aliased speed leaves in the range (RadarPreset.range_rate_coupling_s)
+    c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.doppler_bin_mps),
+                          minlength=uniq.size) / wsafe
     lo = np.full(uniq.size, np.iinfo(np.int64).max)
     hi = np.full(uniq.size, np.iinfo(np.int64).min)
     np.minimum.at(lo, inv, scat.actor_index)
@@ -180,7 +176,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     er, ev, ea = chain_efficiency(snr_peak)
     nz = rng.standard_normal((3, idx.size))
     est_r = np.mod((c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
-                   * p.range_resolution_m - c_alias[idx] * p.range_rate_coupling_s, n_r * p.range_resolution_m)
+                   * p.range_resolution_m + c_alias[idx] * p.range_rate_coupling_s, n_r * p.range_resolution_m)
     est_v = (c_v[idx] + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]) \
         * p.doppler_bin_mps
     sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
