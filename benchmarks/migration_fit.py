@@ -119,6 +119,17 @@ def run(p, speed_mps: float, trials: int) -> dict:
             "fit_v": np.sqrt(np.mean(fe[:, 1] ** 2)) / crb_v, "fit_r": np.sqrt(np.mean(fe[:, 0] ** 2)) / crb_r}
 
 
+def _nearest_error(det, speed_mps: float, vmax: float, gate_m: float = 1.5):
+    """(range, wrapped range-rate, azimuth) error of the detection nearest the point target at R0_M, AZ_DEG, or None
+    when none lies within the gate (``gate_m`` in range, 1 m/s in wrapped range rate)."""
+    dv = (det.range_rate_mps - speed_mps + vmax) % (2.0 * vmax) - vmax
+    cost = np.abs(det.range_m - R0_M) / gate_m + np.abs(dv) / 1.0
+    if not len(det) or cost.min() > 1.0:
+        return None
+    j = int(np.argmin(cost))
+    return np.array([det.range_m[j] - R0_M, dv[j], det.azimuth_rad[j] - math.radians(AZ_DEG)])
+
+
 def chain_errors(p, speed_mps: float, trials: int, migration: bool) -> dict:
     """The chain's (range, wrapped range-rate, azimuth) errors of the detection nearest the truth, per trial."""
     chain = DspChain(p, DspConfig(migration_fit=migration))
@@ -128,12 +139,9 @@ def chain_errors(p, speed_mps: float, trials: int, migration: bool) -> dict:
     for t in range(trials):
         rd = synthesize_rd(p, point_targets([R0_M], [AZ_DEG], [speed_mps], 0.0), np.random.default_rng(1000 + t),
                            snr_db=RHO_DB - 10.0 * math.log10(n * m * c))
-        det = chain.process_rd(rd)
-        dv = (det.range_rate_mps - speed_mps + vmax) % (2.0 * vmax) - vmax
-        cost = np.abs(det.range_m - R0_M) / 1.5 + np.abs(dv) / 1.0
-        if len(det) and cost.min() <= 1.0:
-            j = int(np.argmin(cost))
-            errs.append((det.range_m[j] - R0_M, dv[j], det.azimuth_rad[j] - math.radians(AZ_DEG)))
+        err = _nearest_error(chain.process_rd(rd), speed_mps, vmax)
+        if err is not None:
+            errs.append(err)
     e = np.array(errs).reshape(-1, 3)
     crb_r, crb_v = float(equation.crb_range_m(p, RHO_DB)), float(equation.crb_speed_mps(p, RHO_DB))
     crb_a = float(equation.crb_azimuth_rad(p, RHO_DB, math.radians(AZ_DEG)))
@@ -177,12 +185,9 @@ def threshold_row(p, speed_mps: float, trials: int) -> dict:
                            snr_db=RHO_DB - 10.0 * math.log10(n * m * c))
         got = {}
         for mode, chain in chains.items():
-            det = chain.process_rd(rd)
-            dv = (det.range_rate_mps - speed_mps + vmax) % (2.0 * vmax) - vmax
-            cost = np.abs(det.range_m - R0_M) / 3.0 + np.abs(dv) / 1.0
-            if len(det) and cost.min() <= 1.0:
-                j = int(np.argmin(cost))
-                got[mode] = np.array([det.range_m[j] - R0_M, dv[j], det.azimuth_rad[j] - math.radians(AZ_DEG)])
+            err = _nearest_error(chain.process_rd(rd), speed_mps, vmax, gate_m=3.0)
+            if err is not None:
+                got[mode] = err
         for mode in (False, True):
             if mode in got:
                 errs[mode].append(got[mode])
@@ -220,12 +225,9 @@ def high_snr_row(p, speed_mps: float, rho_db: float, path: str, trials: int) -> 
         rng = np.random.default_rng(4000 + t)
         rd = range_doppler(synthesize(p, scat, rng, snr_db=per_sample)) if path == "td" \
             else synthesize_rd(p, scat, rng, snr_db=per_sample)
-        det = chain.process_rd(rd)
-        dv = (det.range_rate_mps - speed_mps + vmax) % (2.0 * vmax) - vmax
-        cost = np.abs(det.range_m - R0_M) / 1.5 + np.abs(dv) / 1.0
-        if len(det) and cost.min() <= 1.0:
-            j = int(np.argmin(cost))
-            errs.append((det.range_m[j] - R0_M, dv[j], det.azimuth_rad[j] - math.radians(AZ_DEG)))
+        err = _nearest_error(chain.process_rd(rd), speed_mps, vmax)
+        if err is not None:
+            errs.append(err)
     e = np.array(errs).reshape(-1, 3) / crb
     return {"found": len(e), "rate": float(np.sqrt(np.mean(e[:, 1] ** 2))), "rate_bias": float(e[:, 1].mean()),
             "range": float(e[:, 0].std()), "az": float(np.sqrt(np.mean(e[:, 2] ** 2)))}
