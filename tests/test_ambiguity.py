@@ -584,6 +584,20 @@ def test_a_scenario_whose_preset_cannot_run_its_dsp_option_is_refused_with_file_
     load_scenario(f)                        # the defaults (auto, fft) are what every preset can run
 
 
+@pytest.mark.parametrize("order, where", [(("fast_chirp", "mimo12"), "radars[0]"), (("mimo12", "fast_chirp"), "radars[1]")])
+def test_a_radar_list_whose_preset_cannot_run_the_fit_names_that_radar(tmp_path, order, where):
+    """With several radars the refusal names the one whose preset cannot run the option, the first included (it was
+    named 'radar', the scenario's own, when it came first: an independent tester's find)."""
+    from radarnode.errors import ScenarioError
+    from radarnode.radar.setup import load_scenario
+    f = tmp_path / "s.yaml"
+    f.write_text(f"name: t\nduration_s: 1.0\nseed: 1\nradars:\n  - {{preset: {order[0]}, sensor_id: 0}}\n"
+                 f"  - {{preset: {order[1]}, sensor_id: 1}}\nsignal: {{dsp: {{migration_fit: true}}}}\nactors: []\n")
+    with pytest.raises(ScenarioError) as err:
+        load_scenario(f)
+    assert f"preset fast_chirp of {where} " in str(err.value), str(err.value)
+
+
 @pytest.mark.parametrize("dsp, said", [("{migration_fit: maybe}", "value 'maybe' is not allowed; expected true, "
                                                                   "false or auto"),
                                        ("{migration_fit: 1}", "expected true, false or auto"),

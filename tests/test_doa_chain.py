@@ -174,6 +174,25 @@ def test_cli_doa_needs_the_signal_level_and_leaves_no_file(capsys, tmp_path):
     assert "option --doa: value 'beamscan' is not allowed; expected one of fft, capon" in capsys.readouterr().err
 
 
+@pytest.mark.parametrize("radars, where", [("radar: {preset: scanning_ka}", "radar"),
+                                           ("radars:\n  - {preset: mimo12, sensor_id: 0}\n"
+                                            "  - {preset: scanning_ka, sensor_id: 1}", "radars[1]")])
+@pytest.mark.parametrize("command", ["log", "report"])
+def test_cli_doa_on_a_preset_with_one_channel_is_a_usage_error_naming_the_option_and_the_radar(
+        capsys, tmp_path, radars, where, command):
+    """``--doa capon`` at the signal level on a scanning_ka radar (one virtual channel): the command line asks what
+    the preset cannot do, so the option is named, with the radar, exit 2 and no file — not the scenario file, which
+    has no signal.dsp.doa (an independent tester found the file blamed, exit 1)."""
+    path = tmp_path / "s.yaml"
+    path.write_text(f"name: t\nduration_s: 1.0\nseed: 1\n{radars}\nactors: []\n")
+    out = tmp_path / "x.blf"
+    argv = [command, str(path), "--fidelity", "signal", "--doa", "capon"] + (["-o", str(out)] if command == "log" else [])
+    rc = main(argv)
+    err = capsys.readouterr().err
+    assert rc == 2 and f"option --doa: value 'capon' is not allowed with preset scanning_ka of {where}" in err, err
+    assert str(path) not in err and not out.exists()
+
+
 def test_cli_doa_runs_a_scenario_at_signal_level(capsys):
     rc = main(["report", str(SCENARIOS / "acc_cut_in.yaml"), "--doa", "music", "--fidelity", "signal"])
     out = capsys.readouterr().out

@@ -201,8 +201,8 @@ def test_rd_synthesis_equals_the_fft_of_the_cube(preset, floor_db):
 def test_rd_synthesis_moves_the_chains_range_rate_well_within_its_bound(v, rho_db):
     """What the RD synthesis leaves out (RD_NOISE_MARGIN_DB) must not bias the chain at high SNR: a noise-free point
     target on mimo12 (50 m, 10°; −70 m/s wrapped and migration-fitted, −20 m/s not), the chain's range rate on
-    synthesize_rd against that on the exact time-domain cube, over the CRB at ρ: below 0.6 (0.12–0.51 measured;
-    with the former 20 dB margin 0.95–2.45)."""
+    synthesize_rd against that on the exact time-domain cube, over the CRB at ρ: below 0.6 (0.12–0.51 measured in
+    these four cases; with the former 20 dB margin 0.95–2.45; a finer grid finds up to 0.93 elsewhere, BENCHMARKS.md)."""
     from radarnode.radar import equation
     from radarnode.radar.chain import DspChain, DspConfig
     from radarnode.radar.scatterers import point_targets

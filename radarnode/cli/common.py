@@ -86,6 +86,7 @@ def scenario_from_args(args) -> Scenario:
             sc = dataclasses.replace(sc, fidelity=args.fidelity)
         if getattr(args, "doa", None):
             sc = with_doa(sc, args.doa)
+            check_doa_presets(sc, args.doa)
         if args.duration is not None:
             sc = dataclasses.replace(sc, duration_s=validate.number("--duration", args.duration, lo=0.0,
                                                                       hi=86_400.0, lo_open=True))
@@ -106,6 +107,22 @@ def check_doa_option(doa: str, fidelity: str) -> None:
         raise UsageError(f"option --doa: value {doa!r} is not allowed at fidelity {fidelity!r}; expected fft, or "
                          "--fidelity signal (super-resolution exists only in the signal chain: the object and "
                          "detection levels model the FFT beamformer)")
+
+
+def check_doa_presets(scenario: Scenario, doa: str) -> None:
+    """``--doa`` other than fft needs 3 virtual channels or more on every radar of the scenario (UsageError naming the
+    option and the radar: the command line asks what the scenario's preset cannot do)."""
+    if doa == "fft":
+        return
+    from radarnode.radar.presets import get_preset
+    setups = [(f"radars[{i}]", s) for i, s in enumerate(scenario.radars)] if scenario.radars \
+        else [("radar", scenario.radar)]
+    for where, setup in setups:
+        preset = get_preset(setup.preset).with_overrides(setup.overrides)
+        if preset.num_virtual < 3:
+            raise UsageError(f"option --doa: value {doa!r} is not allowed with preset {preset.name} of {where} "
+                             f"({preset.num_virtual} virtual channel(s)); expected fft (super-resolution needs 3 "
+                             "channels or more)")
 
 
 class Terminated(BaseException):

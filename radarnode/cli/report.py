@@ -159,12 +159,13 @@ def cmd(args) -> int:
         raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
     scenarios = [(path, with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
                  for path in args.scenarios]                                                    # checked first
-    from radarnode.cli.common import check_doa_option
+    from radarnode.cli.common import check_doa_option, check_doa_presets
     from radarnode.radar.models import check_doa
     from radarnode.radar.setup import radar_config
     for _, sc in scenarios:
         if args.doa is not None:
             check_doa_option(args.doa, args.fidelity or sc.fidelity)
+            check_doa_presets(sc, args.doa)
         check_doa(args.fidelity or sc.fidelity, radar_config(sc).signal, sc)
     out_dir = plot_dir(args.plots) if args.plots else None     # created once everything else is known good
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")

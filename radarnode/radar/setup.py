@@ -83,12 +83,12 @@ def with_signal(scenario: Scenario, **changes) -> Scenario:
 
 def resolved(scenario: Scenario) -> Scenario:
     """Validate the radar part and fill in the preset's cycle period where the scenario sets none."""
+    if scenario.radars:
+        radar_scenarios(scenario)           # every radar checked first, so that an error names radars[i], not radar
     cfg = radar_config(scenario)
     if scenario.cycle_period_s is None:
         scenario = dataclasses.replace(scenario, cycle_period_s=cfg.preset.cycle_period_s)
         object.__setattr__(scenario, "_radar_config", cfg)
-    if scenario.radars:
-        radar_scenarios(scenario)           # every radar's preset and overrides checked now, not at the first cycle
     return scenario
 
 
