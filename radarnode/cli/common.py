@@ -110,19 +110,19 @@ def check_doa_option(doa: str, fidelity: str) -> None:
 
 
 def check_doa_presets(scenario: Scenario, doa: str) -> None:
-    """``--doa`` other than fft needs 3 virtual channels or more on every radar of the scenario (UsageError naming the
-    option and the radar: the command line asks what the scenario's preset cannot do)."""
-    if doa == "fft":
-        return
+    """``--doa`` on every radar of the scenario, by the chain's own rule (``radarnode.radar.chain.preset_conflicts``):
+    a UsageError naming the option and the radar (the command line asks what the scenario's preset cannot do)."""
+    from radarnode.radar.chain import DspConfig, preset_conflicts
     from radarnode.radar.presets import get_preset
     setups = [(f"radars[{i}]", s) for i, s in enumerate(scenario.radars)] if scenario.radars \
         else [("radar", scenario.radar)]
     for where, setup in setups:
         preset = get_preset(setup.preset).with_overrides(setup.overrides)
-        if preset.num_virtual < 3:
+        conflicts = preset_conflicts(DspConfig(doa=doa), preset)
+        if conflicts:
+            _, why, allowed = conflicts[0]
             raise UsageError(f"option --doa: value {doa!r} is not allowed with preset {preset.name} of {where} "
-                             f"({preset.num_virtual} virtual channel(s)); expected fft (super-resolution needs 3 "
-                             "channels or more)")
+                             f"({why}); expected {allowed}")
 
 
 class Terminated(BaseException):

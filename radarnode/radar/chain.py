@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode import validate
-from radarnode.errors import ConfigError, FieldError
+from radarnode.errors import ConfigError, FieldError, short_repr
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
@@ -76,6 +76,19 @@ class DspConfig:
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
+def preset_conflicts(config: DspConfig, preset: RadarPreset) -> list[tuple[str, str, str]]:
+    """The options of ``config`` that ``preset`` cannot run, as (field, why, what is allowed): one rule for the
+    chain (when it is built), the scenario loader (with the file and line) and the command line's ``--doa``."""
+    out = []
+    if config.doa != "fft" and preset.num_virtual < 3:
+        out.append(("doa", f"{preset.num_virtual} virtual channel(s): super-resolution needs 3 channels or more",
+                    "'fft'"))
+    if config.migration_fit is True and preset.num_tx < 2:
+        out.append(("migration_fit", f"{preset.num_tx} transmitter: the true speed of a wrapped peak comes from the "
+                                     "TDM wrap count", "false or auto"))
+    return out
+
+
 @functools.lru_cache(maxsize=16)
 def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_range: int) -> DetectionStatistic:
     """The CFAR and detection statistic of a chain (built once per configuration and cube shape)."""
@@ -118,14 +131,11 @@ class DspChain:
         self.config = config
         self.statistic = detection_statistic(config, preset.num_virtual, preset.num_chirps, preset.num_range_bins)
         self.cfar = self.statistic.cfar
-        if config.doa != "fft" and preset.num_virtual < 3:
-            raise ConfigError(f"signal.dsp.doa: value {config.doa!r} is not allowed with preset {preset.name} "
-                              f"({preset.num_virtual} virtual channel(s)); expected 'fft' (super-resolution needs "
-                              "3 channels or more)")
-        if config.migration_fit is True and preset.num_tx < 2:
-            raise ConfigError(f"signal.dsp.migration_fit: value true is not allowed with preset {preset.name} "
-                              f"({preset.num_tx} transmitter): the true speed of a wrapped peak comes from the TDM "
-                              "wrap count; expected false or auto")
+        conflicts = preset_conflicts(config, preset)
+        if conflicts:
+            field, why, allowed = conflicts[0]
+            raise ConfigError(f"signal.dsp.{field}: value {short_repr(getattr(config, field))} is not allowed with "
+                              f"preset {preset.name} ({why}); expected {allowed}")
         self.doa = make_doa(config.doa, preset.num_virtual, preset.element_spacing_wl,
                             n_fft=max(config.doa_fft_size, preset.num_virtual))
         self._tx_of = np.repeat(np.arange(preset.num_tx), preset.num_rx)

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from radarnode.errors import FieldError, short_repr
-from radarnode.radar.chain import DspConfig
+from radarnode.radar.chain import DspConfig, preset_conflicts
 from radarnode.radar.checks import check_scenario
 from radarnode.radar.options import Impairments, SignalOptions
 from radarnode.radar.presets import RadarPreset, get_preset
@@ -60,20 +60,14 @@ def radar_config(scenario: Scenario) -> RadarConfig:
 
 
 def _check_dsp_for_preset(dsp: DspConfig, preset: RadarPreset, src: Source, root: str) -> None:
-    """The signal chain's options that the preset cannot run, refused at load time with the file and line (the
-    chain refuses them too, without the file, when it is built from code)."""
-    refused = (
-        ("migration_fit", dsp.migration_fit is True and preset.num_tx < 2,
-         f"false or auto with preset {preset.name} of {root} ({preset.num_tx} transmitter: the true speed of a "
-         "wrapped peak comes from the TDM wrap count)"),
-        ("doa", dsp.doa != "fft" and preset.num_virtual < 3,
-         f"'fft' with preset {preset.name} of {root} ({preset.num_virtual} virtual channel(s): super-resolution "
-         "needs 3 channels or more)"))
-    for field, bad, allowed in refused:
-        if bad:
-            child = f"signal.dsp.{field}"
-            raise src.error(child, f"field '{child}': value {short_repr(getattr(dsp, field))} is not allowed; "
-                                   f"expected {allowed}")
+    """The signal chain's options that the preset cannot run (``radarnode.radar.chain.preset_conflicts``), refused at
+    load time with the file and line."""
+    conflicts = preset_conflicts(dsp, preset)
+    if conflicts:
+        field, why, allowed = conflicts[0]
+        child = f"signal.dsp.{field}"
+        raise src.error(child, f"field '{child}': value {short_repr(getattr(dsp, field))} is not allowed; expected "
+                               f"{allowed} with preset {preset.name} of {root} ({why})")
 
 
 def with_signal(scenario: Scenario, **changes) -> Scenario:
