@@ -25,11 +25,12 @@ def _fresh(pfa: float = 1e-6):
 
 
 def _use(stat) -> None:
-    """What a level asks of the statistic: Pd of both Swerling cases, masking, the ring kernel."""
+    """What a level asks of the statistic: Pd of both Swerling cases, masking, the ring kernel, the edge-cut rings."""
     stat.pd_of_snr(np.array([10.0, 20.0]), 0)
     stat.pd_of_snr(np.array([10.0, 20.0]), 1)
     stat.masking_factor(np.array([15.0]), np.array([50.0]), 1)
     stat.ring_kernel(np.array([3.25]), np.array([-7.5]))
+    stat.ring_cut(np.array([0, 3, 250, 255]), 256)
 
 
 def test_a_second_run_loads_the_tables_the_first_computed_bit_for_bit(tmp_path, monkeypatch):
@@ -52,6 +53,9 @@ def test_a_second_run_loads_the_tables_the_first_computed_bit_for_bit(tmp_path, 
     assert np.array_equal(second.masking_factor(rho, np.full(50, 80.0)), first.masking_factor(rho, np.full(50, 80.0)))
     d = np.linspace(-30.0, 30.0, 101)
     assert np.array_equal(second.ring_kernel(d, d[::-1]), first.ring_kernel(d, d[::-1]))
+    monkeypatch.setattr(detection_stats, "ca_alpha", no_computing)
+    edge = np.array([0, 3, 250, 255])
+    assert all(np.array_equal(x, y) for x, y in zip(second.ring_cut(edge, 256), first.ring_cut(edge, 256)))
     a, b = first.export_tables(), second.export_tables()
     assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
 

@@ -362,8 +362,8 @@ class DetectionStatistic:
         grid, table = self._pd_tables[swerling]
         return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
 
-    def draw(self, energy: np.ndarray, rng: np.random.Generator, interference: np.ndarray | float = 0.0
-             ) -> tuple[np.ndarray, np.ndarray]:
+    def draw(self, energy: np.ndarray, rng: np.random.Generator, interference: np.ndarray | float = 0.0,
+             range_bins: np.ndarray | None = None, n_range: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """One draw of the test for steady targets of windowed energy ``energy``, shape (n,).
 
         The cell's statistic is X = |√E + n₀|² + Gamma(N − 1) (the signal's
@@ -374,6 +374,11 @@ class DetectionStatistic:
         strong cells). A fluctuating (Swerling 1) target is a steady one whose
         energy was drawn from an exponential law first.
 
+        With ``range_bins`` (the cells' range bins, shape (n,)) and ``n_range`` (the map's), a CA-CFAR ring
+        that the map's first or last range bins cut is the chain's: only its cells inside the map, with their
+        own α, training-sum law and count (:meth:`ring_cut`), as :class:`radarnode.dsp.cfar.CellAveragingCfar`
+        tests the cells within ``guard + train`` range bins of an edge.
+
         Returns (detected, statistic), the statistic in units of σ² (the cell's
         power over the per-channel noise).
         """
@@ -383,12 +388,43 @@ class DetectionStatistic:
         x = np.abs(np.sqrt(e) + z0) ** 2
         if self.n_channels > 1:
             x = x + rng.gamma(self.n_channels - 1, 1.0, n)
-        eig = self.eigenvalues
-        mean, var = self.n_channels * eig.sum(), self.n_channels * np.sum(eig ** 2)
+        if range_bins is not None and self.cfar.name == "ca":
+            alpha, mean, var, count = self.ring_cut(range_bins, n_range)
+        else:
+            eig = self.eigenvalues
+            alpha, count = self.alpha_ca, eig.size
+            mean, var = self.n_channels * eig.sum(), self.n_channels * np.sum(eig ** 2)
         z = rng.gamma(mean * mean / var, var / mean, n)
         if self.cfar.name == "ca":
             z = z + interference
-        return x > self.alpha_ca * z / eig.size, x
+        return x > alpha * z / count, x
+
+    def ring_cut(self, range_bins: np.ndarray, n_range: int) -> tuple[np.ndarray, ...]:
+        """Per cell at ``range_bins`` (ints, shape (n,)) of a map of ``n_range`` range bins, the CA-CFAR ring the
+        chain tests it with: (α, mean and variance of the training sum over σ², number of training cells), each
+        shape (n,). Within ``guard + train`` bins of the first or last range bin the ring loses the columns beyond
+        the map (:meth:`radarnode.dsp.cfar.CellAveragingCfar.alpha_for_cut`); elsewhere it is the full ring.
+        Tabulated once per cut (at most 2·(guard + train) + 1 of them)."""
+        r = np.asarray(range_bins, dtype=np.int64)
+        reach = self.cfar.guard[1] + self.cfar.train[1]
+        left, right = np.clip(r, 0, reach), np.clip(n_range - 1 - r, 0, reach)
+        cuts = self.__dict__.setdefault("_cuts", {})
+        key = left * (reach + 1) + right
+        out = np.empty((4, r.size))
+        built = False
+        for k in np.unique(key).tolist():
+            if k not in cuts:
+                a, b = divmod(k, reach + 1)
+                off = self.cfar.offsets()
+                keep = (off[:, 1] >= -a) & (off[:, 1] <= b)
+                eig = self.cfar._eigenvalues(off[keep])
+                cuts[k] = (self.cfar.alpha_for_cut(a, b), self.n_channels * eig.sum(),
+                           self.n_channels * np.sum(eig ** 2), float(eig.size))
+                built = True
+            out[:, key == k] = np.array(cuts[k])[:, None]
+        if built:
+            self._table_built()
+        return out[0], out[1], out[2], out[3]
 
     def ring_interference(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
                           energy: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
@@ -432,14 +468,111 @@ class DetectionStatistic:
         i, j = pairs["i"], pairs["j"]
         dd = np.mod(pos_d[j] - cell_d[i] + m / 2.0, m) - m / 2.0
         dr = np.mod(pos_r[j] - cell_r[i] + n / 2.0, n) - n / 2.0
-        return np.bincount(i, weights=self.ring_kernel(dd, dr) * energy[j], minlength=cell_d.size)
+        return np.bincount(i, weights=self.ring_kernel(dd, dr, cell_r[i], n) * energy[j], minlength=cell_d.size)
 
-    def ring_kernel(self, delta_d: np.ndarray, delta_r: np.ndarray) -> np.ndarray:
+    def ring_kernel(self, delta_d: np.ndarray, delta_r: np.ndarray, cell_r: np.ndarray | None = None,
+                    n_range: int | None = None) -> np.ndarray:
         """The share of a target's on-bin energy in the training ring of a cell ``delta`` bins from it (any
-        shape): the box ±(guard + train) less the box ±guard, each a product of two tabulated sums."""
+        shape): the box ±(guard + train) less the box ±guard, each a product of two tabulated sums. With the
+        cells' range bins ``cell_r`` (integers, the shape of ``delta_r``) and the map's ``n_range``, a ring that
+        the first or last range bins cut holds only its cells inside the map, as the chain's CA-CFAR has it
+        (:meth:`ring_cut`); elsewhere the result is the same."""
         d_outer, d_inner = self._ring_boxes("d", delta_d)
         r_outer, r_inner = self._ring_boxes("r", delta_r)
+        if cell_r is not None:
+            g, t = self._guard_train("r")
+            cell_r = np.broadcast_to(np.asarray(cell_r, dtype=np.float64), np.shape(r_outer))
+            edge = (cell_r < g + t) | (cell_r > n_range - 1 - (g + t))
+            if np.any(edge):
+                r_outer, r_inner = r_outer.copy(), r_inner.copy()
+                dr, a = np.broadcast_to(delta_r, edge.shape)[edge], cell_r[edge]
+                r_outer[edge] = self._cut_box(g + t, dr, a, n_range)
+                r_inner[edge] = self._cut_box(g, dr, a, n_range)
         return d_outer * r_outer - d_inner * r_inner
+
+    def _cut_box(self, half: int, delta: np.ndarray, cell: np.ndarray, n_range: int) -> np.ndarray:
+        """Σ K_r(a − δ) over the range offsets a in [−half, half] whose bins cell + a lie in [0, n_range): the
+        box sum of a ring's range axis where an edge of the map cuts it, from the cumulative table
+        C(x) = Σ_{j≥0} K_r(x − j) as C(hi − δ) − C(lo − 1 − δ)."""
+        lo = np.maximum(-half, -cell)
+        hi = np.minimum(half, n_range - 1 - cell)
+        grid, table, total = self._cumulative_range()
+        c_hi = np.interp(hi - delta, grid, table, left=0.0, right=total)
+        c_lo = np.interp(lo - 1.0 - delta, grid, table, left=0.0, right=total)
+        return np.where(hi >= lo, c_hi - c_lo, 0.0)
+
+    def _cumulative_range(self) -> tuple[np.ndarray, np.ndarray, float]:
+        """The grid (1/32 bin), the table of C(x) = Σ_{j≥0} K_r(x − j) on it, and C's limit far above it (the
+        sum of K_r over every bin, N·Σw²/(Σw)² by Parseval); C is below 1e-7 of that limit under the grid."""
+        tables = self.__dict__.setdefault("_ring_tables_cut", {})
+        if "r" not in tables:
+            g, t = self._guard_train("r")
+            top = 2 * (g + t) + self.BOX_REACH + 2               # |hi − δ|, |lo − 1 − δ| never beyond this
+            low = top + self.BOX_REACH                           # K_r(x − j) below the grid is negligible
+            x = np.arange(-low * 32, top * 32 + 1) / 32.0
+            k = straddle_gain(self.range_window, x)
+            # C at x sums K at x, x − 1, x − 2, …: a cumulative sum along each residue of the grid modulo one bin
+            c = np.empty_like(k)
+            for res in range(32):
+                c[res::32] = np.cumsum(k[res::32])
+            w = self.range_window
+            total = float(w.size * np.sum(w * w) / w.sum() ** 2)
+            keep = x >= -top
+            tables["r"] = (x[keep], c[keep], total)
+        return tables["r"]
+
+    #: the range–Doppler peak test reads the window's power response this many bins either side (Hann: below
+    #: −70 dB there, under the weakest target a 100 dB one can hide)
+    PEAK_REACH = 12
+
+    def power_response(self, axis: str, delta: np.ndarray) -> np.ndarray:
+        """K(δ): the power a target puts into a cell ``delta`` bins from it along one axis ("d": Doppler, "r":
+        range), relative to on-bin (:func:`straddle_gain` at any offset, main lobe and sidelobes), tabulated on a
+        1/32-bin grid to ±(PEAK_REACH + 1) bins and read by linear interpolation; 0 beyond."""
+        tables = self.__dict__.setdefault("_response_tables", {})
+        if axis not in tables:
+            reach = self.PEAK_REACH + 1
+            grid = np.arange(-reach * 32, reach * 32 + 1) / 32.0
+            w = self.doppler_window if axis == "d" else self.range_window
+            tables[axis] = (grid, straddle_gain(w, grid))
+        grid, table = tables[axis]
+        return np.interp(delta, grid, table, left=0.0, right=0.0)
+
+    def map_power(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
+                  energy: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+        """The noise-free non-coherent map the chain's peak search reads, at each cell and its eight neighbours:
+        Σ_j E_j·K_d(b − pos_d,j)·K_r(a − pos_r,j) over the targets j within PEAK_REACH bins in both axes (their
+        powers add: targets in different cells or at different angles add no coherent cross term to a sum over
+        channels on average). Shape (C, 9), the neighbours in the order (Doppler −1, 0, 1) × (range −1, 0, 1),
+        column 4 the cell itself; both axes wrap, as the chain's local-maximum test does.
+
+        Parameters as :meth:`ring_interference`: cells (C,) as integers, targets' positions (T,) in bins and their
+        on-bin windowed energies (T,); ``shape`` = (Doppler bins, range bins).
+        """
+        m, n = shape
+        cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
+        pos_d, pos_r = np.mod(np.asarray(pos_d, dtype=np.float64), m), np.mod(np.asarray(pos_r, dtype=np.float64), n)
+        out = np.zeros((cell_d.size, 9))
+        if cell_d.size == 0 or pos_d.size == 0:
+            return out
+        import scipy.spatial  # imported when first needed: a faster start
+        reach = float(self.PEAK_REACH)
+        box = np.array([m, n], dtype=np.float64) / reach
+        cells = scipy.spatial.cKDTree(np.mod(np.stack([cell_d, cell_r], axis=1) / reach, box), boxsize=box)
+        targets = scipy.spatial.cKDTree(np.stack([pos_d, pos_r], axis=1) / reach % box, boxsize=box)
+        pairs = cells.sparse_distance_matrix(targets, 1.0, p=np.inf, output_type="ndarray")
+        if pairs.size == 0:
+            return out
+        i, j = pairs["i"], pairs["j"]
+        dd = np.mod(cell_d[i] - pos_d[j] + m / 2.0, m) - m / 2.0
+        dr = np.mod(cell_r[i] - pos_r[j] + n / 2.0, n) - n / 2.0
+        steps = np.array([-1.0, 0.0, 1.0])
+        kd = self.power_response("d", dd[:, None] + steps[None, :])                    # (pairs, 3)
+        kr = self.power_response("r", dr[:, None] + steps[None, :])
+        contrib = (kd[:, :, None] * kr[:, None, :]).reshape(-1, 9) * energy[j][:, None]
+        for col in range(9):
+            out[:, col] = np.bincount(i, weights=contrib[:, col], minlength=cell_d.size)
+        return out
 
     def _guard_train(self, axis: str) -> tuple[int, int]:
         """The CFAR's guard and training cells along one axis ("d": Doppler, "r": range)."""
@@ -581,12 +714,15 @@ class DetectionStatistic:
             out[f"mask{swerling}"] = table
         for axis, (_, _, cols) in self.__dict__.get("_ring_tables", {}).items():
             out[f"ring_{axis}"] = np.stack(cols)
+        cuts = self.__dict__.get("_cuts", {})
+        if cuts:            # the rings the range edges cut: (key, α, mean, variance, count) a row
+            out["ring_cuts"] = np.array([(float(k), *v) for k, v in sorted(cuts.items())], dtype=np.float64)
         return out
 
     def import_tables(self, arrays: dict[str, np.ndarray]) -> None:
         """Take tables that :meth:`export_tables` gave (for this :meth:`table_key`); raises ValueError, leaving
         this statistic as it was, where a name, shape or value is not what this statistic builds."""
-        pd, mask, ring = {}, {}, {}
+        pd, mask, ring, cut = {}, {}, {}, {}
         for name, a in arrays.items():
             a = np.asarray(a)
             if a.dtype != np.float64 or not np.all(np.isfinite(a)):
@@ -610,11 +746,19 @@ class DetectionStatistic:
                 if a.shape != (4, size + 1):
                     raise ValueError(f"table {name}: shape {a.shape}; expected {(4, size + 1)}")
                 ring[axis] = (-float(g + t + self.BOX_REACH), size, list(a))
+            elif name == "ring_cuts":
+                reach = self.cfar.guard[1] + self.cfar.train[1]
+                if a.ndim != 2 or a.shape[1] != 5 or np.any(a[:, 0] != np.rint(a[:, 0])) \
+                        or np.any((a[:, 0] < 0) | (a[:, 0] >= (reach + 1) ** 2)) or np.any(a[:, 1:] <= 0.0):
+                    raise ValueError(f"table {name}: shape {a.shape} or a cut or value not allowed; expected (k, 5) "
+                                     f"with cut keys in 0..{(reach + 1) ** 2 - 1} and positive values")
+                cut = {int(row[0]): tuple(float(v) for v in row[1:]) for row in a}
             elif not name.endswith("_grid"):
                 raise ValueError(f"table {name}: not a table this statistic builds")
         self._pd_tables.update(pd)
         self.__dict__.setdefault("_mask_tables", {}).update(mask)
         self.__dict__.setdefault("_ring_tables", {}).update(ring)
+        self.__dict__.setdefault("_cuts", {}).update(cut)
 
     def threshold_mean(self) -> float:
         """The mean threshold in units of σ²: α·E[Z]/N_T."""
