@@ -81,11 +81,15 @@ def _glint(z: np.ndarray, x: np.ndarray, field: np.ndarray, inv: np.ndarray, mar
 
 
 def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½))."""
+    """Where the chain sees each scatterer: (range bin in [0, N), Doppler bin in [−M/2, M/2), d·sinθ in [−½, ½)).
+
+    The range bin is that of its peak in the chain's map: its range plus the range–Doppler coupling of its true
+    speed (``RadarPreset.range_rate_coupling_s``; 0.014 bin per m/s on mimo12), which the chain takes out again
+    with the speed it measures; so the straddle, the cells and the resolution are those the chain has."""
     p = preset
     n_r = p.num_range_bins
     m = p.num_chirps
-    rb = np.mod(scat.range_m / p.range_resolution_m, n_r)
+    rb = np.mod((scat.range_m + scat.range_rate_mps * p.range_rate_coupling_s) / p.range_resolution_m, n_r)
     vb = np.mod(scat.range_rate_mps / p.doppler_bin_mps + m / 2, m) - m / 2
     u = ambiguity.spatial_frequency(p, scat.azimuth_rad)
     return rb, vb, u
@@ -140,9 +144,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     c_v = _glint(z, vb, field, inv, 0.5)
     c_u = _glint(z, u, field, inv, 0.5 * beam)
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
-    # what the chain's coupling correction with the aliased speed leaves in the range (RadarPreset.range_rate_coupling_s)
-    c_alias = np.bincount(inv, weights=amp ** 2 * (scat.range_rate_mps - vb * p.doppler_bin_mps),
-                          minlength=uniq.size) / wsafe
+    # the speed the chain measures (aliased), with which it takes the coupling out of the peak's range
+    # (RadarPreset.range_rate_coupling_s): the peak sits at the true speed's coupling, so a wrapped speed leaves some
+    c_alias = np.bincount(inv, weights=amp ** 2 * (vb * p.doppler_bin_mps), minlength=uniq.size) / wsafe
     lo = np.full(uniq.size, np.iinfo(np.int64).max)
     hi = np.full(uniq.size, np.iinfo(np.int64).min)
     np.minimum.at(lo, inv, scat.actor_index)
@@ -152,32 +156,67 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
     peak, energy = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
     rd = (uniq // n_a)
-    # the range–Doppler test on the summed energy of each range–Doppler cell's peaks
-    rd_u, rd_inv = np.unique(rd[peak], return_inverse=True)
-    rd_inv = rd_inv.ravel()
-    e_rd = np.bincount(rd_inv, weights=energy[peak], minlength=rd_u.size)
-    # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
-    # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
+    idx = np.flatnonzero(peak)
+    cells_rd, grp = np.unique(rd[idx], return_inverse=True)
+    grp = grp.ravel()
     # each scatterer's energy as its cell's coherent sum realised it this frame (the fade |Σ|²/Σ|a|², mean 1):
     # a bridge deck of many reflectors fades and surges from frame to frame, and so does what it puts into a
-    # neighbour's ring (the mean alone would mask the neighbour in every frame where the chain masks it in few)
-    interference = statistic.ring_interference(rd_u % m, rd_u // m, np.mod(vb, m), rb,
-                                               statistic.energy(rho) * fade[inv],
-                                               (m, n_r))
-    hit_rd, stat_rd = statistic.draw(e_rd, rng, interference)
-    top = np.zeros(rd_u.size)
-    np.maximum.at(top, rd_inv, energy[peak])
-    idx = np.flatnonzero(peak)
-    keep = hit_rd[rd_inv] & (energy[idx] >= top[rd_inv] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
-    idx, share = idx[keep], energy[idx[keep]] / np.maximum(e_rd[rd_inv[keep]], 1e-300)
-    measured = np.maximum(stat_rd[rd_inv[keep]] - statistic.n_channels, 1e-30) * share   # energy estimate
-    rho_peak = c_rho[idx]
+    # neighbour's map cells and ring (the mean alone would mask the neighbour in every frame where the chain masks
+    # it in few)
+    e_scat = statistic.energy(rho) * fade[inv]
+    pos_d = np.mod(vb, m)
+    # the chain looks for local maxima of the range–Doppler map before it looks at angles: a range–Doppler cell
+    # whose map rises towards a stronger neighbour's lobe (at any angle: the map sums the channels) is no peak, and
+    # what it holds reaches the chain only as one more source in the snapshot of the peak whose lobe covers it
+    # (reported at that peak's range and speed, with the power that peak's cell receives from it): a car beside a
+    # strong one a few range bins nearer is lost in its skirt
+    top_cell = _top_of_groups(idx, grp, energy[idx], cells_rd.size)
+    host = _rd_hosts(statistic, cells_rd, c_v[top_cell], c_r[top_cell], pos_d, rb, e_scat, m, n_r)
+    e_peak = energy[idx].copy()
+    gain = np.ones(idx.size)                      # the power a peak's source leaves at its host's cell, over its own
+    scat_rd, scat_amp = rd[inv], np.ones(k)       # each scatterer's range–Doppler cell in the snapshots, and weight
+    if np.any(host != np.arange(cells_rd.size)):
+        moved = host[grp] != grp
+        gain[moved] = _moved_gain(statistic, cells_rd[grp[moved]], cells_rd[host[grp[moved]]],
+                                  np.mod(c_v[idx[moved]], m), c_r[idx[moved]], m, n_r)
+        e_peak *= gain
+        grp = host[grp]
+        old = np.minimum(np.searchsorted(cells_rd, scat_rd), cells_rd.size - 1)
+        hidden = (cells_rd[old] == scat_rd) & (host[old] != old)
+        scat_amp[hidden] = np.sqrt(_moved_gain(statistic, scat_rd[hidden], cells_rd[host[old[hidden]]],
+                                               pos_d[hidden], rb[hidden], m, n_r))
+        scat_rd = np.where(hidden, cells_rd[host[old]], scat_rd)
+        kept, grp = np.unique(grp, return_inverse=True)
+        grp = grp.ravel()
+        cells_rd = cells_rd[kept]
+        # a moved source within the beamformer's resolution of a stronger source of its host is one beam peak
+        # with it (:func:`_peaks` did so within each cell before); its energy goes to the stronger
+        live = _merge_in_angle(grp, c_u[idx] / beam, e_peak, moved, k_el)
+        idx, grp, gain = idx[live], grp[live], gain[live]
+        e_peak = e_peak[live]
+    # the range–Doppler test on the summed energy of each range–Doppler peak's sources
+    e_rd = np.bincount(grp, weights=e_peak, minlength=cells_rd.size)
+    # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
+    # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
+    interference = statistic.ring_interference(cells_rd % m, cells_rd // m, pos_d, rb, e_scat, (m, n_r))
+    hit_rd, stat_rd = statistic.draw(e_rd, rng, interference, cells_rd // m, n_r)
+    top = np.zeros(cells_rd.size)
+    np.maximum.at(top, grp, e_peak)
+    keep = hit_rd[grp] & (e_peak >= top[grp] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
+    # one range–Doppler peak is one range and one speed for all its sources (the chain fits the peak, then finds
+    # the angles in its snapshot): the energy-weighted glint of its sources, as the fit's likelihood weighs them
+    g_r, g_v, g_alias = _group_position(grp, e_peak, c_r[idx], c_v[idx], c_alias[idx], cells_rd.size, m, n_r)
+    idx, grp, e_peak, gain = idx[keep], grp[keep], e_peak[keep], gain[keep]
+    pos_r, pos_v, alias_v = g_r[grp], g_v[grp], g_alias[grp]
+    share = e_peak / np.maximum(e_rd[grp], 1e-300)
+    measured = np.maximum(stat_rd[grp] - statistic.n_channels, 1e-30) * share   # energy estimate
+    rho_peak = c_rho[idx] * gain
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
     er, ev, ea = chain_efficiency(snr_peak)
     nz = rng.standard_normal((3, idx.size))
-    est_r = np.mod((c_r[idx] + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
-                   * p.range_resolution_m + c_alias[idx] * p.range_rate_coupling_s, n_r * p.range_resolution_m)
-    est_v = (c_v[idx] + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]) \
+    est_r = np.mod((pos_r + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
+                   * p.range_resolution_m - alias_v * p.range_rate_coupling_s, n_r * p.range_resolution_m)
+    est_v = (pos_v + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]) \
         * p.doppler_bin_mps
     sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
     est_az = np.arcsin(sin_t) + ea * equation.crb_azimuth_rad(p, snr_peak, np.arcsin(sin_t)) * nz[2]
@@ -185,16 +224,17 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     if p.num_virtual < 2:       # one channel measures no angle: boresight, as the chain reports it
         sin_t, est_az = np.zeros(idx.size), np.zeros(idx.size)
     # the chain divides the window and straddle losses out of the measured energy
-    loss = statistic.energy(1.0, c_r[idx] - np.rint(c_r[idx]), c_v[idx] - np.rint(c_v[idx]))
+    loss = statistic.energy(1.0, pos_r - np.rint(pos_r), pos_v - np.rint(pos_v))
     snr_est = 10.0 * np.log10(measured / np.maximum(loss, 1e-30))
     # the angle each detection's reflector spans, from the snapshot its range–Doppler cell's scatterers sum to with
     # its peaks fitted out (the chain's estimator on the chain's snapshot: radarnode.dsp.spread)
-    rd_of = rd[inv]
-    cells, row = np.unique(rd[idx], return_inverse=True)
-    pos = np.minimum(np.searchsorted(cells, rd_of), max(cells.size - 1, 0))
-    inside = cells[pos] == rd_of if cells.size else np.zeros(k, dtype=bool)
+    # (a hidden cell's scatterers in their host's snapshot, weighted by the host cell's response to them)
+    cells, row = np.unique(cells_rd[grp], return_inverse=True)
+    pos = np.minimum(np.searchsorted(cells, scat_rd), max(cells.size - 1, 0))
+    inside = cells[pos] == scat_rd if cells.size else np.zeros(k, dtype=bool)
     snap = np.zeros((cells.size, k_el), dtype=np.complex128)
-    np.add.at(snap, pos[inside], z[inside, None] * np.exp(2j * np.pi * u[inside, None] * np.arange(k_el)[None, :]))
+    np.add.at(snap, pos[inside], (z * scat_amp)[inside, None]
+              * np.exp(2j * np.pi * u[inside, None] * np.arange(k_el)[None, :]))
     frac = spread.unexplained_fraction(snap, row.ravel(), c_u[idx] / p.element_spacing_wl, p.element_spacing_wl)
     spread_rad = spread.azimuth_spread(frac[row.ravel()], k_el, p.element_spacing_wl, est_az)
     det = Detections(est_r, est_v, est_az, snr_est - equation.snr_db(p, est_r, 0.0, power_reduction_db, est_az),
@@ -211,6 +251,116 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
                                         s.snr_db + HANN_SIDELOBE_DB, np.full(len(s), -1, dtype=np.int64)))
     parts.append(false_alarms(p, statistic, rng, power_reduction_db))
     return Detections.concat(parts)
+
+
+def _circular(x: np.ndarray, period: int) -> np.ndarray:
+    """``x`` wrapped into [−period/2, period/2)."""
+    return np.mod(x + period / 2.0, period) - period / 2.0
+
+
+def _top_of_groups(idx: np.ndarray, grp: np.ndarray, energy: np.ndarray, groups: int) -> np.ndarray:
+    """The strongest member ``idx[k]`` of every group ``grp[k]`` (shape (groups,)); ties go to the last."""
+    order = np.lexsort((energy, grp))
+    top = np.empty(groups, dtype=np.int64)
+    top[grp[order]] = idx[order]
+    return top
+
+
+def _moved_gain(statistic: DetectionStatistic, own_rd: np.ndarray, host_rd: np.ndarray, pos_d: np.ndarray,
+                pos_r: np.ndarray, m: int, n_r: int) -> np.ndarray:
+    """The power a source at (pos_d, pos_r) bins puts into its host's range–Doppler cell over what it puts into its
+    own (cells as range·m + Doppler)."""
+    k = statistic.power_response
+
+    def at(cell):
+        return k("d", _circular(cell % m - pos_d, m)) * k("r", _circular(cell // m - pos_r, n_r))
+    return at(host_rd) / np.maximum(at(own_rd), 1e-300)
+
+
+def _group_position(grp: np.ndarray, w: np.ndarray, r: np.ndarray, v: np.ndarray, alias: np.ndarray, groups: int,
+                    m: int, n_r: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per group, the ``w``-weighted mean of its sources' range bins ``r``, Doppler bins ``v`` and aliased speeds
+    ``alias``; range and Doppler taken about the group's strongest source (both axes circular). Shape (groups,)."""
+    top = _top_of_groups(np.arange(grp.size), grp, w, groups)
+    total = np.maximum(np.bincount(grp, weights=w, minlength=groups), 1e-300)
+
+    def mean(x, period):
+        ref = x[top]
+        return ref + np.bincount(grp, weights=w * _circular(x - ref[grp], period), minlength=groups) / total
+    return mean(r, n_r), mean(v, m), np.bincount(grp, weights=w * alias, minlength=groups) / total
+
+
+def _merge_in_angle(grp: np.ndarray, a: np.ndarray, energy: np.ndarray, moved: np.ndarray, n_beams: int
+                    ) -> np.ndarray:
+    """Which sources stay beam peaks where sources of one group ``grp`` (any of each pair ``moved``) lie within
+    RESOLUTION[2] beamwidths (``a``: angles in beamwidths) of a stronger one: the weaker is no peak and its energy
+    is added to the stronger (``energy`` is updated in place). Returns a bool mask over the sources."""
+    live = np.ones(grp.size, dtype=bool)
+    if grp.size < 2 or not moved.any():
+        return live
+    import scipy.spatial  # imported when first needed: a faster start
+    res = RESOLUTION[2]
+    # groups far apart on a first axis: pairs form only within a group; the angle axis is circular over the beams
+    box = np.array([float(grp.max() + 2) * 4.0, n_beams / res])
+    pts = np.stack([grp * 4.0, np.mod(a, n_beams) / res], axis=1)
+    pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0 - 1e-9, p=np.inf,
+                                                                           output_type="ndarray")
+    if pairs.size == 0:
+        return live
+    i, j = pairs[:, 0], pairs[:, 1]
+    pairs = pairs[moved[i] | moved[j]]
+    if pairs.size == 0:
+        return live
+    i, j = pairs[:, 0], pairs[:, 1]
+    stronger = np.where(energy[i] >= energy[j], i, j)
+    weaker = np.where(energy[i] >= energy[j], j, i)
+    weaker, first = np.unique(weaker, return_index=True)
+    np.add.at(energy, stronger[first], energy[weaker])
+    live[weaker] = False
+    return live
+
+
+def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.ndarray, peak_r: np.ndarray,
+              pos_d: np.ndarray, pos_r: np.ndarray, e_scat: np.ndarray, m: int, n_r: int) -> np.ndarray:
+    """For every range–Doppler cell holding peaks (cells as range·m + Doppler, shape (G,)), the cell that reports
+    them: itself where the noise-free map (every scatterer's on-bin energy ``e_scat`` at its position, through the
+    windows' response: :meth:`DetectionStatistic.map_power`) is at least as high there as in its eight neighbours,
+    as the chain's local-maximum test asks; otherwise the peak cell whose lobe puts the most power into it (its
+    strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe reaches keeps its own peaks. Shape (G,)."""
+    g = cells_rd.size
+    own = np.arange(g)
+    if g < 2:
+        return own
+    cd, cr = cells_rd % m, cells_rd // m
+    power = statistic.map_power(cd, cr, pos_d, pos_r, e_scat, (m, n_r))
+    is_peak = power[:, 4] >= power.max(axis=1)
+    # and, as :func:`_peaks` merges cells in all three axes, a peak within the chain's range–Doppler resolution
+    # of a stronger one (its strongest source's position) is no peak of its own at any angle: the chain's map,
+    # noise and all, has one peak there
+    res = np.asarray(RESOLUTION[:2], dtype=np.float64)
+    pk = np.flatnonzero(is_peak)
+    if pk.size > 1:
+        import scipy.spatial  # imported when first needed: a faster start
+        box = np.array([n_r / res[0], m / res[1]])
+        pts = np.mod(np.stack([peak_r[pk] / res[0], np.mod(peak_d[pk], m) / res[1]], axis=1), box)
+        pairs = scipy.spatial.cKDTree(pts, boxsize=box).query_pairs(1.0 - 1e-9, p=np.inf, output_type="ndarray")
+        if pairs.size:
+            a, b = pk[pairs[:, 0]], pk[pairs[:, 1]]
+            is_peak[np.where(power[a, 4] >= power[b, 4], b, a)] = False
+    if is_peak.all() or not is_peak.any():
+        return own
+    pk, hid = np.flatnonzero(is_peak), np.flatnonzero(~is_peak)
+    k = statistic.power_response
+    # each peak's on-bin energy from its cell's power and its strongest source's offset in that cell
+    centre = k("d", _circular(cd[pk] - peak_d[pk], m)) * k("r", _circular(cr[pk] - peak_r[pk], n_r))
+    on_bin = power[pk, 4] / np.maximum(centre, 1e-300)
+    lobe = (on_bin[None, :] * k("d", _circular(cd[hid][:, None] - peak_d[pk][None, :], m))
+            * k("r", _circular(cr[hid][:, None] - peak_r[pk][None, :], n_r)))          # (hidden, peaks)
+    best = np.argmax(lobe, axis=1)
+    reached = lobe[np.arange(hid.size), best] > 0.0
+    out = own.copy()
+    out[hid[reached]] = pk[best[reached]]
+    return out
 
 
 def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r: int, m: int, n_beams: int
