@@ -426,8 +426,28 @@ class DetectionStatistic:
             self._table_built()
         return out[0], out[1], out[2], out[3]
 
+    def cell_pairs(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
+                   shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
+        """(cell index, target index) of the cells and targets within the ring tables' reach of each other in both
+        axes, ±(guard + train + BOX_REACH) bins (a k-d tree on the circular map, the axes scaled to that reach):
+        what :meth:`ring_interference` sums over, and a superset of what :meth:`map_power` reads."""
+        (gd, gr), (td, tr) = self.cfar.guard, self.cfar.train
+        m, n = shape
+        cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
+        pos_d, pos_r = np.mod(np.asarray(pos_d, dtype=np.float64), m), np.mod(np.asarray(pos_r, dtype=np.float64), n)
+        if cell_d.size == 0 or pos_d.size == 0:
+            return np.zeros(0, dtype=np.intp), np.zeros(0, dtype=np.intp)
+        import scipy.spatial  # imported when first needed: a faster start
+        reach = np.array([gd + td + self.BOX_REACH, gr + tr + self.BOX_REACH], dtype=np.float64)
+        box = np.array([m, n], dtype=np.float64) / reach
+        cells = scipy.spatial.cKDTree(np.mod(np.stack([cell_d, cell_r], axis=1) / reach, box), boxsize=box)
+        targets = scipy.spatial.cKDTree(np.stack([pos_d, pos_r], axis=1) / reach % box, boxsize=box)
+        pairs = cells.sparse_distance_matrix(targets, 1.0, p=np.inf, output_type="ndarray")
+        return pairs["i"].astype(np.intp), pairs["j"].astype(np.intp)
+
     def ring_interference(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
-                          energy: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+                          energy: np.ndarray, shape: tuple[int, int],
+                          pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """Signal energy (over σ², summed over channels) that targets put into each test cell's training ring.
 
         A target of on-bin windowed energy E at (pos_d, pos_r) bins puts E·K_d(b − pos_d)·K_r(a − pos_r) into
@@ -443,6 +463,8 @@ class DetectionStatistic:
         pos_d, pos_r, energy : arrays, shape (T,)
             The targets' positions (bins, any real value) and on-bin windowed energies.
         shape : (doppler bins, range bins) of the map; both axes are taken as circular.
+        pairs : (cell index, target index) arrays, optional
+            :meth:`cell_pairs` of these cells and targets, if known.
 
         Returns
         -------
@@ -456,16 +478,9 @@ class DetectionStatistic:
         out = np.zeros(cell_d.size)
         if cell_d.size == 0 or pos_d.size == 0:
             return out
-        # only the pairs within the tables' reach (a k-d tree on the circular map, axes scaled to that reach)
-        import scipy.spatial  # imported when first needed: a faster start
-        reach = np.array([gd + td + self.BOX_REACH, gr + tr + self.BOX_REACH], dtype=np.float64)
-        box = np.array([m, n], dtype=np.float64) / reach
-        cells = scipy.spatial.cKDTree(np.mod(np.stack([cell_d, cell_r], axis=1) / reach, box), boxsize=box)
-        targets = scipy.spatial.cKDTree(np.stack([pos_d, pos_r], axis=1) / reach % box, boxsize=box)
-        pairs = cells.sparse_distance_matrix(targets, 1.0, p=np.inf, output_type="ndarray")
-        if pairs.size == 0:
+        i, j = self.cell_pairs(cell_d, cell_r, pos_d, pos_r, shape) if pairs is None else pairs
+        if i.size == 0:
             return out
-        i, j = pairs["i"], pairs["j"]
         dd = np.mod(pos_d[j] - cell_d[i] + m / 2.0, m) - m / 2.0
         dr = np.mod(pos_r[j] - cell_r[i] + n / 2.0, n) - n / 2.0
         return np.bincount(i, weights=self.ring_kernel(dd, dr, cell_r[i], n) * energy[j], minlength=cell_d.size)
@@ -534,12 +549,21 @@ class DetectionStatistic:
             reach = self.PEAK_REACH + 1
             grid = np.arange(-reach * 32, reach * 32 + 1) / 32.0
             w = self.doppler_window if axis == "d" else self.range_window
-            tables[axis] = (grid, straddle_gain(w, grid))
-        grid, table = tables[axis]
-        return np.interp(delta, grid, table, left=0.0, right=0.0)
+            value = np.zeros(grid.size + 1)                     # one zero after the grid: "outside"
+            value[:grid.size] = straddle_gain(w, grid)
+            slope = np.zeros(grid.size + 1)
+            slope[:grid.size - 1] = np.diff(value[:grid.size])
+            tables[axis] = (float(grid[0]), grid.size, value, slope)
+        x0, size, value, slope = tables[axis]
+        # linear interpolation on the uniform grid by index (no binary search: the peak test reads it often)
+        pos = (np.asarray(delta, dtype=np.float64) - x0) * 32.0
+        outside = ~((pos >= 0.0) & (pos <= size - 1))            # beyond the table (±inf, NaN too): zero
+        cell = np.where(outside, size, np.floor(np.where(outside, 0.0, pos))).astype(np.intp)
+        return np.take(value, cell) + np.where(outside, 0.0, pos - cell) * np.take(slope, cell)
 
     def map_power(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
-                  energy: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+                  energy: np.ndarray, shape: tuple[int, int],
+                  pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
         """The noise-free non-coherent map the chain's peak search reads, at each cell and its eight neighbours:
         Σ_j E_j·K_d(b − pos_d,j)·K_r(a − pos_r,j) over the targets j within PEAK_REACH bins in both axes (their
         powers add: targets in different cells or at different angles add no coherent cross term to a sum over
@@ -547,7 +571,8 @@ class DetectionStatistic:
         column 4 the cell itself; both axes wrap, as the chain's local-maximum test does.
 
         Parameters as :meth:`ring_interference`: cells (C,) as integers, targets' positions (T,) in bins and their
-        on-bin windowed energies (T,); ``shape`` = (Doppler bins, range bins).
+        on-bin windowed energies (T,); ``shape`` = (Doppler bins, range bins); ``pairs``: :meth:`cell_pairs` of
+        these cells and targets, if known.
         """
         m, n = shape
         cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
@@ -555,17 +580,14 @@ class DetectionStatistic:
         out = np.zeros((cell_d.size, 9))
         if cell_d.size == 0 or pos_d.size == 0:
             return out
-        import scipy.spatial  # imported when first needed: a faster start
-        reach = float(self.PEAK_REACH)
-        box = np.array([m, n], dtype=np.float64) / reach
-        cells = scipy.spatial.cKDTree(np.mod(np.stack([cell_d, cell_r], axis=1) / reach, box), boxsize=box)
-        targets = scipy.spatial.cKDTree(np.stack([pos_d, pos_r], axis=1) / reach % box, boxsize=box)
-        pairs = cells.sparse_distance_matrix(targets, 1.0, p=np.inf, output_type="ndarray")
-        if pairs.size == 0:
-            return out
-        i, j = pairs["i"], pairs["j"]
+        i, j = self.cell_pairs(cell_d, cell_r, pos_d, pos_r, shape) if pairs is None else pairs
         dd = np.mod(cell_d[i] - pos_d[j] + m / 2.0, m) - m / 2.0
         dr = np.mod(cell_r[i] - pos_r[j] + n / 2.0, n) - n / 2.0
+        near = (np.abs(dd) <= self.PEAK_REACH) & (np.abs(dr) <= self.PEAK_REACH)
+        if not near.all():
+            i, j, dd, dr = i[near], j[near], dd[near], dr[near]
+        if i.size == 0:
+            return out
         steps = np.array([-1.0, 0.0, 1.0])
         kd = self.power_response("d", dd[:, None] + steps[None, :])                    # (pairs, 3)
         kr = self.power_response("r", dr[:, None] + steps[None, :])

@@ -171,7 +171,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # (reported at that peak's range and speed, with the power that peak's cell receives from it): a car beside a
     # strong one a few range bins nearer is lost in its skirt
     top_cell = _top_of_groups(idx, grp, energy[idx], cells_rd.size)
-    host = _rd_hosts(statistic, cells_rd, c_v[top_cell], c_r[top_cell], pos_d, rb, e_scat, m, n_r)
+    # the cells and scatterers near each other, for the peak test and the CA-CFAR rings below
+    pairs = statistic.cell_pairs(cells_rd % m, cells_rd // m, pos_d, rb, (m, n_r))
+    host = _rd_hosts(statistic, cells_rd, c_v[top_cell], c_r[top_cell], pos_d, rb, e_scat, m, n_r, pairs)
     e_peak = energy[idx].copy()
     gain = np.ones(idx.size)                      # the power a peak's source leaves at its host's cell, over its own
     scat_rd, scat_amp = rd[inv], np.ones(k)       # each scatterer's range–Doppler cell in the snapshots, and weight
@@ -189,6 +191,10 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
         kept, grp = np.unique(grp, return_inverse=True)
         grp = grp.ravel()
         cells_rd = cells_rd[kept]
+        where = np.full(host.size, -1)
+        where[kept] = np.arange(kept.size)
+        on = where[pairs[0]] >= 0
+        pairs = (where[pairs[0][on]], pairs[1][on])
         # a moved source within the beamformer's resolution of a stronger source of its host is one beam peak
         # with it (:func:`_peaks` did so within each cell before); its energy goes to the stronger
         live = _merge_in_angle(grp, c_u[idx] / beam, e_peak, moved, k_el)
@@ -198,7 +204,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     e_rd = np.bincount(grp, weights=e_peak, minlength=cells_rd.size)
     # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
     # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
-    interference = statistic.ring_interference(cells_rd % m, cells_rd // m, pos_d, rb, e_scat, (m, n_r))
+    interference = statistic.ring_interference(cells_rd % m, cells_rd // m, pos_d, rb, e_scat, (m, n_r), pairs)
     hit_rd, stat_rd = statistic.draw(e_rd, rng, interference, cells_rd // m, n_r)
     top = np.zeros(cells_rd.size)
     np.maximum.at(top, grp, e_peak)
@@ -321,18 +327,20 @@ def _merge_in_angle(grp: np.ndarray, a: np.ndarray, energy: np.ndarray, moved: n
 
 
 def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.ndarray, peak_r: np.ndarray,
-              pos_d: np.ndarray, pos_r: np.ndarray, e_scat: np.ndarray, m: int, n_r: int) -> np.ndarray:
+              pos_d: np.ndarray, pos_r: np.ndarray, e_scat: np.ndarray, m: int, n_r: int,
+              pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """For every range–Doppler cell holding peaks (cells as range·m + Doppler, shape (G,)), the cell that reports
     them: itself where the noise-free map (every scatterer's on-bin energy ``e_scat`` at its position, through the
     windows' response: :meth:`DetectionStatistic.map_power`) is at least as high there as in its eight neighbours,
     as the chain's local-maximum test asks; otherwise the peak cell whose lobe puts the most power into it (its
-    strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe reaches keeps its own peaks. Shape (G,)."""
+    strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe reaches keeps its own peaks. ``pairs``: the
+    statistic's :meth:`~DetectionStatistic.cell_pairs` of these cells and the scatterers, if known. Shape (G,)."""
     g = cells_rd.size
     own = np.arange(g)
     if g < 2:
         return own
     cd, cr = cells_rd % m, cells_rd // m
-    power = statistic.map_power(cd, cr, pos_d, pos_r, e_scat, (m, n_r))
+    power = statistic.map_power(cd, cr, pos_d, pos_r, e_scat, (m, n_r), pairs)
     is_peak = power[:, 4] >= power.max(axis=1)
     # and, as :func:`_peaks` merges cells in all three axes, a peak within the chain's range–Doppler resolution
     # of a stronger one (its strongest source's position) is no peak of its own at any angle: the chain's map,
@@ -354,8 +362,12 @@ def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.nd
     # each peak's on-bin energy from its cell's power and its strongest source's offset in that cell
     centre = k("d", _circular(cd[pk] - peak_d[pk], m)) * k("r", _circular(cr[pk] - peak_r[pk], n_r))
     on_bin = power[pk, 4] / np.maximum(centre, 1e-300)
-    lobe = (on_bin[None, :] * k("d", _circular(cd[hid][:, None] - peak_d[pk][None, :], m))
-            * k("r", _circular(cr[hid][:, None] - peak_r[pk][None, :], n_r)))          # (hidden, peaks)
+    dd = _circular(cd[hid][:, None] - peak_d[pk][None, :], m)                          # (hidden, peaks)
+    dr = _circular(cr[hid][:, None] - peak_r[pk][None, :], n_r)
+    reach = statistic.PEAK_REACH + 1
+    near = (np.abs(dd) <= reach) & (np.abs(dr) <= reach)
+    lobe = np.zeros(dd.shape)
+    lobe[near] = on_bin[np.nonzero(near)[1]] * k("d", dd[near]) * k("r", dr[near])
     best = np.argmax(lobe, axis=1)
     reached = lobe[np.arange(hid.size), best] > 0.0
     out = own.copy()
