@@ -162,10 +162,9 @@ def test_the_tracker_initiates_a_joined_body_with_its_fitted_velocity():
 
 def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
     """front_and_corners: the car overtaking on the left passes 2 m from the left corner radar. Its objects there come
-    one at a time, two in a few cycles (before the joining: up to three, born and lost every few cycles). Since the
-    detection level reports every source of one range–Doppler peak at that peak's range and speed, as the chain
-    does (two parts of the car 13° apart at one speed, which no rigid motion explains), the tracker holds two
-    objects in 10 of 73 cycles here; the signal level, on nearly the same detections, in 4 of 71."""
+    one at a time, two in a few cycles (before the joining: up to three, born and lost every few cycles): 4 of 73
+    cycles, where the signal level has 4 of 71 (the detection level reports every source of one range–Doppler peak
+    at that peak's range and speed, as the chain does: two parts of the car 13° apart at one speed)."""
     sc = load_scenario(SCENARIOS / "front_and_corners.yaml")
     node = make_node(sc, fidelity="detection")
     corner, per_cycle = node.nodes[1], []
@@ -180,7 +179,7 @@ def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
     run_node(node, clock=SimulatedClock(), sinks=[lambda m: None], vehicle=ego_motion_for(node))
     seen = np.array([c for c in per_cycle if c > 0])
     assert seen.size >= 20
-    assert seen.max() <= 2 and np.mean(seen > 1) <= 0.15
+    assert seen.max() <= 2 and np.mean(seen > 1) <= 0.1
 
 
 def test_the_mahalanobis_distance_by_ldl_is_the_inverse_covariances():

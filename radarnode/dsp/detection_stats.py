@@ -554,6 +554,7 @@ class DetectionStatistic:
             slope = np.zeros(grid.size + 1)
             slope[:grid.size - 1] = np.diff(value[:grid.size])
             tables[axis] = (float(grid[0]), grid.size, value, slope)
+            self._table_built()
         x0, size, value, slope = tables[axis]
         # linear interpolation on the uniform grid by index (no binary search: the peak test reads it often)
         pos = (np.asarray(delta, dtype=np.float64) - x0) * 32.0
@@ -563,7 +564,8 @@ class DetectionStatistic:
 
     def map_power(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
                   energy: np.ndarray, shape: tuple[int, int],
-                  pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                  pairs: tuple[np.ndarray, np.ndarray] | None = None, owner: np.ndarray | None = None
+                  ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The noise-free non-coherent map the chain's peak search reads, at each cell and its eight neighbours:
         Σ_j E_j·K_d(b − pos_d,j)·K_r(a − pos_r,j) over the targets j within PEAK_REACH bins in both axes (their
         powers add: targets in different cells or at different angles add no coherent cross term to a sum over
@@ -572,14 +574,17 @@ class DetectionStatistic:
 
         Parameters as :meth:`ring_interference`: cells (C,) as integers, targets' positions (T,) in bins and their
         on-bin windowed energies (T,); ``shape`` = (Doppler bins, range bins); ``pairs``: :meth:`cell_pairs` of
-        these cells and targets, if known.
+        these cells and targets, if known. With ``owner`` (T,), the cell each target belongs to (an index into
+        the cells, −1 for none), returns (the map, the part of it the cell's own targets put there).
         """
         m, n = shape
         cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
         pos_d, pos_r = np.mod(np.asarray(pos_d, dtype=np.float64), m), np.mod(np.asarray(pos_r, dtype=np.float64), n)
         out = np.zeros((cell_d.size, 9))
+        own = np.zeros((cell_d.size, 9))
+        done = out if owner is None else (out, own)
         if cell_d.size == 0 or pos_d.size == 0:
-            return out
+            return done
         i, j = self.cell_pairs(cell_d, cell_r, pos_d, pos_r, shape) if pairs is None else pairs
         dd = np.mod(cell_d[i] - pos_d[j] + m / 2.0, m) - m / 2.0
         dr = np.mod(cell_r[i] - pos_r[j] + n / 2.0, n) - n / 2.0
@@ -587,14 +592,39 @@ class DetectionStatistic:
         if not near.all():
             i, j, dd, dr = i[near], j[near], dd[near], dr[near]
         if i.size == 0:
-            return out
+            return done
         steps = np.array([-1.0, 0.0, 1.0])
         kd = self.power_response("d", dd[:, None] + steps[None, :])                    # (pairs, 3)
         kr = self.power_response("r", dr[:, None] + steps[None, :])
         contrib = (kd[:, :, None] * kr[:, None, :]).reshape(-1, 9) * energy[j][:, None]
         for col in range(9):
             out[:, col] = np.bincount(i, weights=contrib[:, col], minlength=cell_d.size)
-        return out
+        if owner is None:
+            return out
+        mine = np.asarray(owner)[j] == i
+        for col in range(9):
+            own[:, col] = np.bincount(i[mine], weights=contrib[mine, col], minlength=cell_d.size)
+        return out, own
+
+    def response_envelope(self, axis: str, distance: np.ndarray) -> np.ndarray:
+        """An upper bound of :meth:`power_response` over every offset at least ``distance`` − 1.5 bins away
+        (|distance|; what a target that far puts into a cell's 3 × 3 neighbourhood at any straddle), 1 within
+        1.5 bins and 0 beyond PEAK_REACH + 1. Tabulated per whole bin, read at the bin below."""
+        tables = self.__dict__.setdefault("_envelope_tables", {})
+        if axis not in tables:
+            reach = self.PEAK_REACH + 1
+            x = np.arange(0.0, reach + 1e-9, 1.0 / 32.0)
+            k = self.power_response(axis, x)
+            tail = np.maximum.accumulate(k[::-1])[::-1]          # max of K beyond each offset
+            starts = np.arange(reach + 2) - 1.5
+            env = np.ones(starts.size)
+            far = starts > 0.0
+            env[far] = tail[np.minimum(np.searchsorted(x, starts[far]), x.size - 1)]
+            env[-1] = 0.0
+            tables[axis] = env
+        env = tables[axis]
+        d = np.minimum(np.floor(np.abs(np.asarray(distance, dtype=np.float64))), env.size - 1)
+        return env[np.where(np.isfinite(d), d, env.size - 1).astype(np.intp)]
 
     def _guard_train(self, axis: str) -> tuple[int, int]:
         """The CFAR's guard and training cells along one axis ("d": Doppler, "r": range)."""
@@ -736,6 +766,8 @@ class DetectionStatistic:
             out[f"mask{swerling}"] = table
         for axis, (_, _, cols) in self.__dict__.get("_ring_tables", {}).items():
             out[f"ring_{axis}"] = np.stack(cols)
+        for axis, (_, _, value, slope) in self.__dict__.get("_response_tables", {}).items():
+            out[f"response_{axis}"] = np.stack([value, slope])
         cuts = self.__dict__.get("_cuts", {})
         if cuts:            # the rings the range edges cut: (key, α, mean, variance, count) a row
             out["ring_cuts"] = np.array([(float(k), *v) for k, v in sorted(cuts.items())], dtype=np.float64)
@@ -744,7 +776,7 @@ class DetectionStatistic:
     def import_tables(self, arrays: dict[str, np.ndarray]) -> None:
         """Take tables that :meth:`export_tables` gave (for this :meth:`table_key`); raises ValueError, leaving
         this statistic as it was, where a name, shape or value is not what this statistic builds."""
-        pd, mask, ring, cut = {}, {}, {}, {}
+        pd, mask, ring, cut, response = {}, {}, {}, {}, {}
         for name, a in arrays.items():
             a = np.asarray(a)
             if a.dtype != np.float64 or not np.all(np.isfinite(a)):
@@ -768,6 +800,11 @@ class DetectionStatistic:
                 if a.shape != (4, size + 1):
                     raise ValueError(f"table {name}: shape {a.shape}; expected {(4, size + 1)}")
                 ring[axis] = (-float(g + t + self.BOX_REACH), size, list(a))
+            elif name in ("response_d", "response_r"):
+                size = 64 * (self.PEAK_REACH + 1) + 1
+                if a.shape != (2, size + 1):
+                    raise ValueError(f"table {name}: shape {a.shape}; expected {(2, size + 1)}")
+                response[name[-1]] = (-float(self.PEAK_REACH + 1), size, a[0].copy(), a[1].copy())
             elif name == "ring_cuts":
                 reach = self.cfar.guard[1] + self.cfar.train[1]
                 if a.ndim != 2 or a.shape[1] != 5 or np.any(a[:, 0] != np.rint(a[:, 0])) \
@@ -781,6 +818,7 @@ class DetectionStatistic:
         self.__dict__.setdefault("_mask_tables", {}).update(mask)
         self.__dict__.setdefault("_ring_tables", {}).update(ring)
         self.__dict__.setdefault("_cuts", {}).update(cut)
+        self.__dict__.setdefault("_response_tables", {}).update(response)
 
     def threshold_mean(self) -> float:
         """The mean threshold in units of σ²: α·E[Z]/N_T."""

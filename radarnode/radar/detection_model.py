@@ -173,10 +173,13 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     top_cell = _top_of_groups(idx, grp, energy[idx], cells_rd.size)
     # the cells and scatterers near each other, for the peak test and the CA-CFAR rings below
     pairs = statistic.cell_pairs(cells_rd % m, cells_rd // m, pos_d, rb, (m, n_r))
-    host = _rd_hosts(statistic, cells_rd, c_v[top_cell], c_r[top_cell], pos_d, rb, e_scat, m, n_r, pairs)
+    scat_rd = rd[inv]                             # each scatterer's range–Doppler cell, and its group there
+    slot = np.minimum(np.searchsorted(cells_rd, scat_rd), cells_rd.size - 1)
+    owner = np.where(cells_rd[slot] == scat_rd, slot, -1)
+    host = _rd_hosts(statistic, cells_rd, c_v[top_cell], c_r[top_cell], pos_d, rb, e_scat, m, n_r, pairs, owner)
     e_peak = energy[idx].copy()
     gain = np.ones(idx.size)                      # the power a peak's source leaves at its host's cell, over its own
-    scat_rd, scat_amp = rd[inv], np.ones(k)       # each scatterer's range–Doppler cell in the snapshots, and weight
+    scat_amp = np.ones(k)                         # each scatterer's weight in its cell's snapshot
     if np.any(host != np.arange(cells_rd.size)):
         moved = host[grp] != grp
         gain[moved] = _moved_gain(statistic, cells_rd[grp[moved]], cells_rd[host[grp[moved]]],
@@ -328,20 +331,25 @@ def _merge_in_angle(grp: np.ndarray, a: np.ndarray, energy: np.ndarray, moved: n
 
 def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.ndarray, peak_r: np.ndarray,
               pos_d: np.ndarray, pos_r: np.ndarray, e_scat: np.ndarray, m: int, n_r: int,
-              pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+              pairs: tuple[np.ndarray, np.ndarray] | None = None, owner: np.ndarray | None = None) -> np.ndarray:
     """For every range–Doppler cell holding peaks (cells as range·m + Doppler, shape (G,)), the cell that reports
     them: itself where the noise-free map (every scatterer's on-bin energy ``e_scat`` at its position, through the
     windows' response: :meth:`DetectionStatistic.map_power`) is at least as high there as in its eight neighbours,
     as the chain's local-maximum test asks; otherwise the peak cell whose lobe puts the most power into it (its
     strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe reaches keeps its own peaks. ``pairs``: the
-    statistic's :meth:`~DetectionStatistic.cell_pairs` of these cells and the scatterers, if known. Shape (G,)."""
+    statistic's :meth:`~DetectionStatistic.cell_pairs` of these cells and the scatterers, if known; ``owner``: each
+    scatterer's cell among ``cells_rd`` (−1: none). Shape (G,)."""
     g = cells_rd.size
     own = np.arange(g)
     if g < 2:
         return own
     cd, cr = cells_rd % m, cells_rd // m
-    power = statistic.map_power(cd, cr, pos_d, pos_r, e_scat, (m, n_r), pairs)
-    is_peak = power[:, 4] >= power.max(axis=1)
+    power, mine = statistic.map_power(cd, cr, pos_d, pos_r, e_scat, (m, n_r), pairs, owner)
+    # no peak where the map rises towards a neighbour because of the others (they put more there than the cell's
+    # own scatterers do; where its own lobe is the higher there, as at a half-bin straddle, the peak is its own
+    # one cell on)
+    rises = (power > power[:, 4:5]) & (power - mine > mine)
+    is_peak = ~rises.any(axis=1)
     # and, as :func:`_peaks` merges cells in all three axes, a peak within the chain's range–Doppler resolution
     # of a stronger one (its strongest source's position) is no peak of its own at any angle: the chain's map,
     # noise and all, has one peak there

@@ -680,6 +680,15 @@ class ObjectModel:
                  & observable[:, :, None] & observable[:, None, :] & ~np.eye(n, dtype=bool)[None])
         if not close.any():
             return out
+        # only the pairs where the other's lobe can reach 1e-4 of the actor's energy in its neighbourhood (its own
+        # response there is 8e-4 of it or more: less could not hide it)
+        t, i, j = np.nonzero(close)
+        gap = np.maximum(np.maximum(dr[t, i, j] - 0.0, -(dr[t, i, j] + ext[t, j])), 0.0)   # to j's range extent
+        strong = (e_near[t, j] * stat.response_envelope("d", dd[t, i, j]) * stat.response_envelope("r", gap)
+                  >= 1e-4 * e_near[t, i])
+        close[t[~strong], i[~strong], j[~strong]] = False
+        if not close.any():
+            return out
         t, i, j = np.nonzero(close)
         k = stat.power_response
         steps = np.array([-1.0, 0.0, 1.0])
@@ -700,11 +709,16 @@ class ObjectModel:
         a = (e_near[..., None, None] * own_d[..., :, None] * own_r[..., None, :]).reshape(-1, 9)
         loss = a[:, 4:5] - a                         # what the actor's own response loses towards each neighbour
         gain = b - b[:, 4:5]                         # what the others' gain there
+        # hidden towards a neighbour where the map rises (the others gain more than the actor loses) because of the
+        # others (they put more there than the actor does; where the actor's own lobe is the higher there, as at a
+        # half-bin straddle, the peak is its own one cell on); with the two powers' exponential factors X_i, X_j
+        # the ratio r = X_j/X_i must exceed both, P(r > t) = 1/(1 + t)
         steady = np.broadcast_to(sc.swerling == 0, (t_n, n)).reshape(-1, 1)
-        with np.errstate(invalid="ignore", divide="ignore"):
-            p_peak = np.where(gain <= 0.0, 1.0, np.where(steady, (loss >= gain).astype(np.float64),
-                                                          loss / np.maximum(loss + gain, 1e-300)))
-        peak = p_peak.min(axis=1)
+        risen = (gain > 0.0) & (b > 0.0)
+        t_need = np.full(a.shape, np.inf)
+        t_need[risen] = np.maximum(np.maximum(loss[risen], 0.0) / gain[risen], a[risen] / b[risen])
+        p_hidden = np.where(steady, (t_need < 1.0).astype(np.float64), 1.0 / (1.0 + t_need))
+        peak = 1.0 - p_hidden.max(axis=1)
         if np.all(peak >= 1.0):
             return out
         # the hiding actor: the one whose response puts the most power into the actor's cell; in its cell the
