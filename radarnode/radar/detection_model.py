@@ -4,6 +4,7 @@ What the signal chain does to scatterers, without the signal:
 
 1. each scatterer lands where the chain would see it: range bin modulo the
    unambiguous range (the range FFT is circular: never a negative range),
+   moved by the range–Doppler coupling of its true speed as in the chain's map,
    Doppler bin modulo ±v_max, spatial frequency d·sinθ modulo one cycle
    (grating lobes where the element spacing exceeds λ/2), power through the
    element pattern (:func:`radarnode.radar.equation.pattern_db`);
@@ -15,16 +16,25 @@ What the signal chain does to scatterers, without the signal:
    range bins, Doppler bins and beamwidths) are one peak: a cell that has a
    stronger cell within the resolution in every axis gives its power to the
    strongest of them, as a weak tone inside a strong main lobe does;
-4. each range–Doppler cell is tested with the same statistic as the chain:
+4. the chain looks for local maxima of the range–Doppler map, which sums the
+   channels, before it looks at angles: a range–Doppler cell whose map rises
+   towards a neighbour because of other scatterers' lobes, or that lies within
+   the range–Doppler resolution of a stronger peak, at any angle, is no peak
+   (:func:`_rd_hosts`); its angle peaks become sources of the snapshot of the
+   peak whose lobe covers it, with the power that peak's cell receives from
+   them (a car beside a strong one a couple of range bins nearer is lost);
+5. each range–Doppler peak is tested with the same statistic as the chain:
    :meth:`DetectionStatistic.draw` — the non-coherent sum of N channels
-   against the exact CA-CFAR threshold, raised by the energy every scatterer
+   against the exact CA-CFAR threshold (the ring the map's first and last
+   range bins cut, as the chain has it), raised by the energy every scatterer
    puts into the cell's training ring (:meth:`DetectionStatistic.ring_interference`:
    the chain's masking of a weak target beside a strong one); in a detected
-   cell every angle peak within the chain's DOA floor is a detection;
-5. the estimates carry noise at the chain's measured efficiency times the
+   peak every angle source within the chain's DOA floor is a detection, all at
+   the peak's range and speed (the energy-weighted glint of its sources);
+6. the estimates carry noise at the chain's measured efficiency times the
    Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
-6. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
+7. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
 
 The measured constants live in :mod:`radarnode.radar.calibration`.
 
