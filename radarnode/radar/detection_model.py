@@ -18,9 +18,8 @@ What the signal chain does to scatterers, without the signal:
    strongest of them, as a weak tone inside a strong main lobe does;
 4. the chain looks for local maxima of the range–Doppler map, which sums the
    channels, before it looks at angles: a range–Doppler cell whose map rises
-   towards a neighbour because of other scatterers' lobes, or that lies within
-   the range–Doppler resolution of a stronger peak, at any angle, is no peak
-   (:func:`_rd_hosts`); its angle peaks become sources of the snapshot of the
+   towards a neighbour because of other scatterers' lobes, at any angle, is no
+   peak (:func:`_rd_hosts`); its angle peaks become sources of the snapshot of the
    peak whose lobe covers it, with the power that peak's cell receives from
    them (a car beside a strong one a couple of range bins nearer is lost);
 5. each range–Doppler peak is tested with the same statistic as the chain:
@@ -208,11 +207,6 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
         where[kept] = np.arange(kept.size)
         on = where[pairs[0]] >= 0
         pairs = (where[pairs[0][on]], pairs[1][on])
-        # a moved source within the beamformer's resolution of a stronger source of its host is one beam peak
-        # with it (:func:`_peaks` did so within each cell before); its energy goes to the stronger
-        live = _merge_in_angle(grp, c_u[idx] / beam, e_peak, moved, k_el)
-        idx, grp, gain = idx[live], grp[live], gain[live]
-        e_peak = e_peak[live]
     # the range–Doppler test on the summed energy of each range–Doppler peak's sources
     e_rd = np.bincount(grp, weights=e_peak, minlength=cells_rd.size)
     # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
@@ -309,44 +303,16 @@ def _group_position(grp: np.ndarray, w: np.ndarray, r: np.ndarray, v: np.ndarray
     return mean(r, n_r), mean(v, m), np.bincount(grp, weights=w * alias, minlength=groups) / total
 
 
-def _merge_in_angle(grp: np.ndarray, a: np.ndarray, energy: np.ndarray, moved: np.ndarray, n_beams: int
-                    ) -> np.ndarray:
-    """Which sources stay beam peaks where sources of one group ``grp`` (any of each pair ``moved``) lie within
-    RESOLUTION[2] beamwidths (``a``: angles in beamwidths) of a stronger one: the weaker is no peak and its energy
-    is added to the stronger (``energy`` is updated in place). Returns a bool mask over the sources."""
-    live = np.ones(grp.size, dtype=bool)
-    if grp.size < 2 or not moved.any():
-        return live
-    import scipy.spatial  # imported when first needed: a faster start
-    res = RESOLUTION[2]
-    # groups far apart on a first axis: pairs form only within a group; the angle axis is circular over the beams
-    box = np.array([float(grp.max() + 2) * 4.0, n_beams / res])
-    pts = np.stack([grp * 4.0, np.mod(a, n_beams) / res], axis=1)
-    pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0 - 1e-9, p=np.inf,
-                                                                           output_type="ndarray")
-    if pairs.size == 0:
-        return live
-    i, j = pairs[:, 0], pairs[:, 1]
-    pairs = pairs[moved[i] | moved[j]]
-    if pairs.size == 0:
-        return live
-    i, j = pairs[:, 0], pairs[:, 1]
-    stronger = np.where(energy[i] >= energy[j], i, j)
-    weaker = np.where(energy[i] >= energy[j], j, i)
-    weaker, first = np.unique(weaker, return_index=True)
-    np.add.at(energy, stronger[first], energy[weaker])
-    live[weaker] = False
-    return live
-
-
 def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.ndarray, peak_r: np.ndarray,
               pos_d: np.ndarray, pos_r: np.ndarray, e_scat: np.ndarray, m: int, n_r: int,
               pairs: tuple[np.ndarray, np.ndarray] | None = None, owner: np.ndarray | None = None) -> np.ndarray:
     """For every range–Doppler cell holding peaks (cells as range·m + Doppler, shape (G,)), the cell that reports
     them: itself where the noise-free map (every scatterer's on-bin energy ``e_scat`` at its position, through the
     windows' response: :meth:`DetectionStatistic.map_power`) is at least as high there as in its eight neighbours,
-    as the chain's local-maximum test asks; otherwise the peak cell whose lobe puts the most power into it (its
-    strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe reaches keeps its own peaks. ``pairs``: the
+    as the chain's local-maximum test asks, or where it rises only towards a neighbour the cell's own scatterers
+    put more into than the others (a half-bin straddle: its peak is its own, one cell on); otherwise the peak cell
+    whose lobe puts the most power into it (its strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe
+    reaches keeps its own peaks. ``pairs``: the
     statistic's :meth:`~DetectionStatistic.cell_pairs` of these cells and the scatterers, if known; ``owner``: each
     scatterer's cell among ``cells_rd`` (−1: none). Shape (G,)."""
     g = cells_rd.size
@@ -360,19 +326,6 @@ def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.nd
     # one cell on)
     rises = (power > power[:, 4:5]) & (power - mine > mine)
     is_peak = ~rises.any(axis=1)
-    # and, as :func:`_peaks` merges cells in all three axes, a peak within the chain's range–Doppler resolution
-    # of a stronger one (its strongest source's position) is no peak of its own at any angle: the chain's map,
-    # noise and all, has one peak there
-    res = np.asarray(RESOLUTION[:2], dtype=np.float64)
-    pk = np.flatnonzero(is_peak)
-    if pk.size > 1:
-        import scipy.spatial  # imported when first needed: a faster start
-        box = np.array([n_r / res[0], m / res[1]])
-        pts = np.mod(np.stack([peak_r[pk] / res[0], np.mod(peak_d[pk], m) / res[1]], axis=1), box)
-        pairs = scipy.spatial.cKDTree(pts, boxsize=box).query_pairs(1.0 - 1e-9, p=np.inf, output_type="ndarray")
-        if pairs.size:
-            a, b = pk[pairs[:, 0]], pk[pairs[:, 1]]
-            is_peak[np.where(power[a, 4] >= power[b, 4], b, a)] = False
     if is_peak.all() or not is_peak.any():
         return own
     pk, hid = np.flatnonzero(is_peak), np.flatnonzero(~is_peak)
