@@ -162,9 +162,9 @@ def test_the_tracker_initiates_a_joined_body_with_its_fitted_velocity():
 
 def test_a_car_passing_a_corner_radar_is_one_object_at_the_detection_level():
     """front_and_corners: the car overtaking on the left passes 2 m from the left corner radar. Its objects there come
-    one at a time, two in a few cycles (before the joining: up to three, born and lost every few cycles): 4 of 73
-    cycles, where the signal level has 4 of 71 (the detection level reports every source of one range–Doppler peak
-    at that peak's range and speed, as the chain does: two parts of the car 13° apart at one speed)."""
+    one at a time, two in a few cycles (before the joining: up to three, born and lost every few cycles): 2 of 74
+    cycles, where the signal level has 4 of 71 (the detection level reports every angle peak of one range–Doppler
+    cell at that cell's range and speed, as the chain does: two parts of the car 13° apart at one speed)."""
     sc = load_scenario(SCENARIOS / "front_and_corners.yaml")
     node = make_node(sc, fidelity="detection")
     corner, per_cycle = node.nodes[1], []

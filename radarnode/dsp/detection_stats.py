@@ -430,7 +430,7 @@ class DetectionStatistic:
                    shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
         """(cell index, target index) of the cells and targets within the ring tables' reach of each other in both
         axes, ±(guard + train + BOX_REACH) bins (a k-d tree on the circular map, the axes scaled to that reach):
-        what :meth:`ring_interference` sums over, and a superset of what :meth:`map_power` reads."""
+        what :meth:`ring_interference` sums over."""
         (gd, gr), (td, tr) = self.cfar.guard, self.cfar.train
         m, n = shape
         cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
@@ -446,8 +446,7 @@ class DetectionStatistic:
         return pairs["i"].astype(np.intp), pairs["j"].astype(np.intp)
 
     def ring_interference(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
-                          energy: np.ndarray, shape: tuple[int, int],
-                          pairs: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
+                          energy: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
         """Signal energy (over σ², summed over channels) that targets put into each test cell's training ring.
 
         A target of on-bin windowed energy E at (pos_d, pos_r) bins puts E·K_d(b − pos_d)·K_r(a − pos_r) into
@@ -463,8 +462,6 @@ class DetectionStatistic:
         pos_d, pos_r, energy : arrays, shape (T,)
             The targets' positions (bins, any real value) and on-bin windowed energies.
         shape : (doppler bins, range bins) of the map; both axes are taken as circular.
-        pairs : (cell index, target index) arrays, optional
-            :meth:`cell_pairs` of these cells and targets, if known.
 
         Returns
         -------
@@ -478,7 +475,7 @@ class DetectionStatistic:
         out = np.zeros(cell_d.size)
         if cell_d.size == 0 or pos_d.size == 0:
             return out
-        i, j = self.cell_pairs(cell_d, cell_r, pos_d, pos_r, shape) if pairs is None else pairs
+        i, j = self.cell_pairs(cell_d, cell_r, pos_d, pos_r, shape)
         if i.size == 0:
             return out
         dd = np.mod(pos_d[j] - cell_d[i] + m / 2.0, m) - m / 2.0
@@ -535,96 +532,6 @@ class DetectionStatistic:
             keep = x >= -top
             tables["r"] = (x[keep], c[keep], total)
         return tables["r"]
-
-    #: the range–Doppler peak test reads the window's power response this many bins either side (Hann: below
-    #: −70 dB there, under the weakest target a 100 dB one can hide)
-    PEAK_REACH = 12
-
-    def power_response(self, axis: str, delta: np.ndarray) -> np.ndarray:
-        """K(δ): the power a target puts into a cell ``delta`` bins from it along one axis ("d": Doppler, "r":
-        range), relative to on-bin (:func:`straddle_gain` at any offset, main lobe and sidelobes), tabulated on a
-        1/32-bin grid to ±(PEAK_REACH + 1) bins and read by linear interpolation; 0 beyond."""
-        tables = self.__dict__.setdefault("_response_tables", {})
-        if axis not in tables:
-            reach = self.PEAK_REACH + 1
-            grid = np.arange(-reach * 32, reach * 32 + 1) / 32.0
-            w = self.doppler_window if axis == "d" else self.range_window
-            value = np.zeros(grid.size + 1)                     # one zero after the grid: "outside"
-            value[:grid.size] = straddle_gain(w, grid)
-            slope = np.zeros(grid.size + 1)
-            slope[:grid.size - 1] = np.diff(value[:grid.size])
-            tables[axis] = (float(grid[0]), grid.size, value, slope)
-            self._table_built()
-        x0, size, value, slope = tables[axis]
-        # linear interpolation on the uniform grid by index (no binary search: the peak test reads it often)
-        pos = (np.asarray(delta, dtype=np.float64) - x0) * 32.0
-        outside = ~((pos >= 0.0) & (pos <= size - 1))            # beyond the table (±inf, NaN too): zero
-        cell = np.where(outside, size, np.floor(np.where(outside, 0.0, pos))).astype(np.intp)
-        return np.take(value, cell) + np.where(outside, 0.0, pos - cell) * np.take(slope, cell)
-
-    def map_power(self, cell_d: np.ndarray, cell_r: np.ndarray, pos_d: np.ndarray, pos_r: np.ndarray,
-                  energy: np.ndarray, shape: tuple[int, int],
-                  pairs: tuple[np.ndarray, np.ndarray] | None = None, owner: np.ndarray | None = None
-                  ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
-        """The noise-free non-coherent map the chain's peak search reads, at each cell and its eight neighbours:
-        Σ_j E_j·K_d(b − pos_d,j)·K_r(a − pos_r,j) over the targets j within PEAK_REACH bins in both axes (their
-        powers add: targets in different cells or at different angles add no coherent cross term to a sum over
-        channels on average). Shape (C, 9), the neighbours in the order (Doppler −1, 0, 1) × (range −1, 0, 1),
-        column 4 the cell itself; both axes wrap, as the chain's local-maximum test does.
-
-        Parameters as :meth:`ring_interference`: cells (C,) as integers, targets' positions (T,) in bins and their
-        on-bin windowed energies (T,); ``shape`` = (Doppler bins, range bins); ``pairs``: :meth:`cell_pairs` of
-        these cells and targets, if known. With ``owner`` (T,), the cell each target belongs to (an index into
-        the cells, −1 for none), returns (the map, the part of it the cell's own targets put there).
-        """
-        m, n = shape
-        cell_d, cell_r = np.asarray(cell_d, dtype=np.float64), np.asarray(cell_r, dtype=np.float64)
-        pos_d, pos_r = np.mod(np.asarray(pos_d, dtype=np.float64), m), np.mod(np.asarray(pos_r, dtype=np.float64), n)
-        out = np.zeros((cell_d.size, 9))
-        own = np.zeros((cell_d.size, 9))
-        done = out if owner is None else (out, own)
-        if cell_d.size == 0 or pos_d.size == 0:
-            return done
-        i, j = self.cell_pairs(cell_d, cell_r, pos_d, pos_r, shape) if pairs is None else pairs
-        dd = np.mod(cell_d[i] - pos_d[j] + m / 2.0, m) - m / 2.0
-        dr = np.mod(cell_r[i] - pos_r[j] + n / 2.0, n) - n / 2.0
-        near = (np.abs(dd) <= self.PEAK_REACH) & (np.abs(dr) <= self.PEAK_REACH)
-        if not near.all():
-            i, j, dd, dr = i[near], j[near], dd[near], dr[near]
-        if i.size == 0:
-            return done
-        steps = np.array([-1.0, 0.0, 1.0])
-        kd = self.power_response("d", dd[:, None] + steps[None, :])                    # (pairs, 3)
-        kr = self.power_response("r", dr[:, None] + steps[None, :])
-        contrib = (kd[:, :, None] * kr[:, None, :]).reshape(-1, 9) * energy[j][:, None]
-        for col in range(9):
-            out[:, col] = np.bincount(i, weights=contrib[:, col], minlength=cell_d.size)
-        if owner is None:
-            return out
-        mine = np.asarray(owner)[j] == i
-        for col in range(9):
-            own[:, col] = np.bincount(i[mine], weights=contrib[mine, col], minlength=cell_d.size)
-        return out, own
-
-    def response_envelope(self, axis: str, distance: np.ndarray) -> np.ndarray:
-        """An upper bound of :meth:`power_response` over every offset at least ``distance`` − 1.5 bins away
-        (|distance|; what a target that far puts into a cell's 3 × 3 neighbourhood at any straddle), 1 within
-        1.5 bins and 0 beyond PEAK_REACH + 1. Tabulated per whole bin, read at the bin below."""
-        tables = self.__dict__.setdefault("_envelope_tables", {})
-        if axis not in tables:
-            reach = self.PEAK_REACH + 1
-            x = np.arange(0.0, reach + 1e-9, 1.0 / 32.0)
-            k = self.power_response(axis, x)
-            tail = np.maximum.accumulate(k[::-1])[::-1]          # max of K beyond each offset
-            starts = np.arange(reach + 2) - 1.5
-            env = np.ones(starts.size)
-            far = starts > 0.0
-            env[far] = tail[np.minimum(np.searchsorted(x, starts[far]), x.size - 1)]
-            env[-1] = 0.0
-            tables[axis] = env
-        env = tables[axis]
-        d = np.minimum(np.floor(np.abs(np.asarray(distance, dtype=np.float64))), env.size - 1)
-        return env[np.where(np.isfinite(d), d, env.size - 1).astype(np.intp)]
 
     def _guard_train(self, axis: str) -> tuple[int, int]:
         """The CFAR's guard and training cells along one axis ("d": Doppler, "r": range)."""
@@ -766,8 +673,6 @@ class DetectionStatistic:
             out[f"mask{swerling}"] = table
         for axis, (_, _, cols) in self.__dict__.get("_ring_tables", {}).items():
             out[f"ring_{axis}"] = np.stack(cols)
-        for axis, (_, _, value, slope) in self.__dict__.get("_response_tables", {}).items():
-            out[f"response_{axis}"] = np.stack([value, slope])
         cuts = self.__dict__.get("_cuts", {})
         if cuts:            # the rings the range edges cut: (key, α, mean, variance, count) a row
             out["ring_cuts"] = np.array([(float(k), *v) for k, v in sorted(cuts.items())], dtype=np.float64)
@@ -776,7 +681,7 @@ class DetectionStatistic:
     def import_tables(self, arrays: dict[str, np.ndarray]) -> None:
         """Take tables that :meth:`export_tables` gave (for this :meth:`table_key`); raises ValueError, leaving
         this statistic as it was, where a name, shape or value is not what this statistic builds."""
-        pd, mask, ring, cut, response = {}, {}, {}, {}, {}
+        pd, mask, ring, cut = {}, {}, {}, {}
         for name, a in arrays.items():
             a = np.asarray(a)
             if a.dtype != np.float64 or not np.all(np.isfinite(a)):
@@ -800,11 +705,6 @@ class DetectionStatistic:
                 if a.shape != (4, size + 1):
                     raise ValueError(f"table {name}: shape {a.shape}; expected {(4, size + 1)}")
                 ring[axis] = (-float(g + t + self.BOX_REACH), size, list(a))
-            elif name in ("response_d", "response_r"):
-                size = 64 * (self.PEAK_REACH + 1) + 1
-                if a.shape != (2, size + 1):
-                    raise ValueError(f"table {name}: shape {a.shape}; expected {(2, size + 1)}")
-                response[name[-1]] = (-float(self.PEAK_REACH + 1), size, a[0].copy(), a[1].copy())
             elif name == "ring_cuts":
                 reach = self.cfar.guard[1] + self.cfar.train[1]
                 if a.ndim != 2 or a.shape[1] != 5 or np.any(a[:, 0] != np.rint(a[:, 0])) \
@@ -818,7 +718,6 @@ class DetectionStatistic:
         self.__dict__.setdefault("_mask_tables", {}).update(mask)
         self.__dict__.setdefault("_ring_tables", {}).update(ring)
         self.__dict__.setdefault("_cuts", {}).update(cut)
-        self.__dict__.setdefault("_response_tables", {}).update(response)
 
     def threshold_mean(self) -> float:
         """The mean threshold in units of σ²: α·E[Z]/N_T."""

@@ -16,26 +16,27 @@ What the signal chain does to scatterers, without the signal:
    range bins, Doppler bins and beamwidths) are one peak: a cell that has a
    stronger cell within the resolution in every axis gives its power to the
    strongest of them, as a weak tone inside a strong main lobe does;
-4. the chain looks for local maxima of the range–Doppler map, which sums the
-   channels, before it looks at angles: a range–Doppler cell whose map rises
-   towards a neighbour because of other scatterers' lobes, at any angle, is no
-   peak (:func:`_rd_hosts`); its angle peaks become sources of the snapshot of the
-   peak whose lobe covers it, with the power that peak's cell receives from
-   them (a car beside a strong one a couple of range bins nearer is lost);
-5. each range–Doppler peak is tested with the same statistic as the chain:
+4. each range–Doppler cell is tested with the same statistic as the chain:
    :meth:`DetectionStatistic.draw` — the non-coherent sum of N channels
    against the exact CA-CFAR threshold (the ring the map's first and last
    range bins cut, as the chain has it), raised by the energy every scatterer
    puts into the cell's training ring (:meth:`DetectionStatistic.ring_interference`:
    the chain's masking of a weak target beside a strong one); in a detected
-   peak every angle source within the chain's DOA floor is a detection, all at
-   the peak's range and speed (the energy-weighted glint of its sources);
-6. the estimates carry noise at the chain's measured efficiency times the
+   cell every angle peak within the chain's DOA floor is a detection, all at
+   the cell's one range and speed (the energy-weighted glint of its peaks: the
+   chain fits the peak, then finds the angles in its snapshot);
+5. the estimates carry noise at the chain's measured efficiency times the
    Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
-7. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
+6. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
 
 The measured constants live in :mod:`radarnode.radar.calibration`.
+
+Not modelled: the chain looks for local maxima of the range–Doppler map, which
+sums the channels, before it looks at angles, so a weaker target on a stronger
+one's lobe a couple of range bins away is lost at any angle; this model keeps
+targets at different angles apart (BENCHMARKS.md, "A weaker target behind a
+stronger one at another angle", measured).
 
 Range sidelobes of strong cells are off by default: in the signal chain the
 main lobe sits in the sidelobe cell's CA-CFAR ring and raises its threshold
@@ -170,60 +171,28 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     grp = grp.ravel()
     # each scatterer's energy as its cell's coherent sum realised it this frame (the fade |Σ|²/Σ|a|², mean 1):
     # a bridge deck of many reflectors fades and surges from frame to frame, and so does what it puts into a
-    # neighbour's map cells and ring (the mean alone would mask the neighbour in every frame where the chain masks
-    # it in few)
+    # neighbour's ring (the mean alone would mask the neighbour in every frame where the chain masks it in few)
     e_scat = statistic.energy(rho) * fade[inv]
     pos_d = np.mod(vb, m)
-    # the chain looks for local maxima of the range–Doppler map before it looks at angles: a range–Doppler cell
-    # whose map rises towards a stronger neighbour's lobe (at any angle: the map sums the channels) is no peak, and
-    # what it holds reaches the chain only as one more source in the snapshot of the peak whose lobe covers it
-    # (reported at that peak's range and speed, with the power that peak's cell receives from it): a car beside a
-    # strong one a few range bins nearer is lost in its skirt
-    top_cell = _top_of_groups(idx, grp, energy[idx], cells_rd.size)
-    # the cells and scatterers near each other, for the peak test and the CA-CFAR rings below
-    pairs = statistic.cell_pairs(cells_rd % m, cells_rd // m, pos_d, rb, (m, n_r))
-    scat_rd = rd[inv]                             # each scatterer's range–Doppler cell, and its group there
-    slot = np.minimum(np.searchsorted(cells_rd, scat_rd), cells_rd.size - 1)
-    owner = np.where(cells_rd[slot] == scat_rd, slot, -1)
-    host = _rd_hosts(statistic, cells_rd, c_v[top_cell], c_r[top_cell], pos_d, rb, e_scat, m, n_r, pairs, owner)
-    e_peak = energy[idx].copy()
-    gain = np.ones(idx.size)                      # the power a peak's source leaves at its host's cell, over its own
-    scat_amp = np.ones(k)                         # each scatterer's weight in its cell's snapshot
-    if np.any(host != np.arange(cells_rd.size)):
-        moved = host[grp] != grp
-        gain[moved] = _moved_gain(statistic, cells_rd[grp[moved]], cells_rd[host[grp[moved]]],
-                                  np.mod(c_v[idx[moved]], m), c_r[idx[moved]], m, n_r)
-        e_peak *= gain
-        grp = host[grp]
-        old = np.minimum(np.searchsorted(cells_rd, scat_rd), cells_rd.size - 1)
-        hidden = (cells_rd[old] == scat_rd) & (host[old] != old)
-        scat_amp[hidden] = np.sqrt(_moved_gain(statistic, scat_rd[hidden], cells_rd[host[old[hidden]]],
-                                               pos_d[hidden], rb[hidden], m, n_r))
-        scat_rd = np.where(hidden, cells_rd[host[old]], scat_rd)
-        kept, grp = np.unique(grp, return_inverse=True)
-        grp = grp.ravel()
-        cells_rd = cells_rd[kept]
-        where = np.full(host.size, -1)
-        where[kept] = np.arange(kept.size)
-        on = where[pairs[0]] >= 0
-        pairs = (where[pairs[0][on]], pairs[1][on])
-    # the range–Doppler test on the summed energy of each range–Doppler peak's sources
+    e_peak = energy[idx]
+    scat_rd = rd[inv]                             # each scatterer's range–Doppler cell (its snapshot's)
+    # the range–Doppler test on the summed energy of each range–Doppler cell's peaks
     e_rd = np.bincount(grp, weights=e_peak, minlength=cells_rd.size)
     # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
     # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
-    interference = statistic.ring_interference(cells_rd % m, cells_rd // m, pos_d, rb, e_scat, (m, n_r), pairs)
+    interference = statistic.ring_interference(cells_rd % m, cells_rd // m, pos_d, rb, e_scat, (m, n_r))
     hit_rd, stat_rd = statistic.draw(e_rd, rng, interference, cells_rd // m, n_r)
     top = np.zeros(cells_rd.size)
     np.maximum.at(top, grp, e_peak)
     keep = hit_rd[grp] & (e_peak >= top[grp] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
-    # one range–Doppler peak is one range and one speed for all its sources (the chain fits the peak, then finds
-    # the angles in its snapshot): the energy-weighted glint of its sources, as the fit's likelihood weighs them
+    # one range–Doppler cell is one range and one speed for all its angle peaks (the chain fits the peak, then
+    # finds the angles in its snapshot): the energy-weighted glint of its peaks, as the fit's likelihood weighs them
     g_r, g_v, g_alias = _group_position(grp, e_peak, c_r[idx], c_v[idx], c_alias[idx], cells_rd.size, m, n_r)
-    idx, grp, e_peak, gain = idx[keep], grp[keep], e_peak[keep], gain[keep]
+    idx, grp, e_peak = idx[keep], grp[keep], e_peak[keep]
     pos_r, pos_v, alias_v = g_r[grp], g_v[grp], g_alias[grp]
     share = e_peak / np.maximum(e_rd[grp], 1e-300)
     measured = np.maximum(stat_rd[grp] - statistic.n_channels, 1e-30) * share   # energy estimate
-    rho_peak = c_rho[idx] * gain
+    rho_peak = c_rho[idx]
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
     er, ev, ea = chain_efficiency(snr_peak)
     nz = rng.standard_normal((3, idx.size))
@@ -241,13 +210,11 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     snr_est = 10.0 * np.log10(measured / np.maximum(loss, 1e-30))
     # the angle each detection's reflector spans, from the snapshot its range–Doppler cell's scatterers sum to with
     # its peaks fitted out (the chain's estimator on the chain's snapshot: radarnode.dsp.spread)
-    # (a hidden cell's scatterers in their host's snapshot, weighted by the host cell's response to them)
     cells, row = np.unique(cells_rd[grp], return_inverse=True)
     pos = np.minimum(np.searchsorted(cells, scat_rd), max(cells.size - 1, 0))
     inside = cells[pos] == scat_rd if cells.size else np.zeros(k, dtype=bool)
     snap = np.zeros((cells.size, k_el), dtype=np.complex128)
-    np.add.at(snap, pos[inside], (z * scat_amp)[inside, None]
-              * np.exp(2j * np.pi * u[inside, None] * np.arange(k_el)[None, :]))
+    np.add.at(snap, pos[inside], z[inside, None] * np.exp(2j * np.pi * u[inside, None] * np.arange(k_el)[None, :]))
     frac = spread.unexplained_fraction(snap, row.ravel(), c_u[idx] / p.element_spacing_wl, p.element_spacing_wl)
     spread_rad = spread.azimuth_spread(frac[row.ravel()], k_el, p.element_spacing_wl, est_az)
     det = Detections(est_r, est_v, est_az, snr_est - equation.snr_db(p, est_r, 0.0, power_reduction_db, est_az),
@@ -279,17 +246,6 @@ def _top_of_groups(idx: np.ndarray, grp: np.ndarray, energy: np.ndarray, groups:
     return top
 
 
-def _moved_gain(statistic: DetectionStatistic, own_rd: np.ndarray, host_rd: np.ndarray, pos_d: np.ndarray,
-                pos_r: np.ndarray, m: int, n_r: int) -> np.ndarray:
-    """The power a source at (pos_d, pos_r) bins puts into its host's range–Doppler cell over what it puts into its
-    own (cells as range·m + Doppler)."""
-    k = statistic.power_response
-
-    def at(cell):
-        return k("d", _circular(cell % m - pos_d, m)) * k("r", _circular(cell // m - pos_r, n_r))
-    return at(host_rd) / np.maximum(at(own_rd), 1e-300)
-
-
 def _group_position(grp: np.ndarray, w: np.ndarray, r: np.ndarray, v: np.ndarray, alias: np.ndarray, groups: int,
                     m: int, n_r: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per group, the ``w``-weighted mean of its sources' range bins ``r``, Doppler bins ``v`` and aliased speeds
@@ -301,49 +257,6 @@ def _group_position(grp: np.ndarray, w: np.ndarray, r: np.ndarray, v: np.ndarray
         ref = x[top]
         return ref + np.bincount(grp, weights=w * _circular(x - ref[grp], period), minlength=groups) / total
     return mean(r, n_r), mean(v, m), np.bincount(grp, weights=w * alias, minlength=groups) / total
-
-
-def _rd_hosts(statistic: DetectionStatistic, cells_rd: np.ndarray, peak_d: np.ndarray, peak_r: np.ndarray,
-              pos_d: np.ndarray, pos_r: np.ndarray, e_scat: np.ndarray, m: int, n_r: int,
-              pairs: tuple[np.ndarray, np.ndarray] | None = None, owner: np.ndarray | None = None) -> np.ndarray:
-    """For every range–Doppler cell holding peaks (cells as range·m + Doppler, shape (G,)), the cell that reports
-    them: itself where the noise-free map (every scatterer's on-bin energy ``e_scat`` at its position, through the
-    windows' response: :meth:`DetectionStatistic.map_power`) is at least as high there as in its eight neighbours,
-    as the chain's local-maximum test asks, or where it rises only towards a neighbour the cell's own scatterers
-    put more into than the others (a half-bin straddle: its peak is its own, one cell on); otherwise the peak cell
-    whose lobe puts the most power into it (its strongest source at ``peak_d``, ``peak_r``). A cell no peak's lobe
-    reaches keeps its own peaks. ``pairs``: the
-    statistic's :meth:`~DetectionStatistic.cell_pairs` of these cells and the scatterers, if known; ``owner``: each
-    scatterer's cell among ``cells_rd`` (−1: none). Shape (G,)."""
-    g = cells_rd.size
-    own = np.arange(g)
-    if g < 2:
-        return own
-    cd, cr = cells_rd % m, cells_rd // m
-    power, mine = statistic.map_power(cd, cr, pos_d, pos_r, e_scat, (m, n_r), pairs, owner)
-    # no peak where the map rises towards a neighbour because of the others (they put more there than the cell's
-    # own scatterers do; where its own lobe is the higher there, as at a half-bin straddle, the peak is its own
-    # one cell on)
-    rises = (power > power[:, 4:5]) & (power - mine > mine)
-    is_peak = ~rises.any(axis=1)
-    if is_peak.all() or not is_peak.any():
-        return own
-    pk, hid = np.flatnonzero(is_peak), np.flatnonzero(~is_peak)
-    k = statistic.power_response
-    # each peak's on-bin energy from its cell's power and its strongest source's offset in that cell
-    centre = k("d", _circular(cd[pk] - peak_d[pk], m)) * k("r", _circular(cr[pk] - peak_r[pk], n_r))
-    on_bin = power[pk, 4] / np.maximum(centre, 1e-300)
-    dd = _circular(cd[hid][:, None] - peak_d[pk][None, :], m)                          # (hidden, peaks)
-    dr = _circular(cr[hid][:, None] - peak_r[pk][None, :], n_r)
-    reach = statistic.PEAK_REACH + 1
-    near = (np.abs(dd) <= reach) & (np.abs(dr) <= reach)
-    lobe = np.zeros(dd.shape)
-    lobe[near] = on_bin[np.nonzero(near)[1]] * k("d", dd[near]) * k("r", dr[near])
-    best = np.argmax(lobe, axis=1)
-    reached = lobe[np.arange(hid.size), best] > 0.0
-    out = own.copy()
-    out[hid[reached]] = pk[best[reached]]
-    return out
 
 
 def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r: int, m: int, n_beams: int

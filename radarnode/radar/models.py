@@ -178,24 +178,22 @@ class SignalModel(ScattererModel):
 
 
 def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> np.ndarray:
-    """Actors with a scatterer within the chain's range–Doppler resolution (plus a bin of margin) of another actor's
-    or of a post's, in range and Doppler at once (where they appear, aliasing included), at any angle: shape
-    (n_actors,) bool.
+    """Actors with a scatterer within the chain's resolution (plus a bin of margin) of another actor's or of a
+    post's, in range, Doppler and angle at once (where they appear, aliasing included): shape (n_actors,) bool.
 
-    Those are the actors whose detections the object level cannot give: the chain finds its peaks in the
-    range–Doppler map, which sums the channels, before it looks at angles, so what lies that close merges into
-    one peak, splits its snapshot or hides in a stronger one's lobe, whatever its angle
-    (:data:`radarnode.radar.calibration.RESOLUTION`; the detection level models it).
+    Those are the actors whose detections the object level cannot give: the
+    chain merges or splits them (:data:`radarnode.radar.calibration.RESOLUTION`).
     """
     out = np.zeros(n_actors, dtype=bool)
     if len(scat) < 2:
         return out
     p = preset
-    rb, vb, _ = detection_model.apparent_positions(p, scat)
-    res = np.asarray(RESOLUTION[:2], dtype=np.float64) + 1.0
+    rb, vb, u = detection_model.apparent_positions(p, scat)
+    res = np.asarray(RESOLUTION, dtype=np.float64) + np.array([1.0, 1.0, 0.5])
+    beam = 1.0 / p.num_virtual
     n_r = p.num_range_bins
-    box = np.array([n_r / res[0], p.num_chirps / res[1]])
-    pts = np.stack([rb / res[0], np.mod(vb, p.num_chirps) / res[1]], axis=1)
+    box = np.array([n_r / res[0], p.num_chirps / res[1], p.num_virtual / res[2]])
+    pts = np.stack([rb / res[0], np.mod(vb, p.num_chirps) / res[1], np.mod(u / beam, p.num_virtual) / res[2]], axis=1)
     import scipy.spatial  # imported when first needed: a faster start
     pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
@@ -213,10 +211,9 @@ class AutoModel:
     Per frame and per actor: the object level's detection of it (the chain's
     Pd law, its measured accuracy and the same velocity aliasing, by
     construction and checked by ``benchmarks/calibration.py``) unless its
-    scatterers come within the chain's measured range–Doppler resolution of
-    another actor's or of a guardrail post's, at any angle — there the
-    detection level renders them, because the chain merges, splits or hides
-    what lies that close in its range–Doppler map. Posts and clutter always
+    scatterers come within the chain's measured resolution of another actor's
+    or of a guardrail post's — there the detection level renders them, because
+    the chain merges or splits what lies that close. Posts and clutter always
     go through the detection level (the object level has no model of them,
     and the chain reports them as clusters and stationary objects). RF impairments
     exist only in the time-domain signal: a scene that asks for them runs the

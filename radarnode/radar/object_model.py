@@ -40,7 +40,7 @@ from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, MIN_BODY_M, R
                                           orientation_sigma_rad)
 from radarnode.radar import ambiguity, elevation, equation
 from radarnode.radar.chain import DspChain
-from radarnode.radar.calibration import DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
+from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
 from radarnode.radar.options import SignalOptions
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
@@ -498,7 +498,7 @@ class ObjectModel:
         stat = self.statistic
         pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
             np.where(sc.swerling == 0, stat.pd_of_snr(snr, 0), stat.pd_of_snr(snr, 1))
-        pd = pd * self._masking(view, rng_m, snr, observable) * self._not_hidden(view, rng_m, snr, observable)
+        pd = pd * self._masking(view, rng_m, snr, observable)
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
         er, ev, ea = chain_efficiency(snr)
@@ -636,109 +636,6 @@ class ObjectModel:
             return stat.masking_factor(snr, interference, 1)
         return np.where(sc.swerling == 0, stat.masking_factor(snr, interference, 0),
                         stat.masking_factor(snr, interference, 1))
-
-    #: samples of an extended actor's range extent in the range–Doppler peak test (:meth:`_not_hidden`)
-    EXTENT_SAMPLES = 4
-
-    def _not_hidden(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
-        """The probability that an actor's range–Doppler cell is a peak of the chain's map, or that it reaches the
-        chain through the peak that hides it; shape (T, n), 1 for an actor alone.
-
-        The chain finds local maxima of the range–Doppler map, which sums the channels, before it looks at
-        angles (:func:`radarnode.radar.detection_model.detect` renders it scatterer by scatterer): an actor whose
-        cell lies on the rising lobe of a stronger actor's response a few range bins nearer (a car beside the
-        sensor, spread over its visible outline from its nearest point out to about as far beyond its centre) is
-        no peak, at any angle. It still reaches the chain as a source in that actor's snapshot if the power its
-        response leaves in that actor's cell is within the DOA floor of that actor's own (DOA_FLOOR_DB).
-
-        The noise-free map's powers add (different cells and angles add no coherent cross term on average); an
-        actor's own response is taken at its nearest point, the others' over EXTENT_SAMPLES points of their range
-        extent weighted as (R_near/R)⁴. The cell is a peak where, against each neighbour, what the actor's own
-        response loses (a) is at least what the others' gain (b); with its power and theirs fluctuating as one
-        exponential factor each (Swerling 1) that holds with probability a/(a + b), taken at the worst
-        neighbour (a steady actor: 1 or 0); the hidden actor's power in its host's cell against the host's own
-        (l against h, times the floor) likewise with l/(l + h).
-        """
-        p, stat, sc = self.preset, self.statistic, self.scene
-        t_n, n = snr.shape
-        out = np.ones(snr.shape)
-        if n < 2:
-            return out
-        m, n_r = p.num_chirps, p.num_range_bins
-        c, s_ = np.cos(view.azimuth_rad), np.sin(view.azimuth_rad)
-        v_rad = view.vx_mps * c + view.vy_mps * s_
-        pos_d = np.mod(v_rad / p.doppler_bin_mps, m)
-        pos_r = np.mod((rng_m + v_rad * p.range_rate_coupling_s) / p.range_resolution_m, n_r)
-        near = np.maximum(rng_m, 0.1)
-        far = np.maximum(2.0 * np.hypot(view.centre_x_m, view.centre_y_m) - near, near)
-        ext = (far - near) / p.range_resolution_m
-        e_near = np.where(observable, stat.energy(10.0 ** (snr / 10.0)), 0.0)                  # (T, n), on-bin
-        reach = float(stat.PEAK_REACH)
-        dd = np.mod(pos_d[:, None, :] - pos_d[:, :, None] + m / 2.0, m) - m / 2.0             # (T, i, j)
-        dr = np.mod(pos_r[:, None, :] - pos_r[:, :, None] + n_r / 2.0, n_r) - n_r / 2.0
-        close = ((np.abs(dd) <= reach) & (dr >= -reach) & (dr <= reach + ext[:, None, :])
-                 & observable[:, :, None] & observable[:, None, :] & ~np.eye(n, dtype=bool)[None])
-        if not close.any():
-            return out
-        # only the pairs where the other's lobe can reach 1e-4 of the actor's energy in its neighbourhood (its own
-        # response there is 8e-4 of it or more: less could not hide it)
-        t, i, j = np.nonzero(close)
-        gap = np.maximum(np.maximum(dr[t, i, j] - 0.0, -(dr[t, i, j] + ext[t, j])), 0.0)   # to j's range extent
-        strong = (e_near[t, j] * stat.response_envelope("d", dd[t, i, j]) * stat.response_envelope("r", gap)
-                  >= 1e-4 * e_near[t, i])
-        close[t[~strong], i[~strong], j[~strong]] = False
-        if not close.any():
-            return out
-        t, i, j = np.nonzero(close)
-        k = stat.power_response
-        steps = np.array([-1.0, 0.0, 1.0])
-        cd, cr = np.rint(pos_d[t, i]), np.rint(pos_r[t, i])
-        frac = (np.arange(self.EXTENT_SAMPLES) + 0.5) / self.EXTENT_SAMPLES
-        r_s = near[t, j][:, None] + frac[None, :] * (far - near)[t, j][:, None]                  # (pairs, S) m
-        w_s = e_near[t, j][:, None] * (near[t, j][:, None] / r_s) ** 4 / self.EXTENT_SAMPLES
-        pr_s = pos_r[t, j][:, None] + (r_s - near[t, j][:, None]) / p.range_resolution_m
-        kd = k("d", _circ(cd - pos_d[t, j], m)[:, None] + steps[None, :])                         # (pairs, 3)
-        kr = k("r", _circ(cr[:, None] - pr_s, n_r)[:, :, None] + steps[None, None, :])             # (pairs, S, 3)
-        other = np.einsum("ps,pa,psb->pab", w_s, kd, kr).reshape(-1, 9)                            # (pairs, 9)
-        flat = t * n + i
-        b = np.zeros((t_n * n, 9))
-        for col in range(9):
-            b[:, col] = np.bincount(flat, weights=other[:, col], minlength=t_n * n)
-        own_d = k("d", np.rint(pos_d)[..., None] + steps - pos_d[..., None])                      # (T, n, 3)
-        own_r = k("r", np.rint(pos_r)[..., None] + steps - pos_r[..., None])
-        a = (e_near[..., None, None] * own_d[..., :, None] * own_r[..., None, :]).reshape(-1, 9)
-        loss = a[:, 4:5] - a                         # what the actor's own response loses towards each neighbour
-        gain = b - b[:, 4:5]                         # what the others' gain there
-        # hidden towards a neighbour where the map rises (the others gain more than the actor loses) because of the
-        # others (they put more there than the actor does; where the actor's own lobe is the higher there, as at a
-        # half-bin straddle, the peak is its own one cell on); with the two powers' exponential factors X_i, X_j
-        # the ratio r = X_j/X_i must exceed both, P(r > t) = 1/(1 + t)
-        steady = np.broadcast_to(sc.swerling == 0, (t_n, n)).reshape(-1, 1)
-        risen = (gain > 0.0) & (b > 0.0)
-        t_need = np.full(a.shape, np.inf)
-        t_need[risen] = np.maximum(np.maximum(loss[risen], 0.0) / gain[risen], a[risen] / b[risen])
-        p_hidden = np.where(steady, (t_need < 1.0).astype(np.float64), 1.0 / (1.0 + t_need))
-        peak = 1.0 - p_hidden.max(axis=1)
-        if np.all(peak >= 1.0):
-            return out
-        # the hiding actor: the one whose response puts the most power into the actor's cell; in its cell the
-        # actor's response is l, its own h
-        centre = other[:, 4]
-        best = np.full(t_n * n, -1.0)
-        np.maximum.at(best, flat, centre)
-        top = (centre == best[flat]) & (centre > 0.0)
-        host = np.full(t_n * n, -1, dtype=np.int64)
-        host[flat[top]] = j[top]
-        rows = np.flatnonzero((peak < 1.0) & (host >= 0))
-        tt, ii, jj = rows // n, rows % n, host[rows]
-        hd, hr = np.rint(pos_d[tt, jj]), np.rint(pos_r[tt, jj])
-        leak = e_near[tt, ii] * k("d", _circ(hd - pos_d[tt, ii], m)) * k("r", _circ(hr - pos_r[tt, ii], n_r))
-        floor = e_near[tt, jj] * k("d", hd - pos_d[tt, jj]) * k("r", hr - pos_r[tt, jj]) \
-            * 10.0 ** (-DOA_FLOOR_DB / 10.0)
-        p_leak = np.where(steady[rows, 0], (leak >= floor).astype(np.float64), leak / np.maximum(leak + floor, 1e-300))
-        res = peak.copy()
-        res[rows] = peak[rows] + (1.0 - peak[rows]) * p_leak
-        return res.reshape(t_n, n)
 
     def _averaged_gain_db(self, k0: int, gain_db: np.ndarray, detected: np.ndarray, first_hit: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
@@ -1133,8 +1030,3 @@ class ObjectModel:
         return ClusterList.of(np.arange(b - a, dtype=np.int64), f[0], f[1], f[2], f[3],
                               cluster_dyn_prop(f[9], f[10], sv, (f[11], f[12])), *f[4:9], g[0], g[1], g[2],
                               tab["near"][a:b], g[3])
-
-
-def _circ(x: np.ndarray, period: int) -> np.ndarray:
-    """``x`` wrapped into [−period/2, period/2)."""
-    return np.mod(x + period / 2.0, period) - period / 2.0
