@@ -13,7 +13,8 @@ Prints Markdown tables:
    bins, Doppler bins and beamwidths, signal against detection level, and the 50 % point of each;
 5. a weaker target behind a stronger one at another angle: how often each level reports it, against the range
    separation and the power ratio (the chain's range–Doppler peak test is blind to the angle);
-6. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like).
+6. the same in one beam, apart in range or in Doppler only;
+7. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like).
 
 Run: ``python benchmarks/calibration.py [--quick]`` (about 8 minutes; ``--quick`` about 2).
 """
@@ -306,6 +307,48 @@ def lobe_table(quick: bool) -> None:
     print()
 
 
+def beam_table(quick: bool) -> None:
+    trials = 40 if not quick else 15
+    chain = DspChain(P)
+    seps = (1.5, 1.75, 2.0, 2.25, 2.5, 3.0)
+    ratios = (0.0, 3.0, 6.0, 12.0, 20.0)
+    print(f"### A weaker target in a stronger one's lobe, in the same beam ({trials} trials per point)\n")
+    print("mimo12; the stronger at ρ = 50 dB, the weaker at the same angle (boresight), apart in range or in Doppler "
+          "only, both positions random within a bin; the fraction of frames in which each level reports the "
+          "weaker one (within half a bin along the axis, a bin along the other, 6° in angle), signal / detection\n")
+    for axis in ("range", "Doppler"):
+        print(f"| {axis} separation (bins) | " + " | ".join(f"{q:.0f} dB weaker" for q in ratios) + " |")
+        print("|---:|" + "---:|" * len(ratios))
+        for sep in seps:
+            row = []
+            for ratio in ratios:
+                hits = {"signal": 0, "detection": 0}
+                for t in range(trials):
+                    rng0 = np.random.default_rng(7000 + t)
+                    r0 = (40.0 + rng0.random()) * P.range_resolution_m
+                    v0 = (3.0 + rng0.random()) * P.doppler_bin_mps
+                    r, v = [r0, r0], [v0, v0]
+                    if axis == "range":
+                        r[1] += sep * P.range_resolution_m
+                    else:
+                        v[1] += sep * P.doppler_bin_mps
+                    scat = point_targets(r, [0.0, 0.0], v)
+                    scat.rcs_dbsm = np.array([50.0, 50.0 - ratio]) - equation.snr_db(P, scat.range_m, 0.0, 0.0,
+                                                                                     scat.azimuth_rad)
+                    tol_r = (0.5 if axis == "range" else 1.0) * P.range_resolution_m
+                    tol_v = (0.5 if axis == "Doppler" else 1.0) * P.doppler_bin_mps
+                    for lv in hits:
+                        rng = np.random.default_rng(7000 + t)
+                        det = chain.process_rd(synthesize_rd(P, scat, rng)) if lv == "signal" \
+                            else detection_model.detect(P, scat, rng, chain.statistic)
+                        hits[lv] += bool(np.any((np.abs(det.range_m - r[1]) < tol_r)
+                                                & (np.abs(det.range_rate_mps - v[1]) < tol_v)
+                                                & (np.abs(det.azimuth_rad) < math.radians(6.0))))
+                row.append(f"{hits['signal'] / trials:.2f} / {hits['detection'] / trials:.2f}")
+            print(f"| {sep:.2f} | " + " | ".join(row) + " |", flush=True)
+        print()
+
+
 def edge_table(quick: bool) -> None:
     trials = 40 if not quick else 15
     p = PRESETS["ars408_like"]
@@ -336,7 +379,7 @@ def main() -> None:
     global LEVELS
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution", "lobe", "edge"))
+    ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution", "lobe", "beam", "edge"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     args = ap.parse_args()
     LEVELS = tuple(lv for lv in args.levels.split(",") if lv)
@@ -344,7 +387,8 @@ def main() -> None:
     print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, `python benchmarks/calibration.py"
           f"{' --quick' if args.quick else ''}`\n")
     for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("accuracy", accuracy_table),
-                     ("resolution", resolution_table), ("lobe", lobe_table), ("edge", edge_table)):
+                     ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
+                     ("edge", edge_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")

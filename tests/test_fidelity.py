@@ -163,14 +163,15 @@ def test_signal_options_in_scenario_files_are_validated(tmp_path):
 def test_auto_on_a_curve_entry_beside_guardrail_posts_reports_the_car_as_the_detection_level_does():
     """clothoid_stopped_own_lane: the stopped car 127 m ahead stands within the chain's resolution of the guardrail
     posts (8 channels: ~30 m of cross range there), so auto renders it at the detection level in every cycle and
-    must report it as that level does. One seed is not enough to judge (seed 1 alone: auto 0.69, detection 1.00;
-    seed 5: 0.91 against 0.37): over seeds 1–6 the reported fractions agree."""
+    must report it as that level does. One seed is not enough to judge (a seed's fraction ranges from 0.2 to 1.0 at
+    every level, the signal level's too): over seeds 1–12 the reported fractions agree (measured with the range–
+    Doppler lobe test: detection 0.86, auto 0.90, the signal level 0.91)."""
     from radarnode.radar.setup import load_scenario
     from radarnode.radar.object_model import in_fov
     import dataclasses
     base = load_scenario(SCENARIOS / "clothoid_stopped_own_lane.yaml")
     reported = {"detection": [], "auto": []}
-    for seed in range(1, 7):
+    for seed in range(1, 13):
         sc = dataclasses.replace(base, seed=seed)
         rc = radar_config(sc)
         cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
@@ -192,13 +193,13 @@ def test_auto_on_a_curve_entry_beside_guardrail_posts_reports_the_car_as_the_det
     assert abs(np.mean(reported["auto"]) - np.mean(reported["detection"])) < 0.12
 
 
-def test_cars_side_by_side_at_close_range_are_reported_alike_at_object_and_detection_level():
-    """Three cars at close range in 3.5 m lanes (a jam): a car 3 m beside the sensor must not mask the cars ahead at
-    the object level more than the detection level does. Its energy is spread over its visible outline (the detection
-    level's scatterers); taken whole at its nearest point, it had hidden them in 26 and 40 of 55 cycles. Rates are
-    means over 4 seeds (one seed's rate varies by ±0.15). Known limit (README): the chain itself (signal level) loses
-    the cars ahead in the beside car's range–Doppler lobe more often, 0.74 / 0.62 / 0.91 of the cycles over these
-    seeds, which neither cheaper level models."""
+def test_cars_side_by_side_at_close_range_are_reported_by_the_detection_level_as_the_chain_reports_them():
+    """Three cars at close range in 3.5 m lanes (a jam). The chain (signal level) loses the cars ahead in the beside
+    car's range–Doppler lobe in some cycles: 0.74 / 0.62 / 0.91 of the cycles over these seeds. The detection level
+    hides a weaker cell in a stronger one's lobe at any angle as the chain's local-maximum test does (0.69 / 0.75 /
+    0.96 measured; 0.95 / 0.85 / 0.92 without it). The object level does not model the lobe (README, known limits):
+    it must not mask the cars ahead more than the detection level does (taken whole at its nearest point, the car
+    beside had hidden them in 26 and 40 of 55 cycles). Rates are means over 4 seeds (one seed's varies by ±0.15)."""
     from radarnode.radar.setup import parse_scenario
     sc = parse_scenario("""
 name: side
@@ -215,7 +216,7 @@ actors:
     rc = radar_config(sc)
     cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
     rate = {}
-    for level in ("object", "detection"):
+    for level in ("object", "detection", "signal"):
         hits = np.zeros(3)
         for seed in (1, 2, 3, 4):
             model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
@@ -226,8 +227,8 @@ actors:
                     d = np.hypot(ol.dist_long_m - v.x_m[i], ol.dist_lat_m - v.y_m[i])
                     hits[i] += d.size > 0 and d.min() < 2.5
         rate[level] = hits / (4 * sc.num_cycles)
-    assert np.all(rate["detection"] > 0.8)
-    assert np.all(rate["object"] > 0.7) and np.all(np.abs(rate["object"] - rate["detection"]) < 0.15), rate
+    assert np.all(np.abs(rate["detection"] - rate["signal"]) < 0.15), rate
+    assert np.all(rate["object"] > 0.7) and np.all(rate["object"] > rate["detection"] - 0.1), rate
 
 
 @pytest.mark.parametrize("yaw", [0.0, 45.0])

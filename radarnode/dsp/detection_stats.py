@@ -642,6 +642,21 @@ class DetectionStatistic:
         grid, table = tables[key]
         return np.interp(delta, grid, table, left=0.0, right=0.0)
 
+    #: reach of :meth:`response`'s table, bins: the main lobe (±2 for Hann) and the first sidelobes
+    RESPONSE_REACH = 4.0
+
+    def response(self, axis: str, delta: np.ndarray) -> np.ndarray:
+        """K(δ): the power of a windowed tone δ bins from a cell, relative to on-bin, along one axis ("d": Doppler,
+        "r": range); tabulated within ±:data:`RESPONSE_REACH` on a 1/64-bin grid (interpolation error below 1e-4
+        of the peak), 0 beyond."""
+        tables = self.__dict__.setdefault("_response_tables", {})
+        if axis not in tables:
+            w = self.doppler_window if axis == "d" else self.range_window
+            grid = np.arange(-self.RESPONSE_REACH, self.RESPONSE_REACH + 1e-9, 1.0 / 64.0)
+            tables[axis] = (grid, straddle_gain(w, grid))
+        grid, table = tables[axis]
+        return np.interp(delta, grid, table, left=0.0, right=0.0)
+
     # --- the tables, for a cache outside this module ----------------------------------------------------------
 
     #: the version of the tables' layout: a cache keyed on :meth:`table_key` holds tables of this layout

@@ -165,6 +165,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
 
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
     peak, energy = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
+    peak &= ~_inside_lobes(c_r, c_v, energy, tag, n_r, m, statistic)
     rd = (uniq // n_a)
     idx = np.flatnonzero(peak)
     cells_rd, grp = np.unique(rd[idx], return_inverse=True)
@@ -291,6 +292,54 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     out = energy.copy()
     np.add.at(out, gets[first], energy[gives[first]])
     return peak, out
+
+
+def _inside_lobes(r: np.ndarray, v: np.ndarray, energy: np.ndarray, tag: np.ndarray, n_r: int, m: int,
+                  statistic: DetectionStatistic) -> np.ndarray:
+    """The cells a stronger cell's range–Doppler main lobe hides, at any angle: the chain reports a peak only
+    where its map, which sums the channels, is a local maximum, so a weaker target a couple of bins from a
+    stronger one is lost when the stronger one's lobe in the cell towards it outweighs the weaker one's own peak
+    (the chain resolves two equal tones at about 1.7 bins, a 12 dB weaker one seldom at 2; BENCHMARKS.md, "A
+    weaker target in a stronger one's lobe"). Per pair of cells within ±3 bins in range and Doppler: the two
+    tones' mean map (powers added: their phases are independent) at the weaker one's cell against its three
+    neighbours towards the stronger one. Positions in bins, both axes circular; ``energy`` the cells' energies
+    at their own bins. A hidden cell gives its energy to no one (the stronger one's cell is two bins away)."""
+    n = energy.size
+    hidden = np.zeros(n, dtype=bool)
+    if n < 2:
+        return hidden
+    reach = 3.0
+    pts = np.stack([np.mod(r, n_r), np.mod(v, m)], axis=1) / reach
+    box = np.array([n_r, m]) / reach
+    import scipy.spatial  # imported when first needed: a faster start
+    pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
+    if pairs.size == 0:
+        return hidden
+    i, j = pairs[:, 0], pairs[:, 1]
+    other = (tag[i] != tag[j]) | (tag[i] < 0)
+    i, j = i[other], j[other]
+    s = np.where(energy[i] >= energy[j], i, j)
+    w = np.where(energy[i] >= energy[j], j, i)
+    kr = lambda x: statistic.response("r", x)           # noqa: E731
+    kd = lambda x: statistic.response("d", x)           # noqa: E731
+    cr, cd = np.rint(r[w]), np.rint(v[w])
+    ow_r, ow_d = r[w] - cr, v[w] - cd                      # the weaker tone from its cell, within ±½
+    os_r, os_d = _circular(r[s] - cr, n_r), _circular(v[s] - cd, m)
+    # on-bin energies from the cells' (straddled) ones
+    e_w = energy[w] / np.maximum(kr(ow_r) * kd(ow_d), 1e-12)
+    e_s = energy[s] / np.maximum(kr(os_r - np.rint(os_r)) * kd(os_d - np.rint(os_d)), 1e-12)
+
+    def level(dr, dd):
+        return e_w * kr(dr - ow_r) * kd(dd - ow_d) + e_s * kr(dr - os_r) * kd(dd - os_d)
+    here = level(0.0, 0.0)
+    step_r = np.where(np.abs(os_r) >= 0.5, np.sign(os_r), 0.0)
+    step_d = np.where(np.abs(os_d) >= 0.5, np.sign(os_d), 0.0)
+    lost = np.zeros(w.size, dtype=bool)
+    for dr, dd in ((step_r, step_d), (step_r, 0.0 * step_d), (0.0 * step_r, step_d)):
+        moved = (dr != 0.0) | (dd != 0.0)
+        lost |= moved & (level(dr, dd) > here)
+    hidden[w[lost]] = True
+    return hidden
 
 
 def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.random.Generator,
