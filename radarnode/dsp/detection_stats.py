@@ -646,14 +646,18 @@ class DetectionStatistic:
     RESPONSE_REACH = 4.0
 
     def response(self, axis: str, delta: np.ndarray) -> np.ndarray:
-        """K(δ): the power of a windowed tone δ bins from a cell, relative to on-bin, along one axis ("d": Doppler,
-        "r": range); tabulated within ±:data:`RESPONSE_REACH` on a 1/64-bin grid (interpolation error below 1e-4
-        of the peak), 0 beyond."""
+        """The amplitude of a windowed tone δ bins from a cell, relative to on-bin, along one axis ("d": Doppler,
+        "r": range), with its sign and without the linear phase e^{−iπδ(L−1)/L} that every tone at δ carries (so
+        two tones' cross-term in a cell is the product of their two values): real, its square the power response
+        K(δ). Tabulated within ±:data:`RESPONSE_REACH` on a 1/64-bin grid (interpolation error below 1e-4 of the
+        peak), 0 beyond."""
         tables = self.__dict__.setdefault("_response_tables", {})
         if axis not in tables:
             w = self.doppler_window if axis == "d" else self.range_window
             grid = np.arange(-self.RESPONSE_REACH, self.RESPONSE_REACH + 1e-9, 1.0 / 64.0)
-            tables[axis] = (grid, straddle_gain(w, grid))
+            n = np.arange(w.size)
+            resp = np.exp(2j * np.pi * np.outer(grid, n - (w.size - 1) / 2.0) / w.size) @ w
+            tables[axis] = (grid, resp.real / w.sum())
         grid, table = tables[axis]
         return np.interp(delta, grid, table, left=0.0, right=0.0)
 

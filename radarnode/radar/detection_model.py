@@ -15,7 +15,11 @@ What the signal chain does to scatterers, without the signal:
 3. cells closer than the chain's measured resolution (:data:`RESOLUTION`, in
    range bins, Doppler bins and beamwidths) are one peak: a cell that has a
    stronger cell within the resolution in every axis gives its power to the
-   strongest of them, as a weak tone inside a strong main lobe does;
+   strongest of them, as a weak tone inside a strong main lobe does; and
+   a cell where the stronger lobe of another actor's (or a post's) cell a
+   couple of bins away outweighs its own peak in the channel-summed map is
+   no peak at any angle, as in the chain, which looks for local maxima of
+   that map before it looks at angles (:func:`_inside_lobes`);
 4. each range–Doppler cell is tested with the same statistic as the chain:
    :meth:`DetectionStatistic.draw` — the non-coherent sum of N channels
    against the exact CA-CFAR threshold (the ring the map's first and last
@@ -32,11 +36,9 @@ What the signal chain does to scatterers, without the signal:
 
 The measured constants live in :mod:`radarnode.radar.calibration`.
 
-Not modelled: the chain looks for local maxima of the range–Doppler map, which
-sums the channels, before it looks at angles, so a weaker target on a stronger
-one's lobe a couple of range bins away is lost at any angle; this model keeps
-targets at different angles apart (BENCHMARKS.md, "A weaker target behind a
-stronger one at another angle", measured).
+Not modelled: within one actor the lobe test of step 3 is left out (the
+resolution box alone merges a body's cells), and a hidden cell's sources are
+not searched for in the stronger cell's snapshot.
 
 Range sidelobes of strong cells are off by default: in the signal chain the
 main lobe sits in the sidelobe cell's CA-CFAR ring and raises its threshold
@@ -165,7 +167,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
 
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
     peak, energy = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
-    peak &= ~_inside_lobes(c_r, c_v, energy, tag, n_r, m, statistic)
+    peak &= ~_inside_lobes(c_r, c_v, c_u, field, energy, tag, n_r, m, k_el, statistic)
     rd = (uniq // n_a)
     idx = np.flatnonzero(peak)
     cells_rd, grp = np.unique(rd[idx], return_inverse=True)
@@ -294,16 +296,20 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     return peak, out
 
 
-def _inside_lobes(r: np.ndarray, v: np.ndarray, energy: np.ndarray, tag: np.ndarray, n_r: int, m: int,
-                  statistic: DetectionStatistic) -> np.ndarray:
+def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray, energy: np.ndarray,
+                  tag: np.ndarray, n_r: int, m: int, n_channels: int, statistic: DetectionStatistic) -> np.ndarray:
     """The cells a stronger cell's range–Doppler main lobe hides, at any angle: the chain reports a peak only
     where its map, which sums the channels, is a local maximum, so a weaker target a couple of bins from a
     stronger one is lost when the stronger one's lobe in the cell towards it outweighs the weaker one's own peak
     (the chain resolves two equal tones at about 1.7 bins, a 12 dB weaker one seldom at 2; BENCHMARKS.md, "A
-    weaker target in a stronger one's lobe"). Per pair of cells within ±3 bins in range and Doppler: the two
-    tones' mean map (powers added: their phases are independent) at the weaker one's cell against its three
-    neighbours towards the stronger one. Positions in bins, both axes circular; ``energy`` the cells' energies
-    at their own bins. A hidden cell gives its energy to no one (the stronger one's cell is two bins away)."""
+    weaker target in a stronger one's lobe"). Per pair of cells of different actors (or posts) within ±3 bins in
+    range and Doppler: the two tones' map, summed over the channels, at the weaker one's cell against its three
+    neighbours towards the stronger one — their powers through the windows' response and their cross-term, from
+    the cells' coherent sums (this frame's phases) and the likeness of their channel phases (full in one beam,
+    about none a few beamwidths apart). Within one actor the resolution box of :func:`_peaks` alone merges cells
+    (a body's weaker parts hidden by its stronger ones had split a car passing a corner radar into three objects).
+    Positions in bins, both axes circular, ``u`` in d·sinθ; ``energy`` the cells' energies at their own bins. A
+    hidden cell gives its energy to no one (the stronger one's cell is two bins away)."""
     n = energy.size
     hidden = np.zeros(n, dtype=bool)
     if n < 2:
@@ -326,11 +332,21 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, energy: np.ndarray, tag: np.ndar
     ow_r, ow_d = r[w] - cr, v[w] - cd                      # the weaker tone from its cell, within ±½
     os_r, os_d = _circular(r[s] - cr, n_r), _circular(v[s] - cd, m)
     # on-bin energies from the cells' (straddled) ones
-    e_w = energy[w] / np.maximum(kr(ow_r) * kd(ow_d), 1e-12)
-    e_s = energy[s] / np.maximum(kr(os_r - np.rint(os_r)) * kd(os_d - np.rint(os_d)), 1e-12)
+    e_w = energy[w] / np.maximum((kr(ow_r) * kd(ow_d)) ** 2, 1e-12)
+    e_s = energy[s] / np.maximum((kr(os_r - np.rint(os_r)) * kd(os_d - np.rint(os_d))) ** 2, 1e-12)
+
+    # the two tones' cross-term in the channel-summed map: their phases (the cells' coherent sums) and how alike
+    # their channel phases are, (1/K)·Σ_k exp(i2π(u_w − u_s)k): 1 in one beam, about 0 a few beamwidths apart
+    du = u[w] - u[s]
+    k = np.arange(n_channels)
+    rho_ch = np.exp(2j * np.pi * np.outer(du, k)).mean(axis=1)
+    cross = 2.0 * np.sqrt(e_w * e_s) * (field[w] * np.conj(field[s]) * rho_ch).real \
+        / np.maximum(np.abs(field[w]) * np.abs(field[s]), 1e-300)
 
     def level(dr, dd):
-        return e_w * kr(dr - ow_r) * kd(dd - ow_d) + e_s * kr(dr - os_r) * kd(dd - os_d)
+        a_w = kr(dr - ow_r) * kd(dd - ow_d)
+        a_s = kr(dr - os_r) * kd(dd - os_d)
+        return e_w * a_w * a_w + e_s * a_s * a_s + cross * a_w * a_s
     here = level(0.0, 0.0)
     step_r = np.where(np.abs(os_r) >= 0.5, np.sign(os_r), 0.0)
     step_d = np.where(np.abs(os_d) >= 0.5, np.sign(os_d), 0.0)
