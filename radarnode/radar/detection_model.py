@@ -296,6 +296,11 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     return peak, out
 
 
+#: how far (range and Doppler bins) a stronger cell's lobe can hide a weaker one (:func:`_inside_lobes`): the
+#: Hann main lobe's half-width (2) and a bin of straddle
+LOBE_REACH_BINS = 3.0
+
+
 def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray, energy: np.ndarray,
                   tag: np.ndarray, n_r: int, m: int, n_channels: int, statistic: DetectionStatistic) -> np.ndarray:
     """The cells a stronger cell's range–Doppler main lobe hides, at any angle: the chain reports a peak only
@@ -314,7 +319,7 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     hidden = np.zeros(n, dtype=bool)
     if n < 2:
         return hidden
-    reach = 3.0
+    reach = LOBE_REACH_BINS
     pts = np.stack([np.mod(r, n_r), np.mod(v, m)], axis=1) / reach
     box = np.array([n_r, m]) / reach
     import scipy.spatial  # imported when first needed: a faster start
