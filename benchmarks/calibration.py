@@ -45,6 +45,7 @@ from radarnode.scene.world import Scene  # noqa: E402
 
 P = PRESETS["mimo12"]
 LEVELS = ("object", "detection", "signal")
+RESOLUTION_TRIALS = 40
 
 
 def pfa_table(quick: bool) -> None:
@@ -213,7 +214,7 @@ def resolved(det, axis: str, sep: float, t0: tuple, t1: tuple) -> bool:
 
 
 def resolution_table(quick: bool) -> None:
-    trials = 40 if not quick else 15
+    trials = RESOLUTION_TRIALS if not quick else 15
     chain = DspChain(P)
     stat = chain.statistic
     rho = 30.0
@@ -222,20 +223,23 @@ def resolution_table(quick: bool) -> None:
     print("| separation | range: signal | range: detection | Doppler: signal | Doppler: detection | "
           "angle: signal | angle: detection |")
     print("|---:|---:|---:|---:|---:|---:|---:|")
-    rng = np.random.default_rng(99)
     curves = {}
     for axis in ("range", "doppler", "angle"):
         for lv in ("signal", "detection"):
             curves[(axis, lv)] = []
-    for s in seps:
+    for si, s in enumerate(seps):
         row = []
-        for axis in ("range", "doppler", "angle"):
-            for lv in ("signal", "detection"):
+        for ai, axis in enumerate(("range", "doppler", "angle")):
+            for li, lv in enumerate(("signal", "detection")):
                 ok = 0
-                for _ in range(trials):
-                    r0 = rng.uniform(30, 80)
-                    v0 = rng.uniform(-10, 10)
-                    a0 = rng.uniform(-0.2, 0.2)           # sinθ
+                for t in range(trials):
+                    # the same pair of targets for both levels (a paired comparison), and each level's own noise
+                    # stream: a change of one level's draws leaves the other's column as it was
+                    geo = np.random.default_rng((99, si, ai, t))
+                    rng = np.random.default_rng((99, si, ai, t, li))
+                    r0 = geo.uniform(30, 80)
+                    v0 = geo.uniform(-10, 10)
+                    a0 = geo.uniform(-0.2, 0.2)           # sinθ
                     r1, v1, a1 = r0, v0, a0
                     if axis == "range":
                         r1 = r0 + s * P.range_resolution_m
@@ -281,6 +285,41 @@ def _weak_seen(preset, chain, ranges, az_deg, rho_db, seed: int) -> dict:
     return out
 
 
+def _fractions(trials: int, seen) -> str:
+    """"signal / detection": the fraction of trials 0…trials−1 in which ``seen(t)`` says each level reports it."""
+    hits = {"signal": 0, "detection": 0}
+    for t in range(trials):
+        out = seen(t)
+        for lv in hits:
+            hits[lv] += out[lv]
+    return f"{hits['signal'] / trials:.2f} / {hits['detection'] / trials:.2f}"
+
+
+def _beam_seen(chain, axis: str, sep: float, ratio: float, seed: int) -> dict:
+    """Whether the signal and detection levels report the weaker of two boresight targets (ρ 50 and 50 − ratio dB)
+    ``sep`` bins apart along ``axis`` ("range" or "Doppler"): within half a bin along it, a bin along the other."""
+    rng0 = np.random.default_rng(seed)
+    r0 = (40.0 + rng0.random()) * P.range_resolution_m
+    v0 = (3.0 + rng0.random()) * P.doppler_bin_mps
+    r, v = [r0, r0], [v0, v0]
+    if axis == "range":
+        r[1] += sep * P.range_resolution_m
+    else:
+        v[1] += sep * P.doppler_bin_mps
+    scat = point_targets(r, [0.0, 0.0], v)
+    scat.rcs_dbsm = np.array([50.0, 50.0 - ratio]) - equation.snr_db(P, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
+    tol_r = (0.5 if axis == "range" else 1.0) * P.range_resolution_m
+    tol_v = (0.5 if axis == "Doppler" else 1.0) * P.doppler_bin_mps
+    out = {}
+    for lv in ("signal", "detection"):
+        rng = np.random.default_rng(seed)
+        det = chain.process_rd(synthesize_rd(P, scat, rng)) if lv == "signal" \
+            else detection_model.detect(P, scat, rng, chain.statistic)
+        out[lv] = bool(np.any((np.abs(det.range_m - r[1]) < tol_r) & (np.abs(det.range_rate_mps - v[1]) < tol_v)
+                              & (np.abs(det.azimuth_rad) < math.radians(6.0))))
+    return out
+
+
 def lobe_table(quick: bool) -> None:
     trials = 40 if not quick else 15
     chain = DspChain(P)
@@ -295,14 +334,11 @@ def lobe_table(quick: bool) -> None:
     for sep in seps:
         row = []
         for ratio in ratios:
-            hits = {"signal": 0, "detection": 0}
-            for t in range(trials):
+            def seen(t, sep=sep, ratio=ratio):
                 base = 40.0 + np.random.default_rng(100 + t).random()
-                seen = _weak_seen(P, chain, (base * P.range_resolution_m, (base + sep) * P.range_resolution_m),
+                return _weak_seen(P, chain, (base * P.range_resolution_m, (base + sep) * P.range_resolution_m),
                                   (-20.0, 20.0), (60.0, 60.0 - ratio), 5000 + t)
-                for lv in hits:
-                    hits[lv] += seen[lv]
-            row.append(f"{hits['signal'] / trials:.2f} / {hits['detection'] / trials:.2f}")
+            row.append(_fractions(trials, seen))
         print(f"| {sep:.1f} | " + " | ".join(row) + " |", flush=True)
     print()
 
@@ -322,29 +358,8 @@ def beam_table(quick: bool) -> None:
         for sep in seps:
             row = []
             for ratio in ratios:
-                hits = {"signal": 0, "detection": 0}
-                for t in range(trials):
-                    rng0 = np.random.default_rng(7000 + t)
-                    r0 = (40.0 + rng0.random()) * P.range_resolution_m
-                    v0 = (3.0 + rng0.random()) * P.doppler_bin_mps
-                    r, v = [r0, r0], [v0, v0]
-                    if axis == "range":
-                        r[1] += sep * P.range_resolution_m
-                    else:
-                        v[1] += sep * P.doppler_bin_mps
-                    scat = point_targets(r, [0.0, 0.0], v)
-                    scat.rcs_dbsm = np.array([50.0, 50.0 - ratio]) - equation.snr_db(P, scat.range_m, 0.0, 0.0,
-                                                                                     scat.azimuth_rad)
-                    tol_r = (0.5 if axis == "range" else 1.0) * P.range_resolution_m
-                    tol_v = (0.5 if axis == "Doppler" else 1.0) * P.doppler_bin_mps
-                    for lv in hits:
-                        rng = np.random.default_rng(7000 + t)
-                        det = chain.process_rd(synthesize_rd(P, scat, rng)) if lv == "signal" \
-                            else detection_model.detect(P, scat, rng, chain.statistic)
-                        hits[lv] += bool(np.any((np.abs(det.range_m - r[1]) < tol_r)
-                                                & (np.abs(det.range_rate_mps - v[1]) < tol_v)
-                                                & (np.abs(det.azimuth_rad) < math.radians(6.0))))
-                row.append(f"{hits['signal'] / trials:.2f} / {hits['detection'] / trials:.2f}")
+                row.append(_fractions(trials, lambda t, sep=sep, ratio=ratio, axis=axis:
+                                      _beam_seen(chain, axis, sep, ratio, 7000 + t)))
             print(f"| {sep:.2f} | " + " | ".join(row) + " |", flush=True)
         print()
 
@@ -364,24 +379,25 @@ def edge_table(quick: bool) -> None:
     for base in (1.3, 4.3, 60.3):
         row = []
         for rs in strong:
-            hits = {"signal": 0, "detection": 0}
-            for t in range(trials):
-                seen = _weak_seen(p, chain, (base * p.range_resolution_m, (base + 3.0) * p.range_resolution_m),
-                                  (-20.0, 0.0), (rs, 40.0), 9000 + t)
-                for lv in hits:
-                    hits[lv] += seen[lv]
-            row.append(f"{hits['signal'] / trials:.2f} / {hits['detection'] / trials:.2f}")
+            row.append(_fractions(trials, lambda t, base=base, rs=rs: _weak_seen(
+                p, chain, (base * p.range_resolution_m, (base + 3.0) * p.range_resolution_m), (-20.0, 0.0),
+                (rs, 40.0), 9000 + t)))
         print(f"| {base:.1f} | " + " | ".join(row) + " |", flush=True)
     print()
 
 
 def main() -> None:
-    global LEVELS
+    global LEVELS, RESOLUTION_TRIALS
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution", "lobe", "beam", "edge"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
+    ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
+                    "points move by about ±0.1 bin at 40)")
     args = ap.parse_args()
+    if args.trials < 1:
+        ap.error(f"--trials: value {args.trials} is not allowed; expected an integer ≥ 1")
+    RESOLUTION_TRIALS = args.trials
     LEVELS = tuple(lv for lv in args.levels.split(",") if lv)
     t0 = time.perf_counter()
     print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, `python benchmarks/calibration.py"
