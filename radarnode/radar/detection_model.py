@@ -303,63 +303,61 @@ LOBE_REACH_BINS = 3.0
 
 def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray, energy: np.ndarray,
                   tag: np.ndarray, n_r: int, m: int, n_channels: int, statistic: DetectionStatistic) -> np.ndarray:
-    """The cells a stronger cell's range–Doppler main lobe hides, at any angle: the chain reports a peak only
-    where its map, which sums the channels, is a local maximum, so a weaker target a couple of bins from a
-    stronger one is lost when the stronger one's lobe in the cell towards it outweighs the weaker one's own peak
-    (the chain resolves two equal tones at about 1.7 bins, a 12 dB weaker one seldom at 2; BENCHMARKS.md, "A
-    weaker target in a stronger one's lobe"). Per pair of cells of different actors (or posts) within ±3 bins in
-    range and Doppler: the two tones' map, summed over the channels, at the weaker one's cell against its three
-    neighbours towards the stronger one — their powers through the windows' response and their cross-term, from
-    the cells' coherent sums (this frame's phases) and the likeness of their channel phases (full in one beam,
-    about none a few beamwidths apart). Within one actor the resolution box of :func:`_peaks` alone merges cells
-    (a body's weaker parts hidden by its stronger ones had split a car passing a corner radar into three objects).
-    Positions in bins, both axes circular, ``u`` in d·sinθ; ``energy`` the cells' energies at their own bins. A
-    hidden cell gives its energy to no one (the stronger one's cell is two bins away)."""
+    """The cells other returns' range–Doppler lobes hide, at any angle: the chain reports a peak only where its
+    map, which sums the channels, is a local maximum, so a weaker target a couple of bins from stronger ones is
+    lost when their lobes in the cell towards them outweigh its own peak (the chain resolves two equal tones at
+    about 1.7 bins, a 12 dB weaker one seldom at 2; BENCHMARKS.md, "A weaker target in a stronger one's lobe").
+
+    For each cell, the noise-free channel-summed map at its range–Doppler cell and the eight around it, from every
+    cell within ±(:data:`LOBE_REACH_BINS` + 1) bins: their powers through the windows' signed response (every
+    return in one range–Doppler cell adds to it, whatever its angle, as in the chain) and each one's cross-term
+    with the tested cell (this frame's phases of their coherent sums, times how alike their channel phases are:
+    full in one beam, about none a few beamwidths apart). The cell is hidden where a neighbour towards which the
+    other returns' lobes rise stands higher than its own cell. A body's own other cells are left out of its
+    cells' map (the resolution box of :func:`_peaks` merges those: with them a car passing a corner radar split
+    into three objects, more often than in the chain). Positions in bins, both axes circular, ``u`` in d·sinθ;
+    ``energy`` the cells' energies at their own bins. A hidden cell gives its energy to no one."""
     n = energy.size
     hidden = np.zeros(n, dtype=bool)
     if n < 2:
         return hidden
-    reach = LOBE_REACH_BINS
-    pts = np.stack([np.mod(r, n_r), np.mod(v, m)], axis=1) / reach
+    reach = LOBE_REACH_BINS + 1.0
     box = np.array([n_r, m]) / reach
+    pts = np.mod(np.stack([np.mod(r, n_r), np.mod(v, m)], axis=1) / reach, box)
     import scipy.spatial  # imported when first needed: a faster start
-    pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
+    pairs = scipy.spatial.cKDTree(pts, boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
         return hidden
-    i, j = pairs[:, 0], pairs[:, 1]
+    # both directions: i the tested cell, j another return around it (not of the same body)
+    i = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    j = np.concatenate([pairs[:, 1], pairs[:, 0]])
     other = (tag[i] != tag[j]) | (tag[i] < 0)
     i, j = i[other], j[other]
-    s = np.where(energy[i] >= energy[j], i, j)
-    w = np.where(energy[i] >= energy[j], j, i)
+    if i.size == 0:
+        return hidden
     kr = lambda x: statistic.response("r", x)           # noqa: E731
     kd = lambda x: statistic.response("d", x)           # noqa: E731
-    cr, cd = np.rint(r[w]), np.rint(v[w])
-    ow_r, ow_d = r[w] - cr, v[w] - cd                      # the weaker tone from its cell, within ±½
-    os_r, os_d = _circular(r[s] - cr, n_r), _circular(v[s] - cd, m)
-    # on-bin energies from the cells' (straddled) ones
-    e_w = energy[w] / np.maximum((kr(ow_r) * kd(ow_d)) ** 2, 1e-12)
-    e_s = energy[s] / np.maximum((kr(os_r - np.rint(os_r)) * kd(os_d - np.rint(os_d))) ** 2, 1e-12)
-
-    # the two tones' cross-term in the channel-summed map: their phases (the cells' coherent sums) and how alike
-    # their channel phases are, (1/K)·Σ_k exp(i2π(u_w − u_s)k): 1 in one beam, about 0 a few beamwidths apart
-    du = u[w] - u[s]
+    cr, cd = np.rint(r), np.rint(v)
+    own_r, own_d = r - cr, v - cd                          # each cell's tone from its cell, within ±½
+    e0 = energy / np.maximum((kr(own_r) * kd(own_d)) ** 2, 1e-12)      # on-bin energies
+    o_r, o_d = _circular(r[j] - cr[i], n_r), _circular(v[j] - cd[i], m)
     k = np.arange(n_channels)
-    rho_ch = np.exp(2j * np.pi * np.outer(du, k)).mean(axis=1)
-    cross = 2.0 * np.sqrt(e_w * e_s) * (field[w] * np.conj(field[s]) * rho_ch).real \
-        / np.maximum(np.abs(field[w]) * np.abs(field[s]), 1e-300)
-
-    def level(dr, dd):
-        a_w = kr(dr - ow_r) * kd(dd - ow_d)
-        a_s = kr(dr - os_r) * kd(dd - os_d)
-        return e_w * a_w * a_w + e_s * a_s * a_s + cross * a_w * a_s
-    here = level(0.0, 0.0)
-    step_r = np.where(np.abs(os_r) >= 0.5, np.sign(os_r), 0.0)
-    step_d = np.where(np.abs(os_d) >= 0.5, np.sign(os_d), 0.0)
-    lost = np.zeros(w.size, dtype=bool)
-    for dr, dd in ((step_r, step_d), (step_r, 0.0 * step_d), (0.0 * step_r, step_d)):
-        moved = (dr != 0.0) | (dd != 0.0)
-        lost |= moved & (level(dr, dd) > here)
-    hidden[w[lost]] = True
+    rho_ch = np.exp(2j * np.pi * np.outer(u[i] - u[j], k)).mean(axis=1)
+    phase = (field[i] * np.conj(field[j]) * rho_ch).real / np.maximum(np.abs(field[i]) * np.abs(field[j]), 1e-300)
+    cross = 2.0 * np.sqrt(e0[i] * e0[j]) * phase
+    tested = np.unique(i)
+    slot = np.searchsorted(tested, i)
+    total = np.empty((tested.size, 9))          # the map at the cell and its eight neighbours
+    others = np.empty((tested.size, 9))         # the other returns' powers alone
+    for q, (dr, dd) in enumerate((a, b) for a in (-1.0, 0.0, 1.0) for b in (-1.0, 0.0, 1.0)):
+        a_i = kr(dr - own_r[tested]) * kd(dd - own_d[tested])
+        a_j = kr(dr - o_r) * kd(dd - o_d)
+        others[:, q] = np.bincount(slot, weights=e0[j] * a_j * a_j, minlength=tested.size)
+        total[:, q] = e0[tested] * a_i * a_i + others[:, q] + np.bincount(
+            slot, weights=cross * a_i[slot] * a_j, minlength=tested.size)
+    rising = others > others[:, 4:5]
+    rising[:, 4] = False
+    hidden[tested] = np.any(rising & (total > total[:, 4:5]), axis=1)
     return hidden
 
 
