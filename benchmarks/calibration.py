@@ -14,7 +14,8 @@ Prints Markdown tables:
 5. a weaker target behind a stronger one at another angle: how often each level reports it, against the range
    separation and the power ratio (the chain's range–Doppler peak test is blind to the angle);
 6. the same in one beam, apart in range or in Doppler only;
-7. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like).
+7. the same behind several stronger returns in one cell, or beside a companion in its own cell;
+8. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like).
 
 Run: ``python benchmarks/calibration.py [--quick]`` (about 8 minutes; ``--quick`` about 2).
 """
@@ -364,6 +365,49 @@ def beam_table(quick: bool) -> None:
         print()
 
 
+def _crowd_seen(chain, config: str, ratio: float, seed: int) -> dict:
+    """Whether each level reports a weak target at boresight, 2 range bins behind stronger returns at ρ 60 dB (the
+    weak one ``ratio`` dB below), all at one speed: ``config`` "one" (a stronger one at −30°), "two" (at ±30°, one
+    cell), "three" (at −45°, −25° and +30°, one cell), "companion" (one at −30°, and a return as strong as the weak
+    one at +30° in the weak one's cell)."""
+    base = 40.0 + np.random.default_rng(seed).random()
+    rs, w = 60.0, 60.0 - ratio
+    r, az, rho = {"one": ([base], [-30.0], [rs]), "two": ([base] * 2, [-30.0, 30.0], [rs] * 2),
+                  "three": ([base] * 3, [-45.0, -25.0, 30.0], [rs] * 3),
+                  "companion": ([base, base + 2.0], [-30.0, 30.0], [rs, w])}[config]
+    r, az, rho = list(r) + [base + 2.0], list(az) + [0.0], list(rho) + [w]
+    v = 3.4 * P.doppler_bin_mps
+    scat = point_targets([x * P.range_resolution_m for x in r], az, [v] * len(r))
+    scat.rcs_dbsm = np.array(rho) - equation.snr_db(P, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
+    out = {}
+    for lv in ("signal", "detection"):
+        rng = np.random.default_rng(seed)
+        det = chain.process_rd(synthesize_rd(P, scat, rng)) if lv == "signal" \
+            else detection_model.detect(P, scat, rng, chain.statistic)
+        out[lv] = bool(np.any((np.abs(det.range_m - scat.range_m[-1]) < P.range_resolution_m)
+                              & (np.abs(det.range_rate_mps - v) < P.doppler_bin_mps)
+                              & (np.abs(det.azimuth_rad) < math.radians(6.0))))
+    return out
+
+
+def crowd_table(quick: bool) -> None:
+    trials = 40 if not quick else 15
+    chain = DspChain(P)
+    ratios = (3.0, 6.0, 9.0)
+    configs = ("one", "two", "three", "companion")
+    print(f"### A weaker target behind several stronger returns in one cell ({trials} trials per point)\n")
+    print("mimo12; a target at boresight 2 range bins behind stronger returns at ρ = 60 dB and other angles, the same "
+          "speed: one at −30°; two at ±30°; three at −45°, −25° and +30° (their range–Doppler cell is one); one at −30° "
+          "and a companion as strong as the weak target at +30° in the weak target's cell; the fraction of frames in "
+          "which each level reports the weak target, signal / detection\n")
+    print("| weaker by | " + " | ".join(configs) + " |")
+    print("|---:|" + "---:|" * len(configs))
+    for ratio in ratios:
+        row = [_fractions(trials, lambda t, c=c, ratio=ratio: _crowd_seen(chain, c, ratio, 100 + t)) for c in configs]
+        print(f"| {ratio:.0f} dB | " + " | ".join(row) + " |", flush=True)
+    print()
+
+
 def edge_table(quick: bool) -> None:
     trials = 40 if not quick else 15
     p = PRESETS["ars408_like"]
@@ -390,7 +434,7 @@ def main() -> None:
     global LEVELS, RESOLUTION_TRIALS
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution", "lobe", "beam", "edge"))
+    ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution", "lobe", "beam", "crowd", "edge"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -404,7 +448,7 @@ def main() -> None:
           f"{' --quick' if args.quick else ''}`\n")
     for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("accuracy", accuracy_table),
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
-                     ("edge", edge_table)):
+                     ("crowd", crowd_table), ("edge", edge_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")
