@@ -176,3 +176,17 @@ def test_signal_level_accuracy_within_1_3_of_the_cramer_rao_bound_at_25_db():
            math.degrees(equation.crb_azimuth_rad(p, rho_db, math.radians(az0))))
     ratio = np.sqrt(np.mean(err ** 2, axis=0)) / np.asarray(crb, dtype=np.float64)
     assert np.all(ratio <= 1.3), ratio
+
+
+@pytest.mark.parametrize("rcs_dbsm", [200.0, 300.0])
+def test_an_absurdly_strong_scatterer_is_refused_by_the_rd_synthesis_for_its_strength_not_its_migration(rcs_dbsm):
+    """A return some 200 dB over the noise would need more series terms than the range–Doppler synthesis allows;
+    the error says so and names the scatterer's peak-to-noise ratio (it used to blame a range migration of 0.0 bins).
+    150 dBsm still synthesises."""
+    from radarnode.errors import ConfigError
+    from radarnode.radar.signal_model import synthesize_rd
+    p = PRESETS["mimo12"]
+    with pytest.raises(ConfigError, match=r"scatterer 0: peak-to-noise value \d+ dB .*rcs_dbsm"):
+        synthesize_rd(p, point_targets([40.0], [0.0], [3.0], [rcs_dbsm]), np.random.default_rng(1))
+    cube = synthesize_rd(p, point_targets([40.0], [0.0], [3.0], [150.0]), np.random.default_rng(1))
+    assert np.all(np.isfinite(cube))

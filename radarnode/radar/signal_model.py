@@ -781,6 +781,14 @@ def _rd_signal(preset: RadarPreset, tm: _Terms, dtype, floor_db: float = RD_PEAK
     terms = _taylor_terms(phi, tol / 4.0, m, n, n_tx)
     if np.any(terms > _MAX_TAYLOR_TERMS):
         k = int(np.argmax(terms))
+        snr_peak_db = 20.0 * math.log10(max(float(peak[k]) / noise_rms, 1e-300))
+        if abs(phi[k]) <= 12.0:
+            # the migration is within reach: the scatterer's return towers so far over the noise that the series
+            # would need more terms to keep its error below it (a return some 200 dB over the noise)
+            raise ConfigError(f"scatterer {k}: peak-to-noise value {snr_peak_db:.0f} dB with a range migration of "
+                              f"{phi[k]:.2f} bins is not allowed for synthesize_rd (its series would need "
+                              f"{int(terms[k])} terms, at most {_MAX_TAYLOR_TERMS}); expected a return at most about "
+                              "200 dB over the noise (check its rcs_dbsm; or use synthesize)")
         raise ConfigError(f"range migration: value {phi[k]:.1f} bins in one frame is not allowed for "
                           "synthesize_rd; expected at most ~12 (use synthesize)")
     ladder = _LADDER.size - 1
