@@ -17,7 +17,7 @@ Prints Markdown tables:
 7. the same behind several stronger returns in one cell, or beside a companion in its own cell;
 8. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like).
 
-Run: ``python benchmarks/calibration.py [--quick]`` (about 8 minutes; ``--quick`` about 2).
+Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 10 minutes; ``--quick`` about 3).
 """
 
 from __future__ import annotations
