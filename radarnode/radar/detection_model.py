@@ -296,9 +296,9 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     return peak, out
 
 
-#: how far (range and Doppler bins) a stronger cell's lobe can hide a weaker one (:func:`_inside_lobes`): the
-#: Hann main lobe's half-width (2) and a bin of straddle
-LOBE_REACH_BINS = 3.0
+#: how far (range and Doppler bins) another return can raise a cell's 3 × 3 neighbourhood of the map
+#: (:func:`_inside_lobes`): the Hann main lobe's half-width (2), a bin of straddle and the neighbour's bin
+LOBE_REACH_BINS = 4.0
 
 
 def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray, energy: np.ndarray,
@@ -309,7 +309,7 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     about 1.7 bins, a 12 dB weaker one seldom at 2; BENCHMARKS.md, "A weaker target in a stronger one's lobe").
 
     For each cell, the noise-free channel-summed map at its range–Doppler cell and the eight around it, from every
-    cell within ±(:data:`LOBE_REACH_BINS` + 1) bins: their powers through the windows' signed response (every
+    cell within ±:data:`LOBE_REACH_BINS` bins: their powers through the windows' signed response (every
     return in one range–Doppler cell adds to it, whatever its angle, as in the chain) and each one's cross-term
     with the tested cell (this frame's phases of their coherent sums, times how alike their channel phases are:
     full in one beam, about none a few beamwidths apart). The cell is hidden where a neighbour towards which the
@@ -321,7 +321,7 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     hidden = np.zeros(n, dtype=bool)
     if n < 2:
         return hidden
-    reach = LOBE_REACH_BINS + 1.0
+    reach = LOBE_REACH_BINS
     box = np.array([n_r, m]) / reach
     pts = np.mod(np.stack([np.mod(r, n_r), np.mod(v, m)], axis=1) / reach, box)
     import scipy.spatial  # imported when first needed: a faster start

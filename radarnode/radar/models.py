@@ -178,32 +178,24 @@ class SignalModel(ScattererModel):
 
 
 def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> np.ndarray:
-    """Actors with a scatterer within the chain's resolution (plus a bin of margin) of another actor's or of a
-    post's, in range, Doppler and angle at once, or within the reach of the detection level's lobe test (plus a
-    bin) in range and Doppler at any angle (where they appear, aliasing included): shape (n_actors,) bool.
+    """Actors with a scatterer within the reach of the detection level's lobe test
+    (:data:`radarnode.radar.detection_model.LOBE_REACH_BINS`) of another actor's or of a post's, in range and Doppler
+    at any angle (where they appear, aliasing included): shape (n_actors,) bool.
 
-    Those are the actors whose detections the object level cannot give: the
-    chain merges or splits them (:data:`radarnode.radar.calibration.RESOLUTION`).
+    Those are the actors whose detections the object level cannot give: the chain merges or splits what lies
+    within its resolution (:data:`radarnode.radar.calibration.RESOLUTION`, plus a bin of margin: inside that reach),
+    and its local-maximum test on the channel-summed map hides a weaker target there whatever the angle.
     """
     out = np.zeros(n_actors, dtype=bool)
     if len(scat) < 2:
         return out
     p = preset
-    rb, vb, u = detection_model.apparent_positions(p, scat)
-    res = np.asarray(RESOLUTION, dtype=np.float64) + np.array([1.0, 1.0, 0.5])
-    beam = 1.0 / p.num_virtual
-    n_r = p.num_range_bins
-    box = np.array([n_r / res[0], p.num_chirps / res[1], p.num_virtual / res[2]])
-    pts = np.stack([rb / res[0], np.mod(vb, p.num_chirps) / res[1], np.mod(u / beam, p.num_virtual) / res[2]], axis=1)
+    rb, vb, _ = detection_model.apparent_positions(p, scat)
+    reach = np.maximum(detection_model.LOBE_REACH_BINS, np.asarray(RESOLUTION[:2], dtype=np.float64) + 1.0)
+    box = np.array([p.num_range_bins, p.num_chirps]) / reach
+    pts = np.stack([rb, np.mod(vb, p.num_chirps)], axis=1) / reach
     import scipy.spatial  # imported when first needed: a faster start
     pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
-    # and within the reach of the detection level's lobe test in range and Doppler, at any angle: the chain's
-    # local-maximum test on its channel-summed map hides a weaker target there whatever the angle between them
-    reach = detection_model.LOBE_REACH_BINS + 1.0
-    box2 = np.array([n_r, p.num_chirps]) / reach
-    pts2 = np.stack([rb, np.mod(vb, p.num_chirps)], axis=1) / reach
-    lobes = scipy.spatial.cKDTree(np.mod(pts2, box2), boxsize=box2).query_pairs(1.0, p=np.inf, output_type="ndarray")
-    pairs = np.concatenate([pairs.reshape(-1, 2), lobes.reshape(-1, 2)])
     if pairs.size == 0:
         return out
     a, b = scat.actor_index[pairs[:, 0]], scat.actor_index[pairs[:, 1]]
