@@ -290,12 +290,12 @@ def test_the_signed_window_response_squares_to_the_power_response():
 
 
 @pytest.mark.parametrize("case", ["one beam, 2 Doppler bins", "40 degrees apart, 1.5 range bins",
-                                  "one beam, 3 Doppler bins"])
+                                  "one beam, 3 Doppler bins", "one beam, 4 Doppler bins", "one beam, 8 Doppler bins"])
 def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(case):
     """The chain looks for local maxima of its channel-summed range–Doppler map before it looks at angles: a 12 dB
     weaker target 2 Doppler bins from a stronger one in one beam is seldom a peak (0.20 of the frames), 1.5 range bins
-    behind it 40° away never; 3 bins away it always is. The detection level's lobe test gives the same (it reported
-    the first two in every frame before)."""
+    behind it 40° away never; 3 bins away it always is, and so at the lobe test's reach (4 bins) and twice it. The
+    detection level's lobe test gives the same (it reported the first two in every frame before)."""
     from radarnode.radar import detection_model
     from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["mimo12"]
@@ -307,7 +307,7 @@ def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(c
         r0 = (40.0 + rng0.random()) * p.range_resolution_m
         v0 = (3.0 + rng0.random()) * p.doppler_bin_mps
         if case.startswith("one beam"):
-            sep = 2.0 if "2 Doppler" in case else 3.0
+            sep = float(case.split(", ")[1].split()[0])
             r, v, az = [r0, r0], [v0, v0 + sep * p.doppler_bin_mps], [0.0, 0.0]
         else:
             r, v, az = [r0, r0 + 1.5 * p.range_resolution_m], [v0, v0], [-20.0, 20.0]
@@ -321,7 +321,7 @@ def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(c
                                        & (np.abs(det.range_rate_mps - v[1]) < 0.75 * p.doppler_bin_mps)
                                        & (np.abs(det.azimuth_rad - math.radians(az[1])) < math.radians(6.0))))
     rate = {k: n / trials for k, n in seen.items()}
-    if "3 Doppler" in case:
+    if case.startswith("one beam") and "2 Doppler" not in case:
         assert rate["signal"] >= 0.9 and rate["detection"] >= 0.9, rate
     else:
         assert rate["signal"] <= 0.35 and rate["detection"] <= 0.35, rate
