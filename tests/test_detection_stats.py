@@ -289,6 +289,26 @@ def test_the_signed_window_response_squares_to_the_power_response():
         assert stat.response(axis, 5.0) == 0.0
 
 
+def test_the_window_response_looked_up_by_index_agrees_with_the_interpolated_table_at_every_offset():
+    """Thousands of offsets (the lobe test's pairs) take the table by index instead of np.interp's search: the same
+    values within 1e-15 of the peak over and beyond the table, 0 outside ±RESPONSE_REACH and at ±inf, NaN for a
+    NaN offset, and squares within 1e-3 of the straddle power (as for a few offsets)."""
+    stat = DspChain(PRESETS["mimo12"]).statistic
+    reach = stat.RESPONSE_REACH
+    d = np.concatenate([np.random.default_rng(3).uniform(-reach - 1.0, reach + 1.0, 5000),
+                        np.arange(-reach, reach + 1e-9, 1.0 / stat.RESPONSE_PER_BIN),      # every grid point
+                        [-reach, reach, np.nextafter(reach, np.inf), np.nextafter(-reach, -np.inf), 0.0,
+                         np.inf, -np.inf, np.nan]])
+    for axis, w in (("r", stat.range_window), ("d", stat.doppler_window)):
+        big = stat.response(axis, d)
+        small = np.concatenate([stat.response(axis, part) for part in np.array_split(d, 40)])   # < 512 each
+        assert big.shape == d.shape and np.isnan(big[-1]) and np.isnan(small[-1])
+        assert np.max(np.abs(big[:-1] - small[:-1])) < 1e-15
+        outside = np.abs(d[:-1]) > reach
+        assert np.all(big[:-1][outside] == 0.0)
+        assert np.max(np.abs(big[:-1][~outside] ** 2 - ds.straddle_gain(w, d[:-1][~outside]))) < 1e-3
+
+
 @pytest.mark.parametrize("case", ["one beam, 2 Doppler bins", "40 degrees apart, 1.5 range bins",
                                   "one beam, 3 Doppler bins", "one beam, 4 Doppler bins", "one beam, 8 Doppler bins"])
 def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(case):

@@ -644,22 +644,37 @@ class DetectionStatistic:
 
     #: reach of :meth:`response`'s table, bins: the main lobe (±2 for Hann) and the first sidelobes
     RESPONSE_REACH = 4.0
+    #: grid points of :meth:`response`'s table per bin
+    RESPONSE_PER_BIN = 64
 
     def response(self, axis: str, delta: np.ndarray) -> np.ndarray:
         """The amplitude of a windowed tone δ bins from a cell, relative to on-bin, along one axis ("d": Doppler,
         "r": range), with its sign and without the linear phase e^{−iπδ(L−1)/L} that every tone at δ carries (so
         two tones' cross-term in a cell is the product of their two values): real, its square the power response
-        K(δ). Tabulated within ±:data:`RESPONSE_REACH` on a 1/64-bin grid (interpolation error below 1e-4 of the
-        peak), 0 beyond."""
+        K(δ). Tabulated within ±:data:`RESPONSE_REACH` with :data:`RESPONSE_PER_BIN` points a bin (interpolation
+        error below 1e-4 of the peak), 0 beyond; a NaN δ gives NaN."""
         tables = self.__dict__.setdefault("_response_tables", {})
         if axis not in tables:
             w = self.doppler_window if axis == "d" else self.range_window
-            grid = np.arange(-self.RESPONSE_REACH, self.RESPONSE_REACH + 1e-9, 1.0 / 64.0)
+            grid = np.arange(-self.RESPONSE_REACH, self.RESPONSE_REACH + 1e-9, 1.0 / self.RESPONSE_PER_BIN)
             n = np.arange(w.size)
-            resp = np.exp(2j * np.pi * np.outer(grid, n - (w.size - 1) / 2.0) / w.size) @ w
-            tables[axis] = (grid, resp.real / w.sum())
-        grid, table = tables[axis]
-        return np.interp(delta, grid, table, left=0.0, right=0.0)
+            resp = (np.exp(2j * np.pi * np.outer(grid, n - (w.size - 1) / 2.0) / w.size) @ w).real / w.sum()
+            # the grid is uniform: a lookup by index, not np.interp's search (the lobe test looks up thousands of
+            # pairs a frame: 7–10× faster there); the last point's slope 0, so that it needs no cell after it
+            tables[axis] = (grid, resp, np.append(np.diff(resp), 0.0))
+        grid, table, slope = tables[axis]
+        delta = np.asarray(delta, dtype=np.float64)
+        if delta.size < 512:            # a few hundred values: np.interp's one call is cheaper than the passes below
+            return np.interp(delta, grid, table, left=0.0, right=0.0)
+        inside = (delta >= -self.RESPONSE_REACH) & (delta <= self.RESPONSE_REACH)
+        pos = (delta + self.RESPONSE_REACH) * self.RESPONSE_PER_BIN      # grid cells from the start
+        lost = np.isnan(pos)            # a NaN δ stays NaN, as np.interp keeps it
+        pos = np.where(inside, pos, 0.0)
+        cell = pos.astype(np.intp)
+        out = np.where(inside, table[cell] + slope[cell] * (pos - cell), 0.0)
+        if lost.any():
+            out[lost] = np.nan
+        return out
 
     # --- the tables, for a cache outside this module ----------------------------------------------------------
 

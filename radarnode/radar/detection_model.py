@@ -341,24 +341,42 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     own_r, own_d = r - cr, v - cd                          # each cell's tone from its cell, within ±½
     e0 = energy / np.maximum((kr(own_r) * kd(own_d)) ** 2, 1e-12)      # on-bin energies
     o_r, o_d = _circular(r[j] - cr[i], n_r), _circular(v[j] - cd[i], m)
-    k = np.arange(n_channels)
-    rho_ch = np.exp(2j * np.pi * np.outer(u[i] - u[j], k)).mean(axis=1)
+    rho_ch = _array_likeness(u[i] - u[j], n_channels)
     phase = (field[i] * np.conj(field[j]) * rho_ch).real / np.maximum(np.abs(field[i]) * np.abs(field[j]), 1e-300)
     cross = 2.0 * np.sqrt(e0[i] * e0[j]) * phase
     tested = np.unique(i)
     slot = np.searchsorted(tested, i)
-    total = np.empty((tested.size, 9))          # the map at the cell and its eight neighbours
-    others = np.empty((tested.size, 9))         # the other returns' powers alone
-    for q, (dr, dd) in enumerate((a, b) for a in (-1.0, 0.0, 1.0) for b in (-1.0, 0.0, 1.0)):
-        a_i = kr(dr - own_r[tested]) * kd(dd - own_d[tested])
-        a_j = kr(dr - o_r) * kd(dd - o_d)
-        others[:, q] = np.bincount(slot, weights=e0[j] * a_j * a_j, minlength=tested.size)
-        total[:, q] = e0[tested] * a_i * a_i + others[:, q] + np.bincount(
-            slot, weights=cross * a_i[slot] * a_j, minlength=tested.size)
+    # the responses at the three shifts −1, 0, +1 of every axis, one table lookup each: (3, ·)
+    shift = np.array([[-1.0], [0.0], [1.0]])
+    ai_r, ai_d = kr(shift - own_r[tested]), kd(shift - own_d[tested])            # (3, tested)
+    aj_r, aj_d = kr(shift - o_r), kd(shift - o_d)                                # (3, pairs)
+    # the map at the cell and its eight neighbours, q = 3·(range shift) + (Doppler shift), row-major
+    a_i = (ai_r[:, None, :] * ai_d[None, :, :]).reshape(9, tested.size)
+    a_j = (aj_r[:, None, :] * aj_d[None, :, :]).reshape(9, i.size)
+    cells = (slot * 9 + np.arange(9)[:, None]).ravel()                          # (9·pairs,): tested slot, q
+    others = np.bincount(cells, weights=(e0[j] * a_j * a_j).ravel(), minlength=9 * tested.size
+                         ).reshape(tested.size, 9)                               # the other returns' powers alone
+    total = e0[tested][:, None] * a_i.T * a_i.T + others + np.bincount(
+        cells, weights=(cross * a_i[:, slot] * a_j).ravel(), minlength=9 * tested.size).reshape(tested.size, 9)
     rising = others > others[:, 4:5]
     rising[:, 4] = False
     hidden[tested] = np.any(rising & (total > total[:, 4:5]), axis=1)
     return hidden
+
+
+def _array_likeness(du: np.ndarray, n: int) -> np.ndarray:
+    """The mean over the n channels k = 0 … n−1 of e^{2πi·du·k}: how alike two returns' channel phases are, du
+    apart in d·sinθ (1 in one beam, 0 at a whole multiple of 1/n but not of 1). The geometric series in closed
+    form, e^{iπ·du·(n−1)}·sin(πn·du)/(n·sin(π·du)); at a whole du = m the ratio's limit is (−1)^{m(n−1)}, which
+    the phase factor cancels (the mean is 1). Within about 1e-12 of the sum, for a few numpy passes over the pairs
+    instead of n complex exponentials each."""
+    half = np.pi * du
+    s = np.sin(half)
+    whole = np.abs(s) < 1e-9
+    ratio = np.sin(n * half) / (n * np.where(whole, 1.0, s))
+    # at a whole du the sum is n·e^{2πi·m·k} = n: ratio·e^{iπ·du·(n−1)} must be 1 there
+    ratio = np.where(whole, np.cos(half * (n - 1)), ratio)
+    return ratio * np.exp(1j * half * (n - 1))
 
 
 def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.random.Generator,
