@@ -222,7 +222,12 @@ class RadarPreset:
         """The staggered second chirp sequence as a preset of its own (same waveform, other chirp period)."""
         if not self.stagger_chirp_period_s:
             raise ConfigError(f"preset {self.name} has no second chirp sequence (stagger_chirp_period_s is 0)")
-        return dataclasses.replace(self, chirp_period_s=self.stagger_chirp_period_s, stagger_chirp_period_s=0.0)
+        # made once (as the cached properties are): a new preset every frame recomputed all its derived figures
+        seq = self.__dict__.get("_second_sequence")
+        if seq is None:
+            seq = dataclasses.replace(self, chirp_period_s=self.stagger_chirp_period_s, stagger_chirp_period_s=0.0)
+            self.__dict__["_second_sequence"] = seq
+        return seq
 
     @functools.cached_property
     def speed_resolution_mps(self) -> float:
