@@ -16,9 +16,8 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 * a cycle is complete as soon as the header's count of frames arrived in every
   group of the expected *layout*; the layout is learned from the cycles
   themselves: every group seen in any of the last ``LAYOUT_MEMORY`` complete
-  cycles (0x60B, 0x60C, 0x60D until the first cycle is seen). A group the node stopped
-  sending therefore drops out after ``LAYOUT_MEMORY`` cycles, each of them
-  delivered at the next header instead of at once;
+  cycles (0x60B, 0x60C, 0x60D until the first cycle is seen). A group the node
+  stopped sending drops out after two cycles without it (below);
 * Obj_4_Warning 0x60E is a group like the others (one frame per object, after
   0x60D) but is not expected before a cycle showed it: it comes only with
   collision detection, and CollDetState 0x408 with Active set (sent before the
@@ -27,12 +26,24 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 * RadarState's SendQuality/SendExtInfo bits can only *add* groups to the
   layout, for ``LAYOUT_MEMORY`` headers (so a configuration change that adds a
   group is waited for); bits that are off are ignored;
-* a header whose MeasCounter does not move on from the last accepted one (a
-  stale, replayed or forged header, or the first of a restarted sensor) cuts
-  nothing: it is held beside the cycle in progress with the frames that fit
-  its own cycle and not the one in progress; a next header that continues its
-  count shows a restart (counted in ``counter_resets``; its cycle is delivered
-  if whole), one that continues the old count drops it (``stray_headers``);
+* a header whose MeasCounter does not move on from the last accepted one, or
+  jumps more than ``MAX_JUMP_STRIDES`` strides ahead (a stale, replayed,
+  forged or corrupted header, or the first of a restarted sensor or after a
+  long gap) cuts nothing: it is held beside the cycle in progress with the
+  frames that fit its own cycle and not the one in progress; a next header that
+  continues its count shows a restart (``counter_resets``) or a gap
+  (``lost_cycles``) and its cycle is delivered if whole; one that continues the
+  old count drops it (``stray_headers``);
+* a header that announced objects and got no frame before the next one,
+  which continues the count from before it and not from it, was stray (a
+  forged header with a plausible MeasCounter just before the sensor's own):
+  taken out, it steals nothing. (A forged *empty* header of that kind is
+  whole at once, and is delivered as an empty cycle: a known limit;)
+* a cycle that ends whole in itself but without a group the last complete
+  cycles had (a stray header cut it before its last groups) is held: the late
+  frames of that group make it whole and it is delivered; if the next cycle
+  lacks the same groups too, the sensor stopped sending them and both are
+  delivered (the layout forgets them at once); otherwise it is dropped;
 * otherwise the cycle ends at the next header of its kind (an object and a
   cluster cycle are assembled side by side, so a stray header of the other
   kind cuts nothing), after ``cycle_timeout_s`` of
@@ -156,6 +167,10 @@ CONFIG_STATE = (P.FILTER_STATE_HEADER, P.FILTER_STATE_CFG, P.COLL_DET_STATE, P.C
 GENERAL = {"obj": P.OBJ_GENERAL, "cl": P.CLUSTER_GENERAL}
 HEADERS = {P.OBJ_STATUS: "obj", P.CLUSTER_STATUS: "cl"}
 LIST_KIND = {g: kind for kind, groups in GROUPS.items() for g in groups}
+#: a header whose MeasCounter jumps further ahead than this many strides (about 4.6 s of a 72-ms sensor) is held
+#: until the next header continues its count, as one that does not advance is: a forged or corrupted header
+#: must not cut the cycle in progress
+MAX_JUMP_STRIDES = 64
 
 
 def _advances(counter: int, last: int) -> bool:
@@ -179,6 +194,7 @@ class _Pending:
         self.order: list[int] = []
         self.bad = False
         self.early = False             # delivered as soon as the layout was complete
+        self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
         self.arrival = time.monotonic()
 
 
@@ -228,6 +244,11 @@ class CycleAssembler(can.Listener):
         self._last_counter: dict[str, int] = {}
         # a header that did not advance MeasCounter, held until frames show whether the sensor restarted
         self._suspects: dict[str, _Pending] = {}
+        # a cycle that ended whole in itself but without a group the layout expects: a stray header cut it before
+        # its last groups (they follow, and it is delivered whole) or the sensor stopped sending the group (the next
+        # cycle lacks it too, and both are delivered); never delivered without either
+        self._held: dict[str, _Pending] = {}
+        self._behind: dict[str, list[_Pending]] = {}    # empty cycles that ended while one was held: after it
         self._stride: dict[str, int] = {}
         # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
         self._seen_layouts: dict[str, collections.deque] = {k: collections.deque(maxlen=LAYOUT_MEMORY)
@@ -335,6 +356,8 @@ class CycleAssembler(can.Listener):
                 for suspect in self._suspects.values():
                     self._drop_suspect(suspect)
                 self._suspects.clear()
+                for held_kind in list(self._held):      # and a cycle short of a group was followed by none
+                    self._drop_held(held_kind)
 
     def expire(self, now: float | None = None) -> bool:
         """Close the cycle being assembled when nothing arrived for it for ``cycle_timeout_s``.
@@ -347,6 +370,9 @@ class CycleAssembler(can.Listener):
             for kind in silent:
                 self.stats.timed_out_cycles += 1
                 self.flush(kind)
+            for kind in [k for k, h in self._held.items() if k not in self._pending
+                         and now - h.arrival > 2.0 * self.cycle_timeout_s]:
+                self._drop_held(kind)           # no cycle followed the one short of a group: it stays unproven
             return bool(silent)
 
     # --- internals ----------------------------------------------------------------
@@ -477,26 +503,33 @@ class CycleAssembler(can.Listener):
             counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
         header = _Pending(kind, n, counter, timestamp, data, n_near)
+        self._unseat_empty_header(kind, counter)
         last = self._last_counter.get(kind)
         suspect = self._suspects.pop(kind, None)
-        if last is not None and not _advances(counter, last):
-            # MeasCounter did not move on: a stale, replayed or forged header — or the first of a restarted
-            # sensor. It is held beside the cycle in progress and cuts nothing; the frames that fit its cycle
-            # are kept with it. A next header that continues its count shows a restart (its cycle is then
-            # delivered, if whole); one that continues the old count drops it (stray_headers)
-            if suspect is None or not _advances(counter, suspect.meas_counter):
+        if last is not None and not self._continues(kind, counter, last):
+            # MeasCounter did not move on, or jumped far ahead: a stale, replayed, forged or corrupted header — or
+            # the first of a restarted sensor, or the first after a long gap. It is held beside the cycle in
+            # progress and cuts nothing; the frames that fit its cycle are kept with it. A next header that
+            # continues its count shows a restart or a gap (its cycle is then delivered, if whole); one that
+            # continues the old count drops it (stray_headers)
+            if suspect is None or not self._continues(kind, counter, suspect.meas_counter):
                 if suspect is not None:
                     self._drop_suspect(suspect)
                 self._suspects[kind] = header
                 return
-            # a second header continuing the first: the sensor restarted
-            self.stats.counter_resets += 1
+            # a second header continuing the first: the sensor restarted, or cycles were lost in between
+            if _advances(suspect.meas_counter, last):
+                self.stats.lost_cycles += ((suspect.meas_counter - last) & 0xFFFF) // self._stride.get(kind, 1) - 1
+            else:
+                self.stats.counter_resets += 1
             self.flush(kind)
             self._last_counter[kind] = last = suspect.meas_counter
             self._finish(suspect)
         elif suspect is not None:
             self._drop_suspect(suspect)
         self.flush(kind)
+        # what accepting this header changes, kept to undo it should the header prove stray
+        header.before = (last, self._stride.get(kind), self.stats.lost_cycles)
         if last is not None:
             gap = (counter - last) & 0xFFFF
             # The real ARS 408 advances MeasCounter by 2 per object cycle (near and far scans);
@@ -515,6 +548,36 @@ class CycleAssembler(can.Listener):
         self._pending[kind] = header
         self._maybe_complete(kind)
 
+    def _unseat_empty_header(self, kind: str, counter: int) -> None:
+        """A header that announced objects and got no frame before this next header, which continues the count
+        from before it and not from it: it was stray (a forged or replayed header just before the sensor's own,
+        with a plausible MeasCounter) — taken out, its effects on the count undone, so that it steals nothing
+        from the cycle that follows."""
+        p = self._pending.get(kind)
+        before = getattr(p, "before", None)
+        if p is None or not p.expected or p.groups or before is None or before[0] is None:
+            return
+        last, stride, lost = before
+        if not _advances(counter, last) or self._continues(kind, counter, p.meas_counter) \
+                or (counter - last) & 0xFFFF > MAX_JUMP_STRIDES * (stride or 1):
+            return
+        del self._pending[kind]
+        self.stats.stray_headers += 1
+        self._last_counter[kind] = last
+        self.stats.lost_cycles = lost
+        if stride is None:
+            self._stride.pop(kind, None)
+        else:
+            self._stride[kind] = stride
+
+    def _continues(self, kind: str, counter: int, last: int) -> bool:
+        """Whether MeasCounter ``counter`` continues the count at ``last``: forward, and by at most
+        MAX_JUMP_STRIDES strides once the stride is known."""
+        if not _advances(counter, last):
+            return False
+        stride = self._stride.get(kind)
+        return stride is None or (counter - last) & 0xFFFF <= MAX_JUMP_STRIDES * stride
+
     def _drop_suspect(self, suspect: _Pending) -> None:
         """A held header that no header continued: stray; the frames it collected are counted as orphans."""
         self.stats.stray_headers += 1
@@ -523,7 +586,8 @@ class CycleAssembler(can.Listener):
     @staticmethod
     def _fits(p: _Pending, base: int, oid: int) -> bool:
         """Whether a list frame has a place in cycle ``p``: a general frame while the header's count is not
-        reached, another group's frame for an object of the general group that this group lacks."""
+        reached, another group's frame for an object of the general group that this group lacks. (The order of
+        a cycle's frames is not checked: a gateway may reorder them, and a cycle reordered is still whole.)"""
         general = p.groups.get(GENERAL[p.kind], {})
         if base == GENERAL[p.kind]:
             return len(general) < p.expected and oid not in general
@@ -533,6 +597,17 @@ class CycleAssembler(can.Listener):
         kind = LIST_KIND[base]
         pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
+        held = self._held.get(kind)
+        if held is not None and base != GENERAL[kind] and self._fits(held, base, oid) \
+                and not (pending is not None and self._fits(pending, base, oid)):
+            # the next frame of a group that the cycle held back lacks, and no place in the cycle in progress: the
+            # late groups of a cycle that a stray header cut; whole, it is delivered
+            self._add(held, base, oid, data, values)
+            if self._layout_complete(held):
+                del self._held[kind]
+                self._deliver(held)
+                self._release(kind)
+            return
         suspect = self._suspects.get(kind)
         if suspect is not None:
             # beside a held header a frame goes with the cycle it fits. A general frame: the one in progress while
@@ -591,22 +666,40 @@ class CycleAssembler(can.Listener):
                 return
         self.stats.orphan_frames += 1
 
-    def _maybe_complete(self, kind: str) -> None:
-        p = self._pending[kind]
+    def _layout_complete(self, p: _Pending) -> bool:
+        """Whether cycle ``p`` holds the header's count in its general group and in every group of the expected
+        layout, every group for the same objects (none bad)."""
         if p.bad:
-            return
+            return False
         general = p.groups.get(GENERAL[p.kind], {})
         if len(general) != p.expected:
-            return
+            return False
         for g in self.expected_groups(p.kind):
             if len(p.groups.get(g, ())) != p.expected:
-                return
-        if all(set(group) == set(general) for group in p.groups.values()):
+                return False
+        return all(set(group) == set(general) for group in p.groups.values())
+
+    def _maybe_complete(self, kind: str) -> None:
+        p = self._pending[kind]
+        if self._layout_complete(p):
             p.early = True
             del self._pending[kind]
             self._finish(p)
 
+    def _drop_held(self, kind: str) -> None:
+        """A cycle short of a layout's group that neither its late groups nor a like cycle after it vindicated."""
+        self._held.pop(kind)
+        self.stats.incomplete_cycles += 1
+        self._release(kind)
+
+    def _release(self, kind: str) -> None:
+        """The empty cycles that waited behind a held one, in order, once it was delivered or dropped."""
+        for p in self._behind.pop(kind, []):
+            self._deliver(p)
+
     def _finish(self, p: _Pending) -> None:
+        """A cycle ended (its layout complete, the next header, a time-out or the end of data): delivered whole,
+        held while short of a group of the layout, or dropped."""
         general_id = GENERAL[p.kind]
         general = p.groups.get(general_id, {})
         unexpected = sum(len(set(group) - set(general)) for g, group in p.groups.items() if g != general_id)
@@ -620,8 +713,47 @@ class CycleAssembler(can.Listener):
             if p.expected and seen:
                 seen[-1] = seen[-1] | present        # evidence that a group exists, never that it does not
             return
+        if not p.expected and p.kind in self._held:
+            # an empty cycle shows neither that the held one was cut short nor that the sensor stopped a group: it
+            # waits behind it, so that cycles are delivered in their order
+            self._behind.setdefault(p.kind, []).append(p)
+            return
+        held = self._held.pop(p.kind, None)
+        missing = self._missing(p)
+        if held is not None:
+            if p.expected and missing and missing == self._missing(held):
+                # two cycles in a row without the same groups: the sensor stopped sending them (RadarCfg). Both are
+                # delivered, and the layout no longer expects those groups
+                self._seen_layouts[p.kind] = seen = collections.deque(
+                    (frozenset(x - missing) for x in seen), maxlen=seen.maxlen)
+                for g in missing:
+                    self._announced[p.kind].pop(g, None)
+                seen.append(frozenset(g for g, group in held.groups.items() if group))
+                self._deliver(held)
+                missing = set()
+            else:
+                # the cycle after it had what it lacked (it was cut short, and its late groups never came), or was
+                # short of other groups (nothing shows the sensor stopped them): dropped, never half
+                self.stats.incomplete_cycles += 1
+            self._release(p.kind)
+        if missing:
+            self._held[p.kind] = p              # whole in itself, short of the layout: wait for what follows
+            return
         if p.expected:
             seen.append(frozenset(present))
+        self._deliver(p)
+
+    def _missing(self, p: _Pending) -> set[int]:
+        """Groups that the last complete cycles had and cycle ``p`` (with objects) lacks: what a stray header cuts
+        off. (A group only announced, by RadarState or CollDetState, is waited for until the next header but
+        holds nothing back: a forged announcement must not cost a cycle.)"""
+        if not p.expected:
+            return set()
+        return set().union(*self._seen_layouts[p.kind]) - {g for g, group in p.groups.items() if group}
+
+    def _deliver(self, p: _Pending) -> None:
+        """Queue cycle ``p`` (whole) as an ObjectCycle or ClusterCycle."""
+        general = p.groups.get(GENERAL[p.kind], {})
         self._last_done[p.kind] = p
         rows = [general[i][1] for i in p.order]
         if p.kind == "obj":
