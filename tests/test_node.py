@@ -230,3 +230,25 @@ def test_status_frames_go_before_a_header_as_in_the_capture(reference_dir):
     assert before <= {None, P.OBJ_EXTENDED}
     times = [m.timestamp for m in frames if m.arbitration_id == P.RADAR_STATE]
     assert np.allclose(np.diff(times), 1.0, atol=node.period_s)
+
+
+def test_the_vehicles_ego_motion_follows_the_node_when_a_radar_configuration_moves_its_sensor_id():
+    """An independent tester's finding: ``node --send-ego-motion`` kept sending 0x300/0x301 at the old sensor ID after
+    a RadarConfiguration moved the node to another, so the node no longer heard them and went to MotionRxState 3
+    (speed and yaw rate missing) two seconds later, its DynProp wrong for the rest of the run."""
+    from radarnode.wire.group import ego_motion_for
+    sc = scenario("  - {id: lead, class: car, x_m: 40.0, lane: 0, speed_mps: 20.0}\n", duration=4.0)
+    from radarnode.wire.dbc import load_database
+    node = RadarNode(sc, fidelity="object")
+    db = load_database()
+    vehicle = ego_motion_for(node)
+    assert {m.arbitration_id for m in vehicle.frames(0.0)} == {0x300, 0x301}
+    node.receive(_cfg_frame(db, RadarCfg_SensorID_valid=1, RadarCfg_SensorID=6), 0.0)
+    for k in range(1, 50):                            # 3.5 s: past the node's motion time-out
+        t = k * sc.period_s
+        frames = vehicle.frames(t)
+        assert {m.arbitration_id for m in frames} == {0x360, 0x361}
+        for m in frames:
+            node.receive(m, t)
+        node.cycle(t)
+    assert node.motion_rx_state(49 * sc.period_s) == 0

@@ -101,7 +101,7 @@ class GroupEgoMotion:
     """The vehicle's SpeedInformation 0x300 and YawRateInformation 0x301 for every radar (each at its sensor ID)."""
 
     def __init__(self, group: RadarGroup, database=None) -> None:
-        self.senders = [EgoMotionSender(n.scene, n.config.sensor_id, database) for n in group.nodes]
+        self.senders = [EgoMotionSender(n.scene, n.config.sensor_id, database, n.config) for n in group.nodes]
 
     def frames(self, t_s: float, timestamp: float | None = None) -> list[can.Message]:
         return [m for s in self.senders for m in s.frames(t_s, timestamp)]
@@ -120,7 +120,7 @@ def ego_motion_for(node: RadarNode | RadarGroup, database=None):
     """The vehicle's ego-motion sender for ``node``: one sensor ID, or every radar's of a group."""
     if isinstance(node, RadarGroup):
         return GroupEgoMotion(node, database)
-    return EgoMotionSender(node.scene, node.config.sensor_id, database)
+    return EgoMotionSender(node.scene, node.config.sensor_id, database, node.config)
 
 
 __all__ = ["GroupEgoMotion", "RadarGroup", "ego_motion_for", "make_node"]

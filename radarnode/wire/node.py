@@ -582,14 +582,22 @@ class EgoMotionSender:
 
     In a car another ECU sends these; ``radarnode run`` and ``radarnode log``
     include one so that the node's MotionRxState is "ok" and logs are complete.
+    Given the node's ``config``, it follows the node's sensor ID when a
+    RadarConfiguration moves it (``node --send-ego-motion``: before, the
+    frames stayed at the old ID, where the node no longer listened).
     """
 
-    def __init__(self, scene: Scene, sensor_id: int = 0, database=None) -> None:
+    def __init__(self, scene: Scene, sensor_id: int = 0, database=None, config=None) -> None:
         db = database if database is not None else load_database()
         self.scene = scene
-        self.sensor_id = sensor_id
+        self._sensor_id = sensor_id
+        self._config = config
         self._speed = MessageCodec(db.get_message_by_frame_id(P.SPEED_INFO))
         self._yaw = MessageCodec(db.get_message_by_frame_id(P.YAW_RATE_INFO))
+
+    @property
+    def sensor_id(self) -> int:
+        return self._config.sensor_id if self._config is not None else self._sensor_id
 
     def frames(self, t_s: float, timestamp: float | None = None) -> list[can.Message]:
         ego = self.scene.ego_state(t_s)
