@@ -12,13 +12,14 @@ import numpy as np
 from radarnode.cli import options
 from radarnode.cli.common import format_cycle, format_fused, format_stats, fusion_mounts, stop_on_signals
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle
+from radarnode.errors import UsageError
 from radarnode.wire.bus import add_bus_arguments, open_bus
 
 
 def add_subparser(sub) -> None:
     p = sub.add_parser("consume", help="decode radar cycles from a CAN bus", description=__doc__)
     add_bus_arguments(p, bitrate=True)
-    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=0, help="radar sensor ID 0..7 (default 0)")
+    p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None, help="radar sensor ID 0..7 (default 0)")
     p.add_argument("--fuse", metavar="SCENARIO",
                    help="decode every radar of SCENARIO (its radars' sensor IDs and mounts) and print their object "
                         "lists fused into one, in the vehicle frame (instead of --sensor-id's cycles)")
@@ -105,7 +106,12 @@ def _consume_fused(args) -> int:
 
 def cmd(args) -> int:
     if args.fuse is not None:
+        if args.sensor_id is not None:          # (decode refuses the same pair)
+            raise UsageError("option --fuse: not allowed with --sensor-id; expected one of them (--fuse takes every "
+                             "radar of its scenario)")
         return _consume_fused(args)
+    if args.sensor_id is None:
+        args.sensor_id = 0
     assembler = CycleAssembler(sensor_id=args.sensor_id)
     with open_bus(args) as bus, stop_on_signals() as stop:
         notifier = can.Notifier(bus, [assembler], timeout=0.05)
