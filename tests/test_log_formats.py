@@ -127,6 +127,24 @@ def test_a_damaged_log_decodes_what_is_readable_and_names_the_first_bad_record(c
         assert out.exists() and len(out.read_text().splitlines()) > 0
 
 
+def test_an_asc_frame_with_an_unknown_direction_is_a_bad_record_not_dropped_silently(capsys, tmp_path):
+    """python-can's ASC reader passes over a frame line whose direction is neither Rx nor Tx: the frame was lost
+    without a word and decode exited 0 (an independent tester's finding). It is now the first bad record."""
+    good = tmp_path / "good.asc"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
+    capsys.readouterr()
+    lines = good.read_text().splitlines(keepends=True)
+    k = [i for i, ln in enumerate(lines) if " Rx " in ln][20]
+    lines[k] = lines[k].replace(" Rx ", " Qx ", 1)
+    bad = tmp_path / "bad.asc"
+    bad.write_text("".join(lines))
+    rc, _, err = cli(capsys, "decode", bad)
+    line = err.strip().splitlines()[-1]
+    total = sum(1 for _ in can.LogReader(str(good)))
+    assert rc == 1 and f"first bad record at line {k + 1}: a frame whose direction is 'Qx'" in line, line
+    assert f"{total - 1} frames read" in line, (line, total)
+
+
 @pytest.mark.parametrize("suffix", WRITTEN + [".mcap"])
 def test_an_interrupted_log_is_complete_and_readable_in_every_format(capsys, tmp_path, suffix):
     if suffix == ".mcap":

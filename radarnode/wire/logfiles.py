@@ -343,14 +343,22 @@ _ASC_LINE = re.compile(r"\s*($|//|date\s|base\s|(no\s+)?internal\s+events\s+logg
                        r"end\s+triggerblock|\d+\.\d+\s)", re.IGNORECASE)
 
 
+#: a classic CAN frame event: time, channel, ID, direction, d or r — its direction must be Rx or Tx
+_ASC_FRAME = re.compile(r"\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?\s+(\S+)\s+[dr]\s", re.IGNORECASE)
+
+
 def _asc_line_problem(line: str) -> str | None:
     """python-can's ASC reader passes over any line it does not know (events it does not parse); a line that is
     none of the ASC grammar's — neither a header, a comment, a trigger block's start or end nor a timestamped
-    event — or that holds control characters or bytes that are not text, is damage, and reported as such."""
+    event —, a frame event whose direction is neither Rx nor Tx (which the reader drops without a word), or a
+    line that holds control characters or bytes that are not text, is damage, and reported as such."""
     if "\ufffd" in line or any(c < " " and c not in "\t\r\n" for c in line):
         return "not text (control characters or invalid UTF-8)"
     if not _ASC_LINE.match(line):
         return f"not an ASC line: {line.strip()[:40]!r}"
+    frame = _ASC_FRAME.match(line)
+    if frame and frame.group(1).lower() not in ("rx", "tx"):
+        return f"a frame whose direction is {frame.group(1)!r}, not Rx or Tx: {line.strip()[:40]!r}"
     return None
 
 
