@@ -196,3 +196,28 @@ def test_decode_json_channel_is_text_whatever_the_log_format(tmp_path, suffix):
     assert r.returncode == 0, r.stderr
     channels = {type(json.loads(line)["channel"]) for line in r.stdout.splitlines()}
     assert channels == {str}, channels
+
+
+@pytest.mark.parametrize("fmt", ["json", "csv"])
+def test_a_timestamp_that_is_not_a_number_is_written_as_null_and_counted(tmp_path, fmt):
+    """A log whose timestamps hold NaN or ±inf (a hand-made or damaged CSV): decode --format json wrote ``NaN`` and
+    ``Infinity``, which no JSON parser takes, and said nothing (an independent tester's finding). Now null (JSON) or
+    an empty field (CSV), and counted on stderr; every other timestamp as it was."""
+    good = _log(tmp_path, ".csv", duration="0.5")
+    rows = good.read_text().splitlines(keepends=True)
+    bad_stamps = {3: "nan", 5: "inf", 7: "-inf"}
+    for k, value in bad_stamps.items():
+        rows[k] = value + rows[k][rows[k].index(","):]
+    bad = tmp_path / "bad.csv"
+    bad.write_text("".join(rows))
+    out = tmp_path / f"frames.{fmt}"
+    r = run("decode", str(bad), "--format", fmt, "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    assert "3 with a timestamp that is not a finite number" in r.stderr, r.stderr
+    if fmt == "json":
+        stamps = [json.loads(line)["timestamp"] for line in out.read_text().splitlines()]
+    else:
+        stamps = [row["timestamp"] or None for row in csv.DictReader(out.open())]
+    assert [k + 1 for k, t in enumerate(stamps) if t is None] == sorted(bad_stamps)
+    reference = [float(line.split(",")[0]) for line in rows[1:]]
+    assert all(float(t) == ref for t, ref in zip(stamps, reference) if t is not None)

@@ -70,7 +70,7 @@ class FrameDecoder:
         self.only = sensor_id
         self.default_sensor = 0 if sensor_id is None else sensor_id
         self.counters: dict[int, int] = {}
-        self.frames = self.unknown = self.errors = self.skipped = 0
+        self.frames = self.unknown = self.errors = self.skipped = self.bad_times = 0
 
     def record(self, msg: can.Message) -> dict | None:
         if msg.is_error_frame or msg.is_remote_frame:
@@ -83,7 +83,10 @@ class FrameDecoder:
         self.frames += 1
         # the channel as text whatever the reader gives (.log "can0", .blf 0): one JSON type per field
         channel = None if msg.channel is None else str(msg.channel)
-        rec = {"timestamp": msg.timestamp, "channel": channel, "can_id": msg.arbitration_id,
+        # a NaN or infinite timestamp (a damaged or hand-made log) is written as null: JSON has no NaN
+        stamp = float(msg.timestamp) if math.isfinite(msg.timestamp) else None
+        self.bad_times += stamp is None
+        rec = {"timestamp": stamp, "channel": channel, "can_id": msg.arbitration_id,
                "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
                "dlc": msg.dlc, "data": bytes(msg.data).hex().upper(), "signals": {}}
         if info is None:
@@ -146,7 +149,8 @@ def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> Frame
                 out.write(json.dumps(rec, ensure_ascii=False) + "\n")
                 continue
             sig = rec["signals"]
-            row = [repr(rec["timestamp"]), "" if rec["channel"] is None else rec["channel"],
+            row = ["" if rec["timestamp"] is None else repr(rec["timestamp"]),
+                   "" if rec["channel"] is None else rec["channel"],
                    f"0x{rec['can_id']:03X}", "" if rec["sensor_id"] is None else rec["sensor_id"],
                    "" if rec["cycle_counter"] is None else rec["cycle_counter"], rec["message"] or "",
                    rec["dlc"], rec["data"]]
@@ -294,7 +298,10 @@ def cmd(args) -> int:
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "
-              f"decodable, {result.skipped} error/remote frames skipped", file=sys.stderr)
+              f"decodable, {result.skipped} error/remote frames skipped"
+              + (f", {result.bad_times} with a timestamp that is not a finite number (written as "
+                 f"{'null' if args.format == 'json' else 'an empty field'})" if result.bad_times else ""),
+              file=sys.stderr)
     if report.damaged:
         # everything readable was decoded (and written); the status says the log itself is not whole
         raise FileError(report.message("argument FILE"))
