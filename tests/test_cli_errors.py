@@ -137,6 +137,11 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     (["consume", "-i", "virtual", "-c", "x", "--sensor-id", "1", "--fuse", "scenarios/front_and_corners.yaml"],
      "option --fuse: not allowed with --sensor-id"),
     (["report", SCENARIO, "--seeds", "2", "--min-passes", "3"], "option --min-passes: value 3 is not allowed"),
+    # the ECU options named no interval for NaN and ±inf (a tester's finding)
+    (["report", SCENARIO, "--fcw-ttc-warn", "nan"], "option --fcw-ttc-warn: value nan is not allowed; expected a "
+                                                     "finite number in [0.5, 10]"),
+    (["report", SCENARIO, "--ecu-latency", "inf"], "option --ecu-latency: value inf is not allowed; expected a "
+                                                    "finite number in [0, 0.5]"),
     (["log", SCENARIO], "the following arguments are required: -o/--output"),
     (["log", SCENARIO, "-o", "LOGS/x.log", "--no-such-option"], "unrecognized arguments: --no-such-option"),
     # options are never abbreviated (report --seed 7 was taken for --seeds 7: seeds 1–7); the full name is offered

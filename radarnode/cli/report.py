@@ -18,6 +18,8 @@ in the same order wherever they run.
 
 from __future__ import annotations
 
+import argparse
+
 import dataclasses
 import datetime
 import math
@@ -51,9 +53,18 @@ def add_subparser(sub) -> None:
     p.add_argument("--plots", metavar="DIR",
                    help="draw one PNG per scenario and seed into DIR (created if missing; needs matplotlib)")
     for opt, field, what in ECU_OPTIONS:
-        p.add_argument(opt, type=options.number(), default=None, metavar="X",
+        # any float here: the ECU settings' own check then names the interval, NaN and ±inf included
+        p.add_argument(opt, type=_any_number, default=None, metavar="X",
                        help=f"{what} (overrides the scenario's ecu.{field})")
     p.set_defaults(func=cmd)
+
+
+def _any_number(text: str) -> float:
+    """An argparse type: any float, NaN and ±inf too (the ECU settings refuse them, naming their interval)."""
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a number") from None
 
 
 #: report options that set the consumer ECU under test, and the scenario field each overrides
