@@ -45,6 +45,8 @@ class Schema:
     aliases: dict = field(default_factory=dict)
     #: fields the loader fills itself, never read from the file
     internal: frozenset = frozenset({"source", "lines"})
+    #: class -> {list field: what is expected instead of an empty list}: lists that, written, must hold something
+    non_empty: dict = field(default_factory=dict)
 
 
 class Source:
@@ -143,6 +145,9 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
                 if not isinstance(value, list):
                     raise src.error(child, f"field '{child}': value {short_repr(value)} is not allowed; expected a "
                                     "list")
+                meaning = schema.non_empty.get(cls, {}).get(name)
+                if not value and meaning is not None:
+                    raise src.error(child, f"field '{child}': value [] is not allowed; expected {meaning}")
                 value = tuple(build(sub, v, f"{child}[{i}]", src, schema, who=who) for i, v in enumerate(value))
             else:
                 value = build(sub, value, child, src, schema, who=who)

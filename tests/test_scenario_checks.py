@@ -111,6 +111,14 @@ def test_a_waypoint_actor_overlapping_the_ego_names_its_waypoints(tmp_path):
     assert msg.startswith(f"{p}:9: actor 'w' (actors[0]) overlaps the ego"), msg
 
 
+def test_an_empty_waypoint_list_is_named_not_taken_for_an_actor_at_the_origin(tmp_path):
+    """``waypoints: []`` was read as no waypoints: the actor stood at x 0 and the error said it overlapped the ego
+    (an independent tester's finding)."""
+    p, msg = _error(tmp_path, HEAD + "actors:\n  - {id: w, class: car, waypoints: [], speed_mps: 10.0}\n")
+    assert "field 'actors[0].waypoints': value [] is not allowed; expected two waypoints or more" in msg, msg
+    assert "overlaps" not in msg
+
+
 # --- an actor the radar can never see -------------------------------------------------------------------------
 
 

@@ -633,7 +633,9 @@ SCHEMA = Schema(
         Road: {"guardrails": (Guardrails, False), "segments": (RoadSegment, True)},
         Ego: {"accel": (AccelStep, True), "lane_change": (LaneChange, False), "driver": (Driver, False)},
         Actor: {"accel": (AccelStep, True), "waypoints": (Waypoint, True)},
-    })
+    },
+    non_empty={Actor: {"waypoints": "two waypoints or more, or no field 'waypoints' (an actor placed by x_m, y_m "
+                                    "or lane)"}})
 
 
 def read_scenario(path: str | Path) -> Scenario:
