@@ -64,3 +64,11 @@ class BusError(RadarnodeError):
 
 class WireError(RadarnodeError):
     """A DBC file or a CAN frame does not match what the protocol requires."""
+
+
+class Terminated(BaseException):
+    """SIGTERM (or another signal) asks the command to end: unwinds like KeyboardInterrupt does for SIGINT."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = int(signum)

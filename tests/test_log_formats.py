@@ -322,3 +322,21 @@ def test_radarnodes_blf_writer_writes_python_cans_bytes(tmp_path):
     assert ours.read_bytes() == theirs.read_bytes()
     back = list(can.BLFReader(str(ours)))
     assert len(back) == len(msgs)
+
+
+@pytest.mark.parametrize("delay", [0.15, 0.25, 0.35])
+def test_ctrl_c_while_the_command_still_loads_its_modules_ends_quietly(tmp_path, delay):
+    """Ctrl-C in the first few tenths of a second, while numpy, python-can and the rest load, printed a
+    KeyboardInterrupt traceback and the process died by the signal (an independent tester's finding): now the
+    modules load inside the command, which ends with 130 and no traceback (a signal before Python's own handler is
+    set kills it silently, as any program; one in the first ~50 ms, while the interpreter itself and the entry
+    module start, can still show Python's own traceback)."""
+    out = tmp_path / "x.blf"
+    p = subprocess.Popen([sys.executable, "-m", "radarnode", "log", str(SCENARIOS / "highway_cut_in.yaml"), "-o",
+                          str(out), "--duration", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         cwd=ROOT)
+    time.sleep(delay)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=60)
+    assert "Traceback" not in err, err
+    assert p.returncode in (130, -signal.SIGINT), (p.returncode, err)

@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from radarnode.errors import FileError, UsageError
+from radarnode.errors import FileError, Terminated, UsageError  # noqa: F401 - Terminated: its old home
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
 from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario
@@ -123,14 +123,6 @@ def check_doa_presets(scenario: Scenario, doa: str) -> None:
             _, why, allowed = conflicts[0]
             raise UsageError(f"option --doa: value {doa!r} is not allowed with preset {preset.name} of {where} "
                              f"({why}); expected {allowed}")
-
-
-class Terminated(BaseException):
-    """SIGTERM (or another signal) asks the command to end: unwinds like KeyboardInterrupt does for SIGINT."""
-
-    def __init__(self, signum: int) -> None:
-        super().__init__(signum)
-        self.signum = int(signum)
 
 
 class Stop(threading.Event):

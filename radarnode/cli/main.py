@@ -10,9 +10,10 @@ import sys
 import traceback
 
 from radarnode import __version__
-from radarnode.cli.common import Terminated
-from radarnode.cli.options import Parser
-from radarnode.errors import RadarnodeError, UsageError
+from radarnode.errors import RadarnodeError, Terminated, UsageError
+
+# (the subcommands' and the parser's modules, which import numpy, python-can and the rest, are imported inside
+# main(): a Ctrl-C while they load ends the command quietly with 130, not with a traceback)
 
 logger = logging.getLogger(__name__)
 
@@ -48,6 +49,7 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
     """The command-line parser; with ``only``, that subcommand's module alone is imported and set up (the
     others are named, with no options of their own), so that a command does not pay for the imports of the
     eight others (``radarnode log`` starts without the consumer's, the image's or Monte Carlo's)."""
+    from radarnode.cli.options import Parser
     parser = Parser(prog="radarnode", description="ARS 408-21 compatible radar node emulator",
                     epilog="exit status: 0 done; 1 a file, scenario, bus or run failed (or report: a scenario "
                            "failed); 2 usage: the command line cannot run as typed; 130/143 stopped by "
@@ -73,14 +75,24 @@ def main(argv: list[str] | None = None) -> int:
     """Run one command; the exit status is 0 (done), 1 (a file, scenario, bus or the run failed), 2 (usage: the
     command line cannot run as typed), 128 + the signal (130 SIGINT, 143 SIGTERM) when stopped."""
     if not threading_main():
-        return _main(argv)
+        return _quiet(argv)
     # SIGTERM unwinds like Ctrl-C (temporary files removed, finished files closed) instead of killing the
     # process where it stands; commands that run until stopped install their own handler (stop_on_signals)
     previous = signal.signal(signal.SIGTERM, _terminate)
     try:
-        return _main(argv)
+        return _quiet(argv)
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def _quiet(argv: list[str] | None) -> int:
+    """:func:`_main`, and a signal that comes before a command runs (while its modules load) ends it quietly too."""
+    try:
+        return _main(argv)
+    except KeyboardInterrupt:
+        return 128 + signal.SIGINT
+    except Terminated as exc:
+        return 128 + exc.signum
 
 
 def _main(argv: list[str] | None) -> int:
