@@ -69,7 +69,7 @@ def main() -> None:
     roots = (ROOT,) if args.before is None else (args.before.resolve(), ROOT)
     for root in roots:
         compile_tree(root)
-    start = wall([py, "-c", "import radarnode.cli.main"], args.runs, roots)
+    start = wall([py, "-c", "import radarnode.cli.main, radarnode.cli.log"], args.runs, roots)
     where = tables.cache_dir()
     print(f"### `radarnode log … --fidelity object -o x{args.suffix}`, median of {args.runs} runs, the package's "
           "bytecode compiled as an installation has it\n")

@@ -340,3 +340,45 @@ def test_ctrl_c_while_the_command_still_loads_its_modules_ends_quietly(tmp_path,
     _, err = p.communicate(timeout=60)
     assert "Traceback" not in err, err
     assert p.returncode in (130, -signal.SIGINT), (p.returncode, err)
+
+
+def _blf_containers(path: Path) -> list[tuple[int, int, int]]:
+    """(offset, size, objects beginning in it) of every top-level container of a BLF file."""
+    import struct
+    import zlib
+    data = path.read_bytes()
+    pos = struct.unpack_from("<4sI", data, 0)[1]           # the file header's own size
+    out = []
+    while pos + 16 <= len(data):
+        _, _, _, size, _ = struct.unpack_from("<4sHHII", data, pos)
+        body = data[pos + 16: pos + size]
+        method = struct.unpack_from("<H", body, 0)[0]
+        inner = body[16:] if method == 0 else zlib.decompress(body[16:])
+        out.append((pos, size, inner.count(b"LOBJ")))
+        pos += size + size % 4
+    return out
+
+
+@pytest.mark.parametrize("damaged", [0, 1])
+def test_a_damaged_blf_container_costs_its_own_frames_only(capsys, tmp_path, damaged):
+    """One byte flipped in a BLF container: python-can's writer splits objects across containers, so the container
+    after the damage begins with the end of an object and python-can's reader refused it and every one after it —
+    0 frames read when the first of three was damaged, none of the third when the second was (an independent
+    tester's finding). Reading now goes on from the first whole object of the next container."""
+    good = tmp_path / "good.blf"
+    assert main(["log", LONG, "-o", str(good), "--duration", "60"]) == 0
+    capsys.readouterr()
+    containers = _blf_containers(good)
+    assert len(containers) >= 3
+    total = sum(1 for _ in can.LogReader(str(good)))
+    offset, size, objects = containers[damaged]
+    data = bytearray(good.read_bytes())
+    data[offset + size // 2] ^= 0x55
+    bad = tmp_path / "bad.blf"
+    bad.write_bytes(bytes(data))
+    rc, _, err = cli(capsys, "decode", bad, "--summary")
+    line = err.strip().splitlines()[-1]
+    assert rc == 1 and f"first bad record at byte {offset}" in line, line
+    read = int(re.search(r"(\d+) frames read", line).group(1))
+    # every frame but those of the damaged container, and the one split at its end
+    assert total - objects - 1 <= read <= total - objects + 1, (read, total, objects)

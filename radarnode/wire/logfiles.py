@@ -453,6 +453,19 @@ class _BlfFrames:
                     f.seek(nxt)
                     if hasattr(reader, "_tail"):
                         reader._tail = b""         # the half object carried over from the damaged container
+                    self.pos = nxt
+                    try:
+                        # the container after the damage begins with the end of an object the damaged one began:
+                        # read from its first whole object (python-can's reader would refuse the container, and
+                        # every one after it, each starting where the one before left off)
+                        for msg in _from_first_whole_object(reader, f):
+                            yield msg
+                    except RECORD_ERRORS + (zlib.error, can.io.blf.BLFParseError) as exc:
+                        report.skip(f"byte {nxt}", exc)
+                        resync_from = nxt + 1
+                        if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+                            return
+                        continue
                 self.pos = f.tell()
                 try:
                     for msg in reader:
@@ -470,6 +483,27 @@ class _BlfFrames:
                         return
         finally:
             reader.stop()
+
+
+def _from_first_whole_object(reader: BLFReader, f) -> Iterator[can.Message]:
+    """The frames of the BLF container at ``f``'s position, from the first object that begins in it, the reader's
+    carried-over tail set as after a whole container. Anything but a container there (an object of an uncompressed
+    container, found by its signature) is left to the reader: ``f`` goes back to it."""
+    start = f.tell()
+    head = f.read(blf.OBJ_HEADER_BASE_STRUCT.size)
+    signature, _, _, obj_size, obj_type = blf.OBJ_HEADER_BASE_STRUCT.unpack(head)
+    if signature != b"LOBJ" or obj_type != blf.LOG_CONTAINER:
+        f.seek(start)
+        return
+    body = f.read(obj_size - blf.OBJ_HEADER_BASE_STRUCT.size)
+    f.read(obj_size % 4)                                  # padding, as the reader skips it
+    method, _ = blf.LOG_CONTAINER_STRUCT.unpack_from(body)
+    payload = body[blf.LOG_CONTAINER_STRUCT.size:]
+    data = payload if method == blf.NO_COMPRESSION else zlib.decompressobj().decompress(payload)
+    first = data.find(b"LOBJ")
+    reader._tail = b""
+    if first >= 0:
+        yield from reader._parse_container(data[first:])
 
 
 def _find_object(f, start: int, size: int) -> int | None:
