@@ -514,3 +514,95 @@ def test_a_forged_header_with_a_plausible_counter_just_before_the_real_one_steal
     assert matched == len(cycles) and not extra, [(c.meas_counter, len(c.objects)) for c in extra]
     st = asm.stats             # (a forged header the same bytes as the real one is the real one, repeated)
     assert st.stray_headers + st.duplicate_frames == 1 and st.incomplete_cycles == 0 and st.lost_cycles == 0
+
+
+def _insert(cycles, target: int, extra: list, where) -> list:
+    """The stream of ``cycles`` with ``extra`` frames put into cycle ``target`` at index ``where(frames)``."""
+    frames = cycles[target][0]
+    at = where(frames)
+    return [m for c in cycles[:target] for m in c[0]] + frames[:at] + extra + frames[at:] \
+        + [m for c in cycles[target + 1:] for m in c[0]]
+
+
+def _whole_or_dropped(got, cycles) -> None:
+    """Every delivered cycle with objects is one the node sent under its counter, whole (groups included)."""
+    sent = {c[4]: c for c in cycles}
+    for c in got:
+        if len(c.objects):
+            assert c.meas_counter in sent and _intact(c, *sent[c.meas_counter][1:]), \
+                (c.meas_counter, c.has_quality, c.has_extended)
+
+
+@pytest.mark.parametrize("count", [0, 5])
+def test_a_stray_header_in_the_first_cycle_neither_halves_it_nor_teaches_a_half_layout(count):
+    """A second tester's finding: before any complete cycle was seen, a stray header right after the first cycle's
+    general frames delivered it without 0x60C/0x60D, and the layout learned from it made the next clean cycle go
+    out at its last general frame, without its groups too."""
+    cycles = _node_cycles(8)
+    first = next(k for k, c in enumerate(cycles) if len(c[1]) >= 2)
+    last_general = lambda fr: max(i for i, m in enumerate(fr) if m.arbitration_id == P.OBJ_GENERAL) + 1  # noqa: E731
+    stream = _insert(cycles, first, [_forged_header(count, 2)], last_general)
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    _whole_or_dropped(got, cycles)
+    assert sum(len(c.objects) > 0 for c in got) >= sum(len(c[1]) > 0 for c in cycles) - 1
+
+
+@pytest.mark.parametrize("after", [P.OBJ_GENERAL, P.OBJ_QUALITY])
+def test_a_forged_header_where_the_groups_come_back_on_never_halves_that_cycle(after):
+    """A second tester's finding: RadarCfg turns SendQuality and SendExtInfo back on at cycle 30; a forged header
+    with objects after that cycle's general or quality frames delivered it without the groups the sensor had
+    announced (announced groups were waited for, not held for)."""
+    toggles = {10: _cfg(RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=0),
+               20: _cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=0),
+               30: _cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=1, RadarCfg_SendExtInfo_valid=1,
+                        RadarCfg_SendExtInfo=1)}
+    cycles = _node_cycles(40, toggles=toggles)
+    target = next(k for k in range(30, 40) if len(cycles[k][1]) >= 2 and cycles[k][3])
+    cut = lambda fr: max(i for i, m in enumerate(fr) if m.arbitration_id == after) + 1  # noqa: E731
+    stream = _insert(cycles, target, [_forged_header(3, cycles[target][4] + 1)], cut)
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    _whole_or_dropped(got, cycles)
+    assert asm.stats.decode_errors == 0
+
+
+def test_empty_cycles_behind_a_held_one_are_delivered_in_order_and_do_not_pile_up():
+    """A second tester's finding: with a cycle held (the sensor stopped 0x60D) and then an empty road, every empty
+    cycle waited behind it — 20,000 of them in memory, none delivered by feed() until the end, then half lost to the
+    queue's bound. At most LAYOUT_MEMORY wait now: then the held cycle, unproven, is dropped (counted) and they go
+    out, in order."""
+    cycles = _node_cycles(12, toggles={10: _cfg(RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=0)})
+    header = _header_of(cycles[11][0])
+    counter = cycles[11][4]
+    empties = [_forged_header(0, counter + k) for k in range(1, 2001)]
+    stream = [m for c in cycles[:11] for m in c[0]] + empties
+    asm = CycleAssembler()
+    seen, most_waiting = [], 0
+    for m in stream:
+        asm.on_message_received(m)
+        seen += [c.meas_counter for c in asm.drain()]
+        most_waiting = max(most_waiting, len(asm._behind.get("obj", [])))
+    asm.flush()
+    seen += [c.meas_counter for c in asm.drain()]
+    assert most_waiting < LAYOUT_MEMORY and asm.queue_overflow == 0
+    assert seen == sorted(seen, key=lambda c: (c - seen[0]) & 0xFFFF)          # in order
+    assert len(seen) + asm.stats.incomplete_cycles == 11 + len(empties) and asm.stats.incomplete_cycles <= 1
+    assert header is not None
+
+
+@pytest.mark.parametrize("jump", [1, 2])
+def test_a_forged_header_just_after_the_real_one_does_not_take_its_cycle(jump):
+    """A second tester's finding: a header with objects and a plausible count put right after the sensor's own
+    took all of that cycle's frames and was delivered as the next cycle (the real one then dropped as stray)."""
+    cycles = _node_cycles(14)
+    target = next(k for k in range(6, 14) if len(cycles[k][1]) >= 2)
+    after_header = lambda fr: fr.index(_header_of(fr)) + 1  # noqa: E731
+    stream = _insert(cycles, target, [_forged_header(len(cycles[target][1]), cycles[target][4] + jump)],
+                     after_header)
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    matched, extra = _match(got, cycles)
+    assert matched == len(cycles) and not extra, [(c.meas_counter, len(c.objects)) for c in extra]
+    # (with the next count and the same number of objects it is the next header itself, sent early: a repeat)
+    assert asm.stats.stray_headers + asm.stats.duplicate_frames == 1

@@ -492,6 +492,12 @@ class CycleAssembler(can.Listener):
 
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
         kind = HEADERS[base]
+        held_header = self._suspects.get(kind)
+        if held_header is not None and held_header.header == data and not held_header.groups:
+            # the header held (it came right after another with none of that one's frames yet) comes again, now in
+            # its place: the first copy was early (a repeat sent ahead of time), this one is taken
+            del self._suspects[kind]
+            self.stats.duplicate_frames += 1
         for known in (self._pending.get(kind), self._last_done.get(kind), self._suspects.get(kind)):
             if known is not None and known.header == data:
                 self.stats.duplicate_frames += 1     # the same header again: not a new cycle
@@ -525,8 +531,18 @@ class CycleAssembler(can.Listener):
             self.flush(kind)
             self._last_counter[kind] = last = suspect.meas_counter
             self._finish(suspect)
-        elif suspect is not None:
-            self._drop_suspect(suspect)
+        else:
+            pending = self._pending.get(kind)
+            if pending is not None and pending.expected and not pending.groups:
+                # a header that continues the count right after one that announced objects and got none of its
+                # frames yet: a forged header put just after the sensor's own would take that cycle's frames under its
+                # count — it is held instead, the frames go to the cycle in progress, and the next header decides
+                if suspect is not None:
+                    self._drop_suspect(suspect)
+                self._suspects[kind] = header
+                return
+            if suspect is not None:
+                self._drop_suspect(suspect)
         self.flush(kind)
         # what accepting this header changes, kept to undo it should the header prove stray
         header.before = (last, self._stride.get(kind), self.stats.lost_cycles)
@@ -575,8 +591,8 @@ class CycleAssembler(can.Listener):
         MAX_JUMP_STRIDES strides once the stride is known."""
         if not _advances(counter, last):
             return False
-        stride = self._stride.get(kind)
-        return stride is None or (counter - last) & 0xFFFF <= MAX_JUMP_STRIDES * stride
+        stride = self._stride.get(kind, 2)        # not known yet: the ARS 408's 2 (radarnode counts in 1s)
+        return (counter - last) & 0xFFFF <= MAX_JUMP_STRIDES * stride
 
     def _drop_suspect(self, suspect: _Pending) -> None:
         """A held header that no header continued: stray; the frames it collected are counted as orphans."""
@@ -687,9 +703,21 @@ class CycleAssembler(can.Listener):
             self._finish(p)
 
     def _drop_held(self, kind: str) -> None:
-        """A cycle short of a layout's group that neither its late groups nor a like cycle after it vindicated."""
-        self._held.pop(kind)
-        self.stats.incomplete_cycles += 1
+        """A held cycle that neither its late groups nor a like cycle after it vindicated (the end of data, a time-out,
+        empty cycles behind it): dropped if it lacks a group the last complete cycles had; one short only of groups
+        announced since (by RadarState or CollDetState, maybe forged) is as whole as those cycles, and delivered, as
+        is the first cycle of all."""
+        held = self._held.pop(kind)
+        present = {g for g, group in held.groups.items() if group}
+        seen = self._seen_layouts[kind]
+        if self._learned_groups(kind) <= present or not seen:
+            # (before any complete cycle the layout is a guess: the first cycle, followed by nothing, goes out and
+            # teaches it; a group it lacks and the next cycles have is waited for again: late_frames)
+            if held.expected:
+                seen.append(frozenset(present))
+            self._deliver(held)
+        else:
+            self.stats.incomplete_cycles += 1
         self._release(kind)
 
     def _release(self, kind: str) -> None:
@@ -715,8 +743,12 @@ class CycleAssembler(can.Listener):
             return
         if not p.expected and p.kind in self._held:
             # an empty cycle shows neither that the held one was cut short nor that the sensor stopped a group: it
-            # waits behind it, so that cycles are delivered in their order
-            self._behind.setdefault(p.kind, []).append(p)
+            # waits behind it, so that cycles are delivered in their order — for LAYOUT_MEMORY cycles at most: then
+            # the held one, unproven, is dropped, and they go out
+            behind = self._behind.setdefault(p.kind, [])
+            behind.append(p)
+            if len(behind) >= LAYOUT_MEMORY:
+                self._drop_held(p.kind)
             return
         held = self._held.pop(p.kind, None)
         missing = self._missing(p)
@@ -744,12 +776,13 @@ class CycleAssembler(can.Listener):
         self._deliver(p)
 
     def _missing(self, p: _Pending) -> set[int]:
-        """Groups that the last complete cycles had and cycle ``p`` (with objects) lacks: what a stray header cuts
-        off. (A group only announced, by RadarState or CollDetState, is waited for until the next header but
-        holds nothing back: a forged announcement must not cost a cycle.)"""
+        """Groups of the expected layout that cycle ``p`` (with objects) lacks: what a stray header cuts off. The
+        layout is the last complete cycles' groups (before the first: 0x60B, 0x60C and 0x60D) and those RadarState
+        or CollDetState announced; a forged announcement costs a held cycle one cycle's delay, not the cycle (the
+        next cycle without the group delivers both)."""
         if not p.expected:
             return set()
-        return set().union(*self._seen_layouts[p.kind]) - {g for g, group in p.groups.items() if group}
+        return self.expected_groups(p.kind) - {g for g, group in p.groups.items() if group}
 
     def _deliver(self, p: _Pending) -> None:
         """Queue cycle ``p`` (whole) as an ObjectCycle or ClusterCycle."""
