@@ -33,7 +33,9 @@ RadarState 0x201 (a stray or forged one must not strip groups):
   frames that fit its own cycle and not the one in progress; a next header that
   continues its count shows a restart (``counter_resets``) or a gap
   (``lost_cycles``) and its cycle is delivered if whole; one that continues the
-  old count drops it (``stray_headers``);
+  old count drops it (``stray_headers``). Up to ``HELD_HEADERS`` are held at
+  once (an old header replayed between a restarted sensor's cycles must not
+  push its first header out); an earlier one, continued, must have taken frames;
 * a header that announced objects and got no frame before the next one,
   which continues the count from before it and not from it, was stray (a
   forged header with a plausible MeasCounter just before the sensor's own):
@@ -171,6 +173,9 @@ LIST_KIND = {g: kind for kind, groups in GROUPS.items() for g in groups}
 #: until the next header continues its count, as one that does not advance is: a forged or corrupted header
 #: must not cut the cycle in progress
 MAX_JUMP_STRIDES = 64
+#: headers held at once, the newest first in line for frames: a restarted sensor's next header still finds its
+#: first one when a replayed old header came between them
+HELD_HEADERS = 4
 
 
 def _advances(counter: int, last: int) -> bool:
@@ -244,6 +249,7 @@ class CycleAssembler(can.Listener):
         self._last_counter: dict[str, int] = {}
         # a header that did not advance MeasCounter, held until frames show whether the sensor restarted
         self._suspects: dict[str, _Pending] = {}
+        self._older_suspects: dict[str, list[_Pending]] = {}    # held before the newest one (HELD_HEADERS in all)
         # a cycle that ended whole in itself but without a group the layout expects: a stray header cut it before
         # its last groups (they follow, and it is delivered whole) or the sensor stopped sending the group (the next
         # cycle lacks it too, and both are delivered); never delivered without either
@@ -353,9 +359,10 @@ class CycleAssembler(can.Listener):
                 del self._pending[p.kind]
                 self._finish(p)
             if kind is None:            # end of data: a header still held was continued by none
-                for suspect in self._suspects.values():
+                for suspect in [*self._suspects.values(), *(o for lst in self._older_suspects.values() for o in lst)]:
                     self._drop_suspect(suspect)
                 self._suspects.clear()
+                self._older_suspects.clear()
                 for held_kind in list(self._held):      # and a cycle short of a group was followed by none
                     self._drop_held(held_kind)
 
@@ -519,10 +526,27 @@ class CycleAssembler(can.Listener):
             # continues its count shows a restart or a gap (its cycle is then delivered, if whole); one that
             # continues the old count drops it (stray_headers)
             if suspect is None or not self._continues(kind, counter, suspect.meas_counter):
-                if suspect is not None:
-                    self._drop_suspect(suspect)
-                self._suspects[kind] = header
-                return
+                older = self._older_suspects.setdefault(kind, [])
+                # (only one that took frames: replayed old headers, one after each cycle, continue each other too)
+                match = [o for o in older if o.groups and self._continues(kind, counter, o.meas_counter)]
+                if not match:
+                    # held beside the earlier held headers (a few): a restarted sensor's headers between replayed
+                    # old ones are still found continuing each other
+                    if suspect is not None:
+                        older.append(suspect)
+                        while len(older) > HELD_HEADERS - 1:
+                            self._drop_suspect(older.pop(0))
+                    self._suspects[kind] = header
+                    return
+                # it continues an earlier held header: that one was the sensor's, the others stray
+                chosen = match[-1]
+                for other in [o for o in older if o is not chosen] + ([suspect] if suspect is not None else []):
+                    self._drop_suspect(other)
+                older.clear()
+                suspect = chosen
+            else:
+                for other in self._older_suspects.pop(kind, []):
+                    self._drop_suspect(other)
             # a second header continuing the first: the sensor restarted, or cycles were lost in between
             if _advances(suspect.meas_counter, last):
                 self.stats.lost_cycles += ((suspect.meas_counter - last) & 0xFFFF) // self._stride.get(kind, 1) - 1
@@ -543,6 +567,8 @@ class CycleAssembler(can.Listener):
                 return
             if suspect is not None:
                 self._drop_suspect(suspect)
+            for other in self._older_suspects.pop(kind, []):
+                self._drop_suspect(other)
         self.flush(kind)
         # what accepting this header changes, kept to undo it should the header prove stray
         header.before = (last, self._stride.get(kind), self.stats.lost_cycles)
