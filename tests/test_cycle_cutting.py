@@ -642,3 +642,15 @@ def test_a_restarted_sensor_is_taken_up_although_an_old_header_is_replayed_after
     assert delivered == sorted(delivered, key=lambda c: c < 5000)           # the old count's cycles, then the new
     assert len(set(delivered) & {c[4] for c in after}) >= len(after) - 1, delivered
     assert asm.stats.counter_resets == 1
+
+
+def test_two_configuration_changes_in_a_row_cost_no_cycle():
+    """A second tester's finding: SendExtInfo off at cycle 10 and SendQuality off at 11 dropped cycle 10 (held, then
+    the next cycle lacked other groups as well). It lacked what the next one lacks too: both delivered whole."""
+    toggles = {10: _cfg(RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=0),
+               11: _cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=0)}
+    cycles = _node_cycles(20, toggles=toggles)
+    asm = CycleAssembler()
+    got = list(asm.feed([m for c in cycles for m in c[0]]))
+    matched, extra = _match(got, cycles)
+    assert matched == len(cycles) and not extra and asm.stats.incomplete_cycles == 0

@@ -41,11 +41,14 @@ RadarState 0x201 (a stray or forged one must not strip groups):
   forged header with a plausible MeasCounter just before the sensor's own):
   taken out, it steals nothing. (A forged *empty* header of that kind is
   whole at once, and is delivered as an empty cycle: a known limit;)
-* a cycle that ends whole in itself but without a group the last complete
-  cycles had (a stray header cut it before its last groups) is held: the late
-  frames of that group make it whole and it is delivered; if the next cycle
-  lacks the same groups too, the sensor stopped sending them and both are
-  delivered (the layout forgets them at once); otherwise it is dropped;
+* a cycle that ends whole in itself but without a group of the expected
+  layout (a stray header cut it before its last groups) is held: the late
+  frames of that group make it whole and it is delivered; if the next cycle has
+  a group it lacked of those the last complete cycles had, it was cut short and
+  is dropped; if the next cycle lacks them too, the sensor stopped sending them
+  and both are delivered (the layout forgets them at once); one short only of
+  groups announced (RadarState, CollDetState) is delivered. Empty cycles that
+  end meanwhile wait behind it (``LAYOUT_MEMORY`` at most);
 * otherwise the cycle ends at the next header of its kind (an object and a
   cluster cycle are assembled side by side, so a stray header of the other
   kind cuts nothing), after ``cycle_timeout_s`` of
@@ -779,20 +782,22 @@ class CycleAssembler(can.Listener):
         held = self._held.pop(p.kind, None)
         missing = self._missing(p)
         if held is not None:
-            if p.expected and missing and missing == self._missing(held):
-                # two cycles in a row without the same groups: the sensor stopped sending them (RadarCfg). Both are
-                # delivered, and the layout no longer expects those groups
-                self._seen_layouts[p.kind] = seen = collections.deque(
-                    (frozenset(x - missing) for x in seen), maxlen=seen.maxlen)
-                for g in missing:
-                    self._announced[p.kind].pop(g, None)
-                seen.append(frozenset(g for g, group in held.groups.items() if group))
-                self._deliver(held)
-                missing = set()
-            else:
-                # the cycle after it had what it lacked (it was cut short, and its late groups never came), or was
-                # short of other groups (nothing shows the sensor stopped them): dropped, never half
+            # what the held cycle lacks of the groups the sensor was sending (not of those only announced)
+            lacked = self._missing(held) & self._learned_groups(p.kind)
+            if lacked & present:
+                # this cycle has what the held one lacked: it was cut short, and its late groups never came — dropped
                 self.stats.incomplete_cycles += 1
+            else:
+                if lacked:
+                    # this cycle lacks them too: the sensor stopped sending them (RadarCfg). The layout no longer
+                    # expects them, and the held cycle is delivered (one short only of announced groups too)
+                    self._seen_layouts[p.kind] = seen = collections.deque(
+                        (frozenset(x - lacked) for x in seen), maxlen=seen.maxlen)
+                    for g in lacked:
+                        self._announced[p.kind].pop(g, None)
+                    seen.append(frozenset(g for g, group in held.groups.items() if group))
+                    missing = self._missing(p)
+                self._deliver(held)
             self._release(p.kind)
         if missing:
             self._held[p.kind] = p              # whole in itself, short of the layout: wait for what follows
