@@ -139,7 +139,12 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         if name not in fields or not isinstance(key, str):
             raise src.error(child, f"unknown field '{child}'; allowed here: {', '.join(allowed)}")
         nested = schema.nested.get(cls, {}).get(name)
-        if nested is not None and value is not None:
+        if nested is not None and value is None:
+            # a section or list written with nothing after it (``road:``) is YAML's null, not "the defaults"
+            what = "a list" if nested[1] else "a mapping of its fields"
+            raise src.error(child, f"field '{child}': value null (nothing after '{key}:') is not allowed; expected "
+                                   f"{what}, or no field '{key}' at all")
+        if nested is not None:
             sub, many = nested
             if many:
                 if not isinstance(value, list):

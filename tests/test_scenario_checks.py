@@ -119,6 +119,21 @@ def test_an_empty_waypoint_list_is_named_not_taken_for_an_actor_at_the_origin(tm
     assert "overlaps" not in msg
 
 
+@pytest.mark.parametrize("section,line", [("road:", "road:"), ("ecu:", "ecu:"), ("ego:", "ego:"),
+                                          ("radar:", "radar:"), ("waypoints", "    waypoints:"),
+                                          ("accel", "    accel:")])
+def test_a_section_left_empty_is_named_not_a_traceback(tmp_path, section, line):
+    """A third tester's finding: ``road:`` (or ``ecu:``, ``ego:``, ``radar:``) with nothing after it is YAML's null,
+    and crashed with an AttributeError traceback; ``waypoints:``/``accel:`` left empty gave Python's own words."""
+    key = section.rstrip(":").strip()
+    if section.endswith(":"):
+        text = "\n".join(ln for ln in HEAD.splitlines() if not ln.startswith(key + ":")) + f"\n{line}\n"
+    else:
+        text = HEAD + f"actors:\n  - id: a\n    class: car\n    x_m: 40.0\n{line}\n"
+    p, msg = _error(tmp_path, text)
+    assert f"{key}': value null" in msg and "is not allowed" in msg and "Traceback" not in msg, msg
+
+
 # --- an actor the radar can never see -------------------------------------------------------------------------
 
 
