@@ -360,11 +360,13 @@ def _blf_containers(path: Path) -> list[tuple[int, int, int]]:
 
 
 @pytest.mark.parametrize("damaged", [0, 1])
-def test_a_damaged_blf_container_costs_its_own_frames_only(capsys, tmp_path, damaged):
+@pytest.mark.parametrize("how", ["payload", "method", "size"])
+def test_a_damaged_blf_container_costs_its_own_frames_only(capsys, tmp_path, damaged, how):
     """One byte flipped in a BLF container: python-can's writer splits objects across containers, so the container
     after the damage begins with the end of an object and python-can's reader refused it and every one after it —
     0 frames read when the first of three was damaged, none of the third when the second was (an independent
-    tester's finding). Reading now goes on from the first whole object of the next container."""
+    tester's finding). Reading now goes on from the first whole object of the next container. A damaged compression
+    method or size (a third tester's findings) costs that container only, invents no frame, and is reported."""
     good = tmp_path / "good.blf"
     assert main(["log", LONG, "-o", str(good), "--duration", "60"]) == 0
     capsys.readouterr()
@@ -373,12 +375,45 @@ def test_a_damaged_blf_container_costs_its_own_frames_only(capsys, tmp_path, dam
     total = sum(1 for _ in can.LogReader(str(good)))
     offset, size, objects = containers[damaged]
     data = bytearray(good.read_bytes())
-    data[offset + size // 2] ^= 0x55
+    if how == "payload":
+        data[offset + size // 2] ^= 0x55
+    elif how == "method":          # the compression method: python-can skipped it with a warning, kept the half
+        data[offset + 16] = 7      # object before it and made a frame of it with the next container's data
+    else:                          # the size 1000 bytes too large: python-can lost the next, intact container
+        data[offset + 8: offset + 12] = (size + 1000).to_bytes(4, "little")
+    bad = tmp_path / "bad.blf"
+    bad.write_bytes(bytes(data))
+    out = tmp_path / "frames.jsonl"
+    rc, _, err = cli(capsys, "decode", bad, "--format", "json", "-o", out)
+    line = err.strip().splitlines()[-1]
+    assert rc == 1 and f"first bad record at byte {offset}" in line, line
+    read = int(re.search(r"(\d+) frames read", line).group(1))
+    if how == "size":              # the container's data is whole: every frame, the damage still reported
+        assert read == total, (read, total)
+    else:                          # every frame but those of the damaged container, and the one split at its end
+        assert total - objects - 1 <= read <= total - objects + 1, (read, total, objects)
+    reference = {(m.arbitration_id, bytes(m.data).hex().upper(), round(m.timestamp, 6))
+                 for m in can.LogReader(str(good))}
+    import json
+    got = [json.loads(row) for row in out.read_text().splitlines()]
+    assert all((r["can_id"], r["data"], round(r["timestamp"], 6)) in reference for r in got)     # none made up
+
+
+@pytest.mark.parametrize("how", ["signature", "header size"])
+def test_a_damaged_blf_file_header_costs_no_frame(capsys, tmp_path, how):
+    """A third tester's finding: a damaged LOGG signature read nothing ("not a BLF file") although every container
+    was whole, and a damaged header-size field lost the first container. Both are reported; every frame is read."""
+    good = tmp_path / "good.blf"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "3"]) == 0
+    capsys.readouterr()
+    total = sum(1 for _ in can.LogReader(str(good)))
+    data = bytearray(good.read_bytes())
+    if how == "signature":
+        data[0:4] = b"XXXX"
+    else:
+        data[4:8] = (200).to_bytes(4, "little")
     bad = tmp_path / "bad.blf"
     bad.write_bytes(bytes(data))
     rc, _, err = cli(capsys, "decode", bad, "--summary")
     line = err.strip().splitlines()[-1]
-    assert rc == 1 and f"first bad record at byte {offset}" in line, line
-    read = int(re.search(r"(\d+) frames read", line).group(1))
-    # every frame but those of the damaged container, and the one split at its end
-    assert total - objects - 1 <= read <= total - objects + 1, (read, total, objects)
+    assert rc == 1 and "first bad record at byte " in line and f"{total} frames read" in line, (line, total)

@@ -423,6 +423,19 @@ class _TextFrames:
 
 
 class _BlfFrames:
+    """A BLF file container by container, each one's frames parsed by python-can's reader (its object parser and
+    the half object it carries from one container to the next). The containers are walked here, not by the reader,
+    so that every kind of damage is found where it is and costs only that container:
+
+    - a container whose signature, size, compression method or compressed data is damaged is a bad record at its
+      start (python-can skipped an unknown method with a log warning and kept the half object before it, which the
+      next container's data then completed into a made-up frame);
+    - a container whose declared size overruns the next one (the compressed stream ends inside it) is read, and the
+      next one is found by its signature from there (python-can lost it);
+    - after a damaged container, the next one's data is read from its first whole object: its beginning is the end
+      of an object the damaged one began (python-can's reader refused it, and every one after it);
+    - a file that ends inside a container, or short of the size its header declares, is truncated."""
+
     def __init__(self, path: str, report: ReadReport) -> None:
         self.path, self.report = path, report
         self.pos = 0
@@ -438,72 +451,146 @@ class _BlfFrames:
             report.stop("byte 0", exc)
             return
         except Exception as exc:  # noqa: BLE001 - struct.error, BLFParseError: not a BLF header
-            report.stop("byte 0", f"not a BLF file ({_reason(exc)})")
-            return
+            # a damaged file header: the file is read from its first object, if it has one (times from the header's
+            # start time where that still reads, else from 0)
+            reader = _headless_reader(self.path)
+            if reader is None:
+                report.stop("byte 0", f"not a BLF file ({_reason(exc)})")
+                return
+            report.skip("byte 0", f"the file header is damaged ({_reason(exc)}); read from its first object")
         f = reader.file
         size = os.fstat(f.fileno()).st_size
+        head_size = blf.OBJ_HEADER_BASE_STRUCT.size
+        resume = False                           # the next container follows a damaged one: from its first object
+        if f.tell() != blf.FILE_HEADER_SIZE:
+            # the header's own size field is damaged (every BLF header is 144 bytes): from the first object after
+            # the header's fixed fields, read from its first whole object (harmless if it is the first container)
+            report.skip("byte 4", f"the file header's size field says {f.tell()} bytes, not "
+                                  f"{blf.FILE_HEADER_SIZE}: it is damaged")
+            first = _find_object(f, blf.FILE_HEADER_STRUCT.size, size)
+            f.seek(size if first is None else first)
+            resume = True
+
+        def damaged(where: int, reason: object) -> int | None:
+            """A bad record at ``where``; the offset of the next object signature after it (None: none)."""
+            nonlocal resume
+            report.skip(f"byte {where}", reason)
+            reader._tail = b""
+            resume = True
+            return _find_object(f, where + 1, size)
+
         try:
             declared = int(reader.file_size)
-            resync_from = None
-            while True:
-                if resync_from is not None:
-                    nxt = _find_object(f, resync_from, size)
-                    if nxt is None:
-                        return
-                    f.seek(nxt)
-                    if hasattr(reader, "_tail"):
-                        reader._tail = b""         # the half object carried over from the damaged container
-                    self.pos = nxt
-                    try:
-                        # the container after the damage begins with the end of an object the damaged one began:
-                        # read from its first whole object (python-can's reader would refuse the container, and
-                        # every one after it, each starting where the one before left off)
-                        for msg in _from_first_whole_object(reader, f):
-                            yield msg
-                    except RECORD_ERRORS + (zlib.error, can.io.blf.BLFParseError) as exc:
-                        report.skip(f"byte {nxt}", exc)
-                        resync_from = nxt + 1
-                        if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-                            return
-                        continue
-                self.pos = f.tell()
-                try:
-                    for msg in reader:
-                        yield msg
-                        self.pos = f.tell()
-                    if 0 < size < declared:
-                        report.stop(f"byte {size}", f"the file ends after {size} bytes, its header says {declared}: "
-                                                    "it is truncated")
+            pos = f.tell()                       # after the file header
+            while pos is not None and pos < size:
+                self.pos = pos
+                if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
                     return
-                except RECORD_ERRORS + (zlib.error, can.io.blf.BLFParseError) as exc:
-                    start = self.pos
-                    report.skip(f"byte {start}", exc)
-                    resync_from = start + 1
-                    if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-                        return
+                f.seek(pos)
+                head = f.read(head_size)
+                if len(head) < head_size:
+                    report.stop(f"byte {pos}", f"the file ends {len(head)} bytes into an object's header: it is "
+                                               "truncated")
+                    return
+                signature, _, _, obj_size, obj_type = blf.OBJ_HEADER_BASE_STRUCT.unpack(head)
+                if signature != b"LOBJ" or obj_size < head_size + blf.LOG_CONTAINER_STRUCT.size:
+                    pos = damaged(pos, "not a BLF object (its signature or size is damaged)")
+                    continue
+                body = f.read(obj_size - head_size)
+                if len(body) < obj_size - head_size:
+                    # the file ends inside the object: truncated — or the last container's size is damaged, and its
+                    # compressed data, whole, is still read
+                    whole = _whole_stream(body[blf.LOG_CONTAINER_STRUCT.size:]) if obj_type == blf.LOG_CONTAINER \
+                        and len(body) > blf.LOG_CONTAINER_STRUCT.size else None
+                    if whole is not None:
+                        if resume:
+                            first = whole.find(b"LOBJ")
+                            whole = whole[first:] if first >= 0 else b""
+                        try:
+                            yield from reader._parse_container(whole)
+                        except RECORD_ERRORS + (can.io.blf.BLFParseError,):
+                            pass
+                    report.stop(f"byte {pos}", f"the file ends inside an object of {obj_size} bytes: it is truncated"
+                                if whole is None else f"the object's size, {obj_size} bytes, runs past the end of "
+                                                      "the file (its data was read)")
+                    return
+                following = pos + obj_size + obj_size % 4
+                if obj_type != blf.LOG_CONTAINER:        # (python-can passes over any other top-level object)
+                    pos = following
+                    continue
+                method, _ = blf.LOG_CONTAINER_STRUCT.unpack_from(body)
+                payload = body[blf.LOG_CONTAINER_STRUCT.size:]
+                rest = b""
+                if method == blf.NO_COMPRESSION:
+                    data = payload
+                elif method == blf.ZLIB_DEFLATE:
+                    z = zlib.decompressobj()
+                    try:
+                        data = z.decompress(payload)
+                    except zlib.error as exc:
+                        pos = damaged(pos, exc)
+                        continue
+                    if not z.eof:
+                        pos = damaged(pos, "its compressed data ends early")
+                        continue
+                    rest = z.unused_data
+                else:
+                    pos = damaged(pos, f"unknown compression method {method} (damaged)")
+                    continue
+                if resume:
+                    first = data.find(b"LOBJ")
+                    data = data[first:] if first >= 0 else b""
+                    resume = False
+                try:
+                    for msg in reader._parse_container(data):
+                        yield msg
+                except RECORD_ERRORS + (can.io.blf.BLFParseError,) as exc:
+                    pos = damaged(pos, exc)
+                    continue
+                if rest and following < size:
+                    # the compressed stream ended before the size declared: that size is damaged (a bad record, though
+                    # the data read is whole: zlib checked it), and the next container is where the next signature is
+                    report.skip(f"byte {pos}", f"the container's size, {obj_size} bytes, is damaged: its compressed "
+                                               f"data ends {len(rest)} bytes before (its frames were read)")
+                    nxt = _find_object(f, pos + head_size, size)
+                    pos = nxt if nxt is not None and nxt < following else following
+                    continue
+                pos = following
+            if 0 < size < declared:
+                report.stop(f"byte {size}", f"the file ends after {size} bytes, its header says {declared}: "
+                                            "it is truncated")
         finally:
             reader.stop()
 
 
-def _from_first_whole_object(reader: BLFReader, f) -> Iterator[can.Message]:
-    """The frames of the BLF container at ``f``'s position, from the first object that begins in it, the reader's
-    carried-over tail set as after a whole container. Anything but a container there (an object of an uncompressed
-    container, found by its signature) is left to the reader: ``f`` goes back to it."""
-    start = f.tell()
-    head = f.read(blf.OBJ_HEADER_BASE_STRUCT.size)
-    signature, _, _, obj_size, obj_type = blf.OBJ_HEADER_BASE_STRUCT.unpack(head)
-    if signature != b"LOBJ" or obj_type != blf.LOG_CONTAINER:
-        f.seek(start)
-        return
-    body = f.read(obj_size - blf.OBJ_HEADER_BASE_STRUCT.size)
-    f.read(obj_size % 4)                                  # padding, as the reader skips it
-    method, _ = blf.LOG_CONTAINER_STRUCT.unpack_from(body)
-    payload = body[blf.LOG_CONTAINER_STRUCT.size:]
-    data = payload if method == blf.NO_COMPRESSION else zlib.decompressobj().decompress(payload)
-    first = data.find(b"LOBJ")
-    reader._tail = b""
-    if first >= 0:
-        yield from reader._parse_container(data[first:])
+def _headless_reader(path: str) -> BLFReader | None:
+    """python-can's BLF reader for a file whose header is damaged but that holds objects: made without reading the
+    header (its start time taken where it still reads, else 0), at the header's usual size; None without objects."""
+    with open(path, "rb") as probe:
+        data = probe.read(1 << 20)
+    if data.find(b"LOBJ") < 0:
+        return None
+    reader = BLFReader.__new__(BLFReader)
+    reader.file = open(path, "rb")                 # noqa: SIM115 - closed by reader.stop()
+    try:
+        header = blf.FILE_HEADER_STRUCT.unpack_from(data.ljust(blf.FILE_HEADER_STRUCT.size, b"\0"))
+        reader.start_timestamp = blf.systemtime_to_timestamp(header[14:22])
+        reader.file_size = header[10]
+    except Exception:  # noqa: BLE001 - the start time is damaged too
+        reader.start_timestamp, reader.file_size = 0.0, 0
+    reader._tail, reader._pos = b"", 0
+    reader.file.seek(blf.FILE_HEADER_SIZE)
+    return reader
+
+
+def _whole_stream(payload: bytes) -> bytes | None:
+    """A container's payload decompressed if its zlib stream is whole (checked), else None."""
+    z = zlib.decompressobj()
+    try:
+        data = z.decompress(payload)
+    except zlib.error:
+        return None
+    return data if z.eof else None
 
 
 def _find_object(f, start: int, size: int) -> int | None:
