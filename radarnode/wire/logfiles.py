@@ -345,13 +345,24 @@ _ASC_LINE = re.compile(r"\s*($|//|date\s|base\s|(no\s+)?internal\s+events\s+logg
 
 #: a classic CAN frame event: time, channel, ID, direction, d or r — its direction must be Rx or Tx
 _ASC_FRAME = re.compile(r"\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?\s+(\S+)\s+[dr]\s", re.IGNORECASE)
+#: a line that begins as a classic CAN frame event (time, a channel number, a hex ID) ...
+_ASC_FRAME_START = re.compile(r"\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?(\s|$)", re.IGNORECASE)
+#: ... must be one whole: direction, then d, the DLC and that many two-digit bytes, or r and an optional DLC; Vector's
+#: named fields (Length = …, BitCount = …) may follow
+_ASC_FRAME_WHOLE = re.compile(r"\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?\s+(rx|tx)\s+(d\s+([0-9a-f])((?:\s+[0-9a-f]{2})*)"
+                              r"|r(?:\s+[0-9a-f])?)(\s+[a-z].*)?\s*$", re.IGNORECASE)
+#: a frame event whose channel is not a number
+_ASC_BAD_CHANNEL = re.compile(r"\s*\d+\.\d+\s+(?!canfd\b)(\S*[^\d\s]\S*)\s+[0-9A-Fa-f]+x?\s+(rx|tx)\s",
+                              re.IGNORECASE)
 
 
 def _asc_line_problem(line: str) -> str | None:
     """python-can's ASC reader passes over any line it does not know (events it does not parse); a line that is
     none of the ASC grammar's — neither a header, a comment, a trigger block's start or end nor a timestamped
-    event —, a frame event whose direction is neither Rx nor Tx (which the reader drops without a word), or a
-    line that holds control characters or bytes that are not text, is damage, and reported as such."""
+    event —, a frame event that is not whole (its direction neither Rx nor Tx, none, a channel that is not a
+    number, the line cut short, data bytes not of two digits or not as many as its DLC says: the reader drops some of
+    those without a word and reads others wrong), or a line that holds control characters or bytes that are not
+    text, is damage, and reported as such."""
     if "\ufffd" in line or any(c < " " and c not in "\t\r\n" for c in line):
         return "not text (control characters or invalid UTF-8)"
     if not _ASC_LINE.match(line):
@@ -359,6 +370,14 @@ def _asc_line_problem(line: str) -> str | None:
     frame = _ASC_FRAME.match(line)
     if frame and frame.group(1).lower() not in ("rx", "tx"):
         return f"a frame whose direction is {frame.group(1)!r}, not Rx or Tx: {line.strip()[:40]!r}"
+    if _ASC_FRAME_START.match(line):
+        whole = _ASC_FRAME_WHOLE.match(line)
+        if not whole:
+            return f"not a whole CAN frame line: {line.strip()[:40]!r}"
+        if whole.group(3) is not None and len(whole.group(4).split()) != int(whole.group(3), 16):
+            return f"a frame whose data bytes are not its DLC's {int(whole.group(3), 16)}: {line.strip()[:40]!r}"
+    elif _ASC_BAD_CHANNEL.match(line):
+        return f"a frame whose channel is not a number: {line.strip()[:40]!r}"
     return None
 
 
