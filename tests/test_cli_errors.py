@@ -147,6 +147,8 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     # options are never abbreviated (report --seed 7 was taken for --seeds 7: seeds 1–7); the full name is offered
     (["report", SCENARIO, "--seed", "7"], "unrecognized arguments: --seed 7; did you mean --seeds?"),
     (["log", SCENARIO, "-o", "LOGS/x.log", "--dur", "3"], "unrecognized arguments: --dur 3; did you mean --duration?"),
+    # the global options were offered twice ("--debug or --debug"; a tester's finding)
+    (["log", SCENARIO, "-o", "LOGS/x.log", "--deb"], "unrecognized arguments: --deb; did you mean --debug?"),
     (["frobnicate"], "argument COMMAND: value 'frobnicate' is not allowed; expected one of run, node"),
     # an option that the rest of the command line leaves unused is refused, not ignored: both named
     (["image", SCENARIO, "-o", "LOGS/x.png", "--every", "3"],

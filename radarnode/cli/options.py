@@ -53,7 +53,9 @@ class Parser(argparse.ArgumentParser):
         for action in self._actions:        # argparse reports a subcommand's unknown options from the main parser
             if isinstance(action, argparse._SubParsersAction):
                 parsers += [p for name, p in action.choices.items() if name in getattr(self, "_words", ())][:1]
-        known = [o for p in parsers for a in p._actions for o in a.option_strings if o.startswith("--")]
+        # (each option once: the global ones are on the main parser and, under the same names, on each subcommand)
+        known = list(dict.fromkeys(o for p in parsers for a in p._actions for o in a.option_strings
+                                   if o.startswith("--")))
         for w in words:
             if w.startswith("--"):
                 name = w.split("=", 1)[0]
