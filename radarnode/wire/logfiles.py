@@ -519,14 +519,12 @@ class _BlfFrames:
                 if len(body) < obj_size - head_size:
                     # the file ends inside the object: truncated — or the last container's size is damaged, and its
                     # compressed data, whole, is still read
-                    whole = _whole_stream(body[blf.LOG_CONTAINER_STRUCT.size:]) if obj_type == blf.LOG_CONTAINER \
-                        and len(body) > blf.LOG_CONTAINER_STRUCT.size else None
+                    inflated = _inflate(body[blf.LOG_CONTAINER_STRUCT.size:]) if obj_type == blf.LOG_CONTAINER \
+                        and len(body) > blf.LOG_CONTAINER_STRUCT.size else "not a container"
+                    whole = None if isinstance(inflated, str) else inflated[0]
                     if whole is not None:
-                        if resume:
-                            first = whole.find(b"LOBJ")
-                            whole = whole[first:] if first >= 0 else b""
                         try:
-                            yield from reader._parse_container(whole)
+                            yield from reader._parse_container(_from_first_object(whole) if resume else whole)
                         except RECORD_ERRORS + (can.io.blf.BLFParseError,):
                             pass
                     report.stop(f"byte {pos}", f"the file ends inside an object of {obj_size} bytes: it is truncated"
@@ -539,26 +537,19 @@ class _BlfFrames:
                     continue
                 method, _ = blf.LOG_CONTAINER_STRUCT.unpack_from(body)
                 payload = body[blf.LOG_CONTAINER_STRUCT.size:]
-                rest = b""
                 if method == blf.NO_COMPRESSION:
-                    data = payload
+                    data, rest = payload, b""
                 elif method == blf.ZLIB_DEFLATE:
-                    z = zlib.decompressobj()
-                    try:
-                        data = z.decompress(payload)
-                    except zlib.error as exc:
-                        pos = damaged(pos, exc)
+                    inflated = _inflate(payload)
+                    if isinstance(inflated, str):
+                        pos = damaged(pos, inflated)
                         continue
-                    if not z.eof:
-                        pos = damaged(pos, "its compressed data ends early")
-                        continue
-                    rest = z.unused_data
+                    data, rest = inflated
                 else:
                     pos = damaged(pos, f"unknown compression method {method} (damaged)")
                     continue
                 if resume:
-                    first = data.find(b"LOBJ")
-                    data = data[first:] if first >= 0 else b""
+                    data = _from_first_object(data)
                     resume = False
                 try:
                     for msg in reader._parse_container(data):
@@ -602,14 +593,22 @@ def _headless_reader(path: str) -> BLFReader | None:
     return reader
 
 
-def _whole_stream(payload: bytes) -> bytes | None:
-    """A container's payload decompressed if its zlib stream is whole (checked), else None."""
+def _inflate(payload: bytes) -> tuple[bytes, bytes] | str:
+    """A container's zlib payload decompressed, and the bytes after its stream (none in a whole container), if the
+    stream is whole (zlib checks it); else why not."""
     z = zlib.decompressobj()
     try:
         data = z.decompress(payload)
-    except zlib.error:
-        return None
-    return data if z.eof else None
+    except zlib.error as exc:
+        return _reason(exc)
+    return (data, z.unused_data) if z.eof else "its compressed data ends early"
+
+
+def _from_first_object(data: bytes) -> bytes:
+    """A container's data from the first object that begins in it (after a damaged container, its beginning is the
+    end of an object the damaged one began)."""
+    first = data.find(b"LOBJ")
+    return data[first:] if first >= 0 else b""
 
 
 def _find_object(f, start: int, size: int) -> int | None:
