@@ -187,6 +187,11 @@ def _advances(counter: int, last: int) -> bool:
     return 0 < gap <= 0x8000
 
 
+def _within_reach(counter: int, last: int, stride: int) -> bool:
+    """True when MeasCounter ``counter`` follows ``last`` by at most MAX_JUMP_STRIDES strides."""
+    return _advances(counter, last) and (counter - last) & 0xFFFF <= MAX_JUMP_STRIDES * stride
+
+
 class _Pending:
     """Frames of one cycle that is being assembled."""
 
@@ -204,6 +209,11 @@ class _Pending:
         self.early = False             # delivered as soon as the layout was complete
         self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
         self.arrival = time.monotonic()
+
+
+def _present(p: _Pending) -> set[int]:
+    """The groups cycle ``p`` holds frames of."""
+    return {g for g, group in p.groups.items() if group}
 
 
 class CycleAssembler(can.Listener):
@@ -519,7 +529,7 @@ class CycleAssembler(can.Listener):
             counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
         header = _Pending(kind, n, counter, timestamp, data, n_near)
-        self._unseat_empty_header(kind, counter)
+        self._unseat_frameless_header(kind, counter)
         last = self._last_counter.get(kind)
         suspect = self._suspects.pop(kind, None)
         if last is not None and not self._continues(kind, counter, last):
@@ -593,18 +603,16 @@ class CycleAssembler(can.Listener):
         self._pending[kind] = header
         self._maybe_complete(kind)
 
-    def _unseat_empty_header(self, kind: str, counter: int) -> None:
+    def _unseat_frameless_header(self, kind: str, counter: int) -> None:
         """A header that announced objects and got no frame before this next header, which continues the count
         from before it and not from it: it was stray (a forged or replayed header just before the sensor's own,
         with a plausible MeasCounter) — taken out, its effects on the count undone, so that it steals nothing
         from the cycle that follows."""
         p = self._pending.get(kind)
-        before = getattr(p, "before", None)
-        if p is None or not p.expected or p.groups or before is None or before[0] is None:
+        if p is None or not p.expected or p.groups or p.before is None or p.before[0] is None:
             return
-        last, stride, lost = before
-        if not _advances(counter, last) or self._continues(kind, counter, p.meas_counter) \
-                or (counter - last) & 0xFFFF > MAX_JUMP_STRIDES * (stride or 1):
+        last, stride, lost = p.before
+        if not _within_reach(counter, last, stride or 1) or self._continues(kind, counter, p.meas_counter):
             return
         del self._pending[kind]
         self.stats.stray_headers += 1
@@ -618,10 +626,8 @@ class CycleAssembler(can.Listener):
     def _continues(self, kind: str, counter: int, last: int) -> bool:
         """Whether MeasCounter ``counter`` continues the count at ``last``: forward, and by at most
         MAX_JUMP_STRIDES strides once the stride is known."""
-        if not _advances(counter, last):
-            return False
-        stride = self._stride.get(kind, 2)        # not known yet: the ARS 408's 2 (radarnode counts in 1s)
-        return (counter - last) & 0xFFFF <= MAX_JUMP_STRIDES * stride
+        # (the stride not known yet: the ARS 408's 2; radarnode counts in 1s)
+        return _within_reach(counter, last, self._stride.get(kind, 2))
 
     def _drop_suspect(self, suspect: _Pending) -> None:
         """A held header that no header continued: stray; the frames it collected are counted as orphans."""
@@ -737,7 +743,7 @@ class CycleAssembler(can.Listener):
         announced since (by RadarState or CollDetState, maybe forged) is as whole as those cycles, and delivered, as
         is the first cycle of all."""
         held = self._held.pop(kind)
-        present = {g for g, group in held.groups.items() if group}
+        present = _present(held)
         seen = self._seen_layouts[kind]
         if self._learned_groups(kind) <= present or not seen:
             # (before any complete cycle the layout is a guess: the first cycle, followed by nothing, goes out and
@@ -763,7 +769,7 @@ class CycleAssembler(can.Listener):
         self.stats.unexpected_ids += unexpected
         complete = (not p.bad and not unexpected and len(general) == p.expected
                     and all(set(group) == set(general) for group in p.groups.values()))
-        present = {g for g, group in p.groups.items() if group}
+        present = _present(p)
         seen = self._seen_layouts[p.kind]
         if not complete:
             self.stats.incomplete_cycles += 1
@@ -795,7 +801,7 @@ class CycleAssembler(can.Listener):
                         (frozenset(x - lacked) for x in seen), maxlen=seen.maxlen)
                     for g in lacked:
                         self._announced[p.kind].pop(g, None)
-                    seen.append(frozenset(g for g, group in held.groups.items() if group))
+                    seen.append(frozenset(_present(held)))
                     missing = self._missing(p)
                 self._deliver(held)
             self._release(p.kind)
@@ -813,7 +819,7 @@ class CycleAssembler(can.Listener):
         next cycle without the group delivers both)."""
         if not p.expected:
             return set()
-        return self.expected_groups(p.kind) - {g for g, group in p.groups.items() if group}
+        return self.expected_groups(p.kind) - _present(p)
 
     def _deliver(self, p: _Pending) -> None:
         """Queue cycle ``p`` (whole) as an ObjectCycle or ClusterCycle."""
