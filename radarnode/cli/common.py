@@ -15,7 +15,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from radarnode.errors import FileError, Terminated, UsageError  # noqa: F401 - Terminated: its old home
+from radarnode.errors import FileError, Terminated, UsageError
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
 from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario

@@ -19,7 +19,6 @@ in the same order wherever they run.
 from __future__ import annotations
 
 import argparse
-
 import dataclasses
 import datetime
 import math
