@@ -654,3 +654,29 @@ def test_two_configuration_changes_in_a_row_cost_no_cycle():
     got = list(asm.feed([m for c in cycles for m in c[0]]))
     matched, extra = _match(got, cycles)
     assert matched == len(cycles) and not extra and asm.stats.incomplete_cycles == 0
+
+
+@pytest.mark.parametrize("lost", [62, 63, 64, 127])
+def test_cycles_lost_just_below_at_and_above_the_jump_limit_and_twice_it(lost):
+    """MAX_JUMP_STRIDES (64 strides; radarnode counts in 1s): after 62 or 63 lost cycles (a jump of 63 or 64, within
+    the limit) the next header is taken at once; after 64 or 127 (a jump of 65 or 128, beyond it) it is held until
+    the header after it continues its count. Either way every cycle that arrives is delivered whole, in order, and
+    the lost ones are counted exactly."""
+    from radarnode.consumer.assembler import MAX_JUMP_STRIDES
+    assert MAX_JUMP_STRIDES == 64
+    cycles = _node_cycles(20)
+    stream_cycles = cycles[:10] + _renumbered(cycles[10:], cycles[9][4] + 1 + lost)
+    asm = CycleAssembler()
+    got = []
+    for k, (frames, *_) in enumerate(stream_cycles):
+        for m in frames:
+            asm.on_message_received(m)
+        got += asm.drain()
+        if k == 10:          # the first cycle after the gap, all its frames in: at once within the limit, else held
+            assert (got[-1].meas_counter == stream_cycles[10][4]) == (lost + 1 <= MAX_JUMP_STRIDES), \
+                [c.meas_counter for c in got[-2:]]
+    asm.flush()
+    got += asm.drain()
+    matched, extra = _match(got, stream_cycles)
+    assert matched == len(stream_cycles) and not extra
+    assert asm.stats.lost_cycles == lost and asm.stats.stray_headers == 0 and asm.stats.incomplete_cycles == 0
