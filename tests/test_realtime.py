@@ -146,6 +146,9 @@ def test_a_cycle_not_ready_in_time_is_flagged_not_sent_late(db):
     # cycle 7 is computed after deadline 6 and ready 38 ms after its own deadline: dropped, the rest on time
     assert counters == [c for c in range(sc.num_cycles) if c != slow]
     assert stats.missed == 1 and node.counters["cycles_missed_deadline"] == 1
+    # the node counts what went out, not the cycle it computed and dropped
+    assert node.counters["cycles"] == stats.cycles == sc.num_cycles - 1
+    assert node.counters["frames"] == len([m for m in frames if m.arbitration_id in SENSOR_IDS])
     assert max(stats.send_error_s) <= 0.002
     origin = 1000.0 + 0.010
     sent_at = [ft.sent[i][0] for i, _ in _headers(frames, db)]
@@ -161,6 +164,23 @@ def test_a_cycle_not_ready_in_time_is_flagged_not_sent_late(db):
     # held for a second, then cleared
     assert [s["RadarState_Temporary_Error"] for _, s in states] == ["No error", "Temporary error active",
                                                                      "Temporary error active", "No error"]
+
+
+def test_a_stop_between_cycles_leaves_the_counters_at_what_was_sent(db):
+    """Real time computes cycle k+1 while cycle k waits: a stop request during that wait ends the run with one
+    cycle computed and never sent, which the node's counters must not include (``cycles=7`` beside ``sent 6``)."""
+    import threading
+    sc = scenario(TRAFFIC, duration=3.0)
+    ft = FakeTime()
+    node = RadarNode(sc)
+    stop = threading.Event()
+    _costly(node, ft, lambda k: (stop.set() if k == 6 else None) or 0.010)   # asked to stop while computing cycle 6
+    stats = run_node(node, clock=ft.clock(), sinks=[ft.sink], recv=ft.recv, vehicle=EgoMotionSender(node.scene),
+                     stop=stop)
+    frames = [m for _, m in ft.sent if m.arbitration_id in SENSOR_IDS]
+    assert [c for _, c in _headers(frames, db)] == list(range(6))
+    assert stats.cycles == node.counters["cycles"] == 6
+    assert node.counters["frames"] == len(frames)
 
 
 def test_a_model_slower_than_the_cycle_keeps_the_grid_and_counts_what_it_skips(db):

@@ -4,7 +4,7 @@ A scenario's ``radars:`` list (:attr:`radarnode.scene.scenario.Scenario.radars`)
 one :class:`~radarnode.wire.node.RadarNode` per radar, each with its preset, mount, sensor ID (its CAN IDs shifted
 by 0x10 × sensor ID, as the ARS 408 does) and seed (:func:`radarnode.radar.setup.radar_seed`), all computed at the
 same scenario time and their frames sent one node after the other in each cycle, in the order of the list. The
-group has the node's interface (``cycle``, ``receive``, ``missed_deadline``), so the runner, ``run``, ``node`` and
+group has the node's interface (``cycle``, ``receive``, ``withdraw``, ``missed_deadline``), so the runner, ``run``, ``node`` and
 ``log`` drive it unchanged. The bus is shared: each node keeps to its share of the bus-load budget
 (``bus_load_limit`` divided by the number of radars). In closed loop the radars' scenes drive one ego: the
 first radar's.
@@ -82,6 +82,10 @@ class RadarGroup:
                           boundaries=first.boundaries)
         out.outputs = outs
         return out
+
+    def withdraw(self, out: CycleOutput) -> None:
+        for n, o in zip(self.nodes, out.outputs):
+            n.withdraw(o)
 
     def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0, computed: bool = True) -> None:
         for n in self.nodes:

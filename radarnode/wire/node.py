@@ -546,6 +546,12 @@ class RadarNode:
         return CycleOutput(t_s, messages, frame, view, sum(frame_bits(d) for d in dlcs), dropped,
                            boundaries=(self.last_boundaries if own else None))
 
+    def withdraw(self, out: CycleOutput) -> None:
+        """Un-count a cycle :meth:`cycle` computed that is not sent (late, or the run stopped before its
+        deadline): ``counters["cycles"]`` and ``["frames"]`` count what went out (its MeasCounter stays used)."""
+        self.counters["cycles"] -= 1
+        self.counters["frames"] -= len(out.messages)
+
     def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0, computed: bool = True) -> None:
         """Flag cycles not sent because they could not be ready on their deadline.
 

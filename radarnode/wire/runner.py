@@ -250,9 +250,11 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         clock.wait_until(deadline, poll if recv is not None else None)
         late = clock.now() - deadline
         if stopped():
+            node.withdraw(out)
             break
         if late > clock.tolerance_s:
             # not ready in time: dropped and flagged, never sent late
+            node.withdraw(out)
             node.missed_deadline(out.t_s, late)
             stats.missed += 1
         else:
