@@ -1,5 +1,5 @@
 """``python -m radarnode``: the same as the ``radarnode`` command."""
 
-from radarnode.cli.main import main
+from radarnode.cli import main
 
 raise SystemExit(main())

@@ -9,3 +9,14 @@ thread unless ``OPENBLAS_NUM_THREADS`` says otherwise (it must be set before num
 import os
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The ``radarnode`` command (:func:`radarnode.cli.main.main`). The command line's modules (argparse, logging
+    and the rest, some 20 ms) load inside this call, so a Ctrl-C while they load ends the command quietly with 130
+    instead of Python's traceback: only the interpreter's own start-up and this package's few lines come before."""
+    try:
+        from radarnode.cli.main import main as command
+    except KeyboardInterrupt:
+        return 130
+    return command(argv)

@@ -1,3 +1,3 @@
-from radarnode.cli.main import main
+from radarnode.cli import main
 
 raise SystemExit(main())
