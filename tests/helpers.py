@@ -6,7 +6,9 @@ from radarnode.radar.setup import parse_scenario
 
 
 def scenario(actors_yaml: str = "", *, ego: str = "{speed_mps: 20.0}", radar: str = "{preset: ars408_like}",
-             road: str = "{lanes: 3, lane_width_m: 3.5, ego_lane: 1}", duration: float = 3.0, seed: int = 1):
+             road: str = "{lanes: 3, lane_width_m: 3.5, ego_lane: 1}", duration: float = 3.0, seed: int = 1,
+             extra: str = ""):
+    """A scenario of these actors (YAML list items) on this road; ``extra``: more top-level YAML (``signal: …``)."""
     text = f"""
 name: test
 duration_s: {duration}
@@ -14,6 +16,7 @@ seed: {seed}
 radar: {radar}
 ego: {ego}
 road: {road}
+{extra}
 actors:
 {actors_yaml if actors_yaml.strip() else "  []"}
 """

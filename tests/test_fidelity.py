@@ -44,6 +44,26 @@ def test_every_level_feeds_the_same_wire_and_consumer(level, output):
         assert len(last.clusters) >= 2
 
 
+@pytest.mark.parametrize("level", ["object", "detection", "signal", "auto"])
+@pytest.mark.parametrize("what", ["guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, post_spacing_m: 4.0}",
+                                  "clutter_density_per_m2: 0.001"])
+def test_every_level_reports_posts_and_clutter_in_a_scene_without_actors(level, what):
+    """No actors, only posts or clutter: ``auto`` indexed its (empty) per-actor table with the posts' actor index
+    -1 and raised IndexError (an independent tester's finding); every level now sends their clusters. (The object
+    level renders no clutter, as the README's level table says.)"""
+    if level == "object" and what.startswith("clutter"):
+        pytest.skip("the object level renders no road clutter (README, 'Fidelity: speed against accuracy')")
+    road = "{lanes: 2, lane_width_m: 3.5, ego_lane: 0" + ("}" if what.startswith("clutter") else f", {what}}}")
+    sc = scenario("", ego="{speed_mps: 36.11}", road=road, radar="{preset: ars408_like, output: clusters}",
+                  duration=0.5, extra=f"signal: {{{what}}}" if what.startswith("clutter") else "")
+    node = RadarNode(sc, fidelity=level)
+    outs = []
+    run_node(node, clock=SimulatedClock(), sinks=[lambda m: None], on_cycle=outs.append,
+             vehicle=EgoMotionSender(node.scene))
+    assert len(outs) == 6
+    assert sum(len(o.frame.clusters) for o in outs) > 0
+
+
 def test_conflicting_actors_are_those_within_the_chains_resolution():
     p = PRESETS["mimo12"]
     apart = point_targets([20.0, 40.0], [0.0, 10.0], [1.0, 2.0])

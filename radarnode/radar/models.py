@@ -250,7 +250,9 @@ class AutoModel:
         conflict = conflicting_actors(self.preset, scat, self.scene.n)
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
-        need = np.where(scat.actor_index >= 0, conflict[np.maximum(scat.actor_index, 0)], True)
+        need = scat.actor_index < 0
+        if conflict.size:
+            need |= conflict[np.maximum(scat.actor_index, 0)] & ~need
         # the object level: kinematics, Pd and noise of every actor; its detections of the simple actors
         sv, yaw = ego_motion(self.scene, t_s, view, sensor_velocity_est)
         self.object.step(t_s, dataclasses.replace(config, clusters=False),
