@@ -44,15 +44,16 @@ def test_every_level_feeds_the_same_wire_and_consumer(level, output):
         assert len(last.clusters) >= 2
 
 
-@pytest.mark.parametrize("level", ["object", "detection", "signal", "auto"])
-@pytest.mark.parametrize("what", ["guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, post_spacing_m: 4.0}",
-                                  "clutter_density_per_m2: 0.001"])
+_POSTS = "guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, post_spacing_m: 4.0}"
+_CLUTTER = "clutter_density_per_m2: 0.001"
+
+
+# (the object level renders no road clutter, as the README's level table says: no clutter case for it)
+@pytest.mark.parametrize("level, what", [(level, _POSTS) for level in ("object", "detection", "signal", "auto")]
+                         + [(level, _CLUTTER) for level in ("detection", "signal", "auto")])
 def test_every_level_reports_posts_and_clutter_in_a_scene_without_actors(level, what):
     """No actors, only posts or clutter: ``auto`` indexed its (empty) per-actor table with the posts' actor index
-    -1 and raised IndexError (an independent tester's finding); every level now sends their clusters. (The object
-    level renders no clutter, as the README's level table says.)"""
-    if level == "object" and what.startswith("clutter"):
-        pytest.skip("the object level renders no road clutter (README, 'Fidelity: speed against accuracy')")
+    -1 and raised IndexError (an independent tester's finding); every level now sends their clusters."""
     road = "{lanes: 2, lane_width_m: 3.5, ego_lane: 0" + ("}" if what.startswith("clutter") else f", {what}}}")
     sc = scenario("", ego="{speed_mps: 36.11}", road=road, radar="{preset: ars408_like, output: clusters}",
                   duration=0.5, extra=f"signal: {{{what}}}" if what.startswith("clutter") else "")
