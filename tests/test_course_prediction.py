@@ -91,3 +91,42 @@ def test_a_stationary_object_is_on_a_known_course_just_below_and_at_the_reach_no
         assert P.course_known(x, beside, reach, speed, yaw_rate, half, m).tolist() == [True, True, False, False]
         # nothing measured: the circle is the only prediction, and nothing is held back
         assert P.course_known(x, beside, None, speed, yaw_rate, half, m).tolist() == [True] * 4
+
+
+@pytest.mark.parametrize("mount_y", [-1.0, 0.5, 1.0])
+def test_the_far_path_follows_the_car_s_centre_line_whatever_the_sensor_s_lateral_place(mount_y):
+    """The boundaries' course blended in beyond BLEND_START_M was applied to the sensor-frame lateral: with the sensor
+    1 m left of centre, a point 2 m left of the car's centre line (beyond the 1.6 m half-width) was in the path at
+    40 and 80 m and one 1.2 m right of it was not (an independent tester's finding). Straight road, edges 5.25 m
+    either side of the car's centre line, reported in the sensor frame."""
+    m = SensorMount(3.7, mount_y, 0.0)
+    b = {"left": Boundary(True, 5.25 - mount_y, 0.0, 0.0, 0.0, 150.0, 1.0),
+         "right": Boundary(True, -5.25 - mount_y, 0.0, 0.0, 0.0, 150.0, 1.0)}
+    for x in (10.0, 40.0, 80.0, 120.0):
+        for y_vehicle, inside in ((-2.0, False), (-1.5, True), (-1.2, True), (0.0, True), (1.2, True), (1.5, True),
+                                  (2.0, False)):
+            got = in_path(np.array([x]), np.array([y_vehicle - mount_y]), 20.0, 0.0, 1.6, b, m)[0]
+            assert got == inside, (x, y_vehicle, mount_y)
+
+
+@pytest.mark.parametrize("yaw_deg", [-8.0, -3.5, 2.0, 3.5, 8.0])
+def test_a_yawed_sensor_s_boundaries_are_turned_to_the_car_s_axes(yaw_deg):
+    """A sensor yawed by ψ sees a straight road's edge at heading −ψ: the ECU compared that with its 2.9° lane-change
+    and 5.7° plausibility limits and dropped the boundaries from 3.5° on (warnings late on a curve entry; an
+    independent tester's finding). In the car's axes the edge runs at 0° again, at its lateral distance."""
+    m = SensorMount(3.7, 0.3, yaw_deg)
+    psi = math.radians(yaw_deg)
+    # the edge y_vehicle = −4.0 m (straight) in the sensor frame: points (xv, −4) moved by −mount and turned by −ψ
+    xv = np.linspace(10.0, 120.0, 50)
+    dx, dy = xv - m.x_m, -4.0 - m.y_m
+    xs, ys = math.cos(psi) * dx + math.sin(psi) * dy, -math.sin(psi) * dx + math.cos(psi) * dy
+    c = np.polyfit(xs, ys, 2)
+    sensor = Boundary(True, float(c[2]), math.atan(c[1]), 2.0 * float(c[0]), 5.0, 100.0, 1.0)
+    assert abs(sensor.heading_rad + psi) < 1e-9
+    got = P.aligned_boundaries({"right": sensor}, m)["right"]
+    assert abs(got.heading_rad) < 1e-9 and abs(got.curvature_1pm) < 1e-12
+    assert got.offset_m == pytest.approx(-4.0 - m.y_m, abs=1e-9)      # the aligned frame's origin is the sensor
+    assert plausible({"right": got}) and road_course(np.array([50.0]), {"right": got}) is not None
+    # no yaw: the boundaries as reported, the same object
+    flat = {"right": sensor}
+    assert P.aligned_boundaries(flat, SensorMount(3.7, 0.3, 0.0)) is flat

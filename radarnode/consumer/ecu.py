@@ -24,8 +24,8 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import (SensorMount, VehicleTrails, boundary_reference, course_known, curvature,
-                                     in_path, measured_reach_m, trail_fits)
+from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundaries, boundary_reference, course_known,
+                                     curvature, in_path, measured_reach_m, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
@@ -394,17 +394,18 @@ class Ecu:
         trail &= moved
         self.trails.add(t_s, np.array(ids)[trail], xv[trail], yv[trail])
         self.trails.keep(t_s, alive)
+        bounds = aligned_boundaries(self.boundaries, self.mount)     # the ego's heading to the road, not the sensor's
         self.trail_fits = (trail_fits(self.trails.trails(), curvature(self.ego_speed_mps, self.ego_yaw_rate_rps),
-                                      boundary_reference(self.boundaries, self.mount))
+                                      boundary_reference(bounds, self.mount))
                            if self.acc.settings.path_from_trails else [])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                     self.boundaries, self.mount, self.trail_fits)
+                     bounds, self.mount, self.trail_fits)
         # beyond where the road's course is measured (the boundaries' valid range, the trails' farthest point) the
         # course is extrapolated: on a curve entry it bends too little, and a car standing in the outer lane a
         # hundred metres ahead lies in it. A stationary object never seen moving becomes FCW's only where the path
         # there is known — measured, or the yaw-rate circle puts it in the path too (on a straight road and a
         # constant bend the two agree)
-        known = course_known(x, y, measured_reach_m(self.boundaries, self.trail_fits, self.mount), self.ego_speed_mps,
+        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount), self.ego_speed_mps,
                              self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive

@@ -5,7 +5,9 @@ The ECU knows the radar's mount as it is calibrated into a real ECU: its positio
 to the vehicle frame. The predicted path is the circle the rear axle drives at the curvature
 κ = yaw rate / speed (a vehicle turns about its rear axle); a point is in the path when its lateral distance
 from that circle is within the path's half-width. Where the radar reports both road edges, the path may not
-leave the road (the edges are in the sensor frame, as they were measured).
+leave the road (the edges are measured in the sensor frame; :func:`aligned_boundaries` turns them to the car's
+axes, so that their headings are the car's to the road and a yawed sensor does not make a straight road look like a
+lane change).
 
 The yaw rate knows only the curve the ego is in, not the one ahead: entering a curve through a clothoid it still
 says "straight" while the lane ahead already bends. Where the radar reports a road boundary, its course ahead —
@@ -30,7 +32,7 @@ circle alone decides.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -69,10 +71,43 @@ class SensorMount:
         c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
         return self.x_m + c * x - s * y, self.y_m + s * x + c * y
 
+    def aligned(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Sensor-frame positions to the sensor's vehicle-aligned frame: the origin at the sensor, the axes the
+        vehicle's (x forward, y left); the vehicle frame less the mount's position."""
+        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
+        return c * x - s * y, s * x + c * y
+
     def rotate(self, vx: np.ndarray, vy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame velocities (relative to the sensor) to vehicle axes."""
         c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
         return c * vx - s * vy, s * vx + c * vy
+
+
+#: samples of a reported boundary taken into the aligned frame (:func:`aligned_boundaries`)
+_ALIGN_SAMPLES = 16
+
+
+def aligned_boundaries(boundaries: dict | None, mount: SensorMount) -> dict | None:
+    """The reported boundaries (sensor frame, as the radar measured them) in the sensor's vehicle-aligned frame
+    (:meth:`SensorMount.aligned`), the frame the path functions take them in: their headings are then the ego's
+    heading to the road, whatever the sensor's yaw (a sensor yawed by 3.5° reported a straight road at −3.5°, past
+    the lane-change limit). A yawed boundary is fitted again, a quadratic in the aligned x over its course
+    (:data:`COURSE_EXTENT` times its valid range); with no yaw the boundaries are returned as they are."""
+    if not boundaries or mount.yaw_deg == 0.0:
+        return boundaries
+    out = {}
+    for side, b in boundaries.items():
+        if b is None or not b.valid:
+            out[side] = b
+            continue
+        xs = np.linspace(b.range_start_m, max(COURSE_EXTENT * b.range_end_m, b.range_start_m + 1.0), _ALIGN_SAMPLES)
+        xa, ya = mount.aligned(xs, b.y_at(xs))
+        c2, c1, c0 = np.polyfit(xa, ya, 2)
+        start, end = mount.aligned(np.array([b.range_start_m, b.range_end_m]), b.y_at(np.array([b.range_start_m,
+                                                                                                  b.range_end_m])))[0]
+        out[side] = replace(b, offset_m=float(c0), heading_rad=math.atan(c1), curvature_1pm=2.0 * float(c2),
+                            range_start_m=float(start), range_end_m=float(end))
+    return out
 
 
 def path_offset_m(x: np.ndarray, y: np.ndarray, curvature_1pm: float) -> np.ndarray:
@@ -94,21 +129,27 @@ def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: fl
             trails: list | None = None) -> np.ndarray:
     """Which sensor-frame points lie ahead in the ego's predicted path.
 
-    ``mount=None`` takes the sensor at the rear axle (the circle then starts at the sensor). ``trails``: the
-    vehicles' trails that describe the road (:func:`trail_fits`); where they and the boundaries both cover a
-    range, the two courses count equally.
+    ``mount=None`` takes the sensor at the rear axle (the circle then starts at the sensor). ``boundaries``: in the
+    sensor's vehicle-aligned frame (:func:`aligned_boundaries`; the sensor frame itself for a sensor with no yaw).
+    ``trails``: the vehicles' trails that describe the road (:func:`trail_fits`); where they and the boundaries
+    both cover a range, the two courses count equally.
+
+    The boundaries' course is a line parallel to the road through the car's centre line: a point's distance from
+    it is its vehicle-frame lateral position less the course's shift (the sensor's own lateral place on the car
+    is no part of it: with the sensor 0.5 m left of centre the far path ran 0.5 m left of the car's).
     """
     x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
     kappa = curvature(ego_speed_mps, yaw_rate_rps)
     m = mount if mount is not None else SensorMount(0.0, 0.0, 0.0)
     xv, yv = m.to_vehicle(x, y)
+    xa, ya = xv - m.x_m, yv - m.y_m                 # the aligned frame: x ahead of the sensor, along the car
     offset = path_offset_m(xv, yv, kappa)
-    course = road_course(x, boundaries)
+    course = road_course(xa, boundaries)
     by_trails = trail_course(xv, trails, kappa) if trails else None
     far = cover = None
     if course is not None:
         shift, cover = course
-        far = y - shift
+        far = yv - shift
     if by_trails is not None:
         yc, covered_t = by_trails
         far_t = yv - yc
@@ -119,11 +160,11 @@ def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: fl
             far = np.where(n > 0, (cover * far + covered_t * far_t) / np.maximum(n, 1.0), 0.0)
             cover = np.minimum(n, 1.0)
     if far is not None:
-        w = np.clip((x - BLEND_START_M) / (BLEND_END_M - BLEND_START_M), 0.0, 1.0) * cover
+        w = np.clip((xa - BLEND_START_M) / (BLEND_END_M - BLEND_START_M), 0.0, 1.0) * cover
         offset = (1.0 - w) * offset + w * far
     inside = (xv > m.x_m) & (np.abs(offset) <= half_width_m)
     for side, b in plausible(boundaries):
-        inside &= (y < b.y_at(x)) if side == "left" else (y > b.y_at(x))
+        inside &= (ya < b.y_at(xa)) if side == "left" else (ya > b.y_at(xa))
     return inside
 
 
@@ -169,13 +210,14 @@ def measured_reach_m(boundaries: dict | None, trails: list | None, mount: Sensor
 
 def course_known(x: np.ndarray, y: np.ndarray, reach_m: float | None, ego_speed_mps: float, yaw_rate_rps: float,
                  half_width_m: float, mount: SensorMount) -> np.ndarray:
-    """Which sensor-frame points lie where the ego's path is known: within the measured course (x ≤ ``reach_m``,
-    :func:`measured_reach_m`), or in the path the yaw-rate circle alone predicts. Everywhere when nothing is
-    measured (``reach_m`` None: the circle is then the only prediction there is)."""
+    """Which sensor-frame points lie where the ego's path is known: within the measured course (``reach_m`` ahead
+    of the sensor along the car, :func:`measured_reach_m`), or in the path the yaw-rate circle alone predicts.
+    Everywhere when nothing is measured (``reach_m`` None: the circle is then the only prediction there is)."""
     x = np.asarray(x, dtype=np.float64)
     if reach_m is None:
         return np.ones(x.shape, dtype=bool)
-    return (x <= reach_m) | in_path(x, y, ego_speed_mps, yaw_rate_rps, half_width_m, None, mount, None)
+    xa = mount.aligned(x, np.asarray(y, dtype=np.float64))[0]
+    return (xa <= reach_m) | in_path(x, y, ego_speed_mps, yaw_rate_rps, half_width_m, None, mount, None)
 
 
 # --- the course from the trails of vehicles ahead ------------------------------------------------------------------
