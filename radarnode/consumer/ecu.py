@@ -52,6 +52,9 @@ MOVING_MPS = 1.0                     # over ground: a track that moved faster ha
 OVERHEAD_HEIGHT_M = 8.0
 STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
 MOVED_CYCLES = 3                     # cycles in a row of moving that make a track one seen moving
+#: over ground, against the predicted path's direction where the track is: faster is oncoming traffic, which neither
+#: ACC follows nor FCW warns for (ISO 15622/15623 address vehicles ahead moving our way or standing)
+ONCOMING_MPS = 3.0
 DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
@@ -303,7 +306,8 @@ class Ecu:
         """ACC's target and FCW's: the nearest track steadily in the predicted path that is a road user for each.
 
         ACC follows vehicles it has seen moving (also once they stopped) and never brakes for a stationary object
-        never seen moving (ISO 15622 does not ask it to; production ACC does not). FCW also warns for a stationary
+        never seen moving (ISO 15622 does not ask it to; production ACC does not). Neither takes a track coming
+        towards the ego (faster than ONCOMING_MPS against the path's direction where it is). FCW also warns for a stationary
         object that reflects like a vehicle, unless the overhead test found it to be a bridge or a gantry
         (:mod:`radarnode.consumer.overhead`) or the ego is faster than ``stationary_max_speed_mps``.
         """
@@ -323,6 +327,7 @@ class Ecu:
         stationary_ok = self.ego_speed_mps <= self.fcw.settings.stationary_max_speed_mps
         moved = np.zeros(len(tracks), dtype=bool)
         obstacle = np.zeros(len(tracks), dtype=bool)
+        oncoming = np.zeros(len(tracks), dtype=bool)
         # tracks that ended leave their landmarks first (a new track at the place of one that ended continues its
         # history; one at the place of a track still alive is another object)
         self.landmarks.forget({t.id for t in tracks}, ox, oy)
@@ -334,6 +339,10 @@ class Ecu:
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
             ground = math.hypot(vx + self.ego_speed_mps, vy)
             rng = math.hypot(t.x[0], t.x[1])
+            # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
+            # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
+            there = kappa * max(xv[i], 0.0)
+            oncoming[i] = (vx + self.ego_speed_mps) * math.cos(there) + vy * math.sin(there) < -ONCOMING_MPS
             if cluster_strength is not None:
                 moved[i] = ground > 1.0
                 obstacle[i] = cluster_strength.get(t.id, False)
@@ -433,8 +442,8 @@ class Ecu:
             return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]), float(vx),
                           float(ax + self.ego_accel_mps2))
 
-        acc = pick(moved, self._target_id)
-        fcw = pick(moved | (obstacle & stationary_ok & known), self._fcw_target_id)
+        acc = pick(moved & ~oncoming, self._target_id)
+        fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
         self._fcw_target_id = fcw.track_id if fcw is not None else None
         return acc, fcw
