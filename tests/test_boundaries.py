@@ -45,6 +45,81 @@ def test_e2e_profile2_round_trip_and_failures():
     assert (rx.stats.ok, rx.stats.crc_errors, rx.stats.repeated, rx.stats.lost) == (11, 2, 1, 3)
 
 
+def _stream(n: int = 40) -> tuple[int, list[bytes]]:
+    tx = E2EProtector()
+    key = ids.e2e_key(ids.ROAD_BOUNDARY_LEFT)
+    return key, [tx.protect(key, bytes([0, 0xA0, k & 0xFF, 2, 3, 4, 5, 6])) for k in range(n)]
+
+
+@pytest.mark.parametrize("ago", [1, 2, 5, 11])
+def test_e2e_a_frame_sent_again_later_is_refused(ago):
+    """A frame from ``ago`` frames back arriving after the current one (a gateway's late copy, a replay) was taken as
+    the current frame and the 4-bit wrap counted 16 − ago frames lost (an independent tester's finding). Profile 2's
+    sequence check (MaxDeltaCounter 4) refuses it; the stream goes on."""
+    key, frames = _stream()
+    rx = E2EChecker()
+    assert all(rx.check(key, f) for f in frames[:20])
+    assert not rx.check(key, frames[19 - ago])
+    assert all(rx.check(key, f) for f in frames[20:30])
+    assert (rx.stats.ok, rx.stats.wrong_sequence, rx.stats.lost, rx.stats.late) == (30, 1, 0, 0)
+
+
+def test_e2e_two_frames_swapped_use_the_newer_and_lose_none():
+    key, frames = _stream()
+    rx = E2EChecker()
+    order = list(range(10)) + [11, 10] + list(range(12, 20))
+    used = [k for k in order if rx.check(key, frames[k])]
+    assert used == [k for k in order if k != 10]                 # frame 10 came after 11: refused, 11 stays current
+    assert (rx.stats.lost, rx.stats.late, rx.stats.wrong_sequence) == (0, 1, 1)
+
+
+@pytest.mark.parametrize("gap, taken_up_at", [(1, 0), (3, 0), (4, 0), (5, 1), (8, 1)])
+def test_e2e_gaps_below_at_and_beyond_the_max_delta(gap, taken_up_at):
+    """Frames lost in a row: up to MAX_DELTA − 1 = 3 (a counter step of 4) the next frame is used and the gap counted
+    lost; a step of 5 or twice the limit is out of sequence: refused, and the stream taken up again from the frame
+    that continues it (the sender restarted, a long outage)."""
+    key, frames = _stream()
+    rx = E2EChecker()
+    assert all(rx.check(key, f) for f in frames[:10])
+    after = frames[9 + gap:]
+    used = [rx.check(key, f) for f in after[:5]]
+    assert used == [False] * taken_up_at + [True] * (5 - taken_up_at)
+    assert rx.stats.lost == (gap - 1 if not taken_up_at else 0)
+    assert rx.stats.wrong_sequence == taken_up_at
+
+
+def test_consumer_keeps_the_newest_boundary_when_a_late_or_replayed_frame_arrives():
+    """On the bus: RoadBoundary_Left of cycle 10 arriving after cycle 11's, and cycle 5's sent again after cycle 15's,
+    left the consumer holding the older boundary and counting 15–16 frames lost; now both are refused and counted
+    (``e2e_wrong_sequence``), the boundary is the newest, and every cycle is still delivered."""
+    sc = scenario("", road="{lanes: 2, ego_lane: 0, guardrails: {left_offset_m: 1.0, right_offset_m: 1.0}}",
+                  duration=2.0, ego="{speed_mps: 25.0}")
+    node = RadarNode(sc)
+    frames = []
+    run_node(node, clock=SimulatedClock(), sinks=[frames.append], vehicle=EgoMotionSender(node.scene))
+    left = [i for i, m in enumerate(frames) if m.arbitration_id == ids.ROAD_BOUNDARY_LEFT]
+    stream = frames[:]
+    stream[left[10]], stream[left[11]] = stream[left[11]], stream[left[10]]
+    stream.insert(left[15] + 1, frames[left[5]])
+    held = []
+    assembler = CycleAssembler()
+    cycles = []
+    for m in stream:
+        cycles += assembler.feed([m])
+        if m.arbitration_id == ids.ROAD_BOUNDARY_LEFT:
+            held.append(assembler.road_boundaries["left"])
+    reference = CycleAssembler()
+    sent = []
+    for m in frames:
+        list(reference.feed([m]))
+        if m.arbitration_id == ids.ROAD_BOUNDARY_LEFT:
+            sent.append(reference.road_boundaries["left"])
+    assert held[11] == sent[11] and held[16] == sent[15] and held[-1] == sent[-1]
+    assert assembler.stats.e2e_wrong_sequence == 2 and assembler.e2e.stats.lost == 0
+    assert assembler.stats.boundary_frames == reference.stats.boundary_frames - 1
+    assert len(cycles) == len(list(CycleAssembler().feed(frames)))
+
+
 def _truth_y(scene, t, x, side):
     """The guardrail's lateral position at x (sensor frame), from the road geometry."""
     road, g = scene.scenario.road, scene.scenario.road.guardrails

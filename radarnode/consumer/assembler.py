@@ -150,11 +150,12 @@ class ConsumerStats:
     ecu_frames: int = 0             # AccStatus / FcwStatus frames accepted
     e2e_errors: int = 0             # own frames with a wrong E2E CRC: dropped
     e2e_repeated: int = 0           # own frames whose alive counter did not advance: dropped
+    e2e_wrong_sequence: int = 0     # own frames whose counter jumped back or too far ahead (late, replayed): dropped
 
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
                 + self.stray_headers + self.conflicting_frames + self.unexpected_ids + self.extra_frames
-                + self.errors_frames + self.e2e_errors + self.e2e_repeated + self.bus_errors)
+                + self.errors_frames + self.e2e_errors + self.e2e_repeated + self.e2e_wrong_sequence + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
@@ -448,10 +449,12 @@ class CycleAssembler(can.Listener):
         if len(data) != message.length:
             self.stats.wrong_dlc += 1
             return
-        before = (self.e2e.stats.crc_errors, self.e2e.stats.repeated)
+        e2e = self.e2e.stats
+        before = (e2e.crc_errors, e2e.repeated, e2e.wrong_sequence)
         if not self.e2e.check(ids.e2e_key(template, self.sensor_id), data):
-            self.stats.e2e_errors += self.e2e.stats.crc_errors - before[0]
-            self.stats.e2e_repeated += self.e2e.stats.repeated - before[1]
+            self.stats.e2e_errors += e2e.crc_errors - before[0]
+            self.stats.e2e_repeated += e2e.repeated - before[1]
+            self.stats.e2e_wrong_sequence += e2e.wrong_sequence - before[2]
             return
         v = message.decode(data, decode_choices=False)
         if template not in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT):

@@ -58,22 +58,38 @@ class E2EProtector:
 
 @dataclass
 class E2EStats:
-    """What the receiver saw: good frames, CRC errors, repeated frames, lost frames (counter gaps)."""
+    """What the receiver saw: good frames, CRC errors, repeated frames, frames out of sequence (refused), frames
+    lost (counter gaps), and the frames counted lost that came later after all (``late``: out of order, refused,
+    counted in ``wrong_sequence`` too)."""
 
     ok: int = 0
     crc_errors: int = 0
     repeated: int = 0
+    wrong_sequence: int = 0
     lost: int = 0
+    late: int = 0
     last_counter: dict[int, int] = field(default_factory=dict)
 
 
 class E2EChecker:
-    """Receiver side: checks CRC and counter; a frame with a bad CRC is rejected, a repeat is ignored."""
+    """Receiver side: checks CRC and counter (AUTOSAR Profile 2's sequence check with MaxDeltaCounter
+    ``MAX_DELTA``).
 
-    MAX_DELTA = 15
+    A frame is used when its CRC holds and its counter advances by 1 … MAX_DELTA from the last one used (the frames
+    in between are counted lost). A repeat is refused; so is a counter further ahead, which on a 4-bit counter is
+    a frame from the past as often as one from the future (an old frame sent again, frames swapped on the way): a
+    late frame was accepted as the current one and the 4-bit wrap counted 15 frames lost. A stream that really
+    jumped (the sender restarted, a long outage) is taken up again from the second frame that continues the refused
+    one, as Profile 2's re-synchronisation does. A frame that arrives after the frames past it is refused as out of
+    sequence and moved from ``lost`` to ``late``.
+    """
+
+    MAX_DELTA = 4            # up to 3 frames lost in a row (3 radar cycles of a message sent once a cycle)
 
     def __init__(self) -> None:
         self.stats = E2EStats()
+        self._refused: dict[int, int] = {}      # per key: the counter of the last frame refused out of sequence
+        self._skipped: dict[int, set[int]] = {}  # per key: the counters counted lost by the last jump
 
     def check(self, key: int, payload: bytes) -> bool:
         """True when the frame may be used; ``key`` is the E2E key of the message expected on its ID."""
@@ -85,12 +101,26 @@ class E2EChecker:
             self.stats.crc_errors += 1
             return False
         last = self.stats.last_counter.get(key)
-        self.stats.last_counter[key] = counter
         if last is not None:
             delta = (counter - last) & 0xF
             if delta == 0:
                 self.stats.repeated += 1
                 return False
+            if delta > self.MAX_DELTA:
+                refused = self._refused.get(key)
+                if refused is None or (counter - refused) & 0xF != 1:
+                    self._refused[key] = counter
+                    skipped = self._skipped.get(key, set())
+                    if counter in skipped:                   # counted lost, came late
+                        skipped.discard(counter)
+                        self.stats.lost -= 1
+                        self.stats.late += 1
+                    self.stats.wrong_sequence += 1
+                    return False
+                delta = 1        # continues the refused frame: the stream jumped (what it skipped is unknowable)
+            self._skipped[key] = {(last + k) & 0xF for k in range(1, delta)}
             self.stats.lost += delta - 1
+        self._refused.pop(key, None)
+        self.stats.last_counter[key] = counter
         self.stats.ok += 1
         return True
