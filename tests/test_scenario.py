@@ -149,3 +149,36 @@ def test_a_non_finite_actor_field_names_the_actor(tmp_path, value):
     _fails(tmp_path, GOOD.replace("x_m: 30.0", f"x_m: {value}"), "actors[0].x_m", "(actor 'a')", "finite")
     accel = GOOD + f"    accel: [{{t_s: 0.5, accel_mps2: {value}}}]\n"
     _fails(tmp_path, accel, "actors[0].accel[0].accel_mps2", "(actor 'a')", "finite")
+
+
+def _pfa_scenario(tmp_path, radar: str, signal: str = ""):
+    f = tmp_path / "pfa.yaml"
+    f.write_text(f"name: t\nduration_s: 1.0\nseed: 1\nradar: {radar}\n{signal}\nactors: []\n")
+    return load_scenario(f)
+
+
+def test_the_preset_s_pfa_override_sets_the_cfar_s_false_alarm_probability(tmp_path):
+    """``radar.overrides: {pfa: …}`` (the scenarios README's own example) was validated and then never read: the
+    CFAR kept signal.dsp.pfa's 1e-6 (an independent tester's finding: 0 false alarms a frame where 57 were due).
+    The preset's pfa is now the CFAR's unless signal.dsp.pfa gives one; both given and different is refused."""
+    from radarnode.radar.levels import make_model
+    from radarnode.radar.object_model import RuntimeConfig
+    from radarnode.radar.setup import radar_config
+    from radarnode.scene.world import Scene
+    import numpy as np
+    sc = _pfa_scenario(tmp_path, "{preset: mimo12, overrides: {pfa: 1.0e-3}}")
+    cfg = radar_config(sc)
+    assert cfg.signal.dsp.pfa == cfg.preset.pfa == 1e-3
+    model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal)
+    run = RuntimeConfig(max_distance_m=cfg.preset.max_range_m)
+    per_frame = np.mean([len(model.step(0.072 * k, run)[0].clusters) for k in range(10)])
+    # 1e-3 of 256 × 256 cells, of which the reported range and field of view keep a part: tens a frame, not none
+    assert 20.0 < per_frame < 1e-3 * 256 * 256
+    assert radar_config(_pfa_scenario(tmp_path, "{preset: mimo12}", "signal: {dsp: {pfa: 1.0e-4}}")).signal.dsp.pfa \
+        == 1e-4
+    same = _pfa_scenario(tmp_path, "{preset: mimo12, overrides: {pfa: 1.0e-4}}", "signal: {dsp: {pfa: 1.0e-4}}")
+    assert radar_config(same).signal.dsp.pfa == 1e-4
+    with pytest.raises(ScenarioError, match=r"pfa\.yaml:\d+: field 'signal\.dsp\.pfa': value 0\.0001 is not allowed; "
+                                            r"expected 0\.001, the pfa radar\.overrides sets"):
+        radar_config(_pfa_scenario(tmp_path, "{preset: mimo12, overrides: {pfa: 1.0e-3}}",
+                                   "signal: {dsp: {pfa: 1.0e-4}}"))

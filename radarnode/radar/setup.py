@@ -52,11 +52,29 @@ def radar_config(scenario: Scenario) -> RadarConfig:
         child = f"{root}.{exc.field}"
         raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}") from None
-    signal = build(SignalOptions, scenario.signal, "signal", src, SIGNAL_SCHEMA)
+    signal = _with_preset_pfa(build(SignalOptions, scenario.signal, "signal", src, SIGNAL_SCHEMA), scenario, preset,
+                              src, root)
     _check_dsp_for_preset(signal.dsp, preset, src, root)
     cfg = RadarConfig(preset=preset, signal=signal)
     object.__setattr__(scenario, "_radar_config", cfg)  # a cache on a frozen dataclass, like functools.cached_property
     return cfg
+
+
+def _with_preset_pfa(signal: SignalOptions, scenario: Scenario, preset: RadarPreset, src: Source,
+                     root: str) -> SignalOptions:
+    """The CFAR's false-alarm probability: ``signal.dsp.pfa`` where the file gives it, else the preset's ``pfa`` (so
+    that ``overrides: {pfa: 1e-3}`` sets it; it used to be validated and then never read). Both given and different
+    is refused: one of them would be ignored."""
+    dsp = scenario.signal.get("dsp") if isinstance(scenario.signal, dict) else None
+    given = isinstance(dsp, dict) and "pfa" in dsp
+    overridden = "pfa" in (scenario.radar.overrides or {})
+    if given and overridden and signal.dsp.pfa != preset.pfa:
+        raise src.error("signal.dsp.pfa", f"field 'signal.dsp.pfa': value {short_repr(signal.dsp.pfa)} is not allowed; "
+                                          f"expected {short_repr(preset.pfa)}, the pfa {root}.overrides sets (or one "
+                                          "of the two left out)")
+    if given or signal.dsp.pfa == preset.pfa:
+        return signal
+    return dataclasses.replace(signal, dsp=dataclasses.replace(signal.dsp, pfa=preset.pfa))
 
 
 def _check_dsp_for_preset(dsp: DspConfig, preset: RadarPreset, src: Source, root: str) -> None:
