@@ -210,3 +210,25 @@ def test_the_mahalanobis_distance_is_never_negative_and_a_broken_covariance_neve
         np.testing.assert_allclose(d2, want, rtol=1e-4)
     bad = np.stack([np.zeros((3, 3)), -np.eye(3), np.full((3, 3), np.nan), np.diag([1.0, 1.0, 0.0])])
     assert np.all(mahalanobis3(np.ones((4, 3)), bad) == np.inf)
+
+
+def test_more_confirmable_tracks_than_ids_wait_for_a_free_id():
+    """The ARS 408's Obj_ID has 8 bits: with 300 tracks to confirm at once (a Pfa of 1e-2 makes that many false
+    ones) the 257th raised StopIteration out of the tracker (found measuring false alarms). Now the nearest 256
+    are confirmed with distinct IDs, the others stay tentative, and take IDs as they free up."""
+    gx, gy = np.meshgrid(np.arange(20.0, 150.0, 6.0), np.arange(-60.0, 60.0, 5.0))   # apart beyond the grouping
+    r, az = np.hypot(gx, gy).ravel(), np.arctan2(gy, gx).ravel()
+    keep = np.abs(az) < np.radians(50.0)
+    r, az = r[keep], az[keep]
+    n = r.size
+    assert n > 300
+    sv = (10.0, 0.0)
+    trk = ObjectTracker(max_objects=1000)
+    for k in range(4):                                           # stationary points, the ego at 10 m/s
+        x, y = r * np.cos(az) - 10.0 * 0.072 * k, r * np.sin(az)
+        rr, a = np.hypot(x, y), np.arctan2(y, x)
+        det = Detections(rr, -10.0 * np.cos(a), a, np.full(n, 5.0), np.full(n, 30.0), np.full(n, -1, dtype=np.int64))
+        out = trk.step(0.072 * k, det, sv)
+    assert len(out) == 256 and len(set(out.id.tolist())) == 256 and out.id.min() >= 0 and out.id.max() <= 255
+    assert (np.hypot(out.dist_long_m, out.dist_lat_m).max()
+            <= np.sort(np.hypot(trk.x[:, 0], trk.x[:, 1]))[255] + 1e-9)          # the nearest got the IDs

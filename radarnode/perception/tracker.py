@@ -468,8 +468,8 @@ class ObjectTracker:
         recent = np.where(moving, bits[:, -CONFIRM_WINDOW:].sum(axis=1),
                           bits[:, -CONFIRM_WINDOW_STATIONARY:].sum(axis=1))
         newly = ~self.confirmed & (recent >= CONFIRM_HITS)
-        self.confirmed |= newly
         self._assign_ids(np.flatnonzero(newly))
+        self.confirmed |= newly & (self.ids >= 0)
         coast = np.where(moving, COAST_CYCLES, COAST_STATIONARY_CYCLES)
         tentative = np.where(moving, 0, CONFIRM_WINDOW_STATIONARY - CONFIRM_HITS)
         self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
@@ -548,10 +548,16 @@ class ObjectTracker:
         return (close & older).any(axis=1)
 
     def _assign_ids(self, idx: np.ndarray) -> None:
-        used = set(self.ids[self.ids >= 0].tolist())
-        free = (i for i in range(256) if i not in used)
-        for k in idx:   # only newly confirmed tracks
-            self.ids[k] = next(free)
+        """IDs 0–255 (the ARS 408's 8-bit Obj_ID) for the tracks ``idx`` to confirm, nearest first; while all 256 are
+        taken (hundreds of confirmed tracks: a Pfa of 1e-2 confirmed that many false ones) the rest stay tentative
+        and try again next cycle (they raised StopIteration)."""
+        used = np.zeros(256, dtype=bool)
+        used[self.ids[self.ids >= 0]] = True
+        free = np.flatnonzero(~used)
+        if idx.size > free.size:
+            idx = idx[np.argsort(np.hypot(self.x[idx, 0], self.x[idx, 1]), kind="stable")]
+        take = min(idx.size, free.size)
+        self.ids[idx[:take]] = free[:take]
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone

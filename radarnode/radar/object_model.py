@@ -975,17 +975,21 @@ class ObjectModel:
             cm, sm = np.cos(maz), np.sin(maz)
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g["rcs"], g["sig_r"], g["sig_az"],
                                         g["sig_v"], -1, g_amb), k - lo))
-        # false alarms: a Poisson count a cycle, uniform in range, azimuth and speed, kept inside the sectors
+        # false alarms: a Poisson count a cycle over the chain's whole map, uniform in its cells as the chain's are
+        # (range bins out to the unambiguous range, Doppler bins, angle bins uniform in sin θ), kept where the chain
+        # reports (the reported range, the sectors): drawn over the reported area itself, they came 1.3–2.4× as
+        # often as the chain's (an independent tester's finding)
         rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
                 * (10.0 if config.high_sensitivity else 1.0))
         counts = rngs["count"].poisson(rate, size=t_n)
         u = rngs["value"].random((int(counts.sum()), 3))
         if u.shape[0]:
-            r_hi, h, v_hi = min(p.max_range_m, config.max_distance_m), p.max_half_fov_rad, p.max_unambiguous_speed_mps
-            fr = p.min_range_m + (r_hi - p.min_range_m) * u[:, 0]
-            faz = -h + 2.0 * h * u[:, 1]
+            r_hi, v_hi = min(p.max_range_m, config.max_distance_m), p.max_unambiguous_speed_mps
+            fr = p.num_range_bins * p.range_resolution_m * u[:, 0]
+            faz = (np.arcsin(np.clip((u[:, 1] - 0.5) / p.element_spacing_wl, -1.0, 1.0)) if p.num_virtual >= 2
+                   else np.zeros(u.shape[0]))
             fv = -v_hi + 2.0 * v_hi * u[:, 2]
-            ok = in_fov(p, fr, faz)
+            ok = in_fov(p, fr, faz) & (fr <= r_hi)
             fr, faz, fv, k = fr[ok], faz[ok], fv[ok], np.repeat(np.arange(t_n), counts)[ok]
             cf, sf = np.cos(faz), np.sin(faz)
             parts.append((_cluster_rows(fr * cf, fr * sf, fv * cf, fv * sf,
