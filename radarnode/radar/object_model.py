@@ -167,6 +167,18 @@ def _cluster_rows(*columns) -> np.ndarray:
     return out
 
 
+def coupled_range(preset: RadarPreset, range_m: np.ndarray, true_rate_mps: np.ndarray,
+                  reported_rate_mps: np.ndarray) -> np.ndarray:
+    """The range the chain reports for a target at ``range_m`` moving at ``true_rate_mps`` that it reports at
+    ``reported_rate_mps``: its peak sits at the true speed's range–Doppler coupling, which the chain takes out with
+    the reported speed (``RadarPreset.range_rate_coupling_s``), modulo the unambiguous range (never negative).
+    Unchanged where the two speeds agree."""
+    shift = (np.asarray(true_rate_mps) - np.asarray(reported_rate_mps)) * preset.range_rate_coupling_s
+    if not np.any(shift):
+        return range_m
+    return np.mod(range_m + shift, preset.unambiguous_range_m)
+
+
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
     """True where (range, azimuth) lies inside any of the preset's sectors and above the minimum range.
 
@@ -525,8 +537,13 @@ class ObjectModel:
             v_rad = v_rad * (np.hypot(view.x_m, view.y_m) / np.maximum(rng_m, 1e-9))   # cos(elevation)
         v_tan = -view.vx_mps * s + view.vy_mps * c
         # the speed the radar can measure: aliased and resolved by the same rules as the other levels
-        m_vr, ambig = ambiguity.apparent_range_rate(p, v_rad + sig_v * z[:, 2], az,
+        v_meas = v_rad + sig_v * z[:, 2]
+        m_vr, ambig = ambiguity.apparent_range_rate(p, v_meas, az,
                                                     (view.sensor_vx_mps[:, None], view.sensor_vy_mps[:, None]))
+        # the range–Doppler coupling: the chain takes it out of the peak's range with the speed it reports, so a
+        # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
+        # (without it the object level put an aliased target 0.4–3 m from where they do)
+        m_r = coupled_range(p, m_r, v_meas, m_vr)
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
@@ -971,7 +988,9 @@ class ObjectModel:
             mr, maz = g["range"] + g["sig_r"] * nz[:, 0], g["azimuth"] + g["sig_az"] * nz[:, 1]
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
             vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
+            vr_true = vr
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]))
+            mr = coupled_range(p, mr, vr_true, vr)
             cm, sm = np.cos(maz), np.sin(maz)
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g["rcs"], g["sig_r"], g["sig_az"],
                                         g["sig_v"], -1, g_amb), k - lo))
