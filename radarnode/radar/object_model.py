@@ -167,6 +167,22 @@ def _cluster_rows(*columns) -> np.ndarray:
     return out
 
 
+def measured_rcs_db(z: np.ndarray, snr_db: np.ndarray, steady: np.ndarray) -> np.ndarray:
+    """What one detection's RCS reads against the mean (dB), from one standard normal draw ``z`` each: a Swerling 1
+    target's power is exponential (10·log10 of an Exp(1) draw: mean −2.5 dB, spread 5.6 dB), taken from ``z`` by its
+    normal tail, −ln Q(z) (Abramowitz–Stegun 7.1.26 for erfc, z clipped at 5: Q(5) = 2.9e-7); a steady one reads
+    the amplitude noise, a relative √2·10^(−ρ/20)·z. The cluster list's RCS per cycle, as the other levels measure
+    it (the object level reported the mean RCS in every cycle, a fluctuating target's too)."""
+    x = np.minimum(np.abs(z), 5.0) / math.sqrt(2.0)
+    t = 1.0 / (1.0 + 0.3275911 * x)
+    erfc = t * (0.254829592 + t * (-0.284496736 + t * (1.421413741 + t * (-1.453152027 + t * 1.061405429)))) \
+        * np.exp(-x * x)
+    q = np.where(z >= 0.0, 0.5 * erfc, 1.0 - 0.5 * erfc)                    # Q(z) = P(N > z)
+    fluctuating = 10.0 * np.log10(np.maximum(-np.log(np.maximum(q, 1e-300)), 1e-12))
+    noise = 10.0 * np.log10(np.maximum(1.0 + math.sqrt(2.0) * 10.0 ** (-np.asarray(snr_db) / 20.0) * z, 0.05))
+    return np.where(steady, noise, fluctuating)
+
+
 def coupled_range(preset: RadarPreset, range_m: np.ndarray, true_rate_mps: np.ndarray,
                   reported_rate_mps: np.ndarray) -> np.ndarray:
     """The range the chain reports for a target at ``range_m`` moving at ``true_rate_mps`` that it reports at
@@ -603,6 +619,7 @@ class ObjectModel:
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
             "k0": k0, "times": times, "config": config, "view": truth, "rcs_rep": sc.rcs_dbsm + z[:, 4],
+            "rcs_meas": ph["rcs_eff"] + measured_rcs_db(z[:, 4], ph["snr"], sc.swerling == 0),
         }
 
     def _tables(self, ch: dict) -> dict:
@@ -613,7 +630,7 @@ class ObjectModel:
         ch["detection_floats"] = np.stack([ch[key] for key in _DETECTION_FLOATS], axis=-1)
         if ch["config"].clusters:      # the actors' rows of the cluster list (_CL_* columns)
             t_n, n = ch["snr"].shape
-            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), ch["rcs_eff"], ch["sig_r"],
+            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), ch["rcs_meas"], ch["sig_r"],
                                                  ch["sig_az"], ch["sig_v"], np.broadcast_to(np.arange(n), (t_n, n)),
                                                  ch["ambig"])
         return ch
