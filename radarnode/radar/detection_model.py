@@ -32,7 +32,7 @@ What the signal chain does to scatterers, without the signal:
 5. the estimates carry noise at the chain's measured efficiency times the
    Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
-6. false alarms at the chain's measured rate per cell (:data:`FALSE_ALARMS_PER_PFA_CELL`).
+6. false alarms at the chain's measured rate per cell (:func:`false_alarms_per_pfa_cell`).
 
 The measured constants live in :mod:`radarnode.radar.calibration`.
 
@@ -57,7 +57,7 @@ from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
 from radarnode.radar import ambiguity, equation
-from radarnode.radar.calibration import DOA_FLOOR_DB, FALSE_ALARMS_PER_PFA_CELL, RESOLUTION, chain_efficiency
+from radarnode.radar.calibration import DOA_FLOOR_DB, RESOLUTION, chain_efficiency, false_alarms_per_pfa_cell
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers
 
@@ -385,7 +385,7 @@ def false_alarms(preset: RadarPreset, statistic: DetectionStatistic, rng: np.ran
     p = preset
     n_r = p.num_range_bins
     m = p.num_chirps
-    n_fa = int(rng.poisson(statistic.cfar.pfa * n_r * m * FALSE_ALARMS_PER_PFA_CELL))
+    n_fa = int(rng.poisson(statistic.cfar.pfa * n_r * m * false_alarms_per_pfa_cell(statistic.cfar.pfa)))
     fr = rng.uniform(0, n_r, n_fa) * p.range_resolution_m
     fv = rng.uniform(-m / 2, m / 2, n_fa) * p.doppler_bin_mps
     faz = np.arcsin(np.clip(rng.uniform(-0.5, 0.5, n_fa) / p.element_spacing_wl, -1.0, 1.0))

@@ -40,7 +40,7 @@ from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, MIN_BODY_M, R
                                           orientation_sigma_rad)
 from radarnode.radar import ambiguity, elevation, equation
 from radarnode.radar.chain import DspChain
-from radarnode.radar.calibration import FALSE_ALARMS_PER_PFA_CELL, chain_efficiency
+from radarnode.radar.calibration import chain_efficiency, false_alarms_per_pfa_cell
 from radarnode.radar.options import SignalOptions
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
@@ -1015,8 +1015,8 @@ class ObjectModel:
         # (range bins out to the unambiguous range, Doppler bins, angle bins uniform in sin θ), kept where the chain
         # reports (the reported range, the sectors): drawn over the reported area itself, they came 1.3–2.4× as
         # often as the chain's (an independent tester's finding)
-        rate = (self.statistic.cfar.pfa * p.num_cells * FALSE_ALARMS_PER_PFA_CELL
-                * (10.0 if config.high_sensitivity else 1.0))
+        pfa = self.statistic.cfar.pfa * (10.0 if config.high_sensitivity else 1.0)
+        rate = pfa * p.num_cells * false_alarms_per_pfa_cell(pfa)
         counts = rngs["count"].poisson(rate, size=t_n)
         u = rngs["value"].random((int(counts.sum()), 3))
         if u.shape[0]:
