@@ -234,3 +234,29 @@ def test_more_confirmable_tracks_than_ids_wait_for_a_free_id():
     assert waiting.sum() == len(trk.x) - 256
     # the nearest got the IDs (ranked when they were confirmed, a cycle or two of ego motion ago)
     assert np.hypot(out.dist_long_m, out.dist_lat_m).max() <= np.hypot(trk.x[waiting, 0], trk.x[waiting, 1]).min() + 1.0
+
+
+@pytest.mark.parametrize("jump, reset", [(2.3, False), (2.7, True), (5.0, True)])
+def test_a_standing_track_that_jumps_across_the_line_of_sight_is_not_given_the_jump_as_speed(jump, reset):
+    """HOP_M = 2.5 m: a standing reflector's track whose next detection lies more than that across the line of sight
+    has taken another reflector (the next post, the other rail): its velocity across the line of sight is set back to
+    the standing world's. Below it (2.3 m) the jump is the filter's to weigh, as before; above it (2.7 m, twice the
+    limit) the track's speed over ground stays that of a standing object."""
+    from radarnode.perception.tracker import HOP_M
+    assert 2.3 < HOP_M < 2.7
+    sv = (20.0, 0.0)
+    trk = ObjectTracker()
+    x0, y0 = 60.0, 3.0
+    for k in range(6):
+        x = x0 - 20.0 * 0.072 * k
+        y = y0 + (jump if k == 5 else 0.0)
+        r, a = math.hypot(x, y), math.atan2(y, x)
+        det = Detections(np.array([r]), np.array([-20.0 * math.cos(a)]), np.array([a]), np.array([5.0]),
+                         np.array([30.0]), np.array([0]))
+        out = trk.step(0.072 * k, det, sv)
+    ground_lat = out.vrel_lat_mps[0] + sv[1]
+    ground_long = out.vrel_long_mps[0] + sv[0]
+    if reset:
+        assert abs(ground_lat) < 0.3 and abs(ground_long) < 0.3, (ground_long, ground_lat)
+    else:
+        assert abs(ground_lat) > 1.0, ground_lat              # the filter took part of the jump as lateral speed

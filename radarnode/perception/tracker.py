@@ -40,6 +40,12 @@ COAST_STATIONARY_CYCLES = 10
 #: … and is confirmed by CONFIRM_HITS detections in this many cycles (a tentative one survives the misses between)
 CONFIRM_WINDOW_STATIONARY = 5
 MOVING_THRESHOLD_MPS = 1.0
+#: a track of a standing reflector whose next detection lies this far across the line of sight (m; no road user
+#: moves 2.5 m sideways in a cycle, 35 m/s at 72 ms) has taken another reflector's detection — the next guardrail
+#: post, the other rail merged with it at long range: it moves there, but the jump is not taken for motion (its
+#: velocity across the line of sight is set back to the standing world's). Without it, tracks hopping from post to
+#: post across the rails became crossing objects at 130 km/h, some in the ego lane.
+HOP_M = 2.5
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
@@ -437,7 +443,10 @@ class ObjectTracker:
         used = np.zeros(len(groups), dtype=bool)
         if pairs:
             ti, gi = np.array(pairs).T
+            hop = self._hops(ti, z[gi], sensor_velocity)
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
+            if hop.any():
+                self._standing_across(ti[hop], sensor_velocity)
             fit = np.isfinite(groups.velocity[gi, 0])
             if fit.any():      # a joined near body: its fitted velocity across the line of sight too
                 t, g = ti[fit], gi[fit]
@@ -475,6 +484,36 @@ class ObjectTracker:
         self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
                      | self._duplicates())
         return self._object_list(sensor_velocity)
+
+    def _hops(self, idx: np.ndarray, z: np.ndarray, sensor_velocity) -> np.ndarray:
+        """Which of the tracks ``idx``, each about to take detection ``z`` (x, y, range rate), stand still (never
+        seen moving, not moving now, the detection's range rate that of the standing world within
+        MOVING_THRESHOLD_MPS) and take a detection more than HOP_M across the line of sight from where they are."""
+        x = self.x[idx]
+        r = np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-3)
+        ux, uy = z[:, 0] / r, z[:, 1] / r
+        across = np.abs(-(z[:, 0] - x[:, 0]) * uy + (z[:, 1] - x[:, 1]) * ux)
+        standing_rate = -(sensor_velocity[0] * ux + sensor_velocity[1] * uy)
+        _, moving = self._heading(idx, sensor_velocity)
+        return ((across > HOP_M) & ~moving & ~self.was_moving[idx]
+                & (np.abs(z[:, 2] - standing_rate) < MOVING_THRESHOLD_MPS))
+
+    def _standing_across(self, idx: np.ndarray, sensor_velocity) -> None:
+        """Tracks ``idx`` that hopped to another standing reflector: their velocity across the line of sight set
+        to the standing world's (the measured radial part kept), its variance to the new track's prior (2 m/s)."""
+        x, p = self.x[idx], self.p[idx]
+        r = np.maximum(np.hypot(x[:, 0], x[:, 1]), 1e-3)
+        u = np.stack([x[:, 0] / r, x[:, 1] / r], axis=1)
+        world = -np.asarray(sensor_velocity, dtype=np.float64)
+        radial = np.einsum("ki,ki->k", x[:, 2:4] - world, u)
+        self.x[idx, 2:4] = world + radial[:, None] * u
+        perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
+        pv = p[:, 2:4, 2:4]
+        var_r = np.einsum("ki,kij,kj->k", u, pv, u)
+        self.p[idx, 2:4, 2:4] = var_r[:, None, None] * u[:, :, None] * u[:, None, :] \
+            + 4.0 * perp[:, :, None] * perp[:, None, :]
+        self.p[idx, 0:2, 2:4] = 0.0
+        self.p[idx, 2:4, 0:2] = 0.0
 
     def _heading(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
         """Heading over ground (sensor axes, rad) of tracks ``idx`` and whether each moves: only where the ground
