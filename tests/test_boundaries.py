@@ -73,6 +73,32 @@ def test_e2e_two_frames_swapped_use_the_newer_and_lose_none():
     assert (rx.stats.lost, rx.stats.late, rx.stats.wrong_sequence) == (0, 1, 1)
 
 
+@pytest.mark.parametrize("order, used, lost, late", [
+    ([0, 1, 2, 3, 4, 6, 7, 5, 8], [0, 1, 2, 3, 4, 6, 7, 8], 0, 1),          # two places late
+    ([0, 1, 2, 3, 4, 7, 8, 9, 5, 6, 10], [0, 1, 2, 3, 4, 7, 8, 9, 10], 0, 2),  # a delayed burst of two
+    ([0, 1, 2, 3, 4, 5, 6, 7, 8, 2, 3, 9, 10], list(range(11)), 0, 0),      # the last frames sent again, in order
+    ([0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 2, 10], list(range(11)), 0, 0),         # one old frame sent again
+])
+def test_e2e_late_bursts_and_replays_never_replace_the_newest_frame(order, used, lost, late):
+    """An independent tester's cases against the first sequence check: a frame two places late was counted lost, a
+    delayed burst of two was taken for a restarted sender (the older frames replaced the newest and 5 were counted
+    lost), and two old frames sent again were taken up while the next genuine one was refused."""
+    key, frames = _stream()
+    rx = E2EChecker()
+    got = [k for k in order if rx.check(key, frames[k])]
+    assert got == used and (rx.stats.lost, rx.stats.late) == (lost, late)
+
+
+def test_e2e_a_restarted_sender_is_taken_up_on_its_second_frame():
+    tx_a, tx_b = E2EProtector(), E2EProtector()
+    key = ids.e2e_key(ids.ROAD_BOUNDARY_LEFT)
+    rx = E2EChecker()
+    before = [tx_a.protect(key, bytes([0, 0xA0, k, 2, 3, 4, 5, 6])) for k in range(10)]
+    after = [tx_b.protect(key, bytes([0, 0xA0, 100 + k, 2, 3, 4, 5, 6])) for k in range(5)]   # counters 0, 1, …
+    assert all(rx.check(key, f) for f in before)
+    assert [rx.check(key, f) for f in after] == [False, True, True, True, True]
+
+
 @pytest.mark.parametrize("gap, taken_up_at", [(1, 0), (3, 0), (4, 0), (5, 1), (8, 1)])
 def test_e2e_gaps_below_at_and_beyond_the_max_delta(gap, taken_up_at):
     """Frames lost in a row: up to MAX_DELTA − 1 = 3 (a counter step of 4) the next frame is used and the gap counted

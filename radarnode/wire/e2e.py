@@ -76,20 +76,30 @@ class E2EChecker:
     ``MAX_DELTA``).
 
     A frame is used when its CRC holds and its counter advances by 1 … MAX_DELTA from the last one used (the frames
-    in between are counted lost). A repeat is refused; so is a counter further ahead, which on a 4-bit counter is
-    a frame from the past as often as one from the future (an old frame sent again, frames swapped on the way): a
-    late frame was accepted as the current one and the 4-bit wrap counted 15 frames lost. A stream that really
-    jumped (the sender restarted, a long outage) is taken up again from the second frame that continues the refused
-    one, as Profile 2's re-synchronisation does. A frame that arrives after the frames past it is refused as out of
-    sequence and moved from ``lost`` to ``late``.
+    in between are counted lost). Any other counter is refused (``wrong_sequence``): on a 4-bit counter a frame from
+    the past looks like one from the future, and a late frame taken as the current one put an older road boundary in
+    place of the newest. Of the refused frames,
+
+    - one whose counter was counted lost is late (moved from ``lost`` to ``late``), a frame overtaken on the way;
+    - one whose counter is among the last ``RECENT`` used is an old frame sent again, unless it continues a run
+      begun by one that is not;
+    - the rest may be a stream that really jumped (the sender restarted, a long outage): ``SYNC_FRAMES`` of them in
+      counter order take it up again, as Profile 2's re-synchronisation does. A late frame never begins or continues
+      such a run, nor does an old frame sent again begin one, so a delayed burst or a replay of the last RECENT frames
+      cannot take the place of the newest. (Two frames older than that, sent again in order, are indistinguishable
+      from a restarted sender on a 4-bit counter: they are taken up.)
     """
 
     MAX_DELTA = 4            # up to 3 frames lost in a row (3 radar cycles of a message sent once a cycle)
+    RECENT = 8               # counters used last, whose return is a repeat of an old frame
+    SYNC_FRAMES = 2          # frames in counter order, neither late nor repeated, that take up a jumped stream
+    _FORGET = 12             # frames counted lost are recognised as late for this many counter steps
 
     def __init__(self) -> None:
         self.stats = E2EStats()
-        self._refused: dict[int, int] = {}      # per key: the counter of the last frame refused out of sequence
-        self._skipped: dict[int, set[int]] = {}  # per key: the counters counted lost by the last jump
+        self._recent: dict[int, list[int]] = {}           # per key: the counters used last, oldest first
+        self._skipped: dict[int, dict[int, int]] = {}     # per key: counter counted lost → counter steps left
+        self._run: dict[int, tuple[int, int]] = {}        # per key: (last refused counter of a run, its length)
 
     def check(self, key: int, payload: bytes) -> bool:
         """True when the frame may be used; ``key`` is the E2E key of the message expected on its ID."""
@@ -101,26 +111,42 @@ class E2EChecker:
             self.stats.crc_errors += 1
             return False
         last = self.stats.last_counter.get(key)
+        skipped = self._skipped.setdefault(key, {})
+        recent = self._recent.setdefault(key, [])
         if last is not None:
             delta = (counter - last) & 0xF
             if delta == 0:
                 self.stats.repeated += 1
                 return False
             if delta > self.MAX_DELTA:
-                refused = self._refused.get(key)
-                if refused is None or (counter - refused) & 0xF != 1:
-                    self._refused[key] = counter
-                    skipped = self._skipped.get(key, set())
-                    if counter in skipped:                   # counted lost, came late
-                        skipped.discard(counter)
-                        self.stats.lost -= 1
-                        self.stats.late += 1
-                    self.stats.wrong_sequence += 1
+                self.stats.wrong_sequence += 1
+                if counter in skipped:                      # counted lost, came late
+                    del skipped[counter]
+                    self.stats.lost -= 1
+                    self.stats.late += 1
                     return False
-                delta = 1        # continues the refused frame: the stream jumped (what it skipped is unknowable)
-            self._skipped[key] = {(last + k) & 0xF for k in range(1, delta)}
+                prev, length = self._run.get(key, (None, 0))
+                continues = prev is not None and (counter - prev) & 0xF == 1
+                if counter in recent and not continues:     # an old frame sent again
+                    return False
+                length = length + 1 if continues else 1
+                self._run[key] = (counter, length)
+                if length < self.SYNC_FRAMES:
+                    return False
+                self.stats.wrong_sequence -= 1              # taken up: this one is used
+                recent.clear()
+                skipped.clear()
+                delta = 1                                   # what the jump skipped is unknowable
+            for c in list(skipped):                         # forget what is too old to come late
+                skipped[c] -= delta
+                if skipped[c] <= 0:
+                    del skipped[c]
+            for k in range(1, delta):
+                skipped[(last + k) & 0xF] = self._FORGET
             self.stats.lost += delta - 1
-        self._refused.pop(key, None)
+        self._run.pop(key, None)
+        recent.append(counter)
+        del recent[:-self.RECENT]
         self.stats.last_counter[key] = counter
         self.stats.ok += 1
         return True
