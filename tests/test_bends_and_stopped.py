@@ -280,10 +280,11 @@ def test_an_oncoming_car_at_a_curve_entry_or_exit_is_neither_acc_s_target_nor_fc
                                                                                    r.peak_decel_mps2)
 
 
-@pytest.mark.parametrize("speed, warned", [(1.5, True), (6.0, False)])
+@pytest.mark.parametrize("speed, warned", [(1.5, True), (3.1, True), (4.5, True), (10.0, False)])
 def test_a_car_coming_our_way_in_the_own_lane_is_fcw_s_below_the_oncoming_speed_and_not_at_twice_it(speed, warned):
-    """The oncoming rule's threshold (ONCOMING_MPS = 3 m/s against the path): a car rolling back towards the ego at
-    1.5 m/s (half the limit) is a vehicle in the path to warn for; one at 6 m/s (twice) is oncoming traffic, which
+    """The oncoming rule's threshold (ONCOMING_MPS = 5 m/s against the path): a car rolling or reversing towards the
+    ego at 1.5–4.5 m/s is a vehicle in the path to warn for (at 3 m/s, the first threshold, one reversing at 3.1 m/s
+    drew no warning: an independent tester's finding); one at 10 m/s (twice the limit) is oncoming traffic, which
     neither ACC nor FCW addresses (ISO 15622/15623; a wrong-way driver is out of their scope)."""
     from radarnode.radar.setup import parse_scenario
     text = f"""

@@ -53,8 +53,9 @@ OVERHEAD_HEIGHT_M = 8.0
 STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
 MOVED_CYCLES = 3                     # cycles in a row of moving that make a track one seen moving
 #: over ground, against the predicted path's direction where the track is: faster is oncoming traffic, which neither
-#: ACC follows nor FCW warns for (ISO 15622/15623 address vehicles ahead moving our way or standing)
-ONCOMING_MPS = 3.0
+#: ACC follows nor FCW warns for (ISO 15622/15623 address vehicles ahead moving our way or standing); 18 km/h, above
+#: a car reversing towards the ego (3 m/s ignored one reversing at 11 km/h), below any oncoming traffic on a road
+ONCOMING_MPS = 5.0
 DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
