@@ -236,8 +236,8 @@ def test_more_confirmable_tracks_than_ids_wait_for_a_free_id():
     assert np.hypot(out.dist_long_m, out.dist_lat_m).max() <= np.hypot(trk.x[waiting, 0], trk.x[waiting, 1]).min() + 1.0
 
 
-@pytest.mark.parametrize("jump, reset", [(2.3, False), (2.7, True), (5.0, True)])
-def test_a_standing_track_that_jumps_across_the_line_of_sight_is_not_given_the_jump_as_speed(jump, reset):
+@pytest.mark.parametrize("x0, jump, reset", [(60.0, 2.3, False), (60.0, 2.7, True), (200.0, 5.0, True)])
+def test_a_standing_track_that_jumps_across_the_line_of_sight_is_not_given_the_jump_as_speed(x0, jump, reset):
     """HOP_M = 2.5 m: a standing reflector's track whose next detection lies more than that across the line of sight
     has taken another reflector (the next post, the other rail): its velocity across the line of sight is set back to
     the standing world's. Below it (2.3 m) the jump is the filter's to weigh, as before; above it (2.7 m, twice the
@@ -246,7 +246,7 @@ def test_a_standing_track_that_jumps_across_the_line_of_sight_is_not_given_the_j
     assert 2.3 < HOP_M < 2.7
     sv = (20.0, 0.0)
     trk = ObjectTracker()
-    x0, y0 = 60.0, 3.0
+    y0 = 3.0                                      # (5 m, twice the limit, is inside the gate at 200 m, not at 60 m)
     for k in range(6):
         x = x0 - 20.0 * 0.072 * k
         y = y0 + (jump if k == 5 else 0.0)
@@ -256,7 +256,29 @@ def test_a_standing_track_that_jumps_across_the_line_of_sight_is_not_given_the_j
         out = trk.step(0.072 * k, det, sv)
     ground_lat = out.vrel_lat_mps[0] + sv[1]
     ground_long = out.vrel_long_mps[0] + sv[0]
+    assert len(trk.x) == 1 and out.dist_lat_m[0] > y0 + 0.2 * jump       # the detection was taken, not a new track
     if reset:
         assert abs(ground_lat) < 0.3 and abs(ground_long) < 0.3, (ground_long, ground_lat)
     else:
         assert abs(ground_lat) > 1.0, ground_lat              # the filter took part of the jump as lateral speed
+
+
+def test_a_jump_within_what_a_body_spans_is_no_hop():
+    """A wide body (a truck crossing, 8 m across the line of sight): its detection wanders over it, and a jump of
+    2.7 m is within its extent plus HOP_M: the filter weighs it as motion (the hop rule fired 19 times on a truck
+    crossing at 3 m/s and held it standing: an independent tester's finding). The same jump by a point is a hop."""
+    sv = (20.0, 0.0)
+    results = {}
+    for width in (0.0, 8.0):
+        trk = ObjectTracker()
+        for k in range(6):
+            x = 60.0 - 20.0 * 0.072 * k
+            y = 3.0 + (2.7 if k == 5 else 0.0)
+            r, a = math.hypot(x, y), math.atan2(y, x)
+            if k == 5:
+                trk.size[:, 1] = width                  # what the track's detections spanned across (sensor y)
+            det = Detections(np.array([r]), np.array([-20.0 * math.cos(a)]), np.array([a]), np.array([5.0]),
+                             np.array([30.0]), np.array([0]))
+            out = trk.step(0.072 * k, det, sv)
+        results[width] = out.vrel_lat_mps[0] + sv[1]
+    assert abs(results[0.0]) < 0.3 and abs(results[8.0]) > 1.0, results

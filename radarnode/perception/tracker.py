@@ -488,11 +488,15 @@ class ObjectTracker:
     def _hops(self, idx: np.ndarray, z: np.ndarray, sensor_velocity) -> np.ndarray:
         """Which of the tracks ``idx``, each about to take detection ``z`` (x, y, range rate), stand still (never
         seen moving, not moving now, the detection's range rate that of the standing world within
-        MOVING_THRESHOLD_MPS) and take a detection more than HOP_M across the line of sight from where they are."""
+        MOVING_THRESHOLD_MPS) and take a detection more than HOP_M across the line of sight from where they are,
+        beyond the extent they span."""
         x = self.x[idx]
         r = np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-3)
         ux, uy = z[:, 0] / r, z[:, 1] / r
         across = np.abs(-(z[:, 0] - x[:, 0]) * uy + (z[:, 1] - x[:, 1]) * ux)
+        # within a body the detection wanders over what it spans across the line of sight (a standing track's extent
+        # is along the sensor's axes): a truck crossing at 3 m/s hopped 19 times without this
+        across = across - (np.abs(self.size[idx, 0] * uy) + np.abs(self.size[idx, 1] * ux))
         standing_rate = -(sensor_velocity[0] * ux + sensor_velocity[1] * uy)
         _, moving = self._heading(idx, sensor_velocity)
         return ((across > HOP_M) & ~moving & ~self.was_moving[idx]
