@@ -341,9 +341,11 @@ def test_ctrl_c_while_the_command_still_loads_its_modules_ends_quietly(tmp_path,
     set kills it silently, as any program; one in the few ms while the interpreter itself, its site packages and
     the package's ``__init__`` start can still show Python's own traceback)."""
     out = tmp_path / "x.blf"
+    # SIGINT as at a terminal: a job started in the background of a non-interactive shell inherits it ignored, and a
+    # command that respects that (Python does) would rightly run on
     p = subprocess.Popen([sys.executable, "-m", "radarnode", "log", str(SCENARIOS / "highway_cut_in.yaml"), "-o",
                           str(out), "--duration", "60"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         cwd=ROOT)
+                         cwd=ROOT, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     time.sleep(delay)
     p.send_signal(signal.SIGINT)
     _, err = p.communicate(timeout=60)
