@@ -86,7 +86,7 @@ def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple
     resolved = det.ambig_state == AMBIG_STAGGERED
     take = candidate & ~resolved
     out.range_rate_mps = np.where(take, unwrapped, det.range_rate_mps)
-    out.range_m = _recouple(preset, det, out.range_rate_mps)
+    out.range_m = coupled_range(preset, det.range_m, det.range_rate_mps, out.range_rate_mps)
     out.ambig_state = np.where(take, AMBIG_STATIONARY, np.where(resolved, AMBIG_STAGGERED, AMBIG_AMBIGUOUS))
     return out
 
@@ -129,15 +129,20 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
     v1 = det1.range_rate_mps + 2 * v1max * _K[kk]
     v2 = det2.range_rate_mps[j] + 2 * v2max * k2[rows, j, kk]
     out.range_rate_mps = np.where(ok, 0.5 * (v1 + v2), det1.range_rate_mps)
-    out.range_m = _recouple(preset, det1, out.range_rate_mps)
+    out.range_m = coupled_range(preset, det1.range_m, det1.range_rate_mps, out.range_rate_mps)
     out.ambig_state = np.where(ok, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
     return out
 
 
-def _recouple(preset: RadarPreset, det: Detections, range_rate_mps: np.ndarray) -> np.ndarray:
-    """Range corrected for the new speed: the chain took the coupling out with the aliased one."""
-    shift = (range_rate_mps - det.range_rate_mps) * preset.range_rate_coupling_s
-    return np.mod(det.range_m - shift, preset.unambiguous_range_m)
+def coupled_range(preset: RadarPreset, range_m: np.ndarray, coupled_mps: np.ndarray,
+                  taken_out_mps: np.ndarray) -> np.ndarray:
+    """The range the chain reports for ``range_m``, which carries the range–Doppler coupling of the speed
+    ``coupled_mps`` (a peak sits at its true speed's), once the coupling is taken out with ``taken_out_mps``
+    (the speed it reports: ``RadarPreset.range_rate_coupling_s``), modulo the unambiguous range (never negative);
+    ``range_m`` itself where the two speeds agree. A target reported at an aliased speed keeps (true − aliased) ×
+    the coupling in its range; a speed resolved later (staggered ramps, stationary candidates) recouples it."""
+    shift = (np.asarray(coupled_mps) - np.asarray(taken_out_mps)) * preset.range_rate_coupling_s
+    return np.where(shift != 0.0, np.mod(range_m + shift, preset.unambiguous_range_m), range_m)
 
 
 def resolve(preset: RadarPreset, sequences: list[Detections], sensor_velocity: tuple[float, float]) -> Detections:

@@ -183,18 +183,6 @@ def measured_rcs_db(z: np.ndarray, snr_db: np.ndarray, steady: np.ndarray) -> np
     return np.where(steady, noise, fluctuating)
 
 
-def coupled_range(preset: RadarPreset, range_m: np.ndarray, true_rate_mps: np.ndarray,
-                  reported_rate_mps: np.ndarray) -> np.ndarray:
-    """The range the chain reports for a target at ``range_m`` moving at ``true_rate_mps`` that it reports at
-    ``reported_rate_mps``: its peak sits at the true speed's range–Doppler coupling, which the chain takes out with
-    the reported speed (``RadarPreset.range_rate_coupling_s``), modulo the unambiguous range (never negative).
-    Unchanged where the two speeds agree."""
-    shift = (np.asarray(true_rate_mps) - np.asarray(reported_rate_mps)) * preset.range_rate_coupling_s
-    if not np.any(shift):
-        return range_m
-    return np.mod(range_m + shift, preset.unambiguous_range_m)
-
-
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
     """True where (range, azimuth) lies inside any of the preset's sectors and above the minimum range.
 
@@ -559,7 +547,7 @@ class ObjectModel:
         # the range–Doppler coupling: the chain takes it out of the peak's range with the speed it reports, so a
         # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
         # (without it the object level put an aliased target 0.4–3 m from where they do)
-        m_r = coupled_range(p, m_r, v_meas, m_vr)
+        m_r = ambiguity.coupled_range(p, m_r, v_meas, m_vr)
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
@@ -619,7 +607,7 @@ class ObjectModel:
             "meas_state": np.where(flags["new"], MEAS_NEW, np.where(det, MEAS_MEASURED, MEAS_PREDICTED)),
             "prob_of_exist": np.searchsorted(_PROB_EDGES, p_exist, side="right").astype(np.int64) + 1,
             "k0": k0, "times": times, "config": config, "view": truth, "rcs_rep": sc.rcs_dbsm + z[:, 4],
-            "rcs_meas": ph["rcs_eff"] + measured_rcs_db(z[:, 4], ph["snr"], sc.swerling == 0),
+            "rcs_draw": z[:, 4],
         }
 
     def _tables(self, ch: dict) -> dict:
@@ -630,7 +618,8 @@ class ObjectModel:
         ch["detection_floats"] = np.stack([ch[key] for key in _DETECTION_FLOATS], axis=-1)
         if ch["config"].clusters:      # the actors' rows of the cluster list (_CL_* columns)
             t_n, n = ch["snr"].shape
-            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), ch["rcs_meas"], ch["sig_r"],
+            rcs = ch["rcs_eff"] + measured_rcs_db(ch["rcs_draw"], ch["snr"], self.scene.swerling == 0)
+            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), rcs, ch["sig_r"],
                                                  ch["sig_az"], ch["sig_v"], np.broadcast_to(np.arange(n), (t_n, n)),
                                                  ch["ambig"])
         return ch
@@ -1007,7 +996,7 @@ class ObjectModel:
             vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
             vr_true = vr
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]))
-            mr = coupled_range(p, mr, vr_true, vr)
+            mr = ambiguity.coupled_range(p, mr, vr_true, vr)
             cm, sm = np.cos(maz), np.sin(maz)
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g["rcs"], g["sig_r"], g["sig_az"],
                                         g["sig_v"], -1, g_amb), k - lo))
