@@ -71,14 +71,10 @@ class SensorMount:
         c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
         return self.x_m + c * x - s * y, self.y_m + s * x + c * y
 
-    def aligned(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Sensor-frame positions to the sensor's vehicle-aligned frame: the origin at the sensor, the axes the
-        vehicle's (x forward, y left); the vehicle frame less the mount's position."""
-        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
-        return c * x - s * y, s * x + c * y
-
     def rotate(self, vx: np.ndarray, vy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Sensor-frame velocities (relative to the sensor) to vehicle axes."""
+        """Sensor-frame vectors to vehicle axes: velocities relative to the sensor, or positions into the sensor's
+        vehicle-aligned frame (the origin at the sensor, the vehicle's axes: the vehicle frame less the mount's
+        position)."""
         c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
         return c * vx - s * vy, s * vx + c * vy
 
@@ -89,7 +85,7 @@ _ALIGN_SAMPLES = 16
 
 def aligned_boundaries(boundaries: dict | None, mount: SensorMount) -> dict | None:
     """The reported boundaries (sensor frame, as the radar measured them) in the sensor's vehicle-aligned frame
-    (:meth:`SensorMount.aligned`), the frame the path functions take them in: their headings are then the ego's
+    (:meth:`SensorMount.rotate`), the frame the path functions take them in: their headings are then the ego's
     heading to the road, whatever the sensor's yaw (a sensor yawed by 3.5° reported a straight road at −3.5°, past
     the lane-change limit). A yawed boundary is fitted again, a quadratic in the aligned x over its course
     (:data:`COURSE_EXTENT` times its valid range); with no yaw the boundaries are returned as they are."""
@@ -101,10 +97,10 @@ def aligned_boundaries(boundaries: dict | None, mount: SensorMount) -> dict | No
             out[side] = b
             continue
         xs = np.linspace(b.range_start_m, max(COURSE_EXTENT * b.range_end_m, b.range_start_m + 1.0), _ALIGN_SAMPLES)
-        xa, ya = mount.aligned(xs, b.y_at(xs))
+        xa, ya = mount.rotate(xs, b.y_at(xs))
         c2, c1, c0 = np.polyfit(xa, ya, 2)
-        start, end = mount.aligned(np.array([b.range_start_m, b.range_end_m]), b.y_at(np.array([b.range_start_m,
-                                                                                                  b.range_end_m])))[0]
+        ends = np.array([b.range_start_m, b.range_end_m])
+        start, end = mount.rotate(ends, b.y_at(ends))[0]
         out[side] = replace(b, offset_m=float(c0), heading_rad=math.atan(c1), curvature_1pm=2.0 * float(c2),
                             range_start_m=float(start), range_end_m=float(end))
     return out
@@ -216,7 +212,7 @@ def course_known(x: np.ndarray, y: np.ndarray, reach_m: float | None, ego_speed_
     x = np.asarray(x, dtype=np.float64)
     if reach_m is None:
         return np.ones(x.shape, dtype=bool)
-    xa = mount.aligned(x, np.asarray(y, dtype=np.float64))[0]
+    xa = mount.rotate(x, np.asarray(y, dtype=np.float64))[0]
     return (xa <= reach_m) | in_path(x, y, ego_speed_mps, yaw_rate_rps, half_width_m, None, mount, None)
 
 
