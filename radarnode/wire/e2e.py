@@ -119,21 +119,9 @@ class E2EChecker:
                 self.stats.repeated += 1
                 return False
             if delta > self.MAX_DELTA:
-                self.stats.wrong_sequence += 1
-                if counter in skipped:                      # counted lost, came late
-                    del skipped[counter]
-                    self.stats.lost -= 1
-                    self.stats.late += 1
+                if not self._takes_up(key, counter, skipped, recent):
+                    self.stats.wrong_sequence += 1
                     return False
-                prev, length = self._run.get(key, (None, 0))
-                continues = prev is not None and (counter - prev) & 0xF == 1
-                if counter in recent and not continues:     # an old frame sent again
-                    return False
-                length = length + 1 if continues else 1
-                self._run[key] = (counter, length)
-                if length < self.SYNC_FRAMES:
-                    return False
-                self.stats.wrong_sequence -= 1              # taken up: this one is used
                 recent.clear()
                 skipped.clear()
                 delta = 1                                   # what the jump skipped is unknowable
@@ -150,3 +138,19 @@ class E2EChecker:
         self.stats.last_counter[key] = counter
         self.stats.ok += 1
         return True
+
+    def _takes_up(self, key: int, counter: int, skipped: dict[int, int], recent: list[int]) -> bool:
+        """Whether a frame out of sequence takes up a jumped stream (the class docstring): a late frame (moved from
+        ``lost`` to ``late``) and an old frame sent again never do; the rest count towards SYNC_FRAMES in a row."""
+        if counter in skipped:                              # counted lost, came late
+            del skipped[counter]
+            self.stats.lost -= 1
+            self.stats.late += 1
+            return False
+        prev, length = self._run.get(key, (None, 0))
+        continues = prev is not None and (counter - prev) & 0xF == 1
+        if counter in recent and not continues:             # an old frame sent again
+            return False
+        length = length + 1 if continues else 1
+        self._run[key] = (counter, length)
+        return length >= self.SYNC_FRAMES
