@@ -46,6 +46,8 @@ MOVING_THRESHOLD_MPS = 1.0
 #: velocity across the line of sight is set back to the standing world's). Without it, tracks hopping from post to
 #: post across the rails became crossing objects at 130 km/h, some in the ego lane.
 HOP_M = 2.5
+#: a new or re-anchored track's prior on its velocity across the line of sight: the standing world's, σ 2 m/s
+TANGENTIAL_PRIOR_VAR = 4.0
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
@@ -515,7 +517,7 @@ class ObjectTracker:
         pv = p[:, 2:4, 2:4]
         var_r = np.einsum("ki,kij,kj->k", u, pv, u)
         self.p[idx, 2:4, 2:4] = var_r[:, None, None] * u[:, :, None] * u[:, None, :] \
-            + 4.0 * perp[:, :, None] * perp[:, None, :]
+            + TANGENTIAL_PRIOR_VAR * perp[:, :, None] * perp[:, None, :]
         self.p[idx, 0:2, 2:4] = 0.0
         self.p[idx, 2:4, 0:2] = 0.0
 
@@ -562,7 +564,7 @@ class ObjectTracker:
         p0[:, 0:2, 0:2] = r_cov[idx, 0:2, 0:2]
         u = np.stack([ux, uy], axis=1)
         p0[:, 2:4, 2:4] = (self.r_cov[2, 2] * u[:, :, None] * u[:, None, :]
-                           + 4.0 * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
+                           + TANGENTIAL_PRIOR_VAR * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
         if fit.any():
             x0[fit, 2:4] = groups.velocity[idx[fit]]
             p0[fit, 2:4, 2:4] = groups.velocity_cov[idx[fit]] + self.r_cov[2, 2] * np.eye(2)[None]
