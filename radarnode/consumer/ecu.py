@@ -338,12 +338,13 @@ class Ecu:
         kappa = curvature(self.ego_speed_mps, self.ego_yaw_rate_rps)
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
-            ground = math.hypot(vx + self.ego_speed_mps, vy)
+            gx = vx + self.ego_speed_mps                      # over ground, vehicle axes: (gx, vy)
+            ground = math.hypot(gx, vy)
             rng = math.hypot(t.x[0], t.x[1])
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
             there = kappa * max(xv[i], 0.0)
-            oncoming[i] = (vx + self.ego_speed_mps) * math.cos(there) + vy * math.sin(there) < -ONCOMING_MPS
+            oncoming[i] = gx * math.cos(there) + vy * math.sin(there) < -ONCOMING_MPS
             if cluster_strength is not None:
                 moved[i] = ground > 1.0
                 obstacle[i] = cluster_strength.get(t.id, False)
@@ -356,7 +357,7 @@ class Ecu:
             heading_there = oh + kappa * max(xv[i], 0.0)
             if k is not None:
                 dyn = int(ol.dyn_prop[k])
-                trail[i] = (dyn == DYN_MOVING and vx + self.ego_speed_mps > MOVING_MPS
+                trail[i] = (dyn == DYN_MOVING and gx > MOVING_MPS
                             and int(ol.meas_state[k]) != MEAS_PREDICTED and xv[i] > self.mount.x_m
                             and (int(ol.obj_class[k]) in VEHICLE_CLASSES or ol.length_m[k] >= TRAIL_MIN_LENGTH_M
                                  or ol.width_m[k] >= TRAIL_MIN_WIDTH_M))
@@ -369,7 +370,7 @@ class Ecu:
                 # standing still by its speed along the line of sight, what the radar measures (Doppler): the
                 # lateral speed of an object whose angle glints (a bridge deck) is seconds-long noise
                 lx, ly = self.mount.rotate(t.x[0], t.x[1])          # line of sight, vehicle axes
-                radial = ((vx + self.ego_speed_mps) * lx + vy * ly) / max(rng, 0.1)
+                radial = (gx * lx + vy * ly) / max(rng, 0.1)
                 if abs(radial) < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
