@@ -145,3 +145,16 @@ def test_a_minimum_fraction_keeps_the_strong_peaks_of_the_full_search(fraction):
     assert len(full) >= 3
     assert part == [ln for ln in full if ln.votes >= fraction * full[0].votes]
     assert 0 < len(part) < len(full)
+
+
+def test_scratch_reused_across_point_sets_gives_the_same_accumulator():
+    # one Scratch for point sets that grow and shrink (its arrays grown, then views of them reused): every
+    # accumulator equals the one computed with fresh arrays, weighted or not
+    from radarnode.dsp.hough import Scratch
+    rng = np.random.default_rng(5)
+    scratch = Scratch()
+    for n in (3, 400, 50, 401, 1, 1200, 7):
+        x, y = rng.uniform(0.0, 60.0, n), rng.uniform(-8.0, 8.0, n)
+        w = rng.uniform(0.1, 3.0, n)
+        assert np.array_equal(accumulate(x, y, GRID, scratch=scratch), accumulate(x, y, GRID))
+        assert np.array_equal(accumulate(x, y, GRID, weights=w, scratch=scratch), accumulate(x, y, GRID, weights=w))

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from radarnode.dsp.hough import HoughGrid, accumulate, strongest_lines
+from radarnode.dsp.hough import HoughGrid, Scratch, accumulate, strongest_lines
 
 STATIONARY_MPS = 1.0
 #: samples of a followed boundary's curve (odometry frame)
@@ -177,6 +177,7 @@ class RoadBoundaryEstimator:
         # (one continuous range through 90°, where the full [−90°, 90°) grid would split them at its ends)
         full = HoughGrid.make(rho_max_m=max_offset_m + 5.0, rho_step_m=0.25, theta_step_deg=0.5)
         self.grid = HoughGrid(np.radians(np.arange(60.0, 120.0, 0.5)), full.rho_m)
+        self._scratch = Scratch()                    # the Hough search's work arrays, reused
         self._points: list[np.ndarray] = []          # per cycle: (2, n), the rows x and y in the odometry frame
         self._pose = (0.0, 0.0, 0.0)                 # odometry: x, y, heading of the sensor
         # the followed boundaries' samples in the odometry frame, (side, x/y, CURVE_SAMPLES), and which are followed
@@ -292,7 +293,7 @@ class RoadBoundaryEstimator:
         """The nearest strong near-longitudinal Hough line among a side's points (straightened frame), fitted."""
         if x.size < 4:
             return UNAVAILABLE
-        acc = accumulate(x, y, self.grid)
+        acc = accumulate(x, y, self.grid, scratch=self._scratch)
         # (a line with less than half the strongest's votes is never taken: only the strong ones are searched for)
         lines = strongest_lines(acc, self.grid, max_lines=3, min_votes=4.0, min_fraction=0.5)
         if not lines:
