@@ -318,23 +318,25 @@ class RoadBoundaryEstimator:
         count = [int(mom[k][0]) if use[k] else 0 for k in range(rows)]
         if max(count) < 4:
             return [UNAVAILABLE] * rows
+        # seed 002: M cross-sections along x from each row's nearest inlier, at most k of them without a point;
+        # every row in one pass (the rows' cells offset by a row's worth of sections for one bincount)
+        lo = np.where(inliers, x, np.inf).min(axis=1).tolist()
+        x_max = np.where(inliers, x, -np.inf).max(axis=1).tolist()
+        start = [max(v, 0.0) if count[k] >= 4 else 0.0 for k, v in enumerate(lo)]
+        cell = np.floor((x - np.array(start)[:, None]) / self.section_m)          # (rows, n)
+        take = inliers & (cell >= 0.0) & (cell < self.sections)
+        cell += (np.arange(rows) * self.sections)[:, None]
+        present = (np.bincount(cell[take].astype(np.intp), minlength=rows * self.sections) > 0).tolist()
         ok, seen, deg2 = [False] * rows, [0] * rows, [False] * rows
-        start, x_max = [0.0] * rows, [0.0] * rows
         for k in range(rows):
             if count[k] < 4:
                 continue
-            # seed 002: M cross-sections along x from the nearest inlier, at most k of them without a point
-            xi = x.compress(inliers[k])
-            lo, x_max[k] = float(xi.min()), float(xi.max())
-            start[k] = max(lo, 0.0)
-            cell = np.floor((xi - start[k]) / self.section_m)
-            cell = cell.compress((cell >= 0.0) & (cell < self.sections)).astype(np.intp)
-            present = (np.bincount(cell, minlength=self.sections) > 0).tolist()
-            reach = max((j + 1 for j, q in enumerate(present) if q), default=0)
-            seen[k] = sum(present[:reach])
+            row = present[k * self.sections:(k + 1) * self.sections]
+            reach = max((j + 1 for j, q in enumerate(row) if q), default=0)
+            seen[k] = sum(row[:reach])
             missing = (reach - seen[k]) + max(0, self.sections - reach - self.max_missing)
             ok[k] = missing <= self.max_missing and reach >= 2
-            deg2[k] = ok[k] and x_max[k] - lo > 40.0 and count[k] >= 8
+            deg2[k] = ok[k] and x_max[k] - lo[k] > 40.0 and count[k] >= 8
         if not any(ok):
             return [UNAVAILABLE] * rows
         coef = solve(mom, deg2).tolist()
