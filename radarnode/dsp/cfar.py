@@ -111,6 +111,10 @@ class Cfar:
         """Noise estimate per cell and the threshold factor (per cell where the ring is cut by an edge)."""
         raise NotImplementedError
 
+    def detect(self, power: np.ndarray) -> np.ndarray:
+        """The detection mask alone: ``self(power).mask``, bit for bit (a detector may get it more cheaply)."""
+        return self(power).mask
+
     def offsets(self) -> np.ndarray:
         """(doppler, range) offsets of the full training ring, shape (n_train, 2)."""
         return stats.ring_offsets(self.guard, self.train)
@@ -187,6 +191,62 @@ class OrderedStatisticCfar(Cfar):
         import scipy.ndimage  # imported when first needed: a faster start
         ranked = scipy.ndimage.rank_filter(padded, self.k - 1, footprint=self.footprint, mode="wrap")
         return ranked[:, pad:padded.shape[1] - pad], self.alpha
+
+    def detect(self, power: np.ndarray) -> np.ndarray:
+        """``self(power).mask`` bit for bit, the order statistic taken only where two bounds cannot settle a cell.
+
+        Both bound the k-th smallest of a ring of N cells from below, so a cell not above α times the bound is
+        not above α times the order statistic. By counts: where fewer than k ring cells lie below a level c, the
+        k-th smallest is at least c (levels an octave apart, from 1/8 to 16 times the map's median; the counts are exact
+        integer box sums). By sums: it is at least (S − (N − k)·M)/k, S the ring's sum and M its largest cell (the
+        k smallest sum to at least S less the N − k largest, and to at most k times the k-th); S by direct sums,
+        whose error of a few hundred ulps of the box's largest cell the bound gives away. The order statistic of
+        the cells left comes from a partition of their rings: the values the rank filter selects, so the same
+        comparisons. On maps of noise and targets well under one cell in a hundred is left (the rank filter over
+        a 128 × 256 map took about 150–270 ms here)."""
+        power = np.asarray(power, dtype=np.float64)
+        if power.ndim != 2:
+            raise ConfigError(f"cfar power: shape {power.shape} is not allowed; expected (doppler, range)")
+        import scipy.ndimage  # imported when first needed: a faster start
+        (gd, gr), (td, tr) = self.guard, self.train
+        fd, pad = gd + td, gr + tr
+        m, n = power.shape
+        padded = np.pad(power, ((0, 0), (pad, pad)), mode="symmetric")
+        inner = slice(pad, padded.shape[1] - pad)
+        outer = (2 * fd + 1, 2 * pad + 1)
+        k_n, k = self.n_train, self.k
+
+        def box(shape: tuple[int, int]) -> np.ndarray:
+            out = scipy.ndimage.correlate1d(padded, np.ones(shape[1]), axis=1, mode="wrap")
+            return scipy.ndimage.correlate1d(out, np.ones(shape[0]), axis=0, mode="wrap")[:, inner]
+
+        ring_sum = box(outer) - box((2 * gd + 1, 2 * gr + 1))
+        top = scipy.ndimage.maximum_filter(padded, size=outer, mode="wrap")[:, inner]
+        bound = (ring_sum - (k_n - k) * top - 1e-12 * outer[0] * outer[1] * top) / k
+        median = float(np.median(power))
+        if median > 0.0:
+            wrapped = np.pad(padded, ((fd, fd), (0, 0)), mode="wrap")      # Doppler wraps: the boxes never do
+            for c in median * 2.0 ** np.arange(-3.0, 5.0):
+                below = np.zeros((wrapped.shape[0] + 1, wrapped.shape[1] + 1), dtype=np.int32)
+                np.cumsum(np.cumsum(wrapped < c, axis=0, dtype=np.int32), axis=1, out=below[1:, 1:])
+                count = (below[outer[0]:outer[0] + m, outer[1]:outer[1] + n] - below[:m, outer[1]:outer[1] + n]
+                         - below[outer[0]:outer[0] + m, :n] + below[:m, :n])
+                a0, a1 = fd - gd, pad - gr                              # the guard box within the outer one
+                b0, b1 = a0 + 2 * gd + 1, a1 + 2 * gr + 1
+                count -= (below[b0:b0 + m, b1:b1 + n] - below[a0:a0 + m, b1:b1 + n]
+                          - below[b0:b0 + m, a1:a1 + n] + below[a0:a0 + m, a1:a1 + n])
+                np.maximum(bound, np.where(count < k, c, -np.inf), out=bound)
+        mask = np.zeros(power.shape, dtype=bool)
+        cand_d, cand_r = np.nonzero(power > self.alpha * bound)
+        if cand_d.size:
+            off = self.offsets()                                   # (N, 2): doppler, range
+            for lo in range(0, cand_d.size, 4096):                 # (chunks of 4096 × N values)
+                d, r = cand_d[lo:lo + 4096], cand_r[lo:lo + 4096]
+                rows = np.mod(d[:, None] + off[None, :, 0], m)
+                vals = padded[rows, r[:, None] + pad + off[None, :, 1]]
+                kth = np.partition(vals, k - 1, axis=1)[:, k - 1]
+                mask[d, r] = power[d, r] > self.alpha * kth
+        return mask
 
 
 CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStatisticCfar}

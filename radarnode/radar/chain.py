@@ -276,8 +276,7 @@ class DspChain:
         if not np.all(np.isfinite(power)):
             raise ConfigError(f"rd: {int(np.sum(~np.isfinite(power)))} range–Doppler cells are NaN or infinite; "
                               "expected a finite spectrum (check the cube's samples)")
-        res = stat.cfar(power)
-        d, r = local_maxima(power, res.mask)
+        d, r = local_maxima(power, stat.cfar.detect(power))
         if d.size > cfg.max_detections:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
             d, r = d[keep], r[keep]
