@@ -438,3 +438,43 @@ def test_an_output_that_cannot_be_written_is_one_line_exit_1_before_the_work(cap
     assert rc == 1, err
     assert line.startswith(f"error: option {option}: ") and repr(str(out)) in line, line
     assert sorted(str(x.relative_to(d)) for x in d.rglob("*")) == before
+
+
+@pytest.mark.parametrize("command", ["log", "decode"])
+def test_an_output_through_a_symlink_replaces_the_file_it_points_to_not_the_link(capsys, logs, tmp_path, command):
+    # an independent tester's finding: the temporary file was renamed over the link itself
+    make, name, _ = OUTPUT_COMMANDS[command]
+    target = tmp_path / f"real-{name}"
+    target.write_text("old")
+    link = tmp_path / name
+    link.symlink_to(target.name)
+    argv = [str(logs[".blf"]) if a == "LOG" else a for a in make(str(link))]
+    assert main(argv) == 0, capsys.readouterr().err
+    assert link.is_symlink() and os.readlink(link) == target.name
+    assert target.read_bytes() != b"old" and target.stat().st_size > 100
+
+
+def test_an_output_that_is_a_device_or_a_fifo_is_written_into_not_replaced(capsys, logs, tmp_path):
+    # -o /dev/null (a device node) and -o FIFO (a reader at its other end) take the output; neither is replaced by a
+    # regular file (an independent tester's finding: as root, -o /dev/full replaced the real /dev/full)
+    import threading
+    null_link = tmp_path / "devnull.txt"
+    null_link.symlink_to("/dev/null")
+    assert main(["decode", str(logs[".blf"]), "-o", str(null_link)]) == 0, capsys.readouterr().err
+    assert null_link.is_symlink() and Path("/dev/null").is_char_device()
+    fifo = tmp_path / "fifo.txt"
+    os.mkfifo(fifo)
+    got = []
+    reader = threading.Thread(target=lambda: got.append(fifo.read_bytes()))
+    reader.start()
+    assert main(["decode", str(logs[".blf"]), "-o", str(fifo)]) == 0, capsys.readouterr().err
+    reader.join(10)
+    assert fifo.is_fifo() and got and got[0].count(b"\n") > 10
+
+
+@pytest.mark.skipif(not Path("/dev/full").is_char_device(), reason="needs /dev/full (Linux): a device that is always full")
+def test_a_full_device_is_one_error_line_naming_the_option_and_file(capsys, logs):
+    rc = main(["decode", str(logs[".blf"]), "-o", "/dev/full"])
+    line = one_error_line(capsys.readouterr().err)
+    assert rc == 1 and line.startswith("error: option --output: cannot write '/dev/full': ") and "space" in line
+    assert Path("/dev/full").is_char_device()

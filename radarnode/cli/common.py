@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import contextlib
 import dataclasses
+import errno
 import json
 import os
 import signal
+import stat
 import sys
 import tempfile
 import threading
@@ -299,12 +301,25 @@ def progress(total: int | None, label: str, unit: str = "cycle", *, to_stdout: b
                 dynamic_ncols=True, leave=False)
 
 
+def _special(path: str | os.PathLike) -> bool:
+    """Whether ``path`` exists and is neither a regular file nor a directory (a device such as /dev/null, a FIFO,
+    a socket): such a target is written into, not replaced."""
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return False
+    return not (stat.S_ISREG(mode) or stat.S_ISDIR(mode))
+
+
 def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple[Path, str]:
     """A new empty temporary file beside ``path`` (created, closed): ``.<name>_<random>_part<suffixes>``.
 
-    Raises FileError naming the option when ``path`` is a directory or its directory cannot be written — before
-    any work is done, not at the rename."""
+    A symbolic link is followed: the file it points to is the one replaced (the link stays a link). Raises
+    FileError naming the option when ``path`` is a directory or its directory cannot be written — before any work
+    is done, not at the rename."""
     target = Path(path)
+    if target.is_symlink():
+        target = Path(os.path.realpath(target))
     if target.is_dir():
         raise FileError(f"option {option}: cannot write {str(path)!r}: it is a directory; expected a file name")
     suffixes = target.suffixes[-2:] if target.suffix.lower() == ".gz" else target.suffixes[-1:]
@@ -321,6 +336,22 @@ def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple
     return target, tmp
 
 
+#: errors of a write that has no room or no device under it: named as the output's, not passed on bare
+_WRITE_ERRNOS = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
+
+
+@contextlib.contextmanager
+def _named_write_errors(path: str | os.PathLike, option: str):
+    """A full disk (or device: /dev/full), a quota or a file-size limit met while the output is written becomes
+    one error naming the option and the file."""
+    try:
+        yield
+    except OSError as exc:
+        if exc.errno not in _WRITE_ERRNOS:
+            raise
+        raise FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+
+
 def _commit(tmp: str, target: Path, option: str) -> None:
     os.chmod(tmp, 0o666 & ~_umask())
     try:
@@ -335,10 +366,20 @@ def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline
 
     A reader never sees a half-written file: an exception (or Ctrl-C, SIGTERM) removes the temporary file and
     leaves any earlier ``path`` untouched. Yields the open file; ``option`` names the option in error messages.
-    """
+    A symbolic link's file is replaced, not the link; a device, FIFO or socket (``-o /dev/null``, a pipe's
+    reader) is written into directly — it was never a file to replace."""
+    kw = {} if "b" in mode else {"encoding": "utf-8"}
+    if _special(path):
+        try:
+            f = open(path, mode, newline=newline, **kw)
+        except OSError as exc:
+            raise FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+        with _named_write_errors(path, option), f:
+            yield f
+        return
     target, tmp = _temporary(path, option, keep_suffix=False)
     try:
-        with open(tmp, mode, newline=newline, **({} if "b" in mode else {"encoding": "utf-8"})) as f:
+        with _named_write_errors(path, option), open(tmp, mode, newline=newline, **kw) as f:
             yield f
         _commit(tmp, target, option)
     except BaseException:
@@ -351,10 +392,16 @@ def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline
 def atomic_path(path: str | os.PathLike, option: str):
     """Like :func:`atomic_output`, for writers that want a file name (python-can, matplotlib): yields the
     temporary path, renamed to ``path`` on success, removed on failure. The temporary name ends in the target's
-    suffix (both of ``.log.gz``), so writers that choose the format by suffix still do."""
+    suffix (both of ``.log.gz``), so writers that choose the format by suffix still do. A device, FIFO or socket
+    is yielded itself (the writer writes into it)."""
+    if _special(path):
+        with _named_write_errors(path, option):
+            yield str(path)
+        return
     target, tmp = _temporary(path, option, keep_suffix=True)
     try:
-        yield tmp
+        with _named_write_errors(path, option):
+            yield tmp
         _commit(tmp, target, option)
     except BaseException:
         with contextlib.suppress(OSError):
