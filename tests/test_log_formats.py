@@ -445,3 +445,23 @@ def test_a_damaged_blf_file_header_costs_no_frame(capsys, tmp_path, how):
     rc, _, err = cli(capsys, "decode", bad, "--summary")
     line = err.strip().splitlines()[-1]
     assert rc == 1 and "first bad record at byte " in line and f"{total} frames read" in line, (line, total)
+
+
+@pytest.mark.parametrize("keep", [0.5, 0.8, 0.9, 0.95, 0.99])
+def test_an_sqlite_log_cut_anywhere_decodes_what_is_readable_without_a_traceback(capsys, tmp_path, keep):
+    # an independent tester's finding: a .db cut in its last pages came back as rows of None, and decode and
+    # export ended in a TypeError traceback
+    good = tmp_path / "good.db"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "3"]) == 0
+    capsys.readouterr()
+    data = good.read_bytes()
+    bad = tmp_path / "cut.db"
+    bad.write_bytes(data[: int(len(data) * keep)])
+    for argv in (["decode", bad, "--format", "json", "-o", tmp_path / "x.jsonl"],
+                 ["decode", bad, "--summary"]):
+        rc, _, err = cli(capsys, *argv)
+        assert "Traceback" not in err, err
+        if rc != 0:
+            line = err.strip().splitlines()[-1]            # (after the summary of what was decoded)
+            assert line.startswith("error: ") and err.count("error: ") == 1, err
+            assert rc == 1 and f"'{bad}'" in line and ("first bad record at row" in line or "not a" in line), line

@@ -28,6 +28,7 @@ import contextlib
 import gc
 import gzip
 import logging
+import math
 import os
 import re
 import struct
@@ -276,12 +277,19 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
 
 def _frame_problem(msg: can.Message) -> str | None:
     """Why a frame a reader produced cannot be on a CAN bus (a garbled or cut-off record), or None."""
+    # a cut-off SQLite row comes back with None where a column was lost: every field is checked for its type
+    if not isinstance(msg.timestamp, (int, float)) or not math.isfinite(msg.timestamp):
+        return f"timestamp {msg.timestamp!r} is not a finite number"
     if msg.is_error_frame:
         return None
+    if not isinstance(msg.arbitration_id, int):
+        return f"CAN ID {msg.arbitration_id!r} is not a number"
     if msg.arbitration_id < 0 or msg.arbitration_id > (0x1FFFFFFF if msg.is_extended_id else 0x7FF):
         return f"CAN ID 0x{msg.arbitration_id:X} is out of range"
     if msg.is_remote_frame:
         return None
+    if msg.data is None or not isinstance(msg.dlc, int):
+        return f"DLC {msg.dlc!r} with data {msg.data!r}"
     n = len(msg.data)
     if msg.is_fd:
         return None if n <= 64 else f"{n} data bytes"
