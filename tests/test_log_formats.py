@@ -465,3 +465,12 @@ def test_an_sqlite_log_cut_anywhere_decodes_what_is_readable_without_a_traceback
             line = err.strip().splitlines()[-1]            # (after the summary of what was decoded)
             assert line.startswith("error: ") and err.count("error: ") == 1, err
             assert rc == 1 and f"'{bad}'" in line and ("first bad record at row" in line or "not a" in line), line
+
+
+@pytest.mark.parametrize("channel,number", [("can0", 0), ("vcan65534", 65534), ("bus", None)])
+def test_a_blf_log_keeps_every_channel_number_it_can_store(capsys, tmp_path, channel, number):
+    out = tmp_path / "x.blf"
+    assert main(["log", SCENARIO, "-o", str(out), "--duration", "0.3", "--channel", channel]) == 0
+    capsys.readouterr()
+    # python-can's BLF writer stores a name's trailing number plus one; a name without one goes to channel 1
+    assert {m.channel for m in can.LogReader(str(out))} == {0 if number is None else number}

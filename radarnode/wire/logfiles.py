@@ -164,6 +164,22 @@ def check_output_format(path: str, option: str, extra: tuple[str, ...] = ()) -> 
     return fmt
 
 
+#: BLF stores a frame's channel as an unsigned 16-bit number, counted from 1: python-can writes a channel name's
+#: trailing number plus one (``can0`` is channel 1)
+BLF_MAX_CHANNEL_NUMBER = 65534
+
+
+def check_channel(path: str, channel: str, option: str) -> None:
+    """A UsageError naming the option when the log format of ``path`` cannot store ``channel``: a BLF file takes a
+    name whose trailing number (python-can's ``channel2int``) is at most BLF_MAX_CHANNEL_NUMBER."""
+    import can.util
+    number = can.util.channel2int(channel)
+    if log_format(path) == ".blf" and number is not None and number > BLF_MAX_CHANNEL_NUMBER:
+        raise UsageError(f"option {option}: value {channel!r} is not allowed for a .blf log: BLF stores the channel "
+                         f"as a 16-bit number (the name's trailing number plus one); expected a name ending in "
+                         f"0…{BLF_MAX_CHANNEL_NUMBER} or in no number")
+
+
 def check_input_format(path: str, what: str) -> str:
     """The format of an input log file by its name, or a UsageError for a suffix no reader here knows.
     ``what`` names the argument (``argument FILE``)."""
