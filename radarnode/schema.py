@@ -20,19 +20,52 @@ from radarnode.errors import FieldError, ScenarioError, short_repr
 
 
 class Loader(yaml.SafeLoader):
-    """PyYAML's safe loader (YAML 1.1) that also reads ``1e-5``, ``2E6`` and ``1.0e5`` as numbers.
+    """PyYAML's safe loader reading plain scalars by YAML 1.2's core schema (JSON's numbers, booleans and null)
+    instead of the YAML 1.1 PyYAML implements.
 
-    YAML 1.1 only knows a float with a dot and a signed exponent (``1.0e-5``); what every other YAML and JSON
-    reader, and every user, takes for a number — ``1e-5``, ``1.0e5`` — it reads as a string, which a scenario
-    field then refuses ("expected a number"). This adds YAML 1.2's float pattern, so those are the numbers
-    meant. Quoted text (``"1e-5"``) stays a string.
+    Numbers: ``1e-5``, ``2E6`` and ``1.0e5`` are floats (YAML 1.1 wanted a dot and a signed exponent, and read
+    them as text, which a scenario field then refused); ``0o17`` and ``0x1F`` are integers and ``012`` is twelve
+    (1.1: octal). What 1.2 does not have is text: ``1:30`` (1.1 read base 60: 90), ``1_000`` (1.1 dropped the
+    underscore), dates. Booleans are ``true`` and ``false`` (in three spellings); ``yes``, ``no``, ``on`` and
+    ``off`` are text. A field then refuses the text and says why (:func:`quoted_number_hint`). Quoted text stays
+    text.
     """
 
+    yaml_implicit_resolvers: dict = {}
 
-Loader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(r"^[-+]?(?:[0-9][0-9_]*(?:\.[0-9_]*)?|\.[0-9_]+)[eE][-+]?[0-9]+$"),
-    list("-+0123456789."))
+
+for _tag, _pattern, _first in (
+        ("tag:yaml.org,2002:null", r"^(?:~|null|Null|NULL|)$", ["~", "n", "N", ""]),
+        ("tag:yaml.org,2002:bool", r"^(?:true|True|TRUE|false|False|FALSE)$", list("tTfF")),
+        ("tag:yaml.org,2002:int", r"^(?:[-+]?[0-9]+|0o[0-7]+|0x[0-9a-fA-F]+)$", list("-+0123456789")),
+        ("tag:yaml.org,2002:float",
+         r"^(?:[-+]?(?:\.[0-9]+|[0-9]+(?:\.[0-9]*)?)(?:[eE][-+]?[0-9]+)?|[-+]?\.(?:inf|Inf|INF)|\.(?:nan|NaN|NAN))$",
+         list("-+0123456789.")),
+        ("tag:yaml.org,2002:merge", r"^(?:<<)$", ["<"])):
+    Loader.add_implicit_resolver(_tag, re.compile(_pattern), _first)
+
+
+def _construct_int(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> int:
+    text = loader.construct_scalar(node)
+    if text.startswith(("0o", "0x")):
+        return int(text[2:], 8 if text[1] == "o" else 16)
+    return int(text, 10)
+
+
+def _construct_float(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> float:
+    text = loader.construct_scalar(node).lower()
+    if text.endswith(".inf"):
+        return -math.inf if text.startswith("-") else math.inf
+    return math.nan if text == ".nan" else float(text)
+
+
+def _construct_bool(loader: yaml.SafeLoader, node: yaml.ScalarNode) -> bool:
+    return loader.construct_scalar(node).lower() == "true"
+
+
+Loader.add_constructor("tag:yaml.org,2002:int", _construct_int)
+Loader.add_constructor("tag:yaml.org,2002:float", _construct_float)
+Loader.add_constructor("tag:yaml.org,2002:bool", _construct_bool)
 
 
 @dataclass(frozen=True)
@@ -106,12 +139,22 @@ class Source:
 
 
 def quoted_number_hint(value: object) -> str:
-    """A hint for a number written as text (``"25"`` in quotes): the field wants the number itself."""
+    """A hint for a number written as text: ``"25"`` in quotes (the field wants the number itself), or a form only
+    YAML 1.1 read as a number (``1:30`` in base 60, ``1_000``), which YAML 1.2 reads as text."""
     if isinstance(value, str):
+        if re.fullmatch(r"[-+]?[0-9][0-9_]*(?::[0-5]?[0-9])+(?:\.[0-9_]*)?", value):
+            sign, digits = (-1.0, value[1:]) if value.startswith("-") else (1.0, value.lstrip("+"))
+            base60 = 0.0
+            for part in digits.replace("_", "").split(":"):
+                base60 = 60.0 * base60 + float(part)
+            return (f" (this is text: YAML 1.2 has no base-60 numbers, where YAML 1.1 read {sign * base60:g}; write "
+                    "the number itself)")
         try:
             number = float(value.replace("_", ""))
         except ValueError:
             return ""
+        if "_" in value and math.isfinite(number):
+            return " (this is text: YAML 1.2 numbers have no '_' separators; write the digits alone)"
         if math.isfinite(number):
             return " (this is text: write the number without quotes)"
     return ""

@@ -39,7 +39,9 @@ def integer(field: str, value: object, *, lo: int | None = None, hi: int | None 
 
 def boolean(field: str, value: object) -> bool:
     if not isinstance(value, bool):
-        raise FieldError(field, value, "true or false")
+        yaml11 = isinstance(value, str) and value.lower() in ("yes", "no", "on", "off", "y", "n")
+        raise FieldError(field, value, "true or false" + (" (YAML 1.2, which scenarios are read by, reads "
+                                                          f"{value} as text)" if yaml11 else ""))
     return value
 
 

@@ -52,6 +52,43 @@ def test_numbers_yaml_1_1_reads_as_strings_are_the_numbers_meant(tmp_path, writt
     assert yaml.load("x: [1e, e5, 1e5x]", Loader=Loader)["x"] == ["1e", "e5", "1e5x"]
 
 
+@pytest.mark.parametrize("written,value", [("0o17", 15), ("0x1F", 31), ("012", 12), ("-7", -7), (".5", 0.5),
+                                           ("-.inf", float("-inf")), ("true", True), ("FALSE", False), ("~", None),
+                                           ("1:30", "1:30"), ("1_000", "1_000"), ("yes", "yes"), ("off", "off"),
+                                           ("0b101", "0b101"), ("2001-12-14", "2001-12-14")])
+def test_plain_scalars_are_read_by_yaml_1_2s_core_schema(written, value):
+    """An independent tester's finding: `duration_s: 1:30` ran 90 s (YAML 1.1's base 60), `seed: 1_0` was 10, `0o7`
+    (a YAML 1.2 integer) was refused, and yes/on/off were booleans. YAML 1.2 core: what it does not read as a number,
+    boolean or null is text."""
+    import yaml
+
+    from radarnode.schema import Loader
+    assert yaml.load(f"x: {written}", Loader=Loader)["x"] == value
+    assert type(yaml.load(f"x: {written}", Loader=Loader)["x"]) is type(value)
+
+
+@pytest.mark.parametrize("field,written,hint", [
+    ("duration_s", "1:30", "this is text: YAML 1.2 has no base-60 numbers, where YAML 1.1 read 90; write the "
+                           "number itself"),
+    ("seed", "1_0", "this is text: YAML 1.2 numbers have no '_' separators; write the digits alone")])
+def test_a_number_only_yaml_1_1_read_is_refused_as_text_saying_why(tmp_path, field, written, hint):
+    p, msg = _error(tmp_path, HEAD.replace(f"{field}: {'10' if field == 'duration_s' else '1'}",
+                                           f"{field}: {written}"))
+    assert msg.startswith(f"{p}:{2 if field == 'duration_s' else 3}: field '{field}': value '{written}' is not "
+                          "allowed") and msg.endswith(f"({hint})"), msg
+
+
+def test_a_yaml_1_1_boolean_is_refused_as_text_saying_why(tmp_path):
+    p, msg = _error(tmp_path, HEAD + "radar: {preset: ars408_like, send_quality: yes}\n")
+    assert msg == (f"{p}:5: field 'radar.send_quality': value 'yes' is not allowed; expected true or false (YAML 1.2, "
+                   "which scenarios are read by, reads yes as text)")
+
+
+def test_an_octal_seed_is_the_number_yaml_1_2_reads(tmp_path):
+    _, sc = _load(tmp_path, HEAD.replace("seed: 1", "seed: 0o7"))
+    assert sc.seed == 7
+
+
 def test_the_readme_example_pfa_1e_5_loads_and_reaches_the_preset(tmp_path):
     from radarnode.radar.setup import radar_config
     _, sc = _load(tmp_path, HEAD + "radar: {preset: mimo12, overrides: {tx_power_dbm: 5, pfa: 1e-5}}\n")
