@@ -474,3 +474,24 @@ def test_a_blf_log_keeps_every_channel_number_it_can_store(capsys, tmp_path, cha
     capsys.readouterr()
     # python-can's BLF writer stores a name's trailing number plus one; a name without one goes to channel 1
     assert {m.channel for m in can.LogReader(str(out))} == {0 if number is None else number}
+
+
+@pytest.mark.parametrize("damage", ["garbage", "garbled number", "no time"])
+def test_a_damaged_trc_record_is_reported_not_dropped_or_read(capsys, tmp_path, damage):
+    # an independent tester's finding: python-can's TRC reader dropped a line of garbage without a word and parsed a
+    # record whose message-number column was garbled; decode exited 0 either way
+    good = tmp_path / "good.trc"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "2"]) == 0
+    capsys.readouterr()
+    lines = good.read_bytes().split(b"\n")
+    i = len(lines) // 2
+    assert not lines[i].startswith(b";")
+    lines[i] = {"garbage": b"\xff\xfe\x80 not utf8 \xc3\x28",
+                "garbled number": b"\x05\xc7\x97\xff\x08" + lines[i][5:],
+                "no time": b"   17  DT  1  0300 Rx -  2    45 6E"}[damage]
+    bad = tmp_path / "bad.trc"
+    bad.write_bytes(b"\n".join(lines))
+    total = sum(1 for _ in can.LogReader(str(good)))
+    rc, _, err = cli(capsys, "decode", bad, "--summary")
+    line = err.strip().splitlines()[-1]
+    assert rc == 1 and f"first bad record at line {i + 1}: " in line and f"; {total - 1} frames read" in line, line

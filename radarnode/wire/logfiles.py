@@ -405,6 +405,22 @@ def _asc_line_problem(line: str) -> str | None:
     return None
 
 
+#: a TRC line: empty, a header or comment (``;``), or a record — its message number (``1)`` in version 1.x), its
+#: time offset, then its fields
+_TRC_LINE = re.compile(r"\s*($|;|\d+\)?\s+-?\d+(\.\d+)?\s+\S)")
+
+
+def _trc_line_problem(line: str) -> str | None:
+    """python-can's TRC reader parses a record whose message number is garbled and drops a line of garbage
+    without a word: a line that holds control characters or bytes that are not text, or that is neither a header
+    nor a record, is damage, and reported as such (as for ASC, :func:`_asc_line_problem`)."""
+    if "\ufffd" in line or any(c < " " and c not in "\t\r\n" for c in line):
+        return "not text (control characters or invalid UTF-8)"
+    if not _TRC_LINE.match(line):
+        return f"not a TRC line: {line.strip()[:40]!r}"
+    return None
+
+
 class _TrcWarnings(logging.Filter):
     """python-can's TRC reader logs a line it cannot parse and goes on: counted as a bad record instead."""
 
@@ -432,7 +448,8 @@ class _TextFrames:
         opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8", errors="replace")) \
             if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8", errors="replace"))
         with opener() as f:
-            lines = self.lines = _Lines(f, report, _asc_line_problem if self.reader_cls is ASCReader else None)
+            check = {ASCReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
+            lines = self.lines = _Lines(f, report, check)
             trc_log = logging.getLogger("can.io.trc")
             quiet = _TrcWarnings(lines, report)
             trc_log.addFilter(quiet)
