@@ -90,10 +90,17 @@ class Source:
         self.lines: dict[str, int] = {}
         try:
             node = yaml.compose(text, Loader=Loader)
+        except yaml.reader.ReaderError as exc:          # a character YAML does not allow (a control character)
+            line = text[:exc.position].count("\n") + 1
+            char = exc.character if isinstance(exc.character, int) else ord(exc.character)
+            kind = "a control character" if char < 0x20 or 0x7F <= char <= 0x9F else "not printable"
+            raise ScenarioError(f"{path}:{line}: not valid YAML: character U+{char:04X} is not allowed in a YAML "
+                                f"file ({kind}); expected printable text") from None
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             where = f":{mark.line + 1}" if mark is not None else ""
-            raise ScenarioError(f"{path}{where}: not valid YAML: {getattr(exc, 'problem', exc)}") from None
+            problem = " ".join(str(getattr(exc, "problem", None) or exc).split())      # one line
+            raise ScenarioError(f"{path}{where}: not valid YAML: {problem}") from None
         if node is None:
             raise ScenarioError(f"{path}: the file is empty; expected a mapping with name, duration_s and seed")
         self.data = self._convert(node, "")

@@ -283,3 +283,28 @@ def test_consume_json_carries_the_collision_regions_when_the_cycle_has_them():
                                                   collision_regions=np.array([0b101, 0], dtype=np.uint8))))
     assert warned["objects"][0]["collision_regions"] == [0, 2] and warned["objects"][0]["coll_det_region_bitfield"] == 5
     assert warned["objects"][1]["collision_regions"] == []
+
+
+def test_heading_beside_waypoints_that_never_move_orients_the_standing_body(tmp_path):
+    # an independent tester took it for ignored: a stationary path has no heading of its own, and heading_deg is the
+    # body's orientation there (speed_mps other than 0 is the error, as those waypoints never move it)
+    import math
+
+    from radarnode.scene.world import Scene
+    path = "waypoints: [{t_s: 0, x_m: 30.0, y_m: 0.0}, {t_s: 3, x_m: 30.0, y_m: 0.0}]"
+    angles = []
+    for extra in ("", ", heading_deg: 45"):
+        _, sc = _load(tmp_path, HEAD + f"actors:\n  - {{id: a, class: car, {path}{extra}}}\n")
+        angles.append(math.degrees(Scene(sc).view(1.0).orientation_rad[0]))
+    assert angles == pytest.approx([0.0, 45.0])
+    _, msg = _error(tmp_path, HEAD + f"actors:\n  - {{id: a, class: car, {path}, speed_mps: 30}}\n")
+    assert "they never move it" in msg
+
+
+@pytest.mark.parametrize("char,kind", [("\x07", "a control character"), ("\x1b", "a control character"),
+                                       ("\x7f", "a control character")])
+def test_a_character_yaml_does_not_allow_is_one_line_with_its_line(tmp_path, char, kind):
+    # an independent tester's finding: PyYAML's message came on two lines, without the line number
+    p, msg = _error(tmp_path, HEAD + f"description: a{char}b\n")
+    assert msg == (f"{p}:5: not valid YAML: character U+{ord(char):04X} is not allowed in a YAML file ({kind}); "
+                   "expected printable text") and "\n" not in msg
