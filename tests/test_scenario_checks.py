@@ -308,3 +308,12 @@ def test_a_character_yaml_does_not_allow_is_one_line_with_its_line(tmp_path, cha
     p, msg = _error(tmp_path, HEAD + f"description: a{char}b\n")
     assert msg == (f"{p}:5: not valid YAML: character U+{ord(char):04X} is not allowed in a YAML file ({kind}); "
                    "expected printable text") and "\n" not in msg
+
+
+def test_a_gap_tolerance_without_its_settle_time_is_refused(tmp_path):
+    p, msg = _error(tmp_path, HEAD + "ecu: {expect: {no_fcw: true, gap_tolerance: 0.2}}\n")
+    assert msg == (f"{p}:5: field 'ecu.expect.gap_tolerance': value 0.2 is not allowed without "
+                   "'ecu.expect.gap_settle_s': it is the tolerance of the time gap from that time on; expected "
+                   "gap_settle_s beside it, or it left out")
+    _, sc = _load(tmp_path, HEAD + "ecu: {expect: {gap_settle_s: 5, gap_tolerance: 0.2}}\n")
+    assert sc.ecu.expect.gap_tolerance == 0.2

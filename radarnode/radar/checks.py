@@ -10,6 +10,8 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
 * **An actor on top of the ego at the start** (error): its box and the ego's (``ego.length_m`` ×
   ``ego.width_m``, the rear axle 1 m ahead of the rear end, as the viewer draws it) intersect at t = 0. No radar
   reports a car inside the car it sits on; the model's output would be meaningless.
+* **An expectation's option without the expectation** (error): ``ecu.expect.gap_tolerance`` without
+  ``gap_settle_s`` would be checked against nothing.
 * **An actor the radar can never see** (warning): at no cycle of the scenario is the actor's nearest point or
   its centre inside the preset's field of view (its sectors, its minimum range, ``radar.max_distance_m``).
   Occlusion is not considered. A warning, not an error: an actor may be there for the ground truth or a
@@ -50,6 +52,13 @@ def check_scenario(scenario: Scenario) -> Scenario:
     if scenario.actors:
         _check_overlap_at_start(scenario, src)
         _check_visibility(scenario, src)
+    expect = scenario.ecu.expect
+    if _given(scenario, "ecu.expect.gap_tolerance") and expect.gap_settle_s is None:
+        # (a tester's finding: it was accepted and had no effect)
+        raise src.error("ecu.expect.gap_tolerance",
+                        f"field 'ecu.expect.gap_tolerance': value {expect.gap_tolerance!r} is not allowed without "
+                        "'ecu.expect.gap_settle_s': it is the tolerance of the time gap from that time on; expected "
+                        "gap_settle_s beside it, or it left out")
     return scenario
 
 
