@@ -43,10 +43,9 @@ from radarnode.radar.chain import DspChain
 from radarnode.radar.calibration import chain_efficiency, false_alarms_per_pfa_cell
 from radarnode.radar.options import SignalOptions
 from radarnode.radar.presets import RadarPreset
-from radarnode.scene.world import Scene, SensorView
+from radarnode.scene.world import POINT_SIZE_M, Scene, SensorView
 
 MIN_VISIBLE_FRACTION = 0.25
-POINT_SIZE_M = 1.0        # actors shorter and narrower than this are one point (the scatterer levels' too)
 FOV_EDGE_TOLERANCE = 1e-9   # rad and m: a field-of-view edge computed to the last bit is inside (in_fov)
 COAST_CYCLES = 3
 CONFIRM_HITS = 2          # detections in the last CONFIRM_WINDOW cycles that make an object
