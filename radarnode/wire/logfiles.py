@@ -28,7 +28,6 @@ import contextlib
 import gc
 import gzip
 import logging
-import math
 import os
 import re
 import struct
@@ -293,9 +292,10 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
 
 def _frame_problem(msg: can.Message) -> str | None:
     """Why a frame a reader produced cannot be on a CAN bus (a garbled or cut-off record), or None."""
-    # a cut-off SQLite row comes back with None where a column was lost: every field is checked for its type
-    if not isinstance(msg.timestamp, (int, float)) or not math.isfinite(msg.timestamp):
-        return f"timestamp {msg.timestamp!r} is not a finite number"
+    # a cut-off SQLite row comes back with None where a column was lost: every field is checked for its type (a
+    # timestamp that is a number but not finite is the decoder's to write as null and count, not a bad record)
+    if isinstance(msg.timestamp, bool) or not isinstance(msg.timestamp, (int, float)):
+        return f"timestamp {msg.timestamp!r} is not a number"
     if msg.is_error_frame:
         return None
     if not isinstance(msg.arbitration_id, int):
