@@ -193,6 +193,7 @@ def test_cli_doa_on_a_preset_with_one_channel_is_a_usage_error_naming_the_option
     assert str(path) not in err and not out.exists()
 
 
+@pytest.mark.slow          # (22 s: a closed-loop ACC run at the signal level; on request, pytest -m slow)
 def test_cli_doa_runs_a_scenario_at_signal_level(capsys):
     rc = main(["report", str(SCENARIOS / "acc_cut_in.yaml"), "--doa", "music", "--fidelity", "signal"])
     out = capsys.readouterr().out

@@ -18,6 +18,7 @@ from tests.helpers import can_unshare
 ROOT = Path(__file__).resolve().parents[1]
 
 
+@pytest.mark.slow          # (18 s; benchmarks/soak.py runs it for 10 minutes; on request, pytest -m slow)
 @pytest.mark.skipif(not can_unshare("-rn"), reason="the soak keeps its udp_multicast traffic inside a private network "
                     "namespace (unshare -rn and iproute2); not available here")
 def test_short_soak_and_flood_over_udp_multicast(tmp_path):
