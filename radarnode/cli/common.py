@@ -332,8 +332,13 @@ def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple
                                    dir=target.parent)
         os.close(fd)
     except OSError as exc:
-        raise FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+        raise _cannot_write(option, path, exc) from None
     return target, tmp
+
+
+def _cannot_write(option: str, path: str | os.PathLike, exc: OSError) -> FileError:
+    """The one error of an output that cannot be written: the option, the file and the system's reason."""
+    return FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}")
 
 
 #: errors of a write that has no room or no device under it: named as the output's, not passed on bare
@@ -349,7 +354,7 @@ def _named_write_errors(path: str | os.PathLike, option: str):
     except OSError as exc:
         if exc.errno not in _WRITE_ERRNOS:
             raise
-        raise FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+        raise _cannot_write(option, path, exc) from None
 
 
 def _commit(tmp: str, target: Path, option: str) -> None:
@@ -357,7 +362,7 @@ def _commit(tmp: str, target: Path, option: str) -> None:
     try:
         os.replace(tmp, target)
     except OSError as exc:
-        raise FileError(f"option {option}: cannot write {str(target)!r}: {exc.strerror or exc}") from None
+        raise _cannot_write(option, target, exc) from None
 
 
 @contextlib.contextmanager
@@ -373,7 +378,7 @@ def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline
         try:
             f = open(path, mode, newline=newline, **kw)
         except OSError as exc:
-            raise FileError(f"option {option}: cannot write {str(path)!r}: {exc.strerror or exc}") from None
+            raise _cannot_write(option, path, exc) from None
         with _named_write_errors(path, option), f:
             yield f
         return
