@@ -24,8 +24,9 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundaries, boundary_reference, course_known,
-                                     curvature, in_path, measured_reach_m, trail_fits)
+from radarnode.consumer.path import (LANE_CHANGE_WINDOW_S, SensorMount, VehicleTrails, aligned_boundaries,
+                                     boundary_reference, course_known, curvature, in_path, lane_keeping,
+                                     measured_reach_m, path_heading, plausible, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
@@ -111,6 +112,7 @@ class Ecu:
                              f"({period_s!r} s)")
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
+        self._bound_hist: list = []        # (time, {side: (offset, heading)}) of the plausible boundaries, last cycles
         self.max_gap_s = float(max_gap_s)
         self.stats = EcuStats()
         self._candidate_t: float | None = None     # a skipped cycle's time: a new time base if the next follows it
@@ -206,6 +208,7 @@ class Ecu:
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.trails.clear()
+        self._bound_hist = []
         self.trail_fits = []
         self.last_cycle_t = None
         self._last_out_t = None
@@ -240,6 +243,17 @@ class Ecu:
         self.stats.bad_measurements += int(np.count_nonzero(~ok))
         return ok
 
+    def _sensor_motion(self) -> tuple[tuple[float, float], tuple[float, float]]:
+        """The sensor's velocity over ground in its own axes, from the ego motion on the bus (the ego's plus the
+        yaw rate times the mount's lever arm), and the ego's acceleration along its path (the trackers' objects
+        follow the ego's road with them: :func:`radarnode.consumer.tracking.road_turn`, where the turning itself
+        is the road's, so an acceleration is only a change of speed)."""
+        v, w, mnt = self.ego_speed_mps, self.ego_yaw_rate_rps, self.mount
+        c, s = math.cos(math.radians(mnt.yaw_deg)), math.sin(math.radians(mnt.yaw_deg))
+        vx, vy = v - w * mnt.y_m, w * mnt.x_m                               # vehicle axes
+        a = self.ego_accel_mps2
+        return (c * vx + s * vy, -s * vx + c * vy), (c * a, -s * a)
+
     def _on_objects(self, t_s: float, cycle: ObjectCycle) -> EcuOutput:
         ol = cycle.objects
         n = len(ol)
@@ -254,7 +268,7 @@ class Ecu:
         sig = np.where(np.isfinite(sig), np.maximum(sig, [0.1, 0.1, 0.1, 0.3]), [0.5, 0.5, 0.3, 0.8])
         r = np.zeros((n, 4, 4))
         r[:, np.arange(4), np.arange(4)] = sig ** 2
-        tracks = self.tracker.step(t_s, z, r, ol.id.astype(np.int64), self.ego_yaw_rate_rps)
+        tracks = self.tracker.step(t_s, z, r, ol.id.astype(np.int64), self.ego_yaw_rate_rps, self._sensor_motion())
         by_id = {int(ol.id[k]): k for k in range(n)}
         self.last_cycle_t = t_s
         return self._decide(t_s, tracks, ol, by_id, radar_ok=True)
@@ -272,7 +286,7 @@ class Ecu:
         sig = np.where(np.isfinite(sig), np.maximum(sig, 0.2), 0.5)
         r = np.zeros((n, 2, 2))
         r[:, np.arange(2), np.arange(2)] = sig ** 2
-        tracks = self.cluster_tracker.step(t_s, z, r, None, self.ego_yaw_rate_rps)
+        tracks = self.cluster_tracker.step(t_s, z, r, None, self.ego_yaw_rate_rps, self._sensor_motion())
         # a cluster track is a road user when it moves over ground or is as strong as a vehicle
         strong = {}
         for t in tracks:
@@ -336,15 +350,25 @@ class Ecu:
         # a structure across the road lies across the road *where it stands*: on a bend that is the predicted
         # path's heading there (the ego's heading plus the path's curvature times the distance), not the ego's now
         kappa = curvature(self.ego_speed_mps, self.ego_yaw_rate_rps)
+        # the sensor's own velocity over ground, vehicle axes: the ego's plus the yaw rate times the mount's lever
+        # arm (a radar 3.7 m ahead of the rear axle moves sideways at ω·3.7 m on a bend); the radar's relative
+        # velocities are relative to it
+        su = self.ego_speed_mps - self.ego_yaw_rate_rps * self.mount.y_m
+        sv = self.ego_yaw_rate_rps * self.mount.x_m
+        along = np.zeros(len(tracks))                 # each track's speed over ground along the path where it is
+        tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
-            gx = vx + self.ego_speed_mps                      # over ground, vehicle axes: (gx, vy)
-            ground = math.hypot(gx, vy)
+            gx, gy = vx + su, vy + sv                         # over ground, vehicle axes
+            ground = math.hypot(gx, gy)
             rng = math.hypot(t.x[0], t.x[1])
+            # the path's direction where the track is: the yaw-rate circle's tangent there
+            there = path_heading(kappa, max(xv[i], 0.0))
+            tangent[i] = math.cos(there), math.sin(there)
+            along[i] = gx * tangent[i, 0] + gy * tangent[i, 1]
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
-            there = kappa * max(xv[i], 0.0)
-            oncoming[i] = gx * math.cos(there) + vy * math.sin(there) < -ONCOMING_MPS
+            oncoming[i] = along[i] < -ONCOMING_MPS
             if cluster_strength is not None:
                 moved[i] = ground > 1.0
                 obstacle[i] = cluster_strength.get(t.id, False)
@@ -370,7 +394,7 @@ class Ecu:
                 # standing still by its speed along the line of sight, what the radar measures (Doppler): the
                 # lateral speed of an object whose angle glints (a bridge deck) is seconds-long noise
                 lx, ly = self.mount.rotate(t.x[0], t.x[1])          # line of sight, vehicle axes
-                radial = (gx * lx + vy * ly) / max(rng, 0.1)
+                radial = (gx * lx + gy * ly) / max(rng, 0.1)
                 if abs(radial) < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
@@ -406,17 +430,21 @@ class Ecu:
         self.trails.add(t_s, np.array(ids)[trail], xv[trail], yv[trail])
         self.trails.keep(t_s, alive)
         bounds = aligned_boundaries(self.boundaries, self.mount)     # the ego's heading to the road, not the sensor's
+        # a lane change, told from the boundaries' offsets over the last cycles, not from their fitted heading alone
+        self._bound_hist = [(t, b) for t, b in self._bound_hist if 0.0 <= t_s - t <= LANE_CHANGE_WINDOW_S]
+        self._bound_hist.append((t_s, {side: (b.offset_m, b.heading_rad) for side, b in plausible(bounds)}))
+        keeping = lane_keeping(self._bound_hist, self.ego_speed_mps)
         self.trail_fits = (trail_fits(self.trails.trails(), curvature(self.ego_speed_mps, self.ego_yaw_rate_rps),
-                                      boundary_reference(bounds, self.mount))
+                                      boundary_reference(bounds, self.mount, keeping))
                            if self.acc.settings.path_from_trails else [])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                     bounds, self.mount, self.trail_fits)
+                     bounds, self.mount, self.trail_fits, keeping)
         # beyond where the road's course is measured (the boundaries' valid range, the trails' farthest point) the
         # course is extrapolated: on a curve entry it bends too little, and a car standing in the outer lane a
         # hundred metres ahead lies in it. A stationary object never seen moving becomes FCW's only where the path
         # there is known — measured, or the yaw-rate circle puts it in the path too (on a straight road and a
         # constant bend the two agree)
-        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount), self.ego_speed_mps,
+        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount, keeping), self.ego_speed_mps,
                              self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
@@ -438,11 +466,16 @@ class Ecu:
                 return None
             i = int(cand[np.argmin(xv[cand])])
             t = tracks[i]
-            vx, _ = self.mount.rotate(t.x[2], t.x[3])
-            ax, _ = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
+            ax, ay = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
+            # the gap along the path changes at the lead's speed along the path less the ego's, and the lead brakes
+            # by its change of speed along the path (the tracker's relative acceleration is the change of speed
+            # over the ego's: the turning is the road's, radarnode.consumer.tracking.road_turn): a lead that keeps
+            # its speed on the ego's bend closes at nothing and brakes at nothing, although its velocity relative
+            # to the sensor points across the bend
+            lead_accel = (ax + self.ego_accel_mps2) * tangent[i, 0] + ay * tangent[i, 1]
             # distance ahead of the sensor along the vehicle's axis, lateral from the vehicle's centre line
-            return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]), float(vx),
-                          float(ax + self.ego_accel_mps2))
+            return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]),
+                          float(along[i] - self.ego_speed_mps), float(lead_accel))
 
         acc = pick(moved & ~oncoming, self._target_id)
         fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming, self._fcw_target_id)

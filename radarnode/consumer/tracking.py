@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from radarnode.errors import ConfigError
-from radarnode.perception.motion import transition
+from radarnode.perception.motion import road_turn, transition
 
 MODELS = ("cv", "ca", "imm")
 IMM_SWITCH = 0.05          # probability per cycle of switching between the constant-velocity and -acceleration mode
@@ -85,12 +85,22 @@ def _rotation(n: int, angle: float) -> np.ndarray:
     return rot
 
 
-def predict(x: np.ndarray, p: np.ndarray, model: str, dt: float, q: float, yaw_rad: float = 0.0):
-    """Predict states (n, d) and covariances (n, d, d) by ``dt``; the sensor turned by ``yaw_rad`` meanwhile."""
+def predict(x: np.ndarray, p: np.ndarray, model: str, dt: float, q: float, yaw_rad: float = 0.0,
+            road: tuple | None = None):
+    """Predict states (n, d) and covariances (n, d, d) by ``dt``; the sensor turned by ``yaw_rad`` meanwhile.
+
+    Without ``road`` every vector of the state turns by −yaw_rad (fixed in the world). With ``road`` = (sensor
+    velocity, sensor acceleration), each over ground in the sensor's axes, the objects follow the ego's road
+    (:func:`road_turn`)."""
     f, qq = transition(model, dt, q)
-    if yaw_rad:
+    if not yaw_rad:
+        return x @ f.T, f @ p @ f.T + qq
+    if road is None:
         f = _rotation(f.shape[0], -yaw_rad) @ f
-    return x @ f.T, f @ p @ f.T + qq
+        return x @ f.T, f @ p @ f.T + qq
+    moved, rot = road_turn(x, x @ f.T, yaw_rad, dt, *road)
+    fk = rot @ f
+    return moved, fk @ p @ fk.transpose(0, 2, 1) + qq
 
 
 def measurement_matrix(state_dim: int, kind: str) -> np.ndarray:
@@ -249,9 +259,11 @@ class Tracker:
         self.last_t: float | None = None
 
     def step(self, t_s: float, z: np.ndarray, r: np.ndarray, meas_ids: np.ndarray | None = None,
-             yaw_rate_rps: float = 0.0) -> list[Track]:
+             yaw_rate_rps: float = 0.0, road: tuple | None = None) -> list[Track]:
         """One cycle: predict all tracks to ``t_s``, associate the measurements (n, m) with covariances
-        (n, m, m), update, initiate, confirm and delete; returns the confirmed tracks."""
+        (n, m, m), update, initiate, confirm and delete; returns the confirmed tracks. ``road``: the sensor's
+        velocity and acceleration over ground (its axes), for the objects to follow the ego's road when it turns
+        (:func:`road_turn`); without it they keep their course over ground."""
         dt = 0.0 if self.last_t is None else max(t_s - self.last_t, 0.0)
         self.last_t = t_s
         imm = self.model == "imm"
@@ -263,15 +275,24 @@ class Tracker:
                 x0, p0, c = imm_mix(xm, pm, mu)
                 if dt > 0:
                     f, qq = imm_models(dt, self.q)
-                    if yaw_rate_rps:
+                    if yaw_rate_rps and road is None:
                         rot = _rotation(6, -yaw_rate_rps * dt)
                         f = rot[None] @ f
-                    x0 = np.einsum("jde,nje->njd", f, x0)
-                    p0 = f[None] @ p0 @ np.transpose(f, (0, 2, 1))[None] + qq[None]
+                    n = x0.shape[0]
+                    moved = np.einsum("jde,nje->njd", f, x0)
+                    if yaw_rate_rps and road is not None:
+                        moved, rot = road_turn(x0.reshape(2 * n, 6), moved.reshape(2 * n, 6), yaw_rate_rps * dt, dt,
+                                               *road)
+                        fk = rot.reshape(n, 2, 6, 6) @ f[None]
+                        moved = moved.reshape(n, 2, 6)
+                    else:
+                        fk = np.broadcast_to(f[None], (n, 2, 6, 6))
+                    x0 = moved
+                    p0 = fk @ p0 @ np.swapaxes(fk, -1, -2) + qq[None]
                 xm, pm = x0, p0
                 x, p = imm_combine(xm, pm, c)
             elif dt > 0:
-                x, p = predict(x, p, self.model, dt, self.q, yaw_rate_rps * dt)
+                x, p = predict(x, p, self.model, dt, self.q, yaw_rate_rps * dt, road)
         else:
             x, p = np.zeros((0, self.dim)), np.zeros((0, self.dim, self.dim))
         ids = np.array([t.meas_id for t in self.tracks]) if meas_ids is not None else None

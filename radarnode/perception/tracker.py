@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode.dsp.cluster import dbscan
-from radarnode.perception.motion import transition
+from radarnode.perception.motion import road_turn, transition
 from radarnode.perception.types import (
     DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, Detections, ObjectList)
@@ -290,24 +290,20 @@ def extents_along(det: Detections, labels: np.ndarray, heading_rad: np.ndarray) 
 
 def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, yaw_rate_rps: float = 0.0,
             sensor_velocity: tuple[float, float] = (0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
-    """Constant-velocity prediction of states (n, 4) = [x, y, vx, vy] and covariances (n, 4, 4).
+    """Constant-velocity prediction of states (n, 4) = [x, y, vx, vy] and covariances (n, 4, 4), on the road.
 
-    The velocity is relative to the sensor (the object's over ground minus the sensor's). The sensor frame
-    turns with the ego by θ = ``yaw_rate_rps``·dt: positions are rotated by −θ, and so is the object's
-    velocity over ground, while the sensor's own velocity stays what it is in its own axes:
-    v' = R(−θ)(v + u) − u. A stationary object then stays where it is on the ground while the ego turns or
-    changes lane.
+    The velocity is relative to the sensor (the object's over ground minus the sensor's, ``sensor_velocity`` in
+    the sensor's axes). The sensor frame turns with the ego by θ = ``yaw_rate_rps``·dt; the objects follow the
+    ego's road (:func:`radarnode.perception.motion.road_turn`): a standing object stays where it is on the ground,
+    a vehicle ahead on the ego's bend at the ego's speed keeps its velocity relative to the sensor, where the
+    world-fixed model (every velocity over ground turned by −θ) let it lag by metres per second across.
     """
     f, q = transition("cv", dt, accel_sigma ** 2)
-    a = -yaw_rate_rps * dt
-    if not a:
+    if not yaw_rate_rps or not dt:
         return x @ f.T, f @ p @ f.T + q
-    c, s = np.cos(a), np.sin(a)
-    rot = np.array([[c, -s, 0, 0], [s, c, 0, 0], [0, 0, c, -s], [0, 0, s, c]])
-    u = np.array([0.0, 0.0, sensor_velocity[0], sensor_velocity[1]])
-    moved = x @ f.T                                  # p + v·dt, v
-    f = rot @ f
-    return (moved + u) @ rot.T - u, f @ p @ f.T + q
+    moved, rot = road_turn(x, x @ f.T, yaw_rate_rps * dt, dt, sensor_velocity)
+    fk = rot @ f
+    return moved, fk @ p @ fk.transpose(0, 2, 1) + q
 
 
 def measure(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

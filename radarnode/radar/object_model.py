@@ -771,7 +771,13 @@ class ObjectModel:
         meas = ch["meas"]
         g = VELOCITY_GAIN
         smooth = (det & alive & ~new)[..., None]
-        a_dt = np.stack([ch["arel_long"], ch["arel_lat"]], axis=-1) * dt
+        # the velocity relative to the sensor, in the sensor's axes, changes by the relative acceleration less
+        # ω × v, ω the axes' turn (the ego's yaw rate): a lead on the ego's bend at its speed keeps it, although
+        # the two accelerate differently (both towards the bend's centre); with the acceleration alone the
+        # smoothed velocity of that lead lagged by a few tenths of a m/s
+        w = self.scene.yaw_rates(times)[:, None]
+        a_dt = np.stack([ch["arel_long"] + w * ch["view"].vy_mps, ch["arel_lat"] - w * ch["view"].vx_mps],
+                        axis=-1) * dt
         d3 = det[..., None]
         v = affine_scan(np.where(d3, np.where(smooth, 1.0 - g, 0.0), 1.0),
                         np.where(d3, np.where(smooth, (1.0 - g) * a_dt + g * meas[..., 2:4], meas[..., 2:4]), a_dt),

@@ -256,6 +256,10 @@ class Scene:
         x, y, heading, _, _, speed, accel, yaw = self._ego_pose(self._ego.state(t_s))
         return EgoState(float(x[0]), float(y[0]), float(heading[0]), float(speed[0]), float(accel[0]), float(yaw[0]))
 
+    def yaw_rates(self, times_s: np.ndarray) -> np.ndarray:
+        """The ego's yaw rate (rad/s) at the times ``times_s`` (T,): the sensor's axes turn at it."""
+        return self._ego_pose(self._ego.state(np.asarray(times_s, dtype=np.float64)))[7][:, 0]
+
     def _ego_on_grid(self, t_s: float) -> EgoState | None:
         period = self.scenario.period_s
         k = round(t_s / period)
