@@ -13,8 +13,7 @@ import pytest
 
 from radarnode.consumer.evaluate import simulate
 from radarnode.consumer.tracking import predict as ecu_predict
-from radarnode.consumer.tracking import road_turn
-from radarnode.perception.motion import transition
+from radarnode.perception.motion import road_turn, transition
 from radarnode.perception.tracker import predict as radar_predict
 from radarnode.radar.models import make_model
 from radarnode.radar.object_model import RuntimeConfig
@@ -82,8 +81,8 @@ def test_the_radar_tracker_and_the_ecu_tracker_predict_the_same_road_motion():
 def test_the_levels_report_a_lead_on_the_bend_at_its_true_relative_velocity(level, tol):
     # R 150 m at 20 m/s: relative velocity (−0.56, +4.22) m/s; the detection level's tracker reported (−0.10, +1.27)
     # (its model kept the lead's course over ground fixed while the ego turned) and the object level's smoothing
-    # lagged by 0.09 m/s along (the −0.06 m/s across that is left at the object level: the reported point is the
-    # body's nearest, its velocity the body's centre's, and on a bend a body turns)
+    # lagged by 0.09 m/s along (the −0.06 m/s across that is left at the object level with this seed is its noise:
+    # the same on a straight road, +0.004 … +0.066 with other seeds; an independent tester's finding)
     sc = parse_scenario(BEND.format(duration=20.0, seed=1, speed=20.0, curv=1 / 150, lead_x=35.7))
     cfg = radar_config(sc)
     model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal)
@@ -185,3 +184,32 @@ def test_a_young_track_of_a_bodys_second_group_is_its_duplicate_within_its_own_v
     # object (a pedestrian stepping out from behind it), whatever its uncertainty
     assert _pair(0.0, 2.0, 2.0, v=(0.0, 0.0)).tolist() == [False, False]
     assert _pair(0.0, 0.5, 2.0, v=(0.0, 0.0)).tolist() == [False, True]
+
+
+JUNCTION = """
+name: junction_turn
+duration_s: 10.0
+seed: {seed}
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 6.0}}
+road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, segments: [{{type: straight, length_m: 5.0}},
+        {{type: arc, length_m: {arc}, curvature_1pm: {curv}}}, {{type: straight, length_m: 300.0}}]}}
+ecu: {{acc_enabled: true, set_speed_mps: 6.0, time_gap_s: 1.5, closed_loop: false,
+      expect: {{no_fcw: true}}}}
+actors:
+  - {{id: cross, class: car, x_m: {x}, y_m: 40.0, speed_mps: 8.0, heading_deg: -90.0}}
+"""
+
+
+@pytest.mark.parametrize("level, radius", [("object", 20.0), ("object", 25.0), ("object", 30.0), ("object", 40.0),
+                                           ("detection", 25.0), ("detection", 30.0), ("detection", 40.0)])
+def test_crossing_traffic_while_the_ego_turns_at_a_junction_draws_no_warning(level, radius):
+    # a quarter turn of R 20–40 m at 6 m/s, a car crossing 10 m beyond it, long before the ego gets there: its speed
+    # projected on the yaw-rate circle's tangent 50° off made it traffic coming towards the ego, and FCW warned in
+    # 5–13 cycles (an independent tester's scene); where the others do not drive the ego's circle, along the axis.
+    # Left as they were before the road model: at R 20 m the detection level warns (5 cycles), and ACC takes the
+    # crossing car for its target for 5–7 cycles at R 30–40 m
+    arc = round(math.pi / 2 * radius, 2)
+    res = simulate(parse_scenario(JUNCTION.format(seed=1, arc=arc, curv=1.0 / radius, x=round(5.0 + arc + 10.0, 2))),
+                   fidelity=level)
+    assert res.passed, res.reasons

@@ -24,13 +24,13 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import (LANE_CHANGE_WINDOW_S, SensorMount, VehicleTrails, aligned_boundaries,
-                                     boundary_reference, course_known, curvature, in_path, lane_keeping,
-                                     measured_reach_m, path_heading, plausible, trail_fits)
+from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundaries, boundary_reference, course_known,
+                                     curvature, in_path, measured_reach_m, path_heading, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
 from radarnode.consumer.tracking import Tracker
+from radarnode.perception.motion import road_share
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
 from radarnode.wire import ids
 from radarnode.wire.codec import MessageCodec
@@ -112,7 +112,6 @@ class Ecu:
                              f"({period_s!r} s)")
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
-        self._bound_hist: list = []        # (time, {side: (offset, heading)}) of the plausible boundaries, last cycles
         self.max_gap_s = float(max_gap_s)
         self.stats = EcuStats()
         self._candidate_t: float | None = None     # a skipped cycle's time: a new time base if the next follows it
@@ -208,7 +207,6 @@ class Ecu:
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.trails.clear()
-        self._bound_hist = []
         self.trail_fits = []
         self.last_cycle_t = None
         self._last_out_t = None
@@ -362,13 +360,17 @@ class Ecu:
             gx, gy = vx + su, vy + sv                         # over ground, vehicle axes
             ground = math.hypot(gx, gy)
             rng = math.hypot(t.x[0], t.x[1])
-            # the path's direction where the track is: the yaw-rate circle's tangent there
-            there = path_heading(kappa, max(xv[i], 0.0))
+            # the road's direction where the track is, for its speed along the road: the yaw-rate circle's tangent
+            # there on a road's bend; along the car's axis where the others do not drive the ego's circle (a turn
+            # at a junction: crossing traffic projected on a tangent 50° off looked like traffic coming towards the
+            # ego, and FCW warned), faded as the trackers fade their road model (road_share)
+            there = road_share(self.ego_speed_mps, kappa) * path_heading(kappa, max(xv[i], 0.0))
             tangent[i] = math.cos(there), math.sin(there)
             along[i] = gx * tangent[i, 0] + gy * tangent[i, 1]
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
-            oncoming[i] = along[i] < -ONCOMING_MPS
+            ahead = kappa * max(xv[i], 0.0)
+            oncoming[i] = gx * math.cos(ahead) + gy * math.sin(ahead) < -ONCOMING_MPS
             if cluster_strength is not None:
                 moved[i] = ground > 1.0
                 obstacle[i] = cluster_strength.get(t.id, False)
@@ -430,21 +432,17 @@ class Ecu:
         self.trails.add(t_s, np.array(ids)[trail], xv[trail], yv[trail])
         self.trails.keep(t_s, alive)
         bounds = aligned_boundaries(self.boundaries, self.mount)     # the ego's heading to the road, not the sensor's
-        # a lane change, told from the boundaries' offsets over the last cycles, not from their fitted heading alone
-        self._bound_hist = [(t, b) for t, b in self._bound_hist if 0.0 <= t_s - t <= LANE_CHANGE_WINDOW_S]
-        self._bound_hist.append((t_s, {side: (b.offset_m, b.heading_rad) for side, b in plausible(bounds)}))
-        keeping = lane_keeping(self._bound_hist, self.ego_speed_mps)
         self.trail_fits = (trail_fits(self.trails.trails(), curvature(self.ego_speed_mps, self.ego_yaw_rate_rps),
-                                      boundary_reference(bounds, self.mount, keeping))
+                                      boundary_reference(bounds, self.mount))
                            if self.acc.settings.path_from_trails else [])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                     bounds, self.mount, self.trail_fits, keeping)
+                     bounds, self.mount, self.trail_fits)
         # beyond where the road's course is measured (the boundaries' valid range, the trails' farthest point) the
         # course is extrapolated: on a curve entry it bends too little, and a car standing in the outer lane a
         # hundred metres ahead lies in it. A stationary object never seen moving becomes FCW's only where the path
         # there is known — measured, or the yaw-rate circle puts it in the path too (on a straight road and a
         # constant bend the two agree)
-        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount, keeping), self.ego_speed_mps,
+        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount), self.ego_speed_mps,
                              self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive

@@ -128,14 +128,13 @@ def path_heading(kappa: float, x_m: float) -> float:
 
 def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: float, half_width_m: float,
             boundaries: dict | None = None, mount: SensorMount | None = None,
-            trails: list | None = None, keeping: bool | None = None) -> np.ndarray:
+            trails: list | None = None) -> np.ndarray:
     """Which sensor-frame points lie ahead in the ego's predicted path.
 
     ``mount=None`` takes the sensor at the rear axle (the circle then starts at the sensor). ``boundaries``: in the
     sensor's vehicle-aligned frame (:func:`aligned_boundaries`; the sensor frame itself for a sensor with no yaw).
     ``trails``: the vehicles' trails that describe the road (:func:`trail_fits`); where they and the boundaries
-    both cover a range, the two courses count equally. ``keeping``: whether the ego keeps its lane, as the
-    boundaries' offsets over time tell (:func:`road_course`).
+    both cover a range, the two courses count equally.
 
     The boundaries' course is a line parallel to the road through the car's centre line: a point's distance from
     it is its vehicle-frame lateral position less the course's shift (the sensor's own lateral place on the car
@@ -147,7 +146,7 @@ def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: fl
     xv, yv = m.to_vehicle(x, y)
     xa, ya = xv - m.x_m, yv - m.y_m                 # the aligned frame: x ahead of the sensor, along the car
     offset = path_offset_m(xv, yv, kappa)
-    course = road_course(xa, boundaries, keeping)
+    course = road_course(xa, boundaries)
     by_trails = trail_course(xv, trails, kappa) if trails else None
     far = cover = None
     if course is not None:
@@ -182,51 +181,12 @@ def plausible(boundaries: dict | None) -> list:
             and abs(b.heading_rad) <= MAX_BOUNDARY_HEADING_RAD]
 
 
-#: the boundaries' offsets over this span tell a lane change from a tilted fit (:func:`lane_keeping`)
-LANE_CHANGE_WINDOW_S = 0.5
-
-
-def lane_keeping(history: list, ego_speed_mps: float) -> bool | None:
-    """Whether the ego keeps its lane, from the plausible boundaries of the last cycles: ``history`` holds (time,
-    {side: (offset, heading)}) oldest first, the newest last. While the boundaries' average heading is within
-    LANE_KEEPING_HEADING_RAD: True. Beyond it the ego crosses the road only if the offsets move as that heading
-    moves them: at v·sin(heading) over the last LANE_CHANGE_WINDOW_S (a lane change at 3° and 25 m/s moves them
-    by 1.3 m/s); at a curve's exit the fitted heading tilts by 3° while the offsets stay. True where they moved
-    less than half that (or the other way), False where they did, None without a sample at least
-    LANE_CHANGE_WINDOW_S/2 old that shares a side with the newest."""
-    if not history:
-        return None
-    t_now, now = history[-1]
-    if not now:
-        return None
-    heading = sum(h for _, h in now.values()) / len(now)
-    if abs(heading) <= LANE_KEEPING_HEADING_RAD:
-        return True
-    for t, then in history:
-        span = t_now - t
-        shared = [side for side in now if side in then]
-        if span < 0.5 * LANE_CHANGE_WINDOW_S or not shared:
-            continue
-        drift = sum(now[k][0] - then[k][0] for k in shared) / len(shared) / span
-        expected = ego_speed_mps * math.sin(heading)
-        return not (drift * expected > 0.0 and abs(drift) >= 0.5 * abs(expected))
-    return None
-
-
-def road_course(x: np.ndarray, boundaries: dict | None, keeping: bool | None = None
-                ) -> tuple[np.ndarray, np.ndarray] | None:
+def road_course(x: np.ndarray, boundaries: dict | None) -> tuple[np.ndarray, np.ndarray] | None:
     """The road's lateral course ahead from the valid reported boundaries, sensor frame: (shift (m) at ``x``, 1
-    where a boundary covers ``x`` else 0), averaged over the boundaries; None without one, or while the ego crosses
-    the road (a lane change: the yaw-rate circle is the better guess then).
-
-    ``keeping``: what the boundaries' offsets over time say (:func:`lane_keeping`): True, the ego keeps its lane
-    whatever the fitted heading (at a curve's exit a quadratic fit to a boundary that straightens tilts it by 3°);
-    False, it is crossing; None (no history), the boundaries' average heading decides: beyond
-    LANE_KEEPING_HEADING_RAD it is crossing."""
+    where a boundary covers ``x`` else 0), averaged over the boundaries; None without one, or while the ego's
+    heading to the road (the boundaries' average) exceeds LANE_KEEPING_HEADING_RAD (it is crossing the road)."""
     valid = [b for _, b in plausible(boundaries)]
-    if not valid or keeping is False:
-        return None
-    if keeping is None and abs(sum(b.heading_rad for b in valid) / len(valid)) > LANE_KEEPING_HEADING_RAD:
+    if not valid or abs(sum(b.heading_rad for b in valid) / len(valid)) > LANE_KEEPING_HEADING_RAD:
         return None
     x = np.asarray(x, dtype=np.float64)
     shift = np.zeros(x.shape)
@@ -238,13 +198,12 @@ def road_course(x: np.ndarray, boundaries: dict | None, keeping: bool | None = N
     return np.where(n > 0, shift / np.maximum(n, 1), 0.0), (n > 0).astype(np.float64)
 
 
-def measured_reach_m(boundaries: dict | None, trails: list | None, mount: SensorMount,
-                     keeping: bool | None = None) -> float | None:
+def measured_reach_m(boundaries: dict | None, trails: list | None, mount: SensorMount) -> float | None:
     """How far ahead of the sensor the road's course is measured, not extrapolated: the farthest valid range of the
     boundaries :func:`road_course` uses and the farthest point of the trails :func:`trail_course` uses; None when
     neither is used (the yaw-rate circle alone predicts the path, nothing to tell apart)."""
     reach = []
-    if road_course(np.zeros(1), boundaries, keeping) is not None:
+    if road_course(np.zeros(1), boundaries) is not None:
         reach.append(max(b.range_end_m for _, b in plausible(boundaries)))
     if trails and trail_course(np.zeros(1), trails) is not None:
         reach.append(max(f.x_max for f in trails) - mount.x_m)
@@ -403,14 +362,14 @@ def trail_fits(trails, curvature_1pm: float, reference=None) -> list[TrailFit]:
     return [f for f, k in zip(fits, keep) if k]
 
 
-def boundary_reference(boundaries: dict | None, mount: SensorMount, keeping: bool | None = None):
+def boundary_reference(boundaries: dict | None, mount: SensorMount):
     """The boundaries' course as a reference for :func:`trail_fits` (vehicle frame, the mount's yaw neglected: a
     drift is measured peak to peak), or None."""
     valid = [b for _, b in plausible(boundaries)]
-    if road_course(np.zeros(1), boundaries, keeping) is None:
+    if road_course(np.zeros(1), boundaries) is None:
         return None
     end = COURSE_EXTENT * max(b.range_end_m for b in valid)
-    return (lambda xs: road_course(xs - mount.x_m, boundaries, keeping)[0] + mount.y_m), mount.x_m, mount.x_m + end
+    return (lambda xs: road_course(xs - mount.x_m, boundaries)[0] + mount.y_m), mount.x_m, mount.x_m + end
 
 
 def fit_course(fits: list[TrailFit], curvature_1pm: float) -> np.ndarray | None:

@@ -1,0 +1,152 @@
+"""ACC and FCW on bends, curve exits and guardrail roads: an independent tester's scenes (session 18).
+
+Three tables, each row a scene built here, run through node, consumer and ECU as ``radarnode report`` runs it:
+
+1. ACC behind a lead at the ego's speed on a constant bend, closed loop, set time gap 1.5 s (2.0 s where stated):
+   the final time gap along the lane (the truth's) at each level, and the lead's velocity relative to the sensor
+   as each level reports it against the truth (mean over the second half of an open-loop run);
+2. a car stopped in the inner lane beyond a curve's exit (R 250 m into a 30-m clothoid, guardrails on both sides,
+   and R 400 m into a 60-m clothoid without): FCW must stay silent;
+3. an empty straight road with guardrails on both sides: FCW must stay silent (README, "Known limit, guardrails
+   both sides": it does not at the detection level).
+
+Run: ``.venv/bin/python benchmarks/bends.py [--seeds 3] [--levels object,detection]`` (about 2 minutes).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from radarnode.consumer.evaluate import simulate  # noqa: E402
+from radarnode.radar.models import make_model  # noqa: E402
+from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
+from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
+from radarnode.scene.world import Scene  # noqa: E402
+
+FOLLOW = """
+name: follow_R{radius:.0f}_v{speed:.0f}
+duration_s: 30.0
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: {speed}}}
+road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, curvature_1pm: {curv}}}
+ecu:
+  acc_enabled: true
+  set_speed_mps: {speed}
+  time_gap_s: {gap}
+  closed_loop: true
+  expect: {{lead: lead, gap_settle_s: 12.0, gap_tolerance: 0.15, acc_follows: lead}}
+actors:
+  - {{id: lead, class: car, x_m: {lead_x}, lane: 0, speed_mps: {speed}}}
+"""
+FOLLOWS = [(150.0, 20.0, 1.5), (100.0, 15.0, 1.5), (100.0, 20.0, 1.5), (250.0, 25.0, 2.0), (500.0, 25.0, 2.0)]
+
+EXIT = """
+name: {name}
+duration_s: 9.0
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 25.0}}
+road:
+  lanes: 3
+  lane_width_m: 3.5
+  ego_lane: 1
+  segments:
+    - {{type: arc, length_m: {arc}, curvature_1pm: {curv}}}
+    - {{type: clothoid, length_m: {clothoid}, curvature_start_1pm: {curv}, curvature_end_1pm: 0.0}}
+    - {{type: straight, length_m: 600}}
+{guardrails}ecu: {{acc_enabled: false, expect: {{lead: stopped, no_fcw: true, never_target: [stopped]}}}}
+actors:
+  - {{id: stopped, class: car, x_m: 200.0, lane: 2, speed_mps: 0.0}}
+"""
+EXITS = [("exit_R250_30_guardrails", 160.0, 0.004, 30.0, True), ("exit_R400_60_none", 130.0, 0.0025, 60.0, False)]
+
+EMPTY = """
+name: empty_guardrails_25
+duration_s: 10.0
+seed: 1
+radar: {preset: ars408_like}
+ego: {speed_mps: 25.0}
+road:
+  lanes: 3
+  lane_width_m: 3.5
+  ego_lane: 1
+  guardrails: {left_offset_m: 1.0, right_offset_m: 1.0}
+ecu: {acc_enabled: false, expect: {no_fcw: true}}
+"""
+
+
+def _runs(sc, levels, seeds):
+    return {lv: [simulate(dataclasses.replace(sc, seed=s), fidelity=lv) for s in range(1, seeds + 1)] for lv in levels}
+
+
+def _velocity(sc, level: str, cycles: int = 200) -> tuple[np.ndarray, np.ndarray]:
+    """The lead's reported velocity relative to the sensor and the truth, means over the second half (open loop)."""
+    cfg = radar_config(sc)
+    model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal)
+    rep, truth = [], []
+    for k in range(cycles):
+        frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=250.0))
+        o = frame.objects
+        mine = np.flatnonzero(o.actor_index == 0)
+        if k >= cycles // 2 and mine.size:
+            rep.append((o.vrel_long_mps[mine[0]], o.vrel_lat_mps[mine[0]]))
+            truth.append((view.vx_mps[0], view.vy_mps[0]))
+    return np.mean(rep, axis=0), np.mean(truth, axis=0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__)
+    ap.add_argument("--seeds", type=int, default=3)
+    ap.add_argument("--levels", default="object,detection")
+    args = ap.parse_args()
+    if args.seeds < 1:
+        ap.error(f"--seeds: value {args.seeds} is not allowed; expected an integer ≥ 1")
+    levels = [lv for lv in args.levels.split(",") if lv]
+    t0 = time.perf_counter()
+    print(f"### ACC behind a lead at the ego's speed on a bend (seeds 1–{args.seeds}; time gap: median of the "
+          "final time gaps along the lane)\n")
+    print("| bend | speed | set gap | " + " | ".join(f"{lv}: final gap (passes)" for lv in levels) + " | truth v | "
+          + " | ".join(f"{lv}: reported v" for lv in levels) + " |")
+    print("|---|---:|---:|" + "---:|" * (2 * len(levels) + 1))
+    for radius, speed, gap in FOLLOWS:
+        sc = parse_scenario(FOLLOW.format(radius=radius, speed=speed, curv=1.0 / radius, gap=gap,
+                                          lead_x=round(gap * speed + 5.7, 2)))
+        runs = _runs(sc, levels, args.seeds)
+        cells = [f"{statistics.median(r.final_time_gap_s for r in runs[lv]):.2f} s "
+                 f"({sum(r.passed for r in runs[lv])}/{args.seeds})" for lv in levels]
+        vel = [_velocity(sc, lv) for lv in levels]
+        truth = vel[0][1]
+        print(f"| R {radius:.0f} m | {speed:.0f} m/s | {gap:.1f} s | " + " | ".join(cells)
+              + f" | ({truth[0]:+.2f}, {truth[1]:+.2f}) | "
+              + " | ".join(f"({v[0][0]:+.2f}, {v[0][1]:+.2f})" for v in vel) + " |", flush=True)
+    print(f"\n### FCW: a car stopped in the inner lane beyond a curve's exit; an empty road with guardrails (seeds "
+          f"1–{args.seeds}; must stay silent)\n")
+    print("| scene | " + " | ".join(f"{lv}: silent in" for lv in levels) + " | " +
+          " | ".join(f"{lv}: warnings at (s)" for lv in levels) + " |")
+    print("|---|" + "---:|" * (2 * len(levels)))
+    scenes = [EXIT.format(name=name, arc=arc, curv=curv, clothoid=cl,
+                          guardrails="  guardrails: {left_offset_m: 1.0, right_offset_m: 1.0}\n" if rails else "")
+              for name, arc, curv, cl, rails in EXITS] + [EMPTY]
+    for text in scenes:
+        sc = parse_scenario(text)
+        runs = _runs(sc, levels, args.seeds)
+        silent = [f"{sum(r.passed for r in runs[lv])}/{args.seeds}" for lv in levels]
+        times = [", ".join(f"{r.warning_time_s:.2f}" if r.warning_time_s is not None else "-" for r in runs[lv])
+                 for lv in levels]
+        print(f"| {sc.name} | " + " | ".join(silent) + " | " + " | ".join(times) + " |", flush=True)
+    print(f"\n(total {time.perf_counter() - t0:.0f} s)")
+
+
+if __name__ == "__main__":
+    main()
