@@ -6,6 +6,8 @@ lead's closing speed and deceleration along the path where the lead is."""
 
 from __future__ import annotations
 
+import dataclasses
+import importlib.util
 import math
 
 import numpy as np
@@ -19,23 +21,16 @@ from radarnode.radar.models import make_model
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.radar.setup import parse_scenario, radar_config
 from radarnode.scene.world import Scene
+from tests.conftest import ROOT
 
-BEND = """
-name: bend_follow
-duration_s: {duration}
-seed: {seed}
-radar: {{preset: ars408_like}}
-ego: {{speed_mps: {speed}}}
-road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, curvature_1pm: {curv}}}
-ecu:
-  acc_enabled: true
-  set_speed_mps: {speed}
-  time_gap_s: 1.5
-  closed_loop: true
-  expect: {{lead: lead, gap_settle_s: 12.0, gap_tolerance: 0.15, acc_follows: lead}}
-actors:
-  - {{id: lead, class: car, x_m: {lead_x}, lane: 0, speed_mps: {speed}}}
-"""
+def _bend(duration: float, seed: int, speed: float, radius: float):
+    """``benchmarks/bends.py``'s scene: a lead at the ego's speed 1.5 s ahead on a constant bend, ACC closed loop."""
+    spec = importlib.util.spec_from_file_location("bends_bench", ROOT / "benchmarks" / "bends.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    sc = parse_scenario(mod.FOLLOW.format(radius=radius, speed=speed, curv=1.0 / radius, gap=1.5,
+                                          lead_x=round(1.5 * speed + 5.7, 2)))
+    return dataclasses.replace(sc, duration_s=duration, seed=seed)
 
 
 def _co_turning(dt=0.072, w=0.2, u=(20.0, 0.74)):
@@ -83,7 +78,7 @@ def test_the_levels_report_a_lead_on_the_bend_at_its_true_relative_velocity(leve
     # (its model kept the lead's course over ground fixed while the ego turned) and the object level's smoothing
     # lagged by 0.09 m/s along (the −0.06 m/s across that is left at the object level with this seed is its noise:
     # the same on a straight road, +0.004 … +0.066 with other seeds; an independent tester's finding)
-    sc = parse_scenario(BEND.format(duration=20.0, seed=1, speed=20.0, curv=1 / 150, lead_x=35.7))
+    sc = _bend(20.0, 1, 20.0, 150.0)
     cfg = radar_config(sc)
     model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal)
     err = []
@@ -103,7 +98,7 @@ def test_the_levels_report_a_lead_on_the_bend_at_its_true_relative_velocity(leve
 def test_acc_keeps_its_time_gap_behind_a_lead_on_a_bend(level):
     # R 100 m at 20 m/s (4 m/s² across): the ECU took the lead's relative velocity, which points across the bend,
     # for 0.6 m/s of closing and 1.2 m/s² of braking, and let the gap grow to 2.69 s (set 1.5 s)
-    sc = parse_scenario(BEND.format(duration=24.0, seed=1, speed=20.0, curv=0.01, lead_x=35.7))
+    sc = _bend(24.0, 1, 20.0, 100.0)
     res = simulate(sc, fidelity=level)
     assert res.passed, res.reasons
     assert abs(res.final_time_gap_s - 1.5) < 0.15, res.final_time_gap_s
