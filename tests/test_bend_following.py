@@ -147,40 +147,6 @@ def test_the_road_model_fades_out_at_walking_pace_and_on_junction_turns_without_
         assert np.all(np.abs((near[0, 2:] - x2[0, 2:]) - step) < 0.003)
 
 
-def _pair(dv_along, dv_across, young_sigma_across, v=(-3.7, 5.1)):
-    """An older track of a car 60 m ahead, 9 m to the side, and a young one 2 m behind it on the same line of sight,
-    its velocity off by ``dv_along`` along the line of sight and ``dv_across`` across, known to ±young_sigma_across."""
-    from radarnode.perception.tracker import ObjectTracker
-
-    t = ObjectTracker()
-    p = np.array([60.0, 9.0])
-    u = p / np.linalg.norm(p)
-    perp = np.array([-u[1], u[0]])
-    v = np.array(v)
-    t.x = np.array([[*p, *v], [*(p + 2.0 * u), *(v + dv_along * u + dv_across * perp)]])
-    cov = 0.01 * np.eye(2)
-    young = 0.3 ** 2 * np.outer(u, u) + young_sigma_across ** 2 * np.outer(perp, perp)
-    t.p = np.zeros((2, 4, 4))
-    t.p[:, :2, :2] = 0.25 * np.eye(2)
-    t.p[0, 2:, 2:], t.p[1, 2:, 2:] = cov, young
-    return t._duplicates()
-
-
-def test_a_young_track_of_a_bodys_second_group_is_its_duplicate_within_its_own_velocity_uncertainty():
-    # a new track starts across the line of sight from the standing world's prior (±2 m/s): on a bend a car's
-    # second group, 2 m behind its track, started 2 m/s off across and stayed a second object for a second
-    assert _pair(0.0, 2.0, 2.0).tolist() == [False, True]
-    # settled (±0.1 m/s across) the same 2 m/s is another object moving differently
-    assert _pair(0.0, 2.0, 0.1).tolist() == [False, False]
-    # along the line of sight the Doppler is measured: 1.5 m/s apart there is never the same body
-    assert _pair(1.5, 0.0, 2.0).tolist() == [False, False]
-    assert _pair(0.9, 0.0, 0.1).tolist() == [False, True]
-    # beside a standing track (a parked car; the sensor standing too) a young one moving 2 m/s across is another
-    # object (a pedestrian stepping out from behind it), whatever its uncertainty
-    assert _pair(0.0, 2.0, 2.0, v=(0.0, 0.0)).tolist() == [False, False]
-    assert _pair(0.0, 0.5, 2.0, v=(0.0, 0.0)).tolist() == [False, True]
-
-
 JUNCTION = """
 name: junction_turn
 duration_s: 10.0

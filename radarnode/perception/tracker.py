@@ -480,7 +480,7 @@ class ObjectTracker:
         coast = np.where(moving, COAST_CYCLES, COAST_STATIONARY_CYCLES)
         tentative = np.where(moving, 0, CONFIRM_WINDOW_STATIONARY - CONFIRM_HITS)
         self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
-                     | self._duplicates(sensor_velocity))
+                     | self._duplicates())
         return self._object_list(sensor_velocity)
 
     def _hops(self, idx: np.ndarray, z: np.ndarray, sensor_velocity) -> np.ndarray:
@@ -575,31 +575,16 @@ class ObjectTracker:
         self.power = np.concatenate([self.power, 10.0 ** (groups.rcs_dbsm[idx] / 10.0)])
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
 
-    def _duplicates(self, sensor_velocity=(0.0, 0.0), eps_m: float = 2.8, eps_long_m: float = 4.5,
-                    eps_mps: float = 1.0) -> np.ndarray:
+    def _duplicates(self, eps_m: float = 2.8, eps_long_m: float = 4.5, eps_mps: float = 1.0) -> np.ndarray:
         """Tracks that are parts of an older track's body: within the grouping distance of it and moving with
         it (one body split into two groups for a few cycles leaves two tracks that would never meet again)."""
         n = len(self.x)
         if n < 2:
             return np.zeros(n, dtype=bool)
-        _, moving = self._heading(np.arange(n), sensor_velocity)
         dx = (self.x[:, None, 0] - self.x[None, :, 0]) / eps_long_m
         dy = (self.x[:, None, 1] - self.x[None, :, 1]) / eps_m
-        # the velocities compared along row i's line of sight and across it; across, beside an older track that
-        # moves, within what row i's own velocity is known to (a new track's is the standing world's prior,
-        # ±2 m/s: on a bend a car's second group, 2 m behind its track, started 2 m/s off the track's velocity
-        # across and stayed a second object); beside a standing one as before (a pedestrian stepping out from
-        # behind a parked car moves across the line of sight, as a young track's prior allows)
-        r = np.maximum(np.hypot(self.x[:, 0], self.x[:, 1]), 1e-3)
-        ux, uy = self.x[:, 0] / r, self.x[:, 1] / r
-        dvx = self.x[:, None, 2] - self.x[None, :, 2]
-        dvy = self.x[:, None, 3] - self.x[None, :, 3]
-        along = (dvx * ux[:, None] + dvy * uy[:, None]) / eps_mps
-        pv = self.p[:, 2:4, 2:4]
-        var_t = uy * uy * pv[:, 0, 0] - 2.0 * ux * uy * pv[:, 0, 1] + ux * ux * pv[:, 1, 1]
-        loose = np.maximum(eps_mps, 2.0 * np.sqrt(np.maximum(var_t, 0.0)))
-        across = (-dvx * uy[:, None] + dvy * ux[:, None]) / np.where(moving[None, :], loose[:, None], eps_mps)
-        close = (dx * dx + dy * dy <= 1.0) & (along * along + across * across <= 1.0)
+        dv = np.hypot(self.x[:, None, 2] - self.x[None, :, 2], self.x[:, None, 3] - self.x[None, :, 3]) / eps_mps
+        close = (dx * dx + dy * dy <= 1.0) & (dv <= 1.0)
         older = np.arange(n)[None, :] < np.arange(n)[:, None]        # column j was created before row i
         return (close & older).any(axis=1)
 
