@@ -244,7 +244,7 @@ class Ecu:
     def _sensor_motion(self) -> tuple[tuple[float, float], tuple[float, float]]:
         """The sensor's velocity over ground in its own axes, from the ego motion on the bus (the ego's plus the
         yaw rate times the mount's lever arm), and the ego's acceleration along its path (the trackers' objects
-        follow the ego's road with them: :func:`radarnode.consumer.tracking.road_turn`, where the turning itself
+        follow the ego's road with them: :func:`radarnode.perception.motion.road_turn`, where the turning itself
         is the road's, so an acceleration is only a change of speed)."""
         v, w, mnt = self.ego_speed_mps, self.ego_yaw_rate_rps, self.mount
         c, s = math.cos(math.radians(mnt.yaw_deg)), math.sin(math.radians(mnt.yaw_deg))
@@ -467,7 +467,7 @@ class Ecu:
             ax, ay = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
             # the gap along the path changes at the lead's speed along the path less the ego's, and the lead brakes
             # by its change of speed along the path (the tracker's relative acceleration is the change of speed
-            # over the ego's: the turning is the road's, radarnode.consumer.tracking.road_turn): a lead that keeps
+            # over the ego's: the turning is the road's, radarnode.perception.motion.road_turn): a lead that keeps
             # its speed on the ego's bend closes at nothing and brakes at nothing, although its velocity relative
             # to the sensor points across the bend
             lead_accel = (ax + self.ego_accel_mps2) * tangent[i, 0] + ay * tangent[i, 1]
