@@ -241,14 +241,20 @@ class Ecu:
         self.stats.bad_measurements += int(np.count_nonzero(~ok))
         return ok
 
+    def _sensor_velocity(self) -> tuple[float, float]:
+        """The sensor's velocity over ground in the vehicle's axes, from the ego motion on the bus: the ego's plus
+        the yaw rate times the mount's lever arm (a radar 3.7 m ahead of the rear axle moves sideways at ω·3.7 m
+        on a bend); the radar's relative velocities are relative to it."""
+        w, mnt = self.ego_yaw_rate_rps, self.mount
+        return self.ego_speed_mps - w * mnt.y_m, w * mnt.x_m
+
     def _sensor_motion(self) -> tuple[tuple[float, float], tuple[float, float]]:
-        """The sensor's velocity over ground in its own axes, from the ego motion on the bus (the ego's plus the
-        yaw rate times the mount's lever arm), and the ego's acceleration along its path (the trackers' objects
-        follow the ego's road with them: :func:`radarnode.perception.motion.road_turn`, where the turning itself
-        is the road's, so an acceleration is only a change of speed)."""
-        v, w, mnt = self.ego_speed_mps, self.ego_yaw_rate_rps, self.mount
+        """:meth:`_sensor_velocity` in the sensor's own axes, and the ego's acceleration along its path (the
+        trackers' objects follow the ego's road with them: :func:`radarnode.perception.motion.road_turn`, where
+        the turning itself is the road's, so an acceleration is only a change of speed)."""
+        mnt = self.mount
         c, s = math.cos(math.radians(mnt.yaw_deg)), math.sin(math.radians(mnt.yaw_deg))
-        vx, vy = v - w * mnt.y_m, w * mnt.x_m                               # vehicle axes
+        vx, vy = self._sensor_velocity()
         a = self.ego_accel_mps2
         return (c * vx + s * vy, -s * vx + c * vy), (c * a, -s * a)
 
@@ -348,11 +354,7 @@ class Ecu:
         # a structure across the road lies across the road *where it stands*: on a bend that is the predicted
         # path's heading there (the ego's heading plus the path's curvature times the distance), not the ego's now
         kappa = curvature(self.ego_speed_mps, self.ego_yaw_rate_rps)
-        # the sensor's own velocity over ground, vehicle axes: the ego's plus the yaw rate times the mount's lever
-        # arm (a radar 3.7 m ahead of the rear axle moves sideways at ω·3.7 m on a bend); the radar's relative
-        # velocities are relative to it
-        su = self.ego_speed_mps - self.ego_yaw_rate_rps * self.mount.y_m
-        sv = self.ego_yaw_rate_rps * self.mount.x_m
+        su, sv = self._sensor_velocity()
         along = np.zeros(len(tracks))                 # each track's speed over ground along the path where it is
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         for i, t in enumerate(tracks):

@@ -23,7 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from radarnode.errors import ConfigError
-from radarnode.perception.motion import road_turn, transition
+from radarnode.perception.motion import road_predict, road_turn, transition
 
 MODELS = ("cv", "ca", "imm")
 IMM_SWITCH = 0.05          # probability per cycle of switching between the constant-velocity and -acceleration mode
@@ -98,9 +98,7 @@ def predict(x: np.ndarray, p: np.ndarray, model: str, dt: float, q: float, yaw_r
     if road is None:
         f = _rotation(f.shape[0], -yaw_rad) @ f
         return x @ f.T, f @ p @ f.T + qq
-    moved, rot = road_turn(x, x @ f.T, yaw_rad, dt, *road)
-    fk = rot @ f
-    return moved, fk @ p @ fk.transpose(0, 2, 1) + qq
+    return road_predict(x, p, f, qq, yaw_rad, dt, *road)
 
 
 def measurement_matrix(state_dim: int, kind: str) -> np.ndarray:

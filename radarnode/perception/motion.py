@@ -71,9 +71,9 @@ def road_turn(before: np.ndarray, moved: np.ndarray, yaw_rad: float, dt: float, 
     speed = math.hypot(ux, uy)
     phi = np.full(n, -yaw_rad)
     g = moved[:, 2:4] + (ux, uy)
-    share = road_share(speed, yaw_rad / dt / speed) if speed > 0.0 and dt > 0.0 else 0.0
+    kappa = yaw_rad / dt / speed if speed > 0.0 and dt > 0.0 else 0.0
+    share = road_share(speed, kappa) if kappa else 0.0
     if share > 0.0:
-        kappa = yaw_rad / dt / speed
         hx, hy = ux / speed, uy / speed
         # the path through the sensor: tangent along u, heading β + κ·(distance along it) at the object's place
         heading = math.atan2(uy, ux) + kappa * (before[:, 0] * hx + before[:, 1] * hy)
@@ -98,3 +98,12 @@ def road_turn(before: np.ndarray, moved: np.ndarray, yaw_rad: float, dt: float, 
         rot[:, 4, 4] = rot[:, 5, 5] = cp
         rot[:, 4, 5], rot[:, 5, 4] = -sp, sp
     return out, rot
+
+
+def road_predict(x: np.ndarray, p: np.ndarray, f: np.ndarray, q: np.ndarray, yaw_rad: float, dt: float,
+                 sensor_velocity, sensor_accel=(0.0, 0.0)) -> tuple[np.ndarray, np.ndarray]:
+    """States (n, d) and covariances (n, d, d) through the linear step ``f`` (process noise ``q``) and
+    :func:`road_turn`: the prediction both trackers make while the ego turns."""
+    moved, rot = road_turn(x, x @ f.T, yaw_rad, dt, sensor_velocity, sensor_accel)
+    fk = rot @ f
+    return moved, fk @ p @ fk.transpose(0, 2, 1) + q

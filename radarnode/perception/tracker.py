@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from radarnode.dsp.cluster import dbscan
-from radarnode.perception.motion import road_turn, transition
+from radarnode.perception.motion import road_predict, transition
 from radarnode.perception.types import (
     DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, Detections, ObjectList)
@@ -301,9 +301,7 @@ def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, y
     f, q = transition("cv", dt, accel_sigma ** 2)
     if not yaw_rate_rps or not dt:
         return x @ f.T, f @ p @ f.T + q
-    moved, rot = road_turn(x, x @ f.T, yaw_rate_rps * dt, dt, sensor_velocity)
-    fk = rot @ f
-    return moved, fk @ p @ fk.transpose(0, 2, 1) + q
+    return road_predict(x, p, f, q, yaw_rate_rps * dt, dt, sensor_velocity)
 
 
 def measure(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
