@@ -293,3 +293,35 @@ def test_false_alarms_a_frame_agree_across_the_levels_at_a_high_pfa():
         frames = 40 if level == "signal" else 160
         n[level] = np.mean([len(model.step(0.072 * k, run)[0].clusters) for k in range(frames)])
     assert abs(n["detection"] / n["signal"] - 1.0) < 0.12 and abs(n["object"] / n["signal"] - 1.0) < 0.12, n
+
+
+@pytest.mark.parametrize("yaw", [0.0, -50.0])
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_a_clusters_velocity_is_its_range_rate_along_its_azimuth_at_every_level(level, yaw):
+    """A cluster is one detection, which measures one radial speed: its VrelLong/VrelLat are that speed split along
+    its azimuth, as the ARS 408 and the detection and signal levels give them. The object level gave clusters the
+    actor's whole relative velocity (a standing point 15 m out at 40°, ego at 25 m/s: VrelLong −25.25 against
+    −14.7 at the other levels; an independent tester's finding)."""
+    import math
+    th = math.radians(yaw + 40.0)
+    x, y = 3.7 + 15.0 * math.cos(th), -0.8 + 15.0 * math.sin(th)
+    sc = scenario(f"  - {{id: p, class: point, x_m: {x:.3f}, y_m: {y:.3f}, speed_mps: 0, rcs_dbsm: 10}}\n",
+                  ego="{speed_mps: 25.0}", duration=1.0,
+                  radar=f"{{preset: ars408_like, output: clusters, mount: {{x_m: 3.7, y_m: -0.8, yaw_deg: {yaw}}}}}",
+                  road="{lanes: 10, lane_width_m: 6, ego_lane: 5}")
+    cfg = radar_config(sc)
+    model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(3), cfg.signal, clusters_wanted=True)
+    run = RuntimeConfig(max_distance_m=cfg.preset.max_range_m, clusters=True)
+    seen = 0
+    for k in range(6):
+        cl = model.step(k * sc.period_s, run)[0].clusters
+        mine = np.flatnonzero(cl.actor_index == 0)
+        for i in mine:
+            seen += 1
+            az = math.atan2(cl.dist_lat_m[i], cl.dist_long_m[i])
+            rate = cl.vrel_long_mps[i] * math.cos(az) + cl.vrel_lat_mps[i] * math.sin(az)
+            # no tangential part, and the radial part is the standing point's (−25 m/s·cos of its azimuth off the
+            # ego's axis), within the measurement's noise
+            assert abs(-cl.vrel_long_mps[i] * math.sin(az) + cl.vrel_lat_mps[i] * math.cos(az)) < 1e-6, (level, i)
+            assert abs(rate + 25.0 * math.cos(az + math.radians(yaw))) < 0.5, (level, rate)
+    assert seen >= 4

@@ -618,9 +618,13 @@ class ObjectModel:
         if ch["config"].clusters:      # the actors' rows of the cluster list (_CL_* columns)
             t_n, n = ch["snr"].shape
             rcs = ch["rcs_eff"] + measured_rcs_db(ch["rcs_draw"], ch["snr"], self.scene.swerling == 0)
-            ch["cluster_actors"] = _cluster_rows(*np.moveaxis(ch["meas"], -1, 0), rcs, ch["sig_r"],
-                                                 ch["sig_az"], ch["sig_v"], np.broadcast_to(np.arange(n), (t_n, n)),
-                                                 ch["ambig"])
+            # a cluster is one detection: its velocity is the range rate split along its azimuth, as the other
+            # levels and the ARS 408 give it (the tangential part is the tracker's, in the object list only)
+            m_az, m_vr = ch["m_az"], ch["m_vr"]
+            meas = ch["meas"]
+            ch["cluster_actors"] = _cluster_rows(meas[..., 0], meas[..., 1], m_vr * np.cos(m_az),
+                                                 m_vr * np.sin(m_az), rcs, ch["sig_r"], ch["sig_az"], ch["sig_v"],
+                                                 np.broadcast_to(np.arange(n), (t_n, n)), ch["ambig"])
         return ch
 
     def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
