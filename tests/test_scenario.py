@@ -100,6 +100,23 @@ def test_bad_override_value(tmp_path):
            "radar.overrides.pfa", "2.0")
 
 
+@pytest.mark.parametrize("override, field, allowed", [
+    ("num_chirps: 2", "radar.overrides.num_chirps", "at least 4"),
+    ("num_chirps: 5", "radar.overrides.num_chirps", "an even number"),
+    ("num_samples: 6", "radar.overrides.num_samples", "at least 4 range bins"),
+])
+def test_a_map_too_small_for_the_signal_chain_is_refused_at_load(tmp_path, override, field, allowed):
+    """Two chirps gave a scenario the object and detection levels ran and the signal level crashed on with a
+    traceback from its peak fit (an independent tester's finding): the smallest map every level can process is
+    4 Doppler × 4 range bins (``ars408_like`` samples real: 8 samples)."""
+    _fails(tmp_path, GOOD.replace("  preset: ars408_like", f"  preset: ars408_like\n  overrides: {{{override}}}"),
+           field, allowed)
+    p = tmp_path / "ok.yaml"
+    p.write_text(GOOD.replace("  preset: ars408_like", "  preset: ars408_like\n  overrides: {num_chirps: 4, num_samples: 8}"))
+    from radarnode.radar.setup import radar_config
+    assert radar_config(load_scenario(p)).preset.num_chirps == 4
+
+
 def test_invalid_yaml(tmp_path):
     _fails(tmp_path, GOOD + "  - [unclosed\n", "not valid YAML")
 

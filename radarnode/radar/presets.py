@@ -104,8 +104,13 @@ class RadarPreset:
         for f in ("num_chirps", "num_samples", "num_tx", "num_rx"):
             validate.integer(f, getattr(self, f), lo=1, hi=1 << 16)
         validate.boolean("complex_sampling", self.complex_sampling)
-        if self.num_chirps % 2:
-            raise FieldError("num_chirps", self.num_chirps, "an even number (the Doppler FFT puts zero speed at M/2)")
+        if self.num_chirps % 2 or self.num_chirps < 4:
+            raise FieldError("num_chirps", self.num_chirps, "an even number (the Doppler FFT puts zero speed at M/2), "
+                             "at least 4 (the signal chain's peak fit spans 3 Doppler bins)")
+        if self.num_range_bins < 4:
+            raise FieldError("num_samples", self.num_samples, "at least 4 range bins (the signal chain's peak fit "
+                             f"spans 3): {'4' if self.complex_sampling else '8'} or more with "
+                             f"{'complex' if self.complex_sampling else 'real'} sampling")
         validate.number("element_pattern_exponent", self.element_pattern_exponent, lo=0.0, hi=20.0)
         validate.number("stagger_chirp_period_s", self.stagger_chirp_period_s, lo=0.0, hi=1.0)
         if self.stagger_chirp_period_s and abs(self.stagger_chirp_period_s - self.chirp_period_s) < 1e-3 * self.chirp_period_s:
