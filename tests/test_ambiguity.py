@@ -662,3 +662,41 @@ def test_an_aliased_speed_leaves_its_range_doppler_coupling_in_the_range_at_ever
                 errs.append(det.range_m[i] - view.range_m[0])
         errors[level] = float(np.median(errs))
         assert errors[level] == pytest.approx(expected, abs=0.25 * p.range_resolution_m), (level, errors)
+
+
+@pytest.mark.parametrize("preset, v, listed", [
+    ("mimo12", -39.9, False),           # one wrap (64.7 m/s) puts the next detection 4.7 m off: never confirmed
+    ("ars408_like", 60.0, False),       # beyond the staggered span, two wraps of the first sequence: 5.6 m
+    ("ars408_like", 56.0, True),        # beyond the span, one wrap: 2.8 m, inside the tracker's gate (2.85 m)
+    ("fast_chirp", -30.0, True),        # one wrap: 1.9 m
+])
+def test_an_aliased_target_is_an_object_at_the_object_level_where_the_tracker_follows_it(preset, v, listed):
+    """A target reported at an aliased speed moves (true − aliased) × the cycle away from where its track predicts
+    it. The detection and signal levels' tracker follows it at the aliased speed where that is inside its gate, and
+    never confirms it beyond; the object level listed it every cycle at the aliased speed whatever the preset (an
+    oncoming car on mimo12 as a car receding at +24.6 m/s where the other levels listed nothing; an independent
+    tester's finding). Now both levels list it, or neither, and at the aliased speed."""
+    x = 40.0 if v >= 0 else 120.0
+    heading = "" if v >= 0 else ", heading_deg: 180"
+    sc = scenario(f"  - {{id: a, class: point, x_m: {x}, y_m: 0.0, speed_mps: {abs(v)}{heading}, rcs_dbsm: 25}}\n",
+                  ego="{speed_mps: 0}", radar=f"{{preset: {preset}, output: clusters}}", duration=2.0)
+    p = radar_config(sc).preset
+    alias = _alias(v, p)
+    found = {}
+    for level in ("object", "detection"):
+        model = make_model(level, Scene(sc), p, np.random.default_rng(1), radar_config(sc).signal,
+                           clusters_wanted=True)
+        listed_at = []
+        for k in range(10):
+            frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m))
+            o = frame.objects
+            near = np.abs(o.dist_long_m - view.range_m[0]) < 6.0
+            if k >= 3:
+                listed_at.append(bool(near.any()))
+                if near.any():
+                    assert abs(o.vrel_long_mps[near][0] - alias) < 1.5, (level, o.vrel_long_mps[near], alias)
+        found[level] = np.mean(listed_at)
+    if listed:
+        assert found["object"] >= 0.8 and found["detection"] >= 0.5, found
+    else:
+        assert found["object"] == 0.0 and found["detection"] == 0.0, found

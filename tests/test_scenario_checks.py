@@ -317,3 +317,32 @@ def test_a_gap_tolerance_without_its_settle_time_is_refused(tmp_path):
                    "gap_settle_s beside it, or it left out")
     _, sc = _load(tmp_path, HEAD + "ecu: {expect: {gap_settle_s: 5, gap_tolerance: 0.2}}\n")
     assert sc.ecu.expect.gap_tolerance == 0.2
+
+
+# --- a speed a single-ramp radar wraps unknowingly -------------------------------------------------------------
+
+
+@pytest.mark.parametrize("ego, oncoming, warned", [(100.0, 45.0, True), (100.0, 32.0, False), (80.0, 53.0, True)])
+def test_a_closing_speed_beyond_acc_lrrs_single_ramp_is_a_warning_naming_the_actor(tmp_path, caplog, ego, oncoming,
+                                                                                     warned):
+    """acc_lrr's one chirp sequence measures ±132.7 m/s and calls every speed unambiguous, as such a sensor does;
+    the schema allows an ego at 100 m/s and an oncoming car at 45 m/s (145 m/s closing), which it then reports at
+    +120.3 m/s flagged 'unambiguous' (an independent tester's finding). The loader says so; 132 m/s closing is fine."""
+    with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
+        p, sc = _load(tmp_path, f"name: fast\nduration_s: 2\nseed: 1\nego: {{speed_mps: {ego}}}\n"
+                                "radar: {preset: acc_lrr}\nactors:\n"
+                                f"  - {{id: oncoming, class: car, x_m: 150.0, y_m: 3.5, speed_mps: {oncoming}, "
+                                "heading_deg: 180}\n")
+    msgs = [r.getMessage() for r in caplog.records]
+    if not warned:
+        assert not msgs, msgs
+        return
+    (msg,) = msgs
+    import re
+    closing = ego + oncoming
+    assert msg.startswith(f"{p}:7: actor 'oncoming' (actors[0]) reaches a range rate of "), msg
+    rate = float(re.search(r"range rate of ([-+0-9.]+) m/s", msg).group(1))
+    alias = float(re.search(r"reported at ([-+0-9.]+) m/s", msg).group(1))
+    assert rate == pytest.approx(-closing, abs=0.2) and alias == pytest.approx(2 * 132.66 - closing, abs=0.2), msg
+    assert "beyond the ±132.7 m/s that preset acc_lrr's single chirp sequence measures" in msg, msg
+    assert "AmbigState 3" in msg, msg

@@ -32,6 +32,7 @@ from radarnode.perception.types import (
     MEAS_PREDICTED, ClusterList, Detections, ObjectList)
 
 GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
+TRACKER_SIGMA_POS_M = 0.5     # a detection group's position noise (ObjectTracker's default)
 CONFIRM_HITS, CONFIRM_WINDOW = 2, 3
 COAST_CYCLES = 3
 #: a confirmed track standing still over ground coasts longer: the ego motion predicts where it is, and a
@@ -403,7 +404,7 @@ class ObjectTracker:
         position noise, so a far object is placed less well sideways than a near one
     """
 
-    def __init__(self, sigma_pos_m: float = 0.5, sigma_vr_mps: float = 0.3, max_objects: int = 100,
+    def __init__(self, sigma_pos_m: float = TRACKER_SIGMA_POS_M, sigma_vr_mps: float = 0.3, max_objects: int = 100,
                  sigma_az_rad: float = math.radians(0.3)) -> None:
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
         self.sigma_az_rad = sigma_az_rad

@@ -17,6 +17,11 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
   Occlusion is not considered. A warning, not an error: an actor may be there for the ground truth or a
   viewer, but usually the tester meant 100 m, not 1000 m. Guardrail actors are not checked (their posts, not
   their box, are what the radar sees).
+* **A speed a single-ramp radar wraps unknowingly** (warning): a preset whose one chirp sequence measures ±400
+  km/h closing (``acc_lrr``) says every speed it measures is unambiguous (AmbigState 3), as such a sensor does.
+  An actor whose range rate goes beyond that within the field of view (the schema allows an ego at 100 m/s and
+  an actor at 150 m/s) is then reported at its alias with that flag, at every level, and listed as no object;
+  the warning names the actor, its range rate and when.
 
 Errors are :class:`ScenarioError` with ``file:line: field '…': …``; warnings go to this module's logger.
 """
@@ -52,6 +57,7 @@ def check_scenario(scenario: Scenario) -> Scenario:
     if scenario.actors:
         _check_overlap_at_start(scenario, src)
         _check_visibility(scenario, src)
+        _check_speed_span(scenario, src)
     expect = scenario.ecu.expect
     if _given(scenario, "ecu.expect.gap_tolerance") and expect.gap_settle_s is None:
         # (a tester's finding: it was accepted and had no effect)
@@ -235,3 +241,42 @@ def _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t) ->
                        "t = %.2f s), so the radar never reports it%s%s", line, actor.id, base, scenario.duration_s,
                        preset.name, preset.min_range_m, max_m, half, closest[i], math.degrees(closest_az[i]),
                        closest_t[i], others, f"; it is {' and '.join(named)}" if named else "")
+
+
+def _check_speed_span(scenario: Scenario, src: Source) -> None:
+    """Warn of an actor whose range rate, inside the field of view, exceeds what a radar that calls every speed
+    unambiguous (:func:`radarnode.radar.ambiguity.unambiguous`) measures without wrapping."""
+    from radarnode.radar import ambiguity
+    from radarnode.radar.setup import radar_config, radar_scenarios
+    from radarnode.scene.world import Scene
+    for sc in radar_scenarios(scenario):
+        preset = radar_config(sc).preset
+        if not ambiguity.unambiguous(preset):
+            continue
+        scene = Scene(sc)
+        vmax = preset.alias_speed_mps
+        worst = np.zeros(len(sc.actors))
+        when = np.zeros(len(sc.actors))
+        for k0 in range(0, max(sc.num_cycles, 1), CHUNK_CYCLES):
+            times = np.arange(k0, min(k0 + CHUNK_CYCLES, max(sc.num_cycles, 1))) * sc.period_s
+            v = scene.views(times)
+            c, s_ = np.cos(v.azimuth_rad), np.sin(v.azimuth_rad)
+            signed = v.vx_mps * c + v.vy_mps * s_
+            rate = np.abs(signed)
+            inside = np.zeros(rate.shape, dtype=bool)
+            for sector in preset.fov:
+                inside |= (v.range_m <= sector.max_range_m) & (np.abs(v.azimuth_rad)
+                                                               <= math.radians(sector.half_angle_deg))
+            rate = np.where(inside, rate, 0.0)
+            k = np.argmax(rate, axis=0)
+            cols = np.arange(rate.shape[1])
+            better = rate[k, cols] > np.abs(worst)
+            worst = np.where(better, signed[k, cols], worst)
+            when = np.where(better, times[k], when)
+        for i in np.flatnonzero(np.abs(worst) > vmax):
+            actor, base = sc.actors[i], f"actors[{i}]"
+            logger.warning("%s: actor '%s' (%s) reaches a range rate of %+.1f m/s at t = %.2f s, beyond the ±%.1f m/s "
+                           "that preset %s's single chirp sequence measures: its detections wrap (reported at "
+                           "%+.1f m/s) and, as on such a sensor, are flagged AmbigState 3 'unambiguous'; no object "
+                           "is listed for it", src.where(base), actor.id, base, worst[i], when[i], vmax,
+                           preset.name, float(np.mod(worst[i] + vmax, 2 * vmax) - vmax))

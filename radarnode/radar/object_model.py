@@ -35,8 +35,8 @@ from radarnode.perception.types import (
     MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.perception.types import Detections
-from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, MIN_BODY_M, RCS_GAIN, accel_sigma_mps2, classify,
-                                          cluster_dyn_prop,
+from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, GATE_CHI2_3DOF, MIN_BODY_M, RCS_GAIN,
+                                          TRACKER_SIGMA_POS_M, accel_sigma_mps2, classify, cluster_dyn_prop,
                                           orientation_sigma_rad)
 from radarnode.radar import ambiguity, elevation, equation
 from radarnode.radar.chain import DspChain
@@ -54,6 +54,12 @@ MAX_OBJECTS = 100         # ARS 408 object list capacity
 MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are 8 bits each)
 CLUSTER_BLOCK = 32        # cycles whose cluster lists are built together
 MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
+#: how far along the line of sight a detection may lie from a young track's prediction and still be its (the
+#: detection and signal levels' tracker: its χ² gate on a radial residual whose variance is the track's and the
+#: measurement's position noise, 2·σ²): 2.85 m. A target reported at an aliased speed lands (true − aliased)·cycle
+#: from the prediction: one wrap of fast_chirp (1.9 m) or ars408_like (2.8 m) is followed at the aliased speed, one of
+#: mimo12 (4.7 m) or acc_lrr (13 m) never confirmed
+ALIAS_GATE_M = math.sqrt(GATE_CHI2_3DOF * 2.0) * TRACKER_SIGMA_POS_M
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
 CHUNK_CYCLES = 1024       # at most this many cycles' physics in one vectorised pass (fewer for crowded scenes) …
@@ -137,7 +143,7 @@ class ObjectStepInfo:
         if self._at is None:
             return None
         ch, i, reportable = self._at
-        seen = np.flatnonzero(ch["detected"][i] & reportable)
+        seen = np.flatnonzero(ch["seen"][i] & reportable)
         d = ch["detection_floats"][i, seen]
         return Detections(d[:, 0], d[:, 1], d[:, 2], d[:, 3], d[:, 4], seen, ch["ambig"][i, seen])
 
@@ -555,7 +561,12 @@ class ObjectModel:
         # a detection is reported where it was measured inside the field of view, as the other levels report
         # theirs (radarnode.radar.models.reportable): a body at a sector's edge is seen on its inner side only
         measured_in = in_fov(p, m_r, m_az) & (m_r <= config.max_distance_m)
-        out = {"det_in": observable & (u < pd) & measured_in, "fov": fov, "still": ground < MOVING_THRESHOLD_MPS,
+        # a speed reported aliased (wraps away from the measured one) moves the track's prediction off the target
+        # by the difference times the cycle: within the tracker's gate the other levels' tracker follows the
+        # target at the aliased speed, beyond it never confirms it (its clusters carry the aliased speed, flagged
+        # ambiguous): the internal tracker takes the same detections (ALIAS_GATE_M)
+        trackable = np.abs(m_vr - v_meas) * self.period_s <= ALIAS_GATE_M
+        out = {"det_in": observable & (u < pd) & measured_in, "trackable": trackable, "fov": fov, "still": ground < MOVING_THRESHOLD_MPS,
                "az": az, "pd": pd, "sx": sx, "sy": sy, "orientation_truth": view.orientation_rad,
                "meas": meas, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr,
                "ambig": ambig, "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
@@ -573,7 +584,8 @@ class ObjectModel:
         """The tracker's flags over the chunk (:meth:`_track_flags`) and the object list's fields that follow
         from them and the physics ``ph``, for every cycle of the chunk."""
         p, sc = self.preset, self.scene
-        flags = self._track_flags(ph.pop("det_in"), ph["fov"], ph.pop("still"))
+        seen = ph.pop("det_in")                  # every detection (the cluster list); the tracker takes the trackable
+        flags = self._track_flags(seen & ph.pop("trackable"), ph["fov"], ph.pop("still"))
         if "body" in ph:
             # the object's reported RCS is its track's average in power (RCS_GAIN per measured cycle, from the
             # track's first detection, as the detection level's tracker and the real sensor report it): so is this
@@ -599,7 +611,7 @@ class ObjectModel:
         sig_along = accel_sigma_mps2(sig_vlong, self.period_s) * coast
         sig_alat = accel_sigma_mps2(sig_vlat, self.period_s) * coast
         sig_orient = orientation_sigma_rad(np.sqrt(0.5 * (sig_long ** 2 + sig_lat ** 2)), sc.length_m)
-        return {**ph, **flags,
+        return {**ph, **flags, "seen": seen,
             "sig_long": sig_long, "sig_lat": sig_lat, "sig_vlong": sig_vlong, "sig_vlat": sig_vlat,
             "sig_along": sig_along, "sig_alat": sig_alat, "sig_orient": sig_orient,
             "orientation": orientation + sig_orient * z[:, 9],
@@ -988,7 +1000,7 @@ class ObjectModel:
         states = {name: g.bit_generator.state for name, g in rngs.items()}    # for _rewind_clusters
         post_cycle = hit_cycle = np.zeros(0, dtype=np.int64)
         svx, svy = view.sensor_vx_mps, view.sensor_vy_mps
-        kk, aa = np.nonzero(ch["detected"][lo:hi] & self.reportable)
+        kk, aa = np.nonzero(ch["seen"][lo:hi] & self.reportable)
         # each part's rows of the _CL_* columns, and its cycles (0 … t_n − 1)
         parts = [(ch["cluster_actors"][lo + kk, aa], kk)]
         # guardrail posts: stationary point targets
