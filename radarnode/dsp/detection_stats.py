@@ -325,6 +325,7 @@ class DetectionStatistic:
         # the threshold on the training sum: α·Z/N_T (OS-CFAR: the CA factor with the same Pfa stands in for Pd)
         self.alpha_ca = cfar.alpha if cfar.name == "ca" else ca_alpha(cfar.pfa, self.n_channels, self.eigenvalues)
         self._pd_tables: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._second_tables: dict[float, tuple[np.ndarray, np.ndarray]] = {}     # pd_second_look, per gain
         # straddle gains tabulated once (|δ| ≤ ½, step 1/2000: interpolation error < 1e-6)
         self._delta = np.linspace(-0.5, 0.5, 2001)
         self._straddle_r = straddle_gain(self.range_window, self._delta)
@@ -361,6 +362,32 @@ class DetectionStatistic:
             self._table_built()
         grid, table = self._pd_tables[swerling]
         return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
+
+    #: equal-probability points of the exponential law (the midpoints of 64 quantile bins) over which a Swerling 1
+    #: target's two looks in one cycle are averaged (:meth:`pd_second_look`)
+    _EXP_POINTS = -np.log1p(-(np.arange(64) + 0.5) / 64)
+
+    def pd_second_look(self, rho_db: np.ndarray, gain_db: float, swerling: np.ndarray | int) -> np.ndarray:
+        """P(a second look detects | the first did): the second look (another chirp sequence of the same cycle, a
+        staggered ramp) at ``rho_db`` + ``gain_db`` with its own noise and, for a Swerling 1 target, the same
+        fluctuation (one per cycle). Swerling 0: the second look's Pd. Swerling 1: E[Pd₀(ρ₁x)·Pd₀(ρ₂x)] / E[Pd₀(ρ₁x)]
+        over x ~ Exp(1) (64 equal-probability points), tabulated once per gain on :meth:`pd_of_snr`'s grid and
+        interpolated (one ``np.interp`` a call). ``swerling`` broadcasts with ``rho_db``."""
+        rho = np.asarray(rho_db, dtype=np.float64)
+        steady = self.pd_of_snr(rho + gain_db, 0)
+        fluct = np.broadcast_to(np.asarray(swerling) == 1, rho.shape)
+        if not fluct.any():
+            return steady
+        key = round(float(gain_db), 9)
+        if key not in self._second_tables:
+            grid = np.arange(-30.0, 60.0001, 0.05)
+            r = grid[:, None] + 10.0 * np.log10(self._EXP_POINTS)[None, :]
+            first = self.pd_of_snr(r, 0)
+            both = (first * self.pd_of_snr(r + gain_db, 0)).mean(axis=1)
+            marginal = first.mean(axis=1)
+            self._second_tables[key] = (grid, np.where(marginal > 0.0, both / np.maximum(marginal, 1e-300), 0.0))
+        grid, table = self._second_tables[key]
+        return np.where(fluct, np.interp(rho, grid, table), steady)
 
     def draw(self, energy: np.ndarray, rng: np.random.Generator, interference: np.ndarray | float = 0.0,
              range_bins: np.ndarray | None = None, n_range: int | None = None) -> tuple[np.ndarray, np.ndarray]:

@@ -162,22 +162,28 @@ def resolve(preset: RadarPreset, sequences: list[Detections], sensor_velocity: t
 
 
 def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth_rad: np.ndarray,
-                        sensor_velocity: tuple) -> tuple[np.ndarray, np.ndarray]:
+                        sensor_velocity: tuple, second: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """What :func:`resolve` makes of a true range rate, for the object level (which has no per-sequence data).
 
-    Staggered ramps: the true speed inside the span (AmbigState 2), else the
-    first sequence's alias (1). A single ramp: the alias, unwrapped to the
-    stationary hypothesis where it matches (4), else flagged ambiguous (1).
+    Staggered ramps: the true speed inside the span where the second sequence
+    detected the target too (``second``, broadcast with the speeds; default
+    everywhere) (AmbigState 2); else what the first sequence alone gives, as a
+    single ramp. A single ramp: the alias, unwrapped to the stationary
+    hypothesis where it matches (4), else flagged ambiguous (1).
     Arrays broadcast; ``sensor_velocity`` may hold arrays (e.g. one per cycle).
     """
     v = np.asarray(range_rate_mps, dtype=np.float64)
     vmax = preset.alias_speed_mps
     alias = np.mod(v + vmax, 2 * vmax) - vmax
-    if preset.stagger_chirp_period_s > 0:
-        lo, hi = preset.range_rate_span_mps
-        inside = (v >= lo) & (v <= hi)
-        return np.where(inside, v, alias), np.where(inside, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
-    if unambiguous(preset):
+    if preset.stagger_chirp_period_s <= 0 and unambiguous(preset):
         return alias, np.full(np.shape(alias), AMBIG_UNAMBIGUOUS, dtype=np.int64)
     unwrapped, candidate = _stationary_unwrap(preset, alias, azimuth_rad, sensor_velocity)
-    return np.where(candidate, unwrapped, alias), np.where(candidate, AMBIG_STATIONARY, AMBIG_AMBIGUOUS).astype(np.int64)
+    rate = np.where(candidate, unwrapped, alias)
+    state = np.where(candidate, AMBIG_STATIONARY, AMBIG_AMBIGUOUS)
+    if preset.stagger_chirp_period_s > 0:
+        lo, hi = preset.range_rate_span_mps
+        paired = (v >= lo) & (v <= hi)
+        if second is not None:
+            paired = paired & second
+        rate, state = np.where(paired, v, rate), np.where(paired, AMBIG_STAGGERED, state)
+    return rate, state.astype(np.int64)

@@ -415,6 +415,9 @@ class ObjectModel:
         self.rng = rng
         # the signal chain's detection test: every level detects with the same law (issue 9)
         self.statistic = DspChain(preset, options.dsp).statistic
+        # a staggered radar's second chirp sequence: its SNR over the first's (its longer chirp collects more)
+        self.second_gain_db = 0.0 if not preset.stagger_chirp_period_s else float(
+            equation.snr_db(preset.second_sequence(), 100.0, 0.0) - equation.snr_db(preset, 100.0, 0.0))
         self.extended = (scene.length_m > 1.0) | (scene.width_m > 1.0)
         self.info = ObjectStepInfo()
         n = scene.n
@@ -488,6 +491,23 @@ class ObjectModel:
             self._physics_layout = tuple((key, (val.shape[1:], val.dtype)) for key, val in ph.items())
         return self._derived(k0, times, config, truth, z, ph)
 
+    def _second_look(self, u: np.ndarray, pd: np.ndarray, snr: np.ndarray, observable: np.ndarray
+                     ) -> np.ndarray | None:
+        """Where a staggered radar's second chirp sequence detects an actor its first detects ((T, n) bool; None
+        for one sequence): with P(second | first) (:meth:`DetectionStatistic.pd_second_look`: its own noise, the
+        same fluctuation), drawn from the first's draw ``u`` (given u < pd, u/pd is uniform: no new random
+        numbers). A detection the second misses keeps the first's speed, aliased and flagged, as at the other levels
+        (which missed it at about 18 dB in 0.3 of the cycles, where the object level never did)."""
+        if not self.preset.stagger_chirp_period_s:
+            return None
+        first = observable & (u < pd)
+        out = np.zeros(u.shape, dtype=bool)
+        t, a = np.nonzero(first)
+        if t.size:
+            q = self.statistic.pd_second_look(snr[t, a], self.second_gain_db, self.scene.swerling[a])
+            out[t, a] = u[t, a] < pd[t, a] * q
+        return out
+
     def _cycles_in_view(self, truth: SensorView) -> np.ndarray:
         """The cycles (indices) where some actor may have a part inside a sector (:func:`may_be_in_fov`)."""
         return np.flatnonzero(may_be_in_fov(self.preset, truth, self.scene.length_m, self.scene.width_m).any(axis=-1))
@@ -548,7 +568,8 @@ class ObjectModel:
         # the speed the radar can measure: aliased and resolved by the same rules as the other levels
         v_meas = v_rad + sig_v * z[:, 2]
         m_vr, ambig = ambiguity.apparent_range_rate(p, v_meas, az,
-                                                    (view.sensor_vx_mps[:, None], view.sensor_vy_mps[:, None]))
+                                                    (view.sensor_vx_mps[:, None], view.sensor_vy_mps[:, None]),
+                                                    self._second_look(u, pd, snr, observable))
         # the range–Doppler coupling: the chain takes it out of the peak's range with the speed it reports, so a
         # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
         # (without it the object level put an aliased target 0.4–3 m from where they do)
@@ -565,7 +586,13 @@ class ObjectModel:
         # by the difference times the cycle: within the tracker's gate the other levels' tracker follows the
         # target at the aliased speed, beyond it never confirms it (its clusters carry the aliased speed, flagged
         # ambiguous): the internal tracker takes the same detections (ALIAS_GATE_M)
-        trackable = np.abs(m_vr - v_meas) * self.period_s <= ALIAS_GATE_M
+        offset = np.abs(m_vr - v_meas)
+        trackable = offset * self.period_s <= ALIAS_GATE_M
+        if p.stagger_chirp_period_s:
+            # inside the staggered span a track runs at the true speed: a cycle the second sequence missed reports an
+            # alias a wrap or more off it in speed, which its gate (σ 0.3 m/s) refuses; the track coasts
+            lo, hi = p.range_rate_span_mps
+            trackable &= (v_meas < lo) | (v_meas > hi) | (offset < 0.5 * p.alias_speed_mps)
         out = {"det_in": observable & (u < pd) & measured_in, "trackable": trackable, "fov": fov, "still": ground < MOVING_THRESHOLD_MPS,
                "az": az, "pd": pd, "sx": sx, "sy": sy, "orientation_truth": view.orientation_rad,
                "meas": meas, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr,
@@ -957,7 +984,8 @@ class ObjectModel:
         er, ev, ea = chain_efficiency(g_snr)  # posts are point targets: the chain's accuracy, no floor
         g_seen = ambiguity.apparent_azimuth(p, g_az)
         return {"cycle": lo + np.repeat(np.arange(starts.size - 1), np.diff(starts))[keep],
-                "pd": self.statistic.pd_of_snr(g_snr, 1), "range": g_r, "azimuth": g_seen, "rcs": g.rcs_dbsm,
+                "pd": self.statistic.pd_of_snr(g_snr, 1), "snr": g_snr, "range": g_r, "azimuth": g_seen,
+                "rcs": g.rcs_dbsm,
                 "sig_r": er * equation.crb_range_m(p, g_snr), "sig_az": ea * equation.crb_azimuth_rad(p, g_snr, g_seen),
                 "sig_v": ev * equation.crb_speed_mps(p, g_snr), "cos": np.cos(g_az), "sin": np.sin(g_az)}
 
@@ -1006,9 +1034,13 @@ class ObjectModel:
         # guardrail posts: stationary point targets
         g = self._posts(ch, lo, hi)
         if g is not None:
-            hit = rngs["hit"].random(g["range"].size) < g["pd"]
+            u_hit = rngs["hit"].random(g["range"].size)
+            hit = u_hit < g["pd"]
             post_cycle = g["cycle"] - lo
             g = {key: val[hit] if isinstance(val, np.ndarray) else val for key, val in g.items()}
+            # a staggered radar's second sequence, given the first (as for the actors: _second_look)
+            second = None if not p.stagger_chirp_period_s else \
+                u_hit[hit] < g["pd"] * self.statistic.pd_second_look(g["snr"], self.second_gain_db, 1)
             k = g["cycle"]
             hit_cycle = k - lo
             nz = rngs["noise"].standard_normal((k.size, 3))
@@ -1016,7 +1048,7 @@ class ObjectModel:
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
             vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
             vr_true = vr
-            vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]))
+            vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]), second)
             mr = ambiguity.coupled_range(p, mr, vr_true, vr)
             cm, sm = np.cos(maz), np.sin(maz)
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, g["rcs"], g["sig_r"], g["sig_az"],
