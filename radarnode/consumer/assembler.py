@@ -56,6 +56,12 @@ RadarState 0x201 (a stray or forged one must not strip groups):
   :meth:`CycleAssembler.expire`, in wall-clock time of arrival), or on
   :meth:`CycleAssembler.flush` (end of a log).
 
+A frame of a group that arrives before the groups the sensor sends ahead of it (0x60B, 0x60C, 0x60D, 0x60E,
+each whole before the next) are whole in the cycle in progress waits aside: the next header, of higher CAN
+priority, overtakes the last frames of a cycle, which must not take the next cycle's places. The cycle's own
+frame, in order, takes the place; at the cycle's end a frame aside fills a place still empty (a cycle reordered)
+or is counted in ``orphan_frames``.
+
 Frames of a group that arrive after their cycle was delivered are counted as
 ``late_frames`` and put their group back into the layout at once.
 
@@ -205,11 +211,26 @@ class _Pending:
         self.header = header
         self.n_near = n_near
         self.groups: dict[int, dict[int, tuple[bytes, dict]]] = {}
+        # frames of a group that came before the group sent ahead of it was whole (a frame of an earlier cycle that
+        # the next header overtook, or this cycle's own, reordered): not counted until the cycle ends (_promote)
+        self.provisional: dict[int, dict[int, tuple[bytes, dict]]] = {}
         self.order: list[int] = []
         self.bad = False
         self.early = False             # delivered as soon as the layout was complete
         self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
         self.arrival = time.monotonic()
+
+
+def _has_frames(p: _Pending) -> bool:
+    """Whether cycle ``p`` took any list frame (in its groups or aside, out of order)."""
+    return bool(p.groups) or any(p.provisional.values())
+
+
+def _whole(p: _Pending) -> bool:
+    """Whether every group cycle ``p`` holds frames of holds one for each object of its general group (a held cycle
+    whose missing group came in part is not)."""
+    general = set(p.groups.get(GENERAL[p.kind], {}))
+    return len(general) == p.expected and all(set(group) == general for group in p.groups.values() if group)
 
 
 def _present(p: _Pending) -> set[int]:
@@ -516,7 +537,7 @@ class CycleAssembler(can.Listener):
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
         kind = HEADERS[base]
         held_header = self._suspects.get(kind)
-        if held_header is not None and held_header.header == data and not held_header.groups:
+        if held_header is not None and held_header.header == data and not _has_frames(held_header):
             # the header held (it came right after another with none of that one's frames yet) comes again, now in
             # its place: the first copy was early (a repeat sent ahead of time), this one is taken
             del self._suspects[kind]
@@ -544,7 +565,7 @@ class CycleAssembler(can.Listener):
             if suspect is None or not self._continues(kind, counter, suspect.meas_counter):
                 older = self._older_suspects.setdefault(kind, [])
                 # (only one that took frames: replayed old headers, one after each cycle, continue each other too)
-                match = [o for o in older if o.groups and self._continues(kind, counter, o.meas_counter)]
+                match = [o for o in older if _has_frames(o) and self._continues(kind, counter, o.meas_counter)]
                 if not match:
                     # held beside the earlier held headers (a few): a restarted sensor's headers between replayed
                     # old ones are still found continuing each other
@@ -573,7 +594,7 @@ class CycleAssembler(can.Listener):
             self._finish(suspect)
         else:
             pending = self._pending.get(kind)
-            if pending is not None and pending.expected and not pending.groups:
+            if pending is not None and pending.expected and not _has_frames(pending):
                 # a header that continues the count right after one that announced objects and got none of its
                 # frames yet: a forged header put just after the sensor's own would take that cycle's frames under its
                 # count — it is held instead, the frames go to the cycle in progress, and the next header decides
@@ -612,7 +633,7 @@ class CycleAssembler(can.Listener):
         with a plausible MeasCounter) — taken out, its effects on the count undone, so that it steals nothing
         from the cycle that follows."""
         p = self._pending.get(kind)
-        if p is None or not p.expected or p.groups or p.before is None or p.before[0] is None:
+        if p is None or not p.expected or _has_frames(p) or p.before is None or p.before[0] is None:
             return
         last, stride, lost = p.before
         if not _within_reach(counter, last, stride or 1) or self._continues(kind, counter, p.meas_counter):
@@ -635,7 +656,8 @@ class CycleAssembler(can.Listener):
     def _drop_suspect(self, suspect: _Pending) -> None:
         """A held header that no header continued: stray; the frames it collected are counted as orphans."""
         self.stats.stray_headers += 1
-        self.stats.orphan_frames += sum(len(group) for group in suspect.groups.values())
+        self.stats.orphan_frames += sum(len(group) for group in (*suspect.groups.values(),
+                                                                  *suspect.provisional.values()))
 
     @staticmethod
     def _fits(p: _Pending, base: int, oid: int) -> bool:
@@ -686,8 +708,49 @@ class CycleAssembler(can.Listener):
         if self._add(pending, base, oid, data, values):
             self._maybe_complete(kind)
 
+    def _ahead_of_order(self, p: _Pending, base: int) -> bool:
+        """Whether a frame of group ``base`` comes before cycle ``p`` holds every frame of the groups the sensor
+        sends ahead of it (general, quality, extended, warning, each whole before the next)."""
+        order = GROUPS[p.kind]
+        before = order[:order.index(base)]
+        wanted = self.expected_groups(p.kind) | set(p.groups)
+        return any(len(p.groups.get(g, ())) < p.expected for g in before if g in wanted)
+
+    def _promote(self, p: _Pending) -> None:
+        """At the end of cycle ``p``: its frames that came out of order take the places still empty (a gateway
+        reordered the cycle); any other had no place in it (an earlier cycle's, overtaken; ``orphan_frames``)."""
+        general = p.groups.get(GENERAL[p.kind], {})
+        for base, frames in p.provisional.items():
+            for oid, frame in frames.items():
+                if oid in general and oid not in p.groups.get(base, {}):
+                    p.groups.setdefault(base, {})[oid] = frame
+                else:
+                    self.stats.orphan_frames += 1
+        p.provisional = {}
+
     def _add(self, p: _Pending, base: int, oid: int, data: bytes, values: dict) -> bool:
-        """Put a list frame into cycle ``p``; False when it was a repeat, a conflict or one too many."""
+        """Put a list frame into cycle ``p``; False when it was a repeat, a conflict or one too many (or came out of
+        order: kept aside until it is the cycle's own, :meth:`_promote`)."""
+        if base != GENERAL[p.kind]:
+            aside = p.provisional.get(base, {})
+            if self._ahead_of_order(p, base):
+                # the next header overtakes the last frames of a cycle on a bus (it has the higher priority): such a
+                # frame must not fill this cycle's place before its own frame comes
+                if oid in aside:
+                    # (two out of order for one place: the first stays; the cycle's own, in order, still decides)
+                    if aside[oid][0] == data:
+                        self.stats.duplicate_frames += 1
+                    else:
+                        self.stats.conflicting_frames += 1
+                    return False
+                p.provisional.setdefault(base, {})[oid] = (data, values)
+                return False
+            stale = aside.pop(oid, None)
+            if stale is not None:
+                if stale[0] == data:
+                    self.stats.duplicate_frames += 1
+                else:
+                    self.stats.orphan_frames += 1      # the frame that came early was an earlier cycle's
         group = p.groups.setdefault(base, {})
         if oid in group:
             if group[oid][0] == data:
@@ -746,9 +809,10 @@ class CycleAssembler(can.Listener):
         announced since (by RadarState or CollDetState, maybe forged) is as whole as those cycles, and delivered, as
         is the first cycle of all."""
         held = self._held.pop(kind)
+        self._promote(held)
         present = _present(held)
         seen = self._seen_layouts[kind]
-        if self._learned_groups(kind) <= present or not seen:
+        if _whole(held) and (self._learned_groups(kind) <= present or not seen):
             # (before any complete cycle the layout is a guess: the first cycle, followed by nothing, goes out and
             # teaches it; a group it lacks and the next cycles have is waited for again: late_frames)
             if held.expected:
@@ -766,6 +830,7 @@ class CycleAssembler(can.Listener):
     def _finish(self, p: _Pending) -> None:
         """A cycle ended (its layout complete, the next header, a time-out or the end of data): delivered whole,
         held while short of a group of the layout, or dropped."""
+        self._promote(p)
         general_id = GENERAL[p.kind]
         general = p.groups.get(general_id, {})
         unexpected = sum(len(set(group) - set(general)) for g, group in p.groups.items() if g != general_id)
@@ -793,7 +858,8 @@ class CycleAssembler(can.Listener):
         if held is not None:
             # what the held cycle lacks of the groups the sensor was sending (not of those only announced)
             lacked = self._missing(held) & self._learned_groups(p.kind)
-            if lacked & present:
+            self._promote(held)
+            if lacked & present or not _whole(held):
                 # this cycle has what the held one lacked: it was cut short, and its late groups never came — dropped
                 self.stats.incomplete_cycles += 1
             else:
