@@ -720,8 +720,9 @@ def test_a_weak_target_beyond_one_wrap_is_resolved_as_often_as_the_second_sequen
             x, y = r * math.cos(az), r * math.sin(az)
             lines.append(f"  - {{id: p{k}, class: point, swerling: 0, rcs_dbsm: {rcs:.3f}, x_m: {x + 3.7:.3f}, "
                          f"y_m: {y:.3f}, speed_mps: 30.0, heading_deg: {math.degrees(math.atan2(-y, -x)):.3f}}}")
-        return scenario("\n".join(lines) + "\n", ego="{speed_mps: 0.0}", radar="{preset: ars408_like, output: clusters}",
-                        road="{lanes: 1, ego_lane: 0}", duration=5.0, seed=seed)
+        return scenario("\n".join(lines) + "\n", ego="{speed_mps: 0.0}",
+                        radar="{preset: ars408_like, output: clusters}", road="{lanes: 1, ego_lane: 0}",
+                        duration=5.0, seed=seed)
 
     s0 = Scene(scene(1))
     v0 = s0.view(0.0)

@@ -315,8 +315,24 @@ def test_a_gap_tolerance_without_its_settle_time_is_refused(tmp_path):
     assert msg == (f"{p}:5: field 'ecu.expect.gap_tolerance': value 0.2 is not allowed without "
                    "'ecu.expect.gap_settle_s': it is the tolerance of the time gap from that time on; expected "
                    "gap_settle_s beside it, or it left out")
-    _, sc = _load(tmp_path, HEAD + "ecu: {expect: {gap_settle_s: 5, gap_tolerance: 0.2}}\n")
+    _, sc = _load(tmp_path, HEAD + "ecu: {expect: {lead: a, gap_settle_s: 5, gap_tolerance: 0.2}}\n"
+                                   "actors:\n  - {id: a, class: car, x_m: 40.0, speed_mps: 20.0}\n")
     assert sc.ecu.expect.gap_tolerance == 0.2
+
+
+@pytest.mark.parametrize("criterion", ["min_gap_m: 500.0", "fcw_ttc_min_s: 19.0", "fcw_before_impact_s: 1.0",
+                                       "gap_settle_s: 5.0", "ttc_with_lead_decel: true"])
+def test_a_criterion_measured_to_the_lead_without_a_lead_is_refused(tmp_path, criterion):
+    """``min_gap_m: 500`` without ``lead`` measured no gap and passed (with the lead named, the run failed at
+    37.4 m; an independent tester's finding); so did ``fcw_ttc_min_s: 19`` and ``fcw_before_impact_s``."""
+    key, value = criterion.split(": ")
+    p, msg = _error(tmp_path, HEAD + f"ecu: {{expect: {{{criterion}}}}}\n"
+                                     "actors:\n  - {id: lead_car, class: car, x_m: 40.0, speed_mps: 20.0}\n")
+    assert msg.startswith(f"{p}:5: field 'ecu.expect.{key}': value ") and "without 'ecu.expect.lead'" in msg, msg
+    assert msg.endswith("expected lead naming the actor (one of 'lead_car')"), msg
+    _, sc = _load(tmp_path, HEAD + f"ecu: {{expect: {{lead: lead_car, {criterion}}}}}\n"
+                                   "actors:\n  - {id: lead_car, class: car, x_m: 40.0, speed_mps: 20.0}\n")
+    assert sc.ecu.expect.lead == "lead_car"
 
 
 # --- a speed a single-ramp radar wraps unknowingly -------------------------------------------------------------

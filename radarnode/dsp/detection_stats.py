@@ -370,8 +370,8 @@ class DetectionStatistic:
     def pd_second_look(self, rho_db: np.ndarray, gain_db: float, swerling: np.ndarray | int) -> np.ndarray:
         """P(a second look detects | the first did): the second look (another chirp sequence of the same cycle, a
         staggered ramp) at ``rho_db`` + ``gain_db`` with its own noise and, for a Swerling 1 target, the same
-        fluctuation (one per cycle). Swerling 0: the second look's Pd. Swerling 1: E[Pd₀(ρ₁x)·Pd₀(ρ₂x)] / E[Pd₀(ρ₁x)]
-        over x ~ Exp(1) (64 equal-probability points), tabulated once per gain on :meth:`pd_of_snr`'s grid and
+        fluctuation (one per cycle). Swerling 0: the second look's Pd. Swerling 1:
+        E[Pd₀(ρ₁x)·Pd₀(ρ₂x)] / E[Pd₀(ρ₁x)] over x ~ Exp(1) (64 equal-probability points), tabulated once per gain on :meth:`pd_of_snr`'s grid and
         interpolated (one ``np.interp`` a call). ``swerling`` broadcasts with ``rho_db``."""
         rho = np.asarray(rho_db, dtype=np.float64)
         steady = self.pd_of_snr(rho + gain_db, 0)

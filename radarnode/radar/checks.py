@@ -10,7 +10,9 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
 * **An actor on top of the ego at the start** (error): its box and the ego's (``ego.length_m`` ×
   ``ego.width_m``, the rear axle 1 m ahead of the rear end, as the viewer draws it) intersect at t = 0. No radar
   reports a car inside the car it sits on; the model's output would be meaningless.
-* **An expectation's option without the expectation** (error): ``ecu.expect.gap_tolerance`` without
+* **An expectation's option without the expectation** (error): ``min_gap_m``, ``fcw_ttc_min_s``,
+  ``fcw_before_impact_s``, ``gap_settle_s`` or ``ttc_with_lead_decel`` without ``ecu.expect.lead`` (they are
+  measured to the lead; without one they compared nothing and passed); ``ecu.expect.gap_tolerance`` without
   ``gap_settle_s`` would be checked against nothing.
 * **An actor the radar can never see** (warning): at no cycle of the scenario is the actor's nearest point or
   its centre inside the preset's field of view (its sectors, its minimum range, ``radar.max_distance_m``).
@@ -65,6 +67,20 @@ def check_scenario(scenario: Scenario) -> Scenario:
                         f"field 'ecu.expect.gap_tolerance': value {expect.gap_tolerance!r} is not allowed without "
                         "'ecu.expect.gap_settle_s': it is the tolerance of the time gap from that time on; expected "
                         "gap_settle_s beside it, or it left out")
+    if expect.lead is None:
+        # measured to the lead: without one they compared nothing and passed (a tester's finding: min_gap_m 500
+        # passed where 37.4 m was measured with the lead named)
+        for key, what in (("min_gap_m", "the gap to the lead"),
+                          ("fcw_ttc_min_s", "the time to collision with the lead"),
+                          ("fcw_before_impact_s", "the time before the impact with the lead"),
+                          ("gap_settle_s", "the time gap to the lead"),
+                          ("ttc_with_lead_decel", "the time to collision with the lead")):
+            value = getattr(expect, key)
+            if value is not None and value is not False:
+                raise src.error(f"ecu.expect.{key}",
+                                f"field 'ecu.expect.{key}': value {value!r} is not allowed without 'ecu.expect.lead': "
+                                f"it is checked on {what}; expected lead naming the actor (one of "
+                                f"{', '.join(repr(a.id) for a in scenario.actors) or 'none: no actor here'})")
     return scenario
 
 

@@ -593,7 +593,8 @@ class ObjectModel:
             # alias a wrap or more off it in speed, which its gate (σ 0.3 m/s) refuses; the track coasts
             lo, hi = p.range_rate_span_mps
             trackable &= (v_meas < lo) | (v_meas > hi) | (offset < 0.5 * p.alias_speed_mps)
-        out = {"det_in": observable & (u < pd) & measured_in, "trackable": trackable, "fov": fov, "still": ground < MOVING_THRESHOLD_MPS,
+        out = {"det_in": observable & (u < pd) & measured_in, "trackable": trackable, "fov": fov,
+               "still": ground < MOVING_THRESHOLD_MPS,
                "az": az, "pd": pd, "sx": sx, "sy": sy, "orientation_truth": view.orientation_rad,
                "meas": meas, "snr": snr, "rcs_eff": rcs_eff, "m_r": m_r, "m_az": m_az, "m_vr": m_vr,
                "ambig": ambig, "sig_r": sig_r, "sig_v": sig_v, "sig_az": sig_az,
