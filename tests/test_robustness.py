@@ -199,6 +199,33 @@ def test_ecu_skips_a_stray_timestamp_and_keeps_its_tracks(bad, counter):
     assert ecu.ego_accel_mps2 == pytest.approx(0.0, abs=0.05)          # no acceleration made up from the jump
 
 
+@pytest.mark.parametrize("ahead_s", [0.3, 3.0, 4.9])
+def test_ecu_undoes_one_cycle_stamped_ahead_within_the_gap_it_tracks_through(ahead_s):
+    """One cycle stamped 0.3–4.9 s ahead (within max_gap_s, so tracked as a pause would be): the next cycle, back on
+    the old time base, was refused and the one after restarted tracking (ACC without a target for 4 cycles; an
+    independent tester's finding). Now the next cycle shows the jump stray, and the tracks go back to before it."""
+    cycles = _assembled()
+    feed = [(t + (ahead_s if k == 40 else 0.0), c, v, w) for k, (t, c, v, w) in enumerate(cycles)]
+    ecu, dec = _run_ecu(feed)
+    st = ecu.stats
+    assert st.stray_undone == (1 if ahead_s > 3 * 0.072 else 0) and st.time_resyncs == 0 and st.internal_errors == 0
+    assert all(d is not None for d in dec)
+    before = dec[39].target
+    assert before is not None and all(d.target is not None and d.target.track_id == before.track_id for d in dec[41:])
+    # the same as a stream that lost that cycle: the same decisions after it
+    ref = _run_ecu(cycles[:40] + cycles[41:])[1]
+    assert [d.target.distance_m for d in dec[41:]] == pytest.approx([d.target.distance_m for d in ref[40:]], abs=1e-9)
+
+
+def test_ecu_tracks_through_a_pause_of_several_cycles():
+    """A real pause (no cycle for 2 s, then the stream goes on from there) is no stray: tracked through."""
+    cycles = _assembled()
+    feed = [(t + (2.0 if k >= 40 else 0.0), c, v, w) for k, (t, c, v, w) in enumerate(cycles)]
+    ecu, dec = _run_ecu(feed)
+    assert ecu.stats.stray_undone == 0 and ecu.stats.time_resyncs == 0 and all(d is not None for d in dec)
+    assert dec[39].target is not None and all(d.target is not None for d in dec[43:])
+
+
 @pytest.mark.parametrize("shift_s, label", [(600.0, "10-minute gap"), (-1e9, "clock restarted far back"),
                                             (-2.5, "clock 2.5 s back")])
 def test_ecu_restarts_tracking_on_a_new_time_base(shift_s, label):

@@ -10,11 +10,14 @@ Every time the ECU is given is checked before it reaches the tracker (:attr:`Ecu
 a timestamp that is not a finite number or lies beyond ±1e11 s is refused; one that runs backwards or jumps
 ahead by more than ``max_gap_s`` skips its cycle, and when the next cycle continues from the skipped one (a
 new time base: a restarted clock, a long pause) tracking restarts there, while a single stray timestamp
-leaves the tracks as they were. No exception from the data escapes :meth:`Ecu.on_cycle`.
+leaves the tracks as they were. A step ahead within ``max_gap_s`` but of more than ``STRAY_STEP_PERIODS``
+cycles (a pause, or one cycle stamped ahead) is tracked, the state before it kept: a next cycle that continues
+from before it shows it stray, and the tracks go back to that state (``stats.stray_undone``). No exception from the data escapes :meth:`Ecu.on_cycle`.
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import logging
 import math
@@ -60,6 +63,13 @@ ONCOMING_MPS = 5.0
 DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
 MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
+#: a step ahead of more than this many cycle periods may be one stray timestamp: the tracking state before it is
+#: kept until the next cycle shows which (:meth:`Ecu._accept_time`)
+STRAY_STEP_PERIODS = 3.0
+#: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
+TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
+                  "_obstacles", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
+                  "_last_out_t", "acc", "fcw", "odometry")
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -71,6 +81,7 @@ class EcuStats:
     cycles: int = 0                  # radar cycles tracked
     rejected_time: int = 0           # timestamps that are NaN, infinite or beyond ±MAX_TIME_S: refused
     time_jumps: int = 0              # cycles skipped: time ran backwards or jumped ahead by more than max_gap_s
+    stray_undone: int = 0            # a cycle stamped ahead (within max_gap_s) that the next one showed stray: undone
     time_resyncs: int = 0            # a new time base confirmed by the next cycle: tracking restarted
     bad_measurements: int = 0        # list entries with a non-finite value: left out
     bad_ego: int = 0                 # ego-motion inputs with a non-finite time or value: ignored
@@ -115,6 +126,7 @@ class Ecu:
         self.max_gap_s = float(max_gap_s)
         self.stats = EcuStats()
         self._candidate_t: float | None = None     # a skipped cycle's time: a new time base if the next follows it
+        self._before_jump: dict | None = None      # the tracking state before a step ahead of several cycles
         self.acc = Acc(acc)
         self.fcw = Fcw(fcw)
         self.sensor_id = sensor_id
@@ -188,6 +200,21 @@ class Ecu:
         last = self.last_cycle_t
         if last is None or 0.0 <= t - last <= self.max_gap_s:
             self._candidate_t = None
+            # a step ahead of several cycles: a pause, or one stray timestamp — the state before it is kept until the
+            # next cycle tells (it continues from this one: kept no longer; from before: restored)
+            self._before_jump = None if last is None or t - last <= STRAY_STEP_PERIODS * self.period_s else \
+                copy.deepcopy({key: getattr(self, key) for key in TRACKING_STATE})
+            return t
+        kept = self._before_jump
+        if kept is not None and kept["last_cycle_t"] is not None \
+                and 0.0 <= t - kept["last_cycle_t"] <= self.max_gap_s:
+            # this cycle continues from before the last one, which was stamped ahead: that one was stray — the
+            # tracks as they were before it, and this cycle on them (one stray timestamp leaves the tracks)
+            for key, value in kept.items():
+                setattr(self, key, value)
+            self._before_jump = None
+            self._candidate_t = None
+            self.stats.stray_undone += 1
             return t
         cand = self._candidate_t
         if cand is not None and 0.0 <= t - cand <= self.max_gap_s:
@@ -212,6 +239,7 @@ class Ecu:
         self._last_out_t = None
         self._prev_speed = None
         self._candidate_t = None
+        self._before_jump = None
 
     def on_cycle(self, t_s: float, cycle: ObjectCycle | ClusterCycle) -> EcuOutput | None:
         """A complete radar cycle (object or cluster list) arrived at ``t_s``.
