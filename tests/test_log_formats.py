@@ -134,11 +134,13 @@ def test_a_damaged_log_decodes_what_is_readable_and_names_the_first_bad_record(c
     (lambda ln: ln.replace(" 1  ", " A  ", 1), "a frame whose channel is not a number"),
     (lambda ln: ln.rstrip("\n") + " 77\n", "a frame whose data bytes are not its DLC's"),      # one byte too many
     (lambda ln: ln.replace(" d ", " q ", 1), "not a whole CAN frame line"),
+    (lambda ln: re.sub(r"^(\s*\S+\s+\S+\s+[0-9A-Fa-f]+)", r'\1"', ln), "a frame whose ID"),     # a byte after the ID
+    (lambda ln: re.sub(r"^(\s*\S+\s+\S+\s+[0-9A-Fa-f]+)", r"\1+", ln), "a frame whose ID"),
 ])
 def test_a_damaged_asc_frame_line_is_a_bad_record(capsys, tmp_path, edit, reason):
-    """Testers' findings: an ASC frame line whose direction is not Rx or Tx, or that has none, is cut after its ID or
-    has a channel that is not a number was dropped by python-can's reader without a word (exit 0), and one with a
-    byte too many was read as a frame. Each is now the first bad record, and every other frame is read."""
+    """Testers' findings: an ASC frame line whose direction is not Rx or Tx, or that has none, is cut after its ID,
+    has a channel that is not a number or a character stuck to its ID (``60B"``) was dropped by python-can's reader
+    without a word (exit 0), and one with a byte too many was read as a frame. Each is now the first bad record, and every other frame is read."""
     good = tmp_path / "good.asc"
     assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
     capsys.readouterr()

@@ -375,6 +375,9 @@ _ASC_FRAME_START = re.compile(r"\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?(\s|$)", re.IG
 #: named fields (Length = …, BitCount = …) may follow
 _ASC_FRAME_WHOLE = re.compile(r"\s*\d+\.\d+\s+\d+\s+[0-9A-Fa-f]+x?\s+(rx|tx)\s+(d\s+([0-9a-f])((?:\s+[0-9a-f]{2})*)"
                               r"|r(?:\s+[0-9a-f])?)(\s+[a-z].*)?\s*$", re.IGNORECASE)
+#: a line laid out as a classic CAN frame event (time, a channel number, a token, Rx or Tx): its token must be a hex ID
+_ASC_FRAME_LIKE = re.compile(r"\s*\d+\.\d+\s+\d+\s+(\S+)\s+(rx|tx)\s", re.IGNORECASE)
+_ASC_ID = re.compile(r"[0-9A-Fa-f]+x?", re.IGNORECASE)
 #: a frame event whose channel is not a number
 _ASC_BAD_CHANNEL = re.compile(r"\s*\d+\.\d+\s+(?!canfd\b)(\S*[^\d\s]\S*)\s+[0-9A-Fa-f]+x?\s+(rx|tx)\s",
                               re.IGNORECASE)
@@ -402,6 +405,11 @@ def _asc_line_problem(line: str) -> str | None:
             return f"a frame whose data bytes are not its DLC's {int(whole.group(3), 16)}: {line.strip()[:40]!r}"
     elif _ASC_BAD_CHANNEL.match(line):
         return f"a frame whose channel is not a number: {line.strip()[:40]!r}"
+    else:
+        like = _ASC_FRAME_LIKE.match(line)
+        if like and not _ASC_ID.fullmatch(like.group(1)):
+            # (python-can's reader passes over it as an event it does not know: a frame lost without a word)
+            return f"a frame whose ID {like.group(1)!r} is not hexadecimal: {line.strip()[:40]!r}"
     return None
 
 
