@@ -136,6 +136,14 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     (["decode", "LOGS/small.txt"], "argument FILE: value 'LOGS/small.txt' is not allowed"),
     (["decode", "LOGS/small.blf", "-o", "LOGS/small.blf"], "option --output: value 'LOGS/small.blf' is not allowed"),
     (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "novalue"], "option --bus-kwargs: value 'novalue'"),
+    # an empty key, a non-finite number, a truth value that is none, and a bit rate the bus-load budget would not
+    # know (the bus opened at 250 kbit/s, the budget planned for 500; a tester's finding) were taken
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "=1"], "option --bus-kwargs: value '=1'"),
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "x=nan"], "option --bus-kwargs: value 'x=nan'"),
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "receive_own_messages=maybe"],
+     "option --bus-kwargs: value 'receive_own_messages=maybe' is not allowed; expected receive_own_messages=True"),
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "bitrate=250000"],
+     "option --bus-kwargs: key 'bitrate' ('250000') is not allowed; expected -b/--bitrate"),
     (["node", SCENARIO, "-i", "no_such_interface", "-c", "x"], "option -i/--interface: interface 'no_such_interface'"),
     (["consume", "-i", "no_such_interface", "-c", "x"], "option -i/--interface: interface 'no_such_interface'"),
     # consume took --sensor-id 1 with --fuse, ignored it and exited 0 (decode refused the pair; a tester's finding)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import socket
 
 import can
@@ -55,13 +56,30 @@ def _parse_value(text: str) -> object:
     return text
 
 
+#: python-can's keyword arguments that take a truth value (common to its interfaces)
+_BOOLEAN_KWARGS = ("receive_own_messages", "fd", "local_loopback")
+
+
 def bus_kwargs(args: argparse.Namespace) -> dict:
     kwargs: dict = {}
     for item in getattr(args, "bus_kwargs", []) or []:
-        if "=" not in item:
-            raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected KEY=VALUE")
-        key, value = item.split("=", 1)
-        kwargs[key] = _parse_value(value)
+        key, _, text = item.partition("=")
+        key = key.strip()
+        if "=" not in item or not key.isidentifier():
+            raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected KEY=VALUE with KEY a "
+                             "python-can keyword argument, e.g. receive_own_messages=True")
+        value = _parse_value(text)
+        if key == "bitrate":
+            # the bus would run at one rate and the cycle's bus-load budget be planned for another
+            raise UsageError(f"option --bus-kwargs: key 'bitrate' ({text!r}) is not allowed; expected -b/--bitrate, "
+                             "which opens the bus at that rate and plans the bus-load budget for it")
+        if isinstance(value, float) and not math.isfinite(value):
+            raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected a finite number, "
+                             "True/False or text")
+        if key in _BOOLEAN_KWARGS and not isinstance(value, bool):
+            raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected {key}=True or "
+                             f"{key}=False")
+        kwargs[key] = value
     if args.interface:
         kwargs["interface"] = args.interface
     if args.channel:
