@@ -727,3 +727,24 @@ def test_a_header_overtaking_the_last_frames_of_the_cycle_before_never_puts_them
             moved.insert(min(len(moved), i + d), m)
             bad += [("delay", i, d, w) for w in wrong(moved)]
     assert not bad, bad[:5]
+
+
+def test_a_switch_to_clusters_and_back_loses_no_cycle_and_a_lost_one_is_still_counted():
+    """The sensor counts its cycles once for both lists: ten cluster cycles between object cycles moved the object
+    count by eleven, and the consumer reported lost_cycles 10 where nothing was lost (an independent tester's
+    finding). The cluster cycles fill the gap; a cycle really lost is still counted, once."""
+    toggles = {10: _cfg(RadarCfg_OutputType_valid=1, RadarCfg_OutputType=2),
+               20: _cfg(RadarCfg_OutputType_valid=1, RadarCfg_OutputType=1)}
+    node = RadarNode(scenario(TRAFFIC, duration=3.0))
+    cycles = []
+    for k in range(30):
+        if k in toggles:
+            node.receive(toggles[k], k * node.period_s)
+        cycles.append(node.cycle(k * node.period_s).messages)
+    for lose in (None, 15, 25):
+        stream = [m for k, frames in enumerate(cycles) if k != lose for m in frames]
+        asm = CycleAssembler()
+        got = list(asm.feed(stream))
+        assert asm.stats.cluster_cycles == 10 - (lose == 15) and asm.stats.object_cycles == 20 - (lose == 25)
+        assert asm.stats.lost_cycles == (0 if lose is None else 1), (lose, asm.stats.lost_cycles)
+        assert len(got) == 30 - (lose is not None) and asm.stats.incomplete_cycles == 0

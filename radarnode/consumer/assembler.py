@@ -291,6 +291,11 @@ class CycleAssembler(can.Listener):
         self._held: dict[str, _Pending] = {}
         self._behind: dict[str, list[_Pending]] = {}    # empty cycles that ended while one was held: after it
         self._stride: dict[str, int] = {}
+        # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
+        # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
+        self._counters: dict[str, collections.deque] = {k: collections.deque(maxlen=4 * MAX_JUMP_STRIDES)
+                                                        for k in GROUPS}
+        self._lost: collections.deque = collections.deque(maxlen=4 * MAX_JUMP_STRIDES)   # counters counted lost
         # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
         self._seen_layouts: dict[str, collections.deque] = {k: collections.deque(maxlen=LAYOUT_MEMORY)
                                                             for k in GROUPS}
@@ -617,8 +622,13 @@ class CycleAssembler(can.Listener):
             if stride is None or gap < stride:
                 self._stride[kind] = stride = gap
             if gap > stride:
-                self.stats.lost_cycles += gap // stride - 1
+                # a counter another kind's cycle took, or one counted lost already (by the other kind), is no loss
+                known = {c for k, seen in self._counters.items() if k != kind for c in seen} | set(self._lost)
+                lost = [c for c in ((last + j * stride) & 0xFFFF for j in range(1, gap // stride)) if c not in known]
+                self.stats.lost_cycles += len(lost)
+                self._lost.extend(lost)
         self._last_counter[kind] = counter
+        self._counters[kind].append(counter)
         announced = self._announced[kind]
         for g in list(announced):
             announced[g] -= 1
