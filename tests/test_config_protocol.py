@@ -424,11 +424,26 @@ def test_max_distance_honoured_up_to_the_preset_and_refused_beyond(bench, caplog
     _consumers_unharmed(bench)
 
 
-def test_a_scenario_max_distance_beyond_the_preset_is_an_error():
-    sc = scenario(ACTORS, radar="{preset: ars408_like, max_distance_m: 300}")
-    with pytest.raises(ScenarioError, match=r"field 'radar.max_distance_m': value 300 is not allowed; expected "
-                                            r"2\.\.250 m \(what preset ars408_like can see\)"):
+@pytest.mark.parametrize("value", [300, 252, 5, 8, 101])
+def test_a_scenario_max_distance_the_sensor_would_not_take_is_an_error(value):
+    """Beyond what the preset sees, below the 10 m RadarConfiguration takes, or off RadarState's 2-m grid: 5 m was
+    in force while RadarState echoed 4 m, which sent back was refused (an independent tester's finding)."""
+    sc = scenario(ACTORS, radar=f"{{preset: ars408_like, max_distance_m: {value}}}")
+    with pytest.raises(ScenarioError, match=rf"field 'radar.max_distance_m': value {value} is not allowed; expected "
+                                            r"10\.\.250 m \(what preset ars408_like can see\) in steps of 2 m"):
         RadarNode(sc)
+
+
+@pytest.mark.parametrize("preset, given, in_force", [("mimo12", None, 112.0), ("ars408_like", None, 250.0),
+                                                     ("ars408_like", 10, 10.0), ("mimo12", 112, 112.0)])
+def test_radar_state_echoes_the_max_distance_in_force(preset, given, in_force):
+    """mimo12 sees 112.5 m, which RadarState's 2-m grid cannot say (it echoed 112 with 112.5 in force): 112 m is in
+    force by default, and what RadarState says is what the model uses."""
+    extra = "" if given is None else f", max_distance_m: {given}"
+    node = RadarNode(scenario(ACTORS, radar=f"{{preset: {preset}{extra}}}"))
+    assert node.config.max_distance_m == in_force
+    state = next(m for m in node.cycle(0.0).messages if m.arbitration_id == P.RADAR_STATE)
+    assert node.db.decode_message(P.RADAR_STATE, state.data)["RadarState_MaxDistanceCfg"] == in_force
 
 
 def test_relay_frames_of_another_sensor_are_not_taken_for_ours(bench):
