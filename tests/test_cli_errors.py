@@ -136,6 +136,12 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     (["decode", "LOGS/small.txt"], "argument FILE: value 'LOGS/small.txt' is not allowed"),
     (["decode", "LOGS/small.blf", "-o", "LOGS/small.blf"], "option --output: value 'LOGS/small.blf' is not allowed"),
     (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "novalue"], "option --bus-kwargs: value 'novalue'"),
+    # a value that begins with "-" and is no plain negative number was taken by argparse for an option ("expected
+    # one argument", no value named), and Python read 0.1_5 as 0.15 (a tester's finding)
+    (["log", SCENARIO, "-o", "LOGS/x.blf", "--duration", "-1e3"], "option --duration: value -1e3 is not allowed"),
+    (["log", SCENARIO, "-o", "LOGS/x.blf", "--start-time", "-inf"], "option --start-time: value -inf is not allowed"),
+    (["log", SCENARIO, "-o", "LOGS/x.blf", "--duration", "0.1_5"], "option --duration: value 0.1_5 is not allowed"),
+    (["report", SCENARIO, "--seeds", "1_0"], "option --seeds: value 1_0 is not allowed"),
     # an empty key, a non-finite number, a truth value that is none, and a bit rate the bus-load budget would not
     # know (the bus opened at 250 kbit/s, the budget planned for 500; a tester's finding) were taken
     (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "=1"], "option --bus-kwargs: value '=1'"),

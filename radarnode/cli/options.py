@@ -30,8 +30,34 @@ class Parser(argparse.ArgumentParser):
         super().__init__(*args, **kwargs)
 
     def parse_args(self, args=None, namespace=None):  # noqa: D102 - argparse's; the words kept for _did_you_mean
-        self._words = list(sys.argv[1:] if args is None else args)
-        return super().parse_args(args, namespace)
+        self._words = self._glued(list(sys.argv[1:] if args is None else args))
+        return super().parse_args(self._words, namespace)
+
+    def _glued(self, words: list[str]) -> list[str]:
+        """``--duration -1e3`` as ``--duration=-1e3``: argparse takes a value that begins with ``-`` and is not a
+        plain negative number (``-1e3``, ``-inf``, ``-nan``) for an option, and says only "expected one argument";
+        glued to its option, the value reaches the option's own check, which names it and what is allowed."""
+        takes_value = {o for p in self._parsers() for a in p._actions if a.option_strings and a.nargs is None
+                       and a.const is None and not isinstance(a, argparse._HelpAction) for o in a.option_strings}
+        out: list[str] = []
+        i = 0
+        while i < len(words):
+            w = words[i]
+            if w in takes_value and i + 1 < len(words) and words[i + 1].startswith("-") and _is_number(words[i + 1]):
+                out.append(f"{w}={words[i + 1]}")
+                i += 2
+                continue
+            out.append(w)
+            i += 1
+        return out
+
+    def _parsers(self) -> list[argparse.ArgumentParser]:
+        """This parser and its subcommands'."""
+        out = [self]
+        for action in self._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                out += list(action.choices.values())
+        return out
 
     def error(self, message: str) -> None:  # noqa: D102 - argparse's hook
         if message.startswith("argument -"):
@@ -65,6 +91,15 @@ class Parser(argparse.ArgumentParser):
         return ""
 
 
+def _is_number(text: str) -> bool:
+    """Whether ``text`` reads as a number (``-1e3``, ``-inf``, ``-nan`` too)."""
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def _shown(text: str) -> str:
     """The value as typed: a number bare, anything else quoted (so an empty or odd string is visible)."""
     try:
@@ -78,7 +113,7 @@ def number(*, lo: float | None = None, hi: float | None = None, lo_open: bool = 
     """An argparse type: a finite float in the interval, else an error naming the value and the interval."""
     def parse(text: str) -> float:
         try:
-            value = float(text)
+            value = float(text) if "_" not in text else text     # (Python reads 0.1_5 as 0.15: a typo here)
         except ValueError:
             value = text
         try:
@@ -93,7 +128,7 @@ def integer(*, lo: int | None = None, hi: int | None = None):
     """An argparse type: an integer (decimal) in [lo, hi]."""
     def parse(text: str) -> int:
         try:
-            value: object = int(text.strip(), 10)
+            value: object = int(text.strip(), 10) if "_" not in text else text
         except ValueError:
             value = text
         try:
