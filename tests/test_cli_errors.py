@@ -142,6 +142,9 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     (["log", SCENARIO, "-o", "LOGS/x.blf", "--start-time", "-inf"], "option --start-time: value -inf is not allowed"),
     (["log", SCENARIO, "-o", "LOGS/x.blf", "--duration", "0.1_5"], "option --duration: value 0.1_5 is not allowed"),
     (["report", SCENARIO, "--seeds", "1_0"], "option --seeds: value 1_0 is not allowed"),
+    # a list or a range that starts below zero is a value too (the next option's check is reached)
+    (["montecarlo", "--snr-db", "-10:20:2", "--trials", "0"], "option --trials: value 0 is not allowed"),
+    (["montecarlo", "--snr-db", "-5,0,5", "--trials", "0"], "option --trials: value 0 is not allowed"),
     # an empty key, a non-finite number, a truth value that is none, and a bit rate the bus-load budget would not
     # know (the bus opened at 250 kbit/s, the budget planned for 500; a tester's finding) were taken
     (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "=1"], "option --bus-kwargs: value '=1'"),

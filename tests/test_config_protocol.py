@@ -428,10 +428,20 @@ def test_max_distance_honoured_up_to_the_preset_and_refused_beyond(bench, caplog
 def test_a_scenario_max_distance_the_sensor_would_not_take_is_an_error(value):
     """Beyond what the preset sees, below the 10 m RadarConfiguration takes, or off RadarState's 2-m grid: 5 m was
     in force while RadarState echoed 4 m, which sent back was refused (an independent tester's finding)."""
-    sc = scenario(ACTORS, radar=f"{{preset: ars408_like, max_distance_m: {value}}}")
     with pytest.raises(ScenarioError, match=rf"field 'radar.max_distance_m': value {value} is not allowed; expected "
                                             r"10\.\.250 m \(what preset ars408_like can see\) in steps of 2 m"):
-        RadarNode(sc)
+        RadarNode(scenario(ACTORS, radar=f"{{preset: ars408_like, max_distance_m: {value}}}"))
+
+
+def test_a_preset_that_sees_less_than_the_smallest_max_distance_still_loads():
+    """A preset whose range is overridden below 10 m (the smallest MaxDistance the sensor takes) works to its range
+    by default; a max_distance_m given for it names why no value fits (an independent tester's finding: the default
+    was refused, the error naming a field the user never wrote)."""
+    node = RadarNode(scenario(ACTORS, radar="{preset: ars408_like, overrides: {max_range_m: 9.0}}"))
+    assert node.config.max_distance_m == 9.0
+    with pytest.raises(ScenarioError, match=r"value 10 is not allowed; expected no value: preset ars408_like sees "
+                                            r"9 m, less than the 10 m"):
+        scenario(ACTORS, radar="{preset: ars408_like, max_distance_m: 10, overrides: {max_range_m: 9.0}}")
 
 
 @pytest.mark.parametrize("preset, given, in_force", [("mimo12", None, 112.0), ("ars408_like", None, 250.0),

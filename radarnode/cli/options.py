@@ -35,15 +35,16 @@ class Parser(argparse.ArgumentParser):
 
     def _glued(self, words: list[str]) -> list[str]:
         """``--duration -1e3`` as ``--duration=-1e3``: argparse takes a value that begins with ``-`` and is not a
-        plain negative number (``-1e3``, ``-inf``, ``-nan``) for an option, and says only "expected one argument";
-        glued to its option, the value reaches the option's own check, which names it and what is allowed."""
+        plain negative number (``-1e3``, ``-inf``, ``-nan``, ``-5,0,5``, ``-10:20:2``) for an option, and says only
+        "expected one argument"; glued to its option, the value reaches the option's own check, which names it and
+        what is allowed."""
         takes_value = {o for p in self._parsers() for a in p._actions if a.option_strings and a.nargs is None
                        and a.const is None and not isinstance(a, argparse._HelpAction) for o in a.option_strings}
         out: list[str] = []
         i = 0
         while i < len(words):
             w = words[i]
-            if w in takes_value and i + 1 < len(words) and words[i + 1].startswith("-") and _is_number(words[i + 1]):
+            if w in takes_value and i + 1 < len(words) and _negative_value(words[i + 1]):
                 out.append(f"{w}={words[i + 1]}")
                 i += 2
                 continue
@@ -89,6 +90,13 @@ class Parser(argparse.ArgumentParser):
                 if near:
                     return f"; did you mean {' or '.join(near[:3])}?"
         return ""
+
+
+def _negative_value(text: str) -> bool:
+    """Whether ``text`` is a value that begins with ``-`` — a number (``-1e3``, ``-inf``, ``-nan``) or a list or range
+    that starts with one (``-5,0,5``, ``-10:20:2``) — rather than an option (no option of radarnode's is ``-`` and a
+    digit)."""
+    return text.startswith("-") and (_is_number(text) or re.match(r"-\.?\d", text) is not None)
 
 
 def _is_number(text: str) -> bool:

@@ -186,6 +186,9 @@ MAX_JUMP_STRIDES = 64
 #: headers held at once, the newest first in line for frames: a restarted sensor's next header still finds its
 #: first one when a replayed old header came between them
 HELD_HEADERS = 4
+#: MeasCounters of the headers taken (per kind) and of cycles counted lost, remembered: about 5 minutes of a 72-ms
+#: sensor, so that a switch of OutputType that long leaves no gap counted lost
+COUNTER_MEMORY = 4096
 
 
 def _advances(counter: int, last: int) -> bool:
@@ -217,6 +220,7 @@ class _Pending:
         self.order: list[int] = []
         self.bad = False
         self.early = False             # delivered as soon as the layout was complete
+        self.announced: frozenset[int] = frozenset()   # groups announced before its header
         self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
         self.arrival = time.monotonic()
 
@@ -293,9 +297,8 @@ class CycleAssembler(can.Listener):
         self._stride: dict[str, int] = {}
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
-        self._counters: dict[str, collections.deque] = {k: collections.deque(maxlen=4 * MAX_JUMP_STRIDES)
-                                                        for k in GROUPS}
-        self._lost: collections.deque = collections.deque(maxlen=4 * MAX_JUMP_STRIDES)   # counters counted lost
+        self._counters: dict[str, collections.deque] = {k: collections.deque(maxlen=COUNTER_MEMORY) for k in GROUPS}
+        self._lost: collections.deque = collections.deque(maxlen=COUNTER_MEMORY)   # counters counted lost
         # layout learned from complete cycles (group sets), and groups RadarState announced (headers left)
         self._seen_layouts: dict[str, collections.deque] = {k: collections.deque(maxlen=LAYOUT_MEMORY)
                                                             for k in GROUPS}
@@ -539,6 +542,11 @@ class CycleAssembler(can.Listener):
         """Groups a cycle of ``kind`` ('obj' or 'cl') must hold before it is delivered without waiting."""
         return self._learned_groups(kind) | {GENERAL[kind]} | set(self._announced[kind])
 
+    def _expected_of(self, p: _Pending) -> set[int]:
+        """:meth:`expected_groups` for cycle ``p``: the learned layout and what was announced before its header
+        (a cycle that ends after a later announcement — reordered frames wait for its end — is not held for it)."""
+        return self._learned_groups(p.kind) | {GENERAL[p.kind]} | set(p.announced)
+
     def _header(self, base: int, values: dict, data: bytes, timestamp: float) -> None:
         kind = HEADERS[base]
         held_header = self._suspects.get(kind)
@@ -558,6 +566,9 @@ class CycleAssembler(can.Listener):
             counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
         header = _Pending(kind, n, counter, timestamp, data, n_near)
+        # the groups announced before this header (RadarState, CollDetState: the sensor sends them ahead of the
+        # header of the first cycle that has the group): one announced after it is not this cycle's to wait for
+        header.announced = frozenset(self._announced[kind])
         self._unseat_frameless_header(kind, counter)
         last = self._last_counter.get(kind)
         suspect = self._suspects.pop(kind, None)
@@ -591,11 +602,12 @@ class CycleAssembler(can.Listener):
                     self._drop_suspect(other)
             # a second header continuing the first: the sensor restarted, or cycles were lost in between
             if _advances(suspect.meas_counter, last):
-                self.stats.lost_cycles += ((suspect.meas_counter - last) & 0xFFFF) // self._stride.get(kind, 1) - 1
+                self._count_lost(kind, last, suspect.meas_counter, self._stride.get(kind, 1))
             else:
                 self.stats.counter_resets += 1
             self.flush(kind)
             self._last_counter[kind] = last = suspect.meas_counter
+            self._counters[kind].append(last)
             self._finish(suspect)
         else:
             pending = self._pending.get(kind)
@@ -622,11 +634,7 @@ class CycleAssembler(can.Listener):
             if stride is None or gap < stride:
                 self._stride[kind] = stride = gap
             if gap > stride:
-                # a counter another kind's cycle took, or one counted lost already (by the other kind), is no loss
-                known = {c for k, seen in self._counters.items() if k != kind for c in seen} | set(self._lost)
-                lost = [c for c in ((last + j * stride) & 0xFFFF for j in range(1, gap // stride)) if c not in known]
-                self.stats.lost_cycles += len(lost)
-                self._lost.extend(lost)
+                self._count_lost(kind, last, counter, stride)
         self._last_counter[kind] = counter
         self._counters[kind].append(counter)
         announced = self._announced[kind]
@@ -636,6 +644,16 @@ class CycleAssembler(can.Listener):
                 del announced[g]
         self._pending[kind] = header
         self._maybe_complete(kind)
+
+    def _count_lost(self, kind: str, last: int, counter: int, stride: int) -> None:
+        """Count the cycles between MeasCounters ``last`` and ``counter`` of ``kind`` as lost, but for those another
+        kind's cycles took (the sensor counts its cycles once for object and cluster lists: a switch of OutputType
+        leaves a gap in each kind's count) and those counted lost already."""
+        known = {c for k, seen in self._counters.items() if k != kind for c in seen} | set(self._lost)
+        gap = (counter - last) & 0xFFFF
+        lost = [c for c in ((last + j * stride) & 0xFFFF for j in range(1, gap // stride)) if c not in known]
+        self.stats.lost_cycles += len(lost)
+        self._lost.extend(lost)
 
     def _unseat_frameless_header(self, kind: str, counter: int) -> None:
         """A header that announced objects and got no frame before this next header, which continues the count
@@ -723,7 +741,7 @@ class CycleAssembler(can.Listener):
         sends ahead of it (general, quality, extended, warning, each whole before the next)."""
         order = GROUPS[p.kind]
         before = order[:order.index(base)]
-        wanted = self.expected_groups(p.kind) | set(p.groups)
+        wanted = self._expected_of(p) | set(p.groups)
         return any(len(p.groups.get(g, ())) < p.expected for g in before if g in wanted)
 
     def _promote(self, p: _Pending) -> None:
@@ -801,7 +819,7 @@ class CycleAssembler(can.Listener):
         general = p.groups.get(GENERAL[p.kind], {})
         if len(general) != p.expected:
             return False
-        for g in self.expected_groups(p.kind):
+        for g in self._expected_of(p):
             if len(p.groups.get(g, ())) != p.expected:
                 return False
         return all(set(group) == set(general) for group in p.groups.values())
@@ -898,7 +916,7 @@ class CycleAssembler(can.Listener):
         next cycle without the group delivers both)."""
         if not p.expected:
             return set()
-        return self.expected_groups(p.kind) - _present(p)
+        return self._expected_of(p) - _present(p)
 
     def _deliver(self, p: _Pending) -> None:
         """Queue cycle ``p`` (whole) as an ObjectCycle or ClusterCycle."""

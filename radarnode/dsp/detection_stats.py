@@ -363,15 +363,15 @@ class DetectionStatistic:
         grid, table = self._pd_tables[swerling]
         return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
 
-    #: equal-probability points of the exponential law (the midpoints of 64 quantile bins) over which a Swerling 1
+    #: equal-probability points of the exponential law (the midpoints of 48 quantile bins) over which a Swerling 1
     #: target's two looks in one cycle are averaged (:meth:`pd_second_look`)
-    _EXP_POINTS = -np.log1p(-(np.arange(64) + 0.5) / 64)
+    _EXP_POINTS = -np.log1p(-(np.arange(48) + 0.5) / 48)
 
     def pd_second_look(self, rho_db: np.ndarray, gain_db: float, swerling: np.ndarray | int) -> np.ndarray:
         """P(a second look detects | the first did): the second look (another chirp sequence of the same cycle, a
         staggered ramp) at ``rho_db`` + ``gain_db`` with its own noise and, for a Swerling 1 target, the same
         fluctuation (one per cycle). Swerling 0: the second look's Pd. Swerling 1:
-        E[Pd₀(ρ₁x)·Pd₀(ρ₂x)] / E[Pd₀(ρ₁x)] over x ~ Exp(1) (64 equal-probability points), tabulated once per gain on :meth:`pd_of_snr`'s grid and
+        E[Pd₀(ρ₁x)·Pd₀(ρ₂x)] / E[Pd₀(ρ₁x)] over x ~ Exp(1) (48 equal-probability points), tabulated once per gain on :meth:`pd_of_snr`'s grid and
         interpolated (one ``np.interp`` a call). ``swerling`` broadcasts with ``rho_db``."""
         rho = np.asarray(rho_db, dtype=np.float64)
         steady = self.pd_of_snr(rho + gain_db, 0)
@@ -380,7 +380,8 @@ class DetectionStatistic:
             return steady
         key = round(float(gain_db), 9)
         if key not in self._second_tables:
-            grid = np.arange(-30.0, 60.0001, 0.05)
+            # (−10 … 50 dB: below, both looks' Pd are the false-alarm floor's; above, 1 — clamped there)
+            grid = np.arange(-10.0, 50.0001, 0.1)
             r = grid[:, None] + 10.0 * np.log10(self._EXP_POINTS)[None, :]
             first = self.pd_of_snr(r, 0)
             both = (first * self.pd_of_snr(r + gain_db, 0)).mean(axis=1)

@@ -14,6 +14,8 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
   ``fcw_before_impact_s``, ``gap_settle_s`` or ``ttc_with_lead_decel`` without ``ecu.expect.lead`` (they are
   measured to the lead; without one they compared nothing and passed); ``ecu.expect.gap_tolerance`` without
   ``gap_settle_s`` would be checked against nothing.
+* **A MaxDistance the sensor would not take** (error): ``radar.max_distance_m`` from 10 m up to what the preset
+  sees, in steps of 2 m (RadarConfiguration's and RadarState's grid), checked for every command.
 * **An actor the radar can never see** (warning): at no cycle of the scenario is the actor's nearest point or
   its centre inside the preset's field of view (its sectors, its minimum range, ``radar.max_distance_m``).
   Occlusion is not considered. A warning, not an error: an actor may be there for the ground truth or a
@@ -60,6 +62,7 @@ def check_scenario(scenario: Scenario) -> Scenario:
         _check_overlap_at_start(scenario, src)
         _check_visibility(scenario, src)
         _check_speed_span(scenario, src)
+    _check_max_distance(scenario, src)
     expect = scenario.ecu.expect
     if _given(scenario, "ecu.expect.gap_tolerance") and expect.gap_settle_s is None:
         # (a tester's finding: it was accepted and had no effect)
@@ -296,3 +299,15 @@ def _check_speed_span(scenario: Scenario, src: Source) -> None:
                            "%+.1f m/s) and, as on such a sensor, are flagged AmbigState 3 'unambiguous'; no object "
                            "is listed for it", src.where(base), actor.id, base, worst[i], when[i], vmax,
                            preset.name, float(np.mod(worst[i] + vmax, 2 * vmax) - vmax))
+
+
+def _check_max_distance(scenario: Scenario, src: Source) -> None:
+    """Every radar's ``max_distance_m``: one the sensor takes (:func:`radarnode.radar.presets.max_distance`), for
+    every command alike (``image`` drew what ``log`` refused)."""
+    from radarnode.radar.presets import max_distance
+    from radarnode.radar.setup import radar_config, radar_path, radar_scenarios
+    for sc in radar_scenarios(scenario):
+        value, problem = max_distance(radar_config(sc).preset, sc.radar.max_distance_m)
+        if problem is not None:
+            field = f"{radar_path(sc)}.max_distance_m"
+            raise src.error(field, f"field '{field}': value {value:g} is not allowed; expected {problem}")

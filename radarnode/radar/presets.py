@@ -364,6 +364,29 @@ PRESETS: dict[str, RadarPreset] = {
 }
 
 
+#: RadarConfiguration's MaxDistance: the smallest the sensor takes, and its resolution (RadarState echoes it on the
+#: same grid)
+MIN_MAX_DISTANCE_M, MAX_DISTANCE_STEP_M = 10, 2
+
+
+def max_distance(preset: RadarPreset, given: float | None) -> tuple[float, str | None]:
+    """The MaxDistance in force for a scenario's ``radar.max_distance_m`` (``given``; None: the preset's reach, on
+    the 2-m grid), and what is wrong with ``given`` (None when the sensor takes it): from 10 m up to what the
+    preset sees, in steps of 2 m, so that RadarState echoes the value in force (mimo12 sees 112.5 m: 112 by
+    default)."""
+    top = MAX_DISTANCE_STEP_M * math.floor(preset.max_range_m / MAX_DISTANCE_STEP_M + 1e-9)
+    if given is None:
+        return (float(top) if top >= MIN_MAX_DISTANCE_M else preset.max_range_m), None
+    steps = given / MAX_DISTANCE_STEP_M
+    if MIN_MAX_DISTANCE_M <= given <= top + 1e-9 and abs(steps - round(steps)) < 1e-9:
+        return float(given), None
+    if top < MIN_MAX_DISTANCE_M:
+        return float(given), (f"no value: preset {preset.name} sees {preset.max_range_m:g} m, less than the "
+                              f"{MIN_MAX_DISTANCE_M} m the sensor's MaxDistance takes (leave the field out)")
+    return float(given), (f"{MIN_MAX_DISTANCE_M}..{top:g} m (what preset {preset.name} can see) in steps of "
+                          f"{MAX_DISTANCE_STEP_M} m (as RadarConfiguration sets it and RadarState echoes it)")
+
+
 def get_preset(name: object) -> RadarPreset:
     """Return the preset called ``name``; an unknown name raises with the list of known ones."""
     if not isinstance(name, str) or name not in PRESETS:

@@ -31,6 +31,7 @@ import numpy as np
 
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
+from radarnode.radar import presets
 from radarnode.radar.setup import radar_config, radar_path
 from radarnode.radar.levels import check_doa, make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
@@ -48,8 +49,7 @@ from radarnode.wire.e2e import E2EProtector
 logger = logging.getLogger(__name__)
 
 MOTION_TIMEOUT_S = 1.0     # ego-motion input older than this is "missing"
-MIN_MAX_DISTANCE_M = 10    # the smallest RadarCfg_MaxDistance accepted
-MAX_DISTANCE_STEP_M = 2    # RadarCfg_MaxDistance's and RadarState_MaxDistanceCfg's resolution
+MIN_MAX_DISTANCE_M = presets.MIN_MAX_DISTANCE_M    # the smallest RadarCfg_MaxDistance accepted
 # what the node receives (base IDs, shifted by 0x10 x SensorID on the bus)
 RX_IDS = (P.RADAR_CFG, P.FILTER_CFG, P.SPEED_INFO, P.YAW_RATE_INFO, P.COLL_DET_CFG, P.COLL_DET_REGION_CFG)
 FILTER_CFG_MIN_DLC = 5     # FilterCfg: 5 bytes in Continental's DBC for sensor 1, 8 in sensor 0's
@@ -106,17 +106,11 @@ class RadarNode:
         self.period_s = scenario.period_s
         self.bitrate = setup.bitrate
         self.bus_load_limit = setup.bus_load_limit
-        # RadarState echoes MaxDistance on a 2-m grid: the value in force is one it can say (mimo12 sees 112.5 m:
-        # 112 m by default), and one the sensor takes in RadarConfiguration (10 m and more)
-        top = MAX_DISTANCE_STEP_M * math.floor(self.preset.max_range_m / MAX_DISTANCE_STEP_M + 1e-9)
-        max_distance = setup.max_distance_m if setup.max_distance_m is not None else float(top)
-        if not (MIN_MAX_DISTANCE_M <= max_distance <= top + 1e-9
-                and abs(max_distance / MAX_DISTANCE_STEP_M - round(max_distance / MAX_DISTANCE_STEP_M)) < 1e-9):
+        max_distance, problem = presets.max_distance(self.preset, setup.max_distance_m)
+        if problem is not None:
             field = f"{radar_path(scenario)}.max_distance_m"
             raise Source.of_lines(scenario.source, scenario.lines).error(
-                field, f"field '{field}': value {max_distance:g} is not allowed; expected {MIN_MAX_DISTANCE_M}.."
-                f"{top:g} m (what preset {self.preset.name} can see) in steps of {MAX_DISTANCE_STEP_M} m (as "
-                "RadarConfiguration sets it and RadarState echoes it)")
+                field, f"field '{field}': value {max_distance:g} is not allowed; expected {problem}")
         self.config = NodeConfig(
             output_type=P.OUTPUT_CODES[setup.output], send_quality=setup.send_quality,
             send_ext_info=setup.send_ext_info, max_distance_m=max_distance,
