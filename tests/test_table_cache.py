@@ -163,7 +163,9 @@ def test_an_object_level_log_with_its_tables_cached_imports_no_heavy_scipy_modul
     env = {**os.environ, tables.CACHE_ENV: str(tmp_path / "cache")}
     runs = [subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env, check=True).stdout
             for _ in range(2)]
-    assert runs[0].strip().endswith("['scipy.special']")        # the first run computes its tables
+    # the first run computes its tables: the steady target's Pd table too (ars408_like's second chirp sequence, given
+    # the first, averages it over a fluctuating target's draws), whose non-central χ² is scipy.stats'
+    assert "scipy.special" in runs[0]
     assert runs[1].strip().endswith("[]")                       # the second loads them
 
 

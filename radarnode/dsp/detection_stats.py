@@ -388,6 +388,7 @@ class DetectionStatistic:
             both = (first * self.pd_of_snr(r + gain_db, 0)).mean(axis=1)
             marginal = first.mean(axis=1)
             self._second_tables[key] = (grid, np.where(marginal > 0.0, both / np.maximum(marginal, 1e-300), 0.0))
+            self._table_built()
         grid, table = self._second_tables[key]
         return np.where(fluct, np.interp(rho, grid, table), steady)
 
@@ -736,6 +737,8 @@ class DetectionStatistic:
             out[f"mask{swerling}"] = table
         for axis, (_, _, cols) in self.__dict__.get("_ring_tables", {}).items():
             out[f"ring_{axis}"] = np.stack(cols)
+        for gain, (grid, table) in self._second_tables.items():      # pd_second_look's, one a gain
+            out[f"second_{gain!r}_grid"], out[f"second_{gain!r}"] = grid, table
         cuts = self.__dict__.get("_cuts", {})
         if cuts:            # the rings the range edges cut: (key, α, mean, variance, count) a row
             out["ring_cuts"] = np.array([(float(k), *v) for k, v in sorted(cuts.items())], dtype=np.float64)
@@ -744,7 +747,7 @@ class DetectionStatistic:
     def import_tables(self, arrays: dict[str, np.ndarray]) -> None:
         """Take tables that :meth:`export_tables` gave (for this :meth:`table_key`); raises ValueError, leaving
         this statistic as it was, where a name, shape or value is not what this statistic builds."""
-        pd, mask, ring, cut = {}, {}, {}, {}
+        pd, mask, ring, cut, second = {}, {}, {}, {}, {}
         for name, a in arrays.items():
             a = np.asarray(a)
             if a.dtype != np.float64 or not np.all(np.isfinite(a)):
@@ -756,6 +759,16 @@ class DetectionStatistic:
                 if not (np.all(np.diff(grid) > 0) and np.all((a >= 0.0) & (a <= 1.0))):
                     raise ValueError(f"table {name}: a grid not increasing or a probability outside [0, 1]")
                 pd[int(name[2])] = (grid, a)
+            elif name.startswith("second_") and f"{name}_grid" in arrays:
+                try:
+                    gain = float(name[len("second_"):])
+                except ValueError:
+                    raise ValueError(f"table {name}: not a gain in its name") from None
+                grid = np.asarray(arrays[f"{name}_grid"], dtype=np.float64)
+                if a.ndim != 1 or grid.shape != a.shape or a.size < 2 or not math.isfinite(gain) \
+                        or not np.all(np.diff(grid) > 0) or not np.all((a >= 0.0) & (a <= 1.0)):
+                    raise ValueError(f"table {name}: shape {a.shape}, grid or a probability not allowed")
+                second[round(gain, 9)] = (grid, a)
             elif name in ("mask0", "mask1"):
                 if a.shape != (self.MASK_RHO_DB.size, self.MASK_LOG_I.size) or not np.all((a >= 0.0) & (a <= 1.0)):
                     raise ValueError(f"table {name}: shape {a.shape} or a factor outside [0, 1]; expected "
@@ -778,6 +791,7 @@ class DetectionStatistic:
             elif not name.endswith("_grid"):
                 raise ValueError(f"table {name}: not a table this statistic builds")
         self._pd_tables.update(pd)
+        self._second_tables.update(second)
         self.__dict__.setdefault("_mask_tables", {}).update(mask)
         self.__dict__.setdefault("_ring_tables", {}).update(ring)
         self.__dict__.setdefault("_cuts", {}).update(cut)
