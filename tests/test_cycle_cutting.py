@@ -748,3 +748,42 @@ def test_a_switch_to_clusters_and_back_loses_no_cycle_and_a_lost_one_is_still_co
         assert asm.stats.cluster_cycles == 10 - (lose == 15) and asm.stats.object_cycles == 20 - (lose == 25)
         assert asm.stats.lost_cycles == (0 if lose is None else 1), (lose, asm.stats.lost_cycles)
         assert len(got) == 30 - (lose is not None) and asm.stats.incomplete_cycles == 0
+
+
+def test_a_gateway_reversing_every_cycle_keeps_each_collision_warning_in_its_own_cycle():
+    """Collision detection switched on at cycle 2, every cycle's list frames reversed after its header (a gateway):
+    a reordered cycle ends at the next header, after the next cycle's CollDetState announced 0x60E; it was then held
+    for that group and took the next cycle's warnings — all 102 in the cycle before their own (an independent
+    tester's finding, a regression of the frames kept aside). A cycle waits only for groups announced before its
+    header: each delivered cycle carries the warning bits sent with it."""
+    db = load_database()
+
+    def frame(name, **values):
+        m = db.get_message_by_name(name)
+        if not m.is_multiplexed():
+            values = {**{s.name: 0 for s in m.signals}, **values}
+        return _msg(m.frame_id, m.encode(values))
+
+    toggles = {2: [frame("CollDetRegionCfg", CollDetRegCfg_Activate=1, CollDetRegCfg_Coordinates_valid=1,
+                         CollDetRegCfg_RegionID=0, CollDetRegCfg_Point1X=5.0, CollDetRegCfg_Point1Y=-6.0,
+                         CollDetRegCfg_Point2X=150.0, CollDetRegCfg_Point2Y=6.0),
+                   frame("CollDetCfg", CollDetCfg_Activate=1, CollDetCfg_MinTime_valid=1, CollDetCfg_MinDetectTime=0.0)]}
+    cycles = _node_cycles(24, toggles=toggles)
+    assert sum(c[5] is not None for c in cycles) >= 20
+    stream = []
+    for frames, *_ in cycles:
+        h = next(i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_STATUS)
+        lists = [i for i, m in enumerate(frames) if i > h and m.arbitration_id in LIST_IDS]
+        body = list(frames)
+        for i, j in zip(lists, reversed(lists)):
+            body[i] = frames[j]
+        stream += body
+    got = {c.meas_counter: c for c in CycleAssembler().feed(stream)}
+    assert len(got) >= 23
+    for frames, sent, quality, ext, counter, warn in cycles:
+        if counter not in got:
+            continue
+        c = got[counter]
+        assert c.has_warning == (warn is not None and len(sent) > 0), counter
+        if c.has_warning:
+            assert {int(i): int(b) for i, b in zip(c.objects.id, c.collision_regions)} == warn, counter
