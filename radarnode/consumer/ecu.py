@@ -66,6 +66,8 @@ MAX_GAP_S = 5.0                      # a longer step between cycles is a discont
 #: a step ahead of more than this many cycle periods may be one stray timestamp: the tracking state before it is
 #: kept until the next cycle shows which (:meth:`Ecu._accept_time`)
 STRAY_STEP_PERIODS = 3.0
+#: the least σ taken for a cluster's radial speed (its σ fields come quantised; a Doppler bin is 0.1–0.3 m/s)
+RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
                   "_obstacles", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
@@ -318,15 +320,36 @@ class Ecu:
         sig = np.where(np.isfinite(sig), np.maximum(sig, 0.2), 0.5)
         r = np.zeros((n, 2, 2))
         r[:, np.arange(2), np.arange(2)] = sig ** 2
-        tracks = self.cluster_tracker.step(t_s, z, r, None, self.ego_yaw_rate_rps, self._sensor_motion())
+        radial = self._radial_speeds(cl, z)
+        tracks = self.cluster_tracker.step(t_s, z, r, None, self.ego_yaw_rate_rps, self._sensor_motion(),
+                                           radial=radial)
         # a cluster track is a road user when it moves over ground or is as strong as a vehicle
+        # (its own cluster: the nearest whose radial speed is the track's — a standing clutter track beside a car
+        # took the car's RCS, and FCW warned for it as for a stopped vehicle)
         strong = {}
+        los = z / np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)[:, None] if n else np.zeros((0, 2))
         for t in tracks:
             d = np.hypot(cl.dist_long_m - t.x[0], cl.dist_lat_m - t.x[1]) if n else np.zeros(0)
-            k = int(np.argmin(d)) if d.size else -1
+            if n:
+                var = radial[1] + np.einsum("mi,ij,mj->m", los, t.p[2:4, 2:4], los)
+                d = np.where((radial[0] - los @ t.x[2:4]) ** 2 <= 9.0 * var, d, np.inf)
+            k = int(np.argmin(d)) if d.size and np.isfinite(d).any() else -1
             strong[t.id] = bool(k >= 0 and cl.rcs_dbsm[k] >= 5.0)
         self.last_cycle_t = t_s
         return self._decide(t_s, tracks, None, {}, radar_ok=True, cluster_strength=strong)
+
+    @staticmethod
+    def _radial_speeds(cl, z: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Each cluster's measured radial speed and its variance: a cluster's VrelLong/VrelLat are that one speed
+        split along its azimuth (a value not finite: no speed, a variance that gates nothing)."""
+        if not len(z):
+            return np.zeros(0), np.zeros(0)
+        los = z / np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)[:, None]
+        vr = cl.vrel_long_mps * los[:, 0] + cl.vrel_lat_mps * los[:, 1]
+        sig = np.hypot(cl.vrel_long_sigma_mps * los[:, 0], cl.vrel_lat_sigma_mps * los[:, 1])
+        sig = np.where(np.isfinite(sig), np.maximum(sig, RADIAL_SIGMA_FLOOR_MPS), 1.0)
+        good = np.isfinite(vr)
+        return np.where(good, vr, 0.0), np.where(good, sig ** 2, 1e6)
 
     def tick(self, t_s: float) -> EcuOutput | None:
         """Call between cycles (e.g. on a timer): reports the radar unavailable after the time-out.
@@ -402,7 +425,17 @@ class Ecu:
             ahead = kappa * max(xv[i], 0.0)
             oncoming[i] = gx * math.cos(ahead) + gy * math.sin(ahead) < -ONCOMING_MPS
             if cluster_strength is not None:
-                moved[i] = ground > 1.0
+                # moving over ground beyond its own velocity's uncertainty along that motion: a cluster track's
+                # velocity across the line of sight comes from positions alone, and standing clutter strung
+                # together looked like a pedestrian walking into the path (a false FCW on highway_mimo12)
+                ssv = self._sensor_motion()[0]
+                g = np.array([t.x[2] + ssv[0], t.x[3] + ssv[1]])                   # over ground, sensor axes
+                unit = g / max(float(np.hypot(*g)), 1e-9)
+                sigma = math.sqrt(max(float(unit @ t.p[2:4, 2:4] @ unit), 0.0))
+                # … in MOVED_CYCLES cycles in a row, as for objects (one glitch of a standing track is no road user)
+                moving_now = ground > max(1.0, 3.0 * sigma)
+                self._moving_for[t.id] = self._moving_for.get(t.id, 0) + 1 if moving_now else 0
+                moved[i] = self._moving_for[t.id] >= MOVED_CYCLES
                 obstacle[i] = cluster_strength.get(t.id, False)
                 continue
             k = by_id.get(t.meas_id)

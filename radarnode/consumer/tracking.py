@@ -130,6 +130,40 @@ def mahalanobis2(x, p, z, r, h) -> np.ndarray:
 
 
 ID_GATE_FACTOR = 25.0      # a measurement with the track's object ID: accepted within 5σ of the wider gate
+#: the gate on a cluster's measured radial speed against a track's predicted one (χ², 1 degree, 99.9 %)
+RADIAL_GATE = 10.83
+
+
+def _line_of_sight(z: np.ndarray) -> np.ndarray:
+    """Unit vectors (m, 2) from the sensor to measured positions (m, 2)."""
+    return z / np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)[:, None]
+
+
+def radial_mismatch2(x: np.ndarray, p: np.ndarray, z: np.ndarray, vr: np.ndarray, vr_var: np.ndarray) -> np.ndarray:
+    """Squared normalised differences (tracks, measurements) between each measurement's radial speed ``vr`` (its
+    variance ``vr_var``) and each track's velocity (state 2:4) along the measurement's line of sight."""
+    if len(x) == 0 or len(z) == 0:
+        return np.zeros((len(x), len(z)))
+    u = _line_of_sight(z)
+    pred = x[:, 2:4] @ u.T                                                           # (n, m)
+    var = np.einsum("mi,nij,mj->nm", u, p[:, 2:4, 2:4], u) + vr_var[None, :]
+    return (vr[None, :] - pred) ** 2 / np.maximum(var, 1e-12)
+
+
+def radial_update(x: np.ndarray, p: np.ndarray, z: np.ndarray, vr: np.ndarray, vr_var: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """Kalman update of states (k, d) with radial speeds (k,) measured at positions z (k, 2): h(x) = u·v with u the
+    measured line of sight (linear in the velocity; Joseph form)."""
+    k, d = x.shape
+    h = np.zeros((k, d))
+    h[:, 2:4] = _line_of_sight(z)
+    ph = np.einsum("kij,kj->ki", p, h)                                                # (k, d)
+    s = np.einsum("ki,ki->k", h, ph) + vr_var
+    gain = ph / s[:, None]
+    x_new = x + gain * (vr - np.einsum("ki,ki->k", h, x))[:, None]
+    i_kh = np.eye(d)[None] - gain[:, :, None] * h[:, None, :]
+    p_new = i_kh @ p @ np.transpose(i_kh, (0, 2, 1)) + vr_var[:, None, None] * gain[:, :, None] * gain[:, None, :]
+    return x_new, p_new
 
 
 def associate(d2: np.ndarray, gate: float, track_ids: np.ndarray | None = None,
@@ -152,9 +186,19 @@ def associate(d2: np.ndarray, gate: float, track_ids: np.ndarray | None = None,
     return [(int(i), int(j)) for i, j in zip(rows, cols) if np.isfinite(cost[i, j])]
 
 
+#: σ across the line of sight of a new cluster track whose radial speed is the standing world's (m/s): it starts
+#: standing, as the radar's tracker starts such tracks (radarnode.perception.tracker.TANGENTIAL_PRIOR_VAR)
+STANDING_PRIOR_SIGMA_MPS = 2.0
+
+
 def initiate(z: np.ndarray, r: np.ndarray, state_dim: int, kind: str, v_sigma: float = 10.0,
-             a_sigma: float = 3.0) -> tuple[np.ndarray, np.ndarray]:
-    """New states from measurements: measured parts as measured, the rest zero with a wide covariance."""
+             a_sigma: float = 3.0, radial: tuple[np.ndarray, np.ndarray] | None = None,
+             sensor_velocity: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """New states from measurements: measured parts as measured, the rest zero with a wide covariance. A cluster's
+    measured radial speed (``radial``: speeds and variances) starts the velocity along its line of sight, as a
+    radar's tracker starts it; across it stays unknown — unless that speed is the standing world's (the sensor's
+    ``sensor_velocity`` over ground seen along the line of sight, within 3σ): then the track starts standing,
+    ``STANDING_PRIOR_SIGMA_MPS`` across."""
     n, m = z.shape
     x = np.zeros((n, state_dim))
     x[:, :m] = z
@@ -162,6 +206,19 @@ def initiate(z: np.ndarray, r: np.ndarray, state_dim: int, kind: str, v_sigma: f
     p[:, :m, :m] = r
     diag = np.arange(m, state_dim)
     p[:, diag, diag] = np.where(diag < 4, v_sigma ** 2, a_sigma ** 2)
+    if radial is not None and m == 2 and n:
+        vr, var = radial
+        u = _line_of_sight(z)
+        perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
+        x[:, 2:4] = vr[:, None] * u
+        across = np.full(n, v_sigma ** 2)
+        if sensor_velocity is not None:
+            standing = -np.asarray(sensor_velocity, dtype=np.float64)                     # relative velocity
+            still = np.abs(vr - u @ standing) <= 3.0 * np.sqrt(var)
+            x[still, 2:4] = standing
+            across = np.where(still, STANDING_PRIOR_SIGMA_MPS ** 2, across)
+        p[:, 2:4, 2:4] = var[:, None, None] * u[:, :, None] * u[:, None, :] \
+            + across[:, None, None] * perp[:, :, None] * perp[:, None, :]
     return x, p
 
 
@@ -257,11 +314,15 @@ class Tracker:
         self.last_t: float | None = None
 
     def step(self, t_s: float, z: np.ndarray, r: np.ndarray, meas_ids: np.ndarray | None = None,
-             yaw_rate_rps: float = 0.0, road: tuple | None = None) -> list[Track]:
+             yaw_rate_rps: float = 0.0, road: tuple | None = None,
+             radial: tuple[np.ndarray, np.ndarray] | None = None) -> list[Track]:
         """One cycle: predict all tracks to ``t_s``, associate the measurements (n, m) with covariances
         (n, m, m), update, initiate, confirm and delete; returns the confirmed tracks. ``road``: the sensor's
         velocity and acceleration over ground (its axes), for the objects to follow the ego's road when it turns
-        (:func:`road_turn`); without it they keep their course over ground."""
+        (:func:`road_turn`); without it they keep their course over ground. ``radial``: clusters' measured radial
+        speeds and their variances (n,): they gate the association (:data:`RADIAL_GATE`), update the velocity
+        along each line of sight (:func:`radial_update`) and start new tracks' velocity — a position-only tracker
+        strung standing clutter into tracks moving with the ego and took a lead's deceleration from its noise."""
         dt = 0.0 if self.last_t is None else max(t_s - self.last_t, 0.0)
         self.last_t = t_s
         imm = self.model == "imm"
@@ -294,7 +355,11 @@ class Tracker:
         else:
             x, p = np.zeros((0, self.dim)), np.zeros((0, self.dim, self.dim))
         ids = np.array([t.meas_id for t in self.tracks]) if meas_ids is not None else None
-        pairs = associate(mahalanobis2(x, p, z, r, self.h), self.gate, ids, meas_ids)
+        d2 = mahalanobis2(x, p, z, r, self.h)
+        if radial is not None and not imm:
+            dop = radial_mismatch2(x, p, z, *radial)
+            d2 = np.where((dop <= RADIAL_GATE) & (d2 <= self.gate), d2 + dop, np.inf)     # both gates hold
+        pairs = associate(d2, self.gate + (RADIAL_GATE if radial is not None and not imm else 0.0), ids, meas_ids)
         hit = np.zeros(len(self.tracks), dtype=bool)
         used = np.zeros(len(z), dtype=bool)
         if pairs:
@@ -304,6 +369,8 @@ class Tracker:
                 x[ti], p[ti] = imm_combine(xm[ti], pm[ti], c[ti])
             else:
                 x[ti], p[ti] = update(x[ti], p[ti], z[mi], r[mi], self.h)
+                if radial is not None:
+                    x[ti], p[ti] = radial_update(x[ti], p[ti], z[mi], radial[0][mi], radial[1][mi])
             hit[ti], used[mi] = True, True
         m_conf, n_conf = self.confirm
         for k, tr in enumerate(self.tracks):
@@ -321,7 +388,9 @@ class Tracker:
         self.tracks = [t for t in self.tracks if (t.misses <= self.max_coast if t.confirmed else t.misses == 0)]
         new = np.flatnonzero(~used)
         if new.size:
-            nx, npc = initiate(z[new], r[new], self.dim, self.kind)
+            nx, npc = initiate(z[new], r[new], self.dim, self.kind,
+                               radial=None if radial is None or imm else (radial[0][new], radial[1][new]),
+                               sensor_velocity=None if road is None else road[0])
             for k, j in enumerate(new):
                 tr = Track(self._next_id, nx[k], npc[k], int(meas_ids[j]) if meas_ids is not None else -1,
                            [True], m_conf <= 1)
