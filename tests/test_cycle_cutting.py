@@ -323,17 +323,18 @@ def test_fuzz_every_well_formed_cycle_arrives_intact(radar):
     _check_fuzz(expected, stream, counts)
 
 
+def _config_frame(name: str, **values) -> can.Message:
+    """A configuration message by its DBC name (the fields not given 0, for a message that is not multiplexed)."""
+    m = load_database().get_message_by_name(name)
+    if not m.is_multiplexed():
+        values = {**{s.name: 0 for s in m.signals}, **values}
+    return _msg(m.frame_id, m.encode(values))
+
+
 def _abuse_toggles(rng: np.random.Generator, n_cycles: int, start: int = 0) -> dict:
     """Configuration changes every ~100 cycles: groups on and off, filters, collision detection on and off with
     regions (so Obj_4_Warning comes and goes and cycles carry warning bits)."""
-    db = load_database()
-
-    def frame(name, **values):
-        m = db.get_message_by_name(name)
-        if not m.is_multiplexed():
-            values = {**{s.name: 0 for s in m.signals}, **values}
-        return _msg(m.frame_id, m.encode(values))
-
+    frame = _config_frame
     toggles = {}
     for k in range(start, n_cycles, 100):
         kind = 1 if k == start else int(rng.integers(4))
@@ -756,14 +757,7 @@ def test_a_gateway_reversing_every_cycle_keeps_each_collision_warning_in_its_own
     for that group and took the next cycle's warnings — all 102 in the cycle before their own (an independent
     tester's finding, a regression of the frames kept aside). A cycle waits only for groups announced before its
     header: each delivered cycle carries the warning bits sent with it."""
-    db = load_database()
-
-    def frame(name, **values):
-        m = db.get_message_by_name(name)
-        if not m.is_multiplexed():
-            values = {**{s.name: 0 for s in m.signals}, **values}
-        return _msg(m.frame_id, m.encode(values))
-
+    frame = _config_frame
     toggles = {2: [frame("CollDetRegionCfg", CollDetRegCfg_Activate=1, CollDetRegCfg_Coordinates_valid=1,
                          CollDetRegCfg_RegionID=0, CollDetRegCfg_Point1X=5.0, CollDetRegCfg_Point1Y=-6.0,
                          CollDetRegCfg_Point2X=150.0, CollDetRegCfg_Point2Y=6.0),

@@ -32,7 +32,7 @@ from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundar
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
-from radarnode.consumer.tracking import Tracker
+from radarnode.consumer.tracking import Tracker, line_of_sight
 from radarnode.perception.motion import road_share
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
 from radarnode.wire import ids
@@ -327,7 +327,7 @@ class Ecu:
         # (its own cluster: the nearest whose radial speed is the track's — a standing clutter track beside a car
         # took the car's RCS, and FCW warned for it as for a stopped vehicle)
         strong = {}
-        los = z / np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)[:, None] if n else np.zeros((0, 2))
+        los = line_of_sight(z) if n else np.zeros((0, 2))
         for t in tracks:
             d = np.hypot(cl.dist_long_m - t.x[0], cl.dist_lat_m - t.x[1]) if n else np.zeros(0)
             if n:
@@ -344,7 +344,7 @@ class Ecu:
         split along its azimuth (a value not finite: no speed, a variance that gates nothing)."""
         if not len(z):
             return np.zeros(0), np.zeros(0)
-        los = z / np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)[:, None]
+        los = line_of_sight(z)
         vr = cl.vrel_long_mps * los[:, 0] + cl.vrel_lat_mps * los[:, 1]
         sig = np.hypot(cl.vrel_long_sigma_mps * los[:, 0], cl.vrel_lat_sigma_mps * los[:, 1])
         sig = np.where(np.isfinite(sig), np.maximum(sig, RADIAL_SIGMA_FLOOR_MPS), 1.0)

@@ -134,7 +134,7 @@ ID_GATE_FACTOR = 25.0      # a measurement with the track's object ID: accepted 
 RADIAL_GATE = 10.83
 
 
-def _line_of_sight(z: np.ndarray) -> np.ndarray:
+def line_of_sight(z: np.ndarray) -> np.ndarray:
     """Unit vectors (m, 2) from the sensor to measured positions (m, 2)."""
     return z / np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-6)[:, None]
 
@@ -144,7 +144,7 @@ def radial_mismatch2(x: np.ndarray, p: np.ndarray, z: np.ndarray, vr: np.ndarray
     variance ``vr_var``) and each track's velocity (state 2:4) along the measurement's line of sight."""
     if len(x) == 0 or len(z) == 0:
         return np.zeros((len(x), len(z)))
-    u = _line_of_sight(z)
+    u = line_of_sight(z)
     pred = x[:, 2:4] @ u.T                                                           # (n, m)
     var = np.einsum("mi,nij,mj->nm", u, p[:, 2:4, 2:4], u) + vr_var[None, :]
     return (vr[None, :] - pred) ** 2 / np.maximum(var, 1e-12)
@@ -156,7 +156,7 @@ def radial_update(x: np.ndarray, p: np.ndarray, z: np.ndarray, vr: np.ndarray, v
     measured line of sight (linear in the velocity; Joseph form)."""
     k, d = x.shape
     h = np.zeros((k, d))
-    h[:, 2:4] = _line_of_sight(z)
+    h[:, 2:4] = line_of_sight(z)
     ph = np.einsum("kij,kj->ki", p, h)                                                # (k, d)
     s = np.einsum("ki,ki->k", h, ph) + vr_var
     gain = ph / s[:, None]
@@ -208,7 +208,7 @@ def initiate(z: np.ndarray, r: np.ndarray, state_dim: int, kind: str, v_sigma: f
     p[:, diag, diag] = np.where(diag < 4, v_sigma ** 2, a_sigma ** 2)
     if radial is not None and m == 2 and n:
         vr, var = radial
-        u = _line_of_sight(z)
+        u = line_of_sight(z)
         perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
         x[:, 2:4] = vr[:, None] * u
         across = np.full(n, v_sigma ** 2)
