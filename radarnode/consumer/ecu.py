@@ -32,7 +32,7 @@ from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundar
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
-from radarnode.consumer.tracking import Tracker, line_of_sight
+from radarnode.consumer.tracking import Tracker, line_of_sight, radial_mismatch2
 from radarnode.perception.motion import road_share
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
 from radarnode.wire import ids
@@ -327,12 +327,12 @@ class Ecu:
         # (its own cluster: the nearest whose radial speed is the track's — a standing clutter track beside a car
         # took the car's RCS, and FCW warned for it as for a stopped vehicle)
         strong = {}
-        los = line_of_sight(z) if n else np.zeros((0, 2))
-        for t in tracks:
-            d = np.hypot(cl.dist_long_m - t.x[0], cl.dist_lat_m - t.x[1]) if n else np.zeros(0)
-            if n:
-                var = radial[1] + np.einsum("mi,ij,mj->m", los, t.p[2:4, 2:4], los)
-                d = np.where((radial[0] - los @ t.x[2:4]) ** 2 <= 9.0 * var, d, np.inf)
+        if tracks:
+            own = radial_mismatch2(np.stack([t.x for t in tracks]), np.stack([t.p for t in tracks]), z,
+                                   *radial) <= 9.0                                       # (tracks, clusters): 3σ
+        for i, t in enumerate(tracks):
+            d = np.where(own[i], np.hypot(cl.dist_long_m - t.x[0], cl.dist_lat_m - t.x[1]), np.inf) if n \
+                else np.zeros(0)
             k = int(np.argmin(d)) if d.size and np.isfinite(d).any() else -1
             strong[t.id] = bool(k >= 0 and cl.rcs_dbsm[k] >= 5.0)
         self.last_cycle_t = t_s
@@ -406,6 +406,7 @@ class Ecu:
         # path's heading there (the ego's heading plus the path's curvature times the distance), not the ego's now
         kappa = curvature(self.ego_speed_mps, self.ego_yaw_rate_rps)
         su, sv = self._sensor_velocity()
+        ssv = self._sensor_motion()[0]                # the same, in the sensor's axes (the trackers' states)
         along = np.zeros(len(tracks))                 # each track's speed over ground along the path where it is
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         for i, t in enumerate(tracks):
@@ -428,7 +429,6 @@ class Ecu:
                 # moving over ground beyond its own velocity's uncertainty along that motion: a cluster track's
                 # velocity across the line of sight comes from positions alone, and standing clutter strung
                 # together looked like a pedestrian walking into the path (a false FCW on highway_mimo12)
-                ssv = self._sensor_motion()[0]
                 g = np.array([t.x[2] + ssv[0], t.x[3] + ssv[1]])                   # over ground, sensor axes
                 unit = g / max(float(np.hypot(*g)), 1e-9)
                 sigma = math.sqrt(max(float(unit @ t.p[2:4, 2:4] @ unit), 0.0))

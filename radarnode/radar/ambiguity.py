@@ -175,7 +175,7 @@ def apparent_range_rate(preset: RadarPreset, range_rate_mps: np.ndarray, azimuth
     v = np.asarray(range_rate_mps, dtype=np.float64)
     vmax = preset.alias_speed_mps
     alias = np.mod(v + vmax, 2 * vmax) - vmax
-    if preset.stagger_chirp_period_s <= 0 and unambiguous(preset):
+    if unambiguous(preset):
         return alias, np.full(np.shape(alias), AMBIG_UNAMBIGUOUS, dtype=np.int64)
     unwrapped, candidate = _stationary_unwrap(preset, alias, azimuth_rad, sensor_velocity)
     rate = np.where(candidate, unwrapped, alias)

@@ -266,6 +266,7 @@ def _check_speed_span(scenario: Scenario, src: Source) -> None:
     """Warn of an actor whose range rate, inside the field of view, exceeds what a radar that calls every speed
     unambiguous (:func:`radarnode.radar.ambiguity.unambiguous`) measures without wrapping."""
     from radarnode.radar import ambiguity
+    from radarnode.radar.object_model import in_fov
     from radarnode.radar.setup import radar_config, radar_scenarios
     from radarnode.scene.world import Scene
     for sc in radar_scenarios(scenario):
@@ -281,12 +282,7 @@ def _check_speed_span(scenario: Scenario, src: Source) -> None:
             v = scene.views(times)
             c, s_ = np.cos(v.azimuth_rad), np.sin(v.azimuth_rad)
             signed = v.vx_mps * c + v.vy_mps * s_
-            rate = np.abs(signed)
-            inside = np.zeros(rate.shape, dtype=bool)
-            for sector in preset.fov:
-                inside |= (v.range_m <= sector.max_range_m) & (np.abs(v.azimuth_rad)
-                                                               <= math.radians(sector.half_angle_deg))
-            rate = np.where(inside, rate, 0.0)
+            rate = np.where(in_fov(preset, v.range_m, v.azimuth_rad), np.abs(signed), 0.0)
             k = np.argmax(rate, axis=0)
             cols = np.arange(rate.shape[1])
             better = rate[k, cols] > np.abs(worst)
