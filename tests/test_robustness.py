@@ -259,3 +259,19 @@ def test_ecu_guards_its_other_inputs():
     for name, kwargs in (("period_s", {"period_s": float("nan")}), ("max_gap_s", {"max_gap_s": 0.01})):
         with pytest.raises(ValueError, match=f"Ecu {name}: value"):
             Ecu(**kwargs)
+
+
+@pytest.mark.parametrize("step_periods, undone", [(2.9, False), (3.1, True), (6.0, True)])
+def test_ecu_keeps_the_state_before_a_step_of_more_than_three_cycles(step_periods, undone):
+    """STRAY_STEP_PERIODS (3): a cycle stamped so that its step from the last is just below, just above and twice
+    that. Above, the state before it is kept and the stray undone; below, the next cycle, back in time, is skipped
+    (time_jumps) and the one after it is ahead of the stray again and tracked on: no restart either way."""
+    from radarnode.consumer.ecu import STRAY_STEP_PERIODS
+    assert STRAY_STEP_PERIODS == 3.0
+    cycles = _assembled()
+    ahead = (step_periods - 1.0) * 0.072
+    feed = [(t + (ahead if k == 40 else 0.0), c, v, w) for k, (t, c, v, w) in enumerate(cycles)]
+    ecu, dec = _run_ecu(feed)
+    st = ecu.stats
+    assert st.stray_undone == int(undone) and st.time_jumps == int(not undone) and st.time_resyncs == 0, st
+    assert all(d is not None and d.target is not None for d in dec[42:])
