@@ -269,9 +269,8 @@ def test_a_followed_boundary_stays_on_an_off_grid_line_and_a_nearer_one_is_found
 def test_the_curve_samples_are_numpys_linspace():
     from radarnode.perception.boundaries import CURVE_SAMPLES, curve_x
     pairs = ((0.0, 100.0), (3.7, 151.3), (12.0, 12.0), (40.0, 8.25), (1e-300, 1e-300 + 1e-310))
-    got = curve_x(np.array([a for a, _ in pairs]), np.array([b for _, b in pairs]))
-    for row, (a, b) in zip(got, pairs):
-        np.testing.assert_array_equal(row, np.linspace(a, b, CURVE_SAMPLES))
+    for a, b in pairs:
+        np.testing.assert_array_equal(curve_x(a, b), np.linspace(a, b, CURVE_SAMPLES))
 
 
 def test_the_e2e_crc_by_table_is_cantools_profile2_crc():

@@ -38,16 +38,13 @@ STATIONARY_MPS = 1.0
 CURVE_SAMPLES = 12
 #: at most this many re-fits of a followed boundary's line to its inliers
 FOLLOW_PASSES = 2
-_CURVE_STEPS = np.arange(CURVE_SAMPLES, dtype=np.float64)
 _LINES = np.zeros(2, dtype=bool)                 # solve's deg2 for two straight lines
 
 
-def curve_x(start: np.ndarray, stop: np.ndarray) -> np.ndarray:
-    """``numpy.linspace(start[k], stop[k], CURVE_SAMPLES)`` for every k, a row each, without its generic wrapper."""
-    x = np.multiply.outer((stop - start) / (CURVE_SAMPLES - 1), _CURVE_STEPS)
-    x += start[:, None]
-    x[:, -1] = stop
-    return x
+def curve_x(start: float, stop: float) -> list[float]:
+    """``numpy.linspace(start, stop, CURVE_SAMPLES)`` in Python numbers (the samples of one followed boundary)."""
+    step = (stop - start) / (CURVE_SAMPLES - 1)
+    return [start + step * j for j in range(CURVE_SAMPLES - 1)] + [stop]
 
 
 #: the fits' variable u = (x − FIT_CENTRE_M) / FIT_SCALE_M: within about ±1.5 over the radar's range, so that the
@@ -56,28 +53,31 @@ FIT_CENTRE_M, FIT_SCALE_M = 100.0, 100.0
 
 
 def powers(x: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """The columns whose masked sums are every moment a fit of y on x up to a quadratic needs: (n, 8) =
-    1, u, u², u³, u⁴, y, u·y, u²·y with u = (x − FIT_CENTRE_M)/FIT_SCALE_M."""
-    out = np.empty((x.size, 8))
-    out[:, 0] = 1.0
-    u = out[:, 1]
+    """The rows whose masked sums are every moment a fit of y on x up to a quadratic needs: (8, n) =
+    1, u, y, u², u³, u⁴, u·y, u²·y with u = (x − FIT_CENTRE_M)/FIT_SCALE_M (a row each, so that every product is
+    one pass over contiguous memory; the first three rows are also what a line's residual y − a − b·u needs)."""
+    out = np.empty((8, x.size))
+    out[0] = 1.0
+    u = out[1]
     np.subtract(x, FIT_CENTRE_M, out=u)
     u /= FIT_SCALE_M
-    np.multiply(u, u, out=out[:, 2])
-    np.multiply(out[:, 2], u, out=out[:, 3])
-    np.multiply(out[:, 2], out[:, 2], out=out[:, 4])
-    out[:, 5] = y
-    np.multiply(u, y, out=out[:, 6])
-    np.multiply(out[:, 2], y, out=out[:, 7])
+    out[2] = y
+    u2 = out[3]
+    np.multiply(u, u, out=u2)
+    np.multiply(u2, u, out=out[4])
+    np.multiply(u2, u2, out=out[5])
+    np.multiply(u, y, out=out[6])
+    np.multiply(u2, y, out=out[7])
     return out
 
 
 def masked_fit(pw: np.ndarray, mask: np.ndarray, deg2: np.ndarray) -> np.ndarray:
     """Least-squares y = c0 + c1·x (+ c2·x²) of the points ``mask`` selects, one fit per row of ``mask``.
 
-    pw: the points' :func:`powers` (n, 8); mask: (S, n) bool, each row with at least 2 points (3 for a
+    pw: the points' :func:`powers` (8, n); mask: (S, n) bool, each row with at least 2 points (3 for a
     quadratic); deg2: (S,) bool, a quadratic for the rows where it is set. Returns (S, 3), lowest power first
-    (c2 = 0 for a line). Every row's moments are one matrix product (S, n) @ (n, 8) (:func:`moments`); the 2×2 or
+    (c2 = 0 for a line). Every row's moments are one matrix product (S, n) @ (n, 8) (:func:`moments`, with the powers' rows as
+    columns); the 2×2 or
     3×3 normal equations in u are solved in Python numbers (:func:`solve`): the fits of both road sides cost one
     numpy call. Accurate to about 1e-9 relative for a line over any stretch and for a quadratic over tens of
     metres (the estimator fits a quadratic only over more than 40 m: over 10 m at 200 m it would lose digits to
@@ -88,29 +88,36 @@ def masked_fit(pw: np.ndarray, mask: np.ndarray, deg2: np.ndarray) -> np.ndarray
 
 def moments(pw: np.ndarray, mask: np.ndarray) -> list[list[float]]:
     """The sums of :func:`powers`' columns over the points each row of ``mask`` (S, n) selects: S lists of 8."""
-    return (mask.astype(np.float64) @ pw).tolist()
+    return (mask.astype(np.float64) @ pw.T).tolist()
 
 
 def solve(mom: list[list[float]], deg2) -> np.ndarray:
     """:func:`masked_fit` from the rows' :func:`moments`."""
-    out = np.zeros((len(mom), 3))
-    for k, (n, s1, s2, s3, s4, sy, suy, su2y) in enumerate(mom):
+    c, sc = FIT_CENTRE_M, FIT_SCALE_M
+    out = []
+    for c0, c1, c2 in solve_u(mom, deg2):   # back to x: c0 + c1·u + c2·u², u = (x − C)/S
+        q = c2 / (sc * sc)
+        out.append((c0 - c1 * c / sc + q * c * c, c1 / sc - 2.0 * q * c, q))
+    return np.array(out).reshape(len(mom), 3)
+
+
+def solve_u(mom: list[list[float]], deg2) -> list[tuple[float, float, float]]:
+    """The fits of :func:`solve` in u = (x − FIT_CENTRE_M)/FIT_SCALE_M: y = c0 + c1·u + c2·u², a tuple a row (zeros
+    for a row of fewer than 2 points)."""
+    out = []
+    for k, (n, s1, sy, s2, s3, s4, suy, su2y) in enumerate(mom):
         if n < 2.0:                 # a row with no fit to make (its caller does not use it)
-            continue
-        if deg2[k]:         # Cramer's rule on [[n, s1, s2], [s1, s2, s3], [s2, s3, s4]]·c = [sy, suy, su2y]
+            out.append((0.0, 0.0, 0.0))
+        elif deg2[k]:         # Cramer's rule on [[n, s1, s2], [s1, s2, s3], [s2, s3, s4]]·c = [sy, suy, su2y]
             m11, m12, m22 = s2 * s4 - s3 * s3, s1 * s4 - s2 * s3, s1 * s3 - s2 * s2
             det = n * m11 - s1 * m12 + s2 * m22
-            c0 = (sy * m11 - s1 * (suy * s4 - s3 * su2y) + s2 * (suy * s3 - s2 * su2y)) / det
-            c1 = (n * (suy * s4 - s3 * su2y) - sy * m12 + s2 * (s1 * su2y - suy * s2)) / det
-            c2 = (n * (s2 * su2y - s3 * suy) - s1 * (s1 * su2y - s2 * suy) + sy * m22) / det
+            out.append(((sy * m11 - s1 * (suy * s4 - s3 * su2y) + s2 * (suy * s3 - s2 * su2y)) / det,
+                        (n * (suy * s4 - s3 * su2y) - sy * m12 + s2 * (s1 * su2y - suy * s2)) / det,
+                        (n * (s2 * su2y - s3 * suy) - s1 * (s1 * su2y - s2 * suy) + sy * m22) / det))
         else:
             det = n * s2 - s1 * s1
             c1 = (n * suy - s1 * sy) / det if det > 1e-300 else 0.0
-            c0, c2 = (sy - s1 * c1) / n, 0.0
-        # back to x: c0 + c1·u + c2·u², u = (x − C)/S
-        c, sc = FIT_CENTRE_M, FIT_SCALE_M
-        q = c2 / (sc * sc)
-        out[k] = (c0 - c1 * c / sc + q * c * c, c1 / sc - 2.0 * q * c, q)
+            out.append(((sy - s1 * c1) / n, c1, 0.0))
     return out
 
 
@@ -180,8 +187,9 @@ class RoadBoundaryEstimator:
         self._scratch = Scratch()                    # the Hough search's work arrays, reused
         self._points: list[np.ndarray] = []          # per cycle: (2, n), the rows x and y in the odometry frame
         self._pose = (0.0, 0.0, 0.0)                 # odometry: x, y, heading of the sensor
-        # the followed boundaries' samples in the odometry frame, (side, x/y, CURVE_SAMPLES), and which are followed
-        self._curves = np.zeros((2, 2, CURVE_SAMPLES))
+        # the followed boundaries' samples in the odometry frame (per side: the lists x and y, or None), and which
+        # are followed
+        self._curves: list[tuple[list[float], list[float]] | None] = [None, None]
         self._followed = [False, False]
         self._cycle = 0
         self.left = UNAVAILABLE
@@ -221,51 +229,66 @@ class RoadBoundaryEstimator:
         np.less(py, -0.5, out=sides[1])
         found = [UNAVAILABLE, UNAVAILABLE]
         if self._cycle % self.reacquire_cycles and (self._followed[0] or self._followed[1]):
-            found = self._follow(px, py, sides, kappa, origin, c, s)  # the full search runs every reacquire_cycles
+            found = self._follow(px, py, sides, kappa, c, s)  # the full search runs every reacquire_cycles
         for k in range(2):
             if not found[k].valid:
                 found[k] = self._side(px[sides[k]], py[sides[k]], kappa)
-        self._keep_curves(found, origin, c, s)
+        self._keep_curves(found, c, s)
         self.left, self.right = found
         if not self.left.valid and not self.right.valid and len(self._points) >= self.cycles:
             del self._points[:-1]         # restart the search (seed 002)
         return self.left, self.right
 
-    def _keep_curves(self, found: list[Boundary], origin, c: float, s: float) -> None:
-        """Samples of the boundaries found (sensor frame, as reported) in the odometry frame, to follow them."""
+    def _keep_curves(self, found: list[Boundary], c: float, s: float) -> None:
+        """Samples of the boundaries found (sensor frame, as reported) in the odometry frame, to follow them: per side
+        CURVE_SAMPLES points evenly from range start to end (``numpy.linspace``'s), in Python numbers (24 points)."""
         self._followed = [b.valid for b in found]
-        if not (found[0].valid or found[1].valid):
-            return
-        col = np.array([[b.range_start_m, b.range_end_m, b.offset_m, math.tan(b.heading_rad),
-                         0.5 * b.curvature_1pm] for b in found])
-        x = curve_x(col[:, 0], col[:, 1])
-        y = col[:, 2:3] + col[:, 3:4] * x + col[:, 4:5] * x * x
-        self._curves = _to_odometry(x, y, origin, c, s).transpose(1, 0, 2)      # (side, x/y, sample)
+        ox, oy = self._pose[0], self._pose[1]
+        curves = []
+        for b in found:
+            if not b.valid:
+                curves.append(None)
+                continue
+            slope, half_k = math.tan(b.heading_rad), 0.5 * b.curvature_1pm
+            xs = curve_x(b.range_start_m, b.range_end_m)
+            ys = [b.offset_m + slope * x + half_k * x * x for x in xs]
+            curves.append(([c * x + ox - s * y for x, y in zip(xs, ys)], [s * x + oy + c * y for x, y in zip(xs, ys)]))
+        self._curves = curves
 
-    def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float, origin, c: float,
-                s: float) -> list[Boundary]:
+    def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float, c: float, s: float
+                ) -> list[Boundary]:
         """Both sides' boundaries near last cycle's: each curve moved into this frame and straightened, its
         inliers fitted (UNAVAILABLE for a side that had none or lost it). The two sides in one pass each."""
-        d = self._curves - origin                        # (side, x/y, sample) less (x/y, 1)
-        q = _to_sensor(d[:, 0], d[:, 1], c, s)           # (x/y, side, sample)
-        if kappa:
-            q[1] -= 0.5 * kappa * q[0] * q[0]
-        # the curves' least-squares lines, y = a + b·x, a row a side, from centred sums (the line masked_fit would give
-        # the samples, but for the last bits: a point within ~1e-15 m of the band's edge may fall the other way)
-        mean = np.add.reduce(q, axis=2) / CURVE_SAMPLES  # (x/y, side)
-        q -= mean[:, :, None]
-        sxx, sxy = np.einsum("sk,isk->is", q[0], q).tolist()
-        follow = [self._followed[k] and sxx[k] > 0.0 and np.count_nonzero(sides[k]) >= 4 for k in range(2)]
+        ox, oy = self._pose[0], self._pose[1]
+        follow, line = [False, False], [[0.0, 0.0], [0.0, 0.0]]
+        for k in range(2):
+            if not self._followed[k]:
+                continue
+            # the curve's samples in this frame, straightened, and their least-squares line y = a + b·x from centred
+            # sums (the line masked_fit would give the samples, but for the last bits)
+            xs_odo, ys_odo = self._curves[k]
+            qx, qy = [], []
+            for xo, yo in zip(xs_odo, ys_odo):
+                dx, dy = xo - ox, yo - oy
+                x = c * dx + s * dy
+                qx.append(x)
+                qy.append(-s * dx + c * dy - 0.5 * kappa * x * x)
+            mx, my = sum(qx) / CURVE_SAMPLES, sum(qy) / CURVE_SAMPLES
+            sxx = sxy = 0.0
+            for x, y in zip(qx, qy):
+                sxx += (x - mx) * (x - mx)
+                sxy += (x - mx) * (y - my)
+            if sxx > 0.0 and np.count_nonzero(sides[k]) >= 4:
+                follow[k] = True
+                slope = sxy / sxx             # the line in u = (x − C)/S: y = (a + b·C) + b·S·u
+                line[k] = (my - slope * mx + slope * FIT_CENTRE_M, slope * FIT_SCALE_M)
         if not (follow[0] or follow[1]):
             return [UNAVAILABLE, UNAVAILABLE]
-        (mx0, mx1), (my0, my1) = mean.tolist()
-        b0, b1 = (sxy[0] / sxx[0] if follow[0] else 0.0), (sxy[1] / sxx[1] if follow[1] else 0.0)
-        line = np.array([[my0 - b0 * mx0, b0], [my1 - b1 * mx1, b1]])
         # the line is re-fitted to the points within band_m of it until the inliers settle (a few passes):
         # starting from the prediction, the gate centres itself on the points instead of on last cycle's error
         pw = powers(px, py)                              # the points' moments, for every fit of this cycle
         allowed = sides if follow[0] and follow[1] else sides & np.array(follow)[:, None]
-        inliers = self._gate(px, py, line, allowed)
+        inliers = self._gate(pw, line, allowed)
         mom = None
         for _ in range(FOLLOW_PASSES):
             mom = moments(pw, inliers)
@@ -277,15 +300,19 @@ class RoadBoundaryEstimator:
                 allowed = sides & np.array(follow)[:, None]
                 inliers &= allowed
                 mom = moments(pw, inliers)
-            again = self._gate(px, py, solve(mom, _LINES)[:, :2], allowed)
-            if np.array_equal(again, inliers):
+            again = self._gate(pw, solve_u(mom, _LINES), allowed)
+            if (again == inliers).all():
                 break
             inliers, mom = again, None
         return self._fit(px, py, inliers, follow, kappa, pw, mom)
 
-    def _gate(self, px: np.ndarray, py: np.ndarray, line: np.ndarray, allowed: np.ndarray) -> np.ndarray:
-        """The points ``allowed`` (2, n) within band_m of each row's line y = line[k, 0] + line[k, 1]·x."""
-        near = np.abs(py - (line[:, :1] + line[:, 1:2] * px)) <= self.band_m
+    def _gate(self, pw: np.ndarray, line_u: list, allowed: np.ndarray) -> np.ndarray:
+        """The points ``allowed`` (2, n) within band_m of each row's line y = a + b·u (u = (x − FIT_CENTRE_M) /
+        FIT_SCALE_M; ``line_u`` a pair (a, b) a row; ``pw``: the points' :func:`powers`, whose rows 1, u, y give every
+        residual in one matrix product)."""
+        res = np.array([[-ln[0], -ln[1], 1.0] for ln in line_u]) @ pw[:3]
+        np.abs(res, out=res)
+        near = res <= self.band_m
         near &= allowed
         return near
 
@@ -319,22 +346,21 @@ class RoadBoundaryEstimator:
         if max(count) < 4:
             return [UNAVAILABLE] * rows
         # seed 002: M cross-sections along x from each row's nearest inlier, at most k of them without a point;
-        # every row in one pass (the rows' cells offset by a row's worth of sections for one bincount)
-        lo = np.where(inliers, x, np.inf).min(axis=1).tolist()
-        x_max = np.where(inliers, x, -np.inf).max(axis=1).tolist()
-        start = [max(v, 0.0) if count[k] >= 4 else 0.0 for k, v in enumerate(lo)]
-        cell = np.floor((x - np.array(start)[:, None]) / self.section_m)          # (rows, n)
-        take = inliers & (cell >= 0.0) & (cell < self.sections)
-        cell += (np.arange(rows) * self.sections)[:, None]
-        present = (np.bincount(cell[take].astype(np.intp), minlength=rows * self.sections) > 0).tolist()
         ok, seen, deg2 = [False] * rows, [0] * rows, [False] * rows
+        start, lo, x_max = [0.0] * rows, [0.0] * rows, [0.0] * rows
+        sections = self.sections
         for k in range(rows):
             if count[k] < 4:
                 continue
-            row = present[k * self.sections:(k + 1) * self.sections]
-            reach = max((j + 1 for j, q in enumerate(row) if q), default=0)
+            row_x = x[inliers[k]]
+            lo[k], x_max[k] = float(row_x.min()), float(row_x.max())
+            start[k] = max(lo[k], 0.0)
+            cell = np.floor((row_x - start[k]) / self.section_m)
+            cell = cell[(cell >= 0.0) & (cell < sections)]
+            row = (np.bincount(cell.astype(np.intp), minlength=sections) > 0).tolist()
+            reach = sections - row[::-1].index(True) if True in row else 0
             seen[k] = sum(row[:reach])
-            missing = (reach - seen[k]) + max(0, self.sections - reach - self.max_missing)
+            missing = (reach - seen[k]) + max(0, sections - reach - self.max_missing)
             ok[k] = missing <= self.max_missing and reach >= 2
             deg2[k] = ok[k] and x_max[k] - lo[k] > 40.0 and count[k] >= 8
         if not any(ok):
