@@ -93,12 +93,17 @@ def moments(pw: np.ndarray, mask: np.ndarray) -> list[list[float]]:
 
 def solve(mom: list[list[float]], deg2) -> np.ndarray:
     """:func:`masked_fit` from the rows' :func:`moments`."""
+    return np.array(solve_x(mom, deg2)).reshape(len(mom), 3)
+
+
+def solve_x(mom: list[list[float]], deg2) -> list[tuple[float, float, float]]:
+    """:func:`solve` in Python numbers: (c0, c1, c2) a row."""
     c, sc = FIT_CENTRE_M, FIT_SCALE_M
     out = []
     for c0, c1, c2 in solve_u(mom, deg2):   # back to x: c0 + c1·u + c2·u², u = (x − C)/S
         q = c2 / (sc * sc)
         out.append((c0 - c1 * c / sc + q * c * c, c1 / sc - 2.0 * q * c, q))
-    return np.array(out).reshape(len(mom), 3)
+    return out
 
 
 def solve_u(mom: list[list[float]], deg2) -> list[tuple[float, float, float]]:
@@ -365,7 +370,7 @@ class RoadBoundaryEstimator:
             deg2[k] = ok[k] and x_max[k] - lo[k] > 40.0 and count[k] >= 8
         if not any(ok):
             return [UNAVAILABLE] * rows
-        coef = solve(mom, deg2).tolist()
+        coef = solve_x(mom, deg2)
         out = []
         for k in range(rows):
             if not ok[k]:
