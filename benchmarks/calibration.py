@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import shlex
 import sys
 import time
 from pathlib import Path
@@ -66,7 +67,7 @@ def pfa_table(quick: bool) -> None:
             cube = (rng.standard_normal((c, m, n)) + 1j * rng.standard_normal((c, m, n))) * math.sqrt(0.5)
             hits += int(cfar(noncoherent_power(range_doppler(cube))).mask.sum())
             cells += m * n
-        print(f"| {kind.upper()} | {pfa:.0e} | {cells:.2e} | {hits} | {hits / cells:.3e} | {hits / cells / pfa:.2f} |",
+        print(f"| {kind.upper()} | {pfa:.0e} | {cells:,} | {hits} | {hits / cells:.3e} | {hits / cells / pfa:.2f} |",
               flush=True)
     print()
 
@@ -504,8 +505,9 @@ def main() -> None:
     PD_FRAMES, PD_SWERLING = args.frames, tuple(int(c) for c in cases)
     LEVELS = tuple(lv for lv in args.levels.split(",") if lv)
     t0 = time.perf_counter()
-    print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, `python benchmarks/calibration.py"
-          f"{' --quick' if args.quick else ''}`\n")
+    # the command as given (its options, not a generic line), so that a table pasted from this output says what made it
+    print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, "
+          f"`python benchmarks/calibration.py{''.join(' ' + shlex.quote(a) for a in sys.argv[1:])}`\n")
     for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("accuracy", accuracy_table),
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
                      ("crowd", crowd_table), ("edge", edge_table)):

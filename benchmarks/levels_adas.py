@@ -43,8 +43,9 @@ def main() -> None:
     paths = [p for p in sorted((ROOT / "scenarios").glob("*.yaml")) if args.only in p.stem]
     scenarios = [sc for sc in (load_scenario(p) for p in paths) if sc.ecu.expect != type(sc.ecu.expect)()]
     print(f"### ADAS verdicts per level: {len(scenarios)} scenarios × seeds 1–{args.seeds}\n")
-    print("| scenario | level | passes | warning at (median) | TTC at warning (median) | max |Δ warning time| | "
-          "max |ΔTTC at warning| | failures |")
+    # (the bars of |Δ| escaped: bare, Markdown takes them for column edges)
+    print("| scenario | level | passes | warning at (median) | TTC at warning (median) | max \\|Δ warning time\\| | "
+          "max \\|ΔTTC at warning\\| | failures |")
     print("|---|---|---:|---:|---:|---:|---:|---|")
     all_pass, worst, worst_t = True, 0.0, 0.0
     t0 = time.perf_counter()

@@ -288,7 +288,7 @@ def main() -> None:
               "RMSE over the frames whose wrap was found, each over its CRB, (wrap missed / frames); "
               "|migration − still| over the CRB, median and 90th percentile per axis (range, rate, azimuth); "
               "auto: of the frames where the fits differ, how many equal the migration fit's / the still fit's:\n")
-        print("| preset | radial speed | migration | still fit | migration fit | median |Δ| | p90 |Δ| | auto: fit / still |")
+        print("| preset | radial speed | migration | still fit | migration fit | median \\|Δ\\| | p90 \\|Δ\\| | auto: fit / still |")
         print("|---|---:|---:|---|---|---|---|---:|")
         rows = [(PRESETS["ars408_like"], -36.0), (PRESETS["ars408_like"], -70.0)]
         rows += [(half_bw, -mu * half_bw.range_resolution_m / half_bw.integration_time_s) for mu in (0.3, 0.4, 0.5, 0.6)]
