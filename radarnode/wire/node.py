@@ -265,11 +265,11 @@ class RadarNode:
             return value
 
         if (x := take("RadarCfg_MaxDistance_valid", "RadarCfg_MaxDistance")) is not None:
-            top = self.preset.max_range_m
-            if not MIN_MAX_DISTANCE_M <= x <= top + 1e-9:
+            # the loader's rule for radar.max_distance_m (presets.max_distance; the frame's 2-m grid is the DBC's)
+            if presets.max_distance(self.preset, x)[1] is not None:
                 self._refuse("cfgmaxd", "RadarConfiguration: MaxDistance=%d m is not allowed (allowed %d..%g m: "
-                             "what preset %s can see); MaxDistance stays %g m", x, MIN_MAX_DISTANCE_M, top,
-                             self.preset.name, cfg.max_distance_m)
+                             "what preset %s can see); MaxDistance stays %g m", x, MIN_MAX_DISTANCE_M,
+                             self.preset.max_range_m, self.preset.name, cfg.max_distance_m)
             else:
                 cfg.max_distance_m = float(x)
         if (x := take("RadarCfg_SensorID_valid", "RadarCfg_SensorID", range(8))) is not None:
