@@ -64,3 +64,25 @@ def test_a_benign_highway_in_cluster_output_draws_almost_no_forward_collision_wa
               for seed in (1, 2, 3, 21)}
     assert sum(w is not None for w in warned.values()) <= 1, warned
     assert simulate(base, fidelity="object").warning_time_s is None
+
+
+@pytest.mark.parametrize("factor, taken", [(0.99, True), (1.0, True), (1.01, False), (2.0, False)])
+def test_the_radial_gate_just_below_at_just_above_and_at_twice_its_limit(factor, taken):
+    """A cluster exactly where a track predicts it, its radial speed off the track's by √(factor·RADIAL_GATE) of the
+    difference's σ: associated (the track updated, no new track) up to the gate, a new track beyond it."""
+    from radarnode.consumer.tracking import RADIAL_GATE, Track
+    trk = Tracker("clusters", "cv")
+    x = np.array([20.0, 0.0, -2.0, 0.0])
+    p = np.diag([0.1, 0.1, 1.0, 1.0])
+    trk.tracks, trk._next_id = [Track(0, x.copy(), p.copy(), confirmed=True, hits=[True])], 1
+    z = np.array([[20.0, 0.0]])                              # on the track, along the x axis: radial speed = vx
+    var = 0.25                                               # the cluster's; the track's along the line of sight 1.0
+    vr = -2.0 + np.sqrt(factor * RADIAL_GATE * (1.0 + var))
+    if factor == 1.0:                                        # "at": the mismatch the gate sees, within rounding of it
+        assert radial_mismatch2(x[None], p[None], z, np.array([vr]), np.array([var]))[0, 0] \
+            == pytest.approx(RADIAL_GATE, rel=1e-12)
+    trk.step(0.0, z, np.diag([0.04, 0.04])[None], radial=(np.array([vr]), np.array([var])))
+    ids = [t.id for t in trk.tracks]
+    assert (ids == [0]) is taken and (1 in ids) is not taken
+    if taken:
+        assert -2.0 < trk.tracks[0].x[2] < vr                 # pulled toward the measured radial speed
