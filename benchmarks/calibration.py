@@ -40,7 +40,7 @@ from radarnode.radar import detection_model, equation  # noqa: E402
 from radarnode.radar.models import make_model  # noqa: E402
 from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
 from radarnode.radar.presets import PRESETS  # noqa: E402
-from radarnode.radar.scatterers import point_targets  # noqa: E402
+from radarnode.radar.scatterers import actor_scatterers, point_targets  # noqa: E402
 from radarnode.radar.signal_model import synthesize, synthesize_rd  # noqa: E402
 from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
@@ -122,27 +122,32 @@ RUN_FRAMES = 80
 
 def run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> dict:
     hits = trials = false = 0
-    err = []
+    err, energy = [], []
     for run in range(-(-frames // RUN_FRAMES)):
         n = min(RUN_FRAMES, frames - run * RUN_FRAMES)
-        h, t, f, e = _run_points(level, rho_db, swerling, n, seed + 100_003 * run)
+        h, t, f, e, w = _run_points(level, rho_db, swerling, n, seed + 100_003 * run)
         hits, trials, false = hits + h, trials + t, false + f
         err += e
+        energy.append(w)
     e = np.array(err) if err else np.zeros((0, 3))
-    return {"pd": hits / trials, "fa": false / frames, "ratio": np.sqrt(np.mean(e ** 2, axis=0)) if len(e) else None}
+    return {"pd": hits / trials, "fa": false / frames, "ratio": np.sqrt(np.mean(e ** 2, axis=0)) if len(e) else None,
+            "energy_db": np.concatenate(energy)}
 
 
-def _run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> tuple[int, int, int, list]:
-    """One run of the point scene: hits, trials, false alarms and the hits' errors over the CRB."""
+def _run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int
+                ) -> tuple[int, int, int, list, np.ndarray]:
+    """One run of the point scene: hits, trials, false alarms, the hits' errors over the CRB and every trial's
+    windowed energy in dB (:class:`TrialTheory`; the same for every level: it depends on the scene alone)."""
     sc = calibrated(rho_db, swerling, seed)
     scene = Scene(sc)
     model = make_model(level, scene, P, np.random.default_rng(seed), radar_config(sc).signal, clusters_wanted=True)
     cfg = RuntimeConfig(max_distance_m=P.max_range_m)
     hits = trials = false = 0
-    err = []
+    err, energy = [], []
     for k in range(frames):
         _, view = model.step(k * sc.period_s, cfg)
         det = model.info.detections
+        energy.append(_trial_energy_db(scene, view))
         tr, taz = view.range_m, view.azimuth_rad
         tvr = view.vx_mps * np.cos(taz) + view.vy_mps * np.sin(taz)
         used = np.zeros(len(det), dtype=bool)
@@ -161,7 +166,29 @@ def _run_points(level: str, rho_db: float, swerling: int, frames: int, seed: int
             err.append(((det.range_m[j] - tr[i]) / crb[0], (det.range_rate_mps[j] - tvr[i]) / crb[1],
                         (det.azimuth_rad[j] - taz[i]) / crb[2]))
         false += int((~used).sum())
-    return hits, trials, false, err
+    return hits, trials, false, err, np.concatenate(energy)
+
+
+def _trial_energy_db(scene: Scene, view) -> np.ndarray:
+    """Each point target's windowed energy in this frame (dB over σ², summed over channels), as the analytic levels
+    compute it from its scatterer: its integrated SNR where it is and its straddle where it sits in its cell."""
+    stat = _statistic()
+    scat = actor_scatterers(scene, view)
+    if not np.array_equal(scat.actor_index, np.arange(scene.n)):
+        raise RuntimeError("the Pd scene's point targets are expected to give one scatterer each")
+    rho = 10.0 ** (equation.snr_db(P, scat.range_m, scat.rcs_dbsm, azimuth_rad=scat.azimuth_rad) / 10.0)
+    rb, vb, _ = detection_model.apparent_positions(P, scat)
+    return 10.0 * np.log10(stat.energy(rho, rb - np.rint(rb), vb - np.rint(vb)))
+
+
+_STAT = []
+
+
+def _statistic():
+    """The mimo12 chain's detection statistic, made once."""
+    if not _STAT:
+        _STAT.append(DspChain(P).statistic)
+    return _STAT[0]
 
 
 def snr_at(pd: np.ndarray, grid: np.ndarray, target: float) -> float:
@@ -173,32 +200,60 @@ def snr_at(pd: np.ndarray, grid: np.ndarray, target: float) -> float:
     return float(grid[i - 1] + (target - pd[i - 1]) / (pd[i] - pd[i - 1]) * (grid[i] - grid[i - 1]))
 
 
-def fitted_offset(stat, pd: np.ndarray, grid: np.ndarray, swerling: int, target: float, samples: int
-                  ) -> tuple[float, float, int]:
+def fitted_offset(stat, pd: np.ndarray, grid: np.ndarray, swerling: int, target: float, samples: int,
+                  curve=None) -> tuple[float, float, int]:
     """The shift Δ (dB) that fits theory's Pd curve, pd_of_snr(ρ − Δ), best to a measured curve over its rows whose
     theoretical Pd is within 0.15 of ``target`` (and below 0.98, where a row tells little) and the two rows either side
     of it: weighted least
     squares with each row's binomial variance (``samples`` trials a row). Returns (Δ, its standard error, the
     number of rows used). Several rows at once: near Pd 0.9 a Swerling 1 curve rises about 0.02 per dB, so the
-    crossing of one pair of rows (:func:`snr_at`) moves by about ±0.5 dB with 800 trials a row."""
-    theory = stat.pd_of_snr(grid, swerling)
+    crossing of one pair of rows (:func:`snr_at`) moves by about ±0.5 dB with 800 trials a row.
+
+    ``curve(deltas, rows)``: the reference instead of theory's uniform curve, the Pd of the rows ``rows`` (indices
+    into ``grid``) with every trial's SNR lowered by each of ``deltas`` (D,), shape (D, rows) (:class:`TrialTheory`).
+    """
+    if curve is None:
+        def curve(deltas, rows):
+            return stat.pd_of_snr(grid[rows][None, :] - np.asarray(deltas)[:, None], swerling)
+    theory = curve(np.zeros(1), np.arange(grid.size))[0]
     use = (np.abs(theory - target) <= 0.15) & (theory < 0.98)
     above = np.flatnonzero(theory >= target)
     if above.size and above[0] > 0:                 # and always the two rows either side of the target
         use[above[0] - 1:above[0] + 1] = True
     if not use.any():
         return float("nan"), float("nan"), 0
-    rho, meas = grid[use], pd[use]
+    rows = np.flatnonzero(use)
+    meas = pd[rows]
     d = 0.0
     for step, half in ((0.05, 4.0), (0.002, 0.06)):            # a coarse search, then a fine one around its best
         deltas = d + np.arange(-half, half + step / 2, step)
-        t = stat.pd_of_snr(rho[None, :] - deltas[:, None], swerling)
+        t = curve(deltas, rows)
         var = np.maximum(t * (1.0 - t), 0.01) / samples
         d = float(deltas[int(np.argmin(np.sum((meas - t) ** 2 / var, axis=1)))])
-    slope = (stat.pd_of_snr(rho - d + 0.01, swerling) - stat.pd_of_snr(rho - d - 0.01, swerling)) / 0.02
-    t = stat.pd_of_snr(rho - d, swerling)
+    t3 = curve(np.array([d + 0.01, d - 0.01, d]), rows)
+    slope, t = (t3[0] - t3[1]) / 0.02, t3[2]
     info = float(np.sum(slope ** 2 / (np.maximum(t * (1.0 - t), 0.01) / samples)))
     return d, (1.0 / math.sqrt(info) if info > 0.0 else float("inf")), int(use.sum())
+
+
+class TrialTheory:
+    """Theory at the trials a Pd table ran: each row's Pd as the mean, over its trials, of the exact Pd of the test
+    for that trial's own windowed energy — the target's integrated SNR at its range and azimuth in that frame and
+    its straddle at its position in its cell (the analytic levels' draws use the same energy). The targets of the
+    Pd scene drift (their Doppler offsets need a speed) and sit where they sit in their range cells, so their SNR
+    spreads about the row's ρ (about ±0.5 dB over a run of 80 frames) and their straddle is not a uniform average:
+    theory's uniform curve at ρ is then not what those trials should give (the spread lowers Pd where the curve bends
+    down, near 0.9). ``energies_db``: per row, the trials' windowed energies in dB."""
+
+    def __init__(self, stat, swerling: int, energies_db: list[np.ndarray]) -> None:
+        self.e_grid = np.arange(-40.0, 70.0001, 0.01)
+        self.pd_e = stat.pd(10.0 ** (self.e_grid / 10.0), swerling)
+        self.energies_db = energies_db
+
+    def __call__(self, deltas, rows) -> np.ndarray:
+        deltas = np.asarray(deltas, dtype=np.float64)
+        return np.stack([np.interp(self.energies_db[j][None, :] - deltas[:, None], self.e_grid, self.pd_e).mean(axis=1)
+                         for j in rows], axis=1)
 
 
 def pd_tables(quick: bool) -> None:
@@ -209,28 +264,40 @@ def pd_tables(quick: bool) -> None:
         grid = np.arange(12.0, top + 0.01, 1.0) if not quick else np.arange(12.0, top + 0.01, 2.0)
         print(f"### Pd against integrated SNR ρ, point targets, Swerling {swerling} ({frames} frames × 10 targets "
               "per point)\n")
-        print("| ρ dB | theory | " + " | ".join(LEVELS) + " |")
-        print("|---:|---:|" + "---:|" * len(LEVELS))
+        print("| ρ dB | theory | theory, the trials | " + " | ".join(LEVELS) + " |")
+        print("|---:|---:|---:|" + "---:|" * len(LEVELS))
         curves = {lv: [] for lv in LEVELS}
+        energies = []
         for rho in grid:
             for lv in LEVELS:
-                curves[lv].append(run_points(lv, float(rho), swerling, frames, seed=int(rho * 10) + swerling)["pd"])
-            print(f"| {rho:.0f} | {float(stat.pd_of_snr(rho, swerling)):.3f} | "
+                r = run_points(lv, float(rho), swerling, frames, seed=int(rho * 10) + swerling)
+                curves[lv].append(r["pd"])
+            energies.append(r["energy_db"])
+            trials = TrialTheory(stat, swerling, energies)(np.zeros(1), [len(energies) - 1])[0, 0]
+            print(f"| {rho:.0f} | {float(stat.pd_of_snr(rho, swerling)):.3f} | {trials:.3f} | "
                   + " | ".join(f"{curves[lv][-1]:.3f}" for lv in LEVELS) + " |", flush=True)
+        reference = TrialTheory(stat, swerling, energies)
+        spread = np.concatenate([e - e.mean() for e in energies])
+        print(f"\n(the trials' windowed energy about its row's mean: standard deviation {spread.std():.2f} dB)")
         fine = np.arange(0.0, 40.0, 0.01)
         theory = stat.pd_of_snr(fine, swerling)
         print("\n| Pd | theory ρ | " + " | ".join(f"{lv} ρ (Δ)" for lv in LEVELS) + " | "
-              + " | ".join(f"{lv}: fitted Δ ± SE" for lv in LEVELS) + " |")
-        print("|---:|---:|" + "---:|" * (2 * len(LEVELS)))
+              + " | ".join(f"{lv}: fitted Δ ± SE" for lv in LEVELS) + " | "
+              + " | ".join(f"{lv}: Δ ± SE against the trials' theory" for lv in LEVELS) + " |")
+        print("|---:|---:|" + "---:|" * (3 * len(LEVELS)))
         for target in (0.5, 0.9):
             t = snr_at(theory, fine, target)
-            cells, fits = [], []
+            cells, fits, own = [], [], []
             for lv in LEVELS:
                 s = snr_at(np.array(curves[lv]), grid, target)
                 cells.append(f"{s:.2f} dB ({s - t:+.2f})")
                 d, se, rows = fitted_offset(stat, np.array(curves[lv]), grid, swerling, target, frames * 10)
                 fits.append(f"{d:+.2f} ± {se:.2f} dB ({rows} rows)")
-            print(f"| {target} | {t:.2f} dB | " + " | ".join(cells) + " | " + " | ".join(fits) + " |")
+                d, se, rows = fitted_offset(stat, np.array(curves[lv]), grid, swerling, target, frames * 10,
+                                            curve=reference)
+                own.append(f"{d:+.2f} ± {se:.2f} dB ({rows} rows)")
+            print(f"| {target} | {t:.2f} dB | " + " | ".join(cells) + " | " + " | ".join(fits) + " | "
+                  + " | ".join(own) + " |")
         print()
 
 

@@ -43,3 +43,39 @@ def test_the_fitted_offset_recovers_a_known_shift_with_an_honest_standard_error(
     t = cal.snr_at(stat.pd_of_snr(fine, swerling), fine, target)
     cross = np.array([cal.snr_at(rng.binomial(samples, truth) / samples, grid, target) - t for _ in range(60)])
     assert est.std() <= np.nanstd(cross) * 1.1
+
+
+@pytest.mark.parametrize("swerling, shift", [(0, 0.25), (1, -0.3)])
+def test_the_fit_against_the_trials_theory_recovers_a_shift_that_theory_at_the_nominal_snr_would_misread(swerling,
+                                                                                                       shift):
+    """Trials whose SNR spreads about each row's ρ (±0.5 dB, as the Pd scene's drifting targets): a level that
+    draws exactly from them, shifted by a known Δ, is fitted to that Δ against the trials' own theory
+    (:class:`TrialTheory`), while the fit against the uniform curve at the nominal ρ reads the spread as a shift too
+    (Swerling 0 near Pd 0.9, where the curve bends)."""
+    cal = _calibration()
+    stat = cal.DspChain(cal.P).statistic
+    top = 24.0 if swerling == 0 else 32.0
+    grid = np.arange(12.0, top + 0.01, 1.0)
+    samples = 3200
+    rng = np.random.default_rng(11)
+    gain = 10.0 * np.log10(stat.window_gain)
+    spread = rng.normal(0.0, 0.5, 400)
+    # every trial on its own straddle (uniform in the cell) and SNR: the energies TrialTheory averages over
+    u = rng.uniform(-0.5, 0.5, (2, 400))
+    straddle = 10.0 * np.log10(stat.energy(1.0, u[0], u[1]) / stat.window_gain)
+    energies = [rho + gain + straddle + spread for rho in grid]
+    reference = cal.TrialTheory(stat, swerling, energies)
+    # on-bin, no spread: the trials' theory is the test's exact Pd
+    flat = cal.TrialTheory(stat, swerling, [np.full(4, 20.0 + gain)])
+    assert flat(np.zeros(1), [0])[0, 0] == pytest.approx(float(stat.pd(np.array([10.0 ** ((20.0 + gain) / 10.0)]),
+                                                                         swerling)[0]), abs=1e-4)
+    truth = reference(np.array([shift]), np.arange(grid.size))[0]
+    est, naive = [], []
+    for _ in range(30):
+        pd = rng.binomial(samples, truth) / samples
+        est.append(cal.fitted_offset(stat, pd, grid, swerling, 0.9, samples, curve=reference)[0])
+        naive.append(cal.fitted_offset(stat, pd, grid, swerling, 0.9, samples)[0])
+    est, naive = np.array(est), np.array(naive)
+    assert abs(est.mean() - shift) < 4.0 * est.std() / np.sqrt(est.size) + 0.01
+    if swerling == 0:           # the spread alone reads as about +0.1 dB more against the nominal ρ
+        assert naive.mean() - est.mean() > 0.05
