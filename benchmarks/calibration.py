@@ -7,7 +7,10 @@ Prints Markdown tables:
 
 1. false-alarm probability of the chain's CFAR on noise-only mimo12 cubes against the set value;
 2. Pd against ρ for point targets, Swerling 0 and 1, level by level, with the exact theory (CA-CFAR on the
-   non-coherent sum of 12 channels, straddle averaged): the ρ at Pd 0.5 and 0.9 of each;
+   non-coherent sum of 12 channels, straddle averaged) and theory at the trials that ran (each target's SNR and
+   position in its cell in each frame, :class:`TrialTheory`): the ρ at Pd 0.5 and 0.9 of each;
+2b. (``--only cells``) Pd of targets at a fixed position in their cell (on the bin centre, a quarter, half a bin
+   in range, in Doppler, both), level by level, against the one-cell test the analytic levels draw from;
 3. RMSE over the CRB of range, range rate and azimuth, and false alarms per frame, per level;
 4. resolution: probability that two equal point targets come out as two, against their separation in range
    bins, Doppler bins and beamwidths, signal against detection level, and the 50 % point of each;
@@ -50,6 +53,7 @@ LEVELS = ("object", "detection", "signal")
 RESOLUTION_TRIALS = 40
 PD_FRAMES: int | None = None        # --frames: frames per point of the Pd tables (None: 80, or 12 with --quick)
 PD_SWERLING = (0, 1)
+CELL_FRAMES = 100                   # frames per offset of the in-cell table (10 targets a frame)
 
 
 def pfa_table(quick: bool) -> None:
@@ -299,6 +303,67 @@ def pd_tables(quick: bool) -> None:
             print(f"| {target} | {t:.2f} dB | " + " | ".join(cells) + " | " + " | ".join(fits) + " | "
                   + " | ".join(own) + " |")
         print()
+
+
+def _cell_scene(offset_range: float, offset_doppler: float, rho_db: float, seed: int, n: int = 10):
+    """Ten Swerling 0 point targets (31–102 m, ±40°) at integrated SNR ``rho_db``, each at ``offset_range`` range
+    bins and ``offset_doppler`` Doppler bins from its cell's centre at t = 0 (receding at that many Doppler bins;
+    the range offset includes the range–Doppler coupling the chain sees): the scene and its targets' scatterers."""
+    res, v = P.range_resolution_m, offset_doppler * P.doppler_bin_mps
+    az = np.radians(-40.0 + 80.0 * ((np.arange(n) * 7) % n) / n)
+    want = (70 + 18 * np.arange(n) + offset_range) * res - v * P.range_rate_coupling_s
+
+    def scene_of(x, y, rcs):
+        lines = [f"  - {{id: p{k}, class: point, swerling: 0, rcs_dbsm: {rcs[k]:.6f}, x_m: {x[k]:.6f}, "
+                 f"y_m: {y[k]:.6f}, speed_mps: {v:.6f}, heading_deg: {math.degrees(math.atan2(y[k], x[k])):.6f}}}"
+                 for k in range(n)]
+        sc = parse_scenario(f"name: cells\nduration_s: 1\nseed: {seed}\nradar: {{preset: mimo12, output: clusters}}\n"
+                            "ego: {speed_mps: 0.0}\nroad: {lanes: 1, ego_lane: 0}\nactors:\n" + "\n".join(lines))
+        return sc, Scene(sc)
+
+    x, y = want * np.cos(az), want * np.sin(az)
+    _, scene = scene_of(x, y, np.zeros(n))
+    view = scene.view(0.0)           # along each line of sight from the sensor (mounted ahead of the ego's origin)
+    x, y = x + (want - view.range_m) * np.cos(view.azimuth_rad), y + (want - view.range_m) * np.sin(view.azimuth_rad)
+    _, scene = scene_of(x, y, np.zeros(n))
+    view = scene.view(0.0)
+    return scene_of(x, y, rho_db - equation.snr_db(P, view.range_m, np.zeros(n), azimuth_rad=view.azimuth_rad))
+
+
+def cells_table(quick: bool) -> None:
+    """Pd of targets at a fixed position in their cell, level by level, against the one-cell test the analytic
+    levels draw from (the target's energy with its straddle, in its nearest cell alone)."""
+    stat = DspChain(P).statistic
+    frames = 30 if quick else CELL_FRAMES
+    rho = 19.0
+    print(f"### Pd at a fixed position in the cell, Swerling 0, ρ = {rho:.0f} dB ({frames} frames × 10 targets, "
+          "one frame a scene)\n")
+    print("| offset (range, Doppler bins) | one cell | " + " | ".join(LEVELS) + " |")
+    print("|---|---:|" + "---:|" * len(LEVELS))
+    for off in ((0.0, 0.0), (0.25, 0.25), (0.5, 0.0), (0.0, 0.5), (0.5, 0.5)):
+        expected, hits = [], {lv: 0 for lv in LEVELS}
+        trials = 0
+        for f in range(frames):
+            sc, scene = _cell_scene(off[0], off[1], rho, 5000 + f)
+            view = scene.view(0.0)
+            expected.append(stat.pd(10.0 ** (_trial_energy_db(scene, view) / 10.0), 0))
+            trials += scene.n
+            for lv in LEVELS:
+                model = make_model(lv, scene, P, np.random.default_rng(5000 + f), radar_config(sc).signal,
+                                   clusters_wanted=True)
+                _, v = model.step(0.0, RuntimeConfig(max_distance_m=P.max_range_m))
+                det = model.info.detections
+                tvr = v.vx_mps * np.cos(v.azimuth_rad) + v.vy_mps * np.sin(v.azimuth_rad)
+                for i in range(scene.n):
+                    d = (np.abs(det.range_m - v.range_m[i]) / (1.5 * P.range_resolution_m)
+                         + np.abs(det.range_rate_mps - tvr[i]) / (1.5 * P.speed_resolution_mps)
+                         + np.abs(np.sin(det.azimuth_rad) - np.sin(v.azimuth_rad[i])) / (2.0 * P.angular_resolution_rad))
+                    hits[lv] += int(d.size > 0 and d.min() <= 1.0)
+        se = lambda p: math.sqrt(max(p * (1.0 - p), 1e-12) / trials)  # noqa: E731
+        print(f"| {off[0]:g}, {off[1]:g} | {np.concatenate(expected).mean():.3f} | "
+              + " | ".join(f"{hits[lv] / trials:.3f} ± {se(hits[lv] / trials):.3f}" for lv in LEVELS) + " |",
+              flush=True)
+    print()
 
 
 def accuracy_table(quick: bool) -> None:
@@ -552,7 +617,7 @@ def main() -> None:
     global LEVELS, RESOLUTION_TRIALS, PD_FRAMES, PD_SWERLING
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--only", choices=("pfa", "pd", "accuracy", "resolution", "lobe", "beam", "crowd", "edge"))
+    ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -575,7 +640,7 @@ def main() -> None:
     # the command as given (its options, not a generic line), so that a table pasted from this output says what made it
     print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, "
           f"`python benchmarks/calibration.py{''.join(' ' + shlex.quote(a) for a in sys.argv[1:])}`\n")
-    for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("accuracy", accuracy_table),
+    for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("cells", cells_table), ("accuracy", accuracy_table),
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
                      ("crowd", crowd_table), ("edge", edge_table)):
         if args.only in (None, name):
