@@ -84,6 +84,8 @@ class CycleOutput:
     objects_dropped: int = 0
     counters: dict = field(default_factory=dict)
     boundaries: tuple[Boundary, Boundary] | None = None
+    #: how many of ``messages`` lead up to and include the cycle's header (the status frames before it)
+    lead: int = 0
 
 
 class RadarNode:
@@ -523,6 +525,7 @@ class RadarNode:
             state = [(base, np.frombuffer(data, np.uint8))
                      for base, data in self.coll_det.state_payloads(self._meas_counter)]
             out[header_at:header_at] = state
+            header_at += len(state)
         if relay:
             out.append((P.COLL_DET_RELAY, self.codecs[P.COLL_DET_RELAY].encode(
                 {"CollDetRelayCtrl_Param": self.coll_det.relay_bits()})[0]))
@@ -544,13 +547,24 @@ class RadarNode:
         self.counters["cycles"] += 1
         self.counters["frames"] += len(messages)
         return CycleOutput(t_s, messages, frame, view, sum(frame_bits(d) for d in dlcs), dropped,
-                           boundaries=(self.last_boundaries if own else None))
+                           boundaries=(self.last_boundaries if own else None), lead=min(header_at + 1, len(messages)))
 
     def withdraw(self, out: CycleOutput) -> None:
         """Un-count a cycle :meth:`cycle` computed that is not sent (late, or the run stopped before its
         deadline): ``counters["cycles"]`` and ``["frames"]`` count what went out (its MeasCounter stays used)."""
         self.counters["cycles"] -= 1
         self.counters["frames"] -= len(out.messages)
+
+    def sent_late(self, t_s: float, late_s: float) -> None:
+        """Flag cycle ``t_s``, which the bus took ``late_s`` after its deadline (beyond the tolerance: the process
+        was preempted between the runner's check and the send): counted in ``cycles_sent_late`` and reported as
+        :meth:`missed_deadline` reports a dropped cycle, Temporary_Error in RadarState for the next second."""
+        self.counters["cycles_sent_late"] += 1
+        self._fault_until_s = max(self._fault_until_s, t_s + self.period_s + STATUS_PERIOD_S)
+        self._status_now = True
+        self._warn_once("sent_late", "cycle at t=%.3f s went out %.1f ms after its deadline (the process was "
+                        "preempted while sending); flagged in RadarState_Temporary_Error and counted in "
+                        "cycles_sent_late (warned once)", t_s, 1e3 * late_s)
 
     def missed_deadline(self, t_s: float, late_s: float, skipped: int = 0, computed: bool = True) -> None:
         """Flag cycles not sent because they could not be ready on their deadline.

@@ -14,7 +14,11 @@ measurement cycle. In simulated time the same rule holds, with no wait between c
 
 A cycle that cannot go out within ``RealTimeClock.tolerance_s`` (2 ms) of its deadline — computed too late,
 or the process woken too late by the operating system — is not sent late: it is dropped
-and flagged (``RadarNode.missed_deadline``: a counter, MeasCounter moves on, RadarState's Temporary_Error).
+and flagged (``RadarNode.missed_deadline``: a counter, MeasCounter moves on, RadarState's Temporary_Error). The
+check is made just before the cycle is handed to the bus; a process preempted between the check and the bus
+taking its frames sends that cycle late, which the node sees when the send returns and flags the same way
+(``RadarNode.sent_late``: counted in ``cycles_sent_late``). What happens after the bus has taken a frame (the
+kernel's queue, the receiver's scheduling) no sender sees.
 When the model is slower than the cycle, the runner skips (and flags) the cycles whose deadline would pass
 before they could be computed, so the cycles that do go out stay on the grid.
 
@@ -56,6 +60,7 @@ class RunStats:
     bits: int = 0
     duration_s: float = 0.0
     missed: int = 0                 # cycles not sent because they were not ready in time (real time)
+    sent_late: int = 0              # cycles whose frames the bus took later than the tolerance (real time: flagged)
     # real time, the last KEEP_CYCLES cycles sent (bounded, so that a node running for days does not grow):
     cycle_start_s: deque = field(default_factory=lambda: deque(maxlen=KEEP_CYCLES))  # send time from the origin
     send_error_s: deque = field(default_factory=lambda: deque(maxlen=KEEP_CYCLES))   # send time minus deadline
@@ -261,7 +266,19 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             if clock.realtime:
                 stats.cycle_start_s.append(clock.now() - origin)
                 stats.send_error_s.append(late)
-            send(out.messages)
+            if clock.realtime:
+                # the process can be preempted between the check above and the bus taking the header: a cycle
+                # whose header was handed over later than the tolerance went out late, and is flagged as one (it
+                # cannot be recalled; the frames after the header take their own time on any bus)
+                lead = out.lead or len(out.messages)
+                send(out.messages[:lead])
+                handed = clock.now() - deadline
+                if handed > clock.tolerance_s:
+                    node.sent_late(out.t_s, handed)
+                    stats.sent_late += 1
+                send(out.messages[lead:])
+            else:
+                send(out.messages)
             stats.cycles += 1
             stats.frames += len(out.messages)
             stats.bits += out.bits
