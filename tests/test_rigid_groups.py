@@ -282,3 +282,34 @@ def test_a_jump_within_what_a_body_spans_is_no_hop():
             out = trk.step(0.072 * k, det, sv)
         results[width] = out.vrel_lat_mps[0] + sv[1]
     assert abs(results[0.0]) < 0.3 and abs(results[8.0]) > 1.0, results
+
+
+@pytest.mark.parametrize("misses, reset", [(0, False), (1, False), (2, True), (4, True), (8, True)])
+def test_a_standing_track_back_from_a_coast_takes_no_speed_from_where_it_finds_its_reflector(misses, reset):
+    """COAST_REANCHOR_MISSES = 2: a standing track that coasted that many cycles or more and takes a detection 1.5 m
+    across the line of sight (under HOP_M) is re-anchored like a hop — its speed over ground stays a standing
+    object's, across and along the line of sight (the merged rails' glint at long range walked such tracks across
+    the road in steps under HOP_M, and after a long coast the position jump put about 1 m/s into the radial speed
+    through the filter's cross-covariance: posts became moving and crossing objects at 130 km/h). Below it (no miss,
+    one) the jump is the filter's to weigh, as before."""
+    from radarnode.perception.tracker import COAST_REANCHOR_MISSES, HOP_M
+    assert COAST_REANCHOR_MISSES == 2 and 1.5 < HOP_M
+    sv = (36.0, 0.0)
+    trk = ObjectTracker()
+    y0, x0 = 3.0, 120.0
+    steps = 6 + misses
+    for k in range(steps):
+        x = x0 - 36.0 * 0.072 * k
+        y = y0 + (1.5 if k == steps - 1 else 0.0)
+        r, a = math.hypot(x, y), math.atan2(y, x)
+        seen = k < 5 or k == steps - 1
+        det = Detections(np.array([r] if seen else []), np.array([-36.0 * math.cos(a)] if seen else []),
+                         np.array([a] if seen else []), np.array([5.0] if seen else []),
+                         np.array([30.0] if seen else []), np.array([0] if seen else [], dtype=np.int64))
+        out = trk.step(0.072 * k, det, sv)
+    ground = (out.vrel_long_mps[0] + sv[0], out.vrel_lat_mps[0] + sv[1])
+    assert len(trk.x) == 1 and out.dist_lat_m[0] > y0 + 0.3           # the detection was taken, not a new track
+    if reset:
+        assert abs(ground[0]) < 0.2 and abs(ground[1]) < 0.3, ground
+    else:
+        assert abs(ground[1]) > 0.5, ground                     # the filter took part of the jump as lateral speed

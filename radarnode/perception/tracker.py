@@ -47,6 +47,8 @@ MOVING_THRESHOLD_MPS = 1.0
 #: velocity across the line of sight is set back to the standing world's). Without it, tracks hopping from post to
 #: post across the rails became crossing objects at 130 km/h, some in the ego lane.
 HOP_M = 2.5
+#: … and so has a standing track that takes a detection after this many cycles without one (see Tracker._hops)
+COAST_REANCHOR_MISSES = 2
 #: a new or re-anchored track's prior on its velocity across the line of sight: the standing world's, σ 2 m/s
 TANGENTIAL_PRIOR_VAR = 4.0
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
@@ -443,7 +445,7 @@ class ObjectTracker:
             hop = self._hops(ti, z[gi], sensor_velocity)
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
             if hop.any():
-                self._standing_across(ti[hop], sensor_velocity)
+                self._standing_across(ti[hop], sensor_velocity, z[gi[hop]])
             fit = np.isfinite(groups.velocity[gi, 0])
             if fit.any():      # a joined near body: its fitted velocity across the line of sight too
                 t, g = ti[fit], gi[fit]
@@ -496,17 +498,25 @@ class ObjectTracker:
         across = across - (np.abs(self.size[idx, 0] * uy) + np.abs(self.size[idx, 1] * ux))
         standing_rate = -(sensor_velocity[0] * ux + sensor_velocity[1] * uy)
         _, moving = self._heading(idx, sensor_velocity)
-        return ((across > HOP_M) & ~moving & ~self.was_moving[idx]
+        # a standing track that coasted (its position across the line of sight extrapolated with a velocity only
+        # position differences ever measured) and takes a detection again has nothing to move it by either: the
+        # merged rails' glint at long range walks it across the road in steps under HOP_M otherwise
+        coasted = self.misses[idx] >= COAST_REANCHOR_MISSES
+        return (((across > HOP_M) | coasted) & ~moving & ~self.was_moving[idx]
                 & (np.abs(z[:, 2] - standing_rate) < MOVING_THRESHOLD_MPS))
 
-    def _standing_across(self, idx: np.ndarray, sensor_velocity) -> None:
-        """Tracks ``idx`` that hopped to another standing reflector: their velocity across the line of sight set
-        to the standing world's (the measured radial part kept), its variance to the new track's prior (2 m/s)."""
+    def _standing_across(self, idx: np.ndarray, sensor_velocity, z: np.ndarray) -> None:
+        """Tracks ``idx`` that hopped to another standing reflector, detection ``z`` (x, y, range rate): their
+        velocity across the line of sight set to the standing world's, its variance to the new track's prior
+        (2 m/s), and their radial velocity over ground to what the detection's range rate measures (the update's
+        own moved with the position jump: after a long coast a jump of a few metres put 1 m/s into it, and a post
+        became a moving object)."""
         x, p = self.x[idx], self.p[idx]
         r = np.maximum(np.hypot(x[:, 0], x[:, 1]), 1e-3)
         u = np.stack([x[:, 0] / r, x[:, 1] / r], axis=1)
         world = -np.asarray(sensor_velocity, dtype=np.float64)
-        radial = np.einsum("ki,ki->k", x[:, 2:4] - world, u)
+        rz = np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-3)
+        radial = z[:, 2] - (world[0] * z[:, 0] + world[1] * z[:, 1]) / rz     # the range rate over the standing world's
         self.x[idx, 2:4] = world + radial[:, None] * u
         perp = np.stack([-u[:, 1], u[:, 0]], axis=1)
         pv = p[:, 2:4, 2:4]
