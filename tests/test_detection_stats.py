@@ -364,11 +364,11 @@ def test_straddle_gain_is_the_windowed_tone_power_summed_directly(name, n):
 
 
 @pytest.mark.parametrize("offset", [(0.0, 0.0), (0.5, 0.5), (0.3, -0.2)])
-def test_the_block_draw_has_the_law_of_the_chains_strongest_of_four_cells(offset):
-    """draw_block's statistic (the strongest of the nearest cell and its neighbours towards the return) against the
-    same four cells of windowed, FFT-ed cubes of a tone in white noise, brute force: the same quantiles within
-    their sampling error. A draw that left out the windows' noise correlation (−2/3 between Hann neighbours) or put
-    the return's share in the wrong neighbour moves them by several times that."""
+def test_the_block_draw_has_the_law_of_the_chains_strongest_of_nine_cells(offset):
+    """draw_block's statistic (the strongest of the 3 × 3 cells about the return's nearest one) against the same
+    nine cells of windowed, FFT-ed cubes of a tone in white noise, brute force: the same quantiles within their
+    sampling error. A draw that left out the windows' noise correlation (−2/3 between Hann neighbours) or put the
+    return's share in the wrong neighbour moves them by several times that."""
     p = _small_preset()
     stat = DspChain(p).statistic
     c, m, n = p.num_virtual, p.num_chirps, p.num_samples
@@ -380,8 +380,8 @@ def test_the_block_draw_has_the_law_of_the_chains_strongest_of_four_cells(offset
     kd, kr = 20, 30
     tone = amp * np.exp(2j * np.pi * ((kd + dd) * np.arange(m)[:, None] / m + (kr + dr) * np.arange(n)[None, :] / n))
     scale = math.sqrt(np.sum(w_r ** 2) * np.sum(w_d ** 2))
-    cells_d = [kd, kd + (1 if dd >= 0 else -1)]
-    cells_r = [kr, kr + (1 if dr >= 0 else -1)]
+    cells_d = [kd - 1, kd, kd + 1]                # the 3 × 3 cells about the nearest one
+    cells_r = [kr - 1, kr, kr + 1]
     brute = []
     for _ in range(1500):
         cube = (rng.standard_normal((c, m, n)) + 1j * rng.standard_normal((c, m, n))) * math.sqrt(0.5)
@@ -399,29 +399,33 @@ def test_the_block_draw_has_the_law_of_the_chains_strongest_of_four_cells(offset
         assert abs(b - d) < 4.0 * se + 0.02 * d, (q, b, d, se)
 
 
-def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_as_the_block_draw_says_not_as_one_cell():
+def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_and_the_detection_level_as_the_block_draw_says():
     """The chain finds a return that straddles four cells in any of them: its Pd half a bin off in range and in
-    Doppler is draw_block's, well above the one-cell test's (draw), which the detection level still uses (its known
-    limit, README "The detection level's peak position")."""
+    Doppler is draw_block's, and the detection level's (which tests with it), well above the one-cell test's (draw)
+    — about half of it at this SNR, which the detection level drew until 2026-11-29."""
     p = _small_preset()
     chain = DspChain(p)
     stat = chain.statistic
     rng = np.random.default_rng(8)
     trials = 400
     rho = 18.0
-    hits = 0
+    hits = {"signal": 0, "detection": 0}
     for _ in range(trials):
         r = (rng.integers(10, p.num_samples - 10) + 0.5) * p.range_resolution_m
         v = (rng.integers(-20, 20) + 0.5) * p.doppler_bin_mps
         r -= v * p.range_rate_coupling_s                   # the chain's peak sits at the coupled range
         rcs = rho - float(equation.snr_db(p, r, 0.0, azimuth_rad=0.0))
-        det = chain.process(synthesize(p, point_targets([r], [0.0], [v], rcs), rng))
-        hits += bool(np.any((np.abs(det.range_m - r) < 1.5 * p.range_resolution_m)
-                            & (np.abs(det.range_rate_mps - v) < 1.5 * p.speed_resolution_mps)))
+        scat = point_targets([r], [0.0], [v], rcs)
+        for level in hits:
+            det = (chain.process(synthesize(p, scat, rng)) if level == "signal"
+                   else detection_model.detect(p, scat, rng, stat))
+            hits[level] += bool(np.any((np.abs(det.range_m - r) < 1.5 * p.range_resolution_m)
+                                       & (np.abs(det.range_rate_mps - v) < 1.5 * p.speed_resolution_mps)))
     e = np.full(20_000, float(stat.energy(10 ** (rho / 10), 0.5, 0.5)))
     block = stat.draw_block(e, np.full(e.size, 0.5), np.full(e.size, 0.5), rng)[0].mean()
     one_cell = stat.draw(e, rng)[0].mean()
-    sig = hits / trials
+    sig, dl = hits["signal"] / trials, hits["detection"] / trials
     se = math.sqrt(0.25 / trials)
     assert abs(block - sig) < 3.0 * se, (block, sig)
+    assert abs(dl - sig) < 3.0 * math.sqrt(2) * se, (dl, sig)
     assert sig > one_cell + 4 * se, (one_cell, sig)

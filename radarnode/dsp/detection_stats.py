@@ -311,6 +311,10 @@ def window_response(window: np.ndarray, delta: np.ndarray) -> np.ndarray:
     return (resp / w.sum()).reshape(d.shape)
 
 
+#: the cells about a return's nearest one that :meth:`DetectionStatistic.draw_block` tests, per axis (bins)
+_BLOCK_STEPS = np.array([-1.0, 0.0, 1.0])
+
+
 class DetectionStatistic:
     """The detection test of one chain: N channels summed non-coherently, two windows, one CFAR.
 
@@ -449,20 +453,16 @@ class DetectionStatistic:
     def draw_block(self, energy: np.ndarray, delta_range: np.ndarray, delta_doppler: np.ndarray,
                    rng: np.random.Generator, interference: np.ndarray | float = 0.0,
                    range_bins: np.ndarray | None = None, n_range: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """:meth:`draw` as the chain tests a return that straddles cells: in its nearest cell and in the neighbours
-        towards it in range, in Doppler and diagonally (2 × 2 cells), each with its share of the return and the
-        windows' correlated noise; detected where the strongest of the four passes the cell's threshold (the chain
-        reports a local maximum of its map above the CFAR's threshold, so a return half a bin off has two cells,
-        half a bin off in both axes four, to be seen in).
+        """:meth:`draw` as the chain tests a return, which spreads over its nearest cell and the neighbours around it:
+        the 3 × 3 cells about the nearest one, each with its share of the return and the windows' correlated noise;
+        detected where the strongest of the nine passes the threshold (the chain reports a local maximum of its map
+        above the CFAR's threshold, so a return half a bin off has two cells to be seen in, half a bin off in both
+        axes four, and its side lobes a few more chances at low SNR).
 
         ``energy``: the windowed energy in the nearest cell (with its straddle, as :meth:`energy` gives it) of
         returns ``delta_range``, ``delta_doppler`` bins from that cell's centre (|δ| ≤ ½; clipped there), shape
-        (n,). The four cells share one threshold (their CA-CFAR rings differ by a column or a row). Returns
+        (n,). The nine cells share one threshold (their CA-CFAR rings differ by a column or a row). Returns
         (detected, statistic of the strongest cell), as :meth:`draw`.
-
-        The detection level does not draw with it yet (it uses :meth:`draw`, the nearest cell alone): with the
-        straddling posts it then detects, the radar tracker lets the merged rails' glint walk a standing track across
-        the road at 130 km/h (tests/test_ambiguity.py), which has to be fixed first.
         """
         e = np.asarray(energy, dtype=np.float64)
         n = e.size
@@ -471,24 +471,22 @@ class DetectionStatistic:
         grid, resp_r, resp_d, chol = self._block_tables()
         near = np.interp(dr, self._delta, self._straddle_r) * np.interp(dd, self._delta, self._straddle_d)
         amp = np.sqrt(e / np.maximum(near, 1e-300))                      # on-bin amplitude
-        step_r = np.where(dr >= 0.0, 1.0, -1.0)                           # the neighbour towards the return
-        step_d = np.where(dd >= 0.0, 1.0, -1.0)
 
         def response(table, x):
             return np.interp(x, grid, table.real) + 1j * np.interp(x, grid, table.imag)
-        a_r = np.stack((response(resp_r, dr), response(resp_r, dr - step_r)), axis=1)      # (n, 2): cells 0, ±1
-        a_d = np.stack((response(resp_d, dd), response(resp_d, dd - step_d)), axis=1)
-        sig = amp[:, None] * (a_r[:, :, None] * a_d[:, None, :]).reshape(n, 4)            # cells (0,0) (0,d) (r,0) (r,d)
-        # white noise in the channels, correlated between the four cells by the windows; the return lies in one
-        # direction of the channel space (the same for its four cells), the other N − 1 directions are noise only
-        z = (rng.standard_normal((n, self.n_channels, 4)) + 1j * rng.standard_normal((n, self.n_channels, 4))) \
+        a_r = response(resp_r, dr[:, None] - _BLOCK_STEPS[None, :])        # (n, 3): cells −1, 0, +1
+        a_d = response(resp_d, dd[:, None] - _BLOCK_STEPS[None, :])
+        sig = amp[:, None] * (a_r[:, :, None] * a_d[:, None, :]).reshape(n, 9)
+        # white noise in the channels, correlated between the nine cells by the windows; the return lies in one
+        # direction of the channel space (the same for its nine cells), the other N − 1 directions are noise only
+        z = (rng.standard_normal((n, self.n_channels, 9)) + 1j * rng.standard_normal((n, self.n_channels, 9))) \
             * math.sqrt(0.5)
-        which = (step_r > 0).astype(np.intp) * 2 + (step_d > 0).astype(np.intp)
-        noise = np.einsum("tij,tcj->tci", chol[which], z)
+        noise = z @ chol.T
         x = np.abs(sig + noise[:, 0, :]) ** 2
         if self.n_channels > 1:
-            x += np.einsum("tci,tci->ti", noise[:, 1:, :].real, noise[:, 1:, :].real)
-            x += np.einsum("tci,tci->ti", noise[:, 1:, :].imag, noise[:, 1:, :].imag)
+            rest = noise[:, 1:, :]
+            x += np.einsum("tci,tci->ti", rest.real, rest.real)
+            x += np.einsum("tci,tci->ti", rest.imag, rest.imag)
         best = x.max(axis=1)
         if range_bins is not None and self.cfar.name == "ca":
             alpha, mean, var, count = self.ring_cut(range_bins, n_range)
@@ -503,19 +501,18 @@ class DetectionStatistic:
 
     def _block_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`draw_block`'s tables, made on its first call: the windows' complex responses over |δ| ≤ 1.5 bins
-        (step 1/2000) and, for each pair of neighbour directions (range −/+, Doppler −/+), the Cholesky factor of the
-        four cells' noise correlation (the Kronecker product of the two axes')."""
+        (step 1/2000) and the Cholesky factor of the nine cells' noise correlation (the Kronecker product of the two
+        axes': E[n_a·conj(n_b)] = ρ[a − b], :func:`noise_correlation`)."""
         tables = self.__dict__.get("_block")
         if tables is None:
             grid = np.linspace(-1.5, 1.5, 6001)
             resp_r, resp_d = window_response(self.range_window, grid), window_response(self.doppler_window, grid)
-            chol = np.empty((4, 4, 4), dtype=np.complex128)
-            for k, (sr, sd) in enumerate(((-1, -1), (-1, 1), (1, -1), (1, 1))):
-                def axis(window, step):      # cells 0 and step: E[n_0·conj(n_step)] = ρ[−step] (noise_correlation)
-                    c = noise_correlation(window)[-step]
-                    return np.array([[1.0, c], [np.conj(c), 1.0]])
-                cov = np.kron(axis(self.range_window, sr), axis(self.doppler_window, sd))
-                chol[k] = np.linalg.cholesky(cov)
+
+            def axis(window):
+                rho = noise_correlation(window)
+                steps = _BLOCK_STEPS.astype(np.int64)
+                return rho[(steps[:, None] - steps[None, :]) % rho.size]
+            chol = np.linalg.cholesky(np.kron(axis(self.range_window), axis(self.doppler_window)))
             tables = self.__dict__["_block"] = (grid, resp_r, resp_d, chol)
         return tables
 
