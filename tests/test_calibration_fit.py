@@ -18,12 +18,16 @@ def _calibration():
     return mod
 
 
+def _setup(swerling: int):
+    """The calibration script, the mimo12 chain's statistic and the Pd tables' grid of ρ for this Swerling case."""
+    cal = _calibration()
+    top = 24.0 if swerling == 0 else 32.0
+    return cal, cal.DspChain(cal.P).statistic, np.arange(12.0, top + 0.01, 1.0)
+
+
 @pytest.mark.parametrize("swerling, target, shift", [(0, 0.5, 0.3), (0, 0.9, -0.2), (1, 0.5, -0.4), (1, 0.9, 0.35)])
 def test_the_fitted_offset_recovers_a_known_shift_with_an_honest_standard_error(swerling, target, shift):
-    cal = _calibration()
-    stat = cal.DspChain(cal.P).statistic
-    top = 24.0 if swerling == 0 else 32.0
-    grid = np.arange(12.0, top + 0.01, 1.0)
+    cal, stat, grid = _setup(swerling)
     samples = 800
     rng = np.random.default_rng(7)
     truth = stat.pd_of_snr(grid - shift, swerling)
@@ -52,10 +56,7 @@ def test_the_fit_against_the_trials_theory_recovers_a_shift_that_theory_at_the_n
     draws exactly from them, shifted by a known Δ, is fitted to that Δ against the trials' own theory
     (:class:`TrialTheory`), while the fit against the uniform curve at the nominal ρ reads the spread as a shift too
     (Swerling 0 near Pd 0.9, where the curve bends)."""
-    cal = _calibration()
-    stat = cal.DspChain(cal.P).statistic
-    top = 24.0 if swerling == 0 else 32.0
-    grid = np.arange(12.0, top + 0.01, 1.0)
+    cal, stat, grid = _setup(swerling)
     samples = 3200
     rng = np.random.default_rng(11)
     gain = 10.0 * np.log10(stat.window_gain)

@@ -439,6 +439,12 @@ class DetectionStatistic:
         x = np.abs(np.sqrt(e) + z0) ** 2
         if self.n_channels > 1:
             x = x + rng.gamma(self.n_channels - 1, 1.0, n)
+        return x > self._threshold(rng, n, interference, range_bins, n_range), x
+
+    def _threshold(self, rng: np.random.Generator, n: int, interference, range_bins, n_range) -> np.ndarray:
+        """One draw of the CFAR threshold α·(Z + I)/N_T for ``n`` tested cells (:meth:`draw`'s: the training sum Z
+        a Gamma law with its exact mean and variance, the cut ring near the map's first or last range bins, the other
+        targets' energy I in the ring for CA-CFAR)."""
         if range_bins is not None and self.cfar.name == "ca":
             alpha, mean, var, count = self.ring_cut(range_bins, n_range)
         else:
@@ -448,7 +454,7 @@ class DetectionStatistic:
         z = rng.gamma(mean * mean / var, var / mean, n)
         if self.cfar.name == "ca":
             z = z + interference
-        return x > alpha * z / count, x
+        return alpha * z / count
 
     def draw_block(self, energy: np.ndarray, delta_range: np.ndarray, delta_doppler: np.ndarray,
                    rng: np.random.Generator, interference: np.ndarray | float = 0.0,
@@ -488,16 +494,7 @@ class DetectionStatistic:
             x += np.einsum("tci,tci->ti", rest.real, rest.real)
             x += np.einsum("tci,tci->ti", rest.imag, rest.imag)
         best = x.max(axis=1)
-        if range_bins is not None and self.cfar.name == "ca":
-            alpha, mean, var, count = self.ring_cut(range_bins, n_range)
-        else:
-            eig = self.eigenvalues
-            alpha, count = self.alpha_ca, eig.size
-            mean, var = self.n_channels * eig.sum(), self.n_channels * np.sum(eig ** 2)
-        train = rng.gamma(mean * mean / var, var / mean, n)
-        if self.cfar.name == "ca":
-            train = train + interference
-        return best > alpha * train / count, best
+        return best > self._threshold(rng, n, interference, range_bins, n_range), best
 
     def _block_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`draw_block`'s tables, made on its first call: the windows' complex responses over |δ| ≤ 1.5 bins
