@@ -399,33 +399,30 @@ def test_the_block_draw_has_the_law_of_the_chains_strongest_of_nine_cells(offset
         assert abs(b - d) < 4.0 * se + 0.02 * d, (q, b, d, se)
 
 
-def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_and_the_detection_level_as_the_block_draw_says():
+def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_as_the_block_draw_says_not_as_one_cell():
     """The chain finds a return that straddles four cells in any of them: its Pd half a bin off in range and in
-    Doppler is draw_block's, and the detection level's (which tests with it), well above the one-cell test's (draw)
-    — about half of it at this SNR, which the detection level drew until 2026-11-29."""
+    Doppler is draw_block's, well above the one-cell test's (draw), which the detection level still uses (its known
+    limit, README "The detection level's peak position": with draw_block the NHTSA lead-decelerating test warned two
+    cycles late at the detection level in its shipped seed, not yet understood)."""
     p = _small_preset()
     chain = DspChain(p)
     stat = chain.statistic
     rng = np.random.default_rng(8)
     trials = 400
     rho = 18.0
-    hits = {"signal": 0, "detection": 0}
+    hits = 0
     for _ in range(trials):
         r = (rng.integers(10, p.num_samples - 10) + 0.5) * p.range_resolution_m
         v = (rng.integers(-20, 20) + 0.5) * p.doppler_bin_mps
         r -= v * p.range_rate_coupling_s                   # the chain's peak sits at the coupled range
         rcs = rho - float(equation.snr_db(p, r, 0.0, azimuth_rad=0.0))
-        scat = point_targets([r], [0.0], [v], rcs)
-        for level in hits:
-            det = (chain.process(synthesize(p, scat, rng)) if level == "signal"
-                   else detection_model.detect(p, scat, rng, stat))
-            hits[level] += bool(np.any((np.abs(det.range_m - r) < 1.5 * p.range_resolution_m)
-                                       & (np.abs(det.range_rate_mps - v) < 1.5 * p.speed_resolution_mps)))
+        det = chain.process(synthesize(p, point_targets([r], [0.0], [v], rcs), rng))
+        hits += bool(np.any((np.abs(det.range_m - r) < 1.5 * p.range_resolution_m)
+                            & (np.abs(det.range_rate_mps - v) < 1.5 * p.speed_resolution_mps)))
     e = np.full(20_000, float(stat.energy(10 ** (rho / 10), 0.5, 0.5)))
     block = stat.draw_block(e, np.full(e.size, 0.5), np.full(e.size, 0.5), rng)[0].mean()
     one_cell = stat.draw(e, rng)[0].mean()
-    sig, dl = hits["signal"] / trials, hits["detection"] / trials
+    sig = hits / trials
     se = math.sqrt(0.25 / trials)
     assert abs(block - sig) < 3.0 * se, (block, sig)
-    assert abs(dl - sig) < 3.0 * math.sqrt(2) * se, (dl, sig)
     assert sig > one_cell + 4 * se, (one_cell, sig)

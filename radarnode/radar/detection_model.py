@@ -184,15 +184,13 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # every scatterer's energy in each tested cell's CA-CFAR training ring raises its threshold, as in the chain
     # (a weak target beside a strong one, or beside the guardrail posts on the stationary Doppler line)
     interference = statistic.ring_interference(cells_rd % m, cells_rd // m, pos_d, rb, e_scat, (m, n_r))
-    # one range–Doppler cell is one range and one speed for all its angle peaks (the chain fits the peak, then
-    # finds the angles in its snapshot): the energy-weighted glint of its peaks, as the fit's likelihood weighs them
-    g_r, g_v, g_alias = _group_position(grp, e_peak, c_r[idx], c_v[idx], c_alias[idx], cells_rd.size, m, n_r)
-    # tested where the chain tests it: in its cell and the neighbours it straddles into (DetectionStatistic.draw_block)
-    hit_rd, stat_rd = statistic.draw_block(e_rd, _circular(g_r - cells_rd // m, n_r), _circular(g_v - cells_rd % m, m),
-                                           rng, interference, cells_rd // m, n_r)
+    hit_rd, stat_rd = statistic.draw(e_rd, rng, interference, cells_rd // m, n_r)
     top = np.zeros(cells_rd.size)
     np.maximum.at(top, grp, e_peak)
     keep = hit_rd[grp] & (e_peak >= top[grp] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
+    # one range–Doppler cell is one range and one speed for all its angle peaks (the chain fits the peak, then
+    # finds the angles in its snapshot): the energy-weighted glint of its peaks, as the fit's likelihood weighs them
+    g_r, g_v, g_alias = _group_position(grp, e_peak, c_r[idx], c_v[idx], c_alias[idx], cells_rd.size, m, n_r)
     idx, grp, e_peak = idx[keep], grp[keep], e_peak[keep]
     pos_r, pos_v, alias_v = g_r[grp], g_v[grp], g_alias[grp]
     share = e_peak / np.maximum(e_rd[grp], 1e-300)
