@@ -284,7 +284,7 @@ def test_a_jump_within_what_a_body_spans_is_no_hop():
     assert abs(results[0.0]) < 0.3 and abs(results[8.0]) > 1.0, results
 
 
-@pytest.mark.parametrize("misses, reset", [(0, False), (1, False), (2, True), (4, True), (8, True)])
+@pytest.mark.parametrize("misses, reset", [(0, False), (1, False), (2, True), (3, True), (4, True), (8, True)])
 def test_a_standing_track_back_from_a_coast_takes_no_speed_from_where_it_finds_its_reflector(misses, reset):
     """COAST_REANCHOR_MISSES = 2: a standing track that coasted that many cycles or more and takes a detection 1.5 m
     across the line of sight (under HOP_M) is re-anchored like a hop — its speed over ground stays a standing

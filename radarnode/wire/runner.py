@@ -266,7 +266,6 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             if clock.realtime:
                 stats.cycle_start_s.append(clock.now() - origin)
                 stats.send_error_s.append(late)
-            if clock.realtime:
                 # the process can be preempted between the check above and the bus taking the header: a cycle
                 # whose header was handed over later than the tolerance went out late, and is flagged as one (it
                 # cannot be recalled; the frames after the header take their own time on any bus)
