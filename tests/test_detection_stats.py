@@ -426,3 +426,47 @@ def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_as_the_block_
     se = math.sqrt(0.25 / trials)
     assert abs(block - sig) < 3.0 * se, (block, sig)
     assert sig > one_cell + 4 * se, (one_cell, sig)
+
+
+def test_a_cells_energy_is_the_channels_mean_of_its_scatterers_sum():
+    """detection_model._channel_energy against the per-channel sums written out: cells of one to four scatterers,
+    spread over a beam; one channel is the plain coherent sum."""
+    rng = np.random.default_rng(5)
+    inv = np.repeat(np.arange(6), [1, 2, 3, 4, 1, 2])
+    z = rng.standard_normal(inv.size) + 1j * rng.standard_normal(inv.size)
+    u = rng.uniform(-0.05, 0.05, inv.size)
+    field = np.bincount(inv, weights=z.real) + 1j * np.bincount(inv, weights=z.imag)
+    for n in (1, 8, 12):
+        want = [np.mean([abs(sum(z[s] * np.exp(2j * np.pi * u[s] * k) for s in np.flatnonzero(inv == c))) ** 2
+                         for k in range(n)]) for c in range(6)]
+        got = detection_model._channel_energy(z, u, field.copy(), inv, n)
+        assert np.allclose(got, want, rtol=1e-12), (n, got, want)
+
+
+@pytest.mark.parametrize("beams_apart, fades", [(0.0, True), (1.0 / 3.0, False)])
+def test_two_reflectors_of_a_body_in_one_beam_fade_only_as_their_channel_phases_allow(beams_apart, fades):
+    """A body's two equal reflectors at one range and speed, in one angle cell: at one angle their random phases
+    cancel in every channel alike (the chain loses them in the frames where the two are nearly opposite), a third of
+    a beamwidth apart the chain's channel-summed map never falls below 2·(1 − |ρ|) = −4.6 dB of their power sum
+    (|ρ| = 0.83, 8 channels). The detection level summed them with one phase for all channels and lost a lead car
+    at 25 m (70 dB) in one frame of an NHTSA run; 25 dB above the threshold it must now see them in every frame."""
+    p = PRESETS["ars408_like"]
+    chain = DspChain(p)
+    du = beams_apart / p.num_virtual                         # in d·sinθ
+    half = math.asin(du / 2 / p.element_spacing_wl)
+    r, v = 30.0 + 0.5 * p.range_resolution_m, 3.0
+    az = np.array([-half, half]) if beams_apart else np.array([0.0, 0.0])
+    scat = point_targets(np.full(2, r), np.degrees(az), np.full(2, v), 0.0)
+    scat.actor_index = np.zeros(2, dtype=np.int64)          # one body
+    # 25 dB above the mean threshold for the pair's power sum (two scatterers at −3 dB each)
+    thr_db = 10 * math.log10(chain.statistic.threshold_mean() / chain.statistic.window_gain)
+    snr = thr_db + 25.0 - 3.0 - 10 * math.log10(p.num_range_bins * p.num_chirps * p.num_virtual)
+    rng = np.random.default_rng(3)
+    frames = 1500
+    seen = sum(bool(np.any(detection_model.detect(p, scat, rng, chain.statistic, snr_db=snr).actor_index == 0))
+               for _ in range(frames))
+    if fades:
+        # P(|cos(φ/2)|² < 10^−2.5 against the mean) ≈ 0.036 with φ uniform: about 54 of 1500 lost
+        assert frames - seen >= 20, seen
+    else:
+        assert seen == frames, seen

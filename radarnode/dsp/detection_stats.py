@@ -472,8 +472,7 @@ class DetectionStatistic:
 
         Measured against the chain at a fixed position in the cell (``benchmarks/calibration.py --only cells``): within
         0.04 of its Pd at every offset, where :meth:`draw` (the nearest cell alone) is up to 0.22 below. The detection
-        level does not use it yet: drawn with it, the NHTSA lead-decelerating test warned two cycles late in its
-        shipped seed (TTC 2.32 s at the warning, 2.4 s asked; the chain warns on time), which is not understood.
+        level tests its range–Doppler cells with it.
         """
         e = np.asarray(energy, dtype=np.float64)
         n = e.size
