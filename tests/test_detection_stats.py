@@ -401,9 +401,8 @@ def test_the_block_draw_has_the_law_of_the_chains_strongest_of_nine_cells(offset
 
 def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_as_the_block_draw_says_not_as_one_cell():
     """The chain finds a return that straddles four cells in any of them: its Pd half a bin off in range and in
-    Doppler is draw_block's, well above the one-cell test's (draw), which the detection level still uses (its known
-    limit, README "The detection level's peak position": with draw_block the NHTSA lead-decelerating test warned two
-    cycles late at the detection level in its shipped seed, not yet understood)."""
+    Doppler is draw_block's (which the detection level tests its cells with), well above the one-cell test's
+    (draw)."""
     p = _small_preset()
     chain = DspChain(p)
     stat = chain.statistic
