@@ -427,19 +427,29 @@ def test_a_return_half_a_bin_off_in_both_axes_is_seen_by_the_chain_as_the_block_
     assert sig > one_cell + 4 * se, (one_cell, sig)
 
 
-def test_a_cells_energy_is_the_channels_mean_of_its_scatterers_sum():
-    """detection_model._channel_energy against the per-channel sums written out: cells of one to four scatterers,
-    spread over a beam; one channel is the plain coherent sum."""
+def test_a_cells_energy_and_position_are_the_channel_summed_maps():
+    """detection_model._cell_sums against the per-channel sums written out: cells of one to four scatterers spread
+    over a beam; the energy is the channels' mean of |S_k|², each position the channel-power-weighted glint (the
+    centroid of the angle spectrum across the channels), within the span ± half a cell; one channel is the plain
+    coherent sum."""
     rng = np.random.default_rng(5)
     inv = np.repeat(np.arange(6), [1, 2, 3, 4, 1, 2])
     z = rng.standard_normal(inv.size) + 1j * rng.standard_normal(inv.size)
     u = rng.uniform(-0.05, 0.05, inv.size)
+    rb = 40.0 + rng.uniform(-0.5, 0.5, inv.size)
+    vb = -7.0 + rng.uniform(-0.5, 0.5, inv.size)
     field = np.bincount(inv, weights=z.real) + 1j * np.bincount(inv, weights=z.imag)
     for n in (1, 8, 12):
-        want = [np.mean([abs(sum(z[s] * np.exp(2j * np.pi * u[s] * k) for s in np.flatnonzero(inv == c))) ** 2
-                         for k in range(n)]) for c in range(6)]
-        got = detection_model._channel_energy(z, u, field.copy(), inv, n)
-        assert np.allclose(got, want, rtol=1e-12), (n, got, want)
+        e, c_r, c_v, c_u = detection_model._cell_sums(z, rb, vb, u, field.copy(), inv, n, 1.0 / max(n, 2))
+        for c in range(6):
+            s = np.flatnonzero(inv == c)
+            snap = [sum(z[i] * np.exp(2j * np.pi * u[i] * k) for i in s) for k in range(n)]
+            assert math.isclose(e[c], np.mean(np.abs(snap) ** 2), rel_tol=1e-12)
+            for got, x, margin in ((c_r, rb, 0.5), (c_v, vb, 0.5), (c_u, u, 0.5 / max(n, 2))):
+                num = [sum(z[i] * x[i] * np.exp(2j * np.pi * u[i] * k) for i in s) for k in range(n)]
+                want = sum((a * np.conj(b)).real for a, b in zip(num, snap)) / sum(abs(b) ** 2 for b in snap)
+                want = min(max(want, x[s].min() - margin), x[s].max() + margin)
+                assert math.isclose(got[c], want, rel_tol=1e-9, abs_tol=1e-12), (n, c, got[c], want)
 
 
 @pytest.mark.parametrize("beams_apart, fades", [(0.0, True), (1.0 / 3.0, False)])

@@ -97,26 +97,46 @@ def _glint(z: np.ndarray, x: np.ndarray, field: np.ndarray, inv: np.ndarray, mar
     return np.clip(g, lo - margin, hi + margin)
 
 
-def _channel_energy(z: np.ndarray, u: np.ndarray, field: np.ndarray, inv: np.ndarray, n_channels: int) -> np.ndarray:
-    """Each cell's energy as the chain's map has it, the mean over the channels of |Σ z·e^{2πi·u·k}|² (shape
-    (cells,)): the map sums the channels non-coherently, so two scatterers in one cell interfere through the
-    likeness of their channel phases (:func:`_array_likeness`), fully only at the same angle. ``|field|²`` (one
-    phase for all channels) let a car's two rear corners a third of a beamwidth apart cancel to −58 dB in one
-    frame, where the chain's map never falls below 2·(1 − 0.83) of their power sum (−4.6 dB). A cell of one
-    scatterer is |z|² either way; only the cells with several are summed channel by channel."""
+def _cell_sums(z: np.ndarray, rb: np.ndarray, vb: np.ndarray, u: np.ndarray, field: np.ndarray, inv: np.ndarray,
+               n_channels: int, beam: float) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Each cell's energy and apparent position as the chain's map has them: (energy, range bin, Doppler bin, d·sinθ),
+    each shape (cells,).
+
+    The map sums the channels non-coherently: the energy is the channels' mean of |S_k|², S_k = Σ z·e^{2πi·u·k}, so
+    two scatterers in one cell interfere only as far as their channel phases are alike (:func:`_array_likeness`),
+    fully only at the same angle (``|Σ z|²``, one phase for all channels, let a car's two rear corners a third of a
+    beamwidth apart cancel to −58 dB in one frame, where the chain's map never falls below 2·(1 − 0.83) of their
+    power sum, −4.6 dB). The position in range and Doppler is the glint of each channel's sum, weighted by the
+    channel's power, Σ_k Re(N_k·conj S_k) / Σ_k |S_k|² with N_k = Σ z·x·e^{2πi·u·k} (the phase slope of the
+    channel-summed map); across the channels the same weighted mean is the centroid of the cell's angle spectrum.
+    Both stay within the span of the cell's scatterers but for half a resolution cell (range and Doppler bins, half
+    a beam ``beam`` in angle), as :func:`_glint` bounds them. A cell of one scatterer is its own position and |z|²;
+    only the cells with several are summed channel by channel (one channel: the coherent sum, :func:`_glint`)."""
     energy = np.abs(field) ** 2
+    c_r = _glint(z, rb, field, inv, 0.5)
+    c_v = _glint(z, vb, field, inv, 0.5)
+    c_u = _glint(z, u, field, inv, 0.5 * beam)
     if n_channels < 2:
-        return energy
+        return energy, c_r, c_v, c_u
     counts = np.bincount(inv, minlength=field.size)
     sel = np.flatnonzero(counts[inv] > 1)
     if sel.size == 0:
-        return energy
+        return energy, c_r, c_v, c_u
     order = sel[np.argsort(inv[sel], kind="stable")]
     cells, starts = np.unique(inv[order], return_index=True)
     rows = z[order, None] * np.exp(2j * np.pi * u[order, None] * np.arange(n_channels)[None, :])
     snap = np.add.reduceat(rows, starts, axis=0)
-    energy[cells] = np.mean(snap.real ** 2 + snap.imag ** 2, axis=1)
-    return energy
+    power = snap.real ** 2 + snap.imag ** 2
+    total = power.sum(axis=1)
+    energy[cells] = total / n_channels
+    ok = total > 0.0
+    for out, x, margin in ((c_r, rb, 0.5), (c_v, vb, 0.5), (c_u, u, 0.5 * beam)):
+        xs = x[order]
+        lo, hi = np.minimum.reduceat(xs, starts), np.maximum.reduceat(xs, starts)
+        num = np.add.reduceat(rows * xs[:, None], starts, axis=0)
+        g = np.einsum("ck,ck->c", num.real, snap.real) + np.einsum("ck,ck->c", num.imag, snap.imag)
+        out[cells] = np.clip(np.where(ok, g / np.where(ok, total, 1.0), 0.5 * (lo + hi)), lo - margin, hi + margin)
+    return energy, c_r, c_v, c_u
 
 
 def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -172,17 +192,13 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     z = amp * np.exp(2j * np.pi * rng.random(k))
     field = np.zeros(uniq.size, dtype=np.complex128)
     np.add.at(field, inv, z)
-    energy = _channel_energy(z, u, field, inv, k_el)
+    # the cells' energies and positions as the chain's channel-summed map has them; where the chain sees a cell's
+    # unresolved scatterers wanders with their phases and can leave their span by up to half a resolution cell (a
+    # bridge deck across the road is seen anywhere along it, not at its middle)
+    energy, c_r, c_v, c_u = _cell_sums(z, rb, vb, u, field, inv, k_el, beam)
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
     fade = energy / wsafe           # the cell's coherent sum against its power sum (mean 1), used for the ring below
-    # where the chain sees the cell's unresolved scatterers: the glint point Re(Σ z·x / Σ z) in each axis (the
-    # phase slope of their coherent sum across the array, the range and the Doppler spectra), which wanders
-    # with the phases and can leave the scatterers' span by up to half a resolution cell (a bridge deck across
-    # the road is seen anywhere along it, not at its middle); one scatterer alone gives its own position
-    c_r = _glint(z, rb, field, inv, 0.5)
-    c_v = _glint(z, vb, field, inv, 0.5)
-    c_u = _glint(z, u, field, inv, 0.5 * beam)
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
     # the speed the chain measures (aliased), with which it takes the coupling out of the peak's range
     # (RadarPreset.range_rate_coupling_s): the peak sits at the true speed's coupling, so a wrapped speed leaves some
