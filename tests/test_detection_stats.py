@@ -479,3 +479,26 @@ def test_two_reflectors_of_a_body_in_one_beam_fade_only_as_their_channel_phases_
         assert frames - seen >= 20, seen
     else:
         assert seen == frames, seen
+
+
+@pytest.mark.parametrize("level", ["detection", "signal"])
+@pytest.mark.parametrize("snr_db", [1e6, 3000.0, 100.5, -60.5, "5", True])
+def test_an_snr_beyond_what_a_scenario_takes_is_refused_by_name_at_both_levels(level, snr_db):
+    """The levels' functions take snr_db directly: beyond signal.snr_db's bounds (−60 … 100 dB) or not a number, a
+    ConfigError naming it, at both levels (1e6 dB raised a bare OverflowError, 3000 dB came out as a 3054 dB
+    detection at the detection level)."""
+    p = PRESETS["mimo12"]
+    scat = point_targets([30.0], [0.0], [5.0])
+    rng = np.random.default_rng(1)
+    with pytest.raises(ConfigError, match="snr_db"):
+        if level == "detection":
+            detection_model.detect(p, scat, rng, DspChain(p).statistic, snr_db=snr_db)
+        else:
+            synthesize(p, scat, rng, snr_db=snr_db)
+
+
+def test_a_statistic_built_for_another_preset_is_refused():
+    p = PRESETS["mimo12"]
+    with pytest.raises(ConfigError, match="statistic.*mimo12"):
+        detection_model.detect(p, point_targets([30.0], [0.0], [5.0]), np.random.default_rng(1),
+                               DspChain(PRESETS["acc_lrr"]).statistic)

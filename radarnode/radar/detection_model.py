@@ -63,6 +63,7 @@ from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
 from radarnode.radar import ambiguity, equation
 from radarnode.radar.calibration import DOA_FLOOR_DB, RESOLUTION, chain_efficiency, false_alarms_per_pfa_cell
+from radarnode.radar.options import check_snr_db
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers
 
@@ -168,9 +169,15 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     """
     p = preset
     scat.require_finite()
-    for name, value in (("snr_db", snr_db), ("power_reduction_db", power_reduction_db)):
-        if value is not None and not np.isfinite(value):
-            raise ConfigError(f"{name}: value {value!r} is not allowed; expected a finite number")
+    snr_db = check_snr_db(snr_db)
+    if not (isinstance(power_reduction_db, (int, float, np.floating, np.integer)) and np.isfinite(power_reduction_db)):
+        raise ConfigError(f"power_reduction_db: value {power_reduction_db!r} is not allowed; expected a finite number")
+    if statistic.n_channels != p.num_virtual or statistic.range_window.size != p.num_range_bins \
+            or statistic.doppler_window.size != p.num_chirps:
+        raise ConfigError(f"statistic: the detection statistic of {statistic.n_channels} channels and "
+                          f"{statistic.range_window.size} × {statistic.doppler_window.size} window samples is not "
+                          f"preset {p.name!r}'s ({p.num_virtual} channels, {p.num_range_bins} × {p.num_chirps}); "
+                          "expected DspChain(preset).statistic")
     n_r = p.num_range_bins
     m, k_el = p.num_chirps, p.num_virtual
     k = len(scat)

@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from radarnode import validate
+from radarnode.errors import ConfigError
 from radarnode.radar.chain import DspConfig
 
 
@@ -45,6 +47,23 @@ class Impairments:
 
 
 
+#: the per-sample, per-channel SNR a scenario's ``signal.snr_db`` and the levels' ``snr_db`` argument take (dB)
+SNR_DB_LIMITS = (-60.0, 100.0)
+
+
+def check_snr_db(snr_db: object) -> float | None:
+    """``snr_db`` as a float within :data:`SNR_DB_LIMITS`, or None; a :class:`ConfigError` naming it otherwise
+    (the detection and signal levels' functions take it directly, not only through a scenario)."""
+    if snr_db is None:
+        return None
+    lo, hi = SNR_DB_LIMITS
+    ok = isinstance(snr_db, (int, float, np.floating, np.integer)) and not isinstance(snr_db, bool)
+    if not ok or not math.isfinite(float(snr_db)) or not lo <= float(snr_db) <= hi:
+        raise ConfigError(f"snr_db: value {snr_db!r} is not allowed; expected a number (dB) from {lo:g} to {hi:g} "
+                          "or None")
+    return float(snr_db)
+
+
 @dataclass(frozen=True)
 class SignalOptions:
     """Options of the scatterer-based levels (scenario key ``signal``)."""
@@ -64,7 +83,7 @@ class SignalOptions:
     def __post_init__(self) -> None:
         validate.choice("dtype", self.dtype, ("complex128", "complex64"))
         if self.snr_db is not None:
-            validate.number("snr_db", self.snr_db, lo=-60.0, hi=100.0)
+            validate.number("snr_db", self.snr_db, lo=SNR_DB_LIMITS[0], hi=SNR_DB_LIMITS[1])
         validate.number("scatterer_spacing_m", self.scatterer_spacing_m, lo=0.1, hi=10.0)
         validate.number("clutter_density_per_m2", self.clutter_density_per_m2, lo=0.0, hi=1.0)
         validate.number("clutter_rcs_dbsm", self.clutter_rcs_dbsm, lo=-60.0, hi=20.0)

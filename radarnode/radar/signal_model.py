@@ -88,7 +88,7 @@ from scipy.special import gammaln
 from radarnode.dsp.spectra import window
 from radarnode.errors import ConfigError
 from radarnode.radar import equation
-from radarnode.radar.options import Impairments
+from radarnode.radar.options import Impairments, check_snr_db
 from radarnode.radar.presets import SPEED_OF_LIGHT_MPS, RadarPreset
 from radarnode.radar.scatterers import Scatterers
 
@@ -163,9 +163,7 @@ class _Terms:
 def _check_common(scat: Scatterers, snr_db: float | None, power_reduction_db: float, dtype) -> None:
     if dtype not in (np.complex128, np.complex64):
         raise ConfigError(f"dtype: value {dtype!r} is not allowed; expected numpy.complex128 or numpy.complex64")
-    if snr_db is not None and not (isinstance(snr_db, (int, float, np.floating, np.integer))
-                                   and math.isfinite(float(snr_db))):
-        raise ConfigError(f"snr_db: value {snr_db!r} is not allowed; expected a finite number (dB) or None")
+    check_snr_db(snr_db)
     if not (isinstance(power_reduction_db, (int, float, np.floating, np.integer))
             and math.isfinite(float(power_reduction_db))):
         raise ConfigError(f"power_reduction_db: value {power_reduction_db!r} is not allowed; "
