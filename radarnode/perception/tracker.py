@@ -64,11 +64,29 @@ _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 ACCEL_WINDOW = 8              # cycles over which an object's acceleration is the slope of its velocity
 
 
-def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window: int = ACCEL_WINDOW) -> np.ndarray:
-    """σ of an acceleration estimated as the least-squares slope of ``window`` velocities ``period_s`` apart,
-    each with σ ``speed_sigma_mps``: σ_v · √(12 / (N (N² − 1))) / T (the slope's variance of a straight-line fit)."""
-    n = window
-    return np.asarray(speed_sigma_mps) * math.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
+def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window=ACCEL_WINDOW) -> np.ndarray:
+    """σ of an acceleration estimated as the least-squares slope of ``window`` (≥ 2; an int or one per value)
+    velocities ``period_s`` apart, each with σ ``speed_sigma_mps``: σ_v · √(12 / (N (N² − 1))) / T (the slope's
+    variance of a straight-line fit)."""
+    n = np.asarray(window, dtype=np.float64)
+    return np.asarray(speed_sigma_mps) * np.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
+
+
+def velocity_slope(history: np.ndarray, count: np.ndarray, period_s: float, min_count: int = 3) -> np.ndarray:
+    """Least-squares slope (m/s², shape (n, 2)) of each row's last ``count`` velocities of ``history`` (n, W, 2; oldest
+    first, one ``period_s`` apart); zero where fewer than ``min_count`` are there."""
+    n, w, _ = history.shape
+    if n == 0:
+        return np.zeros((0, 2))
+    k = np.arange(w, dtype=np.float64)
+    valid = k[None, :] >= (w - count)[:, None]                       # (n, W): the last ``count`` slots
+    m = valid.sum(axis=1).astype(np.float64)
+    kbar = (valid * k).sum(axis=1) / np.maximum(m, 1.0)
+    dk = np.where(valid, k[None, :] - kbar[:, None], 0.0)
+    den = (dk * dk).sum(axis=1)
+    num = np.einsum("nw,nwc->nc", dk, history)
+    slope = num / np.maximum(den, 1e-12)[:, None] / max(period_s, 1e-3)
+    return np.where((count >= min_count)[:, None], slope, 0.0)
 
 
 def orientation_sigma_rad(position_sigma_m: np.ndarray, length_m: np.ndarray) -> np.ndarray:
@@ -422,6 +440,10 @@ class ObjectTracker:
         self.size = np.zeros((0, 2))
         self.power = np.zeros(0)      # RCS in m², averaged in power
         self.tag = np.zeros(0, dtype=np.int64)
+        # the last ACCEL_WINDOW cycles' filtered relative velocities (oldest first) and how many of them there are:
+        # the object's relative acceleration is their slope (:func:`velocity_slope`)
+        self.vh = np.zeros((0, ACCEL_WINDOW, 2))
+        self.nh = np.zeros(0, dtype=np.int64)
         self.last_t: float | None = None
 
     def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float], yaw_rate_rps: float = 0.0
@@ -446,6 +468,7 @@ class ObjectTracker:
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
             if hop.any():
                 self._standing_across(ti[hop], sensor_velocity, z[gi[hop]])
+                self.nh[ti[hop]] = 0            # a re-anchored velocity starts the slope's history again
             fit = np.isfinite(groups.velocity[gi, 0])
             if fit.any():      # a joined near body: its fitted velocity across the line of sight too
                 t, g = ti[fit], gi[fit]
@@ -467,6 +490,10 @@ class ObjectTracker:
             self.tag[ti] = groups.actor_index[gi]
         self.hist = ((self.hist << 1) | hit).astype(np.uint8)
         self.misses = np.where(hit, 0, self.misses + 1)
+        if len(self.x):
+            self.vh = np.roll(self.vh, -1, axis=1)
+            self.vh[:, -1] = self.x[:, 2:4]
+            self.nh = np.minimum(self.nh + 1, ACCEL_WINDOW)
         new_tracks = np.flatnonzero(~used)
         self._initiate(groups, z, new_tracks, sensor_velocity, r_cov)
         # a track standing still over ground is confirmed over a longer window and coasts longer: the ego motion
@@ -583,6 +610,9 @@ class ObjectTracker:
         self.size = np.concatenate([self.size, np.stack([groups.length_m[idx], groups.width_m[idx]], 1)])
         self.power = np.concatenate([self.power, 10.0 ** (groups.rcs_dbsm[idx] / 10.0)])
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
+        # a new track's first velocity is a prior, not a measurement of it: its slope starts with the next cycle's
+        self.vh = np.concatenate([self.vh, np.zeros((k, ACCEL_WINDOW, 2))])
+        self.nh = np.concatenate([self.nh, np.zeros(k, dtype=np.int64)])
 
     def _duplicates(self, eps_m: float = 2.8, eps_long_m: float = 4.5, eps_mps: float = 1.0) -> np.ndarray:
         """Tracks that are parts of an older track's body: within the grouping distance of it and moving with
@@ -611,7 +641,7 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag"):
+        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag", "vh", "nh"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:
@@ -638,15 +668,18 @@ class ObjectTracker:
         p = self.p[idx]
         ol.dist_long_sigma_m, ol.dist_lat_sigma_m = np.sqrt(p[:, 0, 0]), np.sqrt(p[:, 1, 1])
         ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps = np.sqrt(p[:, 2, 2]), np.sqrt(p[:, 3, 3])
-        # acceleration (reported as zero: a constant-velocity filter) known as well as the slope of the velocities
-        ol.arel_long_sigma_mps2 = accel_sigma_mps2(ol.vrel_long_sigma_mps, self.last_dt)
-        ol.arel_lat_sigma_mps2 = accel_sigma_mps2(ol.vrel_lat_sigma_mps, self.last_dt)
+        # acceleration: the slope of the filtered relative velocity over the last ACCEL_WINDOW cycles (the filter is a
+        # constant-velocity one; under a constant acceleration its velocity lags by a constant, so its slope is the
+        # acceleration), known as well as such a slope of velocities that well known; zero until three cycles
+        count = self.nh[idx]
+        slope = velocity_slope(self.vh[idx], count, self.last_dt)
+        ol.arel_long_sigma_mps2 = accel_sigma_mps2(ol.vrel_long_sigma_mps, self.last_dt, np.maximum(count, 2))
+        ol.arel_lat_sigma_mps2 = accel_sigma_mps2(ol.vrel_lat_sigma_mps, self.last_dt, np.maximum(count, 2))
         fresh = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1) <= CONFIRM_HITS
         ol.meas_state = np.where(self.misses[idx] > 0, MEAS_PREDICTED, np.where(fresh, MEAS_NEW, MEAS_MEASURED))
         hits = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1)
         ol.prob_of_exist = np.searchsorted(_PROB_EDGES, 1.0 - 0.5 ** hits, side="right").astype(np.int64) + 1
-        ol.arel_long_mps2 = np.zeros(n)
-        ol.arel_lat_mps2 = np.zeros(n)
+        ol.arel_long_mps2, ol.arel_lat_mps2 = slope[:, 0], slope[:, 1]
         length, width = np.maximum(self.size[idx, 0], 0.2), np.maximum(self.size[idx, 1], 0.2)
         ol.obj_class = classify(length, width, rcs, speed, moving)
         body = MIN_BODY_M[ol.obj_class]
