@@ -62,6 +62,8 @@ WALK_MAX_MPS, BICYCLE_MAX_MPS = 3.0, 9.0
 MIN_BODY_M = np.array([[0.0, 0.0], [3.8, 1.6], [8.0, 2.3], [0.0, 0.0], [1.8, 0.7], [0.0, 0.0], [0.0, 0.0]])
 _PROB_EDGES = np.array([0.25, 0.5, 0.75, 0.9, 0.99, 0.999])
 ACCEL_WINDOW = 8              # cycles over which an object's acceleration is the slope of its velocity
+#: σ of the ego speed the radar is sent (RadarDevice_SpeedInformation 0x300: 0.02 m/s a step)
+EGO_SPEED_SIGMA_MPS = 0.02
 
 
 def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window=ACCEL_WINDOW) -> np.ndarray:
@@ -444,6 +446,10 @@ class ObjectTracker:
         # the object's relative acceleration is their slope (:func:`velocity_slope`)
         self.vh = np.zeros((0, ACCEL_WINDOW, 2))
         self.nh = np.zeros(0, dtype=np.int64)
+        # the same for the sensor's own velocity over ground (sensor axes): a standing object's relative acceleration
+        self.svh = np.zeros((1, ACCEL_WINDOW, 2))
+        self.snh = np.zeros(1, dtype=np.int64)
+        self.last_yaw_rate_rps = 0.0
         self.last_t: float | None = None
 
     def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float], yaw_rate_rps: float = 0.0
@@ -494,6 +500,10 @@ class ObjectTracker:
             self.vh = np.roll(self.vh, -1, axis=1)
             self.vh[:, -1] = self.x[:, 2:4]
             self.nh = np.minimum(self.nh + 1, ACCEL_WINDOW)
+        self.svh = np.roll(self.svh, -1, axis=1)
+        self.svh[0, -1] = (float(sensor_velocity[0]), float(sensor_velocity[1]))
+        self.snh = np.minimum(self.snh + 1, ACCEL_WINDOW)
+        self.last_yaw_rate_rps = float(yaw_rate_rps)
         new_tracks = np.flatnonzero(~used)
         self._initiate(groups, z, new_tracks, sensor_velocity, r_cov)
         # a track standing still over ground is confirmed over a longer window and coasts longer: the ego motion
@@ -614,6 +624,35 @@ class ObjectTracker:
         self.vh = np.concatenate([self.vh, np.zeros((k, ACCEL_WINDOW, 2))])
         self.nh = np.concatenate([self.nh, np.zeros(k, dtype=np.int64)])
 
+    def _acceleration(self, idx: np.ndarray, x: np.ndarray, moving: np.ndarray, sigma_vx: np.ndarray,
+                      sigma_vy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """Relative acceleration (sensor axes, the scene's: the change of the relative velocity over ground, turned
+        into the sensor's axes) of the tracks ``idx`` with states ``x`` and its σ: (long, lat, σ long, σ lat).
+
+        A moving track's is the slope of its filtered relative velocity over the last :data:`ACCEL_WINDOW` cycles (the
+        filter is a constant-velocity one: under a constant acceleration its velocity lags by a constant and its slope
+        is the acceleration; about 5 cycles to half of a step, 9 to 90 %), σ that of such a slope of velocities known
+        to the filter's σ. A standing one's is the standing world's, the slope of the sensor's own velocity (the ego
+        motion the radar is sent) with the sign turned: a post's track, re-anchored at every hop, has no history of
+        its own. Both in the turning sensor frame plus ω × v (the sensor turns at the yaw rate ω). NaN σ (the
+        wire's Invalid) and 0 where fewer than three cycles are behind the slope."""
+        dt = self.last_dt
+        count = self.nh[idx]
+        slope = velocity_slope(self.vh[idx], count, dt)
+        sig_x = accel_sigma_mps2(sigma_vx, dt, np.maximum(count, 2))
+        sig_y = accel_sigma_mps2(sigma_vy, dt, np.maximum(count, 2))
+        world = -velocity_slope(self.svh, self.snh, dt)[0]
+        sig_world = float(accel_sigma_mps2(EGO_SPEED_SIGMA_MPS, dt, max(int(self.snh[0]), 2)))
+        standing = ~moving
+        slope = np.where(standing[:, None], world[None, :], slope)
+        count = np.where(standing, self.snh[0], count)
+        sig_x, sig_y = np.where(standing, sig_world, sig_x), np.where(standing, sig_world, sig_y)
+        w = self.last_yaw_rate_rps
+        ax, ay = slope[:, 0] - w * x[:, 3], slope[:, 1] + w * x[:, 2]
+        known = count >= 3
+        return (np.where(known, ax, 0.0), np.where(known, ay, 0.0), np.where(known, sig_x, np.nan),
+                np.where(known, sig_y, np.nan))
+
     def _duplicates(self, eps_m: float = 2.8, eps_long_m: float = 4.5, eps_mps: float = 1.0) -> np.ndarray:
         """Tracks that are parts of an older track's body: within the grouping distance of it and moving with
         it (one body split into two groups for a few cycles leaves two tracks that would never meet again)."""
@@ -668,18 +707,12 @@ class ObjectTracker:
         p = self.p[idx]
         ol.dist_long_sigma_m, ol.dist_lat_sigma_m = np.sqrt(p[:, 0, 0]), np.sqrt(p[:, 1, 1])
         ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps = np.sqrt(p[:, 2, 2]), np.sqrt(p[:, 3, 3])
-        # acceleration: the slope of the filtered relative velocity over the last ACCEL_WINDOW cycles (the filter is a
-        # constant-velocity one; under a constant acceleration its velocity lags by a constant, so its slope is the
-        # acceleration), known as well as such a slope of velocities that well known; zero until three cycles
-        count = self.nh[idx]
-        slope = velocity_slope(self.vh[idx], count, self.last_dt)
-        ol.arel_long_sigma_mps2 = accel_sigma_mps2(ol.vrel_long_sigma_mps, self.last_dt, np.maximum(count, 2))
-        ol.arel_lat_sigma_mps2 = accel_sigma_mps2(ol.vrel_lat_sigma_mps, self.last_dt, np.maximum(count, 2))
+        ol.arel_long_mps2, ol.arel_lat_mps2, ol.arel_long_sigma_mps2, ol.arel_lat_sigma_mps2 = \
+            self._acceleration(idx, x, moving, ol.vrel_long_sigma_mps, ol.vrel_lat_sigma_mps)
         fresh = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1) <= CONFIRM_HITS
         ol.meas_state = np.where(self.misses[idx] > 0, MEAS_PREDICTED, np.where(fresh, MEAS_NEW, MEAS_MEASURED))
         hits = np.unpackbits(self.hist[idx, None], axis=1).sum(axis=1)
         ol.prob_of_exist = np.searchsorted(_PROB_EDGES, 1.0 - 0.5 ** hits, side="right").astype(np.int64) + 1
-        ol.arel_long_mps2, ol.arel_lat_mps2 = slope[:, 0], slope[:, 1]
         length, width = np.maximum(self.size[idx, 0], 0.2), np.maximum(self.size[idx, 1], 0.2)
         ol.obj_class = classify(length, width, rcs, speed, moving)
         body = MIN_BODY_M[ol.obj_class]
