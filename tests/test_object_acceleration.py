@@ -20,19 +20,24 @@ from tests.conftest import SCENARIOS
 def test_the_slope_of_a_ramp_is_its_acceleration_and_needs_three_velocities():
     t = 0.072
     ramp = np.zeros((4, ACCEL_WINDOW, 2))
-    ramp[:, :, 0] = 20.0 - 2.94 * t * np.arange(ACCEL_WINDOW)          # braking along x
-    ramp[:, :, 1] = 0.5 * t * np.arange(ACCEL_WINDOW)                  # drifting across
+    times = np.tile(t * np.arange(ACCEL_WINDOW), (4, 1))
+    ramp[:, :, 0] = 20.0 - 2.94 * times                               # braking along x
+    ramp[:, :, 1] = 0.5 * times                                        # drifting across
     count = np.array([ACCEL_WINDOW, 3, 2, 0])
-    slope = velocity_slope(ramp, count, t)
+    slope, per = velocity_slope(ramp, times, count)
     assert np.allclose(slope[:2], [[-2.94, 0.5], [-2.94, 0.5]], atol=1e-9)
-    assert np.all(slope[2:] == 0.0)                                   # fewer than three: not measured yet
+    assert np.all(slope[2:] == 0.0) and np.all(np.isinf(per[2:]))    # fewer than three: not measured yet
+    # the slope's σ per m/s of the velocities': the straight-line fit's, √(12 / (N (N² − 1))) / T
+    assert np.allclose(per[:2], [math.sqrt(12 / 504) / t, math.sqrt(12 / 24) / t])
+    assert np.allclose(accel_sigma_mps2(np.array([0.1, 0.1]), t, np.array([8, 3])), 0.1 * per[:2])
     # only the last ``count`` entries count: garbage before them changes nothing
     ramp[1, :ACCEL_WINDOW - 3] = 1e3
-    assert np.allclose(velocity_slope(ramp, count, t)[1], [-2.94, 0.5], atol=1e-9)
-    # the σ of that slope with N velocities each known to σ_v
-    assert math.isclose(float(accel_sigma_mps2(0.1, t, 3)), 0.1 * math.sqrt(12 / 24) / t)
-    assert np.allclose(accel_sigma_mps2(np.array([0.1, 0.1]), t, np.array([3, 8])),
-                       [0.1 * math.sqrt(12 / 24) / t, 0.1 * math.sqrt(12 / 504) / t])
+    assert np.allclose(velocity_slope(ramp, times, count)[0][1], [-2.94, 0.5], atol=1e-9)
+    # a gap (a coast: the history waits for the next measurement) is taken at its real times
+    gap = times.copy()
+    gap[:, -2:] += 3 * t
+    ramp2 = 20.0 - 2.94 * gap
+    assert np.allclose(velocity_slope(np.stack([ramp2, 0 * ramp2], -1), gap, count)[0][0], [-2.94, 0.0])
 
 
 @pytest.mark.parametrize("level", ["object", "detection", "signal"])

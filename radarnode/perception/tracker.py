@@ -74,21 +74,24 @@ def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window=ACCEL_
     return np.asarray(speed_sigma_mps) * np.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
 
 
-def velocity_slope(history: np.ndarray, count: np.ndarray, period_s: float, min_count: int = 3) -> np.ndarray:
+def velocity_slope(history: np.ndarray, times: np.ndarray, count: np.ndarray, min_count: int = 3
+                   ) -> tuple[np.ndarray, np.ndarray]:
     """Least-squares slope (m/s², shape (n, 2)) of each row's last ``count`` velocities of ``history`` (n, W, 2; oldest
-    first, one ``period_s`` apart); zero where fewer than ``min_count`` are there."""
+    first) against their ``times`` (n, W, seconds), and 1/√Σ(t − t̄)² (n,): the slope's σ per m/s of the velocities'
+    (σ_v · √(12 / (N (N² − 1))) / T for N velocities T apart). Zero slope and infinite σ factor where fewer than
+    ``min_count`` are there."""
     n, w, _ = history.shape
     if n == 0:
-        return np.zeros((0, 2))
-    k = np.arange(w, dtype=np.float64)
+        return np.zeros((0, 2)), np.zeros(0)
+    k = np.arange(w)
     valid = k[None, :] >= (w - count)[:, None]                       # (n, W): the last ``count`` slots
-    m = valid.sum(axis=1).astype(np.float64)
-    kbar = (valid * k).sum(axis=1) / np.maximum(m, 1.0)
-    dk = np.where(valid, k[None, :] - kbar[:, None], 0.0)
-    den = (dk * dk).sum(axis=1)
-    num = np.einsum("nw,nwc->nc", dk, history)
-    slope = num / np.maximum(den, 1e-12)[:, None] / max(period_s, 1e-3)
-    return np.where((count >= min_count)[:, None], slope, 0.0)
+    m = np.maximum(valid.sum(axis=1), 1)
+    tbar = np.where(valid, times, 0.0).sum(axis=1) / m
+    dt = np.where(valid, times - tbar[:, None], 0.0)
+    den = (dt * dt).sum(axis=1)
+    ok = (count >= min_count) & (den > 0.0)
+    slope = np.einsum("nw,nwc->nc", dt, np.where(valid[:, :, None], history, 0.0)) / np.where(ok, den, 1.0)[:, None]
+    return np.where(ok[:, None], slope, 0.0), np.where(ok, 1.0 / np.sqrt(np.where(ok, den, 1.0)), np.inf)
 
 
 def orientation_sigma_rad(position_sigma_m: np.ndarray, length_m: np.ndarray) -> np.ndarray:
@@ -445,9 +448,11 @@ class ObjectTracker:
         # the last ACCEL_WINDOW cycles' filtered relative velocities (oldest first) and how many of them there are:
         # the object's relative acceleration is their slope (:func:`velocity_slope`)
         self.vh = np.zeros((0, ACCEL_WINDOW, 2))
+        self.th = np.zeros((0, ACCEL_WINDOW))
         self.nh = np.zeros(0, dtype=np.int64)
         # the same for the sensor's own velocity over ground (sensor axes): a standing object's relative acceleration
         self.svh = np.zeros((1, ACCEL_WINDOW, 2))
+        self.sth = np.zeros((1, ACCEL_WINDOW))
         self.snh = np.zeros(1, dtype=np.int64)
         self.last_yaw_rate_rps = 0.0
         self.last_t: float | None = None
@@ -496,12 +501,13 @@ class ObjectTracker:
             self.tag[ti] = groups.actor_index[gi]
         self.hist = ((self.hist << 1) | hit).astype(np.uint8)
         self.misses = np.where(hit, 0, self.misses + 1)
-        if len(self.x):
-            self.vh = np.roll(self.vh, -1, axis=1)
-            self.vh[:, -1] = self.x[:, 2:4]
-            self.nh = np.minimum(self.nh + 1, ACCEL_WINDOW)
-        self.svh = np.roll(self.svh, -1, axis=1)
-        self.svh[0, -1] = (float(sensor_velocity[0]), float(sensor_velocity[1]))
+        if hit.any():           # a measured velocity joins the track's history; a coasting track's history waits
+            self.vh[hit] = np.roll(self.vh[hit], -1, axis=1)
+            self.th[hit] = np.roll(self.th[hit], -1, axis=1)
+            self.vh[hit, -1], self.th[hit, -1] = self.x[hit, 2:4], t_s
+            self.nh[hit] = np.minimum(self.nh[hit] + 1, ACCEL_WINDOW)
+        self.svh, self.sth = np.roll(self.svh, -1, axis=1), np.roll(self.sth, -1, axis=1)
+        self.svh[0, -1], self.sth[0, -1] = (float(sensor_velocity[0]), float(sensor_velocity[1])), t_s
         self.snh = np.minimum(self.snh + 1, ACCEL_WINDOW)
         self.last_yaw_rate_rps = float(yaw_rate_rps)
         new_tracks = np.flatnonzero(~used)
@@ -622,6 +628,7 @@ class ObjectTracker:
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
         # a new track's first velocity is a prior, not a measurement of it: its slope starts with the next cycle's
         self.vh = np.concatenate([self.vh, np.zeros((k, ACCEL_WINDOW, 2))])
+        self.th = np.concatenate([self.th, np.zeros((k, ACCEL_WINDOW))])
         self.nh = np.concatenate([self.nh, np.zeros(k, dtype=np.int64)])
 
     def _acceleration(self, idx: np.ndarray, x: np.ndarray, moving: np.ndarray, sigma_vx: np.ndarray,
@@ -632,24 +639,23 @@ class ObjectTracker:
         A moving track's is the slope of its filtered relative velocity over the last :data:`ACCEL_WINDOW` cycles (the
         filter is a constant-velocity one: under a constant acceleration its velocity lags by a constant and its slope
         is the acceleration; about 5 cycles to half of a step, 9 to 90 %), σ that of such a slope of velocities known
-        to the filter's σ. A standing one's is the standing world's, the slope of the sensor's own velocity (the ego
-        motion the radar is sent) with the sign turned: a post's track, re-anchored at every hop, has no history of
-        its own. Both in the turning sensor frame plus ω × v (the sensor turns at the yaw rate ω). NaN σ (the
+        to the filter's σ; a coasting track's history waits for its next measurement (its σ grows with the
+        filter's). A standing one's is the standing world's, the slope of the sensor's own velocity (the ego
+        motion the radar is sent) with the sign turned, its σ that slope's for the track's own velocity σ (which grows
+        while it coasts): a post's track, re-anchored at every hop, has no history of its own. Both in the turning sensor frame plus ω × v (the sensor turns at the yaw rate ω). NaN σ (the
         wire's Invalid) and 0 where fewer than three cycles are behind the slope."""
-        dt = self.last_dt
-        count = self.nh[idx]
-        slope = velocity_slope(self.vh[idx], count, dt)
-        sig_x = accel_sigma_mps2(sigma_vx, dt, np.maximum(count, 2))
-        sig_y = accel_sigma_mps2(sigma_vy, dt, np.maximum(count, 2))
-        world = -velocity_slope(self.svh, self.snh, dt)[0]
-        sig_world = float(accel_sigma_mps2(EGO_SPEED_SIGMA_MPS, dt, max(int(self.snh[0]), 2)))
+        slope, per = velocity_slope(self.vh[idx], self.th[idx], self.nh[idx])
+        sig_x, sig_y = sigma_vx * per, sigma_vy * per
+        world, world_per = velocity_slope(self.svh, self.sth, self.snh)
         standing = ~moving
-        slope = np.where(standing[:, None], world[None, :], slope)
-        count = np.where(standing, self.snh[0], count)
-        sig_x, sig_y = np.where(standing, sig_world, sig_x), np.where(standing, sig_world, sig_y)
+        slope = np.where(standing[:, None], -world, slope)
+        # a standing track's: the world's, as far as its own velocity (the filter's σ, grown while it coasts) says
+        # that it stands
+        sig_x = np.where(standing, np.hypot(EGO_SPEED_SIGMA_MPS, sigma_vx) * world_per[0], sig_x)
+        sig_y = np.where(standing, np.hypot(EGO_SPEED_SIGMA_MPS, sigma_vy) * world_per[0], sig_y)
         w = self.last_yaw_rate_rps
         ax, ay = slope[:, 0] - w * x[:, 3], slope[:, 1] + w * x[:, 2]
-        known = count >= 3
+        known = np.isfinite(sig_x)
         return (np.where(known, ax, 0.0), np.where(known, ay, 0.0), np.where(known, sig_x, np.nan),
                 np.where(known, sig_y, np.nan))
 
@@ -680,7 +686,7 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag", "vh", "nh"):
+        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag", "vh", "th", "nh"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:
