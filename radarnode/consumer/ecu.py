@@ -534,9 +534,7 @@ class Ecu:
             # through the IMM's mix with its constant-velocity mode: about −2.4 for a lead braking at −2.94 m/s²)
             sx, sy = (float(t.x[4]), float(t.x[5])) if t.x.size == 6 else (0.0, 0.0)
             k = by_id.get(t.meas_id) if by_id is not None else None
-            # only of a moving object: a standing one's is the ego's own deceleration, which the ECU knows, and its noise
-            # (0.1 m/s² at the object level) put a stopped car's TTC late by a cycle where a scene had one to spare
-            if k is not None and ol is not None and int(ol.dyn_prop[k]) == DYN_MOVING:
+            if k is not None and ol is not None:
                 if float(ol.arel_long_sigma_mps2[k]) <= RADAR_AREL_MAX_SIGMA:       # NaN (Invalid) fails it
                     sx = float(ol.arel_long_mps2[k])
                 if float(ol.arel_lat_sigma_mps2[k]) <= RADAR_AREL_MAX_SIGMA:
