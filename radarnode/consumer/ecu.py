@@ -68,8 +68,6 @@ MAX_GAP_S = 5.0                      # a longer step between cycles is a discont
 STRAY_STEP_PERIODS = 3.0
 #: the least σ taken for a cluster's radial speed (its σ fields come quantised; a Doppler bin is 0.1–0.3 m/s)
 RADIAL_SIGMA_FLOOR_MPS = 0.5
-#: the radar's Obj_ArelLong/ArelLat is taken for a target's relative acceleration where its rms code says at most this
-RADAR_AREL_MAX_SIGMA = 1.0
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
                   "_obstacles", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
@@ -529,17 +527,7 @@ class Ecu:
                 return None
             i = int(cand[np.argmin(xv[cand])])
             t = tracks[i]
-            # the relative acceleration: the radar's own (Obj_ArelLong/ArelLat, from its unquantised measurements)
-            # where it gives it well enough, else this tracker's (from the 0.25 m/s steps of VrelLong on the wire,
-            # through the IMM's mix with its constant-velocity mode: about −2.4 for a lead braking at −2.94 m/s²)
-            sx, sy = (float(t.x[4]), float(t.x[5])) if t.x.size == 6 else (0.0, 0.0)
-            k = by_id.get(t.meas_id) if by_id is not None else None
-            if k is not None and ol is not None:
-                if float(ol.arel_long_sigma_mps2[k]) <= RADAR_AREL_MAX_SIGMA:       # NaN (Invalid) fails it
-                    sx = float(ol.arel_long_mps2[k])
-                if float(ol.arel_lat_sigma_mps2[k]) <= RADAR_AREL_MAX_SIGMA:
-                    sy = float(ol.arel_lat_mps2[k])
-            ax, ay = self.mount.rotate(sx, sy)
+            ax, ay = self.mount.rotate(t.x[4], t.x[5]) if t.x.size == 6 else (0.0, 0.0)
             # the gap along the path changes at the lead's speed along the path less the ego's, and the lead brakes
             # by its change of speed along the path (the tracker's relative acceleration is the change of speed
             # over the ego's: the turning is the road's, radarnode.perception.motion.road_turn): a lead that keeps
