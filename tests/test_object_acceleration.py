@@ -29,7 +29,7 @@ def test_the_slope_of_a_ramp_is_its_acceleration_and_needs_three_velocities():
     assert np.all(slope[2:] == 0.0) and np.all(np.isinf(per[2:]))    # fewer than three: not measured yet
     # the slope's σ per m/s of the velocities': the straight-line fit's, √(12 / (N (N² − 1))) / T
     assert np.allclose(per[:2], [math.sqrt(12 / 504) / t, math.sqrt(12 / 24) / t])
-    assert np.allclose(accel_sigma_mps2(np.array([0.1, 0.1]), t, np.array([8, 3])), 0.1 * per[:2])
+    assert np.allclose([accel_sigma_mps2(0.1, t, 8), accel_sigma_mps2(0.1, t, 3)], 0.1 * per[:2])
     # only the last ``count`` entries count: garbage before them changes nothing
     ramp[1, :ACCEL_WINDOW - 3] = 1e3
     assert np.allclose(velocity_slope(ramp, times, count)[0][1], [-2.94, 0.5], atol=1e-9)

@@ -66,20 +66,19 @@ ACCEL_WINDOW = 8              # cycles over which an object's acceleration is th
 EGO_SPEED_SIGMA_MPS = 0.02
 
 
-def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window=ACCEL_WINDOW) -> np.ndarray:
-    """σ of an acceleration estimated as the least-squares slope of ``window`` (≥ 2; an int or one per value)
-    velocities ``period_s`` apart, each with σ ``speed_sigma_mps``: σ_v · √(12 / (N (N² − 1))) / T (the slope's
-    variance of a straight-line fit)."""
-    n = np.asarray(window, dtype=np.float64)
-    return np.asarray(speed_sigma_mps) * np.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
+def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window: int = ACCEL_WINDOW) -> np.ndarray:
+    """σ of an acceleration estimated as the least-squares slope of ``window`` velocities ``period_s`` apart,
+    each with σ ``speed_sigma_mps``: σ_v · √(12 / (N (N² − 1))) / T (the slope's variance of a straight-line fit)."""
+    n = window
+    return np.asarray(speed_sigma_mps) * math.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
 
 
 def velocity_slope(history: np.ndarray, times: np.ndarray, count: np.ndarray, min_count: int = 3
                    ) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares slope (m/s², shape (n, 2)) of each row's last ``count`` velocities of ``history`` (n, W, 2; oldest
-    first) against their ``times`` (n, W, seconds), and 1/√Σ(t − t̄)² (n,): the slope's σ per m/s of the velocities'
-    (σ_v · √(12 / (N (N² − 1))) / T for N velocities T apart). Zero slope and infinite σ factor where fewer than
-    ``min_count`` are there."""
+    """Least-squares slope (m/s², shape (n, 2)) of each row's last ``count`` velocities of ``history`` (n, W, 2;
+    oldest first) against their ``times`` (n, W, seconds), and 1/√Σ(t − t̄)² (n,): the slope's σ per m/s of the
+    velocities' (:func:`accel_sigma_mps2`'s √(12 / (N (N² − 1))) / T for N velocities T apart). Zero slope and
+    infinite σ factor where fewer than ``min_count`` are there."""
     n, w, _ = history.shape
     if n == 0:
         return np.zeros((0, 2)), np.zeros(0)
@@ -642,8 +641,9 @@ class ObjectTracker:
         to the filter's σ; a coasting track's history waits for its next measurement (its σ grows with the
         filter's). A standing one's is the standing world's, the slope of the sensor's own velocity (the ego
         motion the radar is sent) with the sign turned, its σ that slope's for the track's own velocity σ (which grows
-        while it coasts): a post's track, re-anchored at every hop, has no history of its own. Both in the turning sensor frame plus ω × v (the sensor turns at the yaw rate ω). NaN σ (the
-        wire's Invalid) and 0 where fewer than three cycles are behind the slope."""
+        while it coasts): a post's track, re-anchored at every hop, has no history of its own. Both in the turning
+        sensor frame plus ω × v (the sensor turns at the yaw rate ω). NaN σ (the wire's Invalid) and 0 where fewer
+        than three cycles are behind the slope."""
         slope, per = velocity_slope(self.vh[idx], self.th[idx], self.nh[idx])
         sig_x, sig_y = sigma_vx * per, sigma_vy * per
         world, world_per = velocity_slope(self.svh, self.sth, self.snh)
@@ -686,7 +686,8 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag", "vh", "th", "nh"):
+        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag",
+                     "vh", "th", "nh"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:

@@ -155,7 +155,6 @@ def apparent_positions(preset: RadarPreset, scat: Scatterers) -> tuple[np.ndarra
     return rb, vb, u
 
 
-
 def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, statistic: DetectionStatistic, *,
            power_reduction_db: float = 0.0, snr_db: float | None = None, sidelobes: bool = False) -> Detections:
     """Detections of one frame, computed from the scatterers analytically (see the module docstring).
@@ -205,7 +204,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     energy, c_r, c_v, c_u = _cell_sums(z, rb, vb, u, field, inv, k_el, beam)
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
-    fade = energy / wsafe           # the cell's coherent sum against its power sum (mean 1), used for the ring below
+    fade = energy / wsafe           # the cell's map energy against its power sum (mean 1), used for the ring below
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
     # the speed the chain measures (aliased), with which it takes the coupling out of the peak's range
     # (RadarPreset.range_rate_coupling_s): the peak sits at the true speed's coupling, so a wrapped speed leaves some

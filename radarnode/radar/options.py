@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from radarnode import validate
-from radarnode.errors import ConfigError
+from radarnode.errors import ConfigError, FieldError
 from radarnode.radar.chain import DspConfig
 
 
@@ -52,16 +51,16 @@ SNR_DB_LIMITS = (-60.0, 100.0)
 
 
 def check_snr_db(snr_db: object) -> float | None:
-    """``snr_db`` as a float within :data:`SNR_DB_LIMITS`, or None; a :class:`ConfigError` naming it otherwise
-    (the detection and signal levels' functions take it directly, not only through a scenario)."""
+    """``snr_db`` as a float within :data:`SNR_DB_LIMITS` (:func:`radarnode.validate.number`, numpy scalars taken as
+    their value), or None; a :class:`ConfigError` naming it otherwise (the detection and signal levels' functions take
+    it directly, not only through a scenario)."""
     if snr_db is None:
         return None
-    lo, hi = SNR_DB_LIMITS
-    ok = isinstance(snr_db, (int, float, np.floating, np.integer)) and not isinstance(snr_db, bool)
-    if not ok or not math.isfinite(float(snr_db)) or not lo <= float(snr_db) <= hi:
-        raise ConfigError(f"snr_db: value {snr_db!r} is not allowed; expected a number (dB) from {lo:g} to {hi:g} "
-                          "or None")
-    return float(snr_db)
+    value = snr_db.item() if isinstance(snr_db, (np.floating, np.integer)) else snr_db
+    try:
+        return validate.number("snr_db", value, lo=SNR_DB_LIMITS[0], hi=SNR_DB_LIMITS[1])
+    except FieldError as exc:
+        raise ConfigError(str(exc)) from None
 
 
 @dataclass(frozen=True)
