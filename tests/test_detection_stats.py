@@ -502,3 +502,17 @@ def test_a_statistic_built_for_another_preset_is_refused():
     with pytest.raises(ConfigError, match="statistic.*mimo12"):
         detection_model.detect(p, point_targets([30.0], [0.0], [5.0]), np.random.default_rng(1),
                                DspChain(PRESETS["acc_lrr"]).statistic)
+
+
+@pytest.mark.parametrize("level", ["detection", "signal"])
+@pytest.mark.parametrize("snr_db", [-60.0, -59.5, 99.5, 100.0])
+def test_an_snr_at_and_inside_the_bounds_is_taken_at_both_levels(level, snr_db):
+    """The other side of the refusal above: −60 and 100 dB themselves, and just inside them, are taken."""
+    p = PRESETS["mimo12"]
+    scat = point_targets([30.0], [0.0], [5.0])
+    rng = np.random.default_rng(1)
+    if level == "detection":
+        det = detection_model.detect(p, scat, rng, DspChain(p).statistic, snr_db=snr_db)
+        assert np.all(np.isfinite(det.snr_db))
+    else:
+        assert np.all(np.isfinite(synthesize(p, scat, rng, snr_db=snr_db)))
