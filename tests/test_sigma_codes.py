@@ -41,11 +41,15 @@ def _wire_objects(sc, level: str, db) -> list[dict]:
 
 @pytest.mark.parametrize("level, margin", [("object", 2), ("detection", 1)])
 def test_sigma_codes_grow_with_range(db, level, margin):
-    sc = scenario(NEAR_FAR, ego="{speed_mps: 20.0}", duration=3.0, seed=3)
-    rows = [r for r in _wire_objects(sc, level, db) if r["cycle"] >= 14 and r["Obj_MeasState"] != 3]
+    # three runs pooled: the near car's lateral code lies between two steps (17 in most runs, 18 in some, at the
+    # signal level too), so one run's median can land on either
+    rows = []
+    for seed in (3, 4, 5):
+        sc = scenario(NEAR_FAR, ego="{speed_mps: 20.0}", duration=3.0, seed=seed)
+        rows += [r for r in _wire_objects(sc, level, db) if r["cycle"] >= 14 and r["Obj_MeasState"] != 3]
     near = [r for r in rows if 20 < r["Obj_DistLong"] < 40]
     far = [r for r in rows if 130 < r["Obj_DistLong"] < 170]
-    assert len(near) > 10 and len(far) > 10, (len(near), len(far))
+    assert len(near) > 30 and len(far) > 30, (len(near), len(far))
     med = {name: (np.median([r[name] for r in near]), np.median([r[name] for r in far])) for name in RMS}
     # across the line of sight (range × azimuth noise) and what is derived from it: clearly larger far away (at the
     # detection level the near car's 1.8 m rear also glints across its width — code 17, 0.37 m, where range ×

@@ -313,6 +313,8 @@ def window_response(window: np.ndarray, delta: np.ndarray) -> np.ndarray:
 
 #: the cells about a return's nearest one that :meth:`DetectionStatistic.draw_block` tests, per axis (bins)
 _BLOCK_STEPS = np.array([-1.0, 0.0, 1.0])
+#: :meth:`DetectionStatistic.block_signal`'s response table: its reach (bins) and points a bin
+WIDE_REACH, WIDE_PER_BIN = 3.5, 2000
 
 
 class DetectionStatistic:
@@ -458,7 +460,9 @@ class DetectionStatistic:
 
     def draw_block(self, energy: np.ndarray, delta_range: np.ndarray, delta_doppler: np.ndarray,
                    rng: np.random.Generator, interference: np.ndarray | float = 0.0,
-                   range_bins: np.ndarray | None = None, n_range: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+                   range_bins: np.ndarray | None = None, n_range: int | None = None,
+                   signal: np.ndarray | None = None, signal_rows: np.ndarray | None = None
+                   ) -> tuple[np.ndarray, np.ndarray]:
         """:meth:`draw` as the chain tests a return, which spreads over its nearest cell and the neighbours around it:
         the 3 × 3 cells about the nearest one, each with its share of the return and the windows' correlated noise;
         detected where the strongest of the nine passes the threshold (the chain reports a local maximum of its map
@@ -473,6 +477,11 @@ class DetectionStatistic:
         Measured against the chain at a fixed position in the cell (``benchmarks/calibration.py --only cells``): within
         0.04 of its Pd at every offset, where :meth:`draw` (the nearest cell alone) is up to 0.22 below. The detection
         level tests its range–Doppler cells with it.
+
+        ``signal`` (k, N, 9), complex, with ``signal_rows`` (k,): the noise-free map of those rows' nine cells channel
+        by channel (:meth:`block_signal`: several returns, each at its own offset and angle), in place of the one
+        return that ``energy`` and the offsets describe; the noise is drawn as for every row (the same random stream
+        whichever rows have one).
         """
         e = np.asarray(energy, dtype=np.float64)
         n = e.size
@@ -497,8 +506,58 @@ class DetectionStatistic:
             rest = noise[:, 1:, :]
             x += np.einsum("tci,tci->ti", rest.real, rest.real)
             x += np.einsum("tci,tci->ti", rest.imag, rest.imag)
+        if signal is not None and len(signal_rows):
+            # white in the channels: any basis of them holds the same noise, here the channels' own
+            total = signal + noise[signal_rows]
+            x[signal_rows] = np.einsum("tci,tci->ti", total.real, total.real) \
+                + np.einsum("tci,tci->ti", total.imag, total.imag)
         best = x.max(axis=1)
         return best > self._threshold(rng, n, interference, range_bins, n_range), best
+
+    def block_signal(self, z: np.ndarray, delta_range: np.ndarray, delta_doppler: np.ndarray, u: np.ndarray,
+                     group: np.ndarray, groups: int) -> np.ndarray:
+        """The noise-free map, channel by channel, of each group's returns in the 3 × 3 cells about the group's cell,
+        as :meth:`draw_block`'s ``signal`` takes it: shape (groups, N, 9), cell q = 3·(range step) + (Doppler step).
+
+        Return j (shape (n,) each): on-bin windowed amplitude and phase ``z`` (|z|² the energy :meth:`energy` gives on
+        the bin), ``delta_range`` and ``delta_doppler`` bins from its group's cell (within ±2.5: its response in the
+        cells one bin further is tabulated to ±:data:`WIDE_REACH`, zero beyond), ``u`` = d·sinθ (channel k at phase
+        e^{2πi·u·k}), ``group`` its group in [0, groups). Σ_j z_j·W_r(δr_j − s)·W_d(δd_j − t)·e^{2πi·u_j·k}/√N:
+        one return's nine cells are :meth:`draw_block`'s own (its energy over the N channels is |z|²·|W|²), two
+        returns add in each channel at their own angle, so their cells fade and surge as the chain's do."""
+        table = self._wide_table()
+        n_ch = self.n_channels
+        g = np.asarray(group, dtype=np.int64)
+        order = np.argsort(g, kind="stable")
+        g = g[order]
+        # both axes' responses at the three steps, one linear interpolation in the uniform table (rows: range, Doppler)
+        x = np.stack([np.asarray(delta_range, dtype=np.float64)[order],
+                      np.asarray(delta_doppler, dtype=np.float64)[order]])[:, :, None] - _BLOCK_STEPS
+        pos = (x + WIDE_REACH) * WIDE_PER_BIN
+        i = np.clip(np.floor(pos), 0, table.shape[1] - 2).astype(np.intp)
+        frac = pos - i
+        row = np.arange(2)[:, None, None]
+        a = table[row, i] * (1.0 - frac) + table[row, i + 1] * frac
+        a[(pos < 0.0) | (pos > table.shape[1] - 1)] = 0.0               # zero beyond the table
+        cells = (a[0][:, :, None] * a[1][:, None, :]).reshape(g.size, 9) * np.asarray(z)[order, None]
+        steer = np.exp(2j * np.pi * np.multiply.outer(np.asarray(u, dtype=np.float64)[order], np.arange(n_ch))) \
+            / math.sqrt(n_ch)
+        out = np.zeros((groups, n_ch, 9), dtype=np.complex128)
+        if g.size:
+            starts = np.flatnonzero(np.r_[True, g[1:] != g[:-1]])
+            out[g[starts]] = np.add.reduceat(steer[:, :, None] * cells[:, None, :], starts, axis=0)
+        return out
+
+    def _wide_table(self) -> np.ndarray:
+        """:meth:`block_signal`'s table, (2, ·) complex: the range and Doppler windows' responses (as
+        :meth:`_block_tables`', the convention of the noise correlation) over |δ| ≤ :data:`WIDE_REACH` bins,
+        :data:`WIDE_PER_BIN` points a bin (linear interpolation within 4e-7 of the peak)."""
+        table = self.__dict__.get("_wide")
+        if table is None:
+            grid = np.linspace(-WIDE_REACH, WIDE_REACH, int(2 * WIDE_REACH * WIDE_PER_BIN) + 1)
+            table = self.__dict__["_wide"] = np.stack([window_response(self.range_window, grid),
+                                                       window_response(self.doppler_window, grid)])
+        return table
 
     def _block_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """:meth:`draw_block`'s tables, made on its first call: the windows' complex responses over |δ| ≤ 1.5 bins

@@ -28,12 +28,17 @@ What the signal chain does to scatterers, without the signal:
    in the cell and the eight around it (each with its share of the return at
    the cell's glint point and the windows' correlated noise; the chain sees a
    return that straddles cells in any of them) against the exact CA-CFAR threshold (the ring the map's first and last
-   range bins cut, as the chain has it), raised by the energy every scatterer
+   range bins cut, as the chain has it); a peak that holds several scatterers (its own cell's, and those of the
+   cells it took the energy of) is tested on their sum in those nine cells, channel by channel, each at its own
+   offset and angle (:meth:`DetectionStatistic.block_signal`), so that two reflectors within the resolution fade
+   and surge as in the chain's map wherever the grid cuts them; the threshold is raised by the energy every scatterer
    puts into the cell's training ring (:meth:`DetectionStatistic.ring_interference`:
    the chain's masking of a weak target beside a strong one); in a detected
    cell every angle peak within the chain's DOA floor is a detection, all at
    the cell's one range and speed (the energy-weighted glint of its peaks: the
-   chain fits the peak, then finds the angles in its snapshot);
+   chain fits the peak, then finds the angles in its snapshot); the strongest
+   reports the cell's measured energy, each other one that energy times its
+   power over the strongest's, as the chain's CLEAN reports them;
 5. the estimates carry noise at the chain's measured efficiency times the
    Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
@@ -216,7 +221,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     tag = np.where(lo == hi, lo, -1)
 
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
-    peak, energy = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
+    peak, energy, owner = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
     peak &= ~_inside_lobes(c_r, c_v, c_u, field, energy, tag, n_r, m, k_el, statistic)
     rd = (uniq // n_a)
     idx = np.flatnonzero(peak)
@@ -239,14 +244,20 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     g_r, g_v, g_alias = _group_position(grp, e_peak, c_r[idx], c_v[idx], c_alias[idx], cells_rd.size, m, n_r)
     # tested as the chain tests it: the cell and the eight around it, each with its share of the return and the
     # windows' correlated noise (a return off the cell's centre has more than one cell to be seen in)
+    # a cell of several returns (its peaks' scatterers and those of the cells they took the energy of) is tested on
+    # their sum in its nine cells, each return at its own offset and angle: two reflectors within the resolution
+    # fade and surge as in the chain's map wherever the grid cuts them
+    signal, rows = _group_signal(statistic, z, rb, vb, u, inv, owner, idx, grp, cells_rd, n_r, m)
     hit_rd, stat_rd = statistic.draw_block(e_rd, _circular(g_r - cells_rd // m, n_r), _circular(g_v - cells_rd % m, m),
-                                           rng, interference, cells_rd // m, n_r)
+                                           rng, interference, cells_rd // m, n_r, signal=signal, signal_rows=rows)
     top = np.zeros(cells_rd.size)
     np.maximum.at(top, grp, e_peak)
     keep = hit_rd[grp] & (e_peak >= top[grp] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
     idx, grp, e_peak = idx[keep], grp[keep], e_peak[keep]
     pos_r, pos_v, alias_v = g_r[grp], g_v[grp], g_alias[grp]
-    share = e_peak / np.maximum(e_rd[grp], 1e-300)
+    # the chain reports its cell's energy at the strongest angle peak, and at each other one that energy times the
+    # peak's power over the strongest's (radarnode.dsp.doa: rel_db)
+    share = e_peak / np.maximum(top[grp], 1e-300)
     measured = np.maximum(stat_rd[grp] - statistic.n_channels, 1e-30) * share   # energy estimate
     rho_peak = c_rho[idx]
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
@@ -289,6 +300,33 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     return Detections.concat(parts)
 
 
+def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, vb: np.ndarray, u: np.ndarray,
+                  inv: np.ndarray, owner: np.ndarray, idx: np.ndarray, grp: np.ndarray, cells_rd: np.ndarray,
+                  n_r: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+    """The tested range–Doppler cells of more than one return and their noise-free nine cells, channel by channel:
+    (signal (k, N, 9), rows (k,)) for :meth:`DetectionStatistic.draw_block`. A scatterer belongs to the tested cell
+    of the peak that holds its cell's energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z`` its
+    windowed amplitude at its own cell's centre, from which its on-bin amplitude is taken back."""
+    cell_grp = np.full(owner.size, -1, dtype=np.int64)
+    cell_grp[idx] = grp
+    own = owner[inv]
+    scat_grp = np.where(own >= 0, cell_grp[np.maximum(own, 0)], -1)
+    counts = np.bincount(scat_grp[scat_grp >= 0], minlength=cells_rd.size)
+    rows = np.flatnonzero(counts > 1)
+    if rows.size == 0:
+        return np.zeros((0, statistic.n_channels, 9), dtype=np.complex128), rows
+    slot = np.full(cells_rd.size, -1, dtype=np.int64)
+    slot[rows] = np.arange(rows.size)
+    sel = np.flatnonzero((scat_grp >= 0) & (counts[np.maximum(scat_grp, 0)] > 1))
+    g = scat_grp[sel]
+    ri, vi = np.rint(rb[sel]), np.rint(vb[sel])
+    near = np.maximum(statistic.energy(1.0, rb[sel] - ri, vb[sel] - vi) / statistic.energy(1.0), 1e-300)
+    z_on = z[sel] / np.sqrt(near)                       # the scatterer's amplitude on its bin
+    dr = _circular(rb[sel] - cells_rd[g] // m, n_r)
+    dd = _circular(vb[sel] - cells_rd[g] % m, m)
+    return statistic.block_signal(z_on, dr, dd, u[sel], slot[g], rows.size), rows
+
+
 def _circular(x: np.ndarray, period: int) -> np.ndarray:
     """``x`` wrapped into [−period/2, period/2)."""
     return np.mod(x + period / 2.0, period) - period / 2.0
@@ -316,14 +354,15 @@ def _group_position(grp: np.ndarray, w: np.ndarray, r: np.ndarray, v: np.ndarray
 
 
 def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r: int, m: int, n_beams: int
-           ) -> tuple[np.ndarray, np.ndarray]:
-    """Which cells are peaks, and each peak's energy with its unresolved neighbours' added.
+           ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Which cells are peaks, each peak's energy with its unresolved neighbours' added, and each cell's owner: the
+    peak whose energy it is in (itself for a peak, −1 for a cell whose stronger neighbours are none of them peaks).
 
     Positions in bins (range, Doppler) and beamwidths (angle); Doppler and angle are circular.
     """
     n = energy.size
     if n < 2:
-        return np.ones(n, dtype=bool), energy
+        return np.ones(n, dtype=bool), energy, np.arange(n)
     res = np.asarray(RESOLUTION, dtype=np.float64)
     pts = np.stack([r / res[0], np.mod(v, m) / res[1], np.mod(a, n_beams) / res[2]], axis=1)
     box = np.array([n_r / res[0], m / res[1], n_beams / res[2]])      # every axis is circular
@@ -331,7 +370,7 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     tree = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box)
     pairs = tree.query_pairs(1.0 - 1e-9, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
-        return np.ones(n, dtype=bool), energy
+        return np.ones(n, dtype=bool), energy, np.arange(n)
     i, j = pairs[:, 0], pairs[:, 1]
     stronger = np.where(energy[i] >= energy[j], i, j)
     weaker = np.where(energy[i] >= energy[j], j, i)
@@ -346,7 +385,9 @@ def _peaks(r: np.ndarray, v: np.ndarray, a: np.ndarray, energy: np.ndarray, n_r:
     _, first = np.unique(gives, return_index=True)
     out = energy.copy()
     np.add.at(out, gets[first], energy[gives[first]])
-    return peak, out
+    owner = np.where(peak, np.arange(n), -1)
+    owner[gives[first]] = gets[first]
+    return peak, out, owner
 
 
 #: how far (range and Doppler bins) another return can raise a cell's 3 × 3 neighbourhood of the map
