@@ -18,7 +18,9 @@ Prints Markdown tables:
    separation and the power ratio (the chain's range–Doppler peak test is blind to the angle);
 6. the same in one beam, apart in range or in Doppler only;
 7. the same behind several stronger returns in one cell, or beside a companion in its own cell;
-8. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like).
+8. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like);
+9. (``--only pairs``) two reflectors of one body within the resolution, inside one cell and astride a cell's edge,
+   and a car's reflectors: how often each level sees them and the SNR and RCS it reports.
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 10 minutes; ``--quick`` about 3).
 """
@@ -43,7 +45,7 @@ from radarnode.radar import detection_model, equation  # noqa: E402
 from radarnode.radar.models import make_model  # noqa: E402
 from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
 from radarnode.radar.presets import PRESETS  # noqa: E402
-from radarnode.radar.scatterers import actor_scatterers, point_targets  # noqa: E402
+from radarnode.radar.scatterers import actor_scatterers, point_targets, scene_scatterers  # noqa: E402
 from radarnode.radar.signal_model import synthesize, synthesize_rd  # noqa: E402
 from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
@@ -613,11 +615,124 @@ def edge_table(quick: bool) -> None:
     print()
 
 
+def _pair(p, axis: str, sep: float, centre: float, r0: float, v0: float):
+    """Two equal reflectors of one body ``sep`` cells apart about ``centre`` cells from a cell's centre, along the
+    range or Doppler bins or the beams (d·sinθ in 1/N); the others' at (r0, v0, boresight)."""
+    off = np.array([centre - sep / 2, centre + sep / 2])
+    if axis == "range":
+        s = point_targets(r0 + off * p.range_resolution_m, 0.0, np.full(2, v0), 0.0)
+    elif axis == "Doppler":       # the chain's peak sits at the coupled range: keep it on the range bin
+        s = point_targets(r0 - off * p.doppler_bin_mps * p.range_rate_coupling_s, 0.0, v0 + off * p.doppler_bin_mps,
+                          0.0)
+    else:
+        s = point_targets(np.full(2, r0), np.degrees(np.arcsin(off / p.num_virtual / p.element_spacing_wl)),
+                          np.full(2, v0), 0.0)
+    s.actor_index = np.zeros(2, dtype=np.int64)
+    return s
+
+
+def _pair_seen(level: str, p, chain, scat, snr: float, frames: int, seed: int, r_c: float, v_c: float):
+    """Fraction of frames with a detection within 2 range and 2 Doppler bins of (r_c, v_c), and the strongest such
+    detection's SNR (mean, sd)."""
+    rng = np.random.default_rng(seed)
+    got = []
+    for _ in range(frames):
+        det = (detection_model.detect(p, scat, rng, chain.statistic, snr_db=snr) if level == "detection"
+               else chain.process_rd(synthesize_rd(p, scat, rng, snr_db=snr)))
+        ok = (np.abs(det.range_m - r_c) < 2 * p.range_resolution_m) & (np.abs(det.range_rate_mps - v_c)
+                                                                        < 2 * p.doppler_bin_mps)
+        got.append(det.snr_db[ok].max() if ok.any() else np.nan)
+    got = np.array(got)
+    seen = got[np.isfinite(got)]
+    return seen.size / frames, (seen.mean(), seen.std()) if seen.size else (np.nan, np.nan)
+
+
+def pairs_table(quick: bool) -> None:
+    frames = {"detection": 1200 if not quick else 300, "signal": 300 if not quick else 60}
+    print(f"### Two reflectors of one body within the resolution ({frames['detection']} frames at the detection level, "
+          f"{frames['signal']} at the signal level)\n")
+    print("Two equal point reflectors of one body (random phases each frame), their power sum ρ dB above the "
+          "CA-CFAR threshold's mean; 'centre' is where their middle sits from a cell's centre (0.5: astride the "
+          "edge), in range or Doppler bins or beamwidths; Pd: frames with a detection within 2 range and 2 Doppler "
+          "bins; SNR: the strongest such detection's, mean (sd), dB\n")
+    print("| preset | axis | apart | centre | ρ over threshold | Pd detection | Pd signal | SNR detection | "
+          "SNR signal |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|")
+    cases = [("ars408_like", axis, sep, centre, 4.0) for axis in ("range", "Doppler", "angle")
+             for sep, centre in ((0.1, 0.0), (0.1, 0.5), (0.3, 0.5))]
+    cases += [("ars408_like", "range", 0.5, 0.0, 10.0)]
+    cases += [("mimo12", "range", sep, centre, 10.0) for sep, centre in ((1.0, 0.0), (1.0, 0.5), (1.5, 0.0))]
+    for name, axis, sep, centre, margin in cases:
+        p = PRESETS[name]
+        chain = DspChain(p)
+        stat = chain.statistic
+        threshold_db = 10 * math.log10(stat.threshold_mean() / stat.window_gain)
+        snr = threshold_db + margin - 3.0 - 10 * math.log10(p.num_range_bins * p.num_chirps * p.num_virtual)
+        v0 = 10 * p.doppler_bin_mps
+        r0 = 17 * p.range_resolution_m - v0 * p.range_rate_coupling_s
+        scat = _pair(p, axis, sep, centre, r0, v0)
+        r_c = r0 + (centre * p.range_resolution_m if axis == "range" else 0.0)
+        v_c = v0 + (centre * p.doppler_bin_mps if axis == "Doppler" else 0.0)
+        out = {lv: _pair_seen(lv, p, chain, scat, snr, frames[lv], 11, r_c, v_c) for lv in ("detection", "signal")}
+        print(f"| {name} | {axis} | {sep:.1f} | {centre:.1f} | {margin:.0f} dB | {out['detection'][0]:.3f} | "
+              f"{out['signal'][0]:.3f} | {out['detection'][1][0]:.2f} ({out['detection'][1][1]:.2f}) | "
+              f"{out['signal'][1][0]:.2f} ({out['signal'][1][1]:.2f}) |", flush=True)
+    print()
+    bodies_table(quick)
+
+
+def bodies_table(quick: bool) -> None:
+    frames = 150 if not quick else 40
+    print(f"### A car's reflectors ({frames} frames a row, each level)\n")
+    print("One standing car, the ego standing; each frame the car moved along its line of sight by U(−1, 1) range "
+          "bins; detections within 3 m + 2 range bins, 2 Doppler bins and 15° of its reflectors' mean; detections a "
+          "frame, the strongest one's RCS and the RCS power sum of all (mean (sd), dBsm)\n")
+    print("| preset | car at (x, y), heading | level | detections a frame | strongest RCS | RCS sum |")
+    print("|---|---|---|---:|---:|---:|")
+    for name, x, y, heading in (("mimo12", 15.0, 0.0, 60.0), ("mimo12", 16.0, 0.0, 80.0), ("mimo12", 36.0, -3.0, 10.0),
+                                ("ars408_like", 11.0, 2.0, 60.0)):
+        p = PRESETS[name]
+        chain = DspChain(p)
+        sc = parse_scenario(f"""
+name: body
+duration_s: 1.0
+seed: 1
+radar: {{preset: {name}}}
+ego: {{speed_mps: 0.0}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+actors:
+  - {{id: car, class: car, x_m: {x}, y_m: {y}, speed_mps: 0.0, heading_deg: {heading}}}
+""")
+        scene = Scene(sc)
+        base = scene_scatterers(scene, 0.0, scene.view(0.0), p, p.max_range_m)
+        r_c, az_c = float(np.mean(base.range_m)), float(np.mean(base.azimuth_rad))
+        for level in ("detection", "signal"):
+            rng = np.random.default_rng(7)
+            count, top, total = [], [], []
+            for _ in range(frames):
+                s = base.take(np.arange(len(base)))
+                d = rng.uniform(-1.0, 1.0) * p.range_resolution_m
+                s.x_m, s.y_m = s.x_m + d * math.cos(az_c), s.y_m + d * math.sin(az_c)
+                det = (detection_model.detect(p, s, rng, chain.statistic) if level == "detection"
+                       else chain.process_rd(synthesize_rd(p, s, rng)))
+                ok = ((np.abs(det.range_m - r_c) < 3.0 + 2 * p.range_resolution_m)
+                      & (np.abs(det.range_rate_mps) < 2 * p.doppler_bin_mps)
+                      & (np.abs(det.azimuth_rad - az_c) < math.radians(15.0)))
+                count.append(int(ok.sum()))
+                if ok.any():
+                    top.append(det.rcs_dbsm[ok].max())
+                    total.append(10 * math.log10(np.sum(10 ** (det.rcs_dbsm[ok] / 10))))
+            print(f"| {name} | ({x:.0f}, {y:.0f}) m, {heading:.0f}° | {level} | {np.mean(count):.2f} | "
+                  f"{np.mean(top):.2f} ({np.std(top):.2f}) | {np.mean(total):.2f} ({np.std(total):.2f}) |", flush=True)
+    print()
+
+
 def main() -> None:
     global LEVELS, RESOLUTION_TRIALS, PD_FRAMES, PD_SWERLING
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
-    ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge"))
+    ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
+                                       "pairs"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -642,7 +757,7 @@ def main() -> None:
           f"`python benchmarks/calibration.py{''.join(' ' + shlex.quote(a) for a in sys.argv[1:])}`\n")
     for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("cells", cells_table), ("accuracy", accuracy_table),
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
-                     ("crowd", crowd_table), ("edge", edge_table)):
+                     ("crowd", crowd_table), ("edge", edge_table), ("pairs", pairs_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")
