@@ -485,6 +485,12 @@ class DetectionStatistic:
         """
         e = np.asarray(energy, dtype=np.float64)
         n = e.size
+        if (signal is None) != (signal_rows is None) or (
+                signal is not None and (np.shape(signal) != (len(signal_rows), self.n_channels, 9)
+                                        or (len(signal_rows) and not 0 <= np.min(signal_rows) <= np.max(signal_rows) < n))):
+            raise ConfigError(f"signal: shape {np.shape(signal)} with signal_rows of shape {np.shape(signal_rows)} is not "
+                              f"allowed; expected both or neither, signal (k, {self.n_channels}, 9) for k rows in "
+                              f"[0, {n})")
         dr = np.clip(np.asarray(delta_range, dtype=np.float64), -0.5, 0.5)
         dd = np.clip(np.asarray(delta_doppler, dtype=np.float64), -0.5, 0.5)
         grid, resp_r, resp_d, chol = self._block_tables()
@@ -528,6 +534,8 @@ class DetectionStatistic:
         table = self._wide_table()
         n_ch = self.n_channels
         g = np.asarray(group, dtype=np.int64)
+        if g.size and not 0 <= g.min() <= g.max() < groups:
+            raise ConfigError(f"group: values {g.min()} … {g.max()} are not allowed; expected groups in [0, {groups})")
         order = np.argsort(g, kind="stable")
         g = g[order]
         # both axes' responses at the three steps, one linear interpolation in the uniform table (rows: range, Doppler)

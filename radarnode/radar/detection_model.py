@@ -206,14 +206,20 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # the cells' energies and positions as the chain's channel-summed map has them; where the chain sees a cell's
     # unresolved scatterers wanders with their phases and can leave their span by up to half a resolution cell (a
     # bridge deck across the road is seen anywhere along it, not at its middle)
-    energy, c_r, c_v, c_u = _cell_sums(z, rb, vb, u, field, inv, k_el, beam)
+    # the range and Doppler axes are circular: a cell's scatterers are averaged about one of them (a body astride
+    # ±v_max is seen at ±v_max, never at 0 m/s)
+    first = np.empty(uniq.size, dtype=np.int64)
+    first[inv[::-1]] = np.arange(k)[::-1]
+    rb_u = rb[first][inv] + _circular(rb - rb[first][inv], n_r)
+    vb_u = vb[first][inv] + _circular(vb - vb[first][inv], m)
+    energy, c_r, c_v, c_u = _cell_sums(z, rb_u, vb_u, u, field, inv, k_el, beam)
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
     fade = energy / wsafe           # the cell's map energy against its power sum (mean 1), used for the ring below
     c_rho = np.bincount(inv, weights=rho, minlength=uniq.size)
     # the speed the chain measures (aliased), with which it takes the coupling out of the peak's range
     # (RadarPreset.range_rate_coupling_s): the peak sits at the true speed's coupling, so a wrapped speed leaves some
-    c_alias = np.bincount(inv, weights=amp ** 2 * (vb * p.doppler_bin_mps), minlength=uniq.size) / wsafe
+    c_alias = np.bincount(inv, weights=amp ** 2 * (vb_u * p.doppler_bin_mps), minlength=uniq.size) / wsafe
     lo = np.full(uniq.size, np.iinfo(np.int64).max)
     hi = np.full(uniq.size, np.iinfo(np.int64).min)
     np.minimum.at(lo, inv, scat.actor_index)
@@ -247,7 +253,10 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # a cell of several returns (its peaks' scatterers and those of the cells they took the energy of) is tested on
     # their sum in its nine cells, each return at its own offset and angle: two reflectors within the resolution
     # fade and surge as in the chain's map wherever the grid cuts them
-    signal, rows = _group_signal(statistic, z, rb, vb, u, inv, owner, idx, grp, cells_rd, n_r, m)
+    signal, rows, off_r, off_v = _group_signal(statistic, z, rb, vb, u, inv, owner, idx, grp, cells_rd, n_r, m)
+    # such a peak is seen at the glint of all its scatterers (the chain fits one tone to their sum), not at its
+    # strongest cell's
+    g_r[rows], g_v[rows] = cells_rd[rows] // m + off_r, cells_rd[rows] % m + off_v
     hit_rd, stat_rd = statistic.draw_block(e_rd, _circular(g_r - cells_rd // m, n_r), _circular(g_v - cells_rd % m, m),
                                            rng, interference, cells_rd // m, n_r, signal=signal, signal_rows=rows)
     top = np.zeros(cells_rd.size)
@@ -263,10 +272,14 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
     er, ev, ea = chain_efficiency(snr_peak)
     nz = rng.standard_normal((3, idx.size))
+    # the speed as the chain measures it, within ±v_max; the coupling it takes out with it wraps with it (a body at
+    # the edge read as −v_max has its coupling taken out as at −v_max)
+    raw_v = pos_v + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]
+    est_v = _circular(raw_v, m)
+    alias_v = alias_v + (est_v - raw_v) * p.doppler_bin_mps
+    est_v = est_v * p.doppler_bin_mps
     est_r = np.mod((pos_r + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
                    * p.range_resolution_m - alias_v * p.range_rate_coupling_s, n_r * p.range_resolution_m)
-    est_v = (pos_v + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]) \
-        * p.doppler_bin_mps
     sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
     est_az = np.arcsin(sin_t) + ea * equation.crb_azimuth_rad(p, snr_peak, np.arcsin(sin_t)) * nz[2]
     est_az = np.clip(est_az, -math.pi / 2, math.pi / 2)
@@ -302,11 +315,13 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
 
 def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, vb: np.ndarray, u: np.ndarray,
                   inv: np.ndarray, owner: np.ndarray, idx: np.ndarray, grp: np.ndarray, cells_rd: np.ndarray,
-                  n_r: int, m: int) -> tuple[np.ndarray, np.ndarray]:
+                  n_r: int, m: int) -> tuple[np.ndarray, ...]:
     """The tested range–Doppler cells of more than one return and their noise-free nine cells, channel by channel:
-    (signal (k, N, 9), rows (k,)) for :meth:`DetectionStatistic.draw_block`. A scatterer belongs to the tested cell
-    of the peak that holds its cell's energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z`` its
-    windowed amplitude at its own cell's centre, from which its on-bin amplitude is taken back."""
+    (signal (k, N, 9), rows (k,)) for :meth:`DetectionStatistic.draw_block`, and where each is seen from its cell,
+    (range, Doppler) bins, shape (k,) each. A scatterer belongs to the tested cell of the peak that holds its cell's
+    energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z`` its windowed amplitude at its own cell's
+    centre, from which its on-bin amplitude is taken back. The position is where the chain's peak search starts:
+    the strongest of the nine noise-free cells, interpolated towards its larger neighbour (:func:`_hann_offset`)."""
     cell_grp = np.full(owner.size, -1, dtype=np.int64)
     cell_grp[idx] = grp
     own = owner[inv]
@@ -314,7 +329,7 @@ def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, 
     counts = np.bincount(scat_grp[scat_grp >= 0], minlength=cells_rd.size)
     rows = np.flatnonzero(counts > 1)
     if rows.size == 0:
-        return np.zeros((0, statistic.n_channels, 9), dtype=np.complex128), rows
+        return np.zeros((0, statistic.n_channels, 9), dtype=np.complex128), rows, np.zeros(0), np.zeros(0)
     slot = np.full(cells_rd.size, -1, dtype=np.int64)
     slot[rows] = np.arange(rows.size)
     sel = np.flatnonzero((scat_grp >= 0) & (counts[np.maximum(scat_grp, 0)] > 1))
@@ -324,7 +339,33 @@ def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, 
     z_on = z[sel] / np.sqrt(near)                       # the scatterer's amplitude on its bin
     dr = _circular(rb[sel] - cells_rd[g] // m, n_r)
     dd = _circular(vb[sel] - cells_rd[g] % m, m)
-    return statistic.block_signal(z_on, dr, dd, u[sel], slot[g], rows.size), rows
+    signal = statistic.block_signal(z_on, dr, dd, u[sel], slot[g], rows.size)
+    # where the chain sees such a peak: its map's strongest cell of the nine, moved towards the larger neighbour
+    # along each axis by the Hann window's two-bin ratio (radarnode.dsp.peaks.interpolate, from which its fit
+    # starts), on the noise-free map (a pair's middle for most phases, one of its lobes where they cancel there)
+    power = (signal.real ** 2 + signal.imag ** 2).sum(axis=1).reshape(rows.size, 3, 3)
+    best = np.argmax(power.reshape(rows.size, 9), axis=1)
+    i, j = best // 3, best % 3
+    k = np.arange(rows.size)
+    out = []
+    for axis_i, axis_j, along_range in ((i, j, True), (j, i, False)):
+        def cell(step):
+            at = axis_i + step
+            ok = (at >= 0) & (at <= 2)
+            at = np.clip(at, 0, 2)
+            val = power[k, at, axis_j] if along_range else power[k, axis_j, at]
+            return np.where(ok, val, 0.0)
+        out.append(axis_i - 1.0 + _hann_offset(cell(-1), cell(0), cell(1)))
+    return signal, rows, out[0], out[1]
+
+
+def _hann_offset(p_minus: np.ndarray, p_0: np.ndarray, p_plus: np.ndarray) -> np.ndarray:
+    """The offset of a Hann-windowed tone from the cell of power ``p_0`` with neighbours ``p_minus``, ``p_plus``:
+    (2α − 1)/(α + 1), α = √(larger neighbour / p_0), within ±½ (radarnode.dsp.peaks.interpolate's rule)."""
+    right = p_plus >= p_minus
+    alpha = np.sqrt(np.where(right, p_plus, p_minus) / np.maximum(p_0, 1e-300))
+    delta = np.clip((2.0 * alpha - 1.0) / (alpha + 1.0), 0.0, 0.5)
+    return np.where(right, delta, -delta)
 
 
 def _circular(x: np.ndarray, period: int) -> np.ndarray:
