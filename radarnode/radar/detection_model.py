@@ -274,9 +274,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     nz = rng.standard_normal((3, idx.size))
     # the speed as the chain measures it, within ±v_max; the coupling it takes out with it wraps with it (a body at
     # the edge read as −v_max has its coupling taken out as at −v_max)
-    raw_v = pos_v + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1]
-    est_v = _circular(raw_v, m)
-    alias_v = alias_v + (est_v - raw_v) * p.doppler_bin_mps
+    est_v = _circular(pos_v + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1], m)
+    alias_v = (est_v + _circular(alias_v / p.doppler_bin_mps - est_v, m)) * p.doppler_bin_mps
     est_v = est_v * p.doppler_bin_mps
     est_r = np.mod((pos_r + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
                    * p.range_resolution_m - alias_v * p.range_rate_coupling_s, n_r * p.range_resolution_m)
