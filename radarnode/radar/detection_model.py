@@ -253,10 +253,7 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # a cell of several returns (its peaks' scatterers and those of the cells they took the energy of) is tested on
     # their sum in its nine cells, each return at its own offset and angle: two reflectors within the resolution
     # fade and surge as in the chain's map wherever the grid cuts them
-    signal, rows, off_r, off_v = _group_signal(statistic, z, rb, vb, u, inv, owner, idx, grp, cells_rd, n_r, m)
-    # such a peak is seen at the glint of all its scatterers (the chain fits one tone to their sum), not at its
-    # strongest cell's
-    g_r[rows], g_v[rows] = cells_rd[rows] // m + off_r, cells_rd[rows] % m + off_v
+    signal, rows = _group_signal(statistic, z, rb, vb, u, inv, owner, idx, grp, cells_rd, n_r, m)
     hit_rd, stat_rd = statistic.draw_block(e_rd, _circular(g_r - cells_rd // m, n_r), _circular(g_v - cells_rd % m, m),
                                            rng, interference, cells_rd // m, n_r, signal=signal, signal_rows=rows)
     top = np.zeros(cells_rd.size)
@@ -314,13 +311,14 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
 
 def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, vb: np.ndarray, u: np.ndarray,
                   inv: np.ndarray, owner: np.ndarray, idx: np.ndarray, grp: np.ndarray, cells_rd: np.ndarray,
-                  n_r: int, m: int) -> tuple[np.ndarray, ...]:
+                  n_r: int, m: int) -> tuple[np.ndarray, np.ndarray]:
     """The tested range–Doppler cells of more than one return and their noise-free nine cells, channel by channel:
-    (signal (k, N, 9), rows (k,)) for :meth:`DetectionStatistic.draw_block`, and where each is seen from its cell,
-    (range, Doppler) bins, shape (k,) each. A scatterer belongs to the tested cell of the peak that holds its cell's
-    energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z`` its windowed amplitude at its own cell's
-    centre, from which its on-bin amplitude is taken back. The position is where the chain's peak search starts:
-    the strongest of the nine noise-free cells, interpolated towards its larger neighbour (:func:`_hann_offset`)."""
+    (signal (k, N, 9), rows (k,)) for :meth:`DetectionStatistic.draw_block`. A scatterer belongs to the tested cell
+    of the peak that holds its cell's energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z`` its
+    windowed amplitude at its own cell's centre, from which its on-bin amplitude is taken back. (Where such a peak is
+    seen stays its strongest cell's glint: placing it where the chain's peak search starts on the nine noise-free
+    cells brought a pair's SNR to the chain's, but drew nuisance warnings for cars stopped beside bends at the
+    detection level; BENCHMARKS.md, session 23.)"""
     cell_grp = np.full(owner.size, -1, dtype=np.int64)
     cell_grp[idx] = grp
     own = owner[inv]
@@ -328,7 +326,7 @@ def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, 
     counts = np.bincount(scat_grp[scat_grp >= 0], minlength=cells_rd.size)
     rows = np.flatnonzero(counts > 1)
     if rows.size == 0:
-        return np.zeros((0, statistic.n_channels, 9), dtype=np.complex128), rows, np.zeros(0), np.zeros(0)
+        return np.zeros((0, statistic.n_channels, 9), dtype=np.complex128), rows
     slot = np.full(cells_rd.size, -1, dtype=np.int64)
     slot[rows] = np.arange(rows.size)
     sel = np.flatnonzero((scat_grp >= 0) & (counts[np.maximum(scat_grp, 0)] > 1))
@@ -338,33 +336,7 @@ def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, 
     z_on = z[sel] / np.sqrt(near)                       # the scatterer's amplitude on its bin
     dr = _circular(rb[sel] - cells_rd[g] // m, n_r)
     dd = _circular(vb[sel] - cells_rd[g] % m, m)
-    signal = statistic.block_signal(z_on, dr, dd, u[sel], slot[g], rows.size)
-    # where the chain sees such a peak: its map's strongest cell of the nine, moved towards the larger neighbour
-    # along each axis by the Hann window's two-bin ratio (radarnode.dsp.peaks.interpolate, from which its fit
-    # starts), on the noise-free map (a pair's middle for most phases, one of its lobes where they cancel there)
-    power = (signal.real ** 2 + signal.imag ** 2).sum(axis=1).reshape(rows.size, 3, 3)
-    best = np.argmax(power.reshape(rows.size, 9), axis=1)
-    i, j = best // 3, best % 3
-    k = np.arange(rows.size)
-    out = []
-    for axis_i, axis_j, along_range in ((i, j, True), (j, i, False)):
-        def cell(step):
-            at = axis_i + step
-            ok = (at >= 0) & (at <= 2)
-            at = np.clip(at, 0, 2)
-            val = power[k, at, axis_j] if along_range else power[k, axis_j, at]
-            return np.where(ok, val, 0.0)
-        out.append(axis_i - 1.0 + _hann_offset(cell(-1), cell(0), cell(1)))
-    return signal, rows, out[0], out[1]
-
-
-def _hann_offset(p_minus: np.ndarray, p_0: np.ndarray, p_plus: np.ndarray) -> np.ndarray:
-    """The offset of a Hann-windowed tone from the cell of power ``p_0`` with neighbours ``p_minus``, ``p_plus``:
-    (2α − 1)/(α + 1), α = √(larger neighbour / p_0), within ±½ (radarnode.dsp.peaks.interpolate's rule)."""
-    right = p_plus >= p_minus
-    alpha = np.sqrt(np.where(right, p_plus, p_minus) / np.maximum(p_0, 1e-300))
-    delta = np.clip((2.0 * alpha - 1.0) / (alpha + 1.0), 0.0, 0.5)
-    return np.where(right, delta, -delta)
+    return statistic.block_signal(z_on, dr, dd, u[sel], slot[g], rows.size), rows
 
 
 def _circular(x: np.ndarray, period: int) -> np.ndarray:
