@@ -432,7 +432,6 @@ class ObjectTracker:
                  sigma_az_rad: float = math.radians(0.3)) -> None:
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
         self.sigma_az_rad = sigma_az_rad
-        self.last_dt = 0.0
         self.max_objects = max_objects
         self.x = np.zeros((0, 4))
         self.p = np.zeros((0, 4, 4))
@@ -462,8 +461,6 @@ class ObjectTracker:
         groups = group_detections(det)
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
-        if dt > 0:
-            self.last_dt = dt
         if len(self.x):
             self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps,
                                      sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])))

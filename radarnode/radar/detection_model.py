@@ -200,7 +200,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     amp = np.sqrt(statistic.energy(rho, rb - ri, vb - vi))
     uniq, inv = np.unique(cell, return_inverse=True)
     inv = inv.ravel()
-    z = amp * np.exp(2j * np.pi * rng.random(k))
+    phase = np.exp(2j * np.pi * rng.random(k))
+    z = amp * phase
     field = np.zeros(uniq.size, dtype=np.complex128)
     np.add.at(field, inv, z)
     # the cells' energies and positions as the chain's channel-summed map has them; where the chain sees a cell's
@@ -210,8 +211,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # ±v_max is seen at ±v_max, never at 0 m/s)
     first = np.empty(uniq.size, dtype=np.int64)
     first[inv[::-1]] = np.arange(k)[::-1]
-    rb_u = rb[first][inv] + _circular(rb - rb[first][inv], n_r)
-    vb_u = vb[first][inv] + _circular(vb - vb[first][inv], m)
+    ref = first[inv]                                   # each scatterer's cell's first scatterer
+    rb_u = rb[ref] + _circular(rb - rb[ref], n_r)
+    vb_u = vb[ref] + _circular(vb - vb[ref], m)
     energy, c_r, c_v, c_u = _cell_sums(z, rb_u, vb_u, u, field, inv, k_el, beam)
     w = np.bincount(inv, weights=amp ** 2, minlength=uniq.size)
     wsafe = np.maximum(w, 1e-300)
@@ -253,7 +255,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     # a cell of several returns (its peaks' scatterers and those of the cells they took the energy of) is tested on
     # their sum in its nine cells, each return at its own offset and angle: two reflectors within the resolution
     # fade and surge as in the chain's map wherever the grid cuts them
-    signal, rows = _group_signal(statistic, z, rb, vb, u, inv, owner, idx, grp, cells_rd, n_r, m)
+    signal, rows = _group_signal(statistic, np.sqrt(statistic.energy(rho)) * phase, rb, vb, u, inv, owner, idx, grp,
+                                 cells_rd, n_r, m)
     hit_rd, stat_rd = statistic.draw_block(e_rd, _circular(g_r - cells_rd // m, n_r), _circular(g_v - cells_rd % m, m),
                                            rng, interference, cells_rd // m, n_r, signal=signal, signal_rows=rows)
     top = np.zeros(cells_rd.size)
@@ -309,13 +312,13 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     return Detections.concat(parts)
 
 
-def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, vb: np.ndarray, u: np.ndarray,
+def _group_signal(statistic: DetectionStatistic, z_on: np.ndarray, rb: np.ndarray, vb: np.ndarray, u: np.ndarray,
                   inv: np.ndarray, owner: np.ndarray, idx: np.ndarray, grp: np.ndarray, cells_rd: np.ndarray,
                   n_r: int, m: int) -> tuple[np.ndarray, np.ndarray]:
     """The tested range–Doppler cells of more than one return and their noise-free nine cells, channel by channel:
     (signal (k, N, 9), rows (k,)) for :meth:`DetectionStatistic.draw_block`. A scatterer belongs to the tested cell
-    of the peak that holds its cell's energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z`` its
-    windowed amplitude at its own cell's centre, from which its on-bin amplitude is taken back. (Where such a peak is
+    of the peak that holds its cell's energy (``owner``, :func:`_peaks`; none where that peak is hidden); ``z_on`` its
+    windowed amplitude and phase on its own bin (without the straddle). (Where such a peak is
     seen stays its strongest cell's glint: placing it where the chain's peak search starts on the nine noise-free
     cells brought a pair's SNR to the chain's, but drew nuisance warnings for cars stopped beside bends at the
     detection level; BENCHMARKS.md, session 23.)"""
@@ -331,12 +334,9 @@ def _group_signal(statistic: DetectionStatistic, z: np.ndarray, rb: np.ndarray, 
     slot[rows] = np.arange(rows.size)
     sel = np.flatnonzero((scat_grp >= 0) & (counts[np.maximum(scat_grp, 0)] > 1))
     g = scat_grp[sel]
-    ri, vi = np.rint(rb[sel]), np.rint(vb[sel])
-    near = np.maximum(statistic.energy(1.0, rb[sel] - ri, vb[sel] - vi) / statistic.energy(1.0), 1e-300)
-    z_on = z[sel] / np.sqrt(near)                       # the scatterer's amplitude on its bin
     dr = _circular(rb[sel] - cells_rd[g] // m, n_r)
     dd = _circular(vb[sel] - cells_rd[g] % m, m)
-    return statistic.block_signal(z_on, dr, dd, u[sel], slot[g], rows.size), rows
+    return statistic.block_signal(z_on[sel], dr, dd, u[sel], slot[g], rows.size), rows
 
 
 def _circular(x: np.ndarray, period: int) -> np.ndarray:
