@@ -535,3 +535,128 @@ actors:
     assert r.checked and r.passed, r.reasons
     lms = r.trace["ecu"].landmarks.landmarks
     assert any(lm.overhead for lm in lms) and any(lm.ground for lm in lms)   # the deck recognised, the car its own
+
+
+# --- an object the radar loses for a while and re-reports at its place ---------------------------------------------
+
+
+@pytest.mark.parametrize("shared, own", [(4, False), (5, False), (6, True), (20, True)])
+def test_a_new_track_at_a_structure_is_the_object_that_stood_there_measured_with_it(shared, own):
+    # a recognised deck whose track is alive, and the landmark of a car under it whose track ended: a new track at the
+    # car's place is the car again if the car was measured together with the deck in more than POOL_SHARED of its 20
+    # cycles (5: just below, at, just above, all), one of the deck's parts if the two took turns (glint)
+    assert O.POOL_SHARED * 20 == 5
+    m = O.LandmarkMap(0.5, LAM)
+    deck = m.observe(1, 1, 302.9, 0.0, 0.0, 100.0, 25.0)          # the deck's landmark, filed where first seen
+    deck.overhead = True
+    car = O.Landmark(303.0, 0.0)
+    car.cycles = list(range(1, 41, 2))[: 20 - shared] + list(range(0, 40, 2))[:shared]
+    car.range_m = [100.0] * 20
+    deck.cycles = list(range(0, 40, 2))
+    m.landmarks.append(car)
+    assert (m.separate(302.8, 0.0, 0.0, deck) is car) == own
+    got = m.observe(2, 5, 302.8, 0.0, 0.0, 40.0, 12.0)           # nearer the deck's landmark than the car's
+    assert (got is car) == own and (got is deck) != own
+    # a car's landmark that a live track holds, that moved, or that lies beyond MATCH_LAT_M is never the one
+    del m.by_track[2]
+    m.by_track[3] = car
+    assert m.separate(302.8, 0.0, 0.0, deck) is None
+    del m.by_track[3]
+    car.moved = True
+    assert m.separate(302.8, 0.0, 0.0, deck) is None
+    car.moved = False
+    assert (m.separate(302.8, 0.0, 0.0, deck) is car) == own
+    car.y_m = O.MATCH_LAT_M + 0.1
+    assert m.separate(302.8, 0.0, 0.0, deck) is None
+
+
+def _stationary_car_cycles(ecu, t0, n, oid, x0, speed=13.89, dt=0.072, deck=None):
+    """Feed ``n`` cycles of a stationary car in the path (object ``oid``, first at ``x0`` m) to ``ecu``, the ego at
+    ``speed``; ``deck``: also a deck (object 1) this many metres nearer, measured in the same cycles. Returns the
+    cycles in which FCW's target was the car's track and the last time."""
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    chosen, t = [], t0
+    for k in range(n):
+        t = t0 + k * dt
+        x = x0 - speed * k * dt
+        rows = [(oid, x, 12.0, 1)] + ([(1, x - deck, 25.0, 7)] if deck is not None else [])
+        ol = ObjectList.empty(len(rows))
+        for j, (i, xx, rcs, cls) in enumerate(rows):
+            ol.id[j], ol.dist_long_m[j], ol.rcs_dbsm[j], ol.obj_class[j] = i, xx, rcs, cls
+            ol.vrel_long_mps[j] = -speed
+            ol.dyn_prop[j], ol.meas_state[j] = DYN_STATIONARY, MEAS_MEASURED
+            ol.dist_long_sigma_m[j] = ol.dist_lat_sigma_m[j] = 0.2
+            ol.vrel_long_sigma_mps[j] = ol.vrel_lat_sigma_mps[j] = 0.2
+            ol.length_m[j], ol.width_m[j] = 4.5, 1.8
+        ecu.set_ego(t, speed, 0.0)
+        d = ecu.on_cycle(t, ObjectCycle(k, t, ol, True, True))
+        target = d.fcw_target
+        if target is not None and target.object_id == oid:
+            chosen.append(k)
+    return chosen, t
+
+
+@pytest.mark.parametrize("before", [0, 8])
+def test_a_car_the_radar_re_creates_where_it_stood_is_a_candidate_at_once(before):
+    # a stationary car in the path tracked for `before` cycles (0: none), lost for 20 cycles (the radar's object
+    # deleted), then reported again at its place under a new object ID: with the car's history the new track is
+    # FCW's target from its first confirmed cycle (its obstacle and lane association carried over); without it, only
+    # after OBSTACLE_MIN_AGE cycles of its own
+    ecu = Ecu()
+    t = 0.0
+    if before:
+        chosen, t = _stationary_car_cycles(ecu, 0.0, before, 2, 120.0)
+        assert chosen                              # the car was a candidate before it was lost
+    gap = 20 * 0.072
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import ObjectList
+    for k in range(20):                            # nothing reported: the car's track ends
+        t += 0.072
+        ecu.set_ego(t, 13.89, 0.0)
+        ecu.on_cycle(t, ObjectCycle(100 + k, t, ObjectList.empty(0), True, True))
+    x0 = 120.0 - 13.89 * (before * 0.072 + gap) if before else 120.0 - 13.89 * (8 * 0.072 + gap)
+    chosen, _ = _stationary_car_cycles(ecu, t + 0.072, 10, 5, x0)
+    first = chosen[0]
+    if before:
+        assert first == 1                          # confirmed by its second report, and at once FCW's target
+    else:
+        assert first >= 1 + 3                      # a new object: OBSTACLE_MIN_AGE cycles of its own first
+
+
+@pytest.mark.parametrize("with_deck", [False, True])
+def test_a_car_lost_under_a_recognised_deck_is_that_car_again_not_a_part_of_the_deck(with_deck):
+    # a stationary car in the path (with a deck 7 m nearer, measured in the same cycles, recognised as overhead), its
+    # track ended after 20 cycles without it, then reported anew at its place: FCW's target at once, not a deck part
+    ecu = Ecu()
+    chosen, t = _stationary_car_cycles(ecu, 0.0, 12, 2, 120.0, deck=7.0 if with_deck else None)
+    assert any(lm.obstacle and min(lm.rcs_dbsm) < 20.0 for lm in ecu.landmarks.landmarks)   # the car's place
+    if with_deck:
+        for lm in ecu.landmarks.landmarks:         # the deck recognised (its two-ray test is tested above)
+            if lm.range_m and min(lm.rcs_dbsm) > 20.0:
+                lm.overhead = True
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import ObjectList
+    for k in range(20):
+        t += 0.072
+        ecu.set_ego(t, 13.89, 0.0)
+        if with_deck:                              # the deck still measured alone: its track lives on
+            _, t = _stationary_car_cycles_deck_only(ecu, t, 120.0 - 13.89 * (12 + k) * 0.072 - 7.0)
+        else:
+            ecu.on_cycle(t, ObjectCycle(100 + k, t, ObjectList.empty(0), True, True))
+    chosen, _ = _stationary_car_cycles(ecu, t + 0.072, 8, 5, 120.0 - 13.89 * 32 * 0.072,
+                                       deck=7.0 if with_deck else None)
+    assert chosen and chosen[0] == 1
+
+
+def _stationary_car_cycles_deck_only(ecu, t, x):
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    ol = ObjectList.empty(1)
+    ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = 1, x, 25.0, 7
+    ol.vrel_long_mps[0] = -13.89
+    ol.dyn_prop[0], ol.meas_state[0] = DYN_STATIONARY, MEAS_MEASURED
+    ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
+    ol.length_m[0], ol.width_m[0] = 10.0, 20.0
+    ecu.on_cycle(t, ObjectCycle(0, t, ol, True, True))
+    return None, t

@@ -48,6 +48,7 @@ VEHICLE_CLASSES = (1, 2, 4)          # car, truck, motorcycle: stationary ones s
 #: (a car's rear ≈ 10 dBsm; a guardrail post, a pedestrian ≈ −5) and has been tracked for this many cycles
 OBSTACLE_RCS_DBSM = 0.0          # of the track's power-averaged RCS: a car ≈ 10, a motorcycle ≈ 3, merged posts ≈ −2
 OBSTACLE_MIN_AGE = 4
+OBSTACLE_RCS_POWER = 10.0 ** (OBSTACLE_RCS_DBSM / 10.0)
 RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
@@ -70,7 +71,7 @@ STRAY_STEP_PERIODS = 3.0
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
-                  "_obstacles", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
+                  "_obstacles", "_continued", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
                   "_last_out_t", "acc", "fcw", "odometry")
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
@@ -152,6 +153,7 @@ class Ecu:
         self._fcw_target_id: int | None = None
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
+        self._continued: set[int] = set()         # tracks that took over the state of an object standing where they are
         self._last_out_t: float | None = None
         if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
             raise ValueError(f"Ecu wavelength_m: value {wavelength_m!r} is not allowed; expected the radar's carrier "
@@ -232,7 +234,7 @@ class Ecu:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
-        self._rcs_power, self._obstacles = {}, set()
+        self._rcs_power, self._obstacles, self._continued = {}, set(), set()
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.trails.clear()
@@ -476,15 +478,30 @@ class Ecu:
                     old = self._rcs_power.get(t.id)
                     p = 10.0 ** (rcs / 10.0)
                     self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
-                mean_rcs = 10.0 * math.log10(max(self._rcs_power.get(t.id, 1e-12), 1e-12))
-                if t.age >= OBSTACLE_MIN_AGE and mean_rcs >= OBSTACLE_RCS_DBSM:
+                if t.age >= OBSTACLE_MIN_AGE and self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                     self._obstacles.add(t.id)
+                if t.id in self._obstacles and landmark is not None:
+                    landmark.obstacle = True
             # (a coasting track keeps what it was); any track never seen moving at the place of a bridge is part of it
-            # (the radar reports its parts as objects of their own, moving or not as its Doppler makes them)
+            # (the radar reports its parts as objects of their own, moving or not as its Doppler makes them) —
+            # unless an object of its own stood there, measured together with the structure: then it is that object
+            # again (the radar lost a car under a deck for a while: LandmarkMap.separate)
+            place = landmark
             overhead = landmark is not None and landmark.overhead
             if not overhead and landmark is None and t.id not in self._moved and self.landmarks.landmarks:
-                overhead = self.landmarks.match(wx, wy, heading_there, overhead_only=True,
-                                                beyond_m=OVERHEAD_DEPTH_M) is not None
+                structure = self.landmarks.match(wx, wy, heading_there, overhead_only=True, beyond_m=OVERHEAD_DEPTH_M)
+                if structure is not None:
+                    place = self.landmarks.separate(wx, wy, heading_there, structure)
+                    overhead = place is None
+            if place is not None and place.obstacle and not overhead and t.id not in self._continued:
+                # where a collision candidate stood, a track the radar creates anew is that object again: a candidate
+                # from its first cycle there if it reflects like one, and in the path if the object was (the car
+                # the deck masked for a second must not cost the warning the four cycles of a new object)
+                self._continued.add(t.id)
+                if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
+                    self._obstacles.add(t.id)
+                if place.in_path >= ENTER_CYCLES:
+                    self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead
             obstacle[i] = t.id in self._obstacles and not overhead
@@ -509,6 +526,7 @@ class Ecu:
                              self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
+        self._continued &= alive
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
@@ -516,6 +534,10 @@ class Ecu:
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
         # the target at its edge, does not switch)
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
+        for tid in ids:                    # each landmark keeps its track's lane association (above)
+            lm = self.landmarks.by_track.get(tid)
+            if lm is not None:
+                lm.in_path = self._in_path[tid]
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
         entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
         held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])

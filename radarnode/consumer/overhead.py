@@ -223,6 +223,8 @@ class Landmark:
     overhead: bool = False                          # latched once the test says so
     moved: bool = False                             # a track seen moving stopped here: a vehicle, never overhead
     ground: bool = False                            # an object of its own beside a structure: never overhead
+    obstacle: bool = False                          # a track filed here qualified as a collision candidate (the ECU)
+    in_path: int = 0                                # cycles in a row its last track was in the ECU's path
     fit: Fit | None = None
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
     latched_range_m: float | None = None            # the range at which the overhead decision was latched
@@ -334,6 +336,10 @@ class LandmarkMap:
             # (a post of the guardrail beside a stopped car must not mix into the car's history)
             busy = {id(v) for v in self.by_track.values()}
             lm = self.match(x_m, y_m, heading_rad, exclude=busy)
+            if lm is not None and lm.overhead and id(lm) in busy:
+                # a structure's track is alive: an object that stood here on its own, measured together with the
+                # structure, is back (the radar lost a car under a deck for a while), not one of the structure's parts
+                lm = self.separate(x_m, y_m, heading_rad, lm, busy) or lm
             if lm is None:
                 lm = Landmark(x_m, y_m)
                 self.landmarks.append(lm)
@@ -361,6 +367,27 @@ class LandmarkMap:
                         self.landmarks.append(own)
                         self.by_track[track_id] = lm = own
         return lm
+
+    def separate(self, x_m: float, y_m: float, heading_rad: float, structure: Landmark,
+                 busy: set[int] | None = None) -> Landmark | None:
+        """A free landmark at (x_m, y_m) of an object of its own beside ``structure`` (a recognised structure's
+        landmark): not overhead, never moved, and measured together with the structure in more than
+        :data:`POOL_SHARED` of its cycles (the structure's parts take turns with it: glint), or None."""
+        if busy is None:
+            busy = {id(v) for v in self.by_track.values()}
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        best, best_d = None, math.inf
+        for cand in self.landmarks:
+            if cand.overhead or cand.moved or id(cand) in busy or not cand.cycles:
+                continue
+            dx, dy = cand.x_m - x_m, cand.y_m - y_m
+            along, across = c * dx + s * dy, -s * dx + c * dy
+            if abs(along) <= MATCH_LONG_M and abs(across) <= MATCH_LAT_M and abs(along) < best_d:
+                best, best_d = cand, abs(along)
+        if best is None:
+            return None
+        shared = len(set(best.cycles).intersection(structure.cycles))
+        return best if shared > POOL_SHARED * len(best.cycles) else None
 
     def match(self, x_m: float, y_m: float, heading_rad: float, overhead_only: bool = False,
               beyond_m: float = 0.0, exclude: set[int] = frozenset()) -> Landmark | None:
