@@ -7,7 +7,7 @@ import pytest
 
 from radarnode.consumer.assembler import CycleAssembler
 from radarnode.radar.setup import radar_config
-from radarnode.radar.models import AutoModel, conflicting_actors, make_model
+from radarnode.radar.models import GLINT_SPAN_BEAMS, AutoModel, conflicting_actors, extended_actors, make_model
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.radar.presets import PRESETS
 from radarnode.radar.scatterers import point_targets
@@ -74,6 +74,45 @@ def test_conflicting_actors_are_those_within_the_chains_resolution():
     # same range and angle but 10 Doppler bins apart: resolved, no conflict
     moving = point_targets([40.0, 40.0], [10.0, 10.0], [2.0, 2.0 + 10 * p.speed_resolution_mps])
     assert not conflicting_actors(p, moving, 2).any()
+
+
+@pytest.mark.parametrize("preset", ["ars408_like", "mimo12"])
+def test_extended_actors_spread_across_the_beam_within_one_resolution_cell(preset):
+    # one actor's reflectors at one range and speed, spread in d·sinθ by just below, at, above and twice
+    # GLINT_SPAN_BEAMS beams: extended from the limit on; the same spread over ranges the chain resolves is not
+    p = PRESETS[preset]
+    beam = 1.0 / p.num_virtual
+    r0 = 40.3 * p.range_resolution_m        # inside one cell of the grid, wherever it starts
+    for span, extended in ((0.95, False), (1.001, True), (1.2, True), (2.0, True)):
+        u = np.array([0.1, 0.1 + span * GLINT_SPAN_BEAMS * beam])
+        az = np.degrees(np.arcsin(u / p.element_spacing_wl))
+        scat = point_targets([r0, r0], az, [5.0, 5.0])
+        scat.actor_index[:] = 0
+        assert extended_actors(p, scat, 1)[0] == extended, span
+        apart = point_targets([r0, r0 + 3.0 * p.range_resolution_m], az, [5.0, 5.0])
+        apart.actor_index[:] = 0
+        assert not extended_actors(p, apart, 1)[0]
+        # two actors so placed are conflicting_actors' matter, not this
+        two = point_targets([r0, r0], az, [5.0, 5.0])
+        assert not extended_actors(p, two, 2).any()
+    assert not extended_actors(p, point_targets([r0], [3.0], [5.0]), 1).any()     # one reflector
+
+
+@pytest.mark.parametrize("name, actor, extended", [("bridge_90", "bridge", True), ("gantry_130", "gantry", True),
+                                                   ("ncap_ccrs", "target", False), ("acc_follow_90", "lead", False)])
+def test_auto_renders_a_deck_at_the_detection_level_and_a_car_ahead_at_the_object_level(name, actor, extended):
+    # a structure across the road is 25–40 reflectors in one range cell over about a beam: the chain glints and
+    # splits it (BENCHMARKS.md, "auto on every shipped scenario"); a car ahead is one point to it
+    from radarnode.radar.setup import load_scenario
+    sc = load_scenario(SCENARIOS / f"{name}.yaml")
+    rc = radar_config(sc)
+    model = AutoModel(Scene(sc), rc.preset, np.random.default_rng(0), rc.signal)
+    cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+    t = {"bridge_90": 6.0, "gantry_130": 4.0, "ncap_ccrs": 3.0, "acc_follow_90": 3.0}[name]
+    model.step(t, cfg)
+    assert (model.choices["detection"] == 1) == extended
+    k = [a.id for a in sc.actors].index(actor)
+    assert model.info.scatterers is not None and np.any(model.info.scatterers.actor_index == k)
 
 
 def test_auto_counts_its_choices_and_uses_signal_for_impairments():

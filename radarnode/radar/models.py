@@ -205,6 +205,43 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> 
     return out
 
 
+#: an actor whose own reflectors, within the chain's range and Doppler resolution of each other, span at least this
+#: many beams in angle (d·sinθ in units of 1/K) is an extended reflector to the chain: half its measured angular
+#: resolution (:data:`RESOLUTION`), so that the cell's reflectors either glint — their sum's apparent angle wanders
+#: across the span with their phases — or split into several angle peaks; the object level reports one point
+GLINT_SPAN_BEAMS = 0.5 * RESOLUTION[2]
+
+
+def extended_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> np.ndarray:
+    """Actors with reflectors that share a range–Doppler resolution cell (:data:`RESOLUTION`, on a grid of cells that
+    size, where they appear) and span :data:`GLINT_SPAN_BEAMS` or more in angle there: shape (n_actors,) bool.
+
+    A bridge deck or a sign gantry across the road is 25–40 reflectors in one range cell over 0.4–1.1 beams at
+    140–240 m (``ars408_like``), which the chain reports as one glinting, splitting, fragmenting object; a car ahead
+    spans 0.02–0.2 beams there; a car crossing at 11 m a whole beam.
+    """
+    out = np.zeros(n_actors, dtype=bool)
+    own = scat.actor_index >= 0
+    if n_actors == 0 or np.count_nonzero(own) < 2:
+        return out
+    p = preset
+    rb, vb, u = detection_model.apparent_positions(p, scat)
+    a = scat.actor_index[own]
+    qr = np.floor(rb[own] / RESOLUTION[0]).astype(np.int64)
+    qv = np.floor(np.mod(vb[own], p.num_chirps) / RESOLUTION[1]).astype(np.int64)
+    uniq, inv = np.unique(np.stack([a, qr, qv], axis=1), axis=0, return_inverse=True)
+    uniq = uniq[:, 0]
+    lo = np.full(uniq.size, np.inf)
+    hi = np.full(uniq.size, -np.inf)
+    np.minimum.at(lo, inv.ravel(), u[own])
+    np.maximum.at(hi, inv.ravel(), u[own])
+    wide = (hi - lo) * p.num_virtual >= GLINT_SPAN_BEAMS
+    first = np.zeros(uniq.size, dtype=np.int64)
+    first[inv.ravel()] = a
+    out[first[wide]] = True
+    return out
+
+
 class AutoModel:
     """``auto``: each actor at the cheapest level that keeps the chain's answer, one tracker for all.
 
@@ -213,7 +250,10 @@ class AutoModel:
     construction and checked by ``benchmarks/calibration.py``) unless its
     scatterers come within the chain's measured resolution of another actor's
     or of a guardrail post's — there the detection level renders them, because
-    the chain merges or splits what lies that close. Posts and clutter always
+    the chain merges or splits what lies that close — or its own reflectors
+    spread across the beam within one resolution cell (:func:`extended_actors`:
+    a bridge deck, a gantry, a car crossing close by), whose glint and splitting
+    the object level's one point per actor does not have. Posts and clutter always
     go through the detection level (the object level has no model of them,
     and the chain reports them as clusters and stationary objects). RF impairments
     exist only in the time-domain signal: a scene that asks for them runs the
@@ -247,7 +287,8 @@ class AutoModel:
         t0 = time.perf_counter()
         view = self.scene.view(t_s)
         scat = self.detection.scatterers(t_s, view, config)
-        conflict = conflicting_actors(self.preset, scat, self.scene.n)
+        conflict = conflicting_actors(self.preset, scat, self.scene.n) | extended_actors(self.preset, scat,
+                                                                                         self.scene.n)
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
         need = scat.actor_index < 0
