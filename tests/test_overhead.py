@@ -660,3 +660,40 @@ def _stationary_car_cycles_deck_only(ecu, t, x):
     ol.length_m[0], ol.width_m[0] = 10.0, 20.0
     ecu.on_cycle(t, ObjectCycle(0, t, ol, True, True))
     return None, t
+
+
+def test_a_car_that_drove_away_from_its_place_vouches_for_nothing_there():
+    # a car stands in the path (a collision candidate), then drives off and its track ends far ahead; a stationary
+    # return later at the place where it stood is a new object (its four cycles of its own), not the car again
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+
+    def run(drive_off: bool) -> int:
+        ecu, t, ego, car_x, car_v = Ecu(), 0.0, 0.0, 120.0, 0.0
+        for n in range(80):
+            rows = []
+            if n < 15:
+                rows = [(2, car_x - ego, -13.89, 10.0, DYN_STATIONARY)]
+            elif n < 40 and drive_off:
+                car_v += 3.0 * 0.072
+                car_x += car_v * 0.072
+                rows = [(2, car_x - ego, car_v - 13.89, 10.0, DYN_MOVING)]
+            if n >= 50:
+                rows.append((9, 120.0 - ego, -13.89, 10.0, DYN_STATIONARY))
+            ol = ObjectList.empty(len(rows))
+            for j, (i, x, vx, rcs, dyn) in enumerate(rows):
+                ol.id[j], ol.dist_long_m[j], ol.rcs_dbsm[j], ol.obj_class[j] = i, x, rcs, 1
+                ol.vrel_long_mps[j], ol.dyn_prop[j], ol.meas_state[j] = vx, dyn, MEAS_MEASURED
+                ol.dist_long_sigma_m[j] = ol.dist_lat_sigma_m[j] = 0.2
+                ol.vrel_long_sigma_mps[j] = ol.vrel_lat_sigma_mps[j] = 0.2
+                ol.length_m[j], ol.width_m[j] = 4.5, 1.8
+            ecu.set_ego(t, 13.89, 0.0)
+            d = ecu.on_cycle(t, ObjectCycle(n, t, ol, True, True))
+            if n >= 50 and d.fcw_target is not None and d.fcw_target.object_id == 9:
+                return n - 50
+            t += 0.072
+            ego += 13.89 * 0.072
+        return -1
+
+    assert run(drive_off=False) == 1          # never seen leaving: the car is back, FCW's at once
+    assert run(drive_off=True) >= 1 + 3       # it drove off: a new object at its place

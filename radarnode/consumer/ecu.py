@@ -470,6 +470,8 @@ class Ecu:
                                                       in_path=self._in_path.get(t.id, 0) > 0)
                     if landmark.moved:
                         self._moved.add(t.id)
+                elif landmark is not None and int(ol.meas_state[k]) != MEAS_PREDICTED:
+                    landmark.left = True          # measured moving: the object left its place (it vouches for nothing)
                 # a stationary object counts by what it reflects over its track's life (power average: one
                 # fade of a fluctuating car must not drop it; two merged guardrail posts stay near −2 dBsm), once
                 # tracked OBSTACLE_MIN_AGE cycles; once it qualified it stays a candidate (latched)
@@ -493,7 +495,7 @@ class Ecu:
                 if structure is not None:
                     place = self.landmarks.separate(wx, wy, heading_there, structure)
                     overhead = place is None
-            if place is not None and place.obstacle and not overhead and t.id not in self._continued:
+            if place is not None and place.obstacle and not place.left and not overhead and t.id not in self._continued:
                 # where a collision candidate stood, a track the radar creates anew is that object again: a candidate
                 # from its first cycle there if it reflects like one, and in the path if the object was (the car
                 # the deck masked for a second must not cost the warning the four cycles of a new object)

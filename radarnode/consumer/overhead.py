@@ -225,6 +225,7 @@ class Landmark:
     ground: bool = False                            # an object of its own beside a structure: never overhead
     obstacle: bool = False                          # a track filed here qualified as a collision candidate (the ECU)
     in_path: int = 0                                # cycles in a row its last track was in the ECU's path
+    left: bool = False                              # a track filed here was later measured moving away from it
     fit: Fit | None = None
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
     latched_range_m: float | None = None            # the range at which the overhead decision was latched
