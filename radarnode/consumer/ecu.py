@@ -482,8 +482,8 @@ class Ecu:
                     self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
                 if t.age >= OBSTACLE_MIN_AGE and self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                     self._obstacles.add(t.id)
-                if t.id in self._obstacles and landmark is not None:
-                    landmark.obstacle = True
+                if t.id in self._obstacles and landmark is not None and int(ol.obj_class[k]) in VEHICLE_CLASSES:
+                    landmark.obstacle = True      # a vehicle standing here (not clutter: posts merged, a sign)
             # (a coasting track keeps what it was); any track never seen moving at the place of a bridge is part of it
             # (the radar reports its parts as objects of their own, moving or not as its Doppler makes them) —
             # unless an object of its own stood there, measured together with the structure: then it is that object
@@ -495,15 +495,15 @@ class Ecu:
                 if structure is not None:
                     place = self.landmarks.separate(wx, wy, heading_there, structure)
                     overhead = place is None
-            if place is not None and place.obstacle and not place.left and not overhead and t.id not in self._continued:
-                # where a collision candidate stood, a track the radar creates anew is that object again: a candidate
-                # from its first cycle there if it reflects like one, and in the path if the object was (the car
-                # the deck masked for a second must not cost the warning the four cycles of a new object)
+            if (place is not None and place.obstacle and place.in_path >= ENTER_CYCLES and not place.left
+                    and not overhead and t.id not in self._continued):
+                # where a vehicle stood in the path as a collision candidate, a track the radar creates anew is that
+                # vehicle again: a candidate from its first cycle there if it reflects like one, and in the path (the
+                # car the deck masked for a second must not cost the warning the four cycles of a new object)
                 self._continued.add(t.id)
                 if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                     self._obstacles.add(t.id)
-                if place.in_path >= ENTER_CYCLES:
-                    self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
+                self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead
             obstacle[i] = t.id in self._obstacles and not overhead
