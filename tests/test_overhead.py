@@ -597,12 +597,15 @@ def _stationary_car_cycles(ecu, t0, n, oid, x0, speed=13.89, dt=0.072, deck=None
     return chosen, t
 
 
-@pytest.mark.parametrize("before", [0, 8])
+@pytest.mark.parametrize("before", [0, 10, 11, 22])
 def test_a_car_the_radar_re_creates_where_it_stood_is_a_candidate_at_once(before):
-    # a stationary car in the path tracked for `before` cycles (0: none), lost for 20 cycles (the radar's object
-    # deleted), then reported again at its place under a new object ID: with the car's history the new track is
-    # FCW's target from its first confirmed cycle (its obstacle and lane association carried over); without it, only
-    # after OBSTACLE_MIN_AGE cycles of its own
+    # a stationary car in the path reported for `before` cycles (0: none), lost for 20 cycles (the radar's object
+    # deleted), then reported again at its place under a new object ID: with the car measured standing in the path
+    # CONTINUE_MIN_CYCLES cycles (its ECU track confirmed by the second report: `before` − 1 of them; 9 just below,
+    # 10 at, 21 above the limit) the new track is FCW's target from its first confirmed cycle (its obstacle and lane
+    # association carried over); otherwise only after OBSTACLE_MIN_AGE cycles of its own
+    from radarnode.consumer.ecu import CONTINUE_MIN_CYCLES
+    assert CONTINUE_MIN_CYCLES == 10
     ecu = Ecu()
     t = 0.0
     if before:
@@ -618,7 +621,7 @@ def test_a_car_the_radar_re_creates_where_it_stood_is_a_candidate_at_once(before
     x0 = 120.0 - 13.89 * (before * 0.072 + gap) if before else 120.0 - 13.89 * (8 * 0.072 + gap)
     chosen, _ = _stationary_car_cycles(ecu, t + 0.072, 10, 5, x0)
     first = chosen[0]
-    if before:
+    if before - 1 >= CONTINUE_MIN_CYCLES:
         assert first == 1                          # confirmed by its second report, and at once FCW's target
     else:
         assert first >= 1 + 3                      # a new object: OBSTACLE_MIN_AGE cycles of its own first
@@ -630,6 +633,7 @@ def test_a_car_lost_under_a_recognised_deck_is_that_car_again_not_a_part_of_the_
     # track ended after 20 cycles without it, then reported anew at its place: FCW's target at once, not a deck part
     ecu = Ecu()
     chosen, t = _stationary_car_cycles(ecu, 0.0, 12, 2, 120.0, deck=7.0 if with_deck else None)
+    assert max(lm.in_path for lm in ecu.landmarks.landmarks) >= 10      # the car stood in the path long enough
     assert any(lm.obstacle and min(lm.rcs_dbsm) < 20.0 for lm in ecu.landmarks.landmarks)   # the car's place
     if with_deck:
         for lm in ecu.landmarks.landmarks:         # the deck recognised (its two-ray test is tested above)
@@ -695,5 +699,5 @@ def test_a_car_that_drove_away_from_its_place_vouches_for_nothing_there():
             ego += 13.89 * 0.072
         return -1
 
-    assert run(drive_off=False) == 1          # never seen leaving: the car is back, FCW's at once
+    assert run(drive_off=False) == 1          # never seen leaving (14 cycles standing): the car is back, FCW's at once
     assert run(drive_off=True) >= 1 + 3       # it drove off: a new object at its place

@@ -51,6 +51,9 @@ OBSTACLE_MIN_AGE = 4
 OBSTACLE_RCS_POWER = 10.0 ** (OBSTACLE_RCS_DBSM / 10.0)
 RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
+#: a vehicle that stood in the path this many cycles in a row (0.72 s) is continued by a track the radar creates at its
+#: place after losing it; a shorter stay there is no evidence (clutter on a guardrail road is classed a car at times)
+CONTINUE_MIN_CYCLES = 10
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
@@ -71,7 +74,7 @@ STRAY_STEP_PERIODS = 3.0
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
-                  "_obstacles", "_continued", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
+                  "_obstacles", "_placed", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
                   "_last_out_t", "acc", "fcw", "odometry")
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
@@ -153,7 +156,7 @@ class Ecu:
         self._fcw_target_id: int | None = None
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
-        self._continued: set[int] = set()         # tracks that took over the state of an object standing where they are
+        self._placed: set[int] = set()            # tracks whose place was judged for continuing an object there
         self._last_out_t: float | None = None
         if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
             raise ValueError(f"Ecu wavelength_m: value {wavelength_m!r} is not allowed; expected the radar's carrier "
@@ -234,7 +237,7 @@ class Ecu:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
-        self._rcs_power, self._obstacles, self._continued = {}, set(), set()
+        self._rcs_power, self._obstacles, self._placed = {}, set(), set()
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.trails.clear()
@@ -404,6 +407,7 @@ class Ecu:
         # history; one at the place of a track still alive is another object)
         self.landmarks.forget({t.id for t in tracks}, ox, oy)
         self.landmarks.next_cycle()
+        filed: set[int] = set()                       # the tracks filed at their landmarks this cycle (standing, measured)
         # a structure across the road lies across the road *where it stands*: on a bend that is the predicted
         # path's heading there (the ego's heading plus the path's curvature times the distance), not the ego's now
         kappa = curvature(self.ego_speed_mps, self.ego_yaw_rate_rps)
@@ -465,6 +469,7 @@ class Ecu:
                 if abs(radial) < STATIONARY_MPS and int(ol.meas_state[k]) != MEAS_PREDICTED:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
+                    filed.add(t.id)
                     landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, heading_there, rng,
                                                       float(ol.rcs_dbsm[k]), moved=t.id in self._moved,
                                                       in_path=self._in_path.get(t.id, 0) > 0)
@@ -495,12 +500,17 @@ class Ecu:
                 if structure is not None:
                     place = self.landmarks.separate(wx, wy, heading_there, structure)
                     overhead = place is None
-            if (place is not None and place.obstacle and place.in_path >= ENTER_CYCLES and not place.left
-                    and not overhead and t.id not in self._continued):
+            if place is not None and not overhead and t.id not in self._placed:
                 # where a vehicle stood in the path as a collision candidate, a track the radar creates anew is that
                 # vehicle again: a candidate from its first cycle there if it reflects like one, and in the path (the
-                # car the deck masked for a second must not cost the warning the four cycles of a new object)
-                self._continued.add(t.id)
+                # car the deck masked for a second must not cost the warning the four cycles of a new object); judged
+                # once, on the place as the track finds it
+                self._placed.add(t.id)
+                if not (place.obstacle and place.in_path >= CONTINUE_MIN_CYCLES and not place.left):
+                    place = None
+            else:
+                place = None
+            if place is not None:
                 if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                     self._obstacles.add(t.id)
                 self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
@@ -528,7 +538,7 @@ class Ecu:
                              self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
-        self._continued &= alive
+        self._placed &= alive
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
@@ -536,10 +546,10 @@ class Ecu:
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
         # the target at its edge, does not switch)
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
-        for tid in ids:                    # each landmark keeps its track's lane association (above)
+        for tid, o in zip(ids, ok):        # a place counts the cycles its object was measured standing in the path
             lm = self.landmarks.by_track.get(tid)
-            if lm is not None:
-                lm.in_path = self._in_path[tid]
+            if lm is not None and tid in filed:
+                lm.in_path = lm.in_path + 1 if o else 0
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
         entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
         held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])

@@ -224,7 +224,7 @@ class Landmark:
     moved: bool = False                             # a track seen moving stopped here: a vehicle, never overhead
     ground: bool = False                            # an object of its own beside a structure: never overhead
     obstacle: bool = False                          # a track filed here qualified as a collision candidate (the ECU)
-    in_path: int = 0                                # cycles in a row its last track was in the ECU's path
+    in_path: int = 0                                # cycles in a row its object was measured standing in the ECU's path
     left: bool = False                              # a track filed here was later measured moving away from it
     fit: Fit | None = None
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
