@@ -552,6 +552,7 @@ def test_a_new_track_at_a_structure_is_the_object_that_stood_there_measured_with
     car = O.Landmark(303.0, 0.0)
     car.cycles = list(range(1, 41, 2))[: 20 - shared] + list(range(0, 40, 2))[:shared]
     car.range_m = [100.0] * 20
+    car.obstacle, car.in_path = True, O.CONTINUE_MIN_CYCLES      # a vehicle that stood in the path (ECU's record)
     deck.cycles = list(range(0, 40, 2))
     m.landmarks.append(car)
     assert (m.separate(302.8, 0.0, 0.0, deck) is car) == own
@@ -565,6 +566,13 @@ def test_a_new_track_at_a_structure_is_the_object_that_stood_there_measured_with
     car.moved = True
     assert m.separate(302.8, 0.0, 0.0, deck) is None
     car.moved = False
+    # a car that stood beside the path, or in it for less than CONTINUE_MIN_CYCLES, or that left: not the one (a deck
+    # part over the lane beside a parked car is no car)
+    for field, value in (("in_path", O.CONTINUE_MIN_CYCLES - 1), ("obstacle", False), ("left", True)):
+        keep = getattr(car, field)
+        setattr(car, field, value)
+        assert m.separate(302.8, 0.0, 0.0, deck) is None, field
+        setattr(car, field, keep)
     assert (m.separate(302.8, 0.0, 0.0, deck) is car) == own
     car.y_m = O.MATCH_LAT_M + 0.1
     assert m.separate(302.8, 0.0, 0.0, deck) is None

@@ -31,7 +31,7 @@ from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundar
                                      curvature, in_path, measured_reach_m, path_heading, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
-from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
+from radarnode.consumer.overhead import CONTINUE_MIN_CYCLES, OVERHEAD_DEPTH_M, LandmarkMap
 from radarnode.consumer.tracking import Tracker, line_of_sight, radial_mismatch2
 from radarnode.perception.motion import road_share
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
@@ -51,9 +51,6 @@ OBSTACLE_MIN_AGE = 4
 OBSTACLE_RCS_POWER = 10.0 ** (OBSTACLE_RCS_DBSM / 10.0)
 RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
-#: a vehicle that stood in the path this many cycles in a row (0.72 s) is continued by a track the radar creates at its
-#: place after losing it; a shorter stay there is no evidence (clutter on a guardrail road is classed a car at times)
-CONTINUE_MIN_CYCLES = 10
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
@@ -506,7 +503,7 @@ class Ecu:
                 # car the deck masked for a second must not cost the warning the four cycles of a new object); judged
                 # once, on the place as the track finds it
                 self._placed.add(t.id)
-                if not (place.obstacle and place.in_path >= CONTINUE_MIN_CYCLES and not place.left):
+                if not place.continues():
                     place = None
             else:
                 place = None

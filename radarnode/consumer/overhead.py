@@ -63,6 +63,10 @@ MAX_SAMPLES = 400                 # a landmark's history is capped (≈ 29 s of 
 #: overhead landmark takes any track within OVERHEAD_MATCH_LAT_M (a bridge spans the road, and the radar reports
 #: its parts as objects of their own as they come into the near scan)
 MATCH_LONG_M, MATCH_LAT_M, OVERHEAD_MATCH_LAT_M = 4.0, 2.5, 25.0
+#: a vehicle that stood in the ECU's path this many cycles in a row (0.72 s) is continued by a track the radar creates
+#: at its place after losing it (:meth:`Landmark.continues`); a shorter stay is no evidence (clutter on a guardrail road
+#: is classed a car at times), nor is a car standing beside the path (a deck part over the lane near it is no car)
+CONTINUE_MIN_CYCLES = 10
 #: how deep an overhead structure may reach beyond its near edge (a motorway deck, m): what the radar reports of it
 #: from underneath, moving as its Doppler makes it, belongs to it
 OVERHEAD_DEPTH_M = 20.0
@@ -233,6 +237,11 @@ class Landmark:
     pooled: int = 1                                 # landmarks whose histories the last test pooled (itself too)
     _last_height: float = math.nan
 
+    def continues(self) -> bool:
+        """A vehicle stood here in the ECU's path as a collision candidate for :data:`CONTINUE_MIN_CYCLES` cycles and
+        was never measured moving away: a track the radar creates here after losing it is that vehicle again."""
+        return self.obstacle and self.in_path >= CONTINUE_MIN_CYCLES and not self.left and not self.overhead
+
     def add(self, object_id: int, range_m: float, rcs_dbsm: float, cycle: int = -1) -> None:
         if object_id != self.last_object:
             self.starts.append(len(self.range_m))
@@ -373,13 +382,15 @@ class LandmarkMap:
                  busy: set[int] | None = None) -> Landmark | None:
         """A free landmark at (x_m, y_m) of an object of its own beside ``structure`` (a recognised structure's
         landmark): not overhead, never moved, and measured together with the structure in more than
-        :data:`POOL_SHARED` of its cycles (the structure's parts take turns with it: glint), or None."""
+        :data:`POOL_SHARED` of its cycles (the structure's parts take turns with it: glint), and a vehicle that stood
+        in the ECU's path (:meth:`Landmark.continues`: a car parked beside the lane under a deck does not make the deck's
+        part over the lane near it a car), or None."""
         if busy is None:
             busy = {id(v) for v in self.by_track.values()}
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         best, best_d = None, math.inf
         for cand in self.landmarks:
-            if cand.overhead or cand.moved or id(cand) in busy or not cand.cycles:
+            if not cand.continues() or cand.moved or id(cand) in busy or not cand.cycles:
                 continue
             dx, dy = cand.x_m - x_m, cand.y_m - y_m
             along, across = c * dx + s * dy, -s * dx + c * dy
