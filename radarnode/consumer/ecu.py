@@ -503,14 +503,10 @@ class Ecu:
                 # car the deck masked for a second must not cost the warning the four cycles of a new object); judged
                 # once, on the place as the track finds it
                 self._placed.add(t.id)
-                if not place.continues():
-                    place = None
-            else:
-                place = None
-            if place is not None:
-                if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
-                    self._obstacles.add(t.id)
-                self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
+                if place.continues():
+                    if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
+                        self._obstacles.add(t.id)
+                    self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead
             obstacle[i] = t.id in self._obstacles and not overhead

@@ -38,6 +38,7 @@ from __future__ import annotations
 
 import math
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -387,29 +388,25 @@ class LandmarkMap:
         part over the lane near it a car), or None."""
         if busy is None:
             busy = {id(v) for v in self.by_track.values()}
-        c, s = math.cos(heading_rad), math.sin(heading_rad)
-        best, best_d = None, math.inf
-        for cand in self.landmarks:
-            if not cand.continues() or cand.moved or id(cand) in busy or not cand.cycles:
-                continue
-            dx, dy = cand.x_m - x_m, cand.y_m - y_m
-            along, across = c * dx + s * dy, -s * dx + c * dy
-            if abs(along) <= MATCH_LONG_M and abs(across) <= MATCH_LAT_M and abs(along) < best_d:
-                best, best_d = cand, abs(along)
+        best = self.match(x_m, y_m, heading_rad, exclude=busy,
+                          only=lambda cand: cand.continues() and not cand.moved and bool(cand.cycles))
         if best is None:
             return None
         shared = len(set(best.cycles).intersection(structure.cycles))
         return best if shared > POOL_SHARED * len(best.cycles) else None
 
     def match(self, x_m: float, y_m: float, heading_rad: float, overhead_only: bool = False,
-              beyond_m: float = 0.0, exclude: set[int] = frozenset()) -> Landmark | None:
+              beyond_m: float = 0.0, exclude: set[int] = frozenset(),
+              only: Callable[[Landmark], bool] | None = None) -> Landmark | None:
         """The landmark at odometry-frame (x_m, y_m), matched along and across the ego's heading (see
         :data:`MATCH_LONG_M`); ``overhead_only``: only an overhead one; ``beyond_m``: the point may also lie up to
-        this much farther along than the landmark (the deck behind a bridge's near edge)."""
+        this much farther along than the landmark (the deck behind a bridge's near edge); ``only``: only landmarks
+        for which it is true."""
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         best, best_d = None, math.inf
         for cand in self.landmarks:
-            if (overhead_only and not cand.overhead) or (id(cand) in exclude and not cand.overhead):
+            if (overhead_only and not cand.overhead) or (id(cand) in exclude and not cand.overhead) \
+                    or (only is not None and not only(cand)):
                 continue
             dx, dy = cand.x_m - x_m, cand.y_m - y_m
             along, across = c * dx + s * dy, -s * dx + c * dy

@@ -177,7 +177,8 @@ class SignalModel(ScattererModel):
         return det
 
 
-def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> np.ndarray:
+def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
+                       positions: tuple[np.ndarray, ...] | None = None) -> np.ndarray:
     """Actors with a scatterer within the reach of the detection level's lobe test
     (:data:`radarnode.radar.detection_model.LOBE_REACH_BINS`) of another actor's or of a post's, in range and Doppler
     at any angle (where they appear, aliasing included): shape (n_actors,) bool.
@@ -185,12 +186,13 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> 
     Those are the actors whose detections the object level cannot give: the chain merges or splits what lies
     within its resolution (:data:`radarnode.radar.calibration.RESOLUTION`, plus a bin of margin: inside that reach),
     and its local-maximum test on the channel-summed map hides a weaker target there whatever the angle.
+    ``positions``: the scatterers' :func:`~radarnode.radar.detection_model.apparent_positions`, if already known.
     """
     out = np.zeros(n_actors, dtype=bool)
     if len(scat) < 2:
         return out
     p = preset
-    rb, vb, _ = detection_model.apparent_positions(p, scat)
+    rb, vb, _ = detection_model.apparent_positions(p, scat) if positions is None else positions
     reach = np.maximum(detection_model.LOBE_REACH_BINS, np.asarray(RESOLUTION[:2], dtype=np.float64) + 1.0)
     box = np.array([p.num_range_bins, p.num_chirps]) / reach
     pts = np.stack([rb, np.mod(vb, p.num_chirps)], axis=1) / reach
@@ -212,20 +214,21 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> 
 GLINT_SPAN_BEAMS = 0.5 * RESOLUTION[2]
 
 
-def extended_actors(preset: RadarPreset, scat: Scatterers, n_actors: int) -> np.ndarray:
+def extended_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
+                    positions: tuple[np.ndarray, ...] | None = None) -> np.ndarray:
     """Actors with reflectors that share a range–Doppler resolution cell (:data:`RESOLUTION`, on a grid of cells that
     size, where they appear) and span :data:`GLINT_SPAN_BEAMS` or more in angle there: shape (n_actors,) bool.
 
     A bridge deck or a sign gantry across the road is 25–40 reflectors in one range cell over 0.4–1.1 beams at
     140–240 m (``ars408_like``), which the chain reports as one glinting, splitting, fragmenting object; a car ahead
-    spans 0.02–0.2 beams there; a car crossing at 11 m a whole beam.
+    spans 0.02–0.2 beams there; a car crossing at 11 m a whole beam. ``positions`` as for :func:`conflicting_actors`.
     """
     out = np.zeros(n_actors, dtype=bool)
     own = scat.actor_index >= 0
     if n_actors == 0 or np.count_nonzero(own) < 2:
         return out
     p = preset
-    rb, vb, u = detection_model.apparent_positions(p, scat)
+    rb, vb, u = detection_model.apparent_positions(p, scat) if positions is None else positions
     a = scat.actor_index[own]
     qr = np.floor(rb[own] / RESOLUTION[0]).astype(np.int64)
     qv = np.floor(np.mod(vb[own], p.num_chirps) / RESOLUTION[1]).astype(np.int64)
@@ -287,8 +290,10 @@ class AutoModel:
         t0 = time.perf_counter()
         view = self.scene.view(t_s)
         scat = self.detection.scatterers(t_s, view, config)
-        conflict = conflicting_actors(self.preset, scat, self.scene.n) | extended_actors(self.preset, scat,
-                                                                                         self.scene.n)
+        # (where each scatterer appears, once for both tests: ``positions``, detection_model.apparent_positions)
+        at = detection_model.apparent_positions(self.preset, scat)
+        conflict = conflicting_actors(self.preset, scat, self.scene.n, at) | extended_actors(self.preset, scat,
+                                                                                             self.scene.n, at)
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
         need = scat.actor_index < 0
