@@ -697,3 +697,31 @@ def test_the_block_draw_refuses_a_signal_that_does_not_fit_its_rows():
                         signal_rows=np.array([3]))
     with pytest.raises(ConfigError, match="group"):
         stat.block_signal(np.ones(2), np.zeros(2), np.zeros(2), np.zeros(2), np.array([0, -1]), 2)
+
+
+@pytest.mark.parametrize("car_dbsm, post_dbsm, other, expected", [
+    (10.0, -10.0, -1, 0),        # a car and a post in one cell: the car's detection
+    (-10.0, 10.0, -1, -1),       # a strong post beside a weak car: the post's
+    (3.0, -3.0, 1, 0),           # two cars: the stronger
+    (-3.0, 3.0, 1, 1),
+    (10.0, 10.0, 0, 0),          # one body in the cell
+])
+def test_a_mixed_cell_is_tagged_with_the_actor_that_puts_most_power_into_it(car_dbsm, post_dbsm, other, expected):
+    """The detection level's truth tag (evaluation only): a cell whose scatterers belong to several actors was tagged
+    −1, so a car in a guardrail post's cell was reported as no actor in those cycles and a scenario's check took the
+    car's FCW warning for someone else's. Now the actor with most power in the cell; the detections are the same."""
+    p = PRESETS["ars408_like"]
+    chain = DspChain(p)
+    r, v = 40.0 + 0.5 * p.range_resolution_m, -5.0
+    scat = point_targets(np.full(2, r), np.zeros(2), np.full(2, v), np.array([car_dbsm, post_dbsm]))
+    scat.actor_index = np.array([0, other], dtype=np.int64)
+    det = detection_model.detect(p, scat, np.random.default_rng(5), chain.statistic)
+    near = np.abs(det.range_m - r) < 2 * p.range_resolution_m
+    assert np.count_nonzero(near) == 1
+    assert int(det.actor_index[near][0]) == expected
+    # the same detections whatever the tags say
+    same = point_targets(np.full(2, r), np.zeros(2), np.full(2, v), np.array([car_dbsm, post_dbsm]))
+    same.actor_index = np.array([0, 0], dtype=np.int64)
+    ref = detection_model.detect(p, same, np.random.default_rng(5), chain.statistic)
+    np.testing.assert_array_equal(ref.range_m, det.range_m)
+    np.testing.assert_array_equal(ref.snr_db, det.snr_db)
