@@ -83,3 +83,36 @@ def test_a_car_standing_beyond_the_measured_course_on_a_clothoid(name, seeds):
     for seed in seeds:
         r = simulate(dataclasses.replace(sc, seed=seed), fidelity="object")
         assert r.passed and r.checked, (seed, r.reasons)
+
+
+@pytest.mark.parametrize("lead, passes", [("stopped", True), ("beside", False)])
+def test_an_fcw_expectation_is_met_only_by_a_warning_for_its_lead(lead, passes):
+    """The FCW checks (here ``fcw_required``) judged the first warning whatever it was for: a warning for another
+    object passed a scenario whose lead was never warned for. The warning must be for ``expect.lead``."""
+    from radarnode.consumer.evaluate import NO_ACTOR
+    from radarnode.radar.setup import parse_scenario
+    sc = parse_scenario(f"""
+name: warned_for
+duration_s: 4.0
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 20.0}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+ecu: {{acc_enabled: false, expect: {{lead: {lead}, fcw_required: true}}}}
+actors:
+  - {{id: stopped, class: car, x_m: 70.0, lane: 1, speed_mps: 0.0}}
+  - {{id: beside, class: car, x_m: 60.0, lane: 2, speed_mps: 0.0}}
+""")
+    r = simulate(sc, fidelity="object")
+    assert r.warning_time_s is not None and r.warned_for == "stopped" != NO_ACTOR
+    assert r.passed is passes, r.reasons
+    if not passes:
+        assert r.reasons == [f"the first FCW warning (t = {r.warning_time_s:.2f} s) was for stopped, not beside"]
+
+
+def test_the_warning_on_a_clothoid_is_the_stopped_cars_at_the_detection_level():
+    """At the detection level the car stopped after the clothoid shares range–Doppler cells with guardrail posts; its
+    object was tagged as no actor in those cycles, and the scenario's check could not tell its warning from one for
+    a post."""
+    r = simulate(load_scenario(SCENARIOS / "clothoid_stopped_own_lane.yaml"), fidelity="detection")
+    assert r.warned_for == "stopped" and r.passed, r.reasons

@@ -106,7 +106,8 @@ def _fmt(v, unit: str, digits: int = 2) -> str:
 
 
 def _figures(r) -> str:
-    return (f"warning at {_fmt(r.warning_time_s, 's')}, TTC at warning {_fmt(r.ttc_at_warning_s, 's')}, "
+    return (f"warning at {_fmt(r.warning_time_s, 's')}" + (f" for {r.warned_for}" if r.warned_for else "")
+            + f", TTC at warning {_fmt(r.ttc_at_warning_s, 's')}, "
             f"min TTC {_fmt(r.min_ttc_s, 's')}, min gap {_fmt(r.min_gap_m, 'm', 1)}, "
             f"peak decel {_fmt(r.peak_decel_mps2, 'm/s²')}, peak jerk {_fmt(r.peak_jerk_mps3, 'm/s³')}, "
             f"final time gap {_fmt(r.final_time_gap_s, 's')}")

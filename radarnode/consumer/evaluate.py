@@ -13,6 +13,7 @@ actor, measured from the sensor (front bumper) to the lead's nearest point.
 
 from __future__ import annotations
 
+import collections
 import math
 from dataclasses import dataclass, field
 
@@ -28,6 +29,10 @@ from radarnode.consumer.fusion import FusingConsumer
 from radarnode.wire.group import ego_motion_for, make_node
 
 
+#: ``ScenarioResult.warned_for`` of a warning for an object that is no actor of the scenario
+NO_ACTOR = "no actor"
+#: cycles of an ECU track's truth tags that say which actor it is where a cycle's tag does not
+TAG_WINDOW = 10
 STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
 NO_BRAKING_MPS2 = -0.5         # ``expect.no_braking``: an ACC request below this is braking (above: coasting)
 
@@ -116,6 +121,7 @@ class ScenarioResult:
     latency_s: float = 0.0                  # the ECU's processing latency applied to its outputs
     checked: bool = True                    # False: the scenario's expectation states nothing to check
     ttc_at_warning_s: float | None = None
+    warned_for: str | None = None           # the actor FCW's first warning was for ("no actor": posts, clutter, ghosts)
     min_ttc_s: float = math.inf
     min_gap_m: float = math.inf
     peak_decel_mps2: float = 0.0
@@ -167,6 +173,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     assembler = CycleAssembler(sensor_id=scenario.radar.sensor_id)
     lead = next((i for i, a in enumerate(scenario.actors) if a.id == spec.expect.lead), None)
     res = ScenarioResult(scenario.name, scenario.seed)
+    track_tags: dict[int, collections.deque] = {}     # ECU track → its objects' last truth tags
     prev_a = None
     prev_gap = math.inf
     latency, request = spec.processing_latency_s, 0.0
@@ -223,10 +230,28 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             if res.impact_time_s is None and 0.0 < prev_gap and lane_gap <= 0.0 and abs(lateral) < 2.0:
                 res.impact_time_s = t
             prev_gap = lane_gap
-        # which actor the ECU selected: its object ID, looked up in this cycle's object list (truth tags)
+        # which actor the ECU selected: its object ID, looked up in this cycle's object list (truth tags). Where this
+        # cycle says no actor, or its list lacks the object (the radar dropped it for a cycle), the ECU track is the
+        # actor its objects were most often in its last TAG_WINDOW cycles: at the detection and signal levels a
+        # car's object is tagged no actor in a cycle a guardrail post's return outweighs it in (signal level: lies
+        # nearest its detection)
+        seen_now: dict[int, int] = {}
+
         def actor_of(target) -> int:
             if target is None:
                 return -1
+            if target.track_id in seen_now:
+                return seen_now[target.track_id]
+            found = _actor_in_cycle(target)
+            tags = track_tags.setdefault(target.track_id, collections.deque(maxlen=TAG_WINDOW))
+            if found is not None:
+                tags.append(found)
+            who = found if found is not None and found >= 0 else (
+                collections.Counter(tags).most_common(1)[0][0] if tags else -1)
+            seen_now[target.track_id] = who
+            return who
+
+        def _actor_in_cycle(target) -> int | None:
             if fuser is not None:
                 # a fused object: the actor of the radar objects that fed it this cycle
                 for sid, oid in fused_members.get(int(target.object_id), {}).items():
@@ -234,9 +259,9 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                     hit = np.flatnonzero(ol.id == oid)
                     if hit.size:
                         return int(ol.actor_index[hit[0]])
-                return -1
+                return None
             hit = np.flatnonzero(out.frame.objects.id == target.object_id)
-            return int(out.frame.objects.actor_index[hit[0]]) if hit.size else -1
+            return int(out.frame.objects.actor_index[hit[0]]) if hit.size else None
 
         target_actor = actor_of(decision.target) if decision is not None else -1
         # FCW's object, while it (pre)warns: what FCW selected and acted on
@@ -246,6 +271,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # the ECU's outputs exist from t + latency: the warning is judged then (TTC shorter by the latency)
         if warning and res.warning_time_s is None:
             res.warning_time_s, res.ttc_at_warning_s = t + latency, ttc - latency
+            res.warned_for = scenario.actors[fcw_actor].id if fcw_actor >= 0 else NO_ACTOR
         if warning and driver is not None:
             driver.warn(t + latency)
         if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
@@ -321,6 +347,11 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
         elif res.impact_time_s is not None and res.impact_time_s - res.warning_time_s < e.fcw_before_impact_s:
             res.reasons.append(f"FCW warning {res.impact_time_s - res.warning_time_s:.2f} s before the impact "
                                f"< {e.fcw_before_impact_s} s")
+    if (e.lead is not None and (e.fcw_ttc_min_s is not None or e.fcw_required or e.fcw_before_impact_s is not None)
+            and res.warning_time_s is not None and res.warned_for != e.lead):
+        who = ("an object that is no actor of the scenario (a post, clutter, a ghost)" if res.warned_for == NO_ACTOR
+               else res.warned_for)
+        res.reasons.append(f"the first FCW warning (t = {res.warning_time_s:.2f} s) was for {who}, not {e.lead}")
     if e.fcw_prewarning and (res.prewarning_time_s is None or res.warning_time_s is not None
                              and res.prewarning_time_s >= res.warning_time_s):
         res.reasons.append("no prewarning before the warning")
