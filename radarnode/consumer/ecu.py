@@ -27,8 +27,9 @@ import can
 import numpy as np
 
 from radarnode.consumer.acc import Acc, AccSettings, Target
-from radarnode.consumer.path import (SensorMount, VehicleTrails, aligned_boundaries, boundary_reference, course_known,
-                                     curvature, in_path, measured_reach_m, path_heading, trail_fits)
+from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, aligned_boundaries, boundary_reference,
+                                     course_known, crossing_road, curvature, in_path, measured_reach_m, path_heading,
+                                     trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
 from radarnode.consumer.overhead import CONTINUE_MIN_CYCLES, OVERHEAD_DEPTH_M, LandmarkMap
@@ -72,7 +73,7 @@ RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
                   "_obstacles", "_placed", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
-                  "_last_out_t", "acc", "fcw", "odometry")
+                  "_last_out_t", "acc", "fcw", "odometry", "drift")
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -163,6 +164,7 @@ class Ecu:
         self._moving_for: dict[int, int] = {}      # cycles in a row each track has been seen moving
         self.landmarks = LandmarkMap(mount.z_m, self.wavelength_m)
         self.trails = VehicleTrails()             # where the vehicles ahead drove, vehicle frame (path.py)
+        self.drift = BoundaryDrift()              # how fast the reported road edges move across (a lane change)
         self.trail_fits: list = []                # the trails that shaped the last predicted path
         self.odometry = (0.0, 0.0, 0.0)           # the ECU's own dead reckoning: x, y (m), heading (rad)
 
@@ -238,6 +240,7 @@ class Ecu:
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.trails.clear()
+        self.drift = BoundaryDrift()
         self.trail_fits = []
         self.last_cycle_t = None
         self._last_out_t = None
@@ -517,17 +520,20 @@ class Ecu:
         self.trails.add(t_s, np.array(ids)[trail], xv[trail], yv[trail])
         self.trails.keep(t_s, alive)
         bounds = aligned_boundaries(self.boundaries, self.mount)     # the ego's heading to the road, not the sensor's
+        # a lane change (not a boundary fit tilted by a curve's exit): the road's course then gives way to the circle
+        self.drift.update(t_s, bounds, self.ego_speed_mps)
+        crossing = crossing_road(bounds, self.drift)
         self.trail_fits = (trail_fits(self.trails.trails(), curvature(self.ego_speed_mps, self.ego_yaw_rate_rps),
-                                      boundary_reference(bounds, self.mount))
+                                      boundary_reference(bounds, self.mount, crossing))
                            if self.acc.settings.path_from_trails else [])
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                     bounds, self.mount, self.trail_fits)
+                     bounds, self.mount, self.trail_fits, crossing)
         # beyond where the road's course is measured (the boundaries' valid range, the trails' farthest point) the
         # course is extrapolated: on a curve entry it bends too little, and a car standing in the outer lane a
         # hundred metres ahead lies in it. A stationary object never seen moving becomes FCW's only where the path
         # there is known — measured, or the yaw-rate circle puts it in the path too (on a straight road and a
         # constant bend the two agree)
-        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount), self.ego_speed_mps,
+        known = course_known(x, y, measured_reach_m(bounds, self.trail_fits, self.mount, crossing), self.ego_speed_mps,
                              self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m, self.mount)
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive

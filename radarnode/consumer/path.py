@@ -16,8 +16,10 @@ its place on the road, and it takes over from the yaw-rate circle between :data:
 :data:`BLEND_END_M` ahead, up to :data:`COURSE_EXTENT` times the boundary's valid range (its curvature carries it
 on) (what production course prediction does with the road geometry from stationary
 targets). Not while the ego turns across the road (a lane change: its heading to the boundaries, averaged,
-beyond :data:`LANE_KEEPING_HEADING_RAD`; a single boundary's heading is not enough, as a quadratic fit to a
-clothoid tilts it by a degree or two): then the yaw rate is the better guess.
+beyond :data:`LANE_KEEPING_HEADING_RAD`, and their offsets moving as that heading says, :func:`crossing_road`; a
+single boundary's heading is not enough, as a quadratic fit to a clothoid tilts it by a degree or two, nor the
+heading alone on a curve's exit, where the fit tilts by 3° while the offsets stay): then the yaw rate is the better
+guess.
 
 The vehicles ahead drove the road the ego is about to drive: :class:`VehicleTrails` keeps, per vehicle moving our
 way, its positions of the last TRAIL_MAX_AGE_S in the vehicle frame, carried along every cycle by the ego's speed
@@ -42,6 +44,14 @@ MIN_SPEED_FOR_CURVATURE_MPS = 1.0
 BLEND_START_M, BLEND_END_M = 20.0, 60.0     # the road's course takes over from the yaw-rate circle over this span
 LANE_KEEPING_HEADING_RAD = 0.05             # 2.9°: beyond it the ego crosses the road (a lane change)
 MAX_BOUNDARY_HEADING_RAD = 0.1              # 5.7°: a boundary at a steeper angle to the ego is no road edge
+DRIFT_WINDOW_S = 0.5                        # BoundaryDrift: the offsets of the last 0.5 s …
+DRIFT_MIN_SAMPLES = 4                       # … at least 4 of them on a side …
+DRIFT_JUMP_M = 1.0                          # … a side whose offset jumps by more is another line (restarts) …
+DRIFT_MIN_M = 0.3                           # … and the headings must predict a move of this much to be judged:
+#: a lane change moves the edges by this share of what the headings predict or more (0.26–0.47 measured as the
+#: heading passes 2.9°, the estimator's offsets lagging its headings; 1.0 ± 0.1 once under way); a curve's exit
+#: −0.17 … +0.18 (the quadratic's heading tilted, the offsets staying)
+DRIFT_FOLLOW_SHARE = 0.25
 COURSE_EXTENT = 1.5                         # the boundary's course is used up to this multiple of its valid range
 
 
@@ -128,13 +138,14 @@ def path_heading(kappa: float, x_m: float) -> float:
 
 def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: float, half_width_m: float,
             boundaries: dict | None = None, mount: SensorMount | None = None,
-            trails: list | None = None) -> np.ndarray:
+            trails: list | None = None, crossing: bool | None = None) -> np.ndarray:
     """Which sensor-frame points lie ahead in the ego's predicted path.
 
     ``mount=None`` takes the sensor at the rear axle (the circle then starts at the sensor). ``boundaries``: in the
     sensor's vehicle-aligned frame (:func:`aligned_boundaries`; the sensor frame itself for a sensor with no yaw).
     ``trails``: the vehicles' trails that describe the road (:func:`trail_fits`); where they and the boundaries
-    both cover a range, the two courses count equally.
+    both cover a range, the two courses count equally. ``crossing``: whether the ego turns across the road
+    (:func:`crossing_road`; None: judged from the boundaries' headings alone).
 
     The boundaries' course is a line parallel to the road through the car's centre line: a point's distance from
     it is its vehicle-frame lateral position less the course's shift (the sensor's own lateral place on the car
@@ -146,7 +157,7 @@ def in_path(x: np.ndarray, y: np.ndarray, ego_speed_mps: float, yaw_rate_rps: fl
     xv, yv = m.to_vehicle(x, y)
     xa, ya = xv - m.x_m, yv - m.y_m                 # the aligned frame: x ahead of the sensor, along the car
     offset = path_offset_m(xv, yv, kappa)
-    course = road_course(xa, boundaries)
+    course = road_course(xa, boundaries, crossing)
     by_trails = trail_course(xv, trails, kappa) if trails else None
     far = cover = None
     if course is not None:
@@ -181,12 +192,14 @@ def plausible(boundaries: dict | None) -> list:
             and abs(b.heading_rad) <= MAX_BOUNDARY_HEADING_RAD]
 
 
-def road_course(x: np.ndarray, boundaries: dict | None) -> tuple[np.ndarray, np.ndarray] | None:
+def road_course(x: np.ndarray, boundaries: dict | None, crossing: bool | None = None
+                ) -> tuple[np.ndarray, np.ndarray] | None:
     """The road's lateral course ahead from the valid reported boundaries, sensor frame: (shift (m) at ``x``, 1
-    where a boundary covers ``x`` else 0), averaged over the boundaries; None without one, or while the ego's
-    heading to the road (the boundaries' average) exceeds LANE_KEEPING_HEADING_RAD (it is crossing the road)."""
+    where a boundary covers ``x`` else 0), averaged over the boundaries; None without one, or while the ego crosses
+    the road (``crossing``, :func:`crossing_road`; None: while its heading to the road, the boundaries' average,
+    exceeds LANE_KEEPING_HEADING_RAD)."""
     valid = [b for _, b in plausible(boundaries)]
-    if not valid or abs(sum(b.heading_rad for b in valid) / len(valid)) > LANE_KEEPING_HEADING_RAD:
+    if not valid or (crossing if crossing is not None else abs(_heading(valid)) > LANE_KEEPING_HEADING_RAD):
         return None
     x = np.asarray(x, dtype=np.float64)
     shift = np.zeros(x.shape)
@@ -198,12 +211,69 @@ def road_course(x: np.ndarray, boundaries: dict | None) -> tuple[np.ndarray, np.
     return np.where(n > 0, shift / np.maximum(n, 1), 0.0), (n > 0).astype(np.float64)
 
 
-def measured_reach_m(boundaries: dict | None, trails: list | None, mount: SensorMount) -> float | None:
+def _heading(valid: list) -> float:
+    """The ego's heading to the road: the reported boundaries' headings, averaged."""
+    return sum(b.heading_rad for b in valid) / len(valid)
+
+
+class BoundaryDrift:
+    """Whether the reported road edges move across as the ego's heading to them says they must: the change of each
+    boundary's offset over the last :data:`DRIFT_WINDOW_S` against what its headings predict, Σ v·sin ψ·Δt. A lane
+    change moves them so (both the same sign, the same size, whatever the lag of a heading that builds up); on a
+    curve's exit the boundaries' quadratic fits tilt by 3° at R 250 m while their offsets stay (the road's course
+    and the ego's place on it have not changed)."""
+
+    def __init__(self) -> None:
+        self._hist: dict[str, list[tuple[float, float, float]]] = {"left": [], "right": []}
+
+    def update(self, t_s: float, boundaries: dict | None, speed_mps: float) -> None:
+        """Take this cycle's boundaries (those :func:`plausible` counts) and the ego's speed; a side not reported, or
+        one whose offset jumped by more than :data:`DRIFT_JUMP_M` (another line taken), starts its history again."""
+        seen = dict(plausible(boundaries))
+        for side, hist in self._hist.items():
+            b = seen.get(side)
+            if b is None or (hist and abs(b.offset_m - hist[-1][1]) > DRIFT_JUMP_M):
+                hist.clear()
+            if b is not None:
+                hist.append((t_s, b.offset_m, speed_mps * math.sin(b.heading_rad)))
+                while hist and hist[0][0] < t_s - DRIFT_WINDOW_S:
+                    del hist[0]
+
+    def follows_heading(self) -> bool | None:
+        """Whether the offsets moved at least DRIFT_FOLLOW_SHARE of what the headings predict, the same way: None
+        while no side has :data:`DRIFT_MIN_SAMPLES` samples or the headings predict less than :data:`DRIFT_MIN_M`."""
+        moved = predicted = 0.0
+        for hist in self._hist.values():
+            if len(hist) < DRIFT_MIN_SAMPLES:
+                continue
+            moved += hist[-1][1] - hist[0][1]
+            predicted += sum(0.5 * (a[2] + b[2]) * (b[0] - a[0]) for a, b in zip(hist, hist[1:]))
+        if abs(predicted) < DRIFT_MIN_M:
+            return None
+        return moved / predicted >= DRIFT_FOLLOW_SHARE
+
+
+def crossing_road(boundaries: dict | None, drift: BoundaryDrift) -> bool | None:
+    """Whether the ego turns across the road (a lane change), for :func:`road_course`: its heading to the reported
+    boundaries beyond LANE_KEEPING_HEADING_RAD *and* the boundaries moving across as that heading says they do
+    (:meth:`BoundaryDrift.follows_heading`); None without boundaries, the heading alone while the drift says
+    nothing yet."""
+    valid = [b for _, b in plausible(boundaries)]
+    if not valid:
+        return None
+    if abs(_heading(valid)) <= LANE_KEEPING_HEADING_RAD:
+        return False
+    follows = drift.follows_heading()
+    return True if follows is None else follows
+
+
+def measured_reach_m(boundaries: dict | None, trails: list | None, mount: SensorMount,
+                     crossing: bool | None = None) -> float | None:
     """How far ahead of the sensor the road's course is measured, not extrapolated: the farthest valid range of the
     boundaries :func:`road_course` uses and the farthest point of the trails :func:`trail_course` uses; None when
     neither is used (the yaw-rate circle alone predicts the path, nothing to tell apart)."""
     reach = []
-    if road_course(np.zeros(1), boundaries) is not None:
+    if road_course(np.zeros(1), boundaries, crossing) is not None:
         reach.append(max(b.range_end_m for _, b in plausible(boundaries)))
     if trails and trail_course(np.zeros(1), trails) is not None:
         reach.append(max(f.x_max for f in trails) - mount.x_m)
@@ -362,14 +432,14 @@ def trail_fits(trails, curvature_1pm: float, reference=None) -> list[TrailFit]:
     return [f for f, k in zip(fits, keep) if k]
 
 
-def boundary_reference(boundaries: dict | None, mount: SensorMount):
+def boundary_reference(boundaries: dict | None, mount: SensorMount, crossing: bool | None = None):
     """The boundaries' course as a reference for :func:`trail_fits` (vehicle frame, the mount's yaw neglected: a
     drift is measured peak to peak), or None."""
     valid = [b for _, b in plausible(boundaries)]
-    if road_course(np.zeros(1), boundaries) is None:
+    if road_course(np.zeros(1), boundaries, crossing) is None:
         return None
     end = COURSE_EXTENT * max(b.range_end_m for b in valid)
-    return (lambda xs: road_course(xs - mount.x_m, boundaries)[0] + mount.y_m), mount.x_m, mount.x_m + end
+    return (lambda xs: road_course(xs - mount.x_m, boundaries, crossing)[0] + mount.y_m), mount.x_m, mount.x_m + end
 
 
 def fit_course(fits: list[TrailFit], curvature_1pm: float) -> np.ndarray | None:
@@ -469,4 +539,5 @@ class VehicleTrails:
 
 
 __all__ = ["SensorMount", "VehicleTrails", "boundary_reference", "curvature", "dead_reckon", "fit_course",
-           "fit_trail", "in_path", "path_offset_m", "plausible", "road_course", "trail_course", "trail_fits"]
+           "fit_trail", "in_path", "path_offset_m", "plausible", "road_course", "trail_course", "trail_fits",
+           "BoundaryDrift", "crossing_road"]
