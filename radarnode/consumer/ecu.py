@@ -72,8 +72,8 @@ STRAY_STEP_PERIODS = 3.0
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
-                  "_obstacles", "_placed", "_moved", "_moving_for", "landmarks", "trails", "trail_fits", "last_cycle_t",
-                  "_last_out_t", "acc", "fcw", "odometry", "drift")
+                  "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
+                  "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -155,6 +155,7 @@ class Ecu:
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._placed: set[int] = set()            # tracks whose place was judged for continuing an object there
+        self._born: dict[int, tuple[float, float]] = {}   # where each track was first seen (odometry frame)
         self._last_out_t: float | None = None
         if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
             raise ValueError(f"Ecu wavelength_m: value {wavelength_m!r} is not allowed; expected the radar's carrier "
@@ -236,7 +237,7 @@ class Ecu:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
-        self._rcs_power, self._obstacles, self._placed = {}, set(), set()
+        self._rcs_power, self._obstacles, self._placed, self._born = {}, set(), set(), {}
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
         self.trails.clear()
@@ -450,6 +451,7 @@ class Ecu:
             wx = ox + co * xv[i] - so * yv[i]
             wy = oy + so * xv[i] + co * yv[i]
             heading_there = oh + kappa * max(xv[i], 0.0)
+            self._born.setdefault(t.id, (wx, wy))
             if k is not None:
                 dyn = int(ol.dyn_prop[k])
                 trail[i] = (dyn == DYN_MOVING and gx > MOVING_MPS
@@ -470,9 +472,11 @@ class Ecu:
                     # standing still: filed at its place (with its RCS, for the overhead test); a vehicle that
                     # stopped marks its place, so that a track the radar creates there anew is still one
                     filed.add(t.id)
+                    bx, by = self._born[t.id]
                     landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, heading_there, rng,
                                                       float(ol.rcs_dbsm[k]), moved=t.id in self._moved,
-                                                      in_path=self._in_path.get(t.id, 0) > 0)
+                                                      in_path=self._in_path.get(t.id, 0) > 0,
+                                                      drove_m=math.hypot(wx - bx, wy - by))
                     if landmark.moved:
                         self._moved.add(t.id)
                 elif landmark is not None and int(ol.meas_state[k]) != MEAS_PREDICTED:
@@ -538,6 +542,7 @@ class Ecu:
         self._rcs_power = {k: v for k, v in self._rcs_power.items() if k in alive}
         self._obstacles &= alive
         self._placed &= alive
+        self._born = {k: v for k, v in self._born.items() if k in alive}
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after

@@ -71,6 +71,9 @@ CONTINUE_MIN_CYCLES = 10
 #: how deep an overhead structure may reach beyond its near edge (a motorway deck, m): what the radar reports of it
 #: from underneath, moving as its Doppler makes it, belongs to it
 OVERHEAD_DEPTH_M = 20.0
+#: a track seen moving whose object came farther than this from where the ECU first saw it drove to its place: a
+#: vehicle that stopped, never a part of a structure it stands under (parts glint within OVERHEAD_DEPTH_M of the deck)
+DROVE_IN_M = 2.0 * OVERHEAD_DEPTH_M
 #: landmarks take turns (are parts of one glinting structure) when measured together in at most this fraction of the
 #: cycles the less frequent one was measured
 POOL_SHARED = 0.25
@@ -333,20 +336,25 @@ class LandmarkMap:
         return out
 
     def observe(self, track_id: int, object_id: int, x_m: float, y_m: float, heading_rad: float, range_m: float,
-                rcs_dbsm: float, moved: bool = False, in_path: bool = True) -> Landmark:
+                rcs_dbsm: float, moved: bool = False, in_path: bool = True, drove_m: float = 0.0) -> Landmark:
         """File a stationary track at odometry-frame position (x_m, y_m) with the ego's heading ``heading_rad``
         (matching is along and across the ego's heading); returns its landmark, re-evaluated. ``moved``: the
         track was seen moving (a vehicle that stopped: its landmark is never overhead, and a new track the radar
         creates there later inherits that it moved). ``in_path``: the track is in the ego's predicted path (a track
         on probation at a structure is released as an object of its own only if it is there when its probation ends,
         where a car under the structure matters: the structure's parts beyond the road are measured together with
-        it too)."""
+        it too). ``drove_m``: how far the track's object came from where it was first seen; seen moving and farther
+        than :data:`DROVE_IN_M`, it drove here and stopped, and a recognised structure it stands under does not take
+        it (a lead that stopped with its rear under a deck was filed as one of the deck's parts and never warned
+        for)."""
         lm = self.by_track.get(track_id)
         if lm is None:
             # a landmark another live track is filed at is that track's: two objects seen at once are two
             # (a post of the guardrail beside a stopped car must not mix into the car's history)
             busy = {id(v) for v in self.by_track.values()}
             lm = self.match(x_m, y_m, heading_rad, exclude=busy)
+            if lm is not None and lm.overhead and moved and drove_m > DROVE_IN_M:
+                lm = None                        # a vehicle that drove here and stopped: a place of its own
             if lm is not None and lm.overhead and id(lm) in busy:
                 # a structure's track is alive: an object that stood here on its own, measured together with the
                 # structure, is back (the radar lost a car under a deck for a while), not one of the structure's parts
