@@ -116,3 +116,29 @@ def test_the_warning_on_a_clothoid_is_the_stopped_cars_at_the_detection_level():
     a post."""
     r = simulate(load_scenario(SCENARIOS / "clothoid_stopped_own_lane.yaml"), fidelity="detection")
     assert r.warned_for == "stopped" and r.passed, r.reasons
+
+
+def test_the_warned_object_is_the_actor_it_lies_at_with_a_cluster_list_and_beside_a_truck():
+    """An independent tester's scenes: with ``output: clusters`` the ECU's tracks have no object ID, and every warning
+    was for "no actor"; at the detection level a car and a truck beside it in one range–Doppler cell were tagged the
+    truck (its power outweighs), and the car's warning was taken for the truck's — and with ``lead: truck`` passed."""
+    from radarnode.radar.setup import parse_scenario
+    text = """
+name: warned_at
+duration_s: 9.0
+seed: {seed}
+radar: {{preset: ars408_like{output}}}
+ego: {{speed_mps: 20.0}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+ecu: {{acc_enabled: false, expect: {{lead: {lead}, fcw_required: true}}}}
+actors:
+  - {{id: car, class: car, x_m: 170.0, lane: 1, speed_mps: 0.0}}
+{truck}"""
+    truck = "  - {id: truck, class: truck, x_m: 170.0, lane: 2, speed_mps: 0.0}\n"
+    r = simulate(parse_scenario(text.format(seed=1, output=", output: clusters", lead="car", truck="")), "object")
+    assert r.warned_for == "car" and r.passed, r.reasons
+    for seed in (1, 2):
+        r = simulate(parse_scenario(text.format(seed=seed, output="", lead="car", truck=truck)), "detection")
+        assert r.warned_for == "car" and r.passed, (seed, r.reasons)
+        r = simulate(parse_scenario(text.format(seed=seed, output="", lead="truck", truck=truck)), "detection")
+        assert r.warned_for == "car" and not r.passed, (seed, r.reasons)

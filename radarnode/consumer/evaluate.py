@@ -33,6 +33,8 @@ from radarnode.wire.group import ego_motion_for, make_node
 NO_ACTOR = "no actor"
 #: cycles of an ECU track's truth tags that say which actor it is where a cycle's tag does not
 TAG_WINDOW = 10
+#: an ECU target within this of an actor's box (its outline, not its nearest point) is at that actor
+AT_ACTOR_M = 0.75
 STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
 NO_BRAKING_MPS2 = -0.5         # ``expect.no_braking``: an ACC request below this is braking (above: coasting)
 
@@ -236,12 +238,22 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # car's object is tagged no actor in a cycle a guardrail post's return outweighs it in (signal level: lies
         # nearest its detection)
         seen_now: dict[int, int] = {}
+        view = None
 
         def actor_of(target) -> int:
+            nonlocal view
             if target is None:
                 return -1
             if target.track_id in seen_now:
                 return seen_now[target.track_id]
+            # first where it is: the actor whose box it lies at (a merged return of a car and the truck beside it
+            # lies at the car, whoever's power outweighs in the cell; a cluster track has no object to look up)
+            if view is None:
+                view = scene.view(t)
+            at = _actor_at(view, scene, front, target)
+            if at is not None:
+                seen_now[target.track_id] = at
+                return at
             found = _actor_in_cycle(target)
             tags = track_tags.setdefault(target.track_id, collections.deque(maxlen=TAG_WINDOW))
             if found is not None:
@@ -322,6 +334,26 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     res.trace["ecu"] = ecu                         # the ECU as it ended (its landmarks, for the benchmarks)
     _judge(scenario, res)
     return res
+
+
+def _actor_at(view, scene, mount: SensorMount, target) -> int | None:
+    """The actor an ECU target lies at: within AT_ACTOR_M of its box (sensor frame, the box turned by its orientation),
+    the one whose nearest point's range is nearest the target's if several (a car under a bridge lies in the deck's
+    footprint too; the radar measures range best), or None."""
+    if not len(view.x_m):
+        return None
+    # the target is in the vehicle's axes (along the car from the sensor, across from its centre line)
+    c, s = math.cos(math.radians(mount.yaw_deg)), math.sin(math.radians(mount.yaw_deg))
+    dx, dy = target.distance_m, target.lateral_m - mount.y_m
+    x, y = c * dx + s * dy, -s * dx + c * dy
+    co, so = np.cos(view.orientation_rad), np.sin(view.orientation_rad)
+    rx, ry = x - view.centre_x_m, y - view.centre_y_m
+    out_l = np.maximum(np.abs(co * rx + so * ry) - scene.length_m / 2.0, 0.0)
+    out_w = np.maximum(np.abs(-so * rx + co * ry) - scene.width_m / 2.0, 0.0)
+    near = np.hypot(out_l, out_w) <= AT_ACTOR_M
+    if not near.any():
+        return None
+    return int(np.argmin(np.where(near, np.abs(math.hypot(x, y) - view.range_m), np.inf)))
 
 
 def _judge(scenario: Scenario, res: ScenarioResult) -> None:
