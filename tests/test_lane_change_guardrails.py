@@ -87,6 +87,21 @@ def test_the_heading_alone_decides_until_the_drift_is_known_and_after_a_jump():
     assert _drift(0.0, speed=2.0).follows_heading() is None
 
 
+def test_one_road_edge_alone_says_nothing_but_one_lost_for_a_moment_leaves_the_other_to_decide():
+    from radarnode.consumer.path import DRIFT_WINDOW_S, BoundaryDrift, crossing_road
+    one = BoundaryDrift()
+    left = {"left": _edges(3.0)["left"]}
+    for k in range(8):
+        one.update(k * 0.072, left, 25.0)
+    assert one.follows_heading() is None and crossing_road(left, one) is True     # one guardrail: the heading
+    d = _drift(0.0)                                 # both edges, staying: a curve's exit
+    t = 7 * 0.072
+    for k in range(1, 8):                           # the right edge lost (the estimator re-fits it across the road)
+        d.update(t + k * 0.072, left, 25.0)
+        expected = False if k * 0.072 <= DRIFT_WINDOW_S else None
+        assert d.follows_heading() is expected, k
+
+
 def test_a_car_stopped_in_the_inner_lane_beyond_a_curve_s_exit_between_guardrails_draws_no_warning():
     """``benchmarks/bends.py``'s curve exit (R 250 m into a 30-m clothoid, guardrails both sides, 25 m/s): the
     boundaries' fits tilt by 3° while their offsets stay; taken for a lane change, the yaw-rate circle put the car

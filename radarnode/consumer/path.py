@@ -225,6 +225,7 @@ class BoundaryDrift:
 
     def __init__(self) -> None:
         self._hist: dict[str, list[tuple[float, float, float]]] = {"left": [], "right": []}
+        self._seen = {"left": -math.inf, "right": -math.inf}      # when each edge was last reported
 
     def update(self, t_s: float, boundaries: dict | None, speed_mps: float) -> None:
         """Take this cycle's boundaries (those :func:`plausible` counts) and the ego's speed; a side not reported, or
@@ -235,13 +236,21 @@ class BoundaryDrift:
             if b is None or (hist and abs(b.offset_m - hist[-1][1]) > DRIFT_JUMP_M):
                 hist.clear()
             if b is not None:
+                self._seen[side] = t_s
                 hist.append((t_s, b.offset_m, speed_mps * math.sin(b.heading_rad)))
                 while hist and hist[0][0] < t_s - DRIFT_WINDOW_S:
                     del hist[0]
 
     def follows_heading(self) -> bool | None:
-        """Whether the offsets moved at least DRIFT_FOLLOW_SHARE of what the headings predict, the same way: None
-        while no side has :data:`DRIFT_MIN_SAMPLES` samples or the headings predict less than :data:`DRIFT_MIN_M`."""
+        """Whether the offsets moved at least DRIFT_FOLLOW_SHARE of what the headings predict, the same way, over
+        the sides with :data:`DRIFT_MIN_SAMPLES` samples: None on a road whose two edges were not both reported within
+        the last DRIFT_WINDOW_S (with one guardrail the edge's offset lagged its heading at the start of a lane change
+        for 3–4 cycles, and FCW prewarned for the car in the lane being left: an independent tester; on a curve's exit
+        the estimator can lose one edge for a few cycles, the other's history then decides), or while the headings
+        predict less than :data:`DRIFT_MIN_M`."""
+        now = max(self._seen.values())
+        if any(now - seen > DRIFT_WINDOW_S for seen in self._seen.values()):
+            return None                          # one road edge only (or none) in the last DRIFT_WINDOW_S
         moved = predicted = 0.0
         for hist in self._hist.values():
             if len(hist) < DRIFT_MIN_SAMPLES:
