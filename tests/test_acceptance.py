@@ -142,3 +142,38 @@ actors:
         assert r.warned_for == "car" and r.passed, (seed, r.reasons)
         r = simulate(parse_scenario(text.format(seed=seed, output="", lead="truck", truck=truck)), "detection")
         assert r.warned_for == "car" and not r.passed, (seed, r.reasons)
+
+
+@pytest.mark.parametrize("rear_past_edge_m, at_edge, at_rear", [(0.0, "car", "car"), (4.0, "bridge", "car")])
+def test_a_warning_under_a_bridge_is_for_what_lies_at_its_range(rear_past_edge_m, at_edge, at_rear):
+    """A car stopped under a deck lies in the deck's footprint: of the two, the one whose nearest point is nearest in
+    range, the deck taken 1.5 m farther (a return at a car's rear right at the deck's near edge is the car's; one
+    4 m before the car, at the deck's edge, the deck's — the ECU warned for a deck part on a R 333 m bend at 90 km/h,
+    a cycle before the car behind it)."""
+    from radarnode.consumer.acc import Target
+    from radarnode.consumer.evaluate import _actor_at
+    from radarnode.consumer.path import SensorMount
+    from radarnode.radar.setup import parse_scenario
+    from radarnode.scene.world import Scene
+    edge = 100.0 - 6.0                                   # the deck's near edge (half depth 6 m)
+    sc = parse_scenario(f"""
+name: under
+duration_s: 1.0
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 10.0}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+actors:
+  - {{id: bridge, class: bridge, x_m: 100.0, y_m: 0.0}}
+  - {{id: car, class: car, x_m: {edge + rear_past_edge_m + 2.25}, lane: 1, speed_mps: 0.0}}
+""")
+    scene = Scene(sc)
+    view = scene.view(0.0)
+    mount = SensorMount.of(sc.radar.mount)
+    names = [a.id for a in sc.actors]
+    rear = float(view.range_m[1])
+    for distance, expected in ((rear - rear_past_edge_m, at_edge), (rear, at_rear)):
+        target = Target(1, 1, distance, 0.0, -10.0, 0.0)
+        assert names[_actor_at(view, scene, mount, target)] == expected, distance
+    assert _actor_at(view, scene, mount, Target(1, 1, rear, 6.0, -10.0, 0.0)) == 0     # beside the car: the deck
+    assert _actor_at(view, scene, mount, Target(1, 1, 60.0, 0.0, -10.0, 0.0)) is None   # no one there

@@ -33,8 +33,11 @@ from radarnode.wire.group import ego_motion_for, make_node
 NO_ACTOR = "no actor"
 #: cycles of an ECU track's truth tags that say which actor it is where a cycle's tag does not
 TAG_WINDOW = 10
-#: an ECU target within this of an actor's box (its outline, not its nearest point) is at that actor
+#: an ECU target within this of an actor's box (its outline, not its nearest point) is at that actor; of several,
+#: the nearest in range, an actor whose reflecting point lies more than OVERHEAD_Z_M above the sensor taken
+#: AT_ACTOR_OVERHEAD_M farther (about the far scan's range resolution)
 AT_ACTOR_M = 0.75
+OVERHEAD_Z_M, AT_ACTOR_OVERHEAD_M = 0.5, 1.5
 STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
 NO_BRAKING_MPS2 = -0.5         # ``expect.no_braking``: an ACC request below this is braking (above: coasting)
 
@@ -339,7 +342,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
 def _actor_at(view, scene, mount: SensorMount, target) -> int | None:
     """The actor an ECU target lies at: within AT_ACTOR_M of its box (sensor frame, the box turned by its orientation),
     the one whose nearest point's range is nearest the target's if several (a car under a bridge lies in the deck's
-    footprint too; the radar measures range best), or None."""
+    footprint too; the radar measures range best; a structure above the road taken AT_ACTOR_OVERHEAD_M farther),
+    or None."""
     if not len(view.x_m):
         return None
     # the target is in the vehicle's axes (along the car from the sensor, across from its centre line)
@@ -353,7 +357,11 @@ def _actor_at(view, scene, mount: SensorMount, target) -> int | None:
     near = np.hypot(out_l, out_w) <= AT_ACTOR_M
     if not near.any():
         return None
-    return int(np.argmin(np.where(near, np.abs(math.hypot(x, y) - view.range_m), np.inf)))
+    # an actor above the road (a deck, a gantry) counts AT_ACTOR_OVERHEAD_M farther: a return at a stopped car's
+    # rear right under a deck's near edge is the car's (the one FCW is for), not the deck's
+    above = view.z_m > OVERHEAD_Z_M if view.z_m is not None else np.zeros(len(view.x_m), dtype=bool)
+    miss = np.abs(math.hypot(x, y) - view.range_m) + np.where(above, AT_ACTOR_OVERHEAD_M, 0.0)
+    return int(np.argmin(np.where(near, miss, np.inf)))
 
 
 def _judge(scenario: Scenario, res: ScenarioResult) -> None:
