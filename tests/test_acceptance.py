@@ -85,24 +85,24 @@ def test_a_car_standing_beyond_the_measured_course_on_a_clothoid(name, seeds):
         assert r.passed and r.checked, (seed, r.reasons)
 
 
+def _three_lanes(name: str, duration_s: float, speed_mps: float, rest: str) -> str:
+    """A scenario's text: ``ars408_like``, the ego in the middle of three 3.5-m lanes at ``speed_mps``, then ``rest``."""
+    return (f"name: {name}\nduration_s: {duration_s}\nseed: 1\nradar: {{preset: ars408_like}}\n"
+            f"ego: {{speed_mps: {speed_mps}}}\nroad: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}\n" + rest.lstrip("\n"))
+
+
 @pytest.mark.parametrize("lead, passes", [("stopped", True), ("beside", False)])
 def test_an_fcw_expectation_is_met_only_by_a_warning_for_its_lead(lead, passes):
     """The FCW checks (here ``fcw_required``) judged the first warning whatever it was for: a warning for another
     object passed a scenario whose lead was never warned for. The warning must be for ``expect.lead``."""
     from radarnode.consumer.evaluate import NO_ACTOR
     from radarnode.radar.setup import parse_scenario
-    sc = parse_scenario(f"""
-name: warned_for
-duration_s: 4.0
-seed: 1
-radar: {{preset: ars408_like}}
-ego: {{speed_mps: 20.0}}
-road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+    sc = parse_scenario(_three_lanes("warned_for", 4.0, 20.0, f"""
 ecu: {{acc_enabled: false, expect: {{lead: {lead}, fcw_required: true}}}}
 actors:
   - {{id: stopped, class: car, x_m: 70.0, lane: 1, speed_mps: 0.0}}
   - {{id: beside, class: car, x_m: 60.0, lane: 2, speed_mps: 0.0}}
-""")
+"""))
     r = simulate(sc, fidelity="object")
     assert r.warning_time_s is not None and r.warned_for == "stopped" != NO_ACTOR
     assert r.passed is passes, r.reasons
@@ -156,17 +156,11 @@ def test_a_warning_under_a_bridge_is_for_what_lies_at_its_range(rear_past_edge_m
     from radarnode.radar.setup import parse_scenario
     from radarnode.scene.world import Scene
     edge = 100.0 - 6.0                                   # the deck's near edge (half depth 6 m)
-    sc = parse_scenario(f"""
-name: under
-duration_s: 1.0
-seed: 1
-radar: {{preset: ars408_like}}
-ego: {{speed_mps: 10.0}}
-road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+    sc = parse_scenario(_three_lanes("under", 1.0, 10.0, f"""
 actors:
   - {{id: bridge, class: bridge, x_m: 100.0, y_m: 0.0}}
   - {{id: car, class: car, x_m: {edge + rear_past_edge_m + 2.25}, lane: 1, speed_mps: 0.0}}
-""")
+"""))
     scene = Scene(sc)
     view = scene.view(0.0)
     mount = SensorMount.of(sc.radar.mount)
