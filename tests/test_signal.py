@@ -140,11 +140,12 @@ def test_detection_model_has_the_chains_pd_where_the_coupling_moves_the_peak(v):
 
 def test_cells_merge_in_the_detection_model():
     p = PRESETS["mimo12"]
-    # two scatterers 0.1 m and 0.5° apart share one cell: one detection between them
+    # two scatterers 0.1 m and 0.5° apart share one cell: one detection between them, tagged with one of the two
+    # (the one that puts most power into the cell; tests/test_detection_stats.py has the rule)
     scat = point_targets([40.0, 40.1], [5.0, 5.5], [3.0, 3.0], [10.0, 10.0])
     scat.actor_index[:] = [0, 1]
     det = detection_model.detect(p, scat, np.random.default_rng(0), DspChain(p).statistic)
-    assert len(det) == 1 and det.actor_index[0] == -1
+    assert len(det) == 1 and det.actor_index[0] in (0, 1)
     assert 39.8 < det.range_m[0] < 40.4
 
 
