@@ -7,8 +7,9 @@ consumer and ECU as ``radarnode report`` runs them, seeds 1…N, at object and d
 the ECU neither warned nor braked. The structures stand 250 m ahead (the first one); the run ends 10 m before it
 (bends) or 10 m before the last one.
 
-* ``bend R500 left`` / ``bend R500 right`` / ``bend R1000 left``: one bridge on a constant bend (its deck across
-  the road where it stands, so obliquely in the sensor's beam);
+* ``bend R500 left`` / ``bend R500 right`` / ``bend R1000 left`` / ``bend R333 left``: one bridge on a constant
+  bend (its deck across the road where it stands, so obliquely in the sensor's beam; on the R 333 m bend it comes
+  into view only about 115 m out, the car table's tightest bend);
 * ``bridge + gantry 60 m``: a bridge, then a sign gantry 60 m after it (the deck hides it in elevation until
   about 180 m);
 * ``two bridges 40 m``, ``two bridges 100 m``.
@@ -41,6 +42,7 @@ LAYOUTS = {
     "bend R500 left": (0.002, [("bridge", 250.0)]),
     "bend R500 right": (-0.002, [("bridge", 250.0)]),
     "bend R1000 left": (0.001, [("bridge", 250.0)]),
+    "bend R333 left": (0.003, [("bridge", 250.0)]),
     "bridge + gantry 60 m": (0.0, [("bridge", 250.0), ("gantry", 310.0)]),
     "two bridges 40 m": (0.0, [("bridge", 250.0), ("bridge", 290.0)]),
     "two bridges 100 m": (0.0, [("bridge", 250.0), ("bridge", 350.0)]),
