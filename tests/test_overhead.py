@@ -612,7 +612,7 @@ def test_a_car_the_radar_re_creates_where_it_stood_is_a_candidate_at_once(before
     # CONTINUE_MIN_CYCLES cycles (its ECU track confirmed by the second report: `before` − 1 of them; 9 just below,
     # 10 at, 21 above the limit) the new track is FCW's target from its first confirmed cycle (its obstacle and lane
     # association carried over); otherwise only after OBSTACLE_MIN_AGE cycles of its own
-    from radarnode.consumer.ecu import CONTINUE_MIN_CYCLES
+    CONTINUE_MIN_CYCLES = O.CONTINUE_MIN_CYCLES
     assert CONTINUE_MIN_CYCLES == 10
     ecu = Ecu()
     t = 0.0

@@ -32,7 +32,7 @@ from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, 
                                      trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import Fcw, FcwSettings
-from radarnode.consumer.overhead import CONTINUE_MIN_CYCLES, OVERHEAD_DEPTH_M, LandmarkMap
+from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
 from radarnode.consumer.tracking import Tracker, line_of_sight, radial_mismatch2
 from radarnode.perception.motion import road_share
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED

@@ -235,11 +235,11 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             if res.impact_time_s is None and 0.0 < prev_gap and lane_gap <= 0.0 and abs(lateral) < 2.0:
                 res.impact_time_s = t
             prev_gap = lane_gap
-        # which actor the ECU selected: its object ID, looked up in this cycle's object list (truth tags). Where this
-        # cycle says no actor, or its list lacks the object (the radar dropped it for a cycle), the ECU track is the
-        # actor its objects were most often in its last TAG_WINDOW cycles: at the detection and signal levels a
-        # car's object is tagged no actor in a cycle a guardrail post's return outweighs it in (signal level: lies
-        # nearest its detection)
+        # which actor the ECU selected: the actor whose box its target lies at (_actor_at); else its object ID looked
+        # up in this cycle's object list (truth tags), and where this cycle says no actor, or its list lacks the
+        # object (the radar dropped it for a cycle), the actor the ECU track's objects were most often in its last
+        # TAG_WINDOW cycles (at the detection and signal levels a car's object is tagged no actor in a cycle a
+        # guardrail post's return outweighs it in, or, at the signal level, lies nearest its detection)
         seen_now: dict[int, int] = {}
         view = None
 
@@ -249,8 +249,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                 return -1
             if target.track_id in seen_now:
                 return seen_now[target.track_id]
-            # first where it is: the actor whose box it lies at (a merged return of a car and the truck beside it
-            # lies at the car, whoever's power outweighs in the cell; a cluster track has no object to look up)
+            # where it is first (a merged return of a car and the truck beside it lies at the car, whoever's power
+            # outweighs in the cell; a cluster track has no object to look up)
             if view is None:
                 view = scene.view(t)
             at = _actor_at(view, scene, front, target)
