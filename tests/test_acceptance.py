@@ -171,3 +171,24 @@ actors:
         assert names[_actor_at(view, scene, mount, target)] == expected, distance
     assert _actor_at(view, scene, mount, Target(1, 1, rear, 6.0, -10.0, 0.0)) == 0     # beside the car: the deck
     assert _actor_at(view, scene, mount, Target(1, 1, 60.0, 0.0, -10.0, 0.0)) is None   # no one there
+
+
+@pytest.mark.parametrize("beyond_m, at", [(0.99 * 0.75, True), (1.01 * 0.75, False), (2 * 0.75, False)])
+def test_a_target_is_at_an_actor_within_0_75_m_of_its_box(beyond_m, at):
+    from radarnode.consumer.acc import Target
+    from radarnode.consumer.evaluate import AT_ACTOR_M, _actor_at
+    from radarnode.consumer.path import SensorMount
+    from radarnode.radar.setup import parse_scenario
+    from radarnode.scene.world import Scene
+    assert AT_ACTOR_M == 0.75
+    sc = parse_scenario(_three_lanes("at", 1.0, 10.0, """
+actors:
+  - {id: car, class: car, x_m: 60.0, lane: 1, speed_mps: 0.0}
+"""))
+    scene = Scene(sc)
+    view = scene.view(0.0)
+    mount = SensorMount.of(sc.radar.mount)
+    # beside the car's left side, at its middle along it (sensor frame = the car's axes for this mount)
+    x, y = float(view.centre_x_m[0]), float(view.centre_y_m[0] + scene.width_m[0] / 2 + beyond_m)
+    found = _actor_at(view, scene, mount, Target(1, 1, x, y + mount.y_m, -10.0, 0.0))
+    assert (found == 0) is at
