@@ -330,7 +330,12 @@ class DspChain:
         rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
         if d.size and c > 1:   # every angle peak of a cell is a detection, sharing the cell's energy
             row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db)
-            range_m, speed, rho = range_m[row], speed[row], rho[row] * 10.0 ** (rel_db / 10.0)
+            # in proportion to the peaks' powers, so that the cell's peaks add up to its energy (the strongest took
+            # all of it before, and each other one its share on top: two equal reflectors resolved in angle in one
+            # range–Doppler cell were each reported 3 dB above their RCS)
+            power_share = 10.0 ** (rel_db / 10.0)
+            power_share /= np.bincount(row, weights=power_share, minlength=d.size)[row]
+            range_m, speed, rho = range_m[row], speed[row], rho[row] * power_share
             # what the cell's sources leave unexplained: the angle an extended reflector spans (its glint)
             frac = spread.unexplained_fraction(snap, row, sin_t, self.doa.spacing_wl, sigma2)
         else:                  # one channel measures no angle: boresight (a scanning radar adds its beam angle)

@@ -36,9 +36,9 @@ What the signal chain does to scatterers, without the signal:
    the chain's masking of a weak target beside a strong one); in a detected
    cell every angle peak within the chain's DOA floor is a detection, all at
    the cell's one range and speed (the energy-weighted glint of its peaks: the
-   chain fits the peak, then finds the angles in its snapshot); the strongest
-   reports the cell's measured energy, each other one that energy times its
-   power over the strongest's, as the chain's CLEAN reports them;
+   chain fits the peak, then finds the angles in its snapshot); the peaks
+   share the cell's measured energy in proportion to their powers, as the
+   chain shares it (their RCS add up to the cell's);
 5. the estimates carry noise at the chain's measured efficiency times the
    Cramér–Rao bound of the peak's integrated SNR (:func:`~radarnode.radar.calibration.chain_efficiency`);
    the reported SNR is drawn from the statistic, as the chain estimates it;
@@ -265,9 +265,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     keep = hit_rd[grp] & (e_peak >= top[grp] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
     idx, grp, e_peak = idx[keep], grp[keep], e_peak[keep]
     pos_r, pos_v, alias_v = g_r[grp], g_v[grp], g_alias[grp]
-    # the chain reports its cell's energy at the strongest angle peak, and at each other one that energy times the
-    # peak's power over the strongest's (radarnode.dsp.doa: rel_db)
-    share = e_peak / np.maximum(top[grp], 1e-300)
+    # the chain shares its cell's energy among the angle peaks it reports in proportion to their powers
+    # (radarnode.dsp.doa: rel_db; radarnode.radar.chain)
+    share = e_peak / np.maximum(np.bincount(grp, weights=e_peak, minlength=cells_rd.size)[grp], 1e-300)
     measured = np.maximum(stat_rd[grp] - statistic.n_channels, 1e-30) * share   # energy estimate
     rho_peak = c_rho[idx]
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
