@@ -20,7 +20,9 @@ Prints Markdown tables:
 7. the same behind several stronger returns in one cell, or beside a companion in its own cell;
 8. the same near the map's first range bins, where the CA-CFAR ring is cut (ars408_like);
 9. (``--only pairs``) two reflectors of one body within the resolution, inside one cell and astride a cell's edge,
-   and a car's reflectors: how often each level sees them and the SNR and RCS it reports.
+   and a car's reflectors: how often each level sees them and the SNR and RCS it reports;
+10. (``--only rcs``) two reflectors sharing one range–Doppler cell, apart in angle: each one's reported SNR against
+   its own ρ and the cell's sum against the pair's.
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 10 minutes; ``--quick`` about 3).
 """
@@ -681,6 +683,54 @@ def pairs_table(quick: bool) -> None:
     bodies_table(quick)
 
 
+def rcs_table(quick: bool) -> None:
+    """Two steady reflectors at one range and speed, apart in angle (one range–Doppler cell, two angle peaks): the
+    SNR each level reports for each against its own ρ, and the power sum of the cell's detections against the
+    pair's (the peaks share the cell's energy in proportion to their powers)."""
+    frames = {"detection": 120 if not quick else 30, "signal": 60 if not quick else 15}
+    print(f"### Reflectors sharing one range–Doppler cell ({frames['detection']} frames at the detection level, "
+          f"{frames['signal']} at the signal level)\n")
+    print("Two steady point reflectors at one range and speed, `apart` beamwidths (1/N in d·sinθ) about boresight; "
+          "the stronger at ρ 30 dB, the other `ratio` dB below; random phases each frame. Reported SNR minus the "
+          "reflector's own ρ (median over the frames in which the cell gave exactly two detections, dB), and the "
+          "power sum of those two minus the pair's (mean in power, dB); 'found': frames with exactly two\n")
+    print("| preset | apart | ratio | level | found | stronger | weaker | sum |")
+    print("|---|---:|---:|---|---:|---:|---:|---:|")
+    cases = [("ars408_like", sep, ratio) for sep in (1.5, 2.0, 3.0) for ratio in (0.0, 3.0, 6.0)]
+    cases += [("mimo12", 2.0, 0.0), ("mimo12", 2.0, 6.0), ("srr_corner", 2.0, 0.0), ("srr_corner", 2.0, 6.0)]
+    for name, sep, ratio in cases:
+        p = PRESETS[name]
+        chain = DspChain(p)
+        v0 = 10 * p.doppler_bin_mps
+        r0 = 17 * p.range_resolution_m - v0 * p.range_rate_coupling_s
+        az = np.degrees(np.arcsin(np.array([-sep / 2, sep / 2]) / p.num_virtual / p.element_spacing_wl))
+        rho = np.array([30.0, 30.0 - ratio])
+        rcs = rho - equation.snr_db(p, np.full(2, r0), np.zeros(2), 0.0, np.radians(az))
+        scat = point_targets(np.full(2, r0), az, np.full(2, v0), rcs)
+        scat.actor_index = np.zeros(2, dtype=np.int64)
+        want_sum = 10 * np.log10(np.sum(10 ** (rho / 10)))
+        for level in ("detection", "signal"):
+            rng = np.random.default_rng(5)
+            strong, weak, total = [], [], []
+            for _ in range(frames[level]):
+                det = (detection_model.detect(p, scat, rng, chain.statistic) if level == "detection"
+                       else chain.process_rd(synthesize_rd(p, scat, rng)))
+                near = (np.abs(det.range_m - r0) < 2 * p.range_resolution_m) & (np.abs(det.range_rate_mps - v0)
+                                                                                  < 2 * p.doppler_bin_mps)
+                if np.count_nonzero(near) != 2:
+                    continue
+                a = det.azimuth_rad[near]
+                snr = det.snr_db[near][np.argsort(a)]          # the reflector at −θ first, as ``az``
+                strong.append(snr[0] - rho[0])
+                weak.append(snr[1] - rho[1])
+                total.append(np.sum(10 ** (snr / 10)))
+            found = len(total) / frames[level]
+            cell = (f"{np.median(strong):+.2f} | {np.median(weak):+.2f} | "
+                    f"{10 * np.log10(np.mean(total)) - want_sum:+.2f}") if total else "- | - | -"
+            print(f"| {name} | {sep:.1f} | {ratio:.0f} dB | {level} | {found:.2f} | {cell} |", flush=True)
+    print()
+
+
 def bodies_table(quick: bool) -> None:
     frames = 150 if not quick else 40
     print(f"### A car's reflectors ({frames} frames a row, each level)\n")
@@ -732,7 +782,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
-                                       "pairs"))
+                                       "pairs", "rcs"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -757,7 +807,8 @@ def main() -> None:
           f"`python benchmarks/calibration.py{''.join(' ' + shlex.quote(a) for a in sys.argv[1:])}`\n")
     for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("cells", cells_table), ("accuracy", accuracy_table),
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
-                     ("crowd", crowd_table), ("edge", edge_table), ("pairs", pairs_table)):
+                     ("crowd", crowd_table), ("edge", edge_table), ("pairs", pairs_table),
+                     ("rcs", rcs_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")
