@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from radarnode.cli import interrupt
 from radarnode.errors import FileError, Terminated, UsageError
 from radarnode.perception.types import CLASS_NAMES, DYN_NAMES
 from radarnode.radar.setup import load_scenario
@@ -151,7 +152,9 @@ def stop_on_signals():
     previous = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
 
     def handler(signum, frame):
-        if stop.is_set():          # a second signal: give up at once
+        if stop.is_set():          # a second signal: give up at once (once no module is loading)
+            if interrupt.held(signum, frame):
+                return
             if signum == signal.SIGINT:
                 raise KeyboardInterrupt
             raise Terminated(signum)

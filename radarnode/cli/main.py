@@ -10,6 +10,7 @@ import sys
 import traceback
 
 from radarnode import __version__
+from radarnode.cli import interrupt
 from radarnode.errors import RadarnodeError, Terminated, UsageError
 
 # (the subcommands' and the parser's modules, which import numpy, python-can and the rest, are imported inside
@@ -68,6 +69,8 @@ def build_parser(only: str | None = None) -> argparse.ArgumentParser:
 
 
 def _terminate(signum, frame) -> None:
+    if interrupt.held(signum, frame):       # a module is loading: sent again a moment later
+        return
     raise Terminated(signum)
 
 

@@ -1,0 +1,62 @@
+"""Ctrl-C and SIGTERM while a module is being imported: held back and sent again a moment later.
+
+Python raises KeyboardInterrupt (radarnode's handler: :class:`radarnode.errors.Terminated`) wherever the main thread
+is when the signal arrives. Inside a library's import-time code that is unsafe: an exception raised while a class
+body's ``__set_name__`` runs comes out as a RuntimeError, and libraries that import their parts inside ``try: …
+except Exception`` swallow that. A Ctrl-C in the first few tenths of a second of ``radarnode log``, while its modules
+load, then printed a traceback and ended with 1 (inside cantools' ``DbcComments``: 1 of 15 tries), or was lost and
+the run went on to its end with 0 (once in a full test run). The command's handlers therefore hold a signal that
+finds the main thread importing and send it again :data:`RETRY_S` later, until it lands in the command's own code.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+
+#: a held signal is sent again after this long (s): imports take milliseconds, a person's Ctrl-C waits for 50 ms
+RETRY_S = 0.05
+_IMPORT_FILES = frozenset({"<frozen importlib._bootstrap>", "<frozen importlib._bootstrap_external>"})
+_pending: dict[int, threading.Timer] = {}
+
+
+def importing(frame) -> bool:
+    """Whether ``frame`` (a signal handler's) or one of its callers is the import machinery's: a module is loading."""
+    while frame is not None:
+        if frame.f_code.co_filename in _IMPORT_FILES:
+            return True
+        frame = frame.f_back
+    return False
+
+
+def held(signum: int, frame) -> bool:
+    """True when the signal finds the main thread importing; it is then sent again :data:`RETRY_S` later (once,
+    however often it arrives meanwhile). A handler that gets True returns without raising."""
+    if not importing(frame):
+        return False
+    timer = _pending.get(signum)
+    if timer is None or not timer.is_alive():
+        timer = threading.Timer(RETRY_S, os.kill, (os.getpid(), signum))
+        timer.daemon = True
+        _pending[signum] = timer
+        timer.start()
+    return True
+
+
+def cancel() -> int | None:
+    """Stop the sends not yet made (the command is ending); the signal of one that was still to come, else None."""
+    late = None
+    for signum, timer in list(_pending.items()):
+        if timer.is_alive():
+            timer.cancel()
+            late = signum
+    _pending.clear()
+    return late
+
+
+def on_sigint(signum: int, frame) -> None:
+    """SIGINT's handler while a command loads and runs: Python's KeyboardInterrupt, held while a module imports."""
+    if held(signum, frame):
+        return
+    raise KeyboardInterrupt

@@ -1,0 +1,89 @@
+"""A Ctrl-C that finds a module importing is held and sent again (radarnode.cli.interrupt)."""
+
+from __future__ import annotations
+
+import importlib
+import signal
+import sys
+import time
+import types
+
+import pytest
+
+from radarnode.cli import interrupt
+
+#: a module whose import-time code does what cantools' and python-can's did to a Ctrl-C: the signal arrives while a
+#: class body's descriptor is set up (``__set_name__``: Python 3.11 turns the KeyboardInterrupt raised there into a
+#: RuntimeError) inside a ``try: … except Exception`` (a library loading its optional parts)
+SWALLOWING = '''
+import os
+import signal
+
+
+class Field:
+    def __set_name__(self, owner, name):
+        os.kill(os.getpid(), signal.SIGINT)
+        deadline = __import__("time").perf_counter() + 0.2
+        while __import__("time").perf_counter() < deadline:     # the handler runs here, inside the import
+            pass
+
+
+try:
+    class Comments:
+        nodes = Field()
+except Exception:
+    pass
+LOADED = True
+'''
+
+
+@pytest.fixture
+def on_sigint():
+    previous = signal.signal(signal.SIGINT, interrupt.on_sigint)
+    yield
+    interrupt.cancel()
+    signal.signal(signal.SIGINT, previous)
+
+
+def test_a_ctrl_c_inside_an_import_comes_again_after_it(tmp_path, monkeypatch, on_sigint):
+    """With Python's own handler the KeyboardInterrupt is lost inside the import (it became a RuntimeError the
+    module swallowed) and nothing else ever stops the command; held and sent again, it stops the command once the
+    import is done."""
+    (tmp_path / "swallowing_module.py").write_text(SWALLOWING)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "swallowing_module", raising=False)
+    with pytest.raises(KeyboardInterrupt):
+        module = importlib.import_module("swallowing_module")
+        assert module.LOADED                  # the import itself went through untouched
+        time.sleep(2.0)                       # the held Ctrl-C arrives here, RETRY_S later
+    assert sys.modules["swallowing_module"].LOADED
+
+
+def test_outside_an_import_the_ctrl_c_is_a_keyboard_interrupt_at_once(on_sigint):
+    t0 = time.perf_counter()
+    with pytest.raises(KeyboardInterrupt):
+        signal.raise_signal(signal.SIGINT)
+        time.sleep(2.0)
+    assert time.perf_counter() - t0 < 0.5
+
+
+def _frame(filename, back=None):
+    return types.SimpleNamespace(f_code=types.SimpleNamespace(co_filename=filename), f_back=back)
+
+
+def test_a_held_signal_not_yet_sent_again_is_reported_when_the_command_ends():
+    """The command ends before the held signal comes again: the send is cancelled and the command reports it (its
+    exit status is then 128 + the signal), and no signal arrives after the handlers are gone."""
+    got = []
+    previous = signal.signal(signal.SIGUSR1, lambda s, f: got.append(s))
+    try:
+        inside = _frame("/some/module.py", _frame("<frozen importlib._bootstrap>", _frame("main.py")))
+        assert interrupt.importing(inside) and not interrupt.importing(_frame("main.py", _frame("cli.py")))
+        assert interrupt.held(signal.SIGUSR1, inside)
+        assert interrupt.held(signal.SIGUSR1, inside)          # again meanwhile: still one send
+        assert interrupt.cancel() == signal.SIGUSR1
+        time.sleep(3 * interrupt.RETRY_S)
+        assert got == [] and interrupt.cancel() is None
+        assert not interrupt.held(signal.SIGUSR1, _frame("main.py"))
+    finally:
+        signal.signal(signal.SIGUSR1, previous)
