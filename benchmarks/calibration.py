@@ -22,7 +22,8 @@ Prints Markdown tables:
 9. (``--only pairs``) two reflectors of one body within the resolution, inside one cell and astride a cell's edge,
    and a car's reflectors: how often each level sees them and the SNR and RCS it reports;
 10. (``--only rcs``) two reflectors sharing one range–Doppler cell, apart in angle: each one's reported SNR against
-   its own ρ and the cell's sum against the pair's.
+   its own ρ and the cell's sum against the pair's;
+11. (``--only posts``) guardrail posts on a straight road: the clusters each level reports a frame, by range band.
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 10 minutes; ``--quick`` about 3).
 """
@@ -731,6 +732,43 @@ def rcs_table(quick: bool) -> None:
     print()
 
 
+def posts_table(quick: bool) -> None:
+    """Guardrail posts (2 m apart, −5 dBsm) on a straight road at 25 m/s: the clusters each level reports a frame, by
+    range band, with one guardrail and with both."""
+    frames = 30 if quick else 120
+    bands = ((0.0, 70.0), (70.0, 150.0), (150.0, 250.0))
+    print(f"### Guardrail posts: clusters a frame at each level ({frames} frames a row, seeds 1–2)\n")
+    print("A straight three-lane road, the ego in the middle lane at 25 m/s, ars408_like; guardrails 1 m beyond the "
+          "left edge (one) or both edges, posts 2 m apart (1.1 range bins) at −5 dBsm, Swerling 1; no other actor. "
+          "Clusters a frame (mean) in each range band: what the cluster list carries\n")
+    print("| guardrails | level | " + " | ".join(f"{a:.0f}–{b:.0f} m" for a, b in bands) + " | all |")
+    print("|---|---|" + "---:|" * (len(bands) + 1))
+    for rails in ("left", "both"):
+        g = "{left_offset_m: 1.0}" if rails == "left" else "{left_offset_m: 1.0, right_offset_m: 1.0}"
+        sc = parse_scenario(f"""
+name: posts
+duration_s: {frames * 0.072 + 0.01}
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 25.0}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, guardrails: {g}}}
+""")
+        rc = radar_config(sc)
+        for level in LEVELS:
+            counts = np.zeros(len(bands) + 1)
+            for seed in (1, 2):
+                model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
+                cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m)
+                for k in range(frames):
+                    cl = model.step(k * sc.period_s, cfg)[0].clusters
+                    r = np.hypot(cl.dist_long_m, cl.dist_lat_m)
+                    counts[:-1] += [np.count_nonzero((r >= a) & (r < b)) for a, b in bands]
+                    counts[-1] += r.size
+            counts /= 2 * frames
+            print(f"| {rails} | {level} | " + " | ".join(f"{c:.1f}" for c in counts) + " |", flush=True)
+    print()
+
+
 def bodies_table(quick: bool) -> None:
     frames = 150 if not quick else 40
     print(f"### A car's reflectors ({frames} frames a row, each level)\n")
@@ -782,7 +820,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
-                                       "pairs", "rcs"))
+                                       "pairs", "rcs", "posts"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -808,7 +846,7 @@ def main() -> None:
     for name, fn in (("pfa", pfa_table), ("pd", pd_tables), ("cells", cells_table), ("accuracy", accuracy_table),
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
                      ("crowd", crowd_table), ("edge", edge_table), ("pairs", pairs_table),
-                     ("rcs", rcs_table)):
+                     ("rcs", rcs_table), ("posts", posts_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")
