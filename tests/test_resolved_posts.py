@@ -76,3 +76,15 @@ def test_on_a_guardrail_road_the_object_level_lists_about_as_many_clusters_as_th
     """One guardrail, posts 2 m apart: the object level listed 2.7× the chain's clusters (84 a frame against 31)."""
     obj, sig = _clusters_a_frame("object", 60), _clusters_a_frame("signal", 30)
     assert 0.8 * sig <= obj <= 1.5 * sig, (obj, sig)
+
+
+@pytest.mark.parametrize("bins,merged", [(0.9 * RESOLUTION[1], True), (RESOLUTION[1], True),
+                                         (1.1 * RESOLUTION[1], False), (2 * RESOLUTION[1], False)])
+def test_posts_at_one_range_and_angle_merge_only_within_the_chains_doppler_resolution(bins, merged):
+    """The Doppler side of the box: the sensor moving at 25 m/s, the two posts' lines of sight set (through the
+    table's cos) so that their radial speeds lie ``bins`` Doppler bins apart, range and angle the same."""
+    g, u = _table([30.0, 30.0], 0.0, [2.0, 1.0])
+    g["cos"] = np.array([1.0, 1.0 - bins * P.doppler_bin_mps / 25.0])
+    g["sin"] = np.zeros(2)
+    keep = resolved_posts(P, g, u, np.arange(2), np.full(8, 25.0), np.zeros(8))
+    assert keep.tolist() == ([True, False] if merged else [True, True])
