@@ -266,11 +266,42 @@ def test_a_followed_boundary_stays_on_an_off_grid_line_and_a_nearer_one_is_found
             assert right.valid and abs(right.offset_m + 2.37) < 0.1
 
 
-def test_the_curve_samples_are_numpys_linspace():
-    from radarnode.perception.boundaries import CURVE_SAMPLES, curve_x
-    pairs = ((0.0, 100.0), (3.7, 151.3), (12.0, 12.0), (40.0, 8.25), (1e-300, 1e-300 + 1e-310))
-    for a, b in pairs:
-        np.testing.assert_array_equal(curve_x(a, b), np.linspace(a, b, CURVE_SAMPLES))
+def test_the_predicted_line_is_the_least_squares_line_through_the_moved_samples():
+    # a followed boundary's prediction (closed-form sums) against the samples themselves: numpy.linspace over the
+    # stretch, the curve y = offset + tan(heading)·x + curvature·x²/2, moved from the pose it was found at into the new
+    # one by hand, straightened by the path curvature, fitted by the centred least-squares sums
+    from radarnode.perception.boundaries import CURVE_SAMPLES, FIT_CENTRE_M, FIT_SCALE_M, predicted_line
+    rng = np.random.default_rng(5)
+    for _ in range(300):
+        start = rng.uniform(0.0, 100.0)
+        stop = start + rng.choice([rng.uniform(0.5, 200.0), 1e-3])
+        offset, heading, curvature = rng.uniform(-20, 20), rng.uniform(-0.4, 0.4), rng.uniform(-0.02, 0.02)
+        h0, h1 = rng.uniform(-3, 3), 0.0
+        h1 = h0 + rng.uniform(-0.5, 0.5)
+        (ox0, oy0), (ox1, oy1) = rng.uniform(-1e4, 1e4, 2), rng.uniform(-1e4, 1e4, 2)
+        ox1, oy1 = ox0 + rng.uniform(-5, 5), oy0 + rng.uniform(-5, 5)
+        kappa = rng.choice([0.0, rng.uniform(-0.02, 0.02)])
+        c0, s0, c1, s1 = np.cos(h0), np.sin(h0), np.cos(h1), np.sin(h1)
+        # the samples' own line, in extended precision (odometry coordinates of 10 km over a stretch of 1 mm lose
+        # digits in float64)
+        ld = np.longdouble
+        x = np.linspace(start, stop, CURVE_SAMPLES).astype(ld)
+        x[-1] = ld(stop)
+        y = ld(offset) + ld(np.tan(heading)) * x + ld(0.5 * curvature) * x * x
+        gx, gy = ld(ox0) + ld(c0) * x - ld(s0) * y, ld(oy0) + ld(s0) * x + ld(c0) * y    # odometry frame
+        qx = ld(c1) * (gx - ld(ox1)) + ld(s1) * (gy - ld(oy1))
+        qy = -ld(s1) * (gx - ld(ox1)) + ld(c1) * (gy - ld(oy1)) - ld(0.5 * kappa) * qx * qx
+        mx, my = qx.mean(), qy.mean()
+        slope = ((qx - mx) * (qy - my)).sum() / ((qx - mx) ** 2).sum()
+        want = (float(my - slope * mx + slope * ld(FIT_CENTRE_M)), float(slope * ld(FIT_SCALE_M)))
+        m = 0.5 * (start + stop)
+        t, h = np.tan(heading), 0.5 * curvature
+        curve = (ox0, oy0, c0, s0, m, (stop - start) / (CURVE_SAMPLES - 1), offset + (t + h * m) * m, t + 2 * h * m, h)
+        got = predicted_line(curve, ox1, oy1, c1, s1, kappa)
+        scale = 1.0 + abs(want[0]) + abs(want[1])
+        assert abs(got[0] - want[0]) < 1e-9 * scale and abs(got[1] - want[1]) < 1e-9 * scale
+    # a curve of no length has no line
+    assert predicted_line((0.0, 0.0, 1.0, 0.0, 50.0, 0.0, 3.0, 0.1, 0.0), 1.0, 0.0, 1.0, 0.0, 0.0) is None
 
 
 def test_the_e2e_crc_by_table_is_cantools_profile2_crc():

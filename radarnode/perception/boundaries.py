@@ -34,17 +34,15 @@ import numpy as np
 from radarnode.dsp.hough import HoughGrid, Scratch, accumulate, strongest_lines
 
 STATIONARY_MPS = 1.0
-#: samples of a followed boundary's curve (odometry frame)
+#: a followed boundary is predicted by the least-squares line through this many points evenly spaced over its
+#: reported stretch (``numpy.linspace``'s), moved into the new frame and straightened: computed from the sums below
 CURVE_SAMPLES = 12
 #: at most this many re-fits of a followed boundary's line to its inliers
 FOLLOW_PASSES = 2
 _LINES = np.zeros(2, dtype=bool)                 # solve's deg2 for two straight lines
-
-
-def curve_x(start: float, stop: float) -> list[float]:
-    """``numpy.linspace(start, stop, CURVE_SAMPLES)`` in Python numbers (the samples of one followed boundary)."""
-    step = (stop - start) / (CURVE_SAMPLES - 1)
-    return [start + step * j for j in range(CURVE_SAMPLES - 1)] + [stop]
+#: Σ jᵏ over the samples' centred indices j = i − (CURVE_SAMPLES − 1)/2, k = 0, 2, 4, 6 (the odd sums are 0); exact
+_J_SUMS = [float(sum((i - (CURVE_SAMPLES - 1) / 2) ** k for i in range(CURVE_SAMPLES)))
+           for k in (0, 2, 4, 6)]
 
 
 #: the fits' variable u = (x − FIT_CENTRE_M) / FIT_SCALE_M: within about ±1.5 over the radar's range, so that the
@@ -126,6 +124,40 @@ def solve_u(mom: list[list[float]], deg2) -> list[tuple[float, float, float]]:
     return out
 
 
+def predicted_line(curve: tuple, ox: float, oy: float, c: float, s: float, kappa: float
+                   ) -> tuple[float, float] | None:
+    """The least-squares line y = a + b·u (u = (x − FIT_CENTRE_M)/FIT_SCALE_M) through a followed boundary's
+    CURVE_SAMPLES samples moved into the sensor frame at odometry pose (ox, oy, heading cos c, sin s) and straightened
+    by the path curvature ``kappa`` (y − κ·x²/2); None for a curve of no length.
+
+    ``curve`` as :meth:`RoadBoundaryEstimator._keep_curves` keeps it: (ox0, oy0, c0, s0) the pose it was found at,
+    its samples x = m + step·j (j centred) and y = o + t·d + h·d², d = x − m. The move is rigid, so in this frame
+    x = a0 + a1·d + a2·d² and the straightened y a quartic in d; the line's sums are those polynomials' moments over
+    the samples (the d-sums of odd powers vanish), in closed form: the samples' own least-squares line to rounding,
+    for a few dozen operations instead of passes over the samples.
+    """
+    ox0, oy0, c0, s0, m, step, o, t, h = curve
+    ca, sa = c * c0 + s * s0, s * c0 - c * s0              # the rotation from the old frame into this one
+    dx, dy = ox0 - ox, oy0 - oy
+    e, f = c * dx + s * dy, c * dy - s * dx                 # the old origin in this frame
+    a0, a1, a2 = ca * m + sa * o + e, ca + sa * t, sa * h   # x = a0 + a1·d + a2·d²
+    b0, b1, b2 = ca * o - sa * m + f, ca * t - sa, ca * h   # y before straightening
+    k2 = 0.5 * kappa                                        # straightened y = Σ g_i dⁱ
+    g0, g1, g2 = b0 - k2 * a0 * a0, b1 - 2.0 * k2 * a0 * a1, b2 - k2 * (a1 * a1 + 2.0 * a0 * a2)
+    g3, g4 = -2.0 * k2 * a1 * a2, -k2 * a2 * a2
+    n, j2, j4, j6 = _J_SUMS
+    q = step * step
+    d2, d4, d6 = j2 * q, j4 * q * q, j6 * q * q * q         # Σ d², Σ d⁴, Σ d⁶
+    v4, v6 = d4 - d2 * d2 / n, d6 - d2 * d4 / n             # Σ (d² − d̄²)·d², ·d⁴
+    sxx = a1 * a1 * d2 + a2 * a2 * v4                       # Σ (x − x̄)²: x − x̄ = a1·d + a2·(d² − d̄²)
+    if not sxx > 0.0:
+        return None
+    sxy = a1 * (g1 * d2 + g3 * d4) + a2 * (g2 * v4 + g4 * v6)
+    mx, my = a0 + a2 * d2 / n, g0 + (g2 * d2 + g4 * d4) / n
+    slope = sxy / sxx                     # the line in u: y = (a + b·C) + b·S·u
+    return my - slope * mx + slope * FIT_CENTRE_M, slope * FIT_SCALE_M
+
+
 def _to_odometry(x: np.ndarray, y: np.ndarray, origin: np.ndarray, c: float, s: float) -> np.ndarray:
     """Sensor-frame points into the odometry frame of a sensor at ``origin`` (2, 1) with heading cos c, sin s:
     x = ox + c·x − s·y, y = oy + s·x + c·y; shape (2, *x.shape), the rows x and y (one outer product a column)."""
@@ -194,7 +226,7 @@ class RoadBoundaryEstimator:
         self._pose = (0.0, 0.0, 0.0)                 # odometry: x, y, heading of the sensor
         # the followed boundaries' samples in the odometry frame (per side: the lists x and y, or None), and which
         # are followed
-        self._curves: list[tuple[list[float], list[float]] | None] = [None, None]
+        self._curves: list[tuple | None] = [None, None]
         self._followed = [False, False]
         self._cycle = 0
         self.left = UNAVAILABLE
@@ -245,8 +277,9 @@ class RoadBoundaryEstimator:
         return self.left, self.right
 
     def _keep_curves(self, found: list[Boundary], c: float, s: float) -> None:
-        """Samples of the boundaries found (sensor frame, as reported) in the odometry frame, to follow them: per side
-        CURVE_SAMPLES points evenly from range start to end (``numpy.linspace``'s), in Python numbers (24 points)."""
+        """The boundaries found (sensor frame, as reported), to follow them: per side the pose of this frame in the
+        odometry frame and the curve about the middle m of its stretch, y = o + t·d + h·d² with x = m + d, and the
+        spacing of its CURVE_SAMPLES samples (:func:`predicted_line` moves them)."""
         self._followed = [b.valid for b in found]
         ox, oy = self._pose[0], self._pose[1]
         curves = []
@@ -254,10 +287,10 @@ class RoadBoundaryEstimator:
             if not b.valid:
                 curves.append(None)
                 continue
-            slope, half_k = math.tan(b.heading_rad), 0.5 * b.curvature_1pm
-            xs = curve_x(b.range_start_m, b.range_end_m)
-            ys = [b.offset_m + slope * x + half_k * x * x for x in xs]
-            curves.append(([c * x + ox - s * y for x, y in zip(xs, ys)], [s * x + oy + c * y for x, y in zip(xs, ys)]))
+            t, h = math.tan(b.heading_rad), 0.5 * b.curvature_1pm
+            m = 0.5 * (b.range_start_m + b.range_end_m)
+            curves.append((ox, oy, c, s, m, (b.range_end_m - b.range_start_m) / (CURVE_SAMPLES - 1),
+                           b.offset_m + (t + h * m) * m, t + 2.0 * h * m, h))
         self._curves = curves
 
     def _follow(self, px: np.ndarray, py: np.ndarray, sides: np.ndarray, kappa: float, c: float, s: float
@@ -267,26 +300,10 @@ class RoadBoundaryEstimator:
         ox, oy = self._pose[0], self._pose[1]
         follow, line = [False, False], [[0.0, 0.0], [0.0, 0.0]]
         for k in range(2):
-            if not self._followed[k]:
-                continue
-            # the curve's samples in this frame, straightened, and their least-squares line y = a + b·x from centred
-            # sums (the line masked_fit would give the samples, but for the last bits)
-            xs_odo, ys_odo = self._curves[k]
-            qx, qy = [], []
-            for xo, yo in zip(xs_odo, ys_odo):
-                dx, dy = xo - ox, yo - oy
-                x = c * dx + s * dy
-                qx.append(x)
-                qy.append(-s * dx + c * dy - 0.5 * kappa * x * x)
-            mx, my = sum(qx) / CURVE_SAMPLES, sum(qy) / CURVE_SAMPLES
-            sxx = sxy = 0.0
-            for x, y in zip(qx, qy):
-                sxx += (x - mx) * (x - mx)
-                sxy += (x - mx) * (y - my)
-            if sxx > 0.0 and np.count_nonzero(sides[k]) >= 4:
-                follow[k] = True
-                slope = sxy / sxx             # the line in u = (x − C)/S: y = (a + b·C) + b·S·u
-                line[k] = (my - slope * mx + slope * FIT_CENTRE_M, slope * FIT_SCALE_M)
+            if self._followed[k] and np.count_nonzero(sides[k]) >= 4:
+                line_u = predicted_line(self._curves[k], ox, oy, c, s, kappa)
+                if line_u is not None:
+                    follow[k], line[k] = True, line_u
         if not (follow[0] or follow[1]):
             return [UNAVAILABLE, UNAVAILABLE]
         # the line is re-fitted to the points within band_m of it until the inliers settle (a few passes):
@@ -350,19 +367,22 @@ class RoadBoundaryEstimator:
         count = [int(mom[k][0]) if use[k] else 0 for k in range(rows)]
         if max(count) < 4:
             return [UNAVAILABLE] * rows
-        # seed 002: M cross-sections along x from each row's nearest inlier, at most k of them without a point;
-        ok, seen, deg2 = [False] * rows, [0] * rows, [False] * rows
-        start, lo, x_max = [0.0] * rows, [0.0] * rows, [0.0] * rows
+        # seed 002: M cross-sections along x from each row's nearest inlier, at most k of them without a point (every
+        # row's sections in one pass: a row's cells counted at offset k·M)
         sections = self.sections
+        lo = np.where(inliers, x, np.inf).min(axis=1)
+        x_max = np.where(inliers, x, -np.inf).max(axis=1).tolist()
+        cell = np.floor((x - lo[:, None]) / self.section_m)       # (x > 0: the nearest inlier is the start)
+        cell += (sections * np.arange(rows))[:, None]
+        valid = inliers & (cell < (sections * np.arange(1, rows + 1))[:, None])
+        occupied = (np.bincount(cell[valid].astype(np.intp), minlength=rows * sections) > 0).tolist()
+        lo = lo.tolist()
+        ok, seen, deg2, start = [False] * rows, [0] * rows, [False] * rows, [0.0] * rows
         for k in range(rows):
             if count[k] < 4:
                 continue
-            row_x = x[inliers[k]]
-            lo[k], x_max[k] = float(row_x.min()), float(row_x.max())
             start[k] = max(lo[k], 0.0)
-            cell = np.floor((row_x - start[k]) / self.section_m)
-            cell = cell[(cell >= 0.0) & (cell < sections)]
-            row = (np.bincount(cell.astype(np.intp), minlength=sections) > 0).tolist()
+            row = occupied[k * sections:(k + 1) * sections]
             reach = sections - row[::-1].index(True) if True in row else 0
             seen[k] = sum(row[:reach])
             missing = (reach - seen[k]) + max(0, sections - reach - self.max_missing)
