@@ -18,6 +18,11 @@ import numpy as np
 from radarnode.errors import ConfigError
 
 
+#: the grid of :meth:`FftBeamformer.explained`'s refined fit: at least this many points a beamwidth (1/N cycles an
+#: element)
+REFINE_POINTS_PER_BEAM = 16
+
+
 class Doa:
     """Base: a ULA of ``num_elements`` at ``spacing_wl`` wavelengths; estimates sin(azimuth)."""
 
@@ -54,11 +59,12 @@ class FftBeamformer(Doa):
         self.sin_grid = u / spacing_wl
         self.valid = np.abs(self.sin_grid) <= 1.0
 
-    def spectrum(self, snapshots: np.ndarray) -> np.ndarray:
-        """|FFT|² of the snapshots along elements: shape (n, n_fft), in FFT bin order."""
+    def spectrum(self, snapshots: np.ndarray, n_fft: int | None = None) -> np.ndarray:
+        """|FFT|² of the snapshots along elements: shape (n, n_fft), in FFT bin order (``n_fft``: another grid than
+        the beamformer's)."""
         # a source at sinθ has element phase +2π·d·k·sinθ; Σ_k x_k e^{-j2πku/n} peaks at u/n = d·sinθ
         import scipy.fft  # imported when first needed: the object level builds a chain but never beamforms
-        spec = scipy.fft.fft(snapshots, n=self.n_fft, axis=-1)
+        spec = scipy.fft.fft(snapshots, n=self.n_fft if n_fft is None else n_fft, axis=-1)
         return (spec.real ** 2 + spec.imag ** 2)
 
     def explained(self, snapshots: np.ndarray, sources: int = 2, refine: int = 0) -> np.ndarray:
@@ -89,14 +95,18 @@ class FftBeamformer(Doa):
         return out
 
     def _explained_refined(self, x: np.ndarray, sources: int, passes: int) -> np.ndarray:
-        """:meth:`explained` with alternating projection, snapshots (n, elements): (n, sources)."""
+        """:meth:`explained` with alternating projection, snapshots (n, elements): (n, sources). The waves are sought
+        on a grid of at least 16 points a beamwidth (:data:`REFINE_POINTS_PER_BEAM`), whatever the array: on the
+        beamformer's 256 points a 72-element array has 3.6 a beam, and a wave half a step off loses 6 % of a strong
+        source's energy — more than the penalty of a wave, which then decided between hypotheses."""
         n, n_el = x.shape
         k = np.arange(n_el)
         rows = np.arange(n)
+        n_fft = max(self.n_fft, 1 << int(math.ceil(math.log2(REFINE_POINTS_PER_BEAM * n_el))))
 
         def fit(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             """The waves at FFT bins ``bins`` (n, q) fitted jointly: the explained energy (n,) and the residual."""
-            a = np.exp(2j * np.pi * k[None, :, None] * bins[:, None, :] / self.n_fft)      # (n, elements, q)
+            a = np.exp(2j * np.pi * k[None, :, None] * bins[:, None, :] / n_fft)           # (n, elements, q)
             ah = a.conj().transpose(0, 2, 1)
             gram = ah @ a + 1e-9 * n_el * np.eye(bins.shape[1])     # two waves on one bin: a regularised solve
             y = ah @ x[:, :, None]
@@ -107,11 +117,11 @@ class FftBeamformer(Doa):
         bins = np.zeros((n, 0), dtype=np.int64)
         resid = x
         for q in range(sources):
-            bins = np.concatenate([bins, np.argmax(self.spectrum(resid), axis=1)[:, None]], axis=1)
+            bins = np.concatenate([bins, np.argmax(self.spectrum(resid, n_fft), axis=1)[:, None]], axis=1)
             for _ in range(passes if q else 0):
                 for j in range(q + 1):
                     others = np.delete(bins, j, axis=1)
-                    bins[rows, j] = np.argmax(self.spectrum(fit(others)[1]), axis=1)
+                    bins[rows, j] = np.argmax(self.spectrum(fit(others)[1], n_fft), axis=1)
             out[:, q], resid = fit(bins)
         return out
 

@@ -330,7 +330,9 @@ class DspChain:
             wrap = 1 + np.argmax(peak[:, 1:], axis=1)           # the best wrap hypothesis other than none
             margin = np.full(d.size, WRAP_LL_MARGIN * sigma2)
             take = None                         # the peaks a migrating fit was judged on (signal.dsp.migration_fit)
+            still, fitted_wrap = trial, wrap    # the snapshots before any migrating fit, and the wrap each was for
             if fitted_half is not None and self.migrates(rd.dtype):
+                still, fitted_wrap = trial.copy(), wrap.copy()
                 # a wrap count is also a true speed, and with it a range migration over the frame: the fitted peaks
                 # where a wrap looks better than none are fitted again with that migrating target's response
                 # (radarnode.dsp.peaks.MigrationFit), and the wrap is judged on that fit's beam
@@ -342,17 +344,21 @@ class DspChain:
                 margin[take] += MIGRATION_EXTRA_MARGIN * sigma2
             wrap = np.where(peak[rows, wrap] - peak[:, 0] > margin, wrap, 0)
             # a cell that two plane waves explain under no hypothesis (three sources, wrapped or not) is judged
-            # again on the joint fit of up to three waves
+            # again on the joint fit of up to three waves, every hypothesis on the same (still) snapshot; what is
+            # left must exceed two penalties and what the noise leaves, about one σ² a channel (a 72-channel array's
+            # noise alone left more than two penalties)
             energy = np.sum(snap.real ** 2 + snap.imag ** 2, axis=1)      # the same under each hypothesis
             rest = energy - two.max(axis=1)
             again = np.flatnonzero((rest > (1.0 - WRAP_FINE_EXPLAINED) * energy)
-                                   & (rest > 2.0 * WRAP_SOURCE_PENALTY * sigma2))
+                                   & (rest > max(2.0 * WRAP_SOURCE_PENALTY, c + WRAP_SOURCE_PENALTY) * sigma2))
             if again.size:
-                fine = self._wrap_score_fine(trial[again], sigma2)
+                fine = self._wrap_score_fine(still[again], sigma2)
                 best = 1 + np.argmax(fine[:, 1:], axis=1)
                 wrap[again] = np.where(fine[np.arange(again.size), best] - fine[:, 0] > margin[again], best, 0)
             if take is not None and take.size:
-                taken = wrap[take] != 0              # the migrating fit's offsets where its wrap was taken
+                # the migrating fit's offsets where its wrap was taken (not where the cell was judged again to
+                # another wrap: its fit was for the wrap it was judged on first)
+                taken = (wrap[take] != 0) & (wrap[take] == fitted_wrap[take])
                 dd[take[taken]], dr[take[taken]] = fd[taken], fr[taken]
                 r_bins, speed, range_m = self._positions(d, r, dd, dr, m, n)
             snap = trial[rows, wrap]
