@@ -276,9 +276,9 @@ def test_the_predicted_line_is_the_least_squares_line_through_the_moved_samples(
         start = rng.uniform(0.0, 100.0)
         stop = start + rng.choice([rng.uniform(0.5, 200.0), 1e-3])
         offset, heading, curvature = rng.uniform(-20, 20), rng.uniform(-0.4, 0.4), rng.uniform(-0.02, 0.02)
-        h0, h1 = rng.uniform(-3, 3), 0.0
+        h0 = rng.uniform(-3, 3)
         h1 = h0 + rng.uniform(-0.5, 0.5)
-        (ox0, oy0), (ox1, oy1) = rng.uniform(-1e4, 1e4, 2), rng.uniform(-1e4, 1e4, 2)
+        ox0, oy0 = rng.uniform(-1e4, 1e4, 2)
         ox1, oy1 = ox0 + rng.uniform(-5, 5), oy0 + rng.uniform(-5, 5)
         kappa = rng.choice([0.0, rng.uniform(-0.02, 0.02)])
         c0, s0, c1, s1 = np.cos(h0), np.sin(h0), np.cos(h1), np.sin(h1)

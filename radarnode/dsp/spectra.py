@@ -21,6 +21,11 @@ _COSINE_SUMS = {"hann": (0.5, 0.5), "hamming": (0.54, 0.46), "blackman": (0.42, 
                 "blackmanharris": (0.35875, 0.48829, 0.14128, 0.01168)}
 
 
+def circular(x: np.ndarray, period: float) -> np.ndarray:
+    """``x`` (bins) wrapped into [−period/2, period/2): an offset on a circular FFT axis of ``period`` bins."""
+    return np.mod(x + period / 2.0, period) - period / 2.0
+
+
 @functools.lru_cache(maxsize=64)
 def window(name: str, n: int, dtype: str = "float64") -> np.ndarray:
     """A symmetric-free (DFT-even) window of length ``n``, computed once per (name, n)."""

@@ -114,8 +114,8 @@ WRAP_LL_MARGIN = 9.0
 #: a second plane wave counts in a wrap hypothesis' score only for what it explains beyond this (log-likelihood):
 #: about what the strongest of the beam's independent looks at noise explains
 WRAP_SOURCE_PENALTY = 20.0
-#: a cell of which two plane waves explain less than this fraction under every wrap hypothesis (and more than two
-#: penalties are left) is judged again on up to WRAP_FINE_SOURCES plane waves fitted jointly
+#: a cell of which two plane waves explain less than this fraction under every wrap hypothesis (and leave more than
+#: two penalties and the noise's one σ² a channel) is judged again on up to WRAP_FINE_SOURCES plane waves fitted jointly
 #: (DspChain._wrap_score_fine), with WRAP_FINE_PASSES passes of alternating projection. Two waves explain 0.96–1.0
 #: of one or two point sources under the true hypothesis (ars408_like and mimo12, 30 m, 40 dB, wrapped and not),
 #: and at most 0.85 of three equal ones two beams apart under any
@@ -198,8 +198,8 @@ class DspChain:
         return np.maximum(e[..., 0], e[..., 1] - WRAP_SOURCE_PENALTY * sigma2)
 
     def _wrap_score_fine(self, snapshots: np.ndarray, sigma2: float) -> np.ndarray:
-        """:meth:`_wrap_score` for a wrap it would take: up to three plane waves, each more one penalty more, fitted
-        jointly (:meth:`radarnode.dsp.doa.FftBeamformer.explained` refined). Three sources in one cell (two cars and
+        """:meth:`_wrap_score` for a cell two plane waves do not explain: up to three plane waves, each one more a
+        penalty more, fitted jointly (:meth:`radarnode.dsp.doa.FftBeamformer.explained` refined). Three sources in one cell (two cars and
         a post, three parked cars at standstill, all at one range and speed) are explained by no hypothesis with
         two waves, and the hypothesis that breaks the array into sub-arrays explained them better with two waves
         between the sources than the true one: the chain took the wrap and reported ghosts between the sources,
@@ -347,9 +347,9 @@ class DspChain:
             # again on the joint fit of up to three waves, every hypothesis on the same (still) snapshot; what is
             # left must exceed two penalties and what the noise leaves, about one σ² a channel (a 72-channel array's
             # noise alone left more than two penalties)
-            energy = np.sum(snap.real ** 2 + snap.imag ** 2, axis=1)      # the same under each hypothesis
-            rest = energy - two.max(axis=1)
-            again = np.flatnonzero((rest > (1.0 - WRAP_FINE_EXPLAINED) * energy)
+            snap_energy = np.sum(snap.real ** 2 + snap.imag ** 2, axis=1)      # the same under each hypothesis
+            rest = snap_energy - two.max(axis=1)
+            again = np.flatnonzero((rest > (1.0 - WRAP_FINE_EXPLAINED) * snap_energy)
                                    & (rest > max(2.0 * WRAP_SOURCE_PENALTY, c + WRAP_SOURCE_PENALTY) * sigma2))
             if again.size:
                 fine = self._wrap_score_fine(still[again], sigma2)

@@ -64,6 +64,7 @@ import numpy as np
 
 from radarnode.dsp import spread
 from radarnode.dsp.detection_stats import DetectionStatistic
+from radarnode.dsp.spectra import circular as _circular
 from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
 from radarnode.radar import ambiguity, equation
@@ -357,11 +358,6 @@ def _group_signal(statistic: DetectionStatistic, z_on: np.ndarray, rb: np.ndarra
     dr = _circular(rb[sel] - cells_rd[g] // m, n_r)
     dd = _circular(vb[sel] - cells_rd[g] % m, m)
     return statistic.block_signal(z_on[sel], dr, dd, u[sel], slot[g], rows.size), rows
-
-
-def _circular(x: np.ndarray, period: int) -> np.ndarray:
-    """``x`` wrapped into [−period/2, period/2)."""
-    return np.mod(x + period / 2.0, period) - period / 2.0
 
 
 def _top_of_groups(idx: np.ndarray, grp: np.ndarray, energy: np.ndarray, groups: int) -> np.ndarray:

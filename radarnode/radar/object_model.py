@@ -34,6 +34,7 @@ from radarnode.perception.types import (
     AMBIG_AMBIGUOUS, AMBIG_UNAMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED,
     MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
+from radarnode.dsp.spectra import circular as _circular
 from radarnode.perception.types import Detections
 from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, GATE_CHI2_3DOF, MIN_BODY_M, RCS_GAIN,
                                           TRACKER_SIGMA_POS_M, accel_sigma_mps2, classify, cluster_dyn_prop,
@@ -206,7 +207,7 @@ def resolved_posts(p: RadarPreset, g: dict, u_hit: np.ndarray, idx: np.ndarray, 
     cycle, rb, vb, ub, power, key = cycle[order], rb[order], vb[order], ub[order], power[order], key[order]
     # how far along that order a post's range box reaches (the same cycle, within RESOLUTION[0] bins): every pair
     # within it is compared, one offset at a time (a handful of offsets: posts 0.5 m apart at the closest)
-    reach = int((np.searchsorted(key, key + RESOLUTION[0], side="right") - np.arange(key.size)).max()) - 1
+    reach = _reach(key, RESOLUTION[0])
     kept = np.ones(idx.size, dtype=bool)
     for d in range(1, reach + 1):
         a, b = slice(d, None), slice(None, -d)                # a: the later post of each pair, b: the earlier
@@ -219,6 +220,12 @@ def resolved_posts(p: RadarPreset, g: dict, u_hit: np.ndarray, idx: np.ndarray, 
                                                 response)]] = False
     keep[order] = kept
     return keep
+
+
+def _reach(key: np.ndarray, bins: float) -> int:
+    """How many places along the sorted ``key`` (cycle, then range bins) the farthest pair within ``bins`` range bins
+    of each other lies apart (0: no two posts that close)."""
+    return int((np.searchsorted(key, key + bins, side="right") - np.arange(key.size)).max()) - 1
 
 
 #: how far apart (range and Doppler bins) a post's lobe can hide another's peak (:func:`lobe_hidden`): Hann's main
@@ -235,7 +242,7 @@ def _hidden_peaks(cycle: np.ndarray, rb: np.ndarray, vb: np.ndarray, power: np.n
     hidden = np.zeros(n, dtype=bool)
     if n < 2:
         return hidden
-    reach = int((np.searchsorted(key, key + POST_LOBE_REACH_BINS, side="right") - np.arange(n)).max()) - 1
+    reach = _reach(key, POST_LOBE_REACH_BINS)
     ia, ib = [], []
     for d in range(1, reach + 1):
         a, b = slice(d, None), slice(None, -d)
@@ -254,11 +261,6 @@ def _hidden_peaks(cycle: np.ndarray, rb: np.ndarray, vb: np.ndarray, power: np.n
     if i.size:
         hidden[i[lobe_hidden(rb[i], vb[i], power[i], rb[j], vb[j], power[j], m, response)]] = True
     return hidden
-
-
-def _circular(x: np.ndarray, period: float) -> np.ndarray:
-    """x wrapped into [−period/2, period/2)."""
-    return np.mod(x + 0.5 * period, period) - 0.5 * period
 
 
 def lobe_hidden(r: np.ndarray, v: np.ndarray, power: np.ndarray, r_o: np.ndarray, v_o: np.ndarray,
