@@ -805,6 +805,38 @@ def test_three_reflectors_in_one_cell_come_out_at_their_own_angles_at_both_level
         assert ghosts <= 2 and seen.min() >= 16, (level, ghosts, seen)
 
 
+@pytest.mark.parametrize("third_db", [-14.0, -10.0, -8.0, -6.0, -4.0, 0.0])
+def test_a_weaker_third_reflector_in_the_cell_makes_no_ghost_and_the_gate_changes_no_detection(monkeypatch, third_db):
+    """Two equal 10-dBsm reflectors at −30° and 0° and a third at 30°, 14 dB weaker to as strong, 30 m ahead on mimo12
+    at −1.3× the alias speed: a sweep across where two plane waves stop explaining the cell. A second gate, two waves
+    explaining less than 93 % of it, let the third source through 4–10 dB down: 3–5 of 20 frames had a ghost and lost
+    the true pair. Now no more than 1 ghost frame, the strong pair seen in every frame but one, the third wherever it is
+    within 6 dB; and the remaining gate (what two waves leave must exceed two penalties and the noise) changes no
+    detection: judging every cell again gives the same frames, bit for bit."""
+    from radarnode.radar.chain import DspChain
+    from radarnode.radar.scatterers import point_targets
+    from radarnode.radar.signal_model import synthesize_rd
+    p = PRESETS["mimo12"]
+    chain = DspChain(p)
+    truth = np.array([-30.0, 0.0, 30.0])
+    s = point_targets([30.0] * 3, truth, -1.3 * p.max_unambiguous_speed_mps, [10.0, 10.0, 10.0 + third_db])
+    frames = {}
+    for mode in ("gate", "every cell"):
+        if mode == "every cell":
+            monkeypatch.setattr(DspChain, "_fine_gate", lambda self, channels, sigma2: -np.inf)
+        rng = np.random.default_rng(4)
+        frames[mode] = [chain.process_rd(synthesize_rd(p, s, rng)) for _ in range(20)]
+    ghosts, seen = 0, np.zeros(3, dtype=int)
+    for det in frames["gate"]:
+        az = np.degrees(det.azimuth_rad[np.abs(det.range_m - 30.0) < 3.0])
+        off = np.abs(az[:, None] - truth[None, :])
+        ghosts += int(np.any(off.min(axis=1) > 6.0))
+        seen += np.any(off <= 6.0, axis=0)
+    assert ghosts <= 1 and seen[:2].min() >= 19 and (third_db < -6.0 or seen[2] >= 18), (ghosts, seen)
+    for a, b in zip(frames["gate"], frames["every cell"]):
+        assert np.array_equal(a.azimuth_rad, b.azimuth_rad) and np.array_equal(a.range_rate_mps, b.range_rate_mps)
+
+
 def test_plane_waves_fitted_jointly_explain_a_field_of_as_many_sources():
     """Noise-free snapshots of three on-grid plane waves two beams apart (8 elements, the FFT grid's bins): the greedy
     search's three waves leave part of the energy unexplained (its first peak lands between sources); refined by

@@ -114,12 +114,14 @@ WRAP_LL_MARGIN = 9.0
 #: a second plane wave counts in a wrap hypothesis' score only for what it explains beyond this (log-likelihood):
 #: about what the strongest of the beam's independent looks at noise explains
 WRAP_SOURCE_PENALTY = 20.0
-#: a cell of which two plane waves explain less than this fraction under every wrap hypothesis (and leave more than
-#: two penalties and the noise's one σ² a channel) is judged again on up to WRAP_FINE_SOURCES plane waves fitted jointly
-#: (DspChain._wrap_score_fine), with WRAP_FINE_PASSES passes of alternating projection. Two waves explain 0.96–1.0
-#: of one or two point sources under the true hypothesis (ars408_like and mimo12, 30 m, 40 dB, wrapped and not),
-#: and at most 0.85 of three equal ones two beams apart under any
-WRAP_FINE_EXPLAINED = 0.93
+#: a cell of which two plane waves, under the hypothesis that explains it best, leave more than this many
+#: WRAP_SOURCE_PENALTY (and more than the noise's one σ² a channel plus one penalty) is judged again on up to
+#: WRAP_FINE_SOURCES plane waves fitted jointly (DspChain._wrap_score_fine), with WRAP_FINE_PASSES passes of alternating
+#: projection: below that a third wave cannot pay its penalty, and the judgement is the two waves'. There was a second
+#: gate, two waves explaining less than 93 % of the cell: a third source 4–10 dB below two equal ones passed under it
+#: and came out as ghosts (mimo12 at −1.3× the alias speed: 3–5 frames of 20, none judged again in every cell; one or
+#: two sources gave the same detections either way, and 1 of 82 highway_cut_in frames changed)
+WRAP_FINE_REST_PENALTIES = 2.0
 WRAP_FINE_SOURCES, WRAP_FINE_PASSES = 3, 2
 #: the margin's growth for a wrap judged on a migrating fit (signal.dsp.migration_fit), log-likelihood
 MIGRATION_EXTRA_MARGIN = 3.0
@@ -207,6 +209,13 @@ class DspChain:
         e = self.doa.explained(snapshots, WRAP_FINE_SOURCES, refine=WRAP_FINE_PASSES)
         q = np.arange(WRAP_FINE_SOURCES)
         return np.max(e - q * WRAP_SOURCE_PENALTY * sigma2, axis=-1)
+
+    def _fine_gate(self, channels: int, sigma2: float) -> float:
+        """What two plane waves must leave of a cell's energy for it to be judged again on three
+        (:meth:`_wrap_score_fine`): WRAP_FINE_REST_PENALTIES penalties, and more than the noise leaves (about one σ² a
+        channel: a 72-channel array's noise alone left more than two penalties) plus one penalty."""
+        return max(WRAP_FINE_REST_PENALTIES * WRAP_SOURCE_PENALTY,
+                   channels + WRAP_SOURCE_PENALTY) * sigma2
 
     def _positions(self, d, r, dd, dr, m: int, n: int):
         """Range bins, speed (positive: opening; λ at mid-sweep) and range of peaks at cells (d, r) + offsets."""
@@ -344,13 +353,10 @@ class DspChain:
                 margin[take] += MIGRATION_EXTRA_MARGIN * sigma2
             wrap = np.where(peak[rows, wrap] - peak[:, 0] > margin, wrap, 0)
             # a cell that two plane waves explain under no hypothesis (three sources, wrapped or not) is judged
-            # again on the joint fit of up to three waves, every hypothesis on the same (still) snapshot; what is
-            # left must exceed two penalties and what the noise leaves, about one σ² a channel (a 72-channel array's
-            # noise alone left more than two penalties)
+            # again on the joint fit of up to three waves, every hypothesis on the same (still) snapshot
             snap_energy = np.sum(snap.real ** 2 + snap.imag ** 2, axis=1)      # the same under each hypothesis
             rest = snap_energy - two.max(axis=1)
-            again = np.flatnonzero((rest > (1.0 - WRAP_FINE_EXPLAINED) * snap_energy)
-                                   & (rest > max(2.0 * WRAP_SOURCE_PENALTY, c + WRAP_SOURCE_PENALTY) * sigma2))
+            again = np.flatnonzero(rest > self._fine_gate(c, sigma2))
             if again.size:
                 fine = self._wrap_score_fine(still[again], sigma2)
                 best = 1 + np.argmax(fine[:, 1:], axis=1)
