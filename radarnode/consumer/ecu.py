@@ -64,7 +64,9 @@ MOVED_CYCLES = 3                     # cycles in a row of moving that make a tra
 ONCOMING_MPS = 5.0
 DEFAULT_WAVELENGTH_M = 299_792_458.0 / 77e9
 MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a time but a broken value
-MAX_GAP_S = 5.0                      # a longer step between cycles is a discontinuity, not tracking
+#: a longer step between cycles is a discontinuity, not tracking (the default: this or STRAY_STEP_PERIODS + 1 cycle
+#: periods, whichever is longer, as a radar may cycle up to every 10 s)
+MAX_GAP_S = 5.0
 #: a step ahead of more than this many cycle periods may be one stray timestamp: the tracking state before it is
 #: kept until the next cycle shows which (:meth:`Ecu._accept_time`)
 STRAY_STEP_PERIODS = 3.0
@@ -117,8 +119,11 @@ class Ecu:
     """ACC and FCW on the decoded object list of one radar."""
 
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
-                 period_s: float = 0.072, timeout_cycles: int = 3, max_gap_s: float = MAX_GAP_S,
+                 period_s: float = 0.072, timeout_cycles: int = 3, max_gap_s: float | None = None,
                  mount: SensorMount = SensorMount(), wavelength_m: float = DEFAULT_WAVELENGTH_M) -> None:
+        if max_gap_s is None and isinstance(period_s, (int, float)) and not isinstance(period_s, bool):
+            # a few missed cycles are no discontinuity, however slow the radar's cycle (the schema allows 10 s)
+            max_gap_s = max(MAX_GAP_S, (STRAY_STEP_PERIODS + 1.0) * period_s)
         for name, value in (("period_s", period_s), ("max_gap_s", max_gap_s)):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
                 raise ValueError(f"Ecu {name}: value {value!r} is not allowed; expected a finite number of seconds > 0")
