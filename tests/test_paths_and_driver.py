@@ -76,12 +76,27 @@ def _refused(path, text: str, fragments, line: int | None = None) -> None:
 
 
 @pytest.mark.parametrize("extra, fragments", [
-    ("accel: [{t_s: 1.0, accel_mps2: -2.0}]\n    lane: 1", ("actors[0].lane", "value 1", "none with waypoints")),
-    ("y_m: 3.5", ("actors[0].y_m", "3.5", "the path starts at the first waypoint")),
-    ("heading_deg: 10.0", ("actors[0].heading_deg", "10.0", "a path of waypoints sets the heading")),
+    ("accel: [{t_s: 1.0, accel_mps2: -2.0}]\n    lane: 1", ("actors[0].lane", "value 1", "conflicts with",
+                                                          "starts at the first waypoint, y_m 3.5")),
+    ("y_m: 0.0", ("actors[0].y_m", "0.0", "it starts at the first waypoint")),
+    ("heading_deg: 10.0", ("actors[0].heading_deg", "10.0", "they head 0.0, -5.0°")),
 ])
-def test_a_path_refuses_what_it_sets_itself(tmp_path, extra, fragments):
+def test_a_path_refuses_what_contradicts_it(tmp_path, extra, fragments):
     _refused(tmp_path / "bad.yaml", PATH.format(extra=extra), fragments)
+
+
+@pytest.mark.parametrize("extra", ["y_m: 3.5", "lane: 2", "heading_deg: 0.0", "heading_deg: -5.0", "x_m: 20.0"])
+def test_a_path_takes_what_agrees_with_it_as_a_note(tmp_path, extra):
+    """An untimed path refused a heading, y_m or lane even where they agreed with its waypoints (an independent
+    tester's finding: the scenarios README says a field that agrees is taken as a note, as on a timed path)."""
+    p = tmp_path / "ok.yaml"
+    p.write_text(PATH.format(extra=extra + "\n    speed_mps: 10.0"))
+    sc = load_scenario(p)
+    times = np.array([0.0, 2.0, 4.0, 8.0])
+    moved, bare = Scene(sc)._movers.state(times), _scene("speed_mps: 10.0")._movers.state(times)
+    assert moved.x_m[-1, 0] > 90.0 and moved.y_m[-1, 0] < 0.5          # driven along its path
+    np.testing.assert_array_equal(moved.x_m, bare.x_m)            # the note changes nothing of the path
+    np.testing.assert_array_equal(moved.y_m, bare.y_m)
 
 
 def test_mixed_timed_and_untimed_waypoints_and_accel_with_times_are_refused(tmp_path):

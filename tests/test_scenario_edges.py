@@ -49,3 +49,87 @@ def test_the_slowest_radar_cycles_the_schema_allows_run_log_and_report(tmp_path,
         decisions += [ecu.on_cycle(t, c) for c in asm.drain()]
     assert len(decisions) == 6 and all(d is not None for d in decisions), decisions
     assert ecu.stats.time_jumps == 0 and ecu.stats.rejected_time == 0, ecu.stats
+
+
+def _write(tmp_path, name: str, head: str, actors: str) -> object:
+    path = tmp_path / f"{name}.yaml"
+    path.write_text(f"name: {name}\nseed: 1\n{head}\nego: {{speed_mps: 20.0}}\nactors:\n{actors}\n")
+    return path
+
+
+CAR = "  - {id: a, class: car, x_m: 40, lane: 1, speed_mps: 20}"
+
+
+@pytest.mark.parametrize("duration, cycles", [(0.05, 0), (0.0719, 0), (0.072, 1), (0.073, 1), (0.144, 2)])
+def test_a_run_shorter_than_one_cycle_is_refused_naming_duration(tmp_path, capsys, duration, cycles):
+    """ars408_like's 72-ms cycle: a scenario of 0.05 s ran no cycle, `log` wrote an empty file (status 0) and `report`
+    passed it. Now just below one cycle the file is refused naming duration_s, the cycle and where it comes from (no
+    output file left); at one cycle and above the run writes that many cycles."""
+    path = _write(tmp_path, "short", f"duration_s: {duration}\necu: {{expect: {{no_fcw: true}}}}", CAR)
+    out = tmp_path / "short.blf"
+    rc, _, err = cli(capsys, "log", path, "-o", out)
+    if cycles == 0:
+        assert rc == 1 and f"short.yaml:3: field 'duration_s': value {duration}" in err, err
+        assert "shorter than one radar cycle (0.072 s, the ars408_like preset's cycle)" in err and not out.exists()
+        rc, _, err = cli(capsys, "report", path, "--seeds", "1", "--workers", "1")
+        assert rc != 0 and "field 'duration_s'" in err, err
+    else:
+        assert rc == 0 and f"in {cycles} complete cycles" in err, err
+
+
+@pytest.mark.parametrize("settle, ok", [(4.896, True), (4.9, False), (10.0, False)])
+def test_a_gap_settle_time_after_the_runs_last_cycle_is_refused(tmp_path, capsys, settle, ok):
+    """A 5-s run's last cycle is at 4.896 s: a time gap checked from 10 s failed with "off by up to inf s"; now from
+    just after the last cycle on it is an error naming the field and the last cycle's time."""
+    path = _write(tmp_path, "settle", "duration_s: 5.0\necu: {acc_enabled: true, expect: {lead: a, gap_settle_s: "
+                  f"{settle}, gap_tolerance: 0.5}}}}", CAR)
+    rc, out, err = cli(capsys, "report", path, "--seeds", "1", "--workers", "1")
+    if ok:
+        assert "field 'ecu.expect.gap_settle_s'" not in err and "Traceback" not in err, err
+    else:
+        assert rc != 0 and f"field 'ecu.expect.gap_settle_s': value {settle}" in err and "4.896 s" in err, err
+
+
+@pytest.mark.parametrize("duration, ok", [(1.5, False), (2.0, False), (2.1, True)])
+def test_acc_follows_needs_a_run_past_its_window(tmp_path, capsys, duration, ok):
+    """`acc_follows` is checked from 2 s where no gap_settle_s is given: a 1.5-s run failed with "ACC followed a in 0 %
+    of the cycles". A run whose last cycle comes before 2 s is refused naming the field (2.0 s: its last cycle is at
+    1.944 s); one beyond it is checked."""
+    path = _write(tmp_path, "follows", f"duration_s: {duration}\necu: {{acc_enabled: true, expect: "
+                  "{acc_follows: a}}", CAR)
+    rc, out, err = cli(capsys, "report", path, "--seeds", "1", "--workers", "1")
+    if ok:
+        assert "field 'ecu.expect.acc_follows'" not in err and "Traceback" not in err, err
+    else:
+        assert rc != 0 and "field 'ecu.expect.acc_follows': value 'a'" in err and "checked from 2 s" in err, err
+
+
+@pytest.mark.parametrize("actor, ok", [
+    ("{id: br, class: bridge, x_m: 0.0}", True),                          # a deck 5 m up: the run starts under it
+    ("{id: g, class: gantry, x_m: 1.0}", True),
+    ("{id: s, class: sign, x_m: 2.0, z_m: 5.0, height_m: 1.0}", True),
+    ("{id: s, class: sign, x_m: 2.0, z_m: 2.01, height_m: 1.0}", True),    # just above, at and just below EGO_HEIGHT_M
+    ("{id: s, class: sign, x_m: 2.0, z_m: 2.0, height_m: 1.0}", True),
+    ("{id: s, class: sign, x_m: 2.0, z_m: 1.99, height_m: 1.0}", False),
+    ("{id: s, class: sign, x_m: 2.0, height_m: 1.0}", False),              # on the ground
+    ("{id: c, class: car, x_m: 2.0, lane: 1}", False),
+])
+def test_structures_overhead_may_stand_over_the_ego_at_the_start(tmp_path, capsys, actor, ok):
+    """A bridge, a gantry or a sign 5 m up at x 0–2 m was refused as "overlaps the ego at t = 0": a run could not start
+    under a bridge. An actor whose bottom is 2 m (EGO_HEIGHT_M) or more above the road now passes over the ego; one
+    lower, or on the ground, on top of it is still an error."""
+    from radarnode.radar.checks import EGO_HEIGHT_M
+    assert EGO_HEIGHT_M == 2.0
+    path = _write(tmp_path, "over", "duration_s: 1.0", f"  - {actor}")
+    rc, _, err = cli(capsys, "log", path, "-o", tmp_path / "over.blf")
+    assert (rc == 0) == ok and (("overlaps the ego at t = 0" in err) != ok), err
+
+
+def test_a_refused_max_distance_gets_its_error_and_no_warning_computed_from_it(tmp_path, capsys):
+    """`radar.max_distance_m: 4` printed a warning that the car is never in view (computed from the 4 m it then
+    refused) before the error; now the error alone, and both READMEs give the same range (10 m up)."""
+    from tests.conftest import ROOT
+    path = _write(tmp_path, "maxd", "duration_s: 1.0\nradar: {preset: ars408_like, max_distance_m: 4}", CAR)
+    rc, _, err = cli(capsys, "log", path, "-o", tmp_path / "maxd.blf")
+    assert rc == 1 and "field 'radar.max_distance_m': value 4" in err and "never" not in err, err
+    assert "10…the preset's max range" in (ROOT / "scenarios" / "README.md").read_text()

@@ -25,6 +25,7 @@ from radarnode.consumer.ecu import Ecu
 from radarnode.consumer.fcw import LEVEL_PREWARNING, LEVEL_WARNING, FcwSettings, time_to_collision
 from radarnode.consumer.path import SensorMount
 from radarnode.scene.scenario import Scenario
+from radarnode.radar.checks import ACC_FOLLOWS_FROM_S
 from radarnode.consumer.fusion import FusingConsumer
 from radarnode.wire.group import ego_motion_for, make_node
 
@@ -406,7 +407,7 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
         if n:
             res.reasons.append(f"FCW warned for {a} in {n} cycles")
     if e.acc_follows is not None:
-        after = res.trace["t"] >= (e.gap_settle_s if e.gap_settle_s is not None else 2.0)
+        after = res.trace["t"] >= (e.gap_settle_s if e.gap_settle_s is not None else ACC_FOLLOWS_FROM_S)
         share = float(np.mean(targets[after] == names.index(e.acc_follows))) if after.any() else 0.0
         others = sorted({names[i] for i in targets[after] if i >= 0 and i != names.index(e.acc_follows)})
         if share < 0.95 or others:

@@ -9,7 +9,8 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
   error names the field, its line and what the waypoints say.
 * **An actor on top of the ego at the start** (error): its box and the ego's (``ego.length_m`` ×
   ``ego.width_m``, the rear axle 1 m ahead of the rear end, as the viewer draws it) intersect at t = 0. No radar
-  reports a car inside the car it sits on; the model's output would be meaningless.
+  reports a car inside the car it sits on; the model's output would be meaningless. An actor whose bottom is
+  ``EGO_HEIGHT_M`` (2 m) or more above the road (a bridge, a gantry, an overhead sign) passes over the ego.
 * **An expectation's option without the expectation** (error): ``min_gap_m``, ``fcw_ttc_min_s``,
   ``fcw_before_impact_s``, ``gap_settle_s`` or ``ttc_with_lead_decel`` without ``ecu.expect.lead`` (they are
   measured to the lead; without one they compared nothing and passed); ``ecu.expect.gap_tolerance`` without
@@ -26,6 +27,9 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
   An actor whose range rate goes beyond that within the field of view (the schema allows an ego at 100 m/s and
   an actor at 150 m/s) is then reported at its alias with that flag, at every level, and listed as no object;
   the warning names the actor, its range rate and when.
+
+* **A run of no cycle, a window beyond the run** (error): ``duration_s`` shorter than one radar cycle; an
+  ``ecu.expect.gap_settle_s`` (or ``acc_follows``' default 2 s) after the run's last cycle.
 
 Errors are :class:`ScenarioError` with ``file:line: field '…': …``; warnings go to this module's logger.
 """
@@ -45,24 +49,30 @@ logger = logging.getLogger(__name__)
 
 EGO_REAR_OVERHANG_M = 1.0      # rear end to rear axle, as radarnode.viz draws the ego
 OVERLAP_TOLERANCE_M = 0.01     # boxes that only touch do not overlap
+#: an actor whose bottom is this high or higher (a bridge, a gantry, an overhead sign) passes over the ego: a car or
+#: a van (the scenario gives the ego no height); a run may start under a bridge
+EGO_HEIGHT_M = 2.0
 SPEED_TOLERANCE = (0.5, 0.05)  # m/s, or this fraction of the speed, whichever is larger
 HEADING_TOLERANCE_DEG = 5.0
 POSITION_TOLERANCE_M = 0.5
 CHUNK_CYCLES = 1024            # cycles evaluated at once when looking for the first sight of every actor
+#: ``ecu.expect.acc_follows`` is checked from this time where ``gap_settle_s`` is not given (radarnode.consumer.evaluate)
+ACC_FOLLOWS_FROM_S = 2.0
 
 
 def check_scenario(scenario: Scenario) -> Scenario:
     """Raise ScenarioError for what cannot be meant, log a warning for what is probably not meant; returns the
     scenario unchanged (so the loader can chain it)."""
     src = Source.of_lines(scenario.source, scenario.lines)
+    _check_timing(scenario, src)
     for i, actor in enumerate(scenario.actors):
         if actor.waypoints:
             _check_waypoint_fields(scenario, src, i, actor)
+    _check_max_distance(scenario, src)          # (before the warnings that read it)
     if scenario.actors:
         _check_overlap_at_start(scenario, src)
         _check_visibility(scenario, src)
         _check_speed_span(scenario, src)
-    _check_max_distance(scenario, src)
     expect = scenario.ecu.expect
     if _given(scenario, "ecu.expect.gap_tolerance") and expect.gap_settle_s is None:
         # (a tester's finding: it was accepted and had no effect)
@@ -85,6 +95,35 @@ def check_scenario(scenario: Scenario) -> Scenario:
                                 f"it is checked on {what}; expected lead naming the actor (one of "
                                 f"{', '.join(repr(a.id) for a in scenario.actors) or 'none: no actor here'})")
     return scenario
+
+
+# --- a run of no cycle, an expectation's window beyond the run ----------------------------------------------
+
+
+def _check_timing(scenario: Scenario, src: Source) -> None:
+    """A run shorter than one radar cycle computes nothing (``log`` wrote an empty file and ``report`` passed it); an
+    expectation checked from a time after the run's last cycle compares nothing (it failed with "0 % of the
+    cycles" or "off by inf")."""
+    period = scenario.period_s
+    where = "cycle_period_s" if scenario.cycle_period_s is not None and _given(scenario, "cycle_period_s") \
+        else f"the {scenario.radar.preset} preset's cycle"
+    if scenario.num_cycles < 1:
+        raise src.error("duration_s", f"field 'duration_s': value {scenario.duration_s!r} is not allowed: the run is "
+                                      f"shorter than one radar cycle ({period:g} s, {where}) and would compute "
+                                      f"nothing; expected at least {period:g}")
+    last = (scenario.num_cycles - 1) * period          # the time of the run's last cycle
+    expect = scenario.ecu.expect
+    if expect.gap_settle_s is not None and expect.gap_settle_s > last:
+        raise src.error("ecu.expect.gap_settle_s",
+                        f"field 'ecu.expect.gap_settle_s': value {expect.gap_settle_s!r} is not allowed: the run's "
+                        f"last cycle is at {last:g} s (duration_s {scenario.duration_s:g}), so the time gap would be "
+                        f"checked on no cycle; expected at most {last:g}, or a longer duration_s")
+    if expect.acc_follows is not None and expect.gap_settle_s is None and ACC_FOLLOWS_FROM_S > last:
+        raise src.error("ecu.expect.acc_follows",
+                        f"field 'ecu.expect.acc_follows': value {expect.acc_follows!r} is not allowed here: ACC's "
+                        f"target is checked from {ACC_FOLLOWS_FROM_S:g} s (gap_settle_s, where given) but the run's "
+                        f"last cycle is at {last:g} s (duration_s {scenario.duration_s:g}); expected duration_s "
+                        f"beyond {ACC_FOLLOWS_FROM_S:g}, or gap_settle_s earlier")
 
 
 # --- conflicting motion fields ----------------------------------------------------------------------------
@@ -170,6 +209,8 @@ def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
     ego_h = (0.5 * ego.length_m, 0.5 * ego.width_m)
     c, s = math.cos(myaw), math.sin(myaw)
     for i, actor in enumerate(scenario.actors):
+        if actor.z >= EGO_HEIGHT_M:        # a bridge, a gantry, a sign overhead: the ego passes under it
+            continue
         # the actor's box in the ego frame (the sensor frame turned by the mount's yaw and moved by its position)
         cx, cy = float(view.centre_x_m[i]), float(view.centre_y_m[i])
         ex, ey = c * cx - s * cy + mx, s * cx + c * cy + my

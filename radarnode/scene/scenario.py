@@ -373,12 +373,6 @@ class Actor:
         if self.timed_path and self.accel:
             raise FieldError("accel", "...", "no accel with timed waypoints (their times set the speed); leave "
                              "out the waypoints' t_s to drive the path with speed_mps and accel")
-        if self.waypoints and not self.timed_path:
-            if self.heading_deg != 0.0:
-                raise FieldError("heading_deg", self.heading_deg, "0 (a path of waypoints sets the heading)")
-            if self.y_m is not None or self.lane is not None:
-                raise FieldError("y_m" if self.y_m is not None else "lane", self.y_m if self.y_m is not None
-                                 else self.lane, "none with waypoints (the path starts at the first waypoint)")
 
     @property
     def timed_path(self) -> bool:
