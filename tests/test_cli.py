@@ -153,6 +153,11 @@ def test_consume_reports_a_bus_that_cannot_be_opened():
                                                      "cannot be used here")
     r = run("consume", "-i", "udp_multicast", "-c", "not-an-address.invalid", "--count", "1")
     assert r.returncode == 1 and r.stderr.startswith("error: cannot open CAN bus")
+    # one line, naming the options that chose the bus and what a channel looks like; python-can's "was not properly
+    # shut down" of the bus that never opened (a second line, after the error) no more
+    assert r.stderr.count("\n") == 1 and "WARNING" not in r.stderr, r.stderr
+    assert "option -i/--interface 'udp_multicast' with option -c/--channel 'not-an-address.invalid'" in r.stderr
+    assert "expected a channel that interface can open (udp_multicast: an IPv4 or IPv6 multicast group" in r.stderr
 
 
 def test_node_on_a_virtual_bus_reports_what_it_sent():

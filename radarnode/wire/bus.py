@@ -104,10 +104,55 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
         raise UsageError(f"{source}: interface {name!r} cannot be used here ({exc}); expected one of "
                          f"{', '.join(sorted(can.interfaces.VALID_INTERFACES))} with its driver installed") from None
     except (can.CanError, ValueError, TypeError, OSError, NotImplementedError) as exc:
-        raise BusError(f"cannot open CAN bus {what}: {exc}") from None
+        error = BusError(f"cannot open CAN bus: {_named(args, kwargs)}: {exc}; expected a channel that interface can "
+                         f"open{_CHANNEL_HINTS.get(kwargs.get('interface'), '')}")
+        _drop_half_open(exc)
+        raise error from None
     enlarge_receive_buffer(bus)
     name_bus(bus, kwargs)
     return bus
+
+
+#: what a channel of an interface looks like, for the error of a bus that cannot be opened
+_CHANNEL_HINTS = {
+    "udp_multicast": " (udp_multicast: an IPv4 or IPv6 multicast group, e.g. 239.74.163.2 or ff15:7079:7468:6f6e:6465:6d6f:6d63:6173)",
+    "socketcan": " (socketcan: a CAN network interface that is up, e.g. vcan0: `ip link add dev vcan0 type vcan; ip link set up vcan0`)",
+    "virtual": " (virtual: any name)",
+}
+
+
+def _named(args: argparse.Namespace, kwargs: dict) -> str:
+    """The options (or python-can configuration) that chose the bus, for an error: which to change."""
+    parts = []
+    for key, option in (("interface", "-i/--interface"), ("channel", "-c/--channel")):
+        if key in kwargs:
+            given = getattr(args, key, None) is not None
+            label = f"option {option}" if given else f"python-can configuration {key}"
+            parts.append(f"{label} {kwargs[key]!r}")
+    extra = sorted(k for k in kwargs if k not in ("interface", "channel", "bitrate"))
+    if extra:
+        parts.append("option --bus-kwargs " + ", ".join(f"{k}={kwargs[k]!r}" for k in extra))
+    if "bitrate" in kwargs:
+        parts.append(f"option -b/--bitrate {kwargs['bitrate']}")
+    return " with ".join(parts) if parts else "python-can configuration (no interface or channel given)"
+
+
+def _drop_half_open(exc: BaseException) -> None:
+    """Let a bus whose construction failed go now, with python-can's "was not properly shut down" warning (logged by
+    its destructor: it never opened, so there is nothing to shut down) kept off the error output."""
+    import gc
+    import traceback
+    bus_logger = logging.getLogger("can.bus")
+    disabled = bus_logger.disabled
+    bus_logger.disabled = True
+    try:
+        tb, exc.__traceback__ = exc.__traceback__, None
+        if tb is not None:
+            traceback.clear_frames(tb)
+        del tb
+        gc.collect()
+    finally:
+        bus_logger.disabled = disabled
 
 
 def name_bus(bus: can.BusABC, kwargs: dict) -> None:
