@@ -490,3 +490,26 @@ def test_signal_value_rounds_to_the_dbc_resolution():
     sig = next(s for info in frame_table().values() for s in info.message.signals if s.name == "Obj_DistLat")
     assert signal_value(sig, -204.6 + 1023 * 0.2) == 0 and signal_value(sig, 3.6000000000000014) == 3.6
     assert isinstance(signal_value(sig, -2.0), float)          # a scaled signal stays a float when whole
+
+
+def test_export_of_one_radar_of_several_draws_it_on_its_own_mount(tmp_path, capsys):
+    """front_and_corners.yaml: `export --sensor-id 1` published radar 1's objects with radar 0's mount in /tf (3.7 m,
+    0 m, 0°, where radar 1 sits at 3.5 m, 0.73 m, 45°: an independent tester's finding). Now /tf gives each radar's
+    own mount and the truth is taken around it; a sensor ID the scenario has no radar for is refused."""
+    fc = HIGHWAY.parent / "front_and_corners.yaml"
+    sc = load_scenario(fc)
+    blf = tmp_path / "fc.blf"
+    assert main(["log", str(fc), "--duration", "1.0", "-o", str(blf)]) == 0
+    for radar in sc.radars[:2]:
+        out = tmp_path / f"fc{radar.sensor_id}.mcap"
+        assert main(["export", str(blf), "--scenario", str(fc), "--sensor-id", str(radar.sensor_id),
+                     "-o", str(out)]) == 0
+        tf = read_mcap(out)["topics"]["/tf"][3][0][1]
+        (to_radar,) = [t for t in tf.transforms if t.child_frame_id == "radar"]
+        m = radar.mount
+        assert (to_radar.translation.x, to_radar.translation.y) == pytest.approx((m.x_m, m.y_m))
+        assert 2.0 * math.degrees(math.atan2(to_radar.rotation.z, to_radar.rotation.w)) == pytest.approx(m.yaw_deg)
+    capsys.readouterr()
+    assert main(["export", str(blf), "--scenario", str(fc), "--sensor-id", "5", "-o", str(tmp_path / "x.mcap")]) == 2
+    assert "option --sensor-id: value 5 is not allowed" in capsys.readouterr().err
+    assert not (tmp_path / "x.mcap").exists()

@@ -51,6 +51,18 @@ def cmd(args) -> int:
         from radarnode.radar.setup import load_scenario
         scenario = load_scenario(args.scenario)
     sensor_id = args.sensor_id if args.sensor_id is not None else scenario.radar.sensor_id if scenario else 0
+    if scenario is not None:
+        # the truth and /tf of the radar whose frames are decoded: its own mount (radar 1 of front_and_corners.yaml
+        # was drawn on radar 0's)
+        from radarnode.radar.setup import radar_scenarios
+        radars = radar_scenarios(scenario)
+        mine = [sc for sc in radars if sc.radar.sensor_id == sensor_id]
+        if not mine:
+            ids = ", ".join(str(sc.radar.sensor_id) for sc in radars)
+            raise UsageError(f"option --sensor-id: value {sensor_id} is not allowed with --scenario "
+                             f"{args.scenario!r}: its radars have sensor ID {ids}; expected one of them (its truth "
+                             "is drawn around that radar's mount)")
+        scenario = mine[0]
     rec = FoxgloveRecorder(sensor_id=sensor_id)
     census = SensorCensus()
     report = ReadReport(args.log, fmt)
