@@ -4,6 +4,7 @@ SIGINT/SIGTERM leave every file complete (exit 130/143); a closed pipe ends quie
 
 from __future__ import annotations
 
+import json
 import random
 import re
 import signal
@@ -125,6 +126,30 @@ def test_a_damaged_log_decodes_what_is_readable_and_names_the_first_bad_record(c
         assert len(out.read_text().splitlines()) >= read - 10
     if suffix == ".blf" and "is damaged" in line:
         assert out.exists() and len(out.read_text().splitlines()) > 0
+
+
+@pytest.mark.parametrize("fraction", [0.3, 0.95, 0.999])
+def test_a_blf_cut_off_gives_the_frames_of_its_last_container_up_to_the_cut(capsys, tmp_path, fraction):
+    """A logger that loses power leaves a BLF whose last zlib container is cut off. The container was a bad record
+    and all of its frames were lost: a 15-s log is one container, so a cut at 95 % gave not one frame (an independent
+    tester's finding). Now what its compressed stream gives up to the cut is read: the frames read are the log's
+    first ones, the same bytes and times, and no more than a few are lost (those in the last few hundred bytes of
+    compressed data, and the one object cut in two)."""
+    good = tmp_path / "good.blf"
+    assert main(["log", LONG, "-o", str(good)]) == 0
+    capsys.readouterr()
+    full = [(m.arbitration_id, bytes(m.data), m.timestamp) for m in can.LogReader(str(good))]
+    data = good.read_bytes()
+    cut = tmp_path / "cut.blf"
+    cut.write_bytes(data[: int(len(data) * fraction)])
+    out = tmp_path / "frames.jsonl"
+    rc, _, err = cli(capsys, "decode", cut, "--format", "json", "-o", out)
+    assert rc == 1 and "it is truncated (" in err and "frames of its data before the cut were read" in err, err
+    read = int(re.search(r"(\d+) frames read", err).group(1))
+    frames = [json.loads(x) for x in out.read_text().splitlines()]
+    assert read == len(frames) and read >= 0.9 * fraction * len(full) and read < len(full), (read, len(full))
+    assert [(r["can_id"], bytes.fromhex(r["data"]), r["timestamp"]) for r in frames] == \
+        [(i, d, pytest.approx(t, abs=1e-6)) for i, d, t in full[:read]]
 
 
 @pytest.mark.parametrize("edit,reason", [

@@ -568,15 +568,22 @@ class _BlfFrames:
                 if len(body) < obj_size - head_size:
                     # the file ends inside the object: truncated — or the last container's size is damaged, and its
                     # compressed data, whole, is still read
-                    inflated = _inflate(body[blf.LOG_CONTAINER_STRUCT.size:]) if obj_type == blf.LOG_CONTAINER \
-                        and len(body) > blf.LOG_CONTAINER_STRUCT.size else "not a container"
+                    container = obj_type == blf.LOG_CONTAINER and len(body) > blf.LOG_CONTAINER_STRUCT.size
+                    inflated = _inflate(body[blf.LOG_CONTAINER_STRUCT.size:]) if container else "not a container"
                     whole = None if isinstance(inflated, str) else inflated[0]
-                    if whole is not None:
+                    # a container cut off (a logger that lost power): the whole objects of the data its compressed
+                    # stream gives up to the cut (zlib cannot check a stream without its end; each frame is checked as
+                    # any other, and the object cut in two is left out)
+                    data = whole if whole is not None else _inflate_cut(body) if container else b""
+                    before = report.frames              # (the caller counts the frames it takes)
+                    if data:
                         try:
-                            yield from reader._parse_container(_from_first_object(whole) if resume else whole)
+                            yield from reader._parse_container(_from_first_object(data) if resume else data)
                         except RECORD_ERRORS + (can.io.blf.BLFParseError,):
                             pass
+                    read = report.frames - before
                     report.stop(f"byte {pos}", f"the file ends inside an object of {obj_size} bytes: it is truncated"
+                                               f" ({read} frames of its data before the cut were read)"
                                 if whole is None else f"the object's size, {obj_size} bytes, runs past the end of "
                                                       "the file (its data was read)")
                     return
@@ -651,6 +658,21 @@ def _inflate(payload: bytes) -> tuple[bytes, bytes] | str:
     except zlib.error as exc:
         return _reason(exc)
     return (data, z.unused_data) if z.eof else "its compressed data ends early"
+
+
+def _inflate_cut(body: bytes) -> bytes:
+    """What the compressed data of a container cut off by the end of the file decompresses to, up to the cut (empty
+    if the method is not zlib, or its data is damaged before the cut)."""
+    method, _ = blf.LOG_CONTAINER_STRUCT.unpack_from(body)
+    payload = body[blf.LOG_CONTAINER_STRUCT.size:]
+    if method == blf.NO_COMPRESSION:
+        return payload
+    if method != blf.ZLIB_DEFLATE:
+        return b""
+    try:
+        return zlib.decompressobj().decompress(payload)
+    except zlib.error:
+        return b""
 
 
 def _from_first_object(data: bytes) -> bytes:
