@@ -18,7 +18,7 @@ from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
-from radarnode.wire.logfiles import check_channel, check_output_format, open_writer
+from radarnode.wire.logfiles import check_channel, check_output_format, check_start_time, open_writer
 from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import SimulatedClock, run_node
 
@@ -49,6 +49,7 @@ def cmd(args) -> int:
     # what the command line alone decides comes first: a format nothing reads back is refused before the run
     check_output_format(args.output, "--output", extra=(".mcap",))
     check_channel(args.output, args.channel, "--channel")
+    check_start_time(args.output, args.start_time, "--start-time")
     if is_mcap(args.output):        # for Foxglove (needs foxglove-sdk): a run to watch shows the ECU's decisions too
         require_foxglove("--output", args.output)
         args.ecu = True

@@ -87,6 +87,9 @@ class FoxgloveRecorder(can.Listener):
         self._node = None
         self._start_time_s = 0.0
         self._truth_from_cycles = False
+        #: decoded cycles given the scene's truth, and those outside the scenario's run (time − start time before 0
+        #: or after its end), with the first such cycle's time: a log and a start time that do not go together
+        self.truth_cycles, self.cycles_outside_run, self.first_outside_s = 0, 0, None
 
     # --- sinks --------------------------------------------------------------------------------------------
     def open_mcap(self, path: str, *, metadata: dict[str, str] | None = None,
@@ -215,6 +218,11 @@ class FoxgloveRecorder(can.Listener):
             if 0 <= k <= int(sc.duration_s / sc.period_s + 1e-9):
                 t_s = k * sc.period_s
                 self._publish_scene(t_s, t, self._scene.view(t_s))
+                self.truth_cycles += 1
+            else:
+                self.cycles_outside_run += 1
+                if self.first_outside_s is None:
+                    self.first_outside_s = t
 
     def _publish_scene(self, t_s: float, t_wire: float, view) -> None:
         """Ego and ground truth at scenario time ``t_s``, stamped ``t_wire`` (the time base of the frames)."""
