@@ -275,3 +275,26 @@ def test_ecu_keeps_the_state_before_a_step_of_more_than_three_cycles(step_period
     st = ecu.stats
     assert st.stray_undone == int(undone) and st.time_jumps == int(not undone) and st.time_resyncs == 0, st
     assert all(d is not None and d.target is not None for d in dec[42:])
+
+
+@pytest.mark.parametrize("speed, yaw, refused", [
+    (25.0, 327.67, False), (25.0, 327.68, False), (25.0, 327.69, True), (25.0, -655.36, True), (25.0, 1e6, True),
+    (25.0, 1e300, True), (163.82, 0.0, False), (-163.82, 0.0, False), (163.83, 0.0, True), (327.64, 0.0, True)])
+def test_ecu_refuses_an_ego_motion_beyond_what_the_bus_carries(speed, yaw, refused):
+    """Ecu.set_ego took any finite yaw rate: 1e6 °/s overflowed the path prediction and restarted every track (an
+    independent tester's finding). Just below, at, just above and at twice the bus's limits (0x301: ±327.68 °/s; 0x300:
+    163.82 m/s): beyond them the value is counted in bad_ego and ignored, and the tracks go on undisturbed."""
+    cycles = _assembled(70)
+    ecu = Ecu(AccSettings(set_speed_mps=30.0, time_gap_s=1.5))
+    decisions = []
+    for k, (t, cycle, v, w) in enumerate(cycles):
+        if k == 40:
+            ecu.set_ego(t, speed, yaw)
+        else:
+            ecu.set_ego(t, v, w)
+        decisions.append(ecu.on_cycle(t, cycle))
+    assert ecu.stats.bad_ego == int(refused) and ecu.stats.internal_errors == 0, ecu.stats
+    if refused:
+        assert ecu.ego_speed_mps == pytest.approx(cycles[-1][2])
+        ids = {d.target.track_id for d in decisions[30:] if d.target is not None}
+        assert len(ids) == 1 and all(d.target is not None for d in decisions[30:])
