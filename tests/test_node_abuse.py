@@ -23,7 +23,9 @@ from tests.test_config_protocol import ACTORS, coll_det_cfg, filter_cfg, radar_c
 
 DLC = {0x200: 8, 0x202: 8, 0x300: 2, 0x301: 2, 0x400: 2, 0x401: 8}
 # FilterCfg: 5 bytes in Continental's DBC for sensor 1 (every signal lies in them), 8 in sensor 0's; 5…8 are taken
-_ACCEPTED_DLC = {0x202: (5, 6, 7, 8)}
+#: the DLCs each input is taken with: its own and longer (padded, as AUTOSAR's DLC check takes them), FilterCfg from
+#: 5 bytes (Continental's DBC for sensor 1)
+_ACCEPTED_DLC = {base: tuple(range(5 if base == 0x202 else dlc, 9)) for base, dlc in DLC.items()}
 
 
 def _raw_filter(index: int, lo_raw: int, hi_raw: int, ftype: int = 1, valid: int = 1) -> bytes:
@@ -196,3 +198,34 @@ def test_every_dlc_and_random_bytes_on_every_input_never_raise(base):
     # (random bytes may have moved it to another SensorID: its IDs move with it)
     assert any(P.unshifted(m.arbitration_id)[0] in (P.OBJ_STATUS, P.CLUSTER_STATUS) for m in out.messages) or \
         node.config.output_type == P.OUTPUT_NONE
+
+
+@pytest.mark.parametrize("pad", [b"\x00", b"\xcc"])
+def test_ego_motion_and_configuration_padded_to_eight_bytes_are_taken(pad):
+    """Bench tools and gateways often send every frame with DLC 8: SpeedInformation and YawRateInformation padded
+    from 2 bytes were dropped as a wrong DLC by the node (which then ran with 'speed missing', MotionRxState 3) and by
+    the consumer (an independent tester's finding). A longer DLC is now taken, its first bytes read and counted in
+    rx_padded / padded_frames, whatever the padding; a shorter one is still dropped."""
+    from radarnode.consumer.assembler import CycleAssembler
+    from radarnode.wire.node import EgoMotionSender
+    node = RadarNode(scenario(ACTORS, duration=1.0))
+    asm = CycleAssembler()
+    ego = EgoMotionSender(node.scene)
+    for k in range(4):
+        t = k * node.period_s
+        for m in ego.frames(t):
+            padded = can.Message(arbitration_id=m.arbitration_id, data=bytes(m.data) + pad * (8 - len(m.data)),
+                                 is_extended_id=False)
+            node.receive(padded, t)
+            asm.on_message_received(padded)
+        node.cycle(t)
+    assert node.motion_rx_state(3 * node.period_s) == 0 and node.counters["rx_padded"] == 8
+    assert node.counters["rx_wrong_dlc"] == 0
+    assert asm.ego_speed_mps == pytest.approx(node.scene.scenario.ego.speed_mps, abs=0.02)
+    assert asm.stats.padded_frames == 8 and asm.stats.wrong_dlc == 0
+    node.receive(can.Message(arbitration_id=0x300, data=b"\x01", is_extended_id=False), 0.3)
+    assert node.counters["rx_wrong_dlc"] == 1
+    padded_cfg = coll_det_cfg(1, min_time=0.0)
+    node.receive(can.Message(arbitration_id=padded_cfg.arbitration_id, data=bytes(padded_cfg.data) + pad * (
+        8 - len(padded_cfg.data)), is_extended_id=False), 0.3)
+    assert node.coll_det.active

@@ -140,6 +140,7 @@ class ConsumerStats:
     unknown_id: int = 0
     other_sensor_frames: int = 0    # frames of another sensor ID (its ARS 408 or own messages): not ours
     wrong_dlc: int = 0
+    padded_frames: int = 0          # ego motion 0x300/0x301 with a longer DLC (padded): taken, their first bytes read
     decode_errors: int = 0
     orphan_frames: int = 0          # list frames with no header before them
     late_frames: int = 0            # list frames of a group that came after their cycle was delivered
@@ -444,6 +445,11 @@ class CycleAssembler(can.Listener):
             return
         message = self._messages[base]
         data = bytes(msg.data)
+        if len(data) > message.length and base in (P.SPEED_INFO, P.YAW_RATE_INFO):
+            # the vehicle's 2-byte frames padded to 8 by a gateway or bench tool: their signals are in the first
+            # bytes (as the radar node takes them); the radar's own frames keep their exact length
+            self.stats.padded_frames += 1
+            data = data[:message.length]
         if len(data) != message.length:
             self.stats.wrong_dlc += 1
             return

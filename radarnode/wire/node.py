@@ -159,7 +159,8 @@ class RadarNode:
 
         Frames of other IDs (another sensor's, the node's own traffic) are not for this node and ignored.
         What is for it but cannot be used is dropped and counted, never raised: error frames
-        (``rx_error_frames``), remote frames (``rx_remote_frames``), a wrong DLC (``rx_wrong_dlc``), a signal
+        (``rx_error_frames``), remote frames (``rx_remote_frames``), a DLC shorter than the message's (``rx_wrong_dlc``;
+        a longer one is taken, its first bytes read, and counted in ``rx_padded``), a signal
         outside its DBC range (``rx_out_of_range``, ``rx_invalid_speed_direction``); configuration values the
         sensor refuses are counted in ``config_rejected`` (see :meth:`_refuse`).
         """
@@ -181,6 +182,12 @@ class RadarNode:
             # Continental's DBC for sensor 1 gives FilterCfg 5 bytes (every signal lies in them), sensor 0's 8:
             # a tool built on either is understood (the missing bytes are zero, as in an 8-byte frame)
             data = data + bytes(length - len(data))
+        elif len(data) > length:
+            # padded to a longer DLC (bench tools and gateways that send every frame with 8 bytes): its signals are
+            # in the first bytes, as AUTOSAR's DLC check takes a frame at least as long as configured (the 2-byte
+            # 0x300/0x301 padded to 8 were dropped, and the node ran with "speed missing")
+            self.counters["rx_padded"] += 1
+            data = data[:length]
         if len(data) != length:
             self.counters["rx_wrong_dlc"] += 1
             self._warn_once(f"dlc{base}", "frame 0x%X has DLC %d, expected %d; dropped (counted in rx_wrong_dlc, "
