@@ -446,3 +446,29 @@ def test_two_radars_objects_are_one_only_within_the_cap_across_the_heading(acros
     out = fusion.step(0.0, {0: (0.0, _objects([30.0], [0.0], sigma=1.0)),
                             1: (0.0, _objects([30.0], [across_m], sigma=1.0))})
     assert len(out) == (1 if fused else 2)
+
+
+def test_decode_of_a_capture_of_two_buses_picks_one_with_channel(tmp_path, capsys):
+    """A capture of two CAN channels with a radar 0 on each was decoded as one bus: one radar's headers taken for stray
+    ones and its frames for orphans (68 and 408 here), with no word (an independent tester's finding). Now decode
+    warns that sensor 0 came on two channels, and --channel (by name or number) decodes one bus: every cycle of it,
+    nothing stray or orphaned."""
+    from tests.helpers import cli
+    from tests.conftest import SCENARIOS
+    logs = []
+    for ch, name, start in (("can0", "highway_cut_in.yaml", "0"), ("can1", "stopped_vehicle.yaml", "0.003")):
+        path = tmp_path / f"{ch}.log"
+        rc, _, err = cli(capsys, "log", SCENARIOS / name, "--duration", "5", "--channel", ch, "--start-time", start,
+                         "-o", path)
+        assert rc == 0, err
+        logs += list(can.LogReader(str(path)))
+    both = tmp_path / "both.log"
+    with can.CanutilsLogWriter(str(both)) as w:
+        for m in sorted(logs, key=lambda m: m.timestamp):
+            w.on_message_received(m)
+    rc, out, err = cli(capsys, "decode", both, "--summary")
+    assert rc == 0 and "warning: frames of sensor 0 on 2 channels (can0, can1)" in err and "orphan_frames=" in out
+    for channel in ("can1", "1", "can0"):
+        rc, out, err = cli(capsys, "decode", both, "--summary", "--channel", channel)
+        assert rc == 0 and "warning" not in err, err
+        assert "cycles=69," in out and "orphan_frames" not in out and "stray_headers" not in out, out

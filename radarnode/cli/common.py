@@ -489,13 +489,15 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
 
 
 class SensorCensus:
-    """The radar sensor IDs whose frames a log holds (by the whole-bus DBC's ID plan), to say which to pick when
-    the one asked for has none."""
+    """The radar sensor IDs whose frames a log holds (by the whole-bus DBC's ID plan), and the channels they came on,
+    to say which to pick when the one asked for has none, or came on several buses."""
 
     def __init__(self) -> None:
         from radarnode.wire.busdbc import frame_table
         self._table = frame_table()
         self.present: set[int] = set()
+        #: per sensor ID, the channels its frames came on (a capture of two buses, a radar 0 on each)
+        self.channels: dict[int, set[str]] = {}
 
     def note(self, msg) -> None:
         if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame:
@@ -503,6 +505,17 @@ class SensorCensus:
         info = self._table.get(msg.arbitration_id)
         if info is not None and info.sensor_id is not None:
             self.present.add(info.sensor_id)
+            self.channels.setdefault(info.sensor_id, set()).add(str(msg.channel))
+
+    def channel_warning(self, wanted: int, option: str) -> str | None:
+        """One line when ``wanted``'s frames came on more than one channel (decoded as one bus, a cycle of each radar
+        taken for a stray or an orphan of the other's), else None."""
+        seen = self.channels.get(wanted, set())
+        if len(seen) < 2:
+            return None
+        names = ", ".join(sorted(seen))
+        return (f"warning: frames of sensor {wanted} on {len(seen)} channels ({names}) were decoded as one bus: a "
+                f"radar on each?; pick one with {option}")
 
     def warning(self, wanted: int, option: str) -> str | None:
         """One line when the log holds other sensors' frames but none of ``wanted``'s, else None."""

@@ -49,6 +49,9 @@ def add_subparser(sub) -> None:
     p.add_argument("--fuse", metavar="SCENARIO",
                    help="text: fuse the object lists of every radar of SCENARIO (its radars' sensor IDs and mounts) "
                         "into one list in the vehicle frame and print that")
+    p.add_argument("--channel", default=None, type=options.name("a channel name"),
+                   help="only the frames of this channel (as the log names it: can1, or its number 1): a capture of "
+                        "several buses (default: every channel)")
     p.add_argument("--summary", action="store_true", help="text: only the per-object summary, no per-cycle tables")
     p.add_argument("--max-cycles", type=options.COUNT, default=0,
                    help="text: print at most this many cycles (0: all)")
@@ -125,12 +128,30 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
     return list(cols.items())
 
 
+def _frames(args, report: ReadReport):
+    """The log's frames (:func:`read_frames`), only those of ``--channel`` where it is given: its name, or the same
+    channel number (python-can's ``channel2int``: ``can1`` and ``1`` are one channel)."""
+    frames = read_frames(args.file, report)
+    if args.channel is None:
+        return frames
+    from can.util import channel2int
+    wanted, number = str(args.channel), channel2int(args.channel)
+
+    def mine(msg) -> bool:
+        if str(msg.channel) == wanted:
+            return True
+        other = channel2int(msg.channel) if msg.channel is not None else None
+        return number is not None and other == number
+
+    return (msg for msg in frames if mine(msg))
+
+
 def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> FrameDecoder:
     decoder = FrameDecoder(args.sensor_id)
     if args.format == "csv":
         # a first pass for the columns: only the signals of messages that occur, not the whole DBC's ~200
         first = ReadReport(report.path, report.fmt)
-        present = {m.arbitration_id for m in read_frames(args.file, first)
+        present = {m.arbitration_id for m in _frames(args, first)
                    if not (m.is_error_frame or m.is_remote_frame)}
         if first.frames == 0:                            # not even a header line for a file with no frame
             raise FileError(first.message("argument FILE"))
@@ -139,7 +160,7 @@ def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> Frame
         writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
     bar = progress(None, f"decoding {args.file}", unit="frame", to_stdout=args.output is None)
     try:
-        for msg in read_frames(args.file, report):
+        for msg in _frames(args, report):
             bar.update(1)
             census.note(msg)
             rec = decoder.record(msg)
@@ -186,7 +207,7 @@ def _write_fused(args, out, report: ReadReport, census: SensorCensus) -> None:
                 out.write(format_fused(fused) + "\n")
 
     try:
-        for batch in fuser.feed(counted(read_frames(args.file, report))):
+        for batch in fuser.feed(counted(_frames(args, report))):
             show([batch])
         fuser.flush()
         show(fuser.drain())
@@ -219,7 +240,7 @@ def _write_text(args, out, report: ReadReport, census: SensorCensus) -> None:
             yield msg
 
     try:
-        for cycle in assembler.feed(counted(read_frames(args.file, report))):
+        for cycle in assembler.feed(counted(_frames(args, report))):
             cycles.append(cycle)
             if not args.summary and (not args.max_cycles or len(cycles) <= args.max_cycles):
                 out.write(format_cycle(cycle) + "\n")
@@ -293,6 +314,9 @@ def cmd(args) -> int:
     if (args.format == "text" and args.mounts is None) or args.sensor_id is not None:
         # the sensor asked for (text: 0 by default) sent nothing here, others did: say which there are
         warning = census.warning(0 if args.sensor_id is None else args.sensor_id, "--sensor-id")
+        if warning:
+            print(warning, file=sys.stderr)
+        warning = census.channel_warning(0 if args.sensor_id is None else args.sensor_id, "--channel")
         if warning:
             print(warning, file=sys.stderr)
     if result is not None:
