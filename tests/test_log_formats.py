@@ -264,6 +264,40 @@ def test_run_node_and_consume_stop_on_a_signal_with_130_or_143(command, ready, s
     assert summary in out + err
 
 
+@pytest.mark.parametrize("command,ready", [("node", "radarnode node:"), ("run", "cycle     0")])
+def test_a_slow_radar_stops_on_a_signal_before_its_next_deadline(tmp_path, command, ready):
+    """A radar cycling every 10 s (the schema's slowest): Ctrl-C took until the next deadline, up to 10 s, to end the
+    run (the wait for it slept through the signal; an independent tester's finding). Now the wait looks at the stop
+    every 50 ms: the command ends with 130 long before the next cycle (5 s of its 10 allowed here for a loaded
+    machine; about 0.1 s measured)."""
+    sc = tmp_path / "slow.yaml"
+    sc.write_text("name: slow\nduration_s: 60.0\nseed: 1\ncycle_period_s: 10.0\nego: {speed_mps: 20.0}\n"
+                  "actors:\n  - {id: a, class: car, x_m: 40, lane: 1, speed_mps: 20}\n")
+    argv = {"node": ["node", str(sc), "-i", "virtual", "-c", f"slow-{uuid.uuid4().hex}"],
+            "run": ["run", str(sc), "--realtime"]}[command]
+    p = subprocess.Popen([*CLI, *argv], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stream = p.stdout if command == "run" else p.stderr
+    seen = ""
+    try:
+        deadline = time.monotonic() + 60
+        while time.monotonic() < deadline:
+            line = stream.readline()
+            seen += line
+            if ready in line or not line:
+                break
+        assert ready in seen, seen
+        time.sleep(0.5)                         # into the wait for the second cycle, 10 s after the first
+        sent = time.monotonic()
+        p.send_signal(signal.SIGINT)
+        out, err = p.communicate(timeout=30)
+        took = time.monotonic() - sent
+    finally:
+        if p.poll() is None:
+            p.kill()
+    assert p.returncode == 130 and "Traceback" not in err, seen + err
+    assert took < 5.0, took
+
+
 @pytest.mark.parametrize("argv", [["decode", "LOG"], ["decode", "LOG", "--format", "json"],
                                   ["decode", "LOG", "--format", "csv"],
                                   ["run", LONG, "--fast", "--every", "1", "--duration", "20"]])

@@ -45,6 +45,7 @@ Sink = Callable[[can.Message], None]
 DEADLINE_TOLERANCE_S = 0.002   # a cycle ready later than this after its deadline is dropped and flagged
 _SLEEP_MARGIN_S = 0.002        # stop polling the bus this long before a deadline, then sleep to it …
 _SPIN_S = 0.0005               # … and spin the last half millisecond (a sleep's wake-up is late under load)
+_STOP_CHECK_S = 0.05           # a wait for a deadline looks at the stop event this often
 KEEP_CYCLES = 50_000          # RunStats keeps the send times of this many cycles (an hour at 72 ms)
 _DRAIN_S = 0.004               # real time: the longest a poll(0) spends on queued input before computing a cycle
 _MAX_UNREADABLE_IN_ROW = 64    # a poll gives up after this many frames in a row the bus could not read
@@ -85,7 +86,8 @@ class SimulatedClock:
     def now(self) -> float:
         return 0.0
 
-    def wait_until(self, t_s: float, poll: Callable[[float], None] | None) -> None:
+    def wait_until(self, t_s: float, poll: Callable[[float], None] | None,
+                   stop: threading.Event | None = None) -> None:
         pass
 
     def timestamp(self, t_s: float) -> float:
@@ -124,19 +126,24 @@ class RealTimeClock:
         """Seconds since ``start``."""
         return self._timer() - self._t0
 
-    def wait_until(self, t_s: float, poll: Callable[[float], None] | None) -> None:
-        """Return at ``t_s`` seconds after ``start``, letting ``poll(timeout)`` receive until just before."""
+    def wait_until(self, t_s: float, poll: Callable[[float], None] | None,
+                   stop: threading.Event | None = None) -> None:
+        """Return at ``t_s`` seconds after ``start``, letting ``poll(timeout)`` receive until just before; or as soon
+        as ``stop`` is set (within ``_STOP_CHECK_S``: a radar cycling every 10 s took up to 10 s to end on Ctrl-C)."""
         while True:
             remaining = t_s - self.now()
-            if remaining <= 0.0:
+            if remaining <= 0.0 or (stop is not None and stop.is_set()):
                 return
             if poll is not None and remaining > 1.05 * _SLEEP_MARGIN_S:
                 # the bus's timeout is coarse; the last milliseconds are slept, not polled
                 poll(min(remaining - _SLEEP_MARGIN_S, 0.05))
                 continue
-            if not self._spin:
+            if not self._spin:                 # an injected clock (tests): its sleep moves it
                 self._sleep(remaining)
                 return
+            if remaining > _SPIN_S + (_STOP_CHECK_S if stop is not None else 0.0):
+                self._sleep(min(remaining - _SPIN_S, _STOP_CHECK_S) if stop is not None else remaining - _SPIN_S)
+                continue
             if remaining > _SPIN_S:
                 self._sleep(remaining - _SPIN_S)
             while self.now() < t_s:
@@ -252,7 +259,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         out = pending
         pending = None
         deadline = origin + k * period
-        clock.wait_until(deadline, poll if recv is not None else None)
+        clock.wait_until(deadline, poll if recv is not None else None, stop)
         late = clock.now() - deadline
         if stopped():
             node.withdraw(out)
