@@ -5,6 +5,7 @@ SIGINT/SIGTERM leave every file complete (exit 130/143); a closed pipe ends quie
 from __future__ import annotations
 
 import json
+import os
 import random
 import re
 import signal
@@ -601,3 +602,35 @@ def test_export_says_when_the_logs_cycles_lie_outside_the_scenarios_run(capsys, 
     assert rc == 0 and "warning: 13 of 13 decoded cycles lie outside the scenario's" in err, err
     assert int(re.search(r"foxglove: (\d+) topics", err).group(1)) == with_truth - 5     # /tf, /ego, …
     assert "give --start-time the log's start" in err
+
+
+@pytest.mark.parametrize("suffix", [".log.gz", ".asc.gz", ".csv.gz", ".trc.gz"])
+def test_a_gz_log_names_itself_in_its_gzip_header(capsys, tmp_path, suffix):
+    """gzip keeps the file's name in its header (gunzip -N restores it): it named the temporary file the log was
+    written under (`.x_…_part.log.gz`; an independent tester's finding). Now the target's own name, and no temporary
+    file or directory is left."""
+    import gzip
+    out = tmp_path / f"run{suffix}"
+    rc, _, err = cli(capsys, "log", SCENARIO, "--duration", "0.5", "-o", out)
+    assert rc == 0, err
+    raw = out.read_bytes()
+    assert raw[3] & 0x08                                        # FNAME is set
+    name = raw[10:raw.index(b"\0", 10)].decode("latin-1")
+    assert name == out.name[: -len(".gz")], name
+    assert [p.name for p in tmp_path.iterdir()] == [out.name]
+    assert gzip.decompress(raw)
+
+
+def test_a_read_only_output_is_not_replaced(capsys, tmp_path, monkeypatch):
+    """`-o` naming a read-only file replaced it by renaming over it (its owner and mode changed with it); now it is an
+    error naming the option, and the file stays as it was (os.access says what this user may write: root may write
+    anything, so the test asks it as a user would be answered)."""
+    out = tmp_path / "kept.blf"
+    out.write_bytes(b"precious")
+    out.chmod(0o444)
+    real = os.access
+    monkeypatch.setattr(os, "access", lambda p, mode, **kw: False if Path(p) == out and mode == os.W_OK
+                        else real(p, mode, **kw))
+    rc, _, err = cli(capsys, "log", SCENARIO, "--duration", "0.2", "-o", out)
+    assert rc == 1 and f"option --output: cannot write '{out}': it is read-only" in err, err
+    assert out.read_bytes() == b"precious" and [p.name for p in tmp_path.iterdir()] == [out.name]

@@ -325,6 +325,20 @@ def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple
         target = Path(os.path.realpath(target))
     if target.is_dir():
         raise FileError(f"option {option}: cannot write {str(path)!r}: it is a directory; expected a file name")
+    if target.exists() and not os.access(target, os.W_OK):
+        # a read-only file is one not to replace (the rename would have replaced it, taking its owner and mode)
+        raise FileError(f"option {option}: cannot write {str(path)!r}: it is read-only; expected a file that may be "
+                        "written, or a new name")
+    if target.suffix.lower() == ".gz":
+        # gzip keeps the file's name in its header (gunzip -N restores it): the temporary file has the target's own
+        # name, in a temporary directory beside it, so that the header names the target, not the temporary file
+        try:
+            folder = tempfile.mkdtemp(prefix=f".{target.name.replace('.', '_')}_", suffix="_part", dir=target.parent)
+            tmp = os.path.join(folder, target.name)
+            open(tmp, "xb").close()
+        except OSError as exc:
+            raise _cannot_write(option, path, exc) from None
+        return target, tmp
     suffixes = target.suffixes[-2:] if target.suffix.lower() == ".gz" else target.suffixes[-1:]
     suffix = "".join(suffixes) if keep_suffix else ""
     # no dot in the random part, so that a writer choosing its format by suffix (python-can's .log.gz) sees the
@@ -366,6 +380,21 @@ def _commit(tmp: str, target: Path, option: str) -> None:
         os.replace(tmp, target)
     except OSError as exc:
         raise _cannot_write(option, target, exc) from None
+    _remove_folder(tmp, target)
+
+
+def _discard(tmp: str, target: Path) -> None:
+    """A failed write's temporary file removed (and its temporary directory, for a .gz output)."""
+    with contextlib.suppress(OSError):
+        os.unlink(tmp)
+    _remove_folder(tmp, target)
+
+
+def _remove_folder(tmp: str, target: Path) -> None:
+    folder = os.path.dirname(tmp)
+    if os.path.realpath(folder) != os.path.realpath(target.parent):       # the .gz output's own directory
+        with contextlib.suppress(OSError):
+            os.rmdir(folder)
 
 
 @contextlib.contextmanager
@@ -391,8 +420,7 @@ def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline
             yield f
         _commit(tmp, target, option)
     except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        _discard(tmp, target)
         raise
 
 
@@ -412,8 +440,7 @@ def atomic_path(path: str | os.PathLike, option: str):
             yield tmp
         _commit(tmp, target, option)
     except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        _discard(tmp, target)
         raise
 
 
