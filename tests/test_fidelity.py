@@ -260,7 +260,10 @@ def test_cars_side_by_side_at_close_range_are_reported_by_the_detection_level_as
     hides a weaker cell in stronger ones' lobes at any angle as the chain's local-maximum test does (0.69 / 0.73 /
     0.90 over seeds 1–12, the chain 0.77 / 0.53 / 0.95; 0.94 / 0.87 / 0.92 without it). The object level does not model the lobe (README, known limits):
     it must not mask the cars ahead more than the detection level does (taken whole at its nearest point, the car
-    beside had hidden them in 26 and 40 of 55 cycles). Rates are means over 4 seeds (one seed's varies by ±0.15)."""
+    beside had hidden them in 26 and 40 of 55 cycles). Rates are means over 12 seeds: one seed's varies by ±0.15, and
+    a few detections changed in one cell of one frame move the tracker's hits of a car by up to 18 of 55 cycles (the
+    chain's re-judgement of cells on three plane waves, 2026-11-30, changed 9 of 1,320 frames here, all close-range
+    cells of the cars: car b 0.588 → 0.561 over 12 seeds, 0.645 → 0.564 over 4, every change in seed 3)."""
     from radarnode.radar.setup import parse_scenario
     sc = parse_scenario("""
 name: side
@@ -279,7 +282,7 @@ actors:
     rate = {}
     for level in ("object", "detection", "signal"):
         hits = np.zeros(3)
-        for seed in (1, 2, 3, 4):
+        for seed in range(1, 13):
             model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
             for k in range(sc.num_cycles):
                 frame, v = model.step(k * sc.period_s, cfg)
@@ -287,7 +290,7 @@ actors:
                 for i in range(3):
                     d = np.hypot(ol.dist_long_m - v.x_m[i], ol.dist_lat_m - v.y_m[i])
                     hits[i] += d.size > 0 and d.min() < 2.5
-        rate[level] = hits / (4 * sc.num_cycles)
+        rate[level] = hits / (12 * sc.num_cycles)
     assert np.all(np.abs(rate["detection"] - rate["signal"]) < 0.15), rate
     assert np.all(rate["object"] > 0.7) and np.all(rate["object"] > rate["detection"] - 0.1), rate
 
