@@ -315,7 +315,8 @@ def _special(path: str | os.PathLike) -> bool:
 
 
 def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple[Path, str]:
-    """A new empty temporary file beside ``path`` (created, closed): ``.<name>_<random>_part<suffixes>``.
+    """A new empty temporary file beside ``path`` (created, closed): ``.<name>_<random>_part<suffix>``; for a ``.gz``
+    output, the target's own name in a new directory ``.<name>_<random>_part`` beside it (its gzip header names it).
 
     A symbolic link is followed: the file it points to is the one replaced (the link stays a link). Raises
     FileError naming the option when ``path`` is a directory or its directory cannot be written — before any work
@@ -339,10 +340,9 @@ def _temporary(path: str | os.PathLike, option: str, keep_suffix: bool) -> tuple
         except OSError as exc:
             raise _cannot_write(option, path, exc) from None
         return target, tmp
-    suffixes = target.suffixes[-2:] if target.suffix.lower() == ".gz" else target.suffixes[-1:]
+    suffixes = target.suffixes[-1:]
     suffix = "".join(suffixes) if keep_suffix else ""
-    # no dot in the random part, so that a writer choosing its format by suffix (python-can's .log.gz) sees the
-    # target's suffixes and only those
+    # no dot in the random part, so that a writer choosing its format by suffix sees the target's suffix and only it
     base = target.name[: len(target.name) - len("".join(suffixes))] if suffixes else target.name
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{base.replace('.', '_')}_", suffix="_part" + suffix,

@@ -207,6 +207,24 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
     return out
 
 
+def within_ring(preset: RadarPreset, positions: tuple[np.ndarray, ...], sources: np.ndarray,
+                ring: tuple[float, float]) -> np.ndarray:
+    """Scatterers with one of ``sources`` (bool, per scatterer) within the CA-CFAR's training ring of them: at most
+    ``ring`` (range bins, Doppler bins) apart, where they appear (``positions``: the scatterers'
+    :func:`~radarnode.radar.detection_model.apparent_positions`; Doppler circular). Shape (n,) bool; a source counts
+    itself."""
+    rb, vb, _ = positions
+    out = np.zeros(rb.size, dtype=bool)
+    if not sources.any():
+        return out
+    reach = np.asarray(ring, dtype=np.float64)
+    box = np.array([preset.num_range_bins, preset.num_chirps]) / reach
+    pts = np.mod(np.stack([rb, np.mod(vb, preset.num_chirps)], axis=1) / reach, box)
+    import scipy.spatial  # imported when first needed: a faster start
+    dist, _ = scipy.spatial.cKDTree(pts[sources], boxsize=box).query(pts, k=1, p=np.inf, distance_upper_bound=1.0)
+    return np.isfinite(dist)
+
+
 #: an actor whose own reflectors, within the chain's range and Doppler resolution of each other, span at least this
 #: many beams in angle (d·sinθ in units of 1/K) is an extended reflector to the chain: half its measured angular
 #: resolution (:data:`RESOLUTION`), so that the cell's reflectors either glint — their sum's apparent angle wanders
@@ -253,12 +271,16 @@ class AutoModel:
     construction and checked by ``benchmarks/calibration.py``) unless its
     scatterers come within the chain's measured resolution of another actor's
     or of a guardrail post's — there the detection level renders them, because
-    the chain merges or splits what lies that close — or its own reflectors
+    the chain merges or splits what lies that close — or posts or clutter lie in
+    its CA-CFAR training ring (:func:`within_ring`: the object level's masking
+    counts the other actors only), or its own reflectors
     spread across the beam within one resolution cell (:func:`extended_actors`:
     a bridge deck, a gantry, a car crossing close by), whose glint and splitting
     the object level's one point per actor does not have. Posts and clutter always
     go through the detection level (the object level has no model of them,
-    and the chain reports them as clusters and stationary objects). RF impairments
+    and the chain reports them as clusters and stationary objects), with the
+    reflectors of object-level actors in their rings for their energy (their
+    detections are the object level's). RF impairments
     exist only in the time-domain signal: a scene that asks for them runs the
     signal level throughout. Because both parts feed one tracker, a change of
     level never drops a track, swaps an ID or empties a frame.
@@ -276,6 +298,9 @@ class AutoModel:
         self.clusters_wanted = clusters_wanted
         self.preset = preset
         self.tracker = ObjectTracker()
+        cfar = self.detection.statistic.cfar
+        #: the CA-CFAR training ring's reach (range bins, Doppler bins) from a cell under test
+        self.ring = (cfar.guard[1] + cfar.train[1], cfar.guard[0] + cfar.train[0])
         self.cycle = 0
         self.choices = {"object": 0, "detection": 0, "signal": 0}
         self.actor_frames = {"object": 0, "detection": 0}
@@ -297,8 +322,19 @@ class AutoModel:
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
         need = scat.actor_index < 0
+        ring = self.ring
+        if need.any() and conflict.size:
+            # an actor with posts or clutter in its CA-CFAR training ring: the object level's masking counts the
+            # other actors only, so the chain's threshold there is the detection level's to draw (a bicycle 5.6
+            # Doppler bins off a guardrail's posts, masked by them in the chain, was reported in every cycle)
+            near = within_ring(self.preset, at, need, ring) & ~need
+            conflict[scat.actor_index[near]] = True
         if conflict.size:
             need |= conflict[np.maximum(scat.actor_index, 0)] & ~need
+        # the reflectors of object-level actors in the rendered ones' training rings come along for their energy
+        # (the detection level's CFAR and lobe tests see them; their own detections are the object level's): two
+        # pedestrians rendered without the truck 7 range bins away were reported where the chain loses them
+        context = within_ring(self.preset, at, need, ring) & ~need if need.any() else need
         # the object level: kinematics, Pd and noise of every actor; its detections of the simple actors
         sv, yaw = ego_motion(self.scene, t_s, view, sensor_velocity_est)
         self.object.step(t_s, dataclasses.replace(config, clusters=False),
@@ -306,9 +342,13 @@ class AutoModel:
         det_o = self.object.info.detections
         parts = [det_o.take(~conflict[det_o.actor_index])]
         if need.any():
-            sub = scat.take(need)
-            parts.append(ambiguity.resolve(self.preset, [self.detection.detections(sub, config, seq)
-                                                         for seq in self.detection.sequences()], sv))
+            sub = scat.take(need | context)
+            rendered = ambiguity.resolve(self.preset, [self.detection.detections(sub, config, seq)
+                                                       for seq in self.detection.sequences()], sv)
+            if context.any():
+                own = rendered.actor_index
+                rendered = rendered.take((own < 0) | conflict[np.maximum(own, 0)])
+            parts.append(rendered)
         det = Detections.concat(parts)
         det = det.take(reportable(self.preset, det, config))
         level = "detection" if need.any() else "object"
