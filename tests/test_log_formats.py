@@ -232,6 +232,25 @@ def test_an_interrupted_log_is_complete_and_readable_in_every_format(capsys, tmp
     assert cycles > 0 or at_the_end
 
 
+def _started(argv: list, on_stdout: bool, ready: str, timeout_s: float) -> tuple[subprocess.Popen, str]:
+    """``radarnode argv`` started, read until it prints ``ready`` (on standard output or error): the process and what
+    it printed so far (killed if it never says it)."""
+    p = subprocess.Popen([*CLI, *argv], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    stream = p.stdout if on_stdout else p.stderr
+    seen = ""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        line = stream.readline()
+        seen += line
+        if ready in line or not line:
+            break
+    if ready not in seen:
+        p.kill()
+        p.communicate()
+    assert ready in seen, seen
+    return p, seen
+
+
 @pytest.mark.parametrize("command,ready,sig", [
     ("run", "cycle     0", signal.SIGINT),
     ("node", "radarnode node:", signal.SIGTERM),
@@ -243,17 +262,8 @@ def test_run_node_and_consume_stop_on_a_signal_with_130_or_143(command, ready, s
     argv = {"run": ["run", LONG, "--realtime", "--duration", "600"],
             "node": ["node", LONG, "-i", "virtual", "-c", channel, "--duration", "600"],
             "consume": ["consume", "-i", "virtual", "-c", channel]}[command]
-    p = subprocess.Popen([*CLI, *argv], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    stream = p.stdout if command == "run" else p.stderr
-    seen = ""
+    p, seen = _started(argv, command == "run", ready, 120)
     try:
-        deadline = time.monotonic() + 120
-        while time.monotonic() < deadline:
-            line = stream.readline()
-            seen += line
-            if ready in line or not line:
-                break
-        assert ready in seen, seen
         p.send_signal(sig)
         out, err = p.communicate(timeout=60)
     finally:
@@ -276,17 +286,8 @@ def test_a_slow_radar_stops_on_a_signal_before_its_next_deadline(tmp_path, comma
                   "actors:\n  - {id: a, class: car, x_m: 40, lane: 1, speed_mps: 20}\n")
     argv = {"node": ["node", str(sc), "-i", "virtual", "-c", f"slow-{uuid.uuid4().hex}"],
             "run": ["run", str(sc), "--realtime"]}[command]
-    p = subprocess.Popen([*CLI, *argv], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    stream = p.stdout if command == "run" else p.stderr
-    seen = ""
+    p, seen = _started(argv, command == "run", ready, 60)
     try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            line = stream.readline()
-            seen += line
-            if ready in line or not line:
-                break
-        assert ready in seen, seen
         time.sleep(0.5)                         # into the wait for the second cycle, 10 s after the first
         sent = time.monotonic()
         p.send_signal(signal.SIGINT)
