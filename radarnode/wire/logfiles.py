@@ -28,7 +28,6 @@ import contextlib
 import gc
 import gzip
 import logging
-import math
 import os
 import re
 import struct
@@ -49,17 +48,7 @@ from can.io.trc import TRCReader
 
 from radarnode.errors import FileError, UsageError
 
-class AbsoluteASCReader(ASCReader):
-    """python-can's ASC reader with the frames' times absolute: the file's start (``Begin Triggerblock``, local time to
-    the millisecond, as python-can's writer and CANoe write it) plus each frame's offset. python-can's default counts
-    them from the start, so a log written with ``--start-time`` read back from 0 (an independent tester's finding:
-    ``export --scenario --start-time`` then found no cycle in the scenario's run)."""
-
-    def __init__(self, file, **kwargs) -> None:
-        super().__init__(file, relative_timestamp=False, **kwargs)
-
-
-TEXT_READERS = {".asc": AbsoluteASCReader, ".csv": CSVReader, ".log": CanutilsLogReader, ".trc": TRCReader}
+TEXT_READERS = {".asc": ASCReader, ".csv": CSVReader, ".log": CanutilsLogReader, ".trc": TRCReader}
 #: every format radarnode writes and reads back; ``.mf4`` only with asammdf installed
 FORMATS = (".asc", ".blf", ".csv", ".db", ".log", ".trc", ".asc.gz", ".csv.gz", ".log.gz", ".trc.gz", ".mf4")
 MAX_BAD_WITHOUT_A_FRAME = 1000      # a file that yields only bad records is not a log of this format
@@ -179,22 +168,23 @@ BLF_EARLIEST_START_S = 631152000.0
 
 
 def check_start_time(path: str, start_time_s: float, option: str) -> None:
-    """A UsageError naming the option when the log format of ``path`` cannot keep ``start_time_s``: an ASC file holds
-    its start as a local date and time to the millisecond (``Begin Triggerblock``) and every frame's offset from it,
-    so a start time finer than that is read back up to 1 ms early; python-can's BLF writer stores no start date
-    before 1990 (``BLF_EARLIEST_START_S``), so a start time between 0 and that is read back as 0."""
-    if log_format(path) == ".blf" and 0.0 < start_time_s < BLF_EARLIEST_START_S:
+    """A UsageError naming the option when the log format of ``path`` cannot give ``start_time_s`` back to a reader.
+
+    An ASC file holds its start as a local date and time (``Begin Triggerblock``) and every frame's offset from it;
+    python-can's reader gives the offsets (times from 0), and its writer puts the milliseconds unpadded (5 ms as
+    ``.5``), the local time one hour of the year twice: the start is not kept, and a log rendered from another start
+    than 0 would be read back from 0 (an independent tester's finding). python-can's BLF writer stores no start date
+    before 1990 (``BLF_EARLIEST_START_S``): a start time between 0 and that is read back as 0."""
+    fmt = log_format(path)
+    if fmt == ".blf" and 0.0 < start_time_s < BLF_EARLIEST_START_S:
         raise UsageError(f"option {option}: value {start_time_s!r} is not allowed for a .blf log: BLF keeps the start "
                          f"as a date, and python-can's writer keeps none before 1990-01-01 ({BLF_EARLIEST_START_S:.0f} "
                          "s): the frames would be read back from 0; expected 0, a Unix time from "
-                         f"{BLF_EARLIEST_START_S:.0f} on, or a text format (.log, .asc)")
-    if log_format(path) in (".asc", ".asc.gz"):
-        ms = start_time_s * 1000.0
-        if abs(ms - round(ms)) > 1e-3:
-            raise UsageError(f"option {option}: value {start_time_s!r} is not allowed for an .asc log: ASC keeps the "
-                             "start time to the millisecond (and every frame's offset from it), so the frames would "
-                             f"be read back {ms - math.floor(ms):.3f} ms early; expected a whole number of "
-                             f"milliseconds (e.g. {math.floor(ms) / 1000.0!r}), or .blf or .log, which keep it")
+                         f"{BLF_EARLIEST_START_S:.0f} on, or another format (.log keeps any)")
+    if fmt in (".asc", ".asc.gz") and start_time_s != 0.0:
+        raise UsageError(f"option {option}: value {start_time_s!r} is not allowed for an .asc log: ASC keeps its frames' "
+                         "times from the file's start (its start is a local date and time, which python-can reads "
+                         "back as 0), so they would be read back from 0; expected 0, or .blf or .log, which keep it")
 
 
 #: BLF stores a frame's channel as an unsigned 16-bit number, counted from 1: python-can writes a channel name's
@@ -490,7 +480,7 @@ class _TextFrames:
         opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8", errors="replace")) \
             if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8", errors="replace"))
         with opener() as f:
-            check = {AbsoluteASCReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
+            check = {ASCReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
             lines = self.lines = _Lines(f, report, check)
             trc_log = logging.getLogger("can.io.trc")
             quiet = _TrcWarnings(lines, report)
