@@ -472,3 +472,7 @@ def test_decode_of_a_capture_of_two_buses_picks_one_with_channel(tmp_path, capsy
         rc, out, err = cli(capsys, "decode", both, "--summary", "--channel", channel)
         assert rc == 0 and "warning" not in err, err
         assert "cycles=69," in out and "orphan_frames" not in out and "stray_headers" not in out, out
+    # a channel the log does not have: an empty decode said nothing (the re-test's finding); now a warning naming
+    # the channels it holds
+    rc, out, err = cli(capsys, "decode", both, "--summary", "--channel", "can2")
+    assert "warning: no frame on channel 'can2' (option --channel); the log's frames are on: can0, can1" in err, err

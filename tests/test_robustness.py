@@ -278,12 +278,13 @@ def test_ecu_keeps_the_state_before_a_step_of_more_than_three_cycles(step_period
 
 
 @pytest.mark.parametrize("speed, yaw, refused", [
-    (25.0, 327.67, False), (25.0, 327.68, False), (25.0, 327.69, True), (25.0, -655.36, True), (25.0, 1e6, True),
-    (25.0, 1e300, True), (163.82, 0.0, False), (-163.82, 0.0, False), (163.83, 0.0, True), (327.64, 0.0, True)])
+    (25.0, 327.65, False), (25.0, 327.66, False), (25.0, 327.67, True), (25.0, -327.68, False), (25.0, -327.69, True),
+    (25.0, -655.36, True), (25.0, 1e6, True), (25.0, 1e300, True), (163.82, 0.0, False), (-163.82, 0.0, False),
+    (163.83, 0.0, True), (327.64, 0.0, True)])
 def test_ecu_refuses_an_ego_motion_beyond_what_the_bus_carries(speed, yaw, refused):
     """Ecu.set_ego took any finite yaw rate: 1e6 °/s overflowed the path prediction and restarted every track (an
-    independent tester's finding). Just below, at, just above and at twice the bus's limits (0x301: ±327.68 °/s; 0x300:
-    163.82 m/s): beyond them the value is counted in bad_ego and ignored, and the tracks go on undisturbed."""
+    independent tester's finding). Just below, at, just above and at twice the bus's limits (0x301: −327.68…327.66 °/s,
+    as the radar node takes them; 0x300: 163.82 m/s): beyond them the value is counted in bad_ego and ignored, and the tracks go on undisturbed."""
     cycles = _assembled(70)
     ecu = Ecu(AccSettings(set_speed_mps=30.0, time_gap_s=1.5))
     decisions = []

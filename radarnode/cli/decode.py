@@ -143,7 +143,17 @@ def _frames(args, report: ReadReport):
         other = channel2int(msg.channel) if msg.channel is not None else None
         return number is not None and other == number
 
-    return (msg for msg in frames if mine(msg))
+    seen = args.channels_seen = set()
+
+    def taken():
+        for msg in frames:
+            seen.add(str(msg.channel))
+            if mine(msg):
+                args.channel_frames += 1
+                yield msg
+
+    args.channel_frames = 0
+    return taken()
 
 
 def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> FrameDecoder:
@@ -319,6 +329,11 @@ def cmd(args) -> int:
         warning = census.channel_warning(0 if args.sensor_id is None else args.sensor_id, "--channel")
         if warning:
             print(warning, file=sys.stderr)
+    if args.channel is not None and not getattr(args, "channel_frames", 0):
+        # (a channel the log does not have gave an empty decode, status 0 and no word; a .csv keeps no channel)
+        held = ", ".join(sorted(getattr(args, "channels_seen", set()))) or "none"
+        print(f"warning: no frame on channel {args.channel!r} (option --channel); the log's frames are on: {held} "
+              "(as the log names them: decode --format json shows each frame's)", file=sys.stderr)
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "

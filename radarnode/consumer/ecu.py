@@ -67,10 +67,11 @@ MAX_TIME_S = 1e11                    # |t| beyond this (≈ 3000 years) is not a
 #: a longer step between cycles is a discontinuity, not tracking (the default: this or STRAY_STEP_PERIODS + 1 cycle
 #: periods, whichever is longer, as a radar may cycle up to every 10 s)
 MAX_GAP_S = 5.0
-#: the largest ego speed and yaw rate the bus carries (SpeedInformation 0x300: 0–163.82 m/s, forward or backward;
-#: YawRateInformation 0x301: −327.68…327.66 °/s): set_ego takes none beyond them (counted in stats.bad_ego)
+#: the ego speed and yaw rates the bus carries (SpeedInformation 0x300: 0–163.82 m/s, forward or backward;
+#: YawRateInformation 0x301: −327.68…327.66 °/s, as the radar node takes them): set_ego takes none beyond them
+#: (counted in stats.bad_ego)
 EGO_SPEED_LIMIT_MPS = 163.82
-EGO_YAW_RATE_LIMIT_DPS = 327.68
+EGO_YAW_RATE_RANGE_DPS = (-327.68, 327.66)
 #: a step ahead of more than this many cycle periods may be one stray timestamp: the tracking state before it is
 #: kept until the next cycle shows which (:meth:`Ecu._accept_time`)
 STRAY_STEP_PERIODS = 3.0
@@ -191,14 +192,15 @@ class Ecu:
         """Ego motion as read from the bus; the acceleration is differentiated (and smoothed).
 
         A non-finite time, or a speed or yaw rate that is not finite or beyond what the bus carries
-        (``EGO_SPEED_LIMIT_MPS``, ``EGO_YAW_RATE_LIMIT_DPS``), is ignored (counted in ``stats.bad_ego``); after a backwards step
+        (``EGO_SPEED_LIMIT_MPS``, ``EGO_YAW_RATE_RANGE_DPS``), is ignored (counted in ``stats.bad_ego``); after a backwards step
         or a gap longer than ``max_gap_s`` the differentiation starts again instead of using that step.
         """
         if speed_mps is None:
             return
         t = self._finite_time(t_s)
         yaw = 0.0 if yaw_rate_dps is None else yaw_rate_dps
-        if t is None or not (abs(speed_mps) <= EGO_SPEED_LIMIT_MPS and abs(yaw) <= EGO_YAW_RATE_LIMIT_DPS):
+        lo, hi = EGO_YAW_RATE_RANGE_DPS
+        if t is None or isinstance(speed_mps, bool) or not (abs(speed_mps) <= EGO_SPEED_LIMIT_MPS and lo <= yaw <= hi):
             # (NaN fails the test too) a value the bus cannot carry is no measurement: a yaw rate of 1e6 °/s
             # overflowed the tracker's path and restarted every track
             self.stats.bad_ego += 1
