@@ -637,3 +637,17 @@ def test_a_read_only_output_is_not_replaced(capsys, tmp_path, monkeypatch):
     rc, _, err = cli(capsys, "log", SCENARIO, "--duration", "0.2", "-o", out)
     assert rc == 1 and f"option --output: cannot write '{out}': it is read-only" in err, err
     assert out.read_bytes() == b"precious" and [p.name for p in tmp_path.iterdir()] == [out.name]
+
+
+@pytest.mark.parametrize("cut", [4, 71, 72, 143])
+def test_a_blf_cut_inside_its_file_header_is_called_truncated(capsys, tmp_path, cut):
+    """A BLF cut inside its 144-byte file header was "not a BLF file" (under 72 bytes) or "the header's size field
+    … is damaged" (the field was whole): now where the file ends, and that it is truncated."""
+    good = tmp_path / "good.blf"
+    assert main(["log", SCENARIO, "--duration", "0.3", "-o", str(good)]) == 0
+    capsys.readouterr()
+    bad = tmp_path / "cut.blf"
+    bad.write_bytes(good.read_bytes()[:cut])
+    rc, _, err = cli(capsys, "decode", bad)
+    assert rc == 1 and f"first bad record at byte {cut}: the file ends {cut} bytes into its 144-byte header: it is " \
+        "truncated" in err, err

@@ -96,7 +96,7 @@ def cmd(args) -> int:
         # (a log read back from another time base had no ground truth at all, and nothing said so)
         start = args.start_time or 0.0
         print(f"warning: {rec.cycles_outside_run} of {rec.cycles_outside_run + rec.truth_cycles} decoded cycles lie "
-              f"outside the scenario's {scenario.duration_s:g}-s run from --start-time {start:g} s (the first at "
+              f"outside the scenario's {scenario.duration_s:g}-s run from --start-time {start!r} s (the first at "
               f"{rec.first_outside_s:.6f} s): they have no ground truth, ego or /tf; give --start-time the log's "
               "start (log --start-time)", file=sys.stderr)
     if report.damaged:

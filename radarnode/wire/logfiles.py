@@ -538,6 +538,17 @@ class _BlfFrames:
     def __iter__(self) -> Iterator[can.Message]:
         report = self.report
         try:
+            with open(self.path, "rb") as probe:
+                head = probe.read(blf.FILE_HEADER_SIZE)
+        except OSError as exc:
+            report.stop("byte 0", exc)
+            return
+        if head.startswith(b"LOGG") and len(head) < blf.FILE_HEADER_SIZE:
+            # (a file cut inside its header was "not a BLF file" or one whose size field was damaged)
+            report.stop(f"byte {len(head)}", f"the file ends {len(head)} bytes into its {blf.FILE_HEADER_SIZE}-byte "
+                                             "header: it is truncated")
+            return
+        try:
             reader = BLFReader(self.path)
         except OSError as exc:
             report.stop("byte 0", exc)
