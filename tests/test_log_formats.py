@@ -651,3 +651,21 @@ def test_a_blf_cut_inside_its_file_header_is_called_truncated(capsys, tmp_path, 
     rc, _, err = cli(capsys, "decode", bad)
     assert rc == 1 and f"first bad record at byte {cut}: the file ends {cut} bytes into its 144-byte header: it is " \
         "truncated" in err, err
+
+
+@pytest.mark.parametrize("header", ["", "date Wed Jan 7 10:11:12.005 am 2026\nbase hex  timestamps absolute\n",
+                                    "date Wed Jan 7 10:11:12.005 am 2026\nbase hex  timestamps absolute\n"
+                                    "internal events logged\n// a comment\n"])
+def test_an_asc_file_keeps_its_first_frame_whatever_its_header(capsys, tmp_path, header):
+    """python-can's ASC header parser ends at the first line that is no header line and has taken it by then: a file
+    without `internal events logged` (another tool's, a hand-written one) lost its first frame, silently (an
+    independent tester's finding). Every frame line is now read, with or without the header lines."""
+    frames = ["   0.010000 1  300             Rx   d 2 45 6E\n", "   0.020000 1  301             Rx   d 2 80 00\n",
+              "   0.030000 1  301             Rx   d 2 80 01\n"]
+    log = tmp_path / "bare.asc"
+    log.write_text(header + "".join(frames))
+    rc, text, err = cli(capsys, "decode", log, "--format", "json")
+    assert rc == 0, err
+    rows = [json.loads(x) for x in text.splitlines()]
+    assert [(r["can_id"], r["data"], r["timestamp"]) for r in rows] == [
+        (0x300, "456E", 0.01), (0x301, "8000", 0.02), (0x301, "8001", 0.03)], rows

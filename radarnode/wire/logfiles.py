@@ -48,7 +48,38 @@ from can.io.trc import TRCReader
 
 from radarnode.errors import FileError, UsageError
 
-TEXT_READERS = {".asc": ASCReader, ".csv": CSVReader, ".log": CanutilsLogReader, ".trc": TRCReader}
+class _AscReader(ASCReader):
+    """python-can's ASC reader, less the frame its header parser swallows: the header ends at the first line that is
+    no header line, which python-can has taken by then — a file without ``internal events logged`` (a tool other than
+    python-can or CANoe, a hand-written one) silently lost its first frame (an independent tester's finding). That
+    line is given back to the reader's lines (:class:`_Lines`)."""
+
+    def _extract_header(self) -> None:
+        lines = self.file
+        taken: list[str] = []
+
+        class _Watched:
+            def __iter__(self):
+                return self
+
+            def __next__(self) -> str:
+                taken.append(next(lines))
+                return taken[-1]
+
+        self.file = _Watched()
+        try:
+            super()._extract_header()
+        finally:
+            self.file = lines
+        last = taken[-1] if taken else None
+        if last is not None and isinstance(lines, _Lines) and not _ASC_HEADER.match(last):
+            lines.replay.insert(0, last)
+
+
+#: the lines python-can's ASC header parser takes as header: the date, the base, a comment, the events line
+_ASC_HEADER = re.compile(r"\s*(date\s|base\s|//|(no)?\s*internal\s+events\s+logged)", re.IGNORECASE)
+
+TEXT_READERS = {".asc": _AscReader, ".csv": CSVReader, ".log": CanutilsLogReader, ".trc": TRCReader}
 #: every format radarnode writes and reads back; ``.mf4`` only with asammdf installed
 FORMATS = (".asc", ".blf", ".csv", ".db", ".log", ".trc", ".asc.gz", ".csv.gz", ".log.gz", ".trc.gz", ".mf4")
 MAX_BAD_WITHOUT_A_FRAME = 1000      # a file that yields only bad records is not a log of this format
@@ -480,7 +511,7 @@ class _TextFrames:
         opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8", errors="replace")) \
             if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8", errors="replace"))
         with opener() as f:
-            check = {ASCReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
+            check = {_AscReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
             lines = self.lines = _Lines(f, report, check)
             trc_log = logging.getLogger("can.io.trc")
             quiet = _TrcWarnings(lines, report)
