@@ -28,6 +28,7 @@ def test_the_slowest_radar_cycles_the_schema_allows_run_log_and_report(tmp_path,
     from radarnode.consumer.evaluate import make_ecu
     from radarnode.radar.setup import load_scenario
     from radarnode.wire.node import EgoMotionSender, RadarNode
+    from radarnode.wire.runner import SimulatedClock, run_node
     path = tmp_path / "slow.yaml"
     path.write_text(SLOW.format(period=period))
     for argv in (["run", path, "--fast", "--quiet"], ["log", path, "--ecu", "-o", tmp_path / "slow.blf"],
@@ -36,17 +37,14 @@ def test_the_slowest_radar_cycles_the_schema_allows_run_log_and_report(tmp_path,
         assert rc == 0 and "Traceback" not in err, (argv, err[-400:])
     sc = load_scenario(path)
     node, asm = RadarNode(sc), CycleAssembler()
-    vehicle, ecu = EgoMotionSender(node.scene), make_ecu(sc, node.period_s)
-    decisions = []
-    for k in range(6):
-        t = k * node.period_s
-        for m in vehicle.frames(t):
-            node.receive(m, t)
-            asm.on_message_received(m)
-        for m in node.cycle(t).messages:
-            asm.on_message_received(m)
-        ecu.set_ego(t, asm.ego_speed_mps, asm.ego_yaw_rate_dps)
-        decisions += [ecu.on_cycle(t, c) for c in asm.drain()]
+    ecu, decisions = make_ecu(sc, node.period_s), []
+
+    def on_cycle(out) -> None:            # the ECU on what the assembler decoded of the cycle
+        ecu.set_ego(out.t_s, asm.ego_speed_mps, asm.ego_yaw_rate_dps)
+        decisions.extend(ecu.on_cycle(out.t_s, c) for c in asm.drain())
+
+    run_node(node, clock=SimulatedClock(), sinks=[asm.on_message_received], vehicle=EgoMotionSender(node.scene),
+             duration_s=6 * node.period_s, on_cycle=on_cycle)
     assert len(decisions) == 6 and all(d is not None for d in decisions), decisions
     assert ecu.stats.time_jumps == 0 and ecu.stats.rejected_time == 0, ecu.stats
 
