@@ -128,32 +128,41 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
     return list(cols.items())
 
 
-def _frames(args, report: ReadReport):
-    """The log's frames (:func:`read_frames`), only those of ``--channel`` where it is given: its name, or the same
-    channel number (python-can's ``channel2int``: ``can1`` and ``1`` are one channel)."""
-    frames = read_frames(args.file, report)
-    if args.channel is None:
-        return frames
-    from can.util import channel2int
-    wanted, number = str(args.channel), channel2int(args.channel)
+class ChannelPick:
+    """``--channel``: the frames of one channel (its name, or the same number: python-can's ``channel2int`` takes
+    ``can1`` and ``1`` for one channel), and what the log held, for a warning when none was that channel's."""
 
-    def mine(msg) -> bool:
-        if str(msg.channel) == wanted:
-            return True
-        other = channel2int(msg.channel) if msg.channel is not None else None
-        return number is not None and other == number
+    def __init__(self, channel: str | None) -> None:
+        from can.util import channel2int
+        self.channel, self.number = channel, None if channel is None else channel2int(channel)
+        self.taken = 0                       # frames of the channel, over every pass
+        self.seen: set[str] = set()          # the channels the log's frames came on
 
-    seen = args.channels_seen = set()
-
-    def taken():
+    def __call__(self, frames):
+        if self.channel is None:
+            yield from frames
+            return
+        from can.util import channel2int
         for msg in frames:
-            seen.add(str(msg.channel))
-            if mine(msg):
-                args.channel_frames += 1
+            self.seen.add(str(msg.channel))
+            if str(msg.channel) == self.channel or (
+                    self.number is not None and msg.channel is not None and channel2int(msg.channel) == self.number):
+                self.taken += 1
                 yield msg
 
-    args.channel_frames = 0
-    return taken()
+    def warning(self) -> str | None:
+        """One line when ``--channel`` was given and no frame was that channel's, else None."""
+        if self.channel is None or self.taken:
+            return None
+        # (a channel the log does not have gave an empty decode, status 0 and no word; a .csv keeps no channel)
+        return (f"warning: no frame on channel {self.channel!r} (option --channel); the log's frames are on: "
+                f"{', '.join(sorted(self.seen)) or 'none'} (as the log names them: decode --format json shows each "
+                "frame's)")
+
+
+def _frames(args, report: ReadReport):
+    """The log's frames (:func:`read_frames`), only those of ``--channel`` where it is given."""
+    return args.pick(read_frames(args.file, report))
 
 
 def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> FrameDecoder:
@@ -290,6 +299,7 @@ def check_output_suffix(path: str, fmt: str) -> None:
 
 def cmd(args) -> int:
     args.mounts = None
+    args.pick = ChannelPick(args.channel)
     if args.fuse is not None:
         if args.format != "text":
             raise UsageError(f"option --fuse: not allowed with --format {args.format}; expected --format text (the "
@@ -329,11 +339,9 @@ def cmd(args) -> int:
         warning = census.channel_warning(0 if args.sensor_id is None else args.sensor_id, "--channel")
         if warning:
             print(warning, file=sys.stderr)
-    if args.channel is not None and not getattr(args, "channel_frames", 0):
-        # (a channel the log does not have gave an empty decode, status 0 and no word; a .csv keeps no channel)
-        held = ", ".join(sorted(getattr(args, "channels_seen", set()))) or "none"
-        print(f"warning: no frame on channel {args.channel!r} (option --channel); the log's frames are on: {held} "
-              "(as the log names them: decode --format json shows each frame's)", file=sys.stderr)
+    warning = args.pick.warning()
+    if warning:
+        print(warning, file=sys.stderr)
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "

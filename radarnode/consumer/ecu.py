@@ -126,10 +126,10 @@ class Ecu:
     def __init__(self, acc: AccSettings = AccSettings(), fcw: FcwSettings = FcwSettings(), sensor_id: int = 0,
                  period_s: float = 0.072, timeout_cycles: int = 3, max_gap_s: float | None = None,
                  mount: SensorMount = SensorMount(), wavelength_m: float = DEFAULT_WAVELENGTH_M) -> None:
-        if max_gap_s is None and isinstance(period_s, (int, float)) and not isinstance(period_s, bool):
-            # a few missed cycles are no discontinuity, however slow the radar's cycle (the schema allows 10 s)
-            max_gap_s = max(MAX_GAP_S, (STRAY_STEP_PERIODS + 1.0) * period_s)
         for name, value in (("period_s", period_s), ("max_gap_s", max_gap_s)):
+            if name == "max_gap_s" and value is None:
+                # a few missed cycles are no discontinuity, however slow the radar's cycle (the schema allows 10 s)
+                value = max_gap_s = max(MAX_GAP_S, (STRAY_STEP_PERIODS + 1.0) * period_s)
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < math.inf:
                 raise ValueError(f"Ecu {name}: value {value!r} is not allowed; expected a finite number of seconds > 0")
         if max_gap_s < period_s:

@@ -191,13 +191,11 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
     out = np.zeros(n_actors, dtype=bool)
     if len(scat) < 2:
         return out
-    p = preset
-    rb, vb, _ = detection_model.apparent_positions(p, scat) if positions is None else positions
+    at = detection_model.apparent_positions(preset, scat) if positions is None else positions
     reach = np.maximum(detection_model.LOBE_REACH_BINS, np.asarray(RESOLUTION[:2], dtype=np.float64) + 1.0)
-    box = np.array([p.num_range_bins, p.num_chirps]) / reach
-    pts = np.stack([rb, np.mod(vb, p.num_chirps)], axis=1) / reach
+    pts, box = _map_points(preset, at, reach)
     import scipy.spatial  # imported when first needed: a faster start
-    pairs = scipy.spatial.cKDTree(np.mod(pts, box), boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
+    pairs = scipy.spatial.cKDTree(pts, boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
         return out
     a, b = scat.actor_index[pairs[:, 0]], scat.actor_index[pairs[:, 1]]
@@ -207,19 +205,26 @@ def conflicting_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
     return out
 
 
+def _map_points(preset: RadarPreset, positions: tuple[np.ndarray, ...], reach: np.ndarray
+                ) -> tuple[np.ndarray, np.ndarray]:
+    """Scatterers where they appear on the range–Doppler map (``positions``: range and Doppler bins, as
+    :func:`~radarnode.radar.detection_model.apparent_positions` gives them) in units of ``reach`` (range bins,
+    Doppler bins), wrapped into the map's box, and that box: for a periodic k-d tree (Doppler is circular), in which
+    points within 1 (max-norm) are within ``reach`` of each other. Shapes (n, 2) and (2,)."""
+    rb, vb, _ = positions
+    box = np.array([preset.num_range_bins, preset.num_chirps]) / reach
+    return np.mod(np.stack([rb, np.mod(vb, preset.num_chirps)], axis=1) / reach, box), box
+
+
 def within_ring(preset: RadarPreset, positions: tuple[np.ndarray, ...], sources: np.ndarray,
                 ring: tuple[float, float]) -> np.ndarray:
     """Scatterers with one of ``sources`` (bool, per scatterer) within the CA-CFAR's training ring of them: at most
     ``ring`` (range bins, Doppler bins) apart, where they appear (``positions``: the scatterers'
     :func:`~radarnode.radar.detection_model.apparent_positions`; Doppler circular). Shape (n,) bool; a source counts
     itself."""
-    rb, vb, _ = positions
-    out = np.zeros(rb.size, dtype=bool)
     if not sources.any():
-        return out
-    reach = np.asarray(ring, dtype=np.float64)
-    box = np.array([preset.num_range_bins, preset.num_chirps]) / reach
-    pts = np.mod(np.stack([rb, np.mod(vb, preset.num_chirps)], axis=1) / reach, box)
+        return np.zeros(positions[0].size, dtype=bool)
+    pts, box = _map_points(preset, positions, np.asarray(ring, dtype=np.float64))
     import scipy.spatial  # imported when first needed: a faster start
     dist, _ = scipy.spatial.cKDTree(pts[sources], boxsize=box).query(pts, k=1, p=np.inf, distance_upper_bound=1.0)
     return np.isfinite(dist)

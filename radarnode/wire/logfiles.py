@@ -58,22 +58,18 @@ class _AscReader(ASCReader):
         lines = self.file
         taken: list[str] = []
 
-        class _Watched:
-            def __iter__(self):
-                return self
+        def watched():
+            for line in lines:
+                taken.append(line)
+                yield line
 
-            def __next__(self) -> str:
-                taken.append(next(lines))
-                return taken[-1]
-
-        self.file = _Watched()
+        self.file = watched()
         try:
             super()._extract_header()
         finally:
             self.file = lines
-        last = taken[-1] if taken else None
-        if last is not None and isinstance(lines, _Lines) and not _ASC_HEADER.match(last):
-            lines.replay.insert(0, last)
+        if taken and isinstance(lines, _Lines) and not _ASC_HEADER.match(taken[-1]):
+            lines.replay.insert(0, taken[-1])
 
 
 #: the lines python-can's ASC header parser takes as header: the date, the base, a comment, the events line

@@ -141,8 +141,8 @@ class RealTimeClock:
             if not self._spin:                 # an injected clock (tests): its sleep moves it
                 self._sleep(remaining)
                 return
-            if remaining > _SPIN_S + (_STOP_CHECK_S if stop is not None else 0.0):
-                self._sleep(min(remaining - _SPIN_S, _STOP_CHECK_S) if stop is not None else remaining - _SPIN_S)
+            if stop is not None and remaining > _SPIN_S + _STOP_CHECK_S:
+                self._sleep(_STOP_CHECK_S)
                 continue
             if remaining > _SPIN_S:
                 self._sleep(remaining - _SPIN_S)
