@@ -129,6 +129,7 @@ class RadarNode:
         self.own_codecs = {m.frame_id: MessageCodec(m, self.saturated) for m in load_own_database().messages}
         self._rx_messages = {base: self.db.get_message_by_frame_id(base) for base in RX_IDS}
         self._rx_length = {base: m.length for base, m in self._rx_messages.items()}
+        self._rx_last: dict[int, tuple[bytes, dict]] = {}     # 0x300/0x301: the last payload and its signals
         #: the filters (FilterCfg 0x202) and collision detection (0x400/0x401) in force
         self.filters = ListFilters(self.db)
         self.coll_det = CollisionDetection(self.db)
@@ -144,6 +145,10 @@ class RadarNode:
                 a.object_class == "guardrail" for a in scenario.actors)
         self.boundaries = RoadBoundaryEstimator() if wants else None
         self._e2e = E2EProtector()
+        self.last_boundaries: tuple[Boundary, Boundary] | None = None
+        self._pipe = None                  # a BoundaryPipeline that computes the boundaries (defer_boundaries)
+        self._pipe_index = 0
+        self._blank: dict[int, np.ndarray] = {}
         self._last_t: float | None = None
         self._speed: tuple[float, float] | None = None    # (value m/s signed, time received)
         self._yaw: tuple[float, float] | None = None      # (deg/s, time received)
@@ -202,8 +207,16 @@ class RadarNode:
                 logger.debug("filter %s %s: active=%s [%g, %g]", TYPE_NAMES[f.type], f.name, f.active, f.min, f.max)
             self._reply_filters = True
             return
-        # one frame: cantools' compiled decoder (the vectorised codec pays numpy's per-call cost for every signal)
-        values = self._rx_messages[base].decode(data, decode_choices=False, scaling=True)
+        # one frame: cantools' compiled decoder (the vectorised codec pays numpy's per-call cost for every signal);
+        # the vehicle sends the same 0x300/0x301 bytes cycle after cycle while its speed and yaw rate hold: those
+        # are decoded once
+        last = self._rx_last.get(base)
+        if last is not None and last[0] == data:
+            values = last[1]
+        else:
+            values = self._rx_messages[base].decode(data, decode_choices=False, scaling=True)
+            if base in (P.SPEED_INFO, P.YAW_RATE_INFO):
+                self._rx_last[base] = (data, values)
         if base == P.SPEED_INFO:
             direction = int(values["RadarDevice_SpeedDirection"])
             if direction == 3:
@@ -332,13 +345,28 @@ class RadarNode:
                          ) -> list[tuple[int, np.ndarray]]:
         """Update the road-boundary estimate and encode RoadBoundary_Left/Right (E2E protected).
 
-        Returns (CAN ID, payload) pairs: 0x680/0x681 + 8 × SensorID (``radarnode.wire.ids``)."""
+        Returns (CAN ID, payload) pairs: 0x680/0x681 + 8 × SensorID (``radarnode.wire.ids``). With a
+        :class:`~radarnode.wire.pipeline.BoundaryPipeline` (:meth:`defer_boundaries`) the estimate is handed to its
+        process and the payloads returned are blanks of the frames' length, filled when it answers."""
         cl = frame.clusters
         dt = 0.0 if self._last_t is None else t_s - self._last_t
-        r = np.maximum(cl.range_m, 1e-6)
-        rate = (cl.dist_long_m * cl.vrel_long_mps + cl.dist_lat_m * cl.vrel_lat_mps) / r
-        left, right = self.boundaries.update(cl.dist_long_m, cl.dist_lat_m, rate, dt, sensor_velocity,
-                                             self._yaw_rate_estimate(t_s))
+        columns = (cl.dist_long_m, cl.dist_lat_m, cl.vrel_long_mps, cl.vrel_lat_mps, cl.range_m)
+        if self._pipe is None:
+            return self.boundary_payloads(columns, dt, sensor_velocity, self._yaw_rate_estimate(t_s))
+        self._pipe.submit(self._pipe_index, columns, (dt, sensor_velocity, self._yaw_rate_estimate(t_s)))
+        self.last_boundaries = None
+        sensor = self.config.sensor_id
+        return [(ids.own_id(base, sensor), self._blank[base])
+                for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)]
+
+    def boundary_payloads(self, columns: tuple[np.ndarray, ...], dt_s: float, sensor_velocity: tuple[float, float],
+                          yaw_rate_rps: float) -> list[tuple[int, np.ndarray]]:
+        """One cycle of the road-boundary estimator on the clusters' ``columns`` (dist_long, dist_lat, vrel_long,
+        vrel_lat, range) and its two frames (CAN ID, E2E-protected payload), left then right; sets
+        ``last_boundaries``."""
+        x_m, y_m, vx, vy, r = columns
+        rate = (x_m * vx + y_m * vy) / np.maximum(r, 1e-6)
+        left, right = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps)
         self.last_boundaries = (left, right)
         out = []
         sensor = self.config.sensor_id
@@ -351,6 +379,15 @@ class RadarNode:
             protected = self._e2e.protect(ids.e2e_key(base, sensor), payload.tobytes())
             out.append((ids.own_id(base, sensor), np.frombuffer(protected, dtype=np.uint8)))
         return out
+
+    def defer_boundaries(self, pipe, index: int) -> None:
+        """Hand every cycle's road-boundary estimate to ``pipe`` (a :class:`~radarnode.wire.pipeline.BoundaryPipeline`,
+        this node its ``index``-th) instead of computing it here: :meth:`cycle` then returns the two frames blank,
+        and the pipe fills them in when its process has computed them (the output's ``boundaries`` stay None: a
+        reader of the estimate decodes the frames)."""
+        self._pipe, self._pipe_index = pipe, index
+        self._blank = {base: np.zeros(self.own_codecs[base].length, dtype=np.uint8)
+                       for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)}
 
     # --- output -------------------------------------------------------------
     def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
@@ -553,8 +590,11 @@ class RadarNode:
             elapsed += frame_bits(dlc, worst_case=False)
         self.counters["cycles"] += 1
         self.counters["frames"] += len(messages)
-        return CycleOutput(t_s, messages, frame, view, sum(frame_bits(d) for d in dlcs), dropped,
-                           boundaries=(self.last_boundaries if own else None), lead=min(header_at + 1, len(messages)))
+        result = CycleOutput(t_s, messages, frame, view, sum(frame_bits(d) for d in dlcs), dropped,
+                             boundaries=(self.last_boundaries if own else None), lead=min(header_at + 1, len(messages)))
+        if own and self._pipe is not None:
+            self._pipe.attach(messages[-len(own):])
+        return result
 
     def withdraw(self, out: CycleOutput) -> None:
         """Un-count a cycle :meth:`cycle` computed that is not sent (late, or the run stopped before its
@@ -621,6 +661,7 @@ class EgoMotionSender:
         self._config = config
         self._speed = MessageCodec(db.get_message_by_frame_id(P.SPEED_INFO))
         self._yaw = MessageCodec(db.get_message_by_frame_id(P.YAW_RATE_INFO))
+        self._last: tuple = (None, b"", b"")     # the last (speed, direction, yaw rate) and its two payloads
 
     @property
     def sensor_id(self) -> int:
@@ -631,9 +672,13 @@ class EgoMotionSender:
         speed = abs(ego.speed_mps)
         direction = 0 if speed < 0.01 else (1 if ego.speed_mps > 0 else 2)
         ts = t_s if timestamp is None else timestamp
-        sp = self._speed.encode({"RadarDevice_Speed": speed, "RadarDevice_SpeedDirection": direction})[0]
-        yr = self._yaw.encode({"RadarDevice_YawRate": math.degrees(ego.yaw_rate_rps)})[0]
-        return [can.Message(arbitration_id=P.shifted(P.SPEED_INFO, self.sensor_id), data=sp.tobytes(),
+        yaw = math.degrees(ego.yaw_rate_rps)
+        if (speed, direction, yaw) != self._last[0]:        # encoded again only when the values change
+            sp = self._speed.encode({"RadarDevice_Speed": speed, "RadarDevice_SpeedDirection": direction})[0]
+            yr = self._yaw.encode({"RadarDevice_YawRate": yaw})[0]
+            self._last = ((speed, direction, yaw), sp.tobytes(), yr.tobytes())
+        _, sp, yr = self._last
+        return [can.Message(arbitration_id=P.shifted(P.SPEED_INFO, self.sensor_id), data=sp,
                             is_extended_id=False, timestamp=ts, check=False),
-                can.Message(arbitration_id=P.shifted(P.YAW_RATE_INFO, self.sensor_id), data=yr.tobytes(),
+                can.Message(arbitration_id=P.shifted(P.YAW_RATE_INFO, self.sensor_id), data=yr,
                             is_extended_id=False, timestamp=ts, check=False)]

@@ -39,6 +39,7 @@ import can
 
 from radarnode.wire.busload import frame_time_s
 from radarnode.wire.node import CycleOutput, EgoMotionSender, RadarNode
+from radarnode.wire.pipeline import BoundaryPipeline
 
 Sink = Callable[[can.Message], None]
 
@@ -158,7 +159,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
              recv: Callable[[float], can.Message | None] | None = None,
              vehicle: EgoMotionSender | None = None, duration_s: float | None = None,
              on_cycle: Callable[[CycleOutput], None] | None = None,
-             stop: threading.Event | None = None) -> RunStats:
+             stop: threading.Event | None = None, pipeline: BoundaryPipeline | None = None) -> RunStats:
     """Run ``node`` for the scenario's duration (or ``duration_s``) and return statistics.
 
     Parameters
@@ -172,7 +173,12 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         frames in the same order on the wire, so real time and simulated time give the same payloads.
     on_cycle : callable(CycleOutput), optional
         Called after each cycle sent (not for a cycle dropped at its deadline).
+    pipeline : BoundaryPipeline, optional
+        The process that computes the node's road boundaries (:mod:`radarnode.wire.pipeline`; simulated time only):
+        each cycle goes to the sinks, whole and in order, once its boundary frames are filled in.
     """
+    if pipeline is not None and clock.realtime:
+        raise ValueError("a BoundaryPipeline holds cycles until their boundaries are computed: not in real time")
     sinks = list(sinks)
     stats = RunStats()
     period = node.period_s
@@ -239,13 +245,35 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             ego_frames = vehicle.frames(t, clock.timestamp(t))
             for m in ego_frames:
                 node.receive(m, t)
-            send(ego_frames)
+            if pipeline is not None:             # behind the held cycles
+                held.append((pipeline.submitted, ego_frames, None))
+            else:
+                send(ego_frames)
             stats.frames += len(ego_frames)
             # the radar's frames follow the vehicle's on the wire
             after = sum(frame_time_s(len(m.data), node.bitrate, worst_case=False) for m in ego_frames)
         out = node.cycle(t, clock.timestamp(t) + after)
         rx_t[0] = t
         return out
+
+    def sent(out: CycleOutput) -> None:
+        stats.cycles += 1
+        stats.frames += len(out.messages)
+        stats.bits += out.bits
+        if on_cycle is not None:
+            on_cycle(out)
+
+    # with a pipeline, what waits to be sent in order: (the boundary estimates it needs, frames, its cycle or None)
+    held: deque[tuple[int, list[can.Message], CycleOutput | None]] = deque()
+
+    def release(block: bool = False) -> None:
+        """Send what is held up to the first cycle whose boundary frames are not in yet (with ``block``: all)."""
+        done = pipeline.collect(block)
+        while held and held[0][0] <= done:
+            _, messages, out = held.popleft()
+            send(messages)
+            if out is not None:
+                sent(out)
 
     def stopped() -> bool:
         return stop is not None and stop.is_set()
@@ -283,13 +311,13 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
                     node.sent_late(out.t_s, handed)
                     stats.sent_late += 1
                 send(out.messages[lead:])
+                sent(out)
+            elif pipeline is not None:          # held until its boundary frames are in
+                held.append((pipeline.submitted, out.messages, out))
+                release()
             else:
                 send(out.messages)
-            stats.cycles += 1
-            stats.frames += len(out.messages)
-            stats.bits += out.bits
-            if on_cycle is not None:
-                on_cycle(out)
+                sent(out)
         k += 1
         if clock.realtime and len(costs) >= 3:
             # a model slower than the cycle: skip the cycles whose deadline comes before a cycle could be
@@ -306,5 +334,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             begin = clock.now()
             pending = prepare(k)
             costs.append(clock.now() - begin)
+    if pipeline is not None:
+        release(block=True)
     stats.duration_s = min(k, n_cycles) * period
     return stats

@@ -1,0 +1,190 @@
+"""The road-boundary estimator in a second process, for runs faster than real time (``radarnode log``).
+
+At the object level the road-boundary estimator (``radarnode.perception.boundaries``) is about half of what a
+cycle costs, and it depends on nothing the rest of the cycle computes after it: its input is the cycle's cluster
+list and the ego motion, its output two frames of fixed length at the end of the cycle. A
+:class:`BoundaryPipeline` forks a process that holds the nodes' estimators (copies made by the fork, before the first
+cycle) and computes every cycle's estimate and its two frames there, in the cycles' order, while this process goes on
+with the next cycles; :func:`radarnode.wire.runner.run_node` holds each cycle's frames until its boundary frames are
+filled, so the frames go to the sinks in the same order, with the same bytes, as without the pipeline (the same
+code computes them: :meth:`RadarNode.boundary_payloads <radarnode.wire.node.RadarNode.boundary_payloads>`).
+
+It is for runs whose inputs do not depend on their outputs: no consumer ECU in the loop (whose path prediction reads
+the boundaries and whose decisions may drive the ego), no real-time clock (a cycle is held until its process has
+answered). :func:`pipeline_for` returns None where it does not apply or cannot run — another operating system than
+Linux (the process is started by ``fork``, which copies the node as it is; ``spawn`` would import everything again,
+some 0.2 s, more than a log of a minute saves) — and the run is then computed in one process, to the same frames.
+
+The cycles go over in batches of ``BATCH`` (one pickle a batch, not a cycle), with at most ``MAX_IN_FLIGHT`` batches
+unanswered, so neither process can block the other on a full pipe. The process ignores SIGINT and SIGTERM: a Ctrl-C
+of the terminal reaches both processes, and the run, which ends after the current cycle, still needs the boundary
+frames of the cycles it has computed; it ends when this process closes the pipe (:meth:`BoundaryPipeline.close`) or
+exits. An exception there is raised here, when its batch is read.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from collections import Counter, deque
+
+import numpy as np
+
+from radarnode.errors import RadarnodeError
+
+#: cycles handed over in one message
+BATCH = 32
+#: batches sent and not yet answered, at most (a batch's answer is a few kB: they always fit in the pipe's buffer)
+MAX_IN_FLIGHT = 4
+
+
+class PipelineError(RadarnodeError, RuntimeError):
+    """The boundary process ended without answering (killed, out of memory): the run cannot be completed."""
+
+
+def pipeline_for(node) -> BoundaryPipeline | None:
+    """A started :class:`BoundaryPipeline` for ``node`` (a RadarNode or a RadarGroup), or None where it does not
+    apply: no radar with a road-boundary estimator, or no ``fork`` (see the module docstring)."""
+    nodes = list(getattr(node, "nodes", [node]))
+    if not sys.platform.startswith("linux") or not any(n.boundaries is not None for n in nodes):
+        return None
+    return BoundaryPipeline(nodes)
+
+
+class BoundaryPipeline:
+    """See the module docstring. ``nodes``: the RadarNodes whose boundaries are computed in the process (those
+    without an estimator are left alone); each is told to hand its boundaries over
+    (:meth:`RadarNode.defer_boundaries <radarnode.wire.node.RadarNode.defer_boundaries>`)."""
+
+    def __init__(self, nodes: list) -> None:
+        import multiprocessing
+
+        ctx = multiprocessing.get_context("fork")
+        self._conn, child = ctx.Pipe()
+        self._nodes = nodes
+        self._process = ctx.Process(target=_serve, args=(child, nodes), name="radarnode-boundaries", daemon=True)
+        self._process.start()
+        child.close()
+        for k, n in enumerate(nodes):
+            if n.boundaries is not None:
+                n.defer_boundaries(self, k)
+        self.submitted = 0        # cycles' estimates handed over (a node's cycle each)
+        self.done = 0             # of those, answered and filled in
+        self._batch: list = []          # per cycle of the batch: (node, clusters, (dt, sensor velocity, yaw rate))
+        self._columns: list = []        # the batch's cluster columns, five a cycle, sent as one array
+        self._in_flight = 0
+        self._next_look = 0             # collect looks at the pipe when this many estimates are submitted
+        self._waiting: deque = deque()   # per estimate submitted and not filled: its frames
+        self._closed = False
+
+    # --- the node's side -------------------------------------------------------------------------------------
+    def submit(self, index: int, columns: tuple, scalars: tuple) -> None:
+        """Node ``index``'s cycle: the clusters' columns and the ego motion, as
+        :meth:`RadarNode.boundary_payloads <radarnode.wire.node.RadarNode.boundary_payloads>` takes them."""
+        self._batch.append((index, len(columns[0]), scalars))
+        self._columns.extend(columns)
+        self._waiting.append(None)
+        self.submitted += 1
+        if len(self._batch) >= BATCH:
+            self._send()
+
+    def attach(self, messages: list) -> None:
+        """The frames (blank) of the cycle last submitted: their data is filled in when it is answered."""
+        self._waiting[-1] = messages
+
+    # --- the runner's side -----------------------------------------------------------------------------------
+    def collect(self, block: bool = False) -> int:
+        """Fill in what the process has answered (with ``block``, everything submitted, waiting for it); returns
+        :attr:`done`. Without ``block`` the pipe is looked at once a batch (an answer comes a batch at a time)."""
+        if block:
+            if self._batch:
+                self._send()
+            while self._in_flight:
+                self._receive()
+        elif self._in_flight and self.submitted >= self._next_look:
+            self._next_look = self.submitted + BATCH
+            while self._in_flight and self._conn.poll():
+                self._receive()
+        return self.done
+
+    def close(self) -> None:
+        """End the process (after its last answer); idempotent, also after an error."""
+        if self._closed:
+            return
+        self._closed = True
+        try:
+            self._conn.send(None)
+        except (OSError, ValueError):
+            pass
+        self._process.join(timeout=5.0)
+        if self._process.is_alive():
+            self._process.kill()
+            self._process.join()
+        self._conn.close()
+
+    # --- the pipe ---------------------------------------------------------------------------------------------
+    def _send(self) -> None:
+        while self._in_flight >= MAX_IN_FLIGHT:
+            self._receive()
+        try:
+            self._conn.send((self._batch, np.concatenate(self._columns)))
+        except OSError:          # the process is gone: what it answered before (an error?) says why
+            while True:
+                self._receive()
+        self._batch, self._columns = [], []
+        self._in_flight += 1
+
+    def _receive(self) -> None:
+        try:
+            kind, answer = self._conn.recv()
+        except (EOFError, OSError):
+            self._process.join(timeout=1.0)
+            raise PipelineError(f"the road-boundary process (pid {self._process.pid}) ended without answering "
+                                f"(exit code {self._process.exitcode}); the run stops here") from None
+        self._in_flight -= 1
+        if kind == "error":
+            raise answer
+        payloads, saturated = answer
+        for index, count in saturated:
+            self._nodes[index].saturated.update(count)
+        at = 0
+        while at < len(payloads):
+            messages = self._waiting.popleft()
+            for m in messages:
+                end = at + len(m.data)
+                m.data = bytearray(payloads[at:end])
+                at = end
+            self.done += 1
+
+
+def _serve(conn, nodes: list) -> None:
+    """The process: each batch's estimates in order, answered with their frames (see the module docstring)."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    for n in nodes:
+        n.saturated.clear()
+    while True:
+        try:
+            batch = conn.recv()
+        except (EOFError, OSError):          # the run's process is gone
+            return
+        if batch is None:
+            return
+        try:
+            cycles, columns = batch
+            payloads, at = [], 0
+            for index, n, scalars in cycles:
+                cols = [columns[at + k * n:at + (k + 1) * n] for k in range(5)]
+                at += 5 * n
+                payloads += [p.tobytes() for _, p in nodes[index].boundary_payloads(cols, *scalars)]
+            payloads = b"".join(payloads)
+            saturated = [(k, Counter(n.saturated)) for k, n in enumerate(nodes) if n.saturated]
+            for n in nodes:
+                n.saturated.clear()
+            conn.send(("ok", (payloads, saturated)))
+        except BaseException as exc:                 # noqa: BLE001 - handed to the run's process, which raises it
+            try:
+                conn.send(("error", exc))
+            except Exception:                         # noqa: BLE001 - an exception that does not pickle
+                conn.send(("error", RuntimeError(f"road-boundary process: {exc!r}")))
+            return

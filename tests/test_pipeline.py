@@ -1,0 +1,259 @@
+"""The road boundaries in a second process (``radarnode.wire.pipeline``): `radarnode log` writes the same frames as in
+one process, whole cycles in order, at every batch size and edge, and an error or a lost process is an error.
+
+The reference is the same command with the pipeline turned off (``pipeline_for`` returning None): the cycle-by-cycle
+path every other command takes.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import can
+import pytest
+import yaml
+
+import radarnode.cli.log as cli_log
+import radarnode.wire.pipeline as pl
+from radarnode.cli.main import main
+from radarnode.radar.setup import load_scenario
+from radarnode.wire.group import ego_motion_for, make_node
+from radarnode.wire.runner import SimulatedClock, run_node
+
+ROOT = Path(__file__).resolve().parents[1]
+SCENARIOS = ROOT / "scenarios"
+CUT_IN = SCENARIOS / "highway_cut_in.yaml"
+CYCLE_S = 0.072            # highway_cut_in's radar cycle
+
+pytestmark = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="the pipeline forks: Linux only")
+
+
+def _frames(path: Path) -> list[tuple[int, float, bytes]]:
+    return [(m.arbitration_id, m.timestamp, bytes(m.data)) for m in can.BLFReader(str(path))]
+
+
+def _both(tmp_path: Path, monkeypatch, capsys, *args: str) -> tuple[list, list, str]:
+    """The log of ``args`` with the pipeline and without: their frames, and what the piped run printed."""
+    piped, single = tmp_path / "piped.blf", tmp_path / "single.blf"
+    started = []
+    real = cli_log.pipeline_for
+
+    def spy(node):
+        p = real(node)
+        started.append(p)
+        return p
+
+    monkeypatch.setattr(cli_log, "pipeline_for", spy)
+    assert main(["log", *args, "-o", str(piped)]) == 0
+    err = capsys.readouterr().err
+    assert started and started[0] is not None          # the pipeline ran
+    monkeypatch.setattr(cli_log, "pipeline_for", lambda node: None)
+    assert main(["log", *args, "-o", str(single)]) == 0
+    capsys.readouterr()
+    return _frames(piped), _frames(single), err
+
+
+def _same(a: list, b: list) -> None:
+    assert len(a) == len(b), (len(a), len(b))
+    for k, (x, y) in enumerate(zip(a, b)):
+        assert x == y, f"frame {k}: {x} piped, {y} in one process"
+
+
+def _boundary_frames(frames: list) -> list:
+    return [f for f in frames if f[0] in (0x680, 0x681)]
+
+
+@pytest.mark.parametrize("cycles", [1, pl.BATCH - 1, pl.BATCH, pl.BATCH + 1, 2 * pl.BATCH,
+                                    pl.BATCH * pl.MAX_IN_FLIGHT + 1])
+def test_the_log_is_the_one_process_log_byte_for_byte_across_the_batch_edges(cycles, tmp_path, monkeypatch, capsys):
+    """One cycle, a batch less one, a batch, one more, two, and more than the batches allowed in flight: the same
+    frames, stamps and bytes, and the boundary frames are the estimator's (valid ones among them, filled in)."""
+    a, b, err = _both(tmp_path, monkeypatch, capsys, str(CUT_IN), "--fidelity", "object",
+                      "--duration", f"{cycles * CYCLE_S + 0.001:.3f}")
+    assert f"in {cycles} complete cycles" in err
+    _same(a, b)
+    bounds = _boundary_frames(a)
+    assert len(bounds) == 2 * cycles
+    if cycles > 20:        # (the estimator needs a few cycles of posts): found, so the frames carry its numbers
+        assert any(data[6] != 0 or data[7] != 0 for _, _, data in bounds[-20:])
+
+
+@pytest.mark.parametrize("batch,in_flight", [(1, 1), (1, 4), (7, 1), (64, 2)])
+def test_every_batch_size_and_depth_gives_the_same_log(batch, in_flight, tmp_path, monkeypatch, capsys):
+    monkeypatch.setattr(pl, "BATCH", batch)
+    monkeypatch.setattr(pl, "MAX_IN_FLIGHT", in_flight)
+    a, b, _ = _both(tmp_path, monkeypatch, capsys, str(CUT_IN), "--fidelity", "object", "--duration", "12")
+    _same(a, b)
+
+
+@pytest.mark.parametrize("case", ["bend, clusters", "no ego motion", "three radars, guardrails", "detection level"])
+def test_the_same_log_on_a_bend_without_ego_frames_with_several_radars_and_at_detection_level(case, tmp_path,
+                                                                                             monkeypatch, capsys):
+    if case == "bend, clusters":
+        args = [str(SCENARIOS / "guardrail_traffic.yaml"), "--fidelity", "object"]
+    elif case == "no ego motion":          # the estimator sees a standing sensor: the frames say so, the same
+        args = [str(CUT_IN), "--fidelity", "object", "--duration", "6", "--no-ego-motion"]
+    elif case == "detection level":
+        args = [str(CUT_IN), "--fidelity", "detection", "--duration", "2"]
+    else:      # each radar its own estimator, sensor IDs 0–2: one process answers for all, in the radars' order
+        doc = yaml.safe_load((SCENARIOS / "front_and_corners.yaml").read_text())
+        doc["road"]["guardrails"] = {"left_offset_m": 1.0, "right_offset_m": 1.0, "post_spacing_m": 2.0}
+        doc.pop("ecu", None)
+        path = tmp_path / "corners_guardrails.yaml"
+        path.write_text(yaml.safe_dump(doc))
+        args = [str(path), "--fidelity", "object"]
+    a, b, _ = _both(tmp_path, monkeypatch, capsys, *args)
+    _same(a, b)
+    from radarnode.wire import ids as wire_ids
+    sensors = (0, 1, 2) if case == "three radars, guardrails" else (0,)
+    own = {wire_ids.own_id(base, s) for s in sensors for base in (wire_ids.ROAD_BOUNDARY_LEFT,
+                                                                  wire_ids.ROAD_BOUNDARY_RIGHT)}
+    assert own <= {f[0] for f in a}, "every radar's boundary frames"
+
+
+def _run(scenario: Path, cycles: int, pipeline: bool, stop_after: int | None = None, saturate: bool = False):
+    """run_node on the scenario: the frames sent, the stats, the node's saturated counts."""
+    sc = load_scenario(scenario)
+    node = make_node(sc, fidelity="object")
+    if saturate:      # a boundary far outside its signal's range: saturated and counted, wherever it is encoded
+        est = node.boundaries
+        update = est.update
+
+        def far(*a, **k):
+            left, right = update(*a, **k)
+            return left.__class__(True, 1e4, 0.0, 0.0, 0.0, 1e4, 1.0), right
+        est.update = far
+    pipe = pl.pipeline_for(node) if pipeline else None
+    sent: list[can.Message] = []
+    stop = None
+    if stop_after is not None:
+        import threading
+        stop = threading.Event()
+    cycles_seen = [0]
+
+    def on_cycle(out):
+        cycles_seen[0] += 1
+        if stop is not None and cycles_seen[0] >= stop_after:
+            stop.set()
+    try:
+        stats = run_node(node, clock=SimulatedClock(), sinks=[sent.append], vehicle=ego_motion_for(node),
+                         duration_s=cycles * CYCLE_S + 1e-3, on_cycle=on_cycle, stop=stop, pipeline=pipe)
+    finally:
+        if pipe is not None:
+            pipe.close()
+    return [(m.arbitration_id, m.timestamp, bytes(m.data)) for m in sent], stats, dict(node.saturated)
+
+
+def test_a_stopped_run_sends_every_cycle_it_computed_whole_and_the_same():
+    """A stop (Ctrl-C) while cycles wait for their boundaries: they all go out, whole, as in one process (the
+    stop comes from on_cycle, which with the pipeline runs only when a held cycle is sent: later cycles)."""
+    a, sa, _ = _run(CUT_IN, 200, True, stop_after=70)
+    b, sb, _ = _run(CUT_IN, 200, False, stop_after=sa.cycles)
+    assert 70 <= sa.cycles < 200
+    assert sa.cycles == sb.cycles and sa.frames == sb.frames
+    _same(a, b)
+
+
+def test_saturated_boundary_values_are_counted_in_the_node_as_in_one_process():
+    a, _, sat_a = _run(CUT_IN, 40, True, saturate=True)
+    b, _, sat_b = _run(CUT_IN, 40, False, saturate=True)
+    _same(a, b)
+    assert sat_a == sat_b and sat_a.get("RBL_LatOffset", 0) >= 30
+
+
+def test_an_exception_in_the_boundary_process_is_raised_in_the_run_and_nothing_hangs():
+    sc = load_scenario(CUT_IN)
+    node = make_node(sc, fidelity="object")
+
+    def broken(*a, **k):
+        raise ZeroDivisionError("estimator failed")
+    node.boundaries.update = broken
+    pipe = pl.pipeline_for(node)
+    try:
+        with pytest.raises(ZeroDivisionError, match="estimator failed"):
+            run_node(node, clock=SimulatedClock(), sinks=[lambda m: None], duration_s=5.0, pipeline=pipe)
+    finally:
+        pipe.close()
+    assert not pipe._process.is_alive()
+
+
+def test_a_killed_boundary_process_is_a_clear_error_and_log_leaves_no_file(tmp_path, monkeypatch, capsys):
+    real = cli_log.pipeline_for
+
+    def doomed(node):
+        p = real(node)
+        os.kill(p._process.pid, signal.SIGKILL)
+        p._process.join()
+        return p
+
+    monkeypatch.setattr(cli_log, "pipeline_for", doomed)
+    out = tmp_path / "x.blf"
+    rc = main(["log", str(CUT_IN), "--fidelity", "object", "--duration", "10", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 1, err
+    line = err.strip().splitlines()[-1]
+    assert re.fullmatch(r"error: the road-boundary process \(pid \d+\) ended without answering \(exit code -9\); "
+                        r"the run stops here", line), err
+    assert list(tmp_path.iterdir()) == []           # no partial file
+
+
+def test_the_real_time_clock_refuses_a_pipeline():
+    from radarnode.wire.runner import RealTimeClock
+    sc = load_scenario(CUT_IN)
+    node = make_node(sc, fidelity="object")
+    pipe = pl.pipeline_for(node)
+    try:
+        with pytest.raises(ValueError, match="not in real time"):
+            run_node(node, clock=RealTimeClock(), sinks=[], duration_s=1.0, pipeline=pipe)
+    finally:
+        pipe.close()
+
+
+def test_no_process_without_a_boundary_estimator_nor_with_the_ecu(tmp_path, monkeypatch, capsys):
+    sc = load_scenario(SCENARIOS / "front_and_corners.yaml")         # no guardrails: no estimator
+    assert pl.pipeline_for(make_node(sc, fidelity="object")) is None
+    made = []
+    monkeypatch.setattr(cli_log, "pipeline_for", lambda node: made.append(node))
+    assert main(["log", str(CUT_IN), "--fidelity", "object", "--duration", "1", "--ecu",
+                 "-o", str(tmp_path / "e.blf")]) == 0
+    assert made == []       # the ECU reads the boundaries back: one process
+
+
+def test_ctrl_c_to_the_whole_process_group_closes_the_log_complete(tmp_path):
+    """A terminal's Ctrl-C reaches every process of the group, the boundary process too: it ignores it, answers
+    the cycles computed, and the log is complete (130); no process of the group is left."""
+    out = tmp_path / "long.blf"
+    p = subprocess.Popen([sys.executable, "-m", "radarnode", "log", str(CUT_IN), "--fidelity", "object",
+                          "--duration", "80000", "-v", "-o", str(out)], cwd=ROOT, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        seen = ""
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            line = p.stderr.readline()
+            seen += line
+            if "logging highway_cut_in to" in line or not line:
+                break
+        assert "logging highway_cut_in to" in seen, seen
+        while time.monotonic() < deadline and not any(f.stat().st_size > 30_000 for f in tmp_path.iterdir()):
+            time.sleep(0.1)
+        os.killpg(p.pid, signal.SIGINT)
+        _, err = p.communicate(timeout=120)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+    assert p.returncode == 130, seen + err
+    done = re.search(r"interrupted: wrote (\d+) frames in (\d+) complete cycles", err)
+    assert done, err
+    frames = _frames(out)
+    assert len(frames) == int(done.group(1))
+    assert len(_boundary_frames(frames)) == 2 * int(done.group(2))
+    time.sleep(0.2)
+    with pytest.raises(ProcessLookupError):      # nothing of the group left running
+        os.killpg(p.pid, 0)
