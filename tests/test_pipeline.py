@@ -117,8 +117,10 @@ def test_the_same_log_on_a_bend_without_ego_frames_with_several_radars_and_at_de
     assert own <= {f[0] for f in a}, "every radar's boundary frames"
 
 
-def _run(scenario: Path, cycles: int, pipeline: bool, stop_after: int | None = None, saturate: bool = False):
-    """run_node on the scenario: the frames sent, the stats, the node's saturated counts."""
+def _run(scenario: Path, cycles: int, pipeline: bool, stop_after: int | None = None, saturate: bool = False,
+         received: dict | None = None):
+    """run_node on the scenario: the frames sent, the stats, the node's saturated counts. ``received``: frames
+    the node receives, by the poll (one a cycle) they arrive at."""
     sc = load_scenario(scenario)
     node = make_node(sc, fidelity="object")
     if saturate:      # a boundary far outside its signal's range: saturated and counted, wherever it is encoded
@@ -141,9 +143,15 @@ def _run(scenario: Path, cycles: int, pipeline: bool, stop_after: int | None = N
         cycles_seen[0] += 1
         if stop is not None and cycles_seen[0] >= stop_after:
             stop.set()
+    calls = [0]
+
+    def recv(timeout):
+        calls[0] += 1
+        return (received or {}).pop(calls[0], None)
     try:
         stats = run_node(node, clock=SimulatedClock(), sinks=[sent.append], vehicle=ego_motion_for(node),
-                         duration_s=cycles * CYCLE_S + 1e-3, on_cycle=on_cycle, stop=stop, pipeline=pipe)
+                         duration_s=cycles * CYCLE_S + 1e-3, on_cycle=on_cycle, stop=stop, pipeline=pipe,
+                         recv=recv if received is not None else None)
     finally:
         if pipe is not None:
             pipe.close()
@@ -158,6 +166,23 @@ def test_a_stopped_run_sends_every_cycle_it_computed_whole_and_the_same():
     assert 70 <= sa.cycles < 200
     assert sa.cycles == sb.cycles and sa.frames == sb.frames
     _same(a, b)
+
+
+def test_a_sensor_id_changed_mid_run_moves_the_boundary_frames_as_in_one_process():
+    """A RadarConfiguration that moves the node to sensor ID 3 at cycle 40 (library use: run_node with a receiver):
+    the boundary frames computed in the other process carry the new ID and its E2E key from that cycle on."""
+    from radarnode.wire import ars408 as P
+    from radarnode.wire import ids as wire_ids
+    from radarnode.wire.dbc import load_database
+    m = load_database().get_message_by_name("RadarConfiguration")
+    values = {**{sig.name: 0 for sig in m.signals}, "RadarCfg_SensorID_valid": 1, "RadarCfg_SensorID": 3}
+    cfg = can.Message(arbitration_id=P.shifted(m.frame_id, 0), data=m.encode(values), is_extended_id=False)
+    a, _, _ = _run(CUT_IN, 90, True, received={40: cfg})
+    b, _, _ = _run(CUT_IN, 90, False, received={40: cfg})
+    _same(a, b)
+    moved = {wire_ids.own_id(base, 3) for base in (wire_ids.ROAD_BOUNDARY_LEFT, wire_ids.ROAD_BOUNDARY_RIGHT)}
+    assert sum(f[0] in moved for f in a) >= 2 * 45
+    assert sum(f[0] in (0x680, 0x681) for f in a) >= 2 * 35
 
 
 def test_saturated_boundary_values_are_counted_in_the_node_as_in_one_process():

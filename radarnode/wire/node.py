@@ -353,23 +353,25 @@ class RadarNode:
         columns = (cl.dist_long_m, cl.dist_lat_m, cl.vrel_long_mps, cl.vrel_lat_mps, cl.range_m)
         if self._pipe is None:
             return self.boundary_payloads(columns, dt, sensor_velocity, self._yaw_rate_estimate(t_s))
-        self._pipe.submit(self._pipe_index, columns, (dt, sensor_velocity, self._yaw_rate_estimate(t_s)))
+        self._pipe.submit(self._pipe_index, columns, (dt, sensor_velocity, self._yaw_rate_estimate(t_s),
+                                                      self.config.sensor_id))
         self.last_boundaries = None
         sensor = self.config.sensor_id
         return [(ids.own_id(base, sensor), self._blank[base])
                 for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)]
 
     def boundary_payloads(self, columns: tuple[np.ndarray, ...], dt_s: float, sensor_velocity: tuple[float, float],
-                          yaw_rate_rps: float) -> list[tuple[int, np.ndarray]]:
+                          yaw_rate_rps: float, sensor_id: int | None = None) -> list[tuple[int, np.ndarray]]:
         """One cycle of the road-boundary estimator on the clusters' ``columns`` (dist_long, dist_lat, vrel_long,
-        vrel_lat, range) and its two frames (CAN ID, E2E-protected payload), left then right; sets
+        vrel_lat, range) and its two frames (CAN ID, E2E-protected payload), left then right, for ``sensor_id``
+        (default: the configured one; a pipeline's process is told the one in force at the cycle); sets
         ``last_boundaries``."""
         x_m, y_m, vx, vy, r = columns
         rate = (x_m * vx + y_m * vy) / np.maximum(r, 1e-6)
         left, right = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps)
         self.last_boundaries = (left, right)
         out = []
-        sensor = self.config.sensor_id
+        sensor = self.config.sensor_id if sensor_id is None else sensor_id
         for base, prefix, b in ((ids.ROAD_BOUNDARY_LEFT, "RBL", left), (ids.ROAD_BOUNDARY_RIGHT, "RBR", right)):
             payload = self.own_codecs[base].encode({
                 f"{prefix}_CRC": 0, f"{prefix}_Counter": 0, f"{prefix}_Valid": int(b.valid),

@@ -70,7 +70,7 @@ class BoundaryPipeline:
                 n.defer_boundaries(self, k)
         self.submitted = 0        # cycles' estimates handed over (a node's cycle each)
         self.done = 0             # of those, answered and filled in
-        self._batch: list = []          # per cycle of the batch: (node, clusters, (dt, sensor velocity, yaw rate))
+        self._batch: list = []          # per cycle of the batch: (node, clusters, (dt, sensor velocity, yaw rate, ID))
         self._columns: list = []        # the batch's cluster columns, five a cycle, sent as one array
         self._in_flight = 0
         self._next_look = 0             # collect looks at the pipe when this many estimates are submitted
