@@ -282,3 +282,24 @@ def test_ctrl_c_to_the_whole_process_group_closes_the_log_complete(tmp_path):
     time.sleep(0.2)
     with pytest.raises(ProcessLookupError):      # nothing of the group left running
         os.killpg(p.pid, 0)
+
+
+def test_a_pipeline_never_closed_does_not_hold_the_interpreter_at_exit(tmp_path):
+    """A library user who forgets close(): the interpreter still exits (multiprocessing's exit handler would wait
+    for the daemon, which ignores SIGTERM so that a Ctrl-C of the whole group cannot cut a log short)."""
+    script = tmp_path / "forgot.py"
+    script.write_text(
+        "from radarnode.radar.setup import load_scenario\n"
+        "from radarnode.wire.group import make_node\n"
+        "from radarnode.wire.pipeline import pipeline_for\n"
+        "from radarnode.wire.runner import SimulatedClock, run_node\n"
+        f"node = make_node(load_scenario({str(CUT_IN)!r}), fidelity='object')\n"
+        "pipe = pipeline_for(node)\n"
+        "run_node(node, clock=SimulatedClock(), sinks=[], duration_s=3.0, pipeline=pipe)\n"
+        "print('ran', pipe.done, pipe._process.pid)\n")
+    done = subprocess.run([sys.executable, str(script)], cwd=ROOT, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    ran, cycles, pid = done.stdout.split()
+    assert int(cycles) == 41
+    with pytest.raises(ProcessLookupError):      # the boundary process ended with it
+        os.kill(int(pid), 0)

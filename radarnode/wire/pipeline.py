@@ -24,6 +24,7 @@ exits. An exception there is raised here, when its batch is read.
 
 from __future__ import annotations
 
+import atexit
 import signal
 import sys
 from collections import Counter, deque
@@ -65,6 +66,9 @@ class BoundaryPipeline:
         self._process = ctx.Process(target=_serve, args=(child, nodes), name="radarnode-boundaries", daemon=True)
         self._process.start()
         child.close()
+        # closed at exit if the user does not: before multiprocessing's own exit handler (registered when it was
+        # imported, so run after this one), which would wait for a daemon that ignores its SIGTERM
+        atexit.register(self.close)
         for k, n in enumerate(nodes):
             if n.boundaries is not None:
                 n.defer_boundaries(self, k)
@@ -112,6 +116,7 @@ class BoundaryPipeline:
         if self._closed:
             return
         self._closed = True
+        atexit.unregister(self.close)
         try:
             self._conn.send(None)
         except (OSError, ValueError):
