@@ -16,6 +16,7 @@ import time
 from pathlib import Path
 
 import can
+import numpy as np
 import pytest
 import yaml
 
@@ -303,3 +304,153 @@ def test_a_pipeline_never_closed_does_not_hold_the_interpreter_at_exit(tmp_path)
     assert int(cycles) == 41
     with pytest.raises(ProcessLookupError):      # the boundary process ended with it
         os.kill(int(pid), 0)
+
+
+def _children(pid: int) -> list[int]:
+    """The processes whose parent is ``pid`` (from /proc)."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                stat = (d / "stat").read_text()
+            except OSError:
+                continue
+            if int(stat.rsplit(")", 1)[1].split()[1]) == pid:
+                out.append(int(d.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+def test_the_boundary_process_ends_when_the_run_is_killed_and_holds_no_pipe_of_the_caller(tmp_path):
+    """SIGKILL (an OOM kill, a harness's timeout) to the run: its boundary process sees the end of its pipe and
+    ends too, and the caller's stdout/stderr pipes close (a harness waiting for them is not held)."""
+    p = subprocess.Popen([sys.executable, "-m", "radarnode", "log", str(CUT_IN), "--fidelity", "object",
+                          "--duration", "80000", "-v", "-o", str(tmp_path / "long.blf")], cwd=ROOT,
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        seen = ""
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and "logging highway_cut_in to" not in seen:
+            line = p.stderr.readline()
+            seen += line
+            assert line, seen
+        workers = _children(p.pid)
+        assert len(workers) == 1, workers
+        p.kill()
+        p.communicate(timeout=30)            # the pipes close: nothing else holds them
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and _alive(workers[0]):
+            time.sleep(0.05)
+        assert not _alive(workers[0]), "the boundary process outlived the run"
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+
+
+def test_a_ctrl_c_while_the_process_is_forked_stops_the_run_with_a_complete_log(tmp_path, monkeypatch, capsys):
+    """The signal arrives inside pipeline_for (about 4 ms at the start of every log): caught as every Ctrl-C of
+    the run is, so the run stops at once, 130, the file complete, no process left."""
+    real = cli_log.pipeline_for
+    made = []
+
+    def interrupted(node):
+        os.kill(os.getpid(), signal.SIGINT)
+        made.append(real(node))
+        return made[-1]
+
+    monkeypatch.setattr(cli_log, "pipeline_for", interrupted)
+    out = tmp_path / "x.blf"
+    rc = main(["log", str(CUT_IN), "--fidelity", "object", "--duration", "10", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 130, err
+    assert re.search(r"interrupted: wrote \d+ frames in \d+ complete cycles", err), err
+    assert len(_frames(out)) < 100
+    assert not made[0]._process.is_alive()
+
+
+def test_an_interrupt_inside_the_fork_leaves_no_process(monkeypatch):
+    import multiprocessing.process as mpp
+    started = []
+    real = mpp.BaseProcess.start
+
+    def start_then_interrupt(self):
+        real(self)
+        started.append(self.pid)
+        raise KeyboardInterrupt
+    monkeypatch.setattr(mpp.BaseProcess, "start", start_then_interrupt)
+    node = make_node(load_scenario(CUT_IN), fidelity="object")
+    with pytest.raises(KeyboardInterrupt):
+        pl.pipeline_for(node)
+    assert started and not _alive(started[0])
+    monkeypatch.undo()
+    out, _, _ = _run_direct(node, 0, 40)          # the node was never handed over: it runs in one process
+    assert len(_boundary_frames(out)) == 80
+
+
+def _run_direct(node, first: int, cycles: int):
+    """Cycles first … first+cycles−1 of ``node`` called directly, each after the vehicle's frames (a library
+    user's loop): frames, outputs."""
+    vehicle = ego_motion_for(node)
+    outs = []
+    for k in range(first, first + cycles):
+        for m in vehicle.frames(k * CYCLE_S):
+            node.receive(m, k * CYCLE_S)
+        outs.append(node.cycle(k * CYCLE_S))
+    return [(m.arbitration_id, m.timestamp, bytes(m.data)) for o in outs for m in o.messages], outs, node
+
+
+def test_a_closed_pipeline_gives_the_nodes_their_estimators_back_to_go_on_in_one_process():
+    """Library use: 60 cycles with a pipeline, closed, then 40 more cycles of the same node in this process give
+    the frames of 100 cycles in one process (the estimator, its E2E counters, its last estimate came back)."""
+    piped = make_node(load_scenario(CUT_IN), fidelity="object")
+    pipe = pl.pipeline_for(piped)
+    run_node(piped, clock=SimulatedClock(), sinks=[], vehicle=ego_motion_for(piped), duration_s=60 * CYCLE_S + 1e-3,
+             pipeline=pipe)
+    pipe.close()
+    assert not pipe._process.is_alive()
+    single = make_node(load_scenario(CUT_IN), fidelity="object")
+    run_node(single, clock=SimulatedClock(), sinks=[], vehicle=ego_motion_for(single), duration_s=60 * CYCLE_S + 1e-3)
+    a, outs, _ = _run_direct(piped, 60, 40)
+    b, _, _ = _run_direct(single, 60, 40)
+    _same(a, b)
+    assert sum(o.boundaries[0].valid or o.boundaries[1].valid for o in outs) >= 20     # found, and going on
+    with pytest.raises(pl.PipelineError, match="is closed"):
+        pipe.submit(0, (np.zeros(0),) * 5, (0.0, (0.0, 0.0), 0.0, 0))
+
+
+def test_after_a_pipeline_that_could_not_answer_the_node_says_its_estimator_is_lost():
+    node = make_node(load_scenario(CUT_IN), fidelity="object")
+    pipe = pl.pipeline_for(node)
+    run_node(node, clock=SimulatedClock(), sinks=[], duration_s=20 * CYCLE_S + 1e-3, pipeline=pipe)
+    pipe.close(graceful=False)            # (an error, an interrupt): killed, the estimator not given back
+    assert not pipe._process.is_alive()
+    with pytest.raises(pl.PipelineError, match="estimator was in a BoundaryPipeline's process that ended"):
+        node.cycle(20 * CYCLE_S)
+
+
+def test_a_stopped_boundary_process_is_warned_of_and_waited_for(monkeypatch, caplog):
+    """SIGSTOP (a debugger, a job control accident): the run says what it waits for, and goes on when the process
+    is continued, to the same frames."""
+    import threading
+    monkeypatch.setattr(pl, "SLOW_ANSWER_S", 0.3)
+    node = make_node(load_scenario(CUT_IN), fidelity="object")
+    pipe = pl.pipeline_for(node)
+    os.kill(pipe._process.pid, signal.SIGSTOP)
+    threading.Timer(1.5, os.kill, (pipe._process.pid, signal.SIGCONT)).start()
+    sent: list[can.Message] = []
+    try:
+        with caplog.at_level("WARNING", logger="radarnode.wire.pipeline"):
+            run_node(node, clock=SimulatedClock(), sinks=[sent.append], vehicle=ego_motion_for(node),
+                     duration_s=70 * CYCLE_S + 1e-3, pipeline=pipe)
+    finally:
+        pipe.close()
+    assert any("has not answered for 0.3 s; waiting" in r.message for r in caplog.records), caplog.text
+    b, _, _ = _run(CUT_IN, 70, False)
+    _same([(m.arbitration_id, m.timestamp, bytes(m.data)) for m in sent], b)

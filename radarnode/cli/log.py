@@ -65,10 +65,6 @@ def cmd(args) -> int:
         except (ValueError, OSError) as exc:
             reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else exc
             raise FileError(f"option --output: cannot write {args.output!r}: {reason}") from None
-        # the road boundaries in a second process, where nothing in the run reads them back (no ECU): the same
-        # frames, in about 0.6 of the time at the object level (radarnode.wire.pipeline)
-        pipeline = pipeline_for(node) if not args.ecu else None
-        bar = progress(scenario.num_cycles, f"logging {scenario.name}")
         ecu = assembler = None
         if args.ecu:            # the consumer's modules only when they run (a faster start without --ecu)
             from radarnode.consumer.assembler import CycleAssembler
@@ -106,16 +102,26 @@ def cmd(args) -> int:
                     writer.on_message_received(m)
                     ecu_frames[0] += 1
 
+        pipeline = bar = None
         try:
             with stop_on_signals() as stop:
+                # the road boundaries in a second process where nothing in the run reads them back (no ECU): the
+                # same frames in about 0.6 of the time at the object level (radarnode.wire.pipeline); started with
+                # the signals caught, so that a Ctrl-C while it forks stops the run instead of being lost in the fork
+                if not args.ecu:
+                    pipeline = pipeline_for(node)
+                bar = progress(scenario.num_cycles, f"logging {scenario.name}")
                 logger.info("logging %s to %s (as %s until it is complete)", scenario.name, args.output, tmp)
                 stats = run_node(node, clock=SimulatedClock(args.start_time), sinks=[write], vehicle=vehicle,
                                  on_cycle=on_cycle, stop=stop, pipeline=pipeline)
+                if pipeline is not None:
+                    pipeline.close()
         finally:
-            if pipeline is not None:
-                pipeline.close()
+            if pipeline is not None:            # after an error or a second Ctrl-C: ended at once
+                pipeline.close(graceful=False)
             writer.stop()
-            bar.close()
+            if bar is not None:
+                bar.close()
     interrupted = stats.cycles < scenario.num_cycles
     if is_mcap(args.output):
         print(summary(writer, args.output), file=sys.stderr)

@@ -25,6 +25,8 @@ exits. An exception there is raised here, when its batch is read.
 from __future__ import annotations
 
 import atexit
+import logging
+import os
 import signal
 import sys
 from collections import Counter, deque
@@ -37,6 +39,12 @@ from radarnode.errors import RadarnodeError
 BATCH = 32
 #: batches sent and not yet answered, at most (a batch's answer is a few kB: they always fit in the pipe's buffer)
 MAX_IN_FLIGHT = 4
+#: a graceful close waits this long for the process to give the estimators back, else kills it
+CLOSE_WAIT_S = 5.0
+#: an answer not there after this long is warned of (once a wait), and waited for
+SLOW_ANSWER_S = 10.0
+
+logger = logging.getLogger(__name__)
 
 
 class PipelineError(RadarnodeError, RuntimeError):
@@ -55,23 +63,12 @@ def pipeline_for(node) -> BoundaryPipeline | None:
 class BoundaryPipeline:
     """See the module docstring. ``nodes``: the RadarNodes whose boundaries are computed in the process (those
     without an estimator are left alone); each is told to hand its boundaries over
-    (:meth:`RadarNode.defer_boundaries <radarnode.wire.node.RadarNode.defer_boundaries>`)."""
+    (:meth:`RadarNode.defer_boundaries <radarnode.wire.node.RadarNode.defer_boundaries>`) until :meth:`close`, which
+    gives them back their estimators as the process left them (or, if it could not answer, makes their next cycle
+    an error: their estimates were lost with it)."""
 
     def __init__(self, nodes: list) -> None:
-        import multiprocessing
-
-        ctx = multiprocessing.get_context("fork")
-        self._conn, child = ctx.Pipe()
         self._nodes = nodes
-        self._process = ctx.Process(target=_serve, args=(child, nodes), name="radarnode-boundaries", daemon=True)
-        self._process.start()
-        child.close()
-        # closed at exit if the user does not: before multiprocessing's own exit handler (registered when it was
-        # imported, so run after this one), which would wait for a daemon that ignores its SIGTERM
-        atexit.register(self.close)
-        for k, n in enumerate(nodes):
-            if n.boundaries is not None:
-                n.defer_boundaries(self, k)
         self.submitted = 0        # cycles' estimates handed over (a node's cycle each)
         self.done = 0             # of those, answered and filled in
         self._batch: list = []          # per cycle of the batch: (node, clusters, (dt, sensor velocity, yaw rate, ID))
@@ -80,11 +77,37 @@ class BoundaryPipeline:
         self._next_look = 0             # collect looks at the pipe when this many estimates are submitted
         self._waiting: deque = deque()   # per estimate submitted and not filled: its frames
         self._closed = False
+        self._failed = False            # the process raised or is gone: nothing more comes from it
+        self._process = None
+        self._deferred = False          # the nodes hand their boundaries over
+        import multiprocessing
+        import multiprocessing.util     # (registers its exit handler when first imported: before the one below)
+
+        # closed at exit if the user does not: before multiprocessing's own exit handler (atexit runs the last
+        # registered first), which would wait for a daemon that ignores its SIGTERM
+        atexit.register(self.close, False)
+        ctx = multiprocessing.get_context("fork")
+        self._conn, child = ctx.Pipe()
+        self._process = ctx.Process(target=_serve, args=(child, self._conn, nodes), name="radarnode-boundaries",
+                                    daemon=True)
+        try:
+            self._process.start()
+        except BaseException:          # (a Ctrl-C in the fork): nothing left running
+            self.close(graceful=False)
+            raise
+        finally:
+            child.close()
+        for k, n in enumerate(nodes):
+            if n.boundaries is not None:
+                n.defer_boundaries(self, k)
+        self._deferred = True
 
     # --- the node's side -------------------------------------------------------------------------------------
     def submit(self, index: int, columns: tuple, scalars: tuple) -> None:
         """Node ``index``'s cycle: the clusters' columns and the ego motion, as
         :meth:`RadarNode.boundary_payloads <radarnode.wire.node.RadarNode.boundary_payloads>` takes them."""
+        if self._closed:
+            raise PipelineError("this BoundaryPipeline is closed: its nodes compute their boundaries themselves")
         self._batch.append((index, len(columns[0]), scalars))
         self._columns.extend(columns)
         self._waiting.append(None)
@@ -111,21 +134,50 @@ class BoundaryPipeline:
                 self._receive()
         return self.done
 
-    def close(self) -> None:
-        """End the process (after its last answer); idempotent, also after an error."""
+    def close(self, graceful: bool = True) -> None:
+        """End the process; idempotent. ``graceful`` (a run that ended normally): every estimate submitted is
+        answered first and the nodes get their estimators back as the process left them, to go on in this
+        process. Otherwise (an error, an interrupt, the interpreter's exit) the process is killed at once, and a
+        node that cycles again gets a :class:`PipelineError`."""
         if self._closed:
             return
         self._closed = True
         atexit.unregister(self.close)
+        states = None
         try:
-            self._conn.send(None)
-        except (OSError, ValueError):
-            pass
-        self._process.join(timeout=5.0)
-        if self._process.is_alive():
-            self._process.kill()
-            self._process.join()
-        self._conn.close()
+            if graceful and not self._failed and self._process is not None and self._process.is_alive():
+                try:
+                    self.collect(block=True)
+                    self._conn.send(None)
+                    if self._conn.poll(CLOSE_WAIT_S):
+                        kind, states = self._conn.recv()
+                        states = states if kind == "state" else None
+                except (PipelineError, OSError, EOFError):
+                    states = None
+        finally:
+            self._stop_process(states is not None)
+        if not self._deferred:
+            return
+        for k, n in enumerate(self._nodes):
+            if n.boundaries is None:
+                continue
+            if states is not None:
+                n.boundaries, n._e2e, n.last_boundaries = states[k]
+                n.defer_boundaries(None, 0)
+            else:
+                n.defer_boundaries(_Lost(), k)
+
+    def _stop_process(self, ending: bool) -> None:
+        """Join the process (it ends by itself when ``ending``), else kill it; close the pipe."""
+        p = self._process
+        if p is not None and p.pid is not None:
+            if ending:
+                p.join(timeout=CLOSE_WAIT_S)
+            if p.is_alive():
+                p.kill()
+            p.join()
+        if p is not None:
+            self._conn.close()
 
     # --- the pipe ---------------------------------------------------------------------------------------------
     def _send(self) -> None:
@@ -140,14 +192,22 @@ class BoundaryPipeline:
         self._in_flight += 1
 
     def _receive(self) -> None:
+        warned = False
         try:
+            while not self._conn.poll(SLOW_ANSWER_S):
+                if not warned:     # (stopped, or starved of CPU: a second Ctrl-C gives up the run)
+                    logger.warning("the road-boundary process (pid %s) has not answered for %g s; waiting",
+                                   self._process.pid, SLOW_ANSWER_S)
+                    warned = True
             kind, answer = self._conn.recv()
         except (EOFError, OSError):
+            self._failed = True
             self._process.join(timeout=1.0)
             raise PipelineError(f"the road-boundary process (pid {self._process.pid}) ended without answering "
                                 f"(exit code {self._process.exitcode}); the run stops here") from None
         self._in_flight -= 1
         if kind == "error":
+            self._failed = True
             raise answer
         payloads, saturated = answer
         for index, count in saturated:
@@ -162,10 +222,23 @@ class BoundaryPipeline:
             self.done += 1
 
 
-def _serve(conn, nodes: list) -> None:
-    """The process: each batch's estimates in order, answered with their frames (see the module docstring)."""
+class _Lost:
+    """A node's pipe after its process ended without giving its estimator back."""
+
+    def submit(self, index, columns, scalars) -> None:
+        raise PipelineError("this node's road-boundary estimator was in a BoundaryPipeline's process that ended "
+                            "without giving it back (an error or an interrupt): make a new node to run again")
+
+
+def _serve(conn, parent_end, nodes: list) -> None:
+    """The process: each batch's estimates in order, answered with their frames (see the module docstring); at the
+    end (None) the estimators' state, so that the nodes go on in the run's process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    parent_end.close()        # so that the run's process ending, however it ends, is an end of file here
+    devnull = os.open(os.devnull, os.O_RDWR)
+    for fd in (0, 1, 2):      # nor does this process hold the caller's pipes open (a harness waits for them)
+        os.dup2(devnull, fd)
     for n in nodes:
         n.saturated.clear()
     while True:
@@ -174,6 +247,7 @@ def _serve(conn, nodes: list) -> None:
         except (EOFError, OSError):          # the run's process is gone
             return
         if batch is None:
+            conn.send(("state", [(n.boundaries, n._e2e, n.last_boundaries) for n in nodes]))
             return
         try:
             cycles, columns = batch
