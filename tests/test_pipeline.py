@@ -45,8 +45,8 @@ def _both(tmp_path: Path, monkeypatch, capsys, *args: str) -> tuple[list, list, 
     started = []
     real = cli_log.pipeline_for
 
-    def spy(node):
-        p = real(node)
+    def spy(node, cycles=None):
+        p = real(node)          # (at any length: the batch edges below MIN_CYCLES too)
         started.append(p)
         return p
 
@@ -54,7 +54,7 @@ def _both(tmp_path: Path, monkeypatch, capsys, *args: str) -> tuple[list, list, 
     assert main(["log", *args, "-o", str(piped)]) == 0
     err = capsys.readouterr().err
     assert started and started[0] is not None          # the pipeline ran
-    monkeypatch.setattr(cli_log, "pipeline_for", lambda node: None)
+    monkeypatch.setattr(cli_log, "pipeline_for", lambda node, cycles=None: None)
     assert main(["log", *args, "-o", str(single)]) == 0
     capsys.readouterr()
     return _frames(piped), _frames(single), err
@@ -83,6 +83,27 @@ def test_the_log_is_the_one_process_log_byte_for_byte_across_the_batch_edges(cyc
     assert len(bounds) == 2 * cycles
     if cycles > 20:        # (the estimator needs a few cycles of posts): found, so the frames carry its numbers
         assert any(data[6] != 0 or data[7] != 0 for _, _, data in bounds[-20:])
+
+
+@pytest.mark.parametrize("cycles", [pl.MIN_CYCLES - 1, pl.MIN_CYCLES, pl.MIN_CYCLES + 1, 2 * pl.MIN_CYCLES])
+def test_the_second_process_from_min_cycles_on_and_the_same_log_either_side(cycles, tmp_path, monkeypatch, capsys):
+    """A run shorter than MIN_CYCLES is computed in one process (the second one would cost more than it saves);
+    from MIN_CYCLES on in two: the same frames either side of the switch."""
+    real = cli_log.pipeline_for
+    made = []
+
+    def spy(node, n=None):
+        made.append(real(node, n))
+        return made[-1]
+
+    monkeypatch.setattr(cli_log, "pipeline_for", spy)
+    args = [str(CUT_IN), "--fidelity", "object", "--duration", f"{cycles * CYCLE_S + 0.001:.3f}"]
+    assert main(["log", *args, "-o", str(tmp_path / "a.blf")]) == 0
+    assert (made[0] is not None) == (cycles >= pl.MIN_CYCLES)
+    monkeypatch.setattr(cli_log, "pipeline_for", lambda node, n=None: None)
+    assert main(["log", *args, "-o", str(tmp_path / "b.blf")]) == 0
+    assert f"in {cycles} complete cycles" in capsys.readouterr().err
+    _same(_frames(tmp_path / "a.blf"), _frames(tmp_path / "b.blf"))
 
 
 @pytest.mark.parametrize("batch,in_flight", [(1, 1), (1, 4), (7, 1), (64, 2)])
@@ -212,7 +233,7 @@ def test_an_exception_in_the_boundary_process_is_raised_in_the_run_and_nothing_h
 def test_a_killed_boundary_process_is_a_clear_error_and_log_leaves_no_file(tmp_path, monkeypatch, capsys):
     real = cli_log.pipeline_for
 
-    def doomed(node):
+    def doomed(node, cycles=None):
         p = real(node)
         os.kill(p._process.pid, signal.SIGKILL)
         p._process.join()
@@ -245,7 +266,7 @@ def test_no_process_without_a_boundary_estimator_nor_with_the_ecu(tmp_path, monk
     sc = load_scenario(SCENARIOS / "front_and_corners.yaml")         # no guardrails: no estimator
     assert pl.pipeline_for(make_node(sc, fidelity="object")) is None
     made = []
-    monkeypatch.setattr(cli_log, "pipeline_for", lambda node: made.append(node))
+    monkeypatch.setattr(cli_log, "pipeline_for", lambda node, cycles=None: made.append(node))
     assert main(["log", str(CUT_IN), "--fidelity", "object", "--duration", "1", "--ecu",
                  "-o", str(tmp_path / "e.blf")]) == 0
     assert made == []       # the ECU reads the boundaries back: one process
@@ -362,7 +383,7 @@ def test_a_ctrl_c_while_the_process_is_forked_stops_the_run_with_a_complete_log(
     real = cli_log.pipeline_for
     made = []
 
-    def interrupted(node):
+    def interrupted(node, cycles=None):
         os.kill(os.getpid(), signal.SIGINT)
         made.append(real(node))
         return made[-1]

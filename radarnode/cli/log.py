@@ -109,7 +109,7 @@ def cmd(args) -> int:
                 # same frames in about 0.6 of the time at the object level (radarnode.wire.pipeline); started with
                 # the signals caught, so that a Ctrl-C while it forks stops the run instead of being lost in the fork
                 if not args.ecu:
-                    pipeline = pipeline_for(node)
+                    pipeline = pipeline_for(node, scenario.num_cycles)
                 bar = progress(scenario.num_cycles, f"logging {scenario.name}")
                 logger.info("logging %s to %s (as %s until it is complete)", scenario.name, args.output, tmp)
                 stats = run_node(node, clock=SimulatedClock(args.start_time), sinks=[write], vehicle=vehicle,
