@@ -382,6 +382,16 @@ class RadarNode:
             out.append((ids.own_id(base, sensor), np.frombuffer(protected, dtype=np.uint8)))
         return out
 
+    def boundary_state(self) -> tuple:
+        """What the road-boundary estimate carries from cycle to cycle: the estimator, the E2E counters of its
+        frames, its last estimate (a pipeline's process gives it back with :meth:`resume_boundaries`)."""
+        return self.boundaries, self._e2e, self.last_boundaries
+
+    def resume_boundaries(self, state: tuple) -> None:
+        """Compute the boundaries here again, from ``state`` (:meth:`boundary_state` of the process that had them)."""
+        self.boundaries, self._e2e, self.last_boundaries = state
+        self.defer_boundaries(None, 0)
+
     def defer_boundaries(self, pipe, index: int) -> None:
         """Hand every cycle's road-boundary estimate to ``pipe`` (a :class:`~radarnode.wire.pipeline.BoundaryPipeline`,
         this node its ``index``-th) instead of computing it here: :meth:`cycle` then returns the two frames blank,

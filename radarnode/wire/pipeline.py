@@ -171,8 +171,7 @@ class BoundaryPipeline:
             if n.boundaries is None:
                 continue
             if states is not None:
-                n.boundaries, n._e2e, n.last_boundaries = states[k]
-                n.defer_boundaries(None, 0)
+                n.resume_boundaries(states[k])
             else:
                 n.defer_boundaries(_Lost(), k)
 
@@ -256,7 +255,7 @@ def _serve(conn, parent_end, nodes: list) -> None:
         except (EOFError, OSError):          # the run's process is gone
             return
         if batch is None:
-            conn.send(("state", [(n.boundaries, n._e2e, n.last_boundaries) for n in nodes]))
+            conn.send(("state", [n.boundary_state() for n in nodes]))
             return
         try:
             cycles, columns = batch
