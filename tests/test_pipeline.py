@@ -477,3 +477,37 @@ def test_a_stopped_boundary_process_is_warned_of_and_waited_for(monkeypatch, cap
     assert any("has not answered for 0.3 s; waiting" in r.message for r in caplog.records), caplog.text
     b, _, _ = _run(CUT_IN, 70, False)
     _same([(m.arbitration_id, m.timestamp, bytes(m.data)) for m in sent], b)
+
+
+def test_a_handed_over_node_is_not_run_without_its_pipeline_nor_handed_over_twice():
+    node = make_node(load_scenario(CUT_IN), fidelity="object")
+    pipe = pl.pipeline_for(node)
+    try:
+        with pytest.raises(ValueError, match="pass it as pipeline="):      # else its boundary frames go out blank
+            run_node(node, clock=SimulatedClock(), sinks=[], duration_s=1.0)
+        with pytest.raises(pl.PipelineError, match="cannot be handed to another"):
+            pl.pipeline_for(node)
+        run_node(node, clock=SimulatedClock(), sinks=[], duration_s=3.0, pipeline=pipe)
+    finally:
+        pipe.close(graceful=False)
+    with pytest.raises(pl.PipelineError, match="cannot be handed to another"):      # its estimator was lost
+        pl.pipeline_for(node)
+
+
+def test_an_interrupt_while_the_nodes_are_handed_over_leaves_them_in_one_process(monkeypatch):
+    from radarnode.wire.node import RadarNode
+    real = RadarNode.defer_boundaries
+
+    def interrupted(self, pipe, index):
+        if pipe is not None:
+            raise KeyboardInterrupt
+        real(self, pipe, index)
+    monkeypatch.setattr(RadarNode, "defer_boundaries", interrupted)
+    node = make_node(load_scenario(CUT_IN), fidelity="object")
+    with pytest.raises(KeyboardInterrupt):
+        pl.pipeline_for(node)
+    monkeypatch.undo()
+    assert node.boundary_pipe is None
+    a, _, _ = _run_direct(node, 0, 40)
+    b, _, _ = _run_direct(make_node(load_scenario(CUT_IN), fidelity="object"), 0, 40)
+    _same(a, b)

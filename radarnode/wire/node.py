@@ -382,6 +382,11 @@ class RadarNode:
             out.append((ids.own_id(base, sensor), np.frombuffer(protected, dtype=np.uint8)))
         return out
 
+    @property
+    def boundary_pipe(self):
+        """The BoundaryPipeline this node hands its boundaries to (:meth:`defer_boundaries`), or None."""
+        return self._pipe
+
     def boundary_state(self) -> tuple:
         """What the road-boundary estimate carries from cycle to cycle: the estimator, the E2E counters of its
         frames, its last estimate (a pipeline's process gives it back with :meth:`resume_boundaries`)."""

@@ -21,7 +21,8 @@ of the terminal reaches both processes, and the run, which ends after the curren
 frames of the cycles it has computed; it ends when this process closes the pipe (:meth:`BoundaryPipeline.close`) or
 exits, however it exits (it holds no copy of this process's end of the pipe, nor of its standard streams). An
 exception there is raised here, when its batch is read; an answer that does not come for ``SLOW_ANSWER_S`` (a
-stopped process) is warned of and waited for, and a second Ctrl-C gives the run up as it always does.
+stopped process) is warned of and waited for (a run blocked while it hands a batch over, more than the pipe's
+buffer, waits without the warning), and a second Ctrl-C gives the run up as it always does.
 """
 
 from __future__ import annotations
@@ -89,6 +90,10 @@ class BoundaryPipeline:
         self._failed = False            # the process raised or is gone: nothing more comes from it
         self._process = None
         self._deferred = False          # the nodes hand their boundaries over
+        for n in nodes:              # a node another pipeline has (or lost) cannot be handed over again
+            if n.boundary_pipe is not None:
+                raise PipelineError("a node handed to a BoundaryPipeline already (open, or closed without giving "
+                                    "its estimator back) cannot be handed to another: make a new node")
         import multiprocessing
         import multiprocessing.util     # (registers its exit handler when first imported: before the one below)
 
@@ -99,17 +104,23 @@ class BoundaryPipeline:
         self._conn, child = ctx.Pipe()
         self._process = ctx.Process(target=_serve, args=(child, self._conn, nodes), name="radarnode-boundaries",
                                     daemon=True)
+        # SIGINT/SIGTERM held while the process is made: it inherits them held and ignores them before it takes
+        # them (no traceback of a half-made process); here they come when released, after the nodes are handed over
+        held = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT, signal.SIGTERM})
         try:
-            self._process.start()
-        except BaseException:          # (a Ctrl-C in the fork): nothing left running
+            try:
+                self._process.start()
+            finally:
+                child.close()
+            self._deferred = True
+            for k, n in enumerate(nodes):
+                if n.boundaries is not None:
+                    n.defer_boundaries(self, k)
+        except BaseException:          # nothing left running, no node left handed over
             self.close(graceful=False)
             raise
         finally:
-            child.close()
-        for k, n in enumerate(nodes):
-            if n.boundaries is not None:
-                n.defer_boundaries(self, k)
-        self._deferred = True
+            signal.pthread_sigmask(signal.SIG_SETMASK, held)
 
     # --- the node's side -------------------------------------------------------------------------------------
     def submit(self, index: int, columns: tuple, scalars: tuple) -> None:
@@ -172,6 +183,8 @@ class BoundaryPipeline:
                 continue
             if states is not None:
                 n.resume_boundaries(states[k])
+            elif self.submitted == 0:    # nothing handed over yet: the node's own estimator is still its state
+                n.defer_boundaries(None, 0)
             else:
                 n.defer_boundaries(_Lost(), k)
 
@@ -243,6 +256,7 @@ def _serve(conn, parent_end, nodes: list) -> None:
     end (None) the estimators' state, so that the nodes go on in the run's process."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})     # (held by the fork)
     parent_end.close()        # so that the run's process ending, however it ends, is an end of file here
     devnull = os.open(os.devnull, os.O_RDWR)
     for fd in (0, 1, 2):      # nor does this process hold the caller's pipes open (a harness waits for them)

@@ -179,6 +179,10 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
     """
     if pipeline is not None and clock.realtime:
         raise ValueError("a BoundaryPipeline holds cycles until their boundaries are computed: not in real time")
+    for one in getattr(node, "nodes", [node]):
+        if isinstance(one.boundary_pipe, BoundaryPipeline) and one.boundary_pipe is not pipeline:
+            raise ValueError("the node hands its road boundaries to a BoundaryPipeline: pass it as pipeline= (or "
+                             "close it first), else its boundary frames would go out blank")
     sinks = list(sinks)
     stats = RunStats()
     period = node.period_s
