@@ -318,6 +318,30 @@ def test_a_closed_pipe_ends_quietly(tmp_path, argv):
     assert err == "", err          # no traceback, no "Broken pipe", no "Exception ignored"
 
 
+@pytest.mark.parametrize("closed", [(2,), (1, 2), (0, 1, 2)], ids=["stderr", "stdout+stderr", "all three"])
+def test_closed_standard_streams_still_give_the_whole_log(tmp_path, reference, closed):
+    """A caller that closed stderr (``2>&-``, a service started without it): Python gives that stream as None, and
+    the progress bar's question to it failed `log` before it wrote anything (exit 1, no file, no word). Now each
+    closed one is /dev/null: the log is whole, a bad scenario still exits 1, and a stray write to file descriptor 2
+    after the run does not land in the file the command opened (it took the free number 2 before)."""
+    out = tmp_path / "x.blf"
+    code = ("import os, sys\nfrom radarnode.cli.main import main\n"
+            f"rc = main(['log', {SCENARIO!r}, '-o', {str(out)!r}, '--duration', '2'])\n"
+            "os.write(2, b'stray bytes on descriptor 2' * 100)\n"
+            f"bad = main(['log', {str(tmp_path / 'none.yaml')!r}, '-o', {str(tmp_path / 'y.blf')!r}])\n"
+            f"open({str(tmp_path / 'rc')!r}, 'w').write(f'{{rc}} {{bad}}')\n")
+
+    def close():
+        for fd in closed:
+            os.close(fd)
+    p = subprocess.run([sys.executable, "-c", code], cwd=ROOT, preexec_fn=close, timeout=120)
+    assert p.returncode == 0
+    assert (tmp_path / "rc").read_text() == "0 1"
+    got = [(m.arbitration_id, bytes(m.data), round(m.timestamp, 5)) for m in can.LogReader(str(out))]
+    assert got == reference
+    assert not (tmp_path / "y.blf").exists()
+
+
 def test_a_long_sqlite_log_keeps_every_frame(tmp_path):
     """python-can's SqliteWriter drops what is still queued beyond one batch of 500 when stopped; radarnode's
     waits for its thread to take everything (a run renders faster than SQLite writes)."""

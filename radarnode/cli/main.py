@@ -77,6 +77,7 @@ def _terminate(signum, frame) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Run one command; the exit status is 0 (done), 1 (a file, scenario, bus or the run failed), 2 (usage: the
     command line cannot run as typed), 128 + the signal (130 SIGINT, 143 SIGTERM) when stopped."""
+    standard_streams()
     if not threading_main():
         return _quiet(argv)
     # SIGTERM unwinds like Ctrl-C (temporary files removed, finished files closed) instead of killing the
@@ -86,6 +87,27 @@ def main(argv: list[str] | None = None) -> int:
         return _quiet(argv)
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def standard_streams() -> None:
+    """Standard input, output and error that the caller closed (``2>&-``, a service started without them): each
+    opened on /dev/null, as daemons do, and Python's streams for them (None) on those. Python gives such a stream as
+    None, so that the first message (the progress bar asked stderr whether it is a terminal) failed the command before
+    it wrote anything; and the file descriptor stays free, so that the first file the command opens would take its
+    number and receive whatever a library writes to it."""
+    import os
+    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
+        try:
+            os.fstat(fd)
+            continue
+        except OSError:
+            pass
+        got = os.open(os.devnull, os.O_RDONLY if fd == 0 else os.O_WRONLY)      # the lowest free number: fd
+        if got != fd:
+            os.dup2(got, fd)
+            os.close(got)
+        if getattr(sys, name) is None:
+            setattr(sys, name, open(fd, "r" if fd == 0 else "w", closefd=False))
 
 
 def _quiet(argv: list[str] | None) -> int:
