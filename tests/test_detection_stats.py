@@ -348,6 +348,30 @@ def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(c
     assert abs(rate["detection"] - rate["signal"]) <= 0.2, rate
 
 
+@pytest.mark.parametrize("tested", [0.0, 0.4, 1.0])
+def test_the_lobe_test_of_some_cells_is_their_answer_among_every_cell(tested):
+    """The detection level asks the lobe test about its peaks only (0.4 of the cells on a guardrail road): each
+    tested cell's answer is bit for bit the one it has when every cell is tested (every cell still counts as another
+    return), and an untested cell is never hidden. Crowded cells (a few hundred within a few bins, several bodies
+    and posts) so that many are hidden."""
+    from radarnode.radar import detection_model
+    p = PRESETS["ars408_like"]
+    stat = DspChain(p).statistic
+    rng = np.random.default_rng(11)
+    n = 300
+    r, v = rng.uniform(20.0, 60.0, n), rng.uniform(-8.0, 8.0, n)
+    u = rng.uniform(-0.5, 0.5, n)
+    field = rng.normal(size=n) * 10.0 ** rng.uniform(0.0, 3.0, n) * np.exp(2j * np.pi * rng.random(n))
+    energy = np.abs(field) ** 2
+    tag = rng.integers(-1, 6, n)
+    args = (r, v, u, field, energy, tag, p.num_range_bins, p.num_chirps, p.num_virtual, stat)
+    every = detection_model._inside_lobes(*args)
+    assert 20 < every.sum() < n - 20               # the crowd hides many, not all
+    some = rng.random(n) < tested
+    got = detection_model._inside_lobes(*args, some)
+    assert np.array_equal(got[some], every[some]) and not got[~some].any()
+
+
 @pytest.mark.parametrize("name", ["hann", "hamming", "blackman", "boxcar", "blackmanharris"])
 @pytest.mark.parametrize("n", [4, 5, 7, 16, 63, 64, 65, 256, 300])
 def test_straddle_gain_is_the_windowed_tone_power_summed_directly(name, n):
