@@ -198,6 +198,12 @@ def _object_list_line(frames: int) -> None:
           f"chunk computations included: {s_list['rtf_mean']:.0f}× real time")
 
 
+#: frames of the detection level's line: its first frame imports scipy's k-d tree and assignment (0.1–0.2 s, once
+#: a process), which 60 frames' mean counted as 2–3 ms a frame; a run of 300 (22 s of the scene) spreads it as a log
+#: of that length does
+DETECTION_FRAMES = 300
+
+
 def _detection_line(frames: int) -> None:
     """The detection level on the scene issue 9 item 7 names (guardrail posts on both sides, four cars), and what
     its lobe test (``detection_model._inside_lobes``, timed around each call) takes of it."""
@@ -216,10 +222,10 @@ def _detection_line(frames: int) -> None:
 
     detection_model._inside_lobes = timed
     try:
-        s = speed(scene, "detection", max(frames, 60))
+        s = speed(scene, "detection", max(frames, DETECTION_FRAMES))
     finally:
         detection_model._inside_lobes = inner
-    n = max(frames, 60)
+    n = max(frames, DETECTION_FRAMES)
     print(f"detection level on {scene.name} (object list, {n} frames): median {s['median_s'] * 1e3:.2f} "
           f"ms per frame, mean {s['mean_s'] * 1e3:.2f} ms, {s['scatterers']:.0f} scatterers a frame: "
           f"{s['rtf_mean']:.0f}× real time; the lobe test {lobes[0] / max(lobes[1], 1) * 1e3:.2f} ms a call, "
