@@ -146,23 +146,26 @@ def test_orphans_extra_frames_and_restart_are_counted():
     node, frames, _ = _node_frames(sc, with_vehicle=False)
     general = next(m for m in frames if m.arbitration_id == P.OBJ_GENERAL)
     assembler = CycleAssembler()
-    assembler.on_message_received(general)                  # no header yet
+    assembler.on_message_received(general)                  # no header yet: kept for the next header
+    assert assembler.stats.orphan_frames == 0
+    assembler.flush()                                       # and none came: an orphan
     assert assembler.stats.orphan_frames == 1
     list(assembler.feed(frames))
     list(assembler.feed(frames))                            # the node restarts: MeasCounter jumps back
     assert assembler.stats.counter_resets == 1
+    other = can.Message(arbitration_id=P.OBJ_GENERAL, data=b"\x07" + bytes(general.data[1:]), is_extended_id=False)
     assembler.on_message_received(can.Message(arbitration_id=P.OBJ_STATUS, data=b"\x00\x00\x50\x10",
                                               is_extended_id=False))
-    assembler.on_message_received(general)                  # header said 0 objects: that cycle is over
-    assert assembler.stats.orphan_frames == 2
+    assembler.on_message_received(other)                    # header said 0 objects: that cycle is over; kept
+    duplicates = assembler.stats.duplicate_frames
     assembler.on_message_received(can.Message(arbitration_id=P.OBJ_STATUS, data=b"\x01\x00\x51\x10",
                                               is_extended_id=False))
-    other = can.Message(arbitration_id=P.OBJ_GENERAL, data=b"\x07" + bytes(general.data[1:]), is_extended_id=False)
     assembler.on_message_received(general)
-    assembler.on_message_received(other)                    # header said 1 object
-    assert assembler.stats.extra_frames == 1
+    assembler.on_message_received(other)                    # header said 1 object: one too many (and a repeat of
+    assert assembler.stats.extra_frames == 1                # the one from before the header, not an orphan)
+    assert assembler.stats.duplicate_frames == duplicates + 1
     assembler.flush()
-    assert assembler.stats.incomplete_cycles == 1
+    assert assembler.stats.incomplete_cycles == 1 and assembler.stats.orphan_frames == 1
     assembler.on_message_received(can.Message(arbitration_id=0x60B, is_extended_id=True, data=b"\x00" * 8))
     assert assembler.stats.errors_frames == 1
 

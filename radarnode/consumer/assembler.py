@@ -60,7 +60,11 @@ A frame of a group that arrives before the groups the sensor sends ahead of it (
 each whole before the next) are whole in the cycle in progress waits aside: the next header, of higher CAN
 priority, overtakes the last frames of a cycle, which must not take the next cycle's places. The cycle's own
 frame, in order, takes the place; at the cycle's end a frame aside fills a place still empty (a cycle reordered)
-or is counted in ``orphan_frames``.
+or is counted in ``orphan_frames``. List frames that come with no cycle open (the first frames of a cycle that
+overtook its header: a gateway, a driver with several transmit buffers) wait for the next header of their kind
+(``EARLY_FRAMES`` at most) and go aside in its cycle the same way; where they fill exactly the places its own frames
+left empty, the cycle is delivered at once. (A stale frame aside fills a place only if the cycle's own frame for it
+never comes: that cycle is then delivered with it instead of being dropped.)
 
 Frames of a group that arrive after their cycle was delivered are counted as
 ``late_frames`` and put their group back into the layout at once.
@@ -187,6 +191,10 @@ MAX_JUMP_STRIDES = 64
 #: headers held at once, the newest first in line for frames: a restarted sensor's next header still finds its
 #: first one when a replayed old header came between them
 HELD_HEADERS = 4
+#: list frames that came with no cycle open and are not a repeat of the last one's, kept for the next header of their
+#: kind (a gateway or a driver with several transmit buffers lets the first frames of a cycle overtake its header:
+#: one cycle in ten so reordered lost that cycle): at most this many, the oldest counted in ``orphan_frames``
+EARLY_FRAMES = 8
 #: MeasCounters of the headers taken (per kind) and of cycles counted lost, remembered: about 5 minutes of a 72-ms
 #: sensor, so that a switch of OutputType that long leaves no gap counted lost
 COUNTER_MEMORY = 4096
@@ -218,6 +226,8 @@ class _Pending:
         # frames of a group that came before the group sent ahead of it was whole (a frame of an earlier cycle that
         # the next header overtook, or this cycle's own, reordered): not counted until the cycle ends (_promote)
         self.provisional: dict[int, dict[int, tuple[bytes, dict]]] = {}
+        self.repeats: set[tuple[int, int]] = set()   # of those, the frames from before its header that repeated the
+        # last cycle's (a duplicate, not an orphan, if they take no place)
         self.order: list[int] = []
         self.bad = False
         self.early = False             # delivered as soon as the layout was complete
@@ -295,6 +305,9 @@ class CycleAssembler(can.Listener):
         # cycle lacks it too, and both are delivered); never delivered without either
         self._held: dict[str, _Pending] = {}
         self._behind: dict[str, list[_Pending]] = {}    # empty cycles that ended while one was held: after it
+        # list frames with no cycle open, for the next header of their kind (EARLY_FRAMES): (base, oid, data, values,
+        # whether it repeats the last cycle's frame)
+        self._early: dict[str, list[tuple[int, int, bytes, dict, bool]]] = {}
         self._stride: dict[str, int] = {}
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
@@ -409,6 +422,9 @@ class CycleAssembler(can.Listener):
                 self._older_suspects.clear()
                 for held_kind in list(self._held):      # and a cycle short of a group was followed by none
                     self._drop_held(held_kind)
+                for early in self._early.values():     # frames that waited for a header that never came
+                    self._count_unplaced(early)
+                self._early.clear()
 
     def expire(self, now: float | None = None) -> bool:
         """Close the cycle being assembled when nothing arrived for it for ``cycle_timeout_s``.
@@ -572,6 +588,18 @@ class CycleAssembler(can.Listener):
             counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
         header = _Pending(kind, n, counter, timestamp, data, n_near)
+        for frame in self._early.pop(kind, []):
+            # the frames that came just before it, with no cycle open: this cycle's, overtaken by them, or strays
+            # (or repeats of the last cycle's); aside, they take a place only its own frames leave empty (at its
+            # end, or when they make it whole)
+            e_base, e_oid, e_data, e_values, repeat = frame
+            aside = header.provisional.setdefault(e_base, {})
+            if e_oid in aside:
+                self._count_unplaced([frame])
+                continue
+            aside[e_oid] = (e_data, e_values)
+            if repeat:
+                header.repeats.add((e_base, e_oid))
         # the groups announced before this header (RadarState, CollDetState: the sensor sends them ahead of the
         # header of the first cycle that has the group): one announced after it is not this cycle's to wait for
         header.announced = frozenset(self._announced[kind])
@@ -735,12 +763,33 @@ class CycleAssembler(can.Listener):
                 if not place or (not general and self._fits(suspect, base, oid)):
                     self._add(suspect, base, oid, data, values)
                     return
+        if pending is not None and (self._behind_order(pending, base) or (
+                not self._fits(pending, base, oid) and pending.groups.get(base, {}).get(oid, (None,))[0] != data)) \
+                and self._whole_with_aside(pending):
+            # a frame of a group the cycle in progress is past, or with no place in it (and no repeat of its frame
+            # there), where the cycle's frames aside make it whole (its groups came reordered, or one of its frames
+            # before its header repeated the last cycle's: it waited for the next header): the next cycle's frame,
+            # ahead of its header — that cycle ends here, and does not take it
+            del self._pending[kind]
+            self._finish(pending)
+            pending = None
         if pending is None:
-            self._stray_list_frame(kind, base, oid, data)
+            self._stray_list_frame(kind, base, oid, data, values)
             return
         pending.arrival = time.monotonic()
-        if self._add(pending, base, oid, data, values):
+        if self._add(pending, base, oid, data, values) or pending.provisional.get(GENERAL[kind]):
+            # (with general frames from before its header aside, its other groups' frames wait aside too: one of
+            # them may be the last it lacked)
             self._maybe_complete(kind)
+
+    @staticmethod
+    def _behind_order(p: _Pending, base: int) -> bool:
+        """Whether cycle ``p`` holds frames (in place or aside) of a group the sensor sends after group ``base``: a
+        frame of ``base`` that repeats one of its frames then comes from the next cycle more likely than twice (a
+        repeat follows its frame at once)."""
+        order = GROUPS[p.kind]
+        later = order[order.index(base) + 1:]
+        return any(p.groups.get(g) or p.provisional.get(g) for g in later)
 
     def _ahead_of_order(self, p: _Pending, base: int) -> bool:
         """Whether a frame of group ``base`` comes before cycle ``p`` holds every frame of the groups the sensor
@@ -753,11 +802,25 @@ class CycleAssembler(can.Listener):
     def _promote(self, p: _Pending) -> None:
         """At the end of cycle ``p``: its frames that came out of order take the places still empty (a gateway
         reordered the cycle); any other had no place in it (an earlier cycle's, overtaken; ``orphan_frames``)."""
-        general = p.groups.get(GENERAL[p.kind], {})
+        general_id = GENERAL[p.kind]
+        early = p.provisional.pop(general_id, {})
+        general = p.groups.setdefault(general_id, {}) if early else p.groups.get(general_id, {})
+        taken = []
+        for oid, frame in early.items():
+            if len(general) < p.expected and oid not in general:
+                general[oid] = frame
+                taken.append(oid)
+            elif (general_id, oid) in p.repeats:
+                self.stats.duplicate_frames += 1
+            else:
+                self.stats.orphan_frames += 1
+        p.order[:0] = taken
         for base, frames in p.provisional.items():
             for oid, frame in frames.items():
                 if oid in general and oid not in p.groups.get(base, {}):
                     p.groups.setdefault(base, {})[oid] = frame
+                elif (base, oid) in p.repeats:
+                    self.stats.duplicate_frames += 1
                 else:
                     self.stats.orphan_frames += 1
         p.provisional = {}
@@ -780,11 +843,13 @@ class CycleAssembler(can.Listener):
                 p.provisional.setdefault(base, {})[oid] = (data, values)
                 return False
             stale = aside.pop(oid, None)
-            if stale is not None:
-                if stale[0] == data:
-                    self.stats.duplicate_frames += 1
-                else:
-                    self.stats.orphan_frames += 1      # the frame that came early was an earlier cycle's
+        else:       # (one from before the header: the cycle's own frame, in order, decides)
+            stale = p.provisional.get(base, {}).pop(oid, None)
+        if stale is not None:
+            if stale[0] == data or (base, oid) in p.repeats:
+                self.stats.duplicate_frames += 1
+            else:
+                self.stats.orphan_frames += 1      # the frame that came early was an earlier cycle's
         group = p.groups.setdefault(base, {})
         if oid in group:
             if group[oid][0] == data:
@@ -802,20 +867,40 @@ class CycleAssembler(can.Listener):
         group[oid] = (data, values)
         return True
 
-    def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
-        """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
+    def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes, values: dict) -> None:
+        """A list frame with no cycle open: a repeat, a late group of the last cycle, or one that came before its
+        header (kept for it: ``_early``; an orphan if no header takes it)."""
         done = self._last_done.get(kind)
         if done is not None:
             prior = done.groups.get(base, {}).get(oid)
             if prior is not None and prior[0] == data:
-                self.stats.duplicate_frames += 1
+                # a repeat of the last cycle's frame — or the next cycle's, before its header, the same bytes (an
+                # object that did not move): kept for the next header too, counted a duplicate if it takes no place
+                self._keep_early(kind, (base, oid, data, values, True))
                 return
             if base not in done.groups and oid in done.groups.get(GENERAL[kind], {}):
                 # a group the layout did not expect, for an object of the last cycle: expect it again
                 self.stats.late_frames += 1
                 self._announced[kind][base] = LAYOUT_MEMORY
                 return
-        self.stats.orphan_frames += 1
+        self._keep_early(kind, (base, oid, data, values, False))
+
+    def _keep_early(self, kind: str, frame: tuple) -> None:
+        """A list frame with no cycle open, kept for the next header of its kind (EARLY_FRAMES at most: the oldest is
+        then counted, a duplicate if it repeated the last cycle's frame, else an orphan)."""
+        early = self._early.setdefault(kind, [])
+        early.append(frame)
+        if len(early) > EARLY_FRAMES:
+            self._count_unplaced([early.pop(0)])
+
+    def _count_unplaced(self, frames) -> None:
+        """Frames from before a header that took no place: duplicates where they repeated the last cycle's frame,
+        orphans otherwise."""
+        for frame in frames:
+            if frame[4]:
+                self.stats.duplicate_frames += 1
+            else:
+                self.stats.orphan_frames += 1
 
     def _layout_complete(self, p: _Pending) -> bool:
         """Whether cycle ``p`` holds the header's count in its general group and in every group of the expected
@@ -832,10 +917,42 @@ class CycleAssembler(can.Listener):
 
     def _maybe_complete(self, kind: str) -> None:
         p = self._pending[kind]
-        if self._layout_complete(p):
+        if self._layout_complete(p) or self._whole_with_early(p):
             p.early = True
             del self._pending[kind]
             self._finish(p)
+
+    def _whole_with_early(self, p: _Pending) -> bool:
+        """Whether the general frames that came before cycle ``p``'s header (aside) fill exactly the places its own
+        frames left empty and make its layout complete: then they are taken (:meth:`_promote`), at once, not at the
+        next header."""
+        general_id = GENERAL[p.kind]
+        return any((general_id, oid) not in p.repeats for oid in p.provisional.get(general_id, {})) \
+            and self._whole_with_aside(p)
+
+    def _whole_with_aside(self, p: _Pending) -> bool:
+        """Whether cycle ``p``'s frames aside (before its header, or ahead of their group's order) fill every place its
+        own frames left empty in the expected layout: then they are taken (:meth:`_promote`) and True is returned
+        where the layout is complete (nothing is taken otherwise)."""
+        general_id = GENERAL[p.kind]
+        if p.bad or not any(p.provisional.values()):
+            return False
+
+        def aside(g):
+            # (a repeat of the last cycle's frame of a later group from before the header fills only at the end: it
+            # is one, most often, and would stand in for the cycle's own; a general one counts, the header's count
+            # decides — it makes a cycle whole at once only beside one that is no repeat, _whole_with_early)
+            return {oid for oid in p.provisional.get(g, {}) if g == general_id or (g, oid) not in p.repeats}
+        general = p.groups.get(general_id, {})
+        fill = aside(general_id) - set(general)
+        if len(general) + len(fill) != p.expected:
+            return False
+        ids_ = set(general) | fill
+        for g in self._expected_of(p) | set(p.groups) | set(p.provisional):
+            if g != general_id and set(p.groups.get(g, {})) | (aside(g) & ids_) != ids_:
+                return False
+        self._promote(p)
+        return self._layout_complete(p)
 
     def _drop_held(self, kind: str) -> None:
         """A held cycle that neither its late groups nor a like cycle after it vindicated (the end of data, a time-out,
