@@ -313,3 +313,74 @@ def test_a_standing_track_back_from_a_coast_takes_no_speed_from_where_it_finds_i
         assert abs(ground[0]) < 0.2 and abs(ground[1]) < 0.3, ground
     else:
         assert abs(ground[1]) > 0.5, ground                     # the filter took part of the jump as lateral speed
+
+
+def _standing_points(xy, sv):
+    """Detections of standing reflectors at points ``xy`` (sensor axes) for a sensor moving at ``sv``."""
+    x, y = np.asarray(xy, float).T
+    r, a = np.hypot(x, y), np.arctan2(y, x)
+    return Detections(r, -(sv[0] * np.cos(a) + sv[1] * np.sin(a)), a, np.full(r.size, 5.0), np.full(r.size, 30.0),
+                      np.full(r.size, -1, dtype=np.int64))
+
+
+def test_a_group_of_posts_has_the_radial_speed_of_the_standing_world_where_it_is_reported():
+    """Two posts 2 m apart, 9 and 11 m ahead and 2.75 m to the right, 130 km/h: one group, reported at the nearer
+    post's range and their mean lateral position (the same), where a post's radial speed is the standing world's;
+    their mean radial speed is 0.25 m/s off it (near the sensor, two posts of one group 1.5 m/s off: taken for
+    motion, a new track was born moving). The group's radial speed is read at its reported point's azimuth from the
+    line through its detections' speeds: the standing world's there within 1e-9. A body seen from behind, its
+    detections symmetric about its reported azimuth: their mean, as before. One detection: its own."""
+    sv = (36.11, 0.0)
+    det = _standing_points([(9.0, -2.75), (11.0, -2.75)], sv)
+    g = group_detections(det)
+    assert len(g) == 1
+    a = math.atan2(g.y_m[0], g.x_m[0])
+    assert g.range_rate_mps[0] == pytest.approx(-sv[0] * math.cos(a), abs=1e-9)
+    assert abs(g.range_rate_mps[0] - det.range_rate_mps.mean()) > 0.1          # not the mean
+    car = _detections([40.0, 40.0, 40.0], [-0.9, 0.0, 0.9], (-5.0, 0.0))
+    g = group_detections(car)
+    assert len(g) == 1 and g.range_rate_mps[0] == pytest.approx(np.mean(car.range_rate_mps), abs=1e-9)
+    one = _standing_points([(30.0, 3.0)], sv)
+    assert group_detections(one).range_rate_mps[0] == pytest.approx(one.range_rate_mps[0], abs=1e-12)
+
+
+@pytest.mark.parametrize("speed, accel", [(1.5, None), (3.0, None), (10.0, 3.0)])
+def test_a_standing_track_moves_only_after_two_measured_cycles_in_a_row_that_show_it(speed, accel):
+    """MOVING_EVIDENCE_CYCLES = 2: one detection of the next post, 1.4 m across the line of sight from a standing
+    track near the sensor (under HOP_M), read as some 20 m/s across it for one cycle — and the track coasted out of
+    the field of view as a crossing object. A track never seen moving whose detections have the standing world's
+    radial speed is reported moving only in a cycle whose update shows its speed over ground standing out of its σ
+    and whose previous measured update showed it too. A pedestrian or a cyclist stepping out across the line of
+    sight ahead (1.5, 3 m/s at once, ego at 10 m/s) or a car pulling out across it (3 m/s² to 10 m/s) still becomes
+    moving, a cycle after the first sign of it, on one track."""
+    assert T.MOVING_EVIDENCE_CYCLES == 2
+    from radarnode.perception.types import DYN_STATIONARY
+    sv = (10.0, 0.0)
+    trk = ObjectTracker()
+    dt, y, v, shown, first_move, first_show = 0.072, 0.0, 0.0, [], None, None
+    for k in range(40):                                      # (from 13 m on, at 10 m/s, a second track, as before)
+        x = 45.0 - sv[0] * dt * k
+        if k >= 10:                                          # across the line of sight from cycle 10
+            v = speed if accel is None else min(speed, v + accel * dt)
+            y += v * dt
+        out = trk.step(dt * k, _standing_points([(x, y)], sv), sv)
+        assert len(trk.x) == 1                               # one track, never a second
+        _, shows = trk._ground_motion(np.arange(1), sv)
+        shown.append(bool(shows[0]))
+        moving = len(out) == 1 and out.dyn_prop[0] != DYN_STATIONARY
+        first_show = k if first_show is None and shown[-1] else first_show
+        if moving and first_move is None:
+            first_move = k
+            assert shown[-1] and shown[-2], (k, shown[-3:])
+    assert first_show is not None and first_move == first_show + 1, (first_show, first_move)
+
+
+def test_a_detection_whose_radial_speed_is_not_the_standing_worlds_is_motion_at_once():
+    """A car ahead at the ego's speed (relative radial speed 0, the standing world's −36 m/s): its track is moving
+    as soon as it is confirmed, as before — the evidence rule waits only where motion shows in position alone."""
+    sv = (36.11, 0.0)
+    trk = ObjectTracker()
+    for k in range(3):
+        out = trk.step(0.072 * k, _detections([50.0], [0.0], (0.0, 0.0)), sv)
+    from radarnode.perception.types import DYN_MOVING
+    assert len(out) == 1 and out.dyn_prop[0] == DYN_MOVING

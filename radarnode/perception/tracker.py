@@ -51,6 +51,14 @@ HOP_M = 2.5
 COAST_REANCHOR_MISSES = 2
 #: a new or re-anchored track's prior on its velocity across the line of sight: the standing world's, σ 2 m/s
 TANGENTIAL_PRIOR_VAR = 4.0
+#: a track never seen moving whose detections' radial speeds are the standing world's moves only once its speed over
+#: ground has stood out of its uncertainty after this many measured cycles in a row: motion across the line of sight
+#: is seen only in position, and one detection of the next guardrail post (a standing track at 50–57° near the sensor
+#: that missed its own post took the post 2 m behind, 1.4 m across the line of sight: under HOP_M) reads as a speed
+#: of some 20 m/s across it for that cycle — the track then coasted out of the field of view as a crossing object at
+#: 130 km/h. A reflector that does move across the line of sight goes on showing it; a detection whose radial speed
+#: is not the standing world's is motion at once
+MOVING_EVIDENCE_CYCLES = 2
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
@@ -71,6 +79,14 @@ def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window: int =
     each with σ ``speed_sigma_mps``: σ_v · √(12 / (N (N² − 1))) / T (the slope's variance of a straight-line fit)."""
     n = window
     return np.asarray(speed_sigma_mps) * math.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
+
+
+def _standing_rate(z: np.ndarray, sensor_velocity) -> np.ndarray:
+    """Whether each detection group ``z`` (x, y, range rate; shape (n, 3)) has the range rate of a standing reflector
+    where it is, within MOVING_THRESHOLD_MPS, for a sensor moving at ``sensor_velocity`` (its axes)."""
+    r = np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-3)
+    standing = -(sensor_velocity[0] * z[:, 0] + sensor_velocity[1] * z[:, 1]) / r
+    return np.abs(z[:, 2] - standing) < MOVING_THRESHOLD_MPS
 
 
 def velocity_slope(history: np.ndarray, times: np.ndarray, count: np.ndarray, min_count: int = 3
@@ -163,8 +179,8 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     ymax = np.full(g, -np.inf)
     np.maximum.at(ymax, labels, y)
     gy = np.bincount(labels, weights=power * y, minlength=g) / wsum
-    vr = np.bincount(labels, weights=power * det.range_rate_mps, minlength=g) / wsum
     gx = xmin
+    vr = _rate_at(labels, power, wsum, det.azimuth_rad, det.range_rate_mps, np.arctan2(gy, gx))
     joined = np.isfinite(rigid_v[:, 0])
     if joined.any():
         # a joined near body wraps around the sensor (a car beside a corner radar): its nearest x and mean y may lie
@@ -185,6 +201,30 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     glint = np.zeros(g)
     np.maximum.at(glint, labels, 0.5 * det.range_m * det.azimuth_spread_rad)
     return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov)
+
+
+def _rate_at(labels: np.ndarray, power: np.ndarray, wsum: np.ndarray, az: np.ndarray, rate: np.ndarray,
+             at: np.ndarray) -> np.ndarray:
+    """Each group's radial speed at azimuth ``at`` (its reported point's, held within the span of its detections'
+    azimuths): the power-weighted straight line of its detections' radial speeds against their azimuths, read there.
+    A body's radial speed changes across the angle it spans (v·u, u its line of sight): near the sensor a group of
+    two guardrail posts 2 m apart spans 10° and their radial speeds some 3 m/s at 130 km/h, so their mean was not the
+    speed at the nearer post the group is reported at, and the tracker took the difference for motion. One azimuth
+    (or one detection): the weighted mean. Shape (groups,)."""
+    g = wsum.size
+    lo = np.full(g, np.inf)
+    hi = np.full(g, -np.inf)
+    np.minimum.at(lo, labels, az)
+    np.maximum.at(hi, labels, az)
+    d = az - np.clip(at, lo, hi)[labels]
+    s_d = np.bincount(labels, weights=power * d, minlength=g)
+    s_dd = np.bincount(labels, weights=power * d * d, minlength=g)
+    s_v = np.bincount(labels, weights=power * rate, minlength=g)
+    s_dv = np.bincount(labels, weights=power * d * rate, minlength=g)
+    den = wsum * s_dd - s_d * s_d
+    ok = den > 1e-12 * np.maximum(wsum * s_dd, 1e-300)
+    slope = np.where(ok, (wsum * s_dv - s_d * s_v) / np.where(ok, den, 1.0), 0.0)
+    return (s_v - slope * s_d) / wsum
 
 
 def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -440,6 +480,9 @@ class ObjectTracker:
         self.confirmed = np.zeros(0, dtype=bool)
         self.ids = np.zeros(0, dtype=np.int64)
         self.was_moving = np.zeros(0, dtype=bool)
+        # measured cycles in a row that showed the track moving (MOVING_EVIDENCE_CYCLES at once where its detection's
+        # radial speed was not the standing world's)
+        self.evidence = np.zeros(0, dtype=np.int64)
         self.size = np.zeros((0, 2))
         self.power = np.zeros(0)      # RCS in m², averaged in power
         self.tag = np.zeros(0, dtype=np.int64)
@@ -482,6 +525,9 @@ class ObjectTracker:
                 self.x[t], self.p[t] = tangential_update(self.x[t], self.p[t], z[g], groups.velocity[g],
                                                          groups.velocity_cov[g])
             hit[ti], used[gi] = True, True
+            _, shows = self._ground_motion(ti, sensor_velocity)
+            radial = ~_standing_rate(z[gi], sensor_velocity)
+            self.evidence[ti] = np.where(shows, np.where(radial, MOVING_EVIDENCE_CYCLES, self.evidence[ti] + 1), 0)
             # extent: what the detections spanned over the last cycles (a decaying maximum: one cycle sees only a
             # part of a body, and a far one is a single detection until its parts are resolved)
             # measured along the body's heading over ground (a moving object; a standing one along the sensor's
@@ -535,14 +581,12 @@ class ObjectTracker:
         # within a body the detection wanders over what it spans across the line of sight (a standing track's extent
         # is along the sensor's axes): a truck crossing at 3 m/s hopped 19 times without this
         across = across - (np.abs(self.size[idx, 0] * uy) + np.abs(self.size[idx, 1] * ux))
-        standing_rate = -(sensor_velocity[0] * ux + sensor_velocity[1] * uy)
         _, moving = self._heading(idx, sensor_velocity)
         # a standing track that coasted (its position across the line of sight extrapolated with a velocity only
         # position differences ever measured) and takes a detection again has nothing to move it by either: the
         # merged rails' glint at long range walks it across the road in steps under HOP_M otherwise
         coasted = self.misses[idx] >= COAST_REANCHOR_MISSES
-        return (((across > HOP_M) | coasted) & ~moving & ~self.was_moving[idx]
-                & (np.abs(z[:, 2] - standing_rate) < MOVING_THRESHOLD_MPS))
+        return ((across > HOP_M) | coasted) & ~moving & ~self.was_moving[idx] & _standing_rate(z, sensor_velocity)
 
     def _standing_across(self, idx: np.ndarray, sensor_velocity, z: np.ndarray) -> None:
         """Tracks ``idx`` that hopped to another standing reflector, detection ``z`` (x, y, range rate): their
@@ -568,7 +612,14 @@ class ObjectTracker:
     def _heading(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
         """Heading over ground (sensor axes, rad) of tracks ``idx`` and whether each moves: only where the ground
         speed stands out of its own uncertainty (the lateral velocity of a far object is poorly observed, azimuth
-        noise × range, and a post must not become a crossing object)."""
+        noise × range, and a post must not become a crossing object), and, for a track never seen moving, has done so
+        in :data:`MOVING_EVIDENCE_CYCLES` measured cycles in a row (or its radial speed said so)."""
+        heading, shows = self._ground_motion(idx, sensor_velocity)
+        return heading, shows & (self.was_moving[idx] | (self.evidence[idx] >= MOVING_EVIDENCE_CYCLES))
+
+    def _ground_motion(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
+        """Heading over ground of tracks ``idx`` and whether their speed over ground stands out of its uncertainty
+        (3σ along it, and at least MOVING_THRESHOLD_MPS) now."""
         x, pv = self.x[idx], self.p[idx][:, 2:4, 2:4]
         gx, gy = x[:, 2] + sensor_velocity[0], x[:, 3] + sensor_velocity[1]
         speed = np.hypot(gx, gy)
@@ -619,6 +670,8 @@ class ObjectTracker:
         self.confirmed = np.concatenate([self.confirmed, np.zeros(k, dtype=bool)])
         self.ids = np.concatenate([self.ids, np.full(k, -1, dtype=np.int64)])
         self.was_moving = np.concatenate([self.was_moving, np.zeros(k, dtype=bool)])
+        self.evidence = np.concatenate([self.evidence, np.where(_standing_rate(z[idx], sensor_velocity), 0,
+                                                                MOVING_EVIDENCE_CYCLES)])
         self.size = np.concatenate([self.size, np.stack([groups.length_m[idx], groups.width_m[idx]], 1)])
         self.power = np.concatenate([self.power, 10.0 ** (groups.rcs_dbsm[idx] / 10.0)])
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
@@ -683,8 +736,8 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "size", "power", "tag",
-                     "vh", "th", "nh"):
+        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "evidence", "size", "power",
+                     "tag", "vh", "th", "nh"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:
