@@ -192,8 +192,8 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         if nested is not None and value is None:
             # a section or list written with nothing after it (``road:``) is YAML's null, not "the defaults"
             what = "a list" if nested[1] else "a mapping of its fields"
-            raise src.error(child, f"field '{child}': value null (nothing after '{key}:') is not allowed; expected "
-                                   f"{what}, or no field '{key}' at all")
+            raise src.error(child, f"field '{child}': value null (written as null, ~ or nothing after '{key}:') is not "
+                                   f"allowed; expected {what}, or no field '{key}' at all")
         if nested is not None:
             sub, many = nested
             if many:

@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from radarnode.consumer.assembler import CycleAssembler
+from radarnode.errors import ConfigError
 from radarnode.radar.setup import radar_config
 from radarnode.radar.models import GLINT_SPAN_BEAMS, AutoModel, conflicting_actors, extended_actors, make_model
 from radarnode.radar.object_model import RuntimeConfig
@@ -440,3 +441,38 @@ def test_auto_renders_an_actor_with_posts_in_its_cfar_ring(rails, masked):
         assert auto[0] < 0.3 and detection[0] < 0.3 and obj[0] > 0.95, (auto, detection, obj)
     else:
         assert auto[0] > 0.95 and detection[0] > 0.95, (auto, detection)
+
+
+@pytest.mark.parametrize("field, value", [("max_distance_m", float("nan")), ("max_distance_m", float("inf")),
+                                          ("max_distance_m", -5.0), ("max_distance_m", 0.0),
+                                          ("power_reduction_db", float("inf")), ("power_reduction_db", float("nan")),
+                                          ("power_reduction_db", -3.0), ("high_sensitivity", 1), ("clusters", "yes")])
+def test_a_runtime_configuration_out_of_range_is_refused_by_name(field, value):
+    """A NaN MaxDistance emptied the object level's lists silently and failed deep in numpy at the detection level
+    ("negative dimensions are not allowed"); −5 m emptied every level's; an infinite power reduction gave the object
+    level nothing with eleven RuntimeWarnings where the detection level refused it (an independent tester's finding).
+    Each is refused where it is made, naming the field, the value and what is allowed; the edges pass (10 m, 0 dB)."""
+    kw = {"max_distance_m": 250.0, field: value}
+    with pytest.raises(ConfigError) as info:
+        RuntimeConfig(**kw)
+    assert f"RuntimeConfig.{field}" in str(info.value) and repr(value) in str(info.value)
+    RuntimeConfig(max_distance_m=10.0, power_reduction_db=0.0, high_sensitivity=False, clusters=True)
+
+
+@pytest.mark.parametrize("level", ["object", "detection", "signal", "auto"])
+@pytest.mark.parametrize("t_s, sv, name", [(float("nan"), None, "t_s"), (float("inf"), None, "t_s"),
+                                           (0.0, (float("nan"), 0.0), "sensor_velocity_est"),
+                                           (0.0, (float("inf"), 0.0), "sensor_velocity_est"),
+                                           (0.0, (20.0, 0.0, float("nan")), "sensor_velocity_est"),
+                                           (0.0, (20.0,), "sensor_velocity_est")])
+def test_a_step_at_a_non_finite_time_or_velocity_is_refused_by_name(level, t_s, sv, name):
+    """``step(nan)`` failed in numpy's integer conversion ("cannot convert float NaN to integer") at every level; a
+    NaN or infinite ego-motion estimate gave a frame. Each level refuses both, naming the argument; the model steps
+    on after the refusal."""
+    sc = scenario("  - {id: car, class: car, x_m: 50.0, lane: 1, speed_mps: 15.0}", duration=1.0)
+    cfg = radar_config(sc)
+    model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal, clusters_wanted=True)
+    with pytest.raises(ConfigError, match=name):
+        model.step(t_s, RuntimeConfig(max_distance_m=250.0), sv)
+    frame, _ = model.step(0.072, RuntimeConfig(max_distance_m=250.0), (20.0, 0.0))
+    assert np.all(np.isfinite(frame.objects.dist_long_m))

@@ -4,6 +4,7 @@ radar can never see, motion fields that contradict the waypoints; and report's "
 from __future__ import annotations
 
 import logging
+from pathlib import Path
 
 import pytest
 
@@ -362,3 +363,28 @@ def test_a_closing_speed_beyond_acc_lrrs_single_ramp_is_a_warning_naming_the_act
     assert rate == pytest.approx(-closing, abs=0.2) and alias == pytest.approx(2 * 132.66 - closing, abs=0.2), msg
     assert "beyond the ±132.7 m/s that preset acc_lrr's single chirp sequence measures" in msg, msg
     assert "AmbigState 3" in msg, msg
+
+
+@pytest.mark.parametrize("x1, t1, ok", [(179.0, 1.0, True), (180.0, 1.0, True), (181.0, 1.0, False),
+                                        (330.0, 1.0, False), (30.0 + 1e-10, 1e-12, True), (60.0, 1e-12, False)])
+def test_timed_waypoints_faster_than_an_actor_may_move_are_refused(tmp_path, x1, t1, ok):
+    """speed_mps is held to 150 m/s, but timed waypoints 2000 m apart in 1 s (or 30 m in 1e-12 s) passed silently
+    (an independent tester's finding): each leg's speed is held to the same limit, just below, at, above it and at
+    twice it; the error names the waypoint, its values and the speed."""
+    text = HEAD + (f"actors:\n  - {{id: a, class: car, waypoints: [{{t_s: 0, x_m: 30, y_m: 0}}, "
+                   f"{{t_s: {t1!r}, x_m: {x1!r}, y_m: 0}}]}}\n")
+    if ok:
+        _load(tmp_path, text)
+        return
+    _, msg = _error(tmp_path, text)
+    assert "actors[0].waypoints[1]" in msg and "at most 150 m/s" in msg and "m/s here" in msg, msg
+
+
+def test_a_section_written_as_null_is_named_as_written(tmp_path):
+    """``guardrails: null`` — the scenarios README said null meant none, the loader refuses null for every section
+    (``road:`` with nothing after it is YAML's null, not the defaults): the README now says to leave the field out,
+    and the message no longer says there was nothing after the key when null was written."""
+    _, msg = _error(tmp_path, HEAD + "road: {guardrails: null}\n")
+    assert "road.guardrails': value null (written as null, ~ or nothing after 'guardrails:')" in msg, msg
+    readme = (Path(__file__).resolve().parents[1] / "scenarios" / "README.md").read_text()
+    assert "null for none" not in readme

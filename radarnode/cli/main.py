@@ -141,6 +141,12 @@ def _main(argv: list[str] | None) -> int:
         return 128 + signal.SIGINT
     except Terminated as exc:
         return 128 + exc.signum
+    except MemoryError:      # what the checks before the run could not foresee: one line, not a trace
+        if args.debug:
+            traceback.print_exc(file=sys.stderr)
+        print(f"error: {args.command}: out of memory (this machine's memory did not hold what the run asked for); "
+              "expected a smaller scenario, frame or run (--fidelity, radar.overrides, --duration)", file=sys.stderr)
+        return 1
     except BrokenPipeError:  # output piped into `head` and the like: end quietly
         import os
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -25,11 +25,11 @@ from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.calibration import RESOLUTION
 from radarnode.radar.elevation import GROUND_REFLECTION
 from radarnode.radar.levels import FIDELITY_LEVELS, check_doa, make_model  # noqa: F401 (imported from here too)
-from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo, in_fov
+from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo, check_step, in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
 from radarnode.radar.options import SignalOptions
-from radarnode.radar.signal_model import decimation_for, synthesize, synthesize_rd
+from radarnode.radar.signal_model import check_cube_memory, decimation_for, synthesize, synthesize_rd
 from radarnode.scene.world import Scene, SensorView
 
 
@@ -77,6 +77,7 @@ class ScattererModel:
 
     def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
              ) -> tuple[RadarFrame, SensorView]:
+        check_step(t_s, sensor_velocity_est)
         t0 = time.perf_counter()
         view = self.scene.view(t_s)
         scat = self.scatterers(t_s, view, config)
@@ -133,8 +134,11 @@ class SignalModel(ScattererModel):
     #: keep the range–Doppler power map of every cycle in ``info.rd_power`` (for a viewer; off: it costs a pass)
     keep_rd = False
 
-    def __init__(self, *args, **kwargs) -> None:
+    def __init__(self, *args, check_memory: bool = True, **kwargs) -> None:
         super().__init__(*args, **kwargs)
+        if check_memory:
+            for seq in self.sequences():
+                check_cube_memory(seq, self.options.complex_dtype)
         self.chains = {seq.chirp_period_s: DspChain(seq, self.options.dsp) for seq in self.sequences()}
 
     def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
@@ -297,7 +301,8 @@ class AutoModel:
         # fall (the run's length) must not change what the detection level draws from ``rng``
         self.object = ObjectModel(scene, preset, np.random.default_rng(int(rng.integers(0, 2**63))), options)
         self.detection = DetectionModel(scene, preset, rng, options)
-        self.signal = SignalModel(scene, preset, rng, options)
+        # (rendered only where the scene asks for impairments: only then must its cube fit)
+        self.signal = SignalModel(scene, preset, rng, options, check_memory=options.impairments.any)
         self.scene = scene
         self.options = options
         self.clusters_wanted = clusters_wanted
@@ -312,6 +317,7 @@ class AutoModel:
         self.info = StepInfo()
 
     def step(self, t_s, config, sensor_velocity_est=None):
+        check_step(t_s, sensor_velocity_est)
         if self.options.impairments.any:
             self.choices["signal"] += 1
             out = self.signal.step(t_s, config, sensor_velocity_est)

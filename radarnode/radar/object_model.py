@@ -35,6 +35,7 @@ from radarnode.perception.types import (
     MEAS_MEASURED, MEAS_NEW,
     MEAS_PREDICTED, ClusterList, ObjectList, RadarFrame)
 from radarnode.dsp.spectra import circular as _circular
+from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
 from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, GATE_CHI2_3DOF, MIN_BODY_M, RCS_GAIN,
                                           TRACKER_SIGMA_POS_M, accel_sigma_mps2, classify, cluster_dyn_prop,
@@ -160,6 +161,38 @@ class RuntimeConfig:
     power_reduction_db: float = 0.0
     high_sensitivity: bool = False
     clusters: bool = True       # the object level builds its cluster list only when it is sent
+
+    def __post_init__(self) -> None:
+        # (a NaN distance emptied the object level's lists silently and failed deep in numpy at the detection level;
+        # a negative one emptied every level's)
+        for name, ok, allowed in (
+                ("max_distance_m", _real(self.max_distance_m) and self.max_distance_m > 0.0, "a finite distance > 0 m"),
+                ("power_reduction_db", _real(self.power_reduction_db) and self.power_reduction_db >= 0.0,
+                 "a finite reduction >= 0 dB"),
+                ("high_sensitivity", isinstance(self.high_sensitivity, (bool, np.bool_)), "true or false"),
+                ("clusters", isinstance(self.clusters, (bool, np.bool_)), "true or false")):
+            if not ok:
+                raise ConfigError(f"RuntimeConfig.{name}: value {getattr(self, name)!r} is not allowed; expected "
+                                  f"{allowed}")
+
+
+def _real(x) -> bool:
+    """A finite real number (not a bool)."""
+    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_)) \
+        and math.isfinite(x)
+
+
+def check_step(t_s, sensor_velocity_est) -> None:
+    """A model step's inputs: a finite time, and an ego-motion estimate of 2 or 3 finite numbers (vx, vy[, yaw
+    rate]) or None. A NaN time failed deep in numpy ("cannot convert float NaN to integer"); a NaN or infinite
+    velocity gave a frame."""
+    if not _real(t_s):
+        raise ConfigError(f"t_s: value {t_s!r} is not allowed; expected a finite time in seconds")
+    if sensor_velocity_est is not None and not (
+            isinstance(sensor_velocity_est, (tuple, list, np.ndarray)) and len(sensor_velocity_est) in (2, 3)
+            and all(_real(v) for v in sensor_velocity_est)):
+        raise ConfigError(f"sensor_velocity_est: value {sensor_velocity_est!r} is not allowed; expected None or "
+                          "(vx, vy) or (vx, vy, yaw rate), finite numbers (m/s, rad/s)")
 
 
 #: the columns of a cluster list's rows before it is sorted: position, velocity, RCS, σ of range, azimuth and range
@@ -1046,6 +1079,7 @@ class ObjectModel:
         configuration stays the same: a step takes its cycle's rows. The lists'
         arrays are views of the chunk's tables: read them, do not write to them.
         """
+        check_step(t_s, sensor_velocity_est)
         if sensor_velocity_est is not None and len(sensor_velocity_est) == 3:
             sensor_velocity_est = (sensor_velocity_est[0], sensor_velocity_est[1])   # (the yaw rate: truth here)
         ch, i = self._row(t_s, config)

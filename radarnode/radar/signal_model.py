@@ -122,6 +122,31 @@ def num_range_samples(preset: RadarPreset) -> int:
     return preset.num_range_bins
 
 
+#: the largest share of this machine's memory one frame's cube may take at the signal level (the chain keeps the
+#: cube, its spectrum and their channel sums at once: several cubes' worth in all)
+CUBE_MEMORY_SHARE = 0.125
+
+
+def check_cube_memory(preset: RadarPreset, dtype, field: str = "radar.overrides") -> None:
+    """Refuse a preset whose signal-level cube (channels × chirps × samples of ``dtype``) would take more than
+    :data:`CUBE_MEMORY_SHARE` of this machine's memory: it failed with numpy's MemoryError and a 60-line traceback
+    (12 × 8192 × 8192 complex128 samples, 12 GiB), or took the machine's memory. Where the size is not known
+    (no sysconf), nothing is refused."""
+    import os
+    try:
+        total = os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES")
+    except (ValueError, OSError, AttributeError):
+        return
+    n = preset.num_virtual * preset.num_chirps * num_range_samples(preset)
+    need = n * np.dtype(dtype).itemsize
+    if total > 0 and need > CUBE_MEMORY_SHARE * total:
+        raise ConfigError(f"{field}: a signal-level frame of {preset.num_virtual} channels × {preset.num_chirps} "
+                          f"chirps × {num_range_samples(preset)} samples ({np.dtype(dtype).name}) needs "
+                          f"{need / 2**30:.1f} GiB, more than {CUBE_MEMORY_SHARE:.3g} of this machine's "
+                          f"{total / 2**30:.1f} GiB; expected fewer chirps or samples (num_chirps, num_samples), "
+                          "complex64, or a cheaper fidelity (--fidelity detection)")
+
+
 def decimation_for(preset: RadarPreset, max_range_m: float) -> int:
     """Largest power-of-two decimation of the samples that still covers ``max_range_m``.
 

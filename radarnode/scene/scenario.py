@@ -65,6 +65,10 @@ class AccelStep:
         validate.number("accel_mps2", self.accel_mps2, lo=-15.0, hi=15.0)
 
 
+#: the fastest an actor may move (m/s): its ``speed_mps``, and what its timed waypoints' legs imply
+MAX_ACTOR_SPEED_MPS = 150.0
+
+
 @dataclass(frozen=True)
 class Waypoint:
     """Road-frame position; the actor moves in straight segments between waypoints.
@@ -94,6 +98,14 @@ def _check_profile(accel: tuple[AccelStep, ...], waypoints: tuple[Waypoint, ...]
         times = [s.t_s for s in seq]
         if any(b <= a for a, b in zip(times, times[1:])):
             raise FieldError(name, times, "strictly increasing t_s")
+    for k, (a, b) in enumerate(zip(timed, timed[1:])):
+        # the speed the times give a leg, held to what speed_mps allows (2000 m/s between two waypoints, a jump of
+        # 30 m in 1e-12 s, passed silently)
+        speed = math.hypot(b.x_m - a.x_m, b.y_m - a.y_m) / (b.t_s - a.t_s)
+        if not speed <= MAX_ACTOR_SPEED_MPS:
+            raise FieldError(f"waypoints[{k + 1}]", {"x_m": b.x_m, "y_m": b.y_m, "t_s": b.t_s},
+                             f"a leg from waypoints[{k}] at most {MAX_ACTOR_SPEED_MPS:g} m/s ({speed:.4g} m/s here), "
+                             "as speed_mps")
     if waypoints and not timed:
         for k, (a, b) in enumerate(zip(waypoints, waypoints[1:])):
             if a.x_m == b.x_m and a.y_m == b.y_m:
@@ -351,7 +363,7 @@ class Actor:
                 raise FieldError("lane", self.lane, "no lane when y_m is given (use one of them)")
         if self.lane is not None:
             validate.integer("lane", self.lane, lo=0, hi=9)
-        validate.number("speed_mps", self.speed_mps, lo=0.0, hi=150.0)
+        validate.number("speed_mps", self.speed_mps, lo=0.0, hi=MAX_ACTOR_SPEED_MPS)
         validate.number("heading_deg", self.heading_deg, lo=-180.0, hi=180.0)
         for name in ("length_m", "width_m"):
             v = getattr(self, name)
