@@ -129,9 +129,17 @@ class Acc:
                 # v = √(2·a·room), and stop there (the gap loop alone creeps: its speed term and its gap term
                 # cancel near the lead)
                 # (never accelerating towards it; the room counts what the ego covers while the brakes respond)
+                # below the curve, the constant deceleration that stops in the room: the ego slows all the way
+                # instead of coasting up to the curve (at 2.7 m/s 11.7 m behind, request 0 until 9 m, then the curve's
+                # 1 m/s²: the time to collision at 0 m/s² fell to 2.3 s and FCW warned behind a lead that ACC was
+                # stopping for — a tester's finding)
+                # (that deceleration from the room to the standstill gap itself: v²/(2·room) is then the same at every
+                # step of a constant-deceleration stop, which ends at the gap; taken with the brakes' response in the
+                # room, it shrank with the speed and the ego crept the last metre for seconds)
                 room = max(target.distance_m - s.standstill_gap_m - ego_speed_mps * STOP_RESPONSE_S, 0.0)
                 v_curve = math.sqrt(2.0 * STOP_DECEL_MPS2 * room)
-                gap = min(STOP_GAIN * (v_curve - ego_speed_mps), 0.0) if room > 0.2 else -2.0 * STOP_DECEL_MPS2
+                steady = -ego_speed_mps ** 2 / (2.0 * max(target.distance_m - s.standstill_gap_m, 0.05))
+                gap = min(STOP_GAIN * (v_curve - ego_speed_mps), steady) if room > 0.2 else -2.0 * STOP_DECEL_MPS2
             want = min(want, gap)
             # what avoiding the lead needs beyond ACC's authority is the driver's: take-over request
             closing = -target.rel_speed_mps
