@@ -164,10 +164,10 @@ def test_posts_two_metres_apart_passing_the_sensor_stay_standing(ego_mps, level,
     one cycle, and coasted out of the field of view as a crossing-moving object; a group of two posts reported at the
     nearer had their mean radial speed, 1.5 m/s off the standing world's there, and was born moving. 23 and 12
     non-standing reports over 8 seeds at the detection level (of 19,000), 17 over 4 seeds × 40 frames at the signal
-    level (an independent tester's finding). Now a track never seen moving moves only after two measured cycles in a
-    row that show it (at once where its radial speed is not the standing world's), and a group's radial speed is
-    read at its reported point's azimuth: 2, 2 and 3 (a track or two still hops along the posts for two cycles before
-    it leaves the field of view: a known limit)."""
+    level (an independent tester's finding). Now a track never seen moving within 20 m moves only once two of its
+    last three measured cycles show it (at once where its radial speed is not the standing world's), and a group's
+    radial speed is read at its reported point's azimuth: 2, 2 and 3 (a track or two still hops along the posts for
+    two cycles before it leaves the field of view: a known limit)."""
     from radarnode.perception.types import DYN_STATIONARY
     moving = reports = 0
     for seed in seeds:

@@ -51,14 +51,23 @@ HOP_M = 2.5
 COAST_REANCHOR_MISSES = 2
 #: a new or re-anchored track's prior on its velocity across the line of sight: the standing world's, σ 2 m/s
 TANGENTIAL_PRIOR_VAR = 4.0
-#: a track never seen moving whose detections' radial speeds are the standing world's moves only once its speed over
-#: ground has stood out of its uncertainty after this many measured cycles in a row: motion across the line of sight
+#: a track never seen moving near the sensor whose detections' radial speeds are the standing world's moves only once
+#: its speed over ground has stood out of its uncertainty in this many of its last measured cycles: motion across the
+#: line of sight
 #: is seen only in position, and one detection of the next guardrail post (a standing track at 50–57° near the sensor
 #: that missed its own post took the post 2 m behind, 1.4 m across the line of sight: under HOP_M) reads as a speed
 #: of some 20 m/s across it for that cycle — the track then coasted out of the field of view as a crossing object at
 #: 130 km/h. A reflector that does move across the line of sight goes on showing it; a detection whose radial speed
 #: is not the standing world's is motion at once
 MOVING_EVIDENCE_CYCLES = 2
+#: … of the last this many measured cycles …
+MOVING_EVIDENCE_WINDOW = 3
+#: … within this range (m): where a guardrail's next post lies 1–2 m across the line of sight from a track's own. Beyond
+#: it motion shows at once, as before: a car crossing 60 m ahead at 3 m/s was called moving in 0.65 of its cycles with
+#: the rule at every range instead of 0.76 (each new track of it waited), and no post hop needs it there
+MOVING_EVIDENCE_RANGE_M = 20.0
+_EVIDENCE_MASK = (1 << MOVING_EVIDENCE_WINDOW) - 1
+_POPCOUNT = np.array([bin(k).count("1") for k in range(1 << MOVING_EVIDENCE_WINDOW)])
 SIZE_DECAY = 0.95             # per cycle: the extent seen 14 cycles (1 s) ago counts half
 RCS_GAIN = 0.2                # exponential average of the RCS in power
 VEHICLE_RCS_DBSM, TRUCK_RCS_DBSM = 5.0, 17.0
@@ -480,7 +489,8 @@ class ObjectTracker:
         self.confirmed = np.zeros(0, dtype=bool)
         self.ids = np.zeros(0, dtype=np.int64)
         self.was_moving = np.zeros(0, dtype=bool)
-        # measured cycles in a row that showed the track moving (MOVING_EVIDENCE_CYCLES at once where its detection's
+        # which of the last MOVING_EVIDENCE_WINDOW measured cycles showed the track moving, a bit each, newest lowest
+        # (all at once where its detection's
         # radial speed was not the standing world's)
         self.evidence = np.zeros(0, dtype=np.int64)
         self.size = np.zeros((0, 2))
@@ -527,7 +537,9 @@ class ObjectTracker:
             hit[ti], used[gi] = True, True
             _, shows = self._ground_motion(ti, sensor_velocity)
             radial = ~_standing_rate(z[gi], sensor_velocity)
-            self.evidence[ti] = np.where(shows, np.where(radial, MOVING_EVIDENCE_CYCLES, self.evidence[ti] + 1), 0)
+            at_once = radial | (np.hypot(z[gi, 0], z[gi, 1]) > MOVING_EVIDENCE_RANGE_M)
+            self.evidence[ti] = np.where(shows & at_once, _EVIDENCE_MASK,
+                                         ((self.evidence[ti] << 1) | shows) & _EVIDENCE_MASK)
             # extent: what the detections spanned over the last cycles (a decaying maximum: one cycle sees only a
             # part of a body, and a far one is a single detection until its parts are resolved)
             # measured along the body's heading over ground (a moving object; a standing one along the sensor's
@@ -613,9 +625,10 @@ class ObjectTracker:
         """Heading over ground (sensor axes, rad) of tracks ``idx`` and whether each moves: only where the ground
         speed stands out of its own uncertainty (the lateral velocity of a far object is poorly observed, azimuth
         noise × range, and a post must not become a crossing object), and, for a track never seen moving, has done so
-        in :data:`MOVING_EVIDENCE_CYCLES` measured cycles in a row (or its radial speed said so)."""
+        in :data:`MOVING_EVIDENCE_CYCLES` of its last :data:`MOVING_EVIDENCE_WINDOW` measured cycles (or its radial
+        speed said so)."""
         heading, shows = self._ground_motion(idx, sensor_velocity)
-        return heading, shows & (self.was_moving[idx] | (self.evidence[idx] >= MOVING_EVIDENCE_CYCLES))
+        return heading, shows & (self.was_moving[idx] | (_POPCOUNT[self.evidence[idx]] >= MOVING_EVIDENCE_CYCLES))
 
     def _ground_motion(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
         """Heading over ground of tracks ``idx`` and whether their speed over ground stands out of its uncertainty
@@ -670,8 +683,9 @@ class ObjectTracker:
         self.confirmed = np.concatenate([self.confirmed, np.zeros(k, dtype=bool)])
         self.ids = np.concatenate([self.ids, np.full(k, -1, dtype=np.int64)])
         self.was_moving = np.concatenate([self.was_moving, np.zeros(k, dtype=bool)])
-        self.evidence = np.concatenate([self.evidence, np.where(_standing_rate(z[idx], sensor_velocity), 0,
-                                                                MOVING_EVIDENCE_CYCLES)])
+        near = np.hypot(z[idx, 0], z[idx, 1]) <= MOVING_EVIDENCE_RANGE_M
+        self.evidence = np.concatenate([self.evidence, np.where(_standing_rate(z[idx], sensor_velocity) & near, 0,
+                                                                _EVIDENCE_MASK)])
         self.size = np.concatenate([self.size, np.stack([groups.length_m[idx], groups.width_m[idx]], 1)])
         self.power = np.concatenate([self.power, 10.0 ** (groups.rcs_dbsm[idx] / 10.0)])
         self.tag = np.concatenate([self.tag, groups.actor_index[idx]])
