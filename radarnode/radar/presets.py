@@ -99,6 +99,13 @@ class RadarPreset:
         for f in ("range_sigma_floor_m", "speed_sigma_floor_mps", "azimuth_sigma_floor_deg", "min_range_m",
                   "system_loss_db", "noise_figure_db"):
             validate.number(f, getattr(self, f), lo=0.0)
+        # what a radar can be (a loss of 1e308 dB, a 1e-300-Hz sweep or a 1e-300-s chirp passed and turned into
+        # NaN inside, a car vanishing silently with numpy's RuntimeWarnings: an independent tester's finding)
+        validate.number("carrier_hz", self.carrier_hz, lo=1e9, hi=3e11)
+        validate.number("bandwidth_hz", self.bandwidth_hz, lo=1e6, hi=min(2e10, self.carrier_hz))
+        validate.number("chirp_period_s", self.chirp_period_s, lo=1e-7, hi=1e-2)
+        for f in ("system_loss_db", "noise_figure_db"):
+            validate.number(f, getattr(self, f), lo=0.0, hi=100.0)
         for f in ("tx_power_dbm", "antenna_gain_dbi"):
             validate.number(f, getattr(self, f), lo=-30.0, hi=60.0)
         for f in ("num_chirps", "num_samples", "num_tx", "num_rx"):
