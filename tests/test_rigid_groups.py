@@ -323,27 +323,6 @@ def _standing_points(xy, sv):
                       np.full(r.size, -1, dtype=np.int64))
 
 
-def test_a_group_of_posts_has_the_radial_speed_of_the_standing_world_where_it_is_reported():
-    """Two posts 2 m apart, 9 and 11 m ahead and 2.75 m to the right, 130 km/h: one group, reported at the nearer
-    post's range and their mean lateral position (the same), where a post's radial speed is the standing world's;
-    their mean radial speed is 0.25 m/s off it (near the sensor, two posts of one group 1.5 m/s off: taken for
-    motion, a new track was born moving). The group's radial speed is read at its reported point's azimuth from the
-    line through its detections' speeds: the standing world's there within 1e-9. A body seen from behind, its
-    detections symmetric about its reported azimuth: their mean, as before. One detection: its own."""
-    sv = (36.11, 0.0)
-    det = _standing_points([(9.0, -2.75), (11.0, -2.75)], sv)
-    g = group_detections(det)
-    assert len(g) == 1
-    a = math.atan2(g.y_m[0], g.x_m[0])
-    assert g.range_rate_mps[0] == pytest.approx(-sv[0] * math.cos(a), abs=1e-9)
-    assert abs(g.range_rate_mps[0] - det.range_rate_mps.mean()) > 0.1          # not the mean
-    car = _detections([40.0, 40.0, 40.0], [-0.9, 0.0, 0.9], (-5.0, 0.0))
-    g = group_detections(car)
-    assert len(g) == 1 and g.range_rate_mps[0] == pytest.approx(np.mean(car.range_rate_mps), abs=1e-9)
-    one = _standing_points([(30.0, 3.0)], sv)
-    assert group_detections(one).range_rate_mps[0] == pytest.approx(one.range_rate_mps[0], abs=1e-12)
-
-
 @pytest.mark.parametrize("speed, accel, x0", [(1.5, None, 18.0), (3.0, None, 18.0), (10.0, 3.0, 19.0),
                                              (3.0, None, 40.0)])
 def test_near_the_sensor_a_standing_track_moves_only_after_two_of_three_measured_cycles_show_it(speed, accel, x0):
@@ -368,7 +347,7 @@ def test_near_the_sensor_a_standing_track_moves_only_after_two_of_three_measured
             y += v * dt
         out = trk.step(dt * k, _standing_points([(x, y)], sv), sv)
         assert len(trk.x) == 1                               # one track, never a second
-        _, shows = trk._ground_motion(np.arange(1), sv)
+        _, shows = trk._heading(np.arange(1), sv)
         shown.append(bool(shows[0]))
         moving = len(out) == 1 and out.dyn_prop[0] != DYN_STATIONARY
         first_show = k if first_show is None and shown[-1] else first_show

@@ -188,8 +188,8 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     ymax = np.full(g, -np.inf)
     np.maximum.at(ymax, labels, y)
     gy = np.bincount(labels, weights=power * y, minlength=g) / wsum
+    vr = np.bincount(labels, weights=power * det.range_rate_mps, minlength=g) / wsum
     gx = xmin
-    vr = _rate_at(labels, power, wsum, det.azimuth_rad, det.range_rate_mps, np.arctan2(gy, gx))
     joined = np.isfinite(rigid_v[:, 0])
     if joined.any():
         # a joined near body wraps around the sensor (a car beside a corner radar): its nearest x and mean y may lie
@@ -210,30 +210,6 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     glint = np.zeros(g)
     np.maximum.at(glint, labels, 0.5 * det.range_m * det.azimuth_spread_rad)
     return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov)
-
-
-def _rate_at(labels: np.ndarray, power: np.ndarray, wsum: np.ndarray, az: np.ndarray, rate: np.ndarray,
-             at: np.ndarray) -> np.ndarray:
-    """Each group's radial speed at azimuth ``at`` (its reported point's, held within the span of its detections'
-    azimuths): the power-weighted straight line of its detections' radial speeds against their azimuths, read there.
-    A body's radial speed changes across the angle it spans (v·u, u its line of sight): near the sensor a group of
-    two guardrail posts 2 m apart spans 10° and their radial speeds some 3 m/s at 130 km/h, so their mean was not the
-    speed at the nearer post the group is reported at, and the tracker took the difference for motion. One azimuth
-    (or one detection): the weighted mean. Shape (groups,)."""
-    g = wsum.size
-    lo = np.full(g, np.inf)
-    hi = np.full(g, -np.inf)
-    np.minimum.at(lo, labels, az)
-    np.maximum.at(hi, labels, az)
-    d = az - np.clip(at, lo, hi)[labels]
-    s_d = np.bincount(labels, weights=power * d, minlength=g)
-    s_dd = np.bincount(labels, weights=power * d * d, minlength=g)
-    s_v = np.bincount(labels, weights=power * rate, minlength=g)
-    s_dv = np.bincount(labels, weights=power * d * rate, minlength=g)
-    den = wsum * s_dd - s_d * s_d
-    ok = den > 1e-12 * np.maximum(wsum * s_dd, 1e-300)
-    slope = np.where(ok, (wsum * s_dv - s_d * s_v) / np.where(ok, den, 1.0), 0.0)
-    return (s_v - slope * s_d) / wsum
 
 
 def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -535,7 +511,7 @@ class ObjectTracker:
                 self.x[t], self.p[t] = tangential_update(self.x[t], self.p[t], z[g], groups.velocity[g],
                                                          groups.velocity_cov[g])
             hit[ti], used[gi] = True, True
-            _, shows = self._ground_motion(ti, sensor_velocity)
+            _, shows = self._heading(ti, sensor_velocity)
             radial = ~_standing_rate(z[gi], sensor_velocity)
             at_once = radial | (np.hypot(z[gi, 0], z[gi, 1]) > MOVING_EVIDENCE_RANGE_M)
             self.evidence[ti] = np.where(shows & at_once, _EVIDENCE_MASK,
@@ -621,18 +597,19 @@ class ObjectTracker:
         self.p[idx, 0:2, 2:4] = 0.0
         self.p[idx, 2:4, 0:2] = 0.0
 
+    def _reported_motion(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
+        """:meth:`_heading`, and whether each of tracks ``idx`` is reported moving: where it moves now and, for a track
+        never seen moving, did in :data:`MOVING_EVIDENCE_CYCLES` of its last :data:`MOVING_EVIDENCE_WINDOW` measured
+        cycles (or its radial speed, or its range beyond MOVING_EVIDENCE_RANGE_M, said so at once). Only the list
+        sent waits for the evidence: the tracker's own rules (hops, confirmation, coasting) take the motion as it
+        shows (a car crossing close ahead, not yet reported moving, must not be re-anchored as a standing hop)."""
+        heading, shows = self._heading(idx, sensor_velocity)
+        return heading, shows & (self.was_moving[idx] | (_POPCOUNT[self.evidence[idx]] >= MOVING_EVIDENCE_CYCLES))
+
     def _heading(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
         """Heading over ground (sensor axes, rad) of tracks ``idx`` and whether each moves: only where the ground
         speed stands out of its own uncertainty (the lateral velocity of a far object is poorly observed, azimuth
-        noise × range, and a post must not become a crossing object), and, for a track never seen moving, has done so
-        in :data:`MOVING_EVIDENCE_CYCLES` of its last :data:`MOVING_EVIDENCE_WINDOW` measured cycles (or its radial
-        speed said so)."""
-        heading, shows = self._ground_motion(idx, sensor_velocity)
-        return heading, shows & (self.was_moving[idx] | (_POPCOUNT[self.evidence[idx]] >= MOVING_EVIDENCE_CYCLES))
-
-    def _ground_motion(self, idx: np.ndarray, sensor_velocity) -> tuple[np.ndarray, np.ndarray]:
-        """Heading over ground of tracks ``idx`` and whether their speed over ground stands out of its uncertainty
-        (3σ along it, and at least MOVING_THRESHOLD_MPS) now."""
+        noise × range, and a post must not become a crossing object)."""
         x, pv = self.x[idx], self.p[idx][:, 2:4, 2:4]
         gx, gy = x[:, 2] + sensor_velocity[0], x[:, 3] + sensor_velocity[1]
         speed = np.hypot(gx, gy)
@@ -767,7 +744,7 @@ class ObjectTracker:
         speed = np.hypot(gx, gy)
         pv = self.p[idx][:, 2:4, 2:4]
         ux, uy = gx / np.maximum(speed, 1e-9), gy / np.maximum(speed, 1e-9)
-        heading, moving = self._heading(idx, sensor_velocity)
+        heading, moving = self._reported_motion(idx, sensor_velocity)
         self.was_moving[idx] |= moving
         angle = np.abs(heading)
         dyn = np.where(angle > np.radians(135), DYN_ONCOMING, np.where(angle > np.radians(45), DYN_CROSSING_MOVING,
