@@ -51,14 +51,13 @@ HOP_M = 2.5
 COAST_REANCHOR_MISSES = 2
 #: a new or re-anchored track's prior on its velocity across the line of sight: the standing world's, σ 2 m/s
 TANGENTIAL_PRIOR_VAR = 4.0
-#: a track never seen moving near the sensor whose detections' radial speeds are the standing world's moves only once
-#: its speed over ground has stood out of its uncertainty in this many of its last measured cycles: motion across the
-#: line of sight
-#: is seen only in position, and one detection of the next guardrail post (a standing track at 50–57° near the sensor
-#: that missed its own post took the post 2 m behind, 1.4 m across the line of sight: under HOP_M) reads as a speed
-#: of some 20 m/s across it for that cycle — the track then coasted out of the field of view as a crossing object at
-#: 130 km/h. A reflector that does move across the line of sight goes on showing it; a detection whose radial speed
-#: is not the standing world's is motion at once
+#: a track never seen moving near the sensor whose detections' radial speeds are the standing world's is reported
+#: moving only once its speed over ground has stood out of its uncertainty in this many of its last measured cycles:
+#: motion across the line of sight is seen only in position, and one detection of the next guardrail post (a standing
+#: track at 50–57° near the sensor that missed its own post took the post 2 m behind, 1.4 m across the line of sight:
+#: under HOP_M) reads as a speed of some 20 m/s across it for that cycle — the track then coasted out of the field of
+#: view as a crossing object at 130 km/h. A reflector that does move across the line of sight goes on showing it; a
+#: detection whose radial speed is not the standing world's is motion at once
 MOVING_EVIDENCE_CYCLES = 2
 #: … of the last this many measured cycles …
 MOVING_EVIDENCE_WINDOW = 3
@@ -466,8 +465,8 @@ class ObjectTracker:
         self.ids = np.zeros(0, dtype=np.int64)
         self.was_moving = np.zeros(0, dtype=bool)
         # which of the last MOVING_EVIDENCE_WINDOW measured cycles showed the track moving, a bit each, newest lowest
-        # (all at once where its detection's
-        # radial speed was not the standing world's)
+        # (all at once where its detection's radial speed was not the standing world's, or it was beyond
+        # MOVING_EVIDENCE_RANGE_M)
         self.evidence = np.zeros(0, dtype=np.int64)
         self.size = np.zeros((0, 2))
         self.power = np.zeros(0)      # RCS in m², averaged in power
