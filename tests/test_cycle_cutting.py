@@ -765,6 +765,80 @@ def test_the_first_frames_of_a_cycle_before_its_header_lose_no_cycle(share, ahea
     assert (s.incomplete_cycles, s.orphan_frames, s.lost_cycles, s.conflicting_frames) == (0, 0, 0, 0)
 
 
+def _ahead(frames, k):
+    """A cycle's frames with the first ``k`` list frames after its header moved ahead of it."""
+    frames = list(frames)
+    h = next(i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_STATUS)
+    return frames[:h] + frames[h + 1:h + 1 + k] + [frames[h]] + frames[h + 1 + k:]
+
+
+def _never_wrong(cycles, stream, stamped: bool = True):
+    """Feed ``stream`` (timestamps stripped unless ``stamped``); returns (delivered wrong, cycles lost) against a
+    clean decode of ``cycles``' frames."""
+    clean = [m for frames, *_ in cycles for m in frames]
+    truth = _oracle(clean)
+    if not stamped:
+        stream = [_msg(m.arbitration_id, m.data) for m in stream]
+    got = list(CycleAssembler().feed(stream))
+    wrong = [c.meas_counter for c in got if c.meas_counter not in truth or not _same_cycle(c, truth[c.meas_counter])]
+    return wrong, sorted(set(truth) - {c.meas_counter for c in got})
+
+
+_NO_GROUPS = {0: [_cfg(RadarCfg_SendQuality_valid=1, RadarCfg_SendQuality=0),
+                  _cfg(RadarCfg_SendExtInfo_valid=1, RadarCfg_SendExtInfo=0)]}
+
+
+@pytest.mark.parametrize("case", ["general only, 1 ahead", "general only, 4 ahead", "4 ahead", "8 ahead",
+                                  "9 ahead", "12 ahead", "a frame lost, the next cycle's ahead",
+                                  "every cycle's last frame after the next header", "3 ahead, no timestamps",
+                                  "general only, 2 ahead, no timestamps"])
+def test_frames_ahead_of_or_behind_a_header_never_put_another_cycles_data_in_a_cycle(case):
+    """An independent tester's re-test of the frames kept for the next header: with only general frames sent, each
+    cycle waited for groups that never came and took the next cycle's first frame (19 of 20 delivered with the
+    next cycle's data); 4–8 frames ahead of every header swapped data between cycles (25–26 of 30); a frame lost and
+    the next cycle's first frame ahead of its header, or every cycle's last frame behind the next header, made a
+    cycle whole with another cycle's frame. Now the frames ahead of a header are its cycle's first ones, a general
+    frame beyond a cycle's count ends it, and where the frames carry the sensor's timestamps a frame sent at the
+    next header's time or a cycle earlier is no frame of the cycle in progress: no cycle is ever delivered with
+    another's data; up to 8 frames ahead none is lost, beyond that the cycles are dropped (counted), and a cycle
+    that lost a frame is dropped."""
+    n = 24
+    general_only = case.startswith("general only")
+    cycles = _node_cycles(n, toggles=_NO_GROUPS if general_only else None)
+    k = int(case.split(" ahead")[0].split()[-1]) if " ahead" in case and case[0] in "0123456789g" else 0
+    stream = []
+    for j, (frames, *_) in enumerate(cycles):
+        frames = list(frames)
+        if case == "a frame lost, the next cycle's ahead":
+            if j == 10:
+                frames.remove(next(m for m in frames if m.arbitration_id == P.OBJ_GENERAL))
+            if j == 11:
+                frames = _ahead(frames, 1)
+        elif case == "every cycle's last frame after the next header":
+            pass
+        elif k and sum(m.arbitration_id in LIST_IDS for m in frames) >= k:
+            frames = _ahead(frames, k)
+        stream += frames
+    if case == "every cycle's last frame after the next header":
+        moved, out = None, []
+        for frames, *_ in cycles:
+            frames = list(frames)
+            last = max(i for i, m in enumerate(frames) if m.arbitration_id in LIST_IDS)
+            h = next(i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_STATUS)
+            tail = frames.pop(last) if last > h else None
+            if moved is not None:
+                frames.insert(frames.index(next(m for m in frames if m.arbitration_id == P.OBJ_STATUS)) + 1, moved)
+            moved = tail
+            out += frames
+        stream = out
+    wrong, lost = _never_wrong(cycles, stream, stamped="no timestamps" not in case)
+    assert wrong == [], (case, wrong)
+    if case in ("a frame lost, the next cycle's ahead",):
+        assert 10 in lost and len(lost) <= 2, lost
+    elif k and k <= 8:
+        assert lost == [], lost
+
+
 def test_a_stray_list_frame_before_a_header_takes_no_place_that_its_cycle_fills():
     """Before a header: a general frame of an object its cycle does not hold, and a stale copy (other bytes) of one
     it holds. Neither takes a place: the cycle's own frames fill them, every cycle is delivered as sent, and both are
