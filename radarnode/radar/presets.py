@@ -148,7 +148,9 @@ class RadarPreset:
         if n_max > STAGGER_MAX_WRAPS:
             raise FieldError("min_range_rate_mps", self.min_range_rate_mps,
                              f"a span of range rates within {2 * STAGGER_MAX_WRAPS} wraps of 2·v_max "
-                             f"({2 * STAGGER_MAX_WRAPS * 2 * v1:.1f} m/s; max_range_rate_mps {hi:g})")
+                             f"({2 * STAGGER_MAX_WRAPS * 2 * v1:.1f} m/s; max_range_rate_mps {hi:g}; v_max "
+                             f"{v1:.3g} m/s comes from carrier_hz, chirp_period_s and num_tx: a higher carrier or a "
+                             "longer chirp narrows it, and the span must narrow with it)")
         for n in range(1, n_max + 1):
             beat = abs(n * 2.0 * v1 - round(n * v1 / v2) * 2.0 * v2)
             if beat <= 2.0 * STAGGER_TOLERANCE_MPS:
