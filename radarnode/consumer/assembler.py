@@ -734,7 +734,6 @@ class CycleAssembler(can.Listener):
         self._last_header[kind] = (counter, timestamp, header.timed)
         if last is None or not (math.isfinite(timestamp) and math.isfinite(last[1])):
             return
-        stride = self._stride.get(kind)
         if stride and (counter - last[0]) & 0xFFFF == stride and MIN_PERIOD_S <= timestamp - last[1] < 60.0:
             seen = self._periods.setdefault(kind, collections.deque(maxlen=8))
             seen.append(timestamp - last[1])
