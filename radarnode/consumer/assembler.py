@@ -60,18 +60,7 @@ A frame of a group that arrives before the groups the sensor sends ahead of it (
 each whole before the next) are whole in the cycle in progress waits aside: the next header, of higher CAN
 priority, overtakes the last frames of a cycle, which must not take the next cycle's places. The cycle's own
 frame, in order, takes the place; at the cycle's end a frame aside fills a place still empty (a cycle reordered)
-or is counted in ``orphan_frames``. List frames that come with no cycle open (the first frames of a cycle that
-overtook its header: a gateway, a driver with several transmit buffers) wait for the next header of their kind
-(``EARLY_FRAMES`` at most: beyond that the next cycle is dropped): its general frames are that cycle's first ones
-(a stray among them makes a conflict or one too many, and the cycle is dropped), its later groups' frames and a
-repeat of the last cycle's frame go aside and fill places its own frames leave empty. A general frame beyond a
-cycle's count (and no repeat of one it holds) ends the cycle in progress: it is the next cycle's. Where the frames
-carry the sensor's timestamps and the headers a period one stride apart (``MIN_PERIOD_S`` or longer), a list frame
-sent at the next header's time (``NEXT_HEADER_SHARE`` of the period) or later is the next cycle's, one sent more than
-the rest of a period before the header an earlier cycle's (an orphan), and a frame with no cycle open sent with the
-last cycle is no frame of the next; timestamps further than ``TIMING_REACH_PERIODS`` off, NaN or a header stamped
-off the period leave a frame to its place in the stream. No cycle is delivered with another cycle's frame in the
-tests' reorderings (tests/test_cycle_cutting.py); a cycle that lost a frame is dropped.
+or is counted in ``orphan_frames``.
 
 Frames of a group that arrive after their cycle was delivered are counted as
 ``late_frames`` and put their group back into the layout at once.
@@ -92,7 +81,6 @@ from __future__ import annotations
 import collections
 import dataclasses
 import logging
-import math
 import queue
 import threading
 import time
@@ -199,20 +187,6 @@ MAX_JUMP_STRIDES = 64
 #: headers held at once, the newest first in line for frames: a restarted sensor's next header still finds its
 #: first one when a replayed old header came between them
 HELD_HEADERS = 4
-#: list frames that came with no cycle open and are not a repeat of the last one's, kept for the next header of their
-#: kind (a gateway or a driver with several transmit buffers lets the first frames of a cycle overtake its header:
-#: one cycle in ten so reordered lost that cycle): at most this many, the oldest counted in ``orphan_frames``
-EARLY_FRAMES = 8
-#: where frames carry the sensor's timestamps (a bus read in real time, a log), a list frame sent this share of the
-#: learnt cycle period after a cycle's header or later is the next cycle's, and one sent more than the rest of a period
-#: before it an earlier cycle's: a cycle's frames go out within its bus-load budget (80 % of the period at most)
-NEXT_HEADER_SHARE = 0.9
-#: … the period learnt from headers one MeasCounter stride apart, at least this long (frames stamped as they are read
-#: from a bus stepped faster than real time, microseconds apart, teach no period: the timing rules stay off)
-MIN_PERIOD_S = 0.02
-#: … and they judge only frames stamped within this many periods of the header (a frame stamped an hour back, NaN or
-#: at −1 s is read by its place in the stream, as before)
-TIMING_REACH_PERIODS = 4.0
 #: MeasCounters of the headers taken (per kind) and of cycles counted lost, remembered: about 5 minutes of a 72-ms
 #: sensor, so that a switch of OutputType that long leaves no gap counted lost
 COUNTER_MEMORY = 4096
@@ -244,10 +218,6 @@ class _Pending:
         # frames of a group that came before the group sent ahead of it was whole (a frame of an earlier cycle that
         # the next header overtook, or this cycle's own, reordered): not counted until the cycle ends (_promote)
         self.provisional: dict[int, dict[int, tuple[bytes, dict]]] = {}
-        self.repeats: set[tuple[int, int]] = set()   # of those, the frames from before its header that repeated the
-        # last cycle's (a duplicate, not an orphan, if they take no place)
-        self.before_header: set[tuple[int, int]] = set()   # and those from before its header that did not
-        self.timed = False             # its header's timestamp fits the learnt period: the timing rules apply
         self.order: list[int] = []
         self.bad = False
         self.early = False             # delivered as soon as the layout was complete
@@ -325,13 +295,6 @@ class CycleAssembler(can.Listener):
         # cycle lacks it too, and both are delivered); never delivered without either
         self._held: dict[str, _Pending] = {}
         self._behind: dict[str, list[_Pending]] = {}    # empty cycles that ended while one was held: after it
-        # each kind's last accepted header (MeasCounter, timestamp) and the periods seen between headers a stride apart
-        self._last_header: dict[str, tuple[int, float, bool]] = {}
-        self._periods: dict[str, collections.deque] = {}
-        # list frames with no cycle open, for the next header of their kind (EARLY_FRAMES): (base, oid, data, values,
-        # whether it repeats the last cycle's frame)
-        self._early: dict[str, list[tuple[int, int, bytes, dict, bool]]] = {}
-        self._early_overflow: set[str] = set()     # kinds whose next header lost some of the frames ahead of it
         self._stride: dict[str, int] = {}
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
@@ -446,9 +409,6 @@ class CycleAssembler(can.Listener):
                 self._older_suspects.clear()
                 for held_kind in list(self._held):      # and a cycle short of a group was followed by none
                     self._drop_held(held_kind)
-                for early in self._early.values():     # frames that waited for a header that never came
-                    self._count_unplaced(early)
-                self._early.clear()
 
     def expire(self, now: float | None = None) -> bool:
         """Close the cycle being assembled when nothing arrived for it for ``cycle_timeout_s``.
@@ -501,7 +461,7 @@ class CycleAssembler(can.Listener):
         if base in HEADERS:
             self._header(base, values, data, msg.timestamp)
         elif base in LIST_KIND:
-            self._list_frame(base, values, data, msg.timestamp)
+            self._list_frame(base, values, data)
         elif base in CONFIG_STATE:
             self._config_state(base, values)
         else:
@@ -612,34 +572,6 @@ class CycleAssembler(can.Listener):
             counter = int(values["Cluster_MeasCounter"])
             n = n_near + int(values["Cluster_NofClustersFar"])
         header = _Pending(kind, n, counter, timestamp, data, n_near)
-        if kind in self._early_overflow:
-            # more frames came ahead of it than are kept: it lacks some, and the next cycle's would fill their places
-            self._early_overflow.discard(kind)
-            header.bad = True
-        for frame in self._early.pop(kind, []):
-            # the frames that came just before it, with no cycle open: this cycle's, overtaken by them (a gateway that
-            # reorders one cycle's header reorders the next one's too), or strays, or repeats of the last cycle's. Its
-            # general frames are its first, in their order: a stray or stale one makes a frame conflict or one too many
-            # and the cycle is dropped, never delivered with it (aside, such a frame stood in for one of the cycle's
-            # own, and the next cycle's first frames, overtaking their header too, were taken for this cycle's: one in
-            # two cycles delivered with the next one's data — an independent tester's finding). Its later groups'
-            # frames wait aside and take a place only its own frames leave empty (at its end, or when they make it
-            # whole)
-            e_base, e_oid, e_data, e_values, repeat = frame
-            if e_base == GENERAL[kind] and not repeat:
-                self._add(header, e_base, e_oid, e_data, e_values)
-                continue
-            aside = header.provisional.setdefault(e_base, {})
-            if e_oid in aside:
-                self._count_unplaced([frame])
-                continue
-            aside[e_oid] = (e_data, e_values)
-            if repeat:
-                # (a general one aside too: the cycle's own frame of that object, in order, decides — a repeat of
-                # the last cycle's frame taken as this one's first made the cycle's own a conflict and cost it)
-                header.repeats.add((e_base, e_oid))
-            if not repeat or e_base == GENERAL[kind]:
-                header.before_header.add((e_base, e_oid))
         # the groups announced before this header (RadarState, CollDetState: the sensor sends them ahead of the
         # header of the first cycle that has the group): one announced after it is not this cycle's to wait for
         header.announced = frozenset(self._announced[kind])
@@ -711,7 +643,6 @@ class CycleAssembler(can.Listener):
                 self._count_lost(kind, last, counter, stride)
         self._last_counter[kind] = counter
         self._counters[kind].append(counter)
-        self._learn_period(kind, counter, timestamp, header)
         announced = self._announced[kind]
         for g in list(announced):
             announced[g] -= 1
@@ -719,50 +650,6 @@ class CycleAssembler(can.Listener):
                 del announced[g]
         self._pending[kind] = header
         self._maybe_complete(kind)
-
-    def _learn_period(self, kind: str, counter: int, timestamp: float, header: _Pending) -> None:
-        """The cycle period of ``kind``, from the time between headers one MeasCounter stride apart (the smallest of
-        the last few; nothing learnt from timestamps that are not finite or do not move forward); and whether
-        ``header``'s timestamp is where the period puts it after the last header (within a quarter period): only
-        then do the timing rules judge its cycle's frames (a header stamped 0 by a tool cut its cycle at once)."""
-        last = self._last_header.get(kind)
-        period = self._period(kind)
-        stride = self._stride.get(kind)
-        if period is not None and last is not None and stride and math.isfinite(timestamp) and math.isfinite(last[1]):
-            expected = last[1] + period * (((counter - last[0]) & 0xFFFF) / stride)
-            header.timed = abs(timestamp - expected) <= 0.25 * period
-        self._last_header[kind] = (counter, timestamp, header.timed)
-        if last is None or not (math.isfinite(timestamp) and math.isfinite(last[1])):
-            return
-        if stride and (counter - last[0]) & 0xFFFF == stride and MIN_PERIOD_S <= timestamp - last[1] < 60.0:
-            seen = self._periods.setdefault(kind, collections.deque(maxlen=8))
-            seen.append(timestamp - last[1])
-
-    def _next_cycles(self, p: _Pending, timestamp: float) -> bool:
-        """Whether a list frame was sent at or after the time cycle ``p``'s next header is due (NEXT_HEADER_SHARE of
-        a period after ``p``'s): the next cycle's, overtaking its header, whatever place it finds in ``p`` (a frame of
-        ``p`` lost and the next cycle's first frame of that object ahead of its header made ``p`` whole with the next
-        cycle's data; with eight frames or more ahead of every header, each cycle took the next one's: an independent
-        tester's finding). A cycle's own frames go out within its bus-load budget (80 % of the period at most).
-        Unknown while no period was learnt, or where the timestamps are not finite."""
-        period = self._period(p.kind)
-        if period is None or not p.timed or not math.isfinite(timestamp):
-            return False
-        return NEXT_HEADER_SHARE * period <= timestamp - p.timestamp < TIMING_REACH_PERIODS * period
-
-    def _period(self, kind: str) -> float | None:
-        """The cycle period learnt from the headers' timestamps (the smallest of the last few, at least MIN_PERIOD_S:
-        frames stamped as they are read from a bus stepped faster than real time teach nothing), or None."""
-        seen = self._periods.get(kind)
-        return min(seen) if seen else None
-
-    def _earlier_cycles(self, p: _Pending, timestamp: float) -> bool:
-        """Whether a list frame was sent more than (1 − NEXT_HEADER_SHARE) of a period before cycle ``p``'s header: an
-        earlier cycle's (its frames go out within 80 % of the period after their own header)."""
-        period = self._period(p.kind)
-        if period is None or not p.timed or not math.isfinite(timestamp):
-            return False
-        return (1.0 - NEXT_HEADER_SHARE) * period < p.timestamp - timestamp < TIMING_REACH_PERIODS * period
 
     def _count_lost(self, kind: str, last: int, counter: int, stride: int) -> None:
         """Count the cycles between MeasCounters ``last`` and ``counter`` of ``kind`` as lost, but for those another
@@ -816,7 +703,7 @@ class CycleAssembler(can.Listener):
             return len(general) < p.expected and oid not in general
         return oid in general and oid not in p.groups.get(base, {})
 
-    def _list_frame(self, base: int, values: dict, data: bytes, timestamp: float = math.nan) -> None:
+    def _list_frame(self, base: int, values: dict, data: bytes) -> None:
         kind = LIST_KIND[base]
         pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
@@ -848,44 +735,12 @@ class CycleAssembler(can.Listener):
                 if not place or (not general and self._fits(suspect, base, oid)):
                     self._add(suspect, base, oid, data, values)
                     return
-        strange = pending is not None and not self._fits(pending, base, oid) \
-            and pending.groups.get(base, {}).get(oid, (None,))[0] != data
-        if pending is not None and ((strange and base == GENERAL[kind]) or self._next_cycles(pending, timestamp) or (
-                (strange or self._behind_order(pending, base)) and self._whole_with_aside(pending))):
-            # a general frame with no place in the cycle in progress (its count reached, or another frame of that
-            # object in it) and no repeat of its frame there, which no frame of that cycle can be; or a frame of a
-            # later group with no place in it or of a group it is past, where the cycle's frames aside make it whole
-            # (its groups came reordered, or one of its frames before its header repeated the last cycle's): the next
-            # cycle's frame, ahead of its header — the cycle in progress ends here (delivered, held for a group it
-            # lacks, or dropped) and does not take it (taken, it was a conflict or one too many and the cycle was
-            # dropped — or, with the cycle waiting for groups the sensor does not send, each cycle took the next
-            # one's first frame: one in two delivered with the next one's data, an independent tester's finding)
-            del self._pending[kind]
-            self._finish(pending)
-            pending = None
         if pending is None:
-            self._stray_list_frame(kind, base, oid, data, values, timestamp)
-            return
-        if self._earlier_cycles(pending, timestamp):
-            # sent more than half a period before this cycle's header: an earlier cycle's, overtaken by the header
-            # (the last frame of every cycle after the next header: each cycle took the one before's, an independent
-            # tester's finding); it has no place here
-            self.stats.orphan_frames += 1
+            self._stray_list_frame(kind, base, oid, data)
             return
         pending.arrival = time.monotonic()
-        if self._add(pending, base, oid, data, values) or pending.before_header:
-            # (with frames from before its header aside, the last one it lacked may go aside too: its frames from
-            # before the header make it whole at once, not at the next cycle's first frame)
+        if self._add(pending, base, oid, data, values):
             self._maybe_complete(kind)
-
-    @staticmethod
-    def _behind_order(p: _Pending, base: int) -> bool:
-        """Whether cycle ``p`` holds frames (in place or aside) of a group the sensor sends after group ``base``: a
-        frame of ``base`` that repeats one of its frames then comes from the next cycle more likely than twice (a
-        repeat follows its frame at once)."""
-        order = GROUPS[p.kind]
-        later = order[order.index(base) + 1:]
-        return any(p.groups.get(g) or p.provisional.get(g) for g in later)
 
     def _ahead_of_order(self, p: _Pending, base: int) -> bool:
         """Whether a frame of group ``base`` comes before cycle ``p`` holds every frame of the groups the sensor
@@ -898,25 +753,11 @@ class CycleAssembler(can.Listener):
     def _promote(self, p: _Pending) -> None:
         """At the end of cycle ``p``: its frames that came out of order take the places still empty (a gateway
         reordered the cycle); any other had no place in it (an earlier cycle's, overtaken; ``orphan_frames``)."""
-        general_id = GENERAL[p.kind]
-        early = p.provisional.pop(general_id, {})
-        general = p.groups.setdefault(general_id, {}) if early else p.groups.get(general_id, {})
-        taken = []
-        for oid, frame in early.items():
-            if len(general) < p.expected and oid not in general:
-                general[oid] = frame
-                taken.append(oid)
-            elif (general_id, oid) in p.repeats:
-                self.stats.duplicate_frames += 1
-            else:
-                self.stats.orphan_frames += 1
-        p.order[:0] = taken
+        general = p.groups.get(GENERAL[p.kind], {})
         for base, frames in p.provisional.items():
             for oid, frame in frames.items():
                 if oid in general and oid not in p.groups.get(base, {}):
                     p.groups.setdefault(base, {})[oid] = frame
-                elif (base, oid) in p.repeats:
-                    self.stats.duplicate_frames += 1
                 else:
                     self.stats.orphan_frames += 1
         p.provisional = {}
@@ -939,13 +780,11 @@ class CycleAssembler(can.Listener):
                 p.provisional.setdefault(base, {})[oid] = (data, values)
                 return False
             stale = aside.pop(oid, None)
-        else:       # (one from before the header: the cycle's own frame, in order, decides)
-            stale = p.provisional.get(base, {}).pop(oid, None)
-        if stale is not None:
-            if stale[0] == data or (base, oid) in p.repeats:
-                self.stats.duplicate_frames += 1
-            else:
-                self.stats.orphan_frames += 1      # the frame that came early was an earlier cycle's
+            if stale is not None:
+                if stale[0] == data:
+                    self.stats.duplicate_frames += 1
+                else:
+                    self.stats.orphan_frames += 1      # the frame that came early was an earlier cycle's
         group = p.groups.setdefault(base, {})
         if oid in group:
             if group[oid][0] == data:
@@ -963,53 +802,20 @@ class CycleAssembler(can.Listener):
         group[oid] = (data, values)
         return True
 
-    def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes, values: dict,
-                          timestamp: float = math.nan) -> None:
-        """A list frame with no cycle open: a repeat, a late group of the last cycle, or one that came before its
-        header (kept for it: ``_early``; an orphan if no header takes it)."""
-        last = self._last_header.get(kind)
-        period = self._period(kind)
-        # sent with the last cycle, not ahead of the next header (a repeat, a gateway echoing old frames)
-        old = last is not None and period is not None and last[2] and math.isfinite(timestamp) \
-            and last[1] - TIMING_REACH_PERIODS * period < timestamp < last[1] + NEXT_HEADER_SHARE * period
+    def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
+        """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
         done = self._last_done.get(kind)
         if done is not None:
             prior = done.groups.get(base, {}).get(oid)
             if prior is not None and prior[0] == data:
-                # a repeat of the last cycle's frame — or the next cycle's, before its header, the same bytes (an
-                # object that did not move): kept for the next header too, counted a duplicate if it takes no place
-                if old:
-                    self.stats.duplicate_frames += 1
-                else:
-                    self._keep_early(kind, (base, oid, data, values, True))
+                self.stats.duplicate_frames += 1
                 return
             if base not in done.groups and oid in done.groups.get(GENERAL[kind], {}):
                 # a group the layout did not expect, for an object of the last cycle: expect it again
                 self.stats.late_frames += 1
                 self._announced[kind][base] = LAYOUT_MEMORY
                 return
-        if old:                 # no next cycle's frame ahead of its header: an orphan, as ever
-            self.stats.orphan_frames += 1
-            return
-        self._keep_early(kind, (base, oid, data, values, False))
-
-    def _keep_early(self, kind: str, frame: tuple) -> None:
-        """A list frame with no cycle open, kept for the next header of its kind (EARLY_FRAMES at most: the oldest is
-        then counted, a duplicate if it repeated the last cycle's frame, else an orphan)."""
-        early = self._early.setdefault(kind, [])
-        early.append(frame)
-        if len(early) > EARLY_FRAMES:
-            self._count_unplaced([early.pop(0)])
-            self._early_overflow.add(kind)      # the next cycle lacks a frame it may find in the one after: dropped
-
-    def _count_unplaced(self, frames) -> None:
-        """Frames from before a header that took no place: duplicates where they repeated the last cycle's frame,
-        orphans otherwise."""
-        for frame in frames:
-            if frame[4]:
-                self.stats.duplicate_frames += 1
-            else:
-                self.stats.orphan_frames += 1
+        self.stats.orphan_frames += 1
 
     def _layout_complete(self, p: _Pending) -> bool:
         """Whether cycle ``p`` holds the header's count in its general group and in every group of the expected
@@ -1026,33 +832,10 @@ class CycleAssembler(can.Listener):
 
     def _maybe_complete(self, kind: str) -> None:
         p = self._pending[kind]
-        if self._layout_complete(p) or (p.before_header and self._whole_with_aside(p)):
+        if self._layout_complete(p):
             p.early = True
             del self._pending[kind]
             self._finish(p)
-
-    def _whole_with_aside(self, p: _Pending) -> bool:
-        """Whether cycle ``p``'s frames aside (before its header, or ahead of their group's order) fill every place its
-        own frames left empty in the expected layout: then they are taken (:meth:`_promote`) and True is returned
-        where the layout is complete (nothing is taken otherwise)."""
-        general_id = GENERAL[p.kind]
-        if p.bad or not any(p.provisional.values()):
-            return False
-
-        def aside(g):
-            # (a repeat of the last cycle's frame of a later group from before the header fills only at the end: it
-            # is one, most often, and would stand in for the cycle's own)
-            return {oid for oid in p.provisional.get(g, {}) if (g, oid) not in p.repeats}
-        general = p.groups.get(general_id, {})
-        fill = aside(general_id) - set(general)
-        if len(general) + len(fill) != p.expected:
-            return False
-        ids_ = set(general) | fill
-        for g in self._expected_of(p) | set(p.groups) | set(p.provisional):
-            if g != general_id and set(p.groups.get(g, {})) | (aside(g) & ids_) != ids_:
-                return False
-        self._promote(p)
-        return self._layout_complete(p)
 
     def _drop_held(self, kind: str) -> None:
         """A held cycle that neither its late groups nor a like cycle after it vindicated (the end of data, a time-out,
