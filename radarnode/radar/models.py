@@ -134,11 +134,10 @@ class SignalModel(ScattererModel):
     #: keep the range–Doppler power map of every cycle in ``info.rd_power`` (for a viewer; off: it costs a pass)
     keep_rd = False
 
-    def __init__(self, *args, check_memory: bool = True, **kwargs) -> None:
+    def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        if check_memory:
-            for seq in self.sequences():
-                check_cube_memory(seq, self.options.complex_dtype)
+        for seq in self.sequences():
+            check_cube_memory(seq, self.options.complex_dtype)
         self.chains = {seq.chirp_period_s: DspChain(seq, self.options.dsp) for seq in self.sequences()}
 
     def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
@@ -301,8 +300,9 @@ class AutoModel:
         # fall (the run's length) must not change what the detection level draws from ``rng``
         self.object = ObjectModel(scene, preset, np.random.default_rng(int(rng.integers(0, 2**63))), options)
         self.detection = DetectionModel(scene, preset, rng, options)
-        # (rendered only where the scene asks for impairments: only then must its cube fit)
-        self.signal = SignalModel(scene, preset, rng, options, check_memory=options.impairments.any)
+        # the signal level only where the scene asks for impairments, the one case that runs it (its cube must then
+        # fit, and its chains are built for nothing otherwise)
+        self.signal = SignalModel(scene, preset, rng, options) if options.impairments.any else None
         self.scene = scene
         self.options = options
         self.clusters_wanted = clusters_wanted
