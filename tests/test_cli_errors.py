@@ -535,3 +535,21 @@ def test_out_of_memory_during_a_run_is_one_line(capsys, tmp_path, monkeypatch):
     assert main(["log", SCENARIO, "-o", str(out), "--duration", "1"]) == 1
     line = one_error_line(capsys.readouterr().err)
     assert line.startswith("error: log: out of memory") and not out.exists() and not list(tmp_path.glob("*.blf*"))
+
+
+@pytest.mark.parametrize("share, refused", [(0.99, False), (1.0, False), (1.01, True), (2.0, True)])
+def test_the_cube_memory_check_refuses_just_above_its_share(monkeypatch, share, refused):
+    """CUBE_MEMORY_SHARE = 1/8 of the machine's memory: a cube just below and at it passes, just above and at twice
+    it is refused (the machine's memory set so that mimo12's complex128 cube is ``share`` of the allowed size)."""
+    from radarnode.errors import ConfigError
+    from radarnode.radar.presets import PRESETS
+    from radarnode.radar import signal_model
+    p = PRESETS["mimo12"]
+    need = p.num_virtual * p.num_chirps * signal_model.num_range_samples(p) * 16
+    total = need / (share * signal_model.CUBE_MEMORY_SHARE)
+    monkeypatch.setattr(os, "sysconf", lambda name: 1 if name == "SC_PAGE_SIZE" else int(round(total)))
+    if refused:
+        with pytest.raises(ConfigError, match="radar.overrides"):
+            signal_model.check_cube_memory(p, "complex128")
+    else:
+        signal_model.check_cube_memory(p, "complex128")

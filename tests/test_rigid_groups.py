@@ -367,3 +367,16 @@ def test_a_detection_whose_radial_speed_is_not_the_standing_worlds_is_motion_at_
         out = trk.step(0.072 * k, _detections([50.0], [0.0], (0.0, 0.0)), sv)
     from radarnode.perception.types import DYN_MOVING
     assert len(out) == 1 and out.dyn_prop[0] == DYN_MOVING
+
+
+@pytest.mark.parametrize("r, waits", [(19.9, True), (20.0, True), (20.1, False), (40.0, False)])
+def test_the_motion_evidence_holds_within_its_range_and_not_beyond(r, waits):
+    """MOVING_EVIDENCE_RANGE_M = 20 m: a new track of a standing-looking detection within it starts with no motion
+    evidence (it must show motion in two of its next three measured cycles); just beyond it, and at twice it, with
+    all of it (motion counts at once, as before the rule)."""
+    assert T.MOVING_EVIDENCE_RANGE_M == 20.0
+    sv = (10.0, 0.0)
+    trk = ObjectTracker()
+    trk.step(0.0, _standing_points([(r, 0.0)], sv), sv)          # (on the axis: its range is r exactly)
+    assert len(trk.x) == 1
+    assert trk.evidence[0] == (0 if waits else (1 << T.MOVING_EVIDENCE_WINDOW) - 1)
