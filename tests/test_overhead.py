@@ -10,6 +10,8 @@ import numpy as np
 import pytest
 
 from radarnode.consumer import overhead as O
+from radarnode.consumer import ecu as ecu_module
+from radarnode.consumer.acc import AccSettings
 from radarnode.consumer.ecu import Ecu
 from radarnode.consumer.evaluate import simulate
 from radarnode.errors import FieldError
@@ -750,3 +752,64 @@ actors:
     for seed in (1, 2, 3, 4):
         r = simulate(dataclasses.replace(sc, seed=seed), fidelity="object")
         assert r.warned_for == "car" and r.passed, (seed, r.reasons)
+
+
+def _car_ahead_cycles(ecu, n, x0, ego, ground, t0=0.0, oid=5, k0=0, dt=0.072):
+    """Feed ``n`` cycles of a car straight ahead (object ``oid``, first ``x0`` m from the sensor) driving at ``ground``
+    m/s over ground, the ego at ``ego`` m/s, to ``ecu``. Returns the cycles whose ACC target is the car's track."""
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    followed = []
+    for k in range(n):
+        t = t0 + k * dt
+        ol = ObjectList.empty(1)
+        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = oid, x0 + (ground - ego) * k * dt, 10.0, 1
+        ol.vrel_long_mps[0] = ground - ego
+        ol.dyn_prop[0], ol.meas_state[0] = (DYN_MOVING if ground > 0.5 else DYN_STATIONARY), MEAS_MEASURED
+        ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = 0.2
+        ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
+        ol.length_m[0], ol.width_m[0] = 4.5, 1.8
+        ecu.set_ego(t, ego, 0.0)
+        d = ecu.on_cycle(t, ObjectCycle(k0 + k, t, ol, True, True))
+        if d.target is not None and d.target.object_id == oid:
+            followed.append(k)
+    return followed
+
+
+def test_a_lead_first_seen_close_at_the_egos_speed_is_followed():
+    """An independent tester's stop-and-go scene: ego and lead at 4 m/s, 6 m apart. Within 8 m the elevation
+    allowance reaches the ego's speed (a deck straight above seems to move at it), so the lead never counted as seen
+    moving: ACC followed it in no cycle and accelerated into it. First seen nearer than CLEAR_BIRTH_RANGE_M with
+    nothing standing tracked there, it cannot be a structure: ACC follows it from its fourth cycle."""
+    ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
+    followed = _car_ahead_cycles(ecu, 30, 6.0, 4.0, 4.0)
+    assert followed and followed[0] <= 6 and followed == list(range(followed[0], 30)), followed
+    # the same lead at 10 m/s and 8 m, and closing at 2 m/s from 10 m at 10 m/s
+    for x0, ego, ground in ((8.0, 10.0, 10.0), (10.0, 10.0, 8.0)):
+        assert _car_ahead_cycles(Ecu(acc=AccSettings(set_speed_mps=30.0)), 12, x0, ego, ground)[:1] != [], (x0, ground)
+
+
+def test_a_track_born_close_where_a_structure_stands_keeps_the_elevation_allowance():
+    """A structure seen from afar is filed where it stands; a new track born there within 8 m, whose Doppler makes it
+    move at the ego's speed, is what a deck part straight above shows, and does not count as seen moving."""
+    ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
+    # a deck's edge (standing) from 60 m to 3 m at 4 m/s, then a new object at 6 m moving at the ego's speed: a part
+    # of the deck straight above, which the ECU places at its slant range, beyond the edge
+    n = int((60.0 - 3.0) / (4.0 * 0.072))
+    _stationary = _car_ahead_cycles(ecu, n, 60.0, 4.0, 0.0, oid=1)
+    assert not _stationary and not ecu._moved
+    followed = _car_ahead_cycles(ecu, 20, 6.0, 4.0, 4.0, t0=n * 0.072, oid=9, k0=n)
+    assert followed == [] and not ecu._moved
+
+
+@pytest.mark.parametrize("born_m, moved", [(ecu_module.CLEAR_BIRTH_RANGE_M - 0.1, True),
+                                            (ecu_module.CLEAR_BIRTH_RANGE_M, False),
+                                            (ecu_module.CLEAR_BIRTH_RANGE_M + 0.1, False),
+                                            (2 * ecu_module.CLEAR_BIRTH_RANGE_M, False)])
+def test_the_clear_birth_range_below_at_above_and_twice(born_m, moved):
+    # the ego at 36 m/s, a car at 2 m/s over ground: beyond MOVING_MPS, within the elevation allowance at every range
+    # it is seen at from 32 m in (2.14 m/s at 32 m, more nearer): only a track born clear of structures counts it
+    # (the ECU's track begins with the car's second report, a cycle nearer)
+    ecu = Ecu(acc=AccSettings(set_speed_mps=40.0))
+    _car_ahead_cycles(ecu, ecu_module.MOVED_CYCLES + 2, born_m + 34.0 * 0.072, 36.0, 2.0)
+    assert len(ecu._born) == 1 and bool(ecu._moved) == moved
