@@ -478,6 +478,18 @@ class RadarNode:
         per_item = sum(frame_bits(int(d)) for d in frames_per_item)
         return max(0, min(n, int(budget // per_item))) if per_item else n
 
+    def _runtime_config(self) -> RuntimeConfig:
+        """What the configuration asks of the model, the same object while it stays the same (a new one, checked,
+        when it changes: the model compares it by identity first)."""
+        cfg = self.config
+        key = (min(cfg.max_distance_m, self.preset.max_range_m), 3.0 * cfg.radar_power, cfg.rcs_threshold == 1,
+               cfg.output_type == P.OUTPUT_CLUSTERS or self.boundaries is not None)
+        last = self.__dict__.get("_runtime")
+        if last is None or last[0] != key:
+            last = self._runtime = (key, RuntimeConfig(max_distance_m=key[0], power_reduction_db=key[1],
+                                                       high_sensitivity=key[2], clusters=key[3]))
+        return last[1]
+
     def cycle(self, t_s: float, timestamp: float | None = None) -> CycleOutput:
         """Run the model at ``t_s`` and return this cycle's frames in bus order.
 
@@ -485,9 +497,7 @@ class RadarNode:
         frames are spaced by their nominal time on the wire.
         """
         cfg = self.config
-        runtime = RuntimeConfig(max_distance_m=min(cfg.max_distance_m, self.preset.max_range_m),
-                                power_reduction_db=3.0 * cfg.radar_power, high_sensitivity=cfg.rcs_threshold == 1,
-                                clusters=cfg.output_type == P.OUTPUT_CLUSTERS or self.boundaries is not None)
+        runtime = self._runtime_config()
         sensor_velocity = self._sensor_velocity_estimate(t_s)
         frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),))
         own = self._boundary_frames(frame, t_s, sensor_velocity) if self.boundaries is not None else []
