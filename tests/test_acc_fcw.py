@@ -193,3 +193,29 @@ def test_behind_a_stopped_lead_acc_slows_all_the_way_and_never_draws_fcw(speed, 
     assert acc.standstill and abs(d - 4.0) < 0.5, (d, v)
     if speed * speed / (2.0 * (distance - 4.0)) < 1.0:      # (9 m at 3.5 m/s needs 1.2 m/s²: the curve's case)
         assert min(ttc) > FcwSettings().ttc_warn_s, min(ttc)
+
+
+CLOSE_LEAD = """
+name: close_lead_{v}
+duration_s: 10
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: {v}}}
+road: {{lanes: 2, ego_lane: 0}}
+ecu: {{acc_enabled: true, set_speed_mps: 30.0, time_gap_s: 1.5, closed_loop: true,
+      expect: {{lead: lead, min_gap_m: 3.0, no_fcw: true, acc_follows: lead}}}}
+actors:
+  - {{id: lead, class: car, x_m: {x}, lane: 0, speed_mps: {v}}}
+"""
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+@pytest.mark.parametrize("speed, x_m", [(4.0, 12.0), (10.0, 14.0)])
+def test_a_lead_first_seen_a_few_metres_ahead_is_followed_in_closed_loop(level, speed, x_m):
+    """An independent tester's scene: the lead's rear 6 m (8 m) ahead of the sensor, both at 4 m/s (10 m/s). ACC
+    followed it in no cycle and drove into it (gap 0.0 m) at both levels: within 8 m the ECU's elevation allowance
+    reached the ego's speed. Now it follows the lead and no warning is drawn."""
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import parse_scenario
+    r = simulate(parse_scenario(CLOSE_LEAD.format(v=speed, x=x_m)), fidelity=level)
+    assert r.passed, r.reasons
