@@ -53,6 +53,23 @@ def test_a_speed_profile_drives_along_untimed_waypoints_and_on_beyond_the_last()
     assert st.vy_mps[4, 0] == pytest.approx(8.0 * uy) and st.ay_mps2[4, 0] == pytest.approx(-2.0 * uy)
 
 
+def test_an_actor_without_a_path_beside_one_with_a_path_steps_without_a_nan_warning():
+    """A car on a speed profile beside one driven along untimed waypoints warned "invalid value encountered in
+    multiply" on every step (an independent tester's cut-out scene): the path's numbers of the car without one were
+    inf·0, discarded but computed. Now they are finite, and the car's own motion is as without the other."""
+    import warnings
+    text = PATH.format(extra="speed_mps: 10.0") + "  - {id: b, class: car, x_m: 40.0, y_m: 0.0, speed_mps: 1.5}\n"
+    scene = Scene(dataclasses.replace(read_scenario_text(text), cycle_period_s=0.072))
+    t = np.array([0.0, 1.0, 5.0, 20.0])
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        st = scene._movers.state(t)
+    b = [a.id for a in scene.scenario.actors].index("b")
+    np.testing.assert_allclose(st.x_m[:, b], 40.0 + 1.5 * t, atol=1e-9)
+    np.testing.assert_allclose(st.y_m[:, b], 0.0, atol=1e-12)
+    assert np.all(np.isfinite(st.x_m)) and np.all(np.isfinite(st.y_m))
+
+
 def test_a_timed_path_is_as_before():
     text = PATH.format(extra="speed_mps: 10.0").replace("{x_m: 20.0, y_m: 3.5}", "{t_s: 0.0, x_m: 20.0, y_m: 3.5}") \
         .replace("{x_m: 50.0, y_m: 3.5}", "{t_s: 2.0, x_m: 50.0, y_m: 3.5}").replace(

@@ -95,7 +95,10 @@ class MoverTable:
         self.leg_y = np.zeros((n, kl))
         self.leg_ux = np.ones((n, kl))
         self.leg_uy = np.zeros((n, kl))
-        self.leg_s = np.full((n, kl), np.inf)        # distance along the path at each leg's start
+        # distance along the path at each leg's start: legs beyond a path's last are never reached; an actor without
+        # a path has one leg from 0 (its numbers unused, finite: inf·0 in them warned of NaN on every step)
+        self.leg_s = np.full((n, kl), np.inf)
+        self.leg_s[:, 0] = 0.0
         for i in np.flatnonzero(self.is_route):
             px = np.array([p.x_m for p in waypoints[i]])
             py = np.array([p.y_m for p in waypoints[i]])
