@@ -779,8 +779,9 @@ def _car_ahead_cycles(ecu, n, x0, ego, ground, t0=0.0, oid=5, k0=0, dt=0.072):
 def test_a_lead_first_seen_close_at_the_egos_speed_is_followed():
     """An independent tester's stop-and-go scene: ego and lead at 4 m/s, 6 m apart. Within 8 m the elevation
     allowance reaches the ego's speed (a deck straight above seems to move at it), so the lead never counted as seen
-    moving: ACC followed it in no cycle and accelerated into it. First seen nearer than CLEAR_BIRTH_RANGE_M with
-    nothing standing tracked there, it cannot be a structure: ACC follows it from its fourth cycle."""
+    moving: ACC followed it in no cycle and accelerated into it. First seen where no structure could stand
+    (LandmarkMap.structure_near) and never measured standing, it cannot be a structure's: ACC follows it from its
+    fourth cycle."""
     ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
     followed = _car_ahead_cycles(ecu, 30, 6.0, 4.0, 4.0)
     assert followed and followed[0] <= 6 and followed == list(range(followed[0], 30)), followed
@@ -791,7 +792,8 @@ def test_a_lead_first_seen_close_at_the_egos_speed_is_followed():
 
 def test_a_track_born_close_where_a_structure_stands_keeps_the_elevation_allowance():
     """A structure seen from afar is filed where it stands; a new track born there within 8 m, whose Doppler makes it
-    move at the ego's speed, is what a deck part straight above shows, and does not count as seen moving."""
+    move at the ego's speed, is what a deck part straight above shows, and does not count as seen moving (a car's
+    RCS here: within MATCH_LAT_M of the deck's landmark)."""
     ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
     # a deck's edge (standing) from 60 m to 3 m at 4 m/s, then a new object at 6 m moving at the ego's speed: a part
     # of the deck straight above, which the ECU places at its slant range, beyond the edge
@@ -802,14 +804,79 @@ def test_a_track_born_close_where_a_structure_stands_keeps_the_elevation_allowan
     assert followed == [] and not ecu._moved
 
 
-@pytest.mark.parametrize("born_m, moved", [(ecu_module.CLEAR_BIRTH_RANGE_M - 0.1, True),
-                                            (ecu_module.CLEAR_BIRTH_RANGE_M, False),
-                                            (ecu_module.CLEAR_BIRTH_RANGE_M + 0.1, False),
-                                            (2 * ecu_module.CLEAR_BIRTH_RANGE_M, False)])
-def test_the_clear_birth_range_below_at_above_and_twice(born_m, moved):
-    # the ego at 36 m/s, a car at 2 m/s over ground: beyond MOVING_MPS, within the elevation allowance at every range
-    # it is seen at from 32 m in (2.14 m/s at 32 m, more nearer): only a track born clear of structures counts it
-    # (the ECU's track begins with the car's second report, a cycle nearer)
+def test_a_slow_car_first_seen_beyond_the_near_range_is_seen_moving():
+    """An independent tester's cut-out: a car creeping at 1.5 m/s first seen 17–30 m ahead, the ego at 6 m/s, was
+    never seen moving — the allowance there is 1.5–1.7 m/s and grows as the ego nears — and ACC drove into it. First
+    seen where no structure could stand and never measured standing, it counts from MOVING_MPS at any range."""
+    for x0 in (17.0, 19.0, 30.0, 60.0):
+        ecu = Ecu(acc=AccSettings(set_speed_mps=15.0))
+        _car_ahead_cycles(ecu, ecu_module.MOVED_CYCLES + 2, x0, 6.0, 1.5)
+        assert ecu._moved, x0
+    # at MOVING_MPS over ground and below it: not moving; above: moving
+    for ground, moved in ((0.9, False), (1.0, False), (1.1, True), (2.0, True)):
+        ecu = Ecu(acc=AccSettings(set_speed_mps=15.0))
+        _car_ahead_cycles(ecu, ecu_module.MOVED_CYCLES + 2, 30.0, 6.0, ground)
+        assert bool(ecu._moved) == moved, ground
+
+
+def test_a_track_measured_standing_keeps_the_elevation_allowance_after():
+    """A deck's own track stands still in Doppler from afar: once measured standing it could be a structure's, and its
+    Doppler motion near the deck (a reflector 7.5 m above the radar: 0.4 of the ego's speed at 12.5 m) is no motion.
+    Its ground speed reaches 1 m/s at 31 m (the ego at 36 m/s) and 12 m/s at 10 m."""
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
     ecu = Ecu(acc=AccSettings(set_speed_mps=40.0))
-    _car_ahead_cycles(ecu, ecu_module.MOVED_CYCLES + 2, born_m + 34.0 * 0.072, 36.0, 2.0)
-    assert len(ecu._born) == 1 and bool(ecu._moved) == moved
+    v, h, dt = 36.0, 7.5, 0.072
+    ground = []
+    for k in range(int(98.0 / (v * dt))):
+        d = 100.0 - v * k * dt                    # the deck's horizontal distance
+        r = math.hypot(d, h)
+        ground.append(v * (1.0 - d / r))           # what its Doppler makes of its speed over ground
+        ol = ObjectList.empty(1)
+        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = 1, r, 25.0, 7
+        ol.vrel_long_mps[0] = -v * d / r
+        ol.dyn_prop[0], ol.meas_state[0] = (DYN_MOVING if ground[-1] > 0.5 else DYN_STATIONARY), MEAS_MEASURED
+        ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
+        ol.length_m[0], ol.width_m[0] = 2.0, 20.0
+        ecu.set_ego(k * dt, v, 0.0)
+        ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True))
+    assert max(ground) > 12.0 and len(ecu._born) == 1 and not next(iter(ecu._born.values()))[2]
+    assert not ecu._moved
+
+
+def _landmark_map_with(across_m: float, rcs_dbsm: float, overhead: bool = False, moved: bool = False):
+    m = O.LandmarkMap(0.5, LAM)
+    lm = m.observe(1, 1, 100.0, across_m, 0.0, 80.0, rcs_dbsm, moved=moved)
+    for _ in range(9):
+        lm.add(1, 80.0, rcs_dbsm)
+    lm.overhead = overhead
+    return m
+
+
+@pytest.mark.parametrize("rcs, near", [(O.STRUCTURE_RCS_DBSM - 0.1, False), (O.STRUCTURE_RCS_DBSM, True),
+                                       (O.STRUCTURE_RCS_DBSM + 0.1, True), (2 * O.STRUCTURE_RCS_DBSM, True)])
+def test_a_landmark_as_strong_as_a_structure_reaches_across_the_road(rcs, near):
+    # 10 m across the road from where a track is first seen: only a structure's landmark (or a recognised one) reaches
+    assert _landmark_map_with(10.0, rcs).structure_near(100.0, 0.0, 0.0) == near
+    assert _landmark_map_with(10.0, rcs - 30.0, overhead=True).structure_near(100.0, 0.0, 0.0)
+    assert not _landmark_map_with(10.0, rcs, moved=True).structure_near(100.0, 0.0, 0.0)   # a vehicle stood there
+
+
+@pytest.mark.parametrize("across, near", [(O.MATCH_LAT_M - 0.1, True), (O.MATCH_LAT_M, True),
+                                          (O.MATCH_LAT_M + 0.1, False), (2 * O.MATCH_LAT_M, False)])
+def test_a_weak_landmark_reaches_match_lat_across(across, near):
+    assert _landmark_map_with(across, 10.0).structure_near(100.0, 0.0, 0.0) == near
+    # a strong one reaches OVERHEAD_MATCH_LAT_M across, and no farther
+    strong = O.STRUCTURE_RCS_DBSM + 5.0
+    for lat, ok in ((O.OVERHEAD_MATCH_LAT_M - 0.1, True), (O.OVERHEAD_MATCH_LAT_M, True),
+                    (O.OVERHEAD_MATCH_LAT_M + 0.1, False), (2 * O.OVERHEAD_MATCH_LAT_M, False)):
+        assert _landmark_map_with(lat, strong).structure_near(100.0, 0.0, 0.0) == ok, lat
+
+
+@pytest.mark.parametrize("along, near", [(O.MATCH_LONG_M + 0.1, False), (O.MATCH_LONG_M, True), (0.0, True),
+                                         (-O.MATCH_LONG_M - O.OVERHEAD_DEPTH_M, True),
+                                         (-O.MATCH_LONG_M - O.OVERHEAD_DEPTH_M - 0.1, False),
+                                         (-2 * (O.MATCH_LONG_M + O.OVERHEAD_DEPTH_M), False)])
+def test_a_structure_reaches_from_its_landmark_to_a_deck_s_depth_beyond(along, near):
+    # the point ``along`` m before the landmark (negative: beyond it, where the ECU places a reflector above the road)
+    assert _landmark_map_with(0.0, 25.0).structure_near(100.0 - along, 0.0, 0.0) == near

@@ -56,11 +56,11 @@ MOVING_MPS = 1.0                     # over ground: a track that moved faster ha
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
 OVERHEAD_HEIGHT_M = 8.0
-#: … but only for a track that a structure could be: one first seen nearer than this where nothing standing was ever
-#: tracked (no landmark but a stopped vehicle's) is no structure's reflector — a structure is in view from far off and
-#: filed there long before — and its speed over ground counts from MOVING_MPS (a lead first seen 6 m ahead at the
-#: ego's 4 m/s was never followed: within 8 m the allowance reaches the ego's speed)
-CLEAR_BIRTH_RANGE_M = 2.0 * OVERHEAD_HEIGHT_M
+#: … but only for a track that a structure could be. One first seen where no structure could stand
+#: (LandmarkMap.structure_near: a structure is in view from far off and filed where it stands long before) and never
+#: measured standing still (a structure's own track is, from afar) is no structure's reflector: its speed over ground
+#: counts from MOVING_MPS (a lead first seen 6 m ahead at the ego's 4 m/s was never followed — within 8 m the allowance
+#: reaches the ego's speed — nor a car creeping at 1.5 m/s first seen 17–30 m ahead: the allowance grows as it nears)
 STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
 MOVED_CYCLES = 3                     # cycles in a row of moving that make a track one seen moving
 #: over ground, against the predicted path's direction where the track is: faster is oncoming traffic, which neither
@@ -170,7 +170,7 @@ class Ecu:
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._placed: set[int] = set()            # tracks whose place was judged for continuing an object there
-        # where each track was first seen (odometry frame), and whether no structure can be there (CLEAR_BIRTH_RANGE_M)
+        # where each track was first seen (odometry frame), and whether it can be no structure's (OVERHEAD_HEIGHT_M)
         self._born: dict[int, tuple[float, float, bool]] = {}
         self._last_out_t: float | None = None
         if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
@@ -395,7 +395,7 @@ class Ecu:
         """Whether a track moves over ground more than a stationary reflector up to OVERHEAD_HEIGHT_M above the
         radar seems to: its Doppler is the ego's speed times cos(elevation), so at short range it seems to
         move away slowly (a bridge at 10 m, at 36 m/s: 3.2 m/s). ``clear``: the track cannot be a structure's
-        (:data:`CLEAR_BIRTH_RANGE_M`), and moving is faster than MOVING_MPS."""
+        (:data:`OVERHEAD_HEIGHT_M`), and moving is faster than MOVING_MPS."""
         if clear:
             return ground_mps > MOVING_MPS
         el = math.asin(min(OVERHEAD_HEIGHT_M / max(range_m, 0.1), 1.0))      # highest elevation at that range
@@ -475,10 +475,8 @@ class Ecu:
             wy = oy + so * xv[i] + co * yv[i]
             heading_there = oh + kappa * max(xv[i], 0.0)
             if t.id not in self._born:
-                # first seen near, where nothing standing was tracked before: no structure's reflector
-                clear = rng < CLEAR_BIRTH_RANGE_M and self.landmarks.match(
-                    wx, wy, heading_there, beyond_m=OVERHEAD_DEPTH_M, only=lambda lm: not lm.moved) is None
-                self._born[t.id] = (wx, wy, clear)
+                # first seen where no structure could stand: no structure's reflector (until measured standing)
+                self._born[t.id] = (wx, wy, not self.landmarks.structure_near(wx, wy, heading_there))
             if k is not None:
                 dyn = int(ol.dyn_prop[k])
                 trail[i] = (dyn == DYN_MOVING and gx > MOVING_MPS
@@ -500,6 +498,7 @@ class Ecu:
                     # stopped marks its place, so that a track the radar creates there anew is still one
                     filed.add(t.id)
                     bx, by, _ = self._born[t.id]
+                    self._born[t.id] = (bx, by, False)     # standing still: it could be a structure's after all
                     landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, heading_there, rng,
                                                       float(ol.rcs_dbsm[k]), moved=t.id in self._moved,
                                                       in_path=self._in_path.get(t.id, 0) > 0,

@@ -64,6 +64,11 @@ MAX_SAMPLES = 400                 # a landmark's history is capped (≈ 29 s of 
 #: overhead landmark takes any track within OVERHEAD_MATCH_LAT_M (a bridge spans the road, and the radar reports
 #: its parts as objects of their own as they come into the near scan)
 MATCH_LONG_M, MATCH_LAT_M, OVERHEAD_MATCH_LAT_M = 4.0, 2.5, 25.0
+#: a standing landmark whose RCS, averaged in power over its history, is at least this strong could be a structure's
+#: (a bridge deck is 25 dBsm from the front and a gantry 20, their lobing adds up to 5 dB to the mean; a truck's rear
+#: is 20, a car's 10, a guardrail post −5): across the road it reaches as far as a recognised one
+#: (:meth:`LandmarkMap.structure_near`)
+STRUCTURE_RCS_DBSM = 15.0
 #: a vehicle that stood in the ECU's path this many cycles in a row (0.72 s) is continued by a track the radar creates
 #: at its place after losing it (:meth:`Landmark.continues`); a shorter stay is no evidence (clutter on a guardrail road
 #: is classed a car at times), nor is a car standing beside the path (a deck part over the lane near it is no car)
@@ -239,6 +244,7 @@ class Landmark:
     latched_range_m: float | None = None            # the range at which the overhead decision was latched
     latched_fit: Fit | None = None
     pooled: int = 1                                 # landmarks whose histories the last test pooled (itself too)
+    power_sum: float = 0.0                          # Σ 10^(RCS/10) over the history kept (for its power mean)
     _last_height: float = math.nan
 
     def continues(self) -> bool:
@@ -253,8 +259,10 @@ class Landmark:
         self.range_m.append(range_m)
         self.rcs_dbsm.append(rcs_dbsm)
         self.cycles.append(cycle)
+        self.power_sum += 10.0 ** (rcs_dbsm / 10.0)
         if len(self.range_m) > MAX_SAMPLES:
             drop = len(self.range_m) - MAX_SAMPLES
+            self.power_sum = max(self.power_sum - sum(10.0 ** (v / 10.0) for v in self.rcs_dbsm[:drop]), 0.0)
             del self.range_m[:drop], self.rcs_dbsm[:drop], self.cycles[:drop]
             self.starts = [max(s - drop, 0) for s in self.starts]
             self.starts = sorted(set(self.starts))
@@ -422,6 +430,27 @@ class LandmarkMap:
             if -MATCH_LONG_M - beyond_m <= along <= MATCH_LONG_M and abs(across) <= lat and abs(along) < best_d:
                 best, best_d = cand, abs(along)
         return best
+
+    def structure_near(self, x_m: float, y_m: float, heading_rad: float) -> bool:
+        """Whether a structure could stand where a track is first seen, at odometry-frame (x_m, y_m): a landmark no
+        vehicle stood at (never moved, no object of its own beside a structure) from MATCH_LONG_M beyond the point
+        to MATCH_LONG_M + OVERHEAD_DEPTH_M before it along the ego's heading (the ECU places a reflector above the
+        road at its slant range, beyond where it stands), and across within MATCH_LAT_M — or within
+        OVERHEAD_MATCH_LAT_M for one recognised as overhead or as strong as a structure (STRUCTURE_RCS_DBSM: a deck's
+        reported point glints across the road, on a bend metres from where its landmark was filed)."""
+        c, s = math.cos(heading_rad), math.sin(heading_rad)
+        strong = 10.0 ** (STRUCTURE_RCS_DBSM / 10.0)
+        for cand in self.landmarks:
+            if cand.moved or cand.ground:
+                continue
+            dx, dy = cand.x_m - x_m, cand.y_m - y_m
+            along, across = c * dx + s * dy, abs(-s * dx + c * dy)
+            if not -MATCH_LONG_M - OVERHEAD_DEPTH_M <= along <= MATCH_LONG_M or across > OVERHEAD_MATCH_LAT_M:
+                continue
+            if across <= MATCH_LAT_M or cand.overhead or (
+                    cand.range_m and cand.power_sum >= strong * len(cand.range_m)):
+                return True
+        return False
 
     def forget(self, alive: set[int], ego_x_m: float, ego_y_m: float, keep_m: float = 300.0) -> None:
         """Drop the tracks that ended and the landmarks far behind the ego."""
