@@ -219,3 +219,40 @@ def test_a_lead_first_seen_a_few_metres_ahead_is_followed_in_closed_loop(level, 
     from radarnode.radar.setup import parse_scenario
     r = simulate(parse_scenario(CLOSE_LEAD.format(v=speed, x=x_m)), fidelity=level)
     assert r.passed, r.reasons
+
+
+def test_acc_asks_for_no_acceleration_while_fcw_warns():
+    """An independent tester's scene: the ego starts from standstill with a stopped car 4–32 m ahead, which ACC, never
+    having seen it move, does not follow; ACC went on towards its set speed at up to 4 m/s² while FCW warned. Now
+    from the warning on the request falls to 0 or below within the jerk limit and stays there while it lasts."""
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.consumer.ecu import Ecu
+    from radarnode.perception.types import DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    ecu = Ecu(acc=AccSettings(set_speed_mps=20.0))
+    dt, v, x = 0.072, 5.0, 40.0
+    outs = []
+    for k in range(60):
+        ol = ObjectList.empty(1)
+        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = 3, x, 10.0, 1
+        ol.vrel_long_mps[0] = -v
+        ol.dyn_prop[0], ol.meas_state[0] = DYN_STATIONARY, MEAS_MEASURED
+        ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
+        ol.length_m[0], ol.width_m[0] = 4.5, 1.8
+        ecu.set_ego(k * dt, v, 0.0)
+        outs.append(ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True)))
+        v = min(v + max(outs[-1].accel_request_mps2, -v / dt) * dt, 20.0)      # the ego follows the request
+        x -= v * dt
+        if x < 3.0:
+            break
+    warned = [k for k, o in enumerate(outs) if o.warning_level == LEVEL_WARNING]
+    assert warned and outs[warned[0] - 1].accel_request_mps2 > 0.0       # it was accelerating when the warning came
+    jerk = iso15622_limits(0.0)[2]
+    ramp = int(np.ceil(outs[warned[0] - 1].accel_request_mps2 / (jerk * dt))) + 1
+    assert all(outs[k].accel_request_mps2 <= 1e-12 for k in warned[ramp:]), [outs[k].accel_request_mps2 for k in warned]
+    # the controller alone: the cap at 0, reached within the jerk limit, and released with the warning
+    acc = Acc(AccSettings(set_speed_mps=20.0))
+    a = [acc.step(dt, 10.0, None, True) for _ in range(20)]
+    assert a[-1] > 1.0
+    b = [acc.step(dt, 10.0, None, True, no_accel=True) for _ in range(20)]
+    assert all(later <= earlier + 1e-12 for earlier, later in zip([a[-1]] + b, b)) and b[-1] == 0.0
+    assert acc.step(dt, 10.0, None, True) > 0.0

@@ -96,8 +96,10 @@ class Acc:
         """The driver confirms driving off (the resume button or a tap on the accelerator, ISO 22179)."""
         self.resume_confirmed = True
 
-    def step(self, dt: float, ego_speed_mps: float, target: Target | None, radar_ok: bool) -> float:
-        """The acceleration request (m/s²) for this cycle."""
+    def step(self, dt: float, ego_speed_mps: float, target: Target | None, radar_ok: bool,
+             no_accel: bool = False) -> float:
+        """The acceleration request (m/s²) for this cycle; ``no_accel`` (a collision warning is on): none above 0,
+        reached within the jerk limit."""
         s = self.settings
         if not s.enabled:
             self.state, self.request = STATE_OFF, 0.0
@@ -162,7 +164,7 @@ class Acc:
             self.standstill, self.standstill_s, self.resume_confirmed = True, 0.0, False
             self.request = HOLD_MPS2
             return self.request
-        want = min(max(want, a_min), a_max)
+        want = min(max(want, a_min), 0.0 if no_accel else a_max)
         if dt > 0:
             step = jerk * dt
             want = min(max(want, self.request - step), self.request + step)

@@ -31,7 +31,7 @@ from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, 
                                      course_known, crossing_road, curvature, in_path, measured_reach_m, path_heading,
                                      trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
-from radarnode.consumer.fcw import Fcw, FcwSettings
+from radarnode.consumer.fcw import LEVEL_WARNING, Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
 from radarnode.consumer.tracking import Tracker, line_of_sight, radial_mismatch2
 from radarnode.perception.motion import road_share
@@ -620,13 +620,15 @@ class Ecu:
                          oh + w * dt)
         self.trails.advance(v, w, dt)           # the same motion carries the trails into this cycle's frame
         target, fcw_target = self._select(t_s, tracks, ol, by_id, cluster_strength) if radar_ok else (None, None)
-        accel = self.acc.step(dt, self.ego_speed_mps, target, radar_ok)
         v = self.ego_speed_mps
         if fcw_target is not None:
             lead_v = max(v + fcw_target.rel_speed_mps, 0.0)
             level = self.fcw.step(fcw_target.distance_m, v, lead_v, self.ego_accel_mps2, fcw_target.lead_accel_mps2)
         else:
             level = self.fcw.step(None, v, 0.0, 0.0, 0.0)
+        # while FCW warns, ACC asks for no acceleration (it went on towards its set speed, at up to 4 m/s², into a
+        # stopped car FCW warned for and ACC, never having seen it move, does not follow)
+        accel = self.acc.step(dt, v, target, radar_ok, no_accel=level >= LEVEL_WARNING)
         fault = (0 if radar_ok else 1)
         out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
                         target, radar_ok,
