@@ -754,7 +754,7 @@ actors:
         assert r.warned_for == "car" and r.passed, (seed, r.reasons)
 
 
-def _car_ahead_cycles(ecu, n, x0, ego, ground, t0=0.0, oid=5, k0=0, dt=0.072):
+def _car_ahead_cycles(ecu, n, x0, ego, ground, t0=0.0, oid=5, k0=0, dt=0.072, rcs=10.0):
     """Feed ``n`` cycles of a car straight ahead (object ``oid``, first ``x0`` m from the sensor) driving at ``ground``
     m/s over ground, the ego at ``ego`` m/s, to ``ecu``. Returns the cycles whose ACC target is the car's track."""
     from radarnode.consumer.assembler import ObjectCycle
@@ -763,7 +763,7 @@ def _car_ahead_cycles(ecu, n, x0, ego, ground, t0=0.0, oid=5, k0=0, dt=0.072):
     for k in range(n):
         t = t0 + k * dt
         ol = ObjectList.empty(1)
-        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = oid, x0 + (ground - ego) * k * dt, 10.0, 1
+        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = oid, x0 + (ground - ego) * k * dt, rcs, 1
         ol.vrel_long_mps[0] = ground - ego
         ol.dyn_prop[0], ol.meas_state[0] = (DYN_MOVING if ground > 0.5 else DYN_STATIONARY), MEAS_MEASURED
         ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = 0.2
@@ -792,15 +792,15 @@ def test_a_lead_first_seen_close_at_the_egos_speed_is_followed():
 
 def test_a_track_born_close_where_a_structure_stands_keeps_the_elevation_allowance():
     """A structure seen from afar is filed where it stands; a new track born there within 8 m, whose Doppler makes it
-    move at the ego's speed, is what a deck part straight above shows, and does not count as seen moving (a car's
-    RCS here: within MATCH_LAT_M of the deck's landmark)."""
+    move at the ego's speed and reflects less than a vehicle (seen from below through the elevation beam's
+    sidelobes), is what a deck part straight above shows, and does not count as seen moving."""
     ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
     # a deck's edge (standing) from 60 m to 3 m at 4 m/s, then a new object at 6 m moving at the ego's speed: a part
     # of the deck straight above, which the ECU places at its slant range, beyond the edge
     n = int((60.0 - 3.0) / (4.0 * 0.072))
     _stationary = _car_ahead_cycles(ecu, n, 60.0, 4.0, 0.0, oid=1)
     assert not _stationary and not ecu._moved
-    followed = _car_ahead_cycles(ecu, 20, 6.0, 4.0, 4.0, t0=n * 0.072, oid=9, k0=n)
+    followed = _car_ahead_cycles(ecu, 20, 6.0, 4.0, 4.0, t0=n * 0.072, oid=9, k0=n, rcs=-10.0)
     assert followed == [] and not ecu._moved
 
 
@@ -840,37 +840,51 @@ def test_a_track_measured_standing_keeps_the_elevation_allowance_after():
         ol.length_m[0], ol.width_m[0] = 2.0, 20.0
         ecu.set_ego(k * dt, v, 0.0)
         ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True))
-    assert max(ground) > 12.0 and len(ecu._born) == 1 and not next(iter(ecu._born.values()))[2]
+    assert max(ground) > 12.0 and len(ecu._born) == 1 and next(iter(ecu._born.values()))[2] == ecu_module.STOOD_STILL
     assert not ecu._moved
 
 
-def _landmark_map_with(across_m: float, rcs_dbsm: float, overhead: bool = False, moved: bool = False):
+def _landmark_map_with(across_m: float, rcs_dbsm: float, overhead: bool = False, moved: bool = False,
+                       width_m: float = 0.0):
     m = O.LandmarkMap(0.5, LAM)
-    lm = m.observe(1, 1, 100.0, across_m, 0.0, 80.0, rcs_dbsm, moved=moved)
+    lm = m.observe(1, 1, 100.0, across_m, 0.0, 80.0, rcs_dbsm, moved=moved, width_m=width_m)
     for _ in range(9):
         lm.add(1, 80.0, rcs_dbsm)
     lm.overhead = overhead
     return m
 
 
+def _at(m, x=100.0):
+    return m.structure_at(x, 0.0, 0.0)
+
+
 @pytest.mark.parametrize("rcs, near", [(O.STRUCTURE_RCS_DBSM - 0.1, False), (O.STRUCTURE_RCS_DBSM, True),
                                        (O.STRUCTURE_RCS_DBSM + 0.1, True), (2 * O.STRUCTURE_RCS_DBSM, True)])
 def test_a_landmark_as_strong_as_a_structure_reaches_across_the_road(rcs, near):
     # 10 m across the road from where a track is first seen: only a structure's landmark (or a recognised one) reaches
-    assert _landmark_map_with(10.0, rcs).structure_near(100.0, 0.0, 0.0) == near
-    assert _landmark_map_with(10.0, rcs - 30.0, overhead=True).structure_near(100.0, 0.0, 0.0)
-    assert not _landmark_map_with(10.0, rcs, moved=True).structure_near(100.0, 0.0, 0.0)   # a vehicle stood there
+    assert _at(_landmark_map_with(10.0, rcs)) == (O.STRUCTURE_POSSIBLE if near else O.NO_STRUCTURE)
+    assert _at(_landmark_map_with(10.0, rcs - 30.0, overhead=True)) == O.STRUCTURE_RECOGNISED
+    assert _at(_landmark_map_with(10.0, rcs, moved=True)) == O.NO_STRUCTURE       # a vehicle stood there
+
+
+@pytest.mark.parametrize("width, wide", [(O.STRUCTURE_WIDTH_M - 0.1, False), (O.STRUCTURE_WIDTH_M, True),
+                                         (O.STRUCTURE_WIDTH_M + 0.1, True), (2 * O.STRUCTURE_WIDTH_M, True)])
+def test_a_landmark_of_an_object_as_wide_as_a_structure_is_one(width, wide):
+    assert _at(_landmark_map_with(10.0, 20.0, width_m=width)) == (O.STRUCTURE_WIDE if wide else O.STRUCTURE_POSSIBLE)
+    # … where it reaches (a weak one 10 m across does not) and below a recognised one
+    assert _at(_landmark_map_with(10.0, 10.0, width_m=width)) == O.NO_STRUCTURE
+    assert _at(_landmark_map_with(10.0, 20.0, overhead=True, width_m=width)) == O.STRUCTURE_RECOGNISED
 
 
 @pytest.mark.parametrize("across, near", [(O.MATCH_LAT_M - 0.1, True), (O.MATCH_LAT_M, True),
                                           (O.MATCH_LAT_M + 0.1, False), (2 * O.MATCH_LAT_M, False)])
 def test_a_weak_landmark_reaches_match_lat_across(across, near):
-    assert _landmark_map_with(across, 10.0).structure_near(100.0, 0.0, 0.0) == near
+    assert (_at(_landmark_map_with(across, 10.0)) == O.STRUCTURE_POSSIBLE) == near
     # a strong one reaches OVERHEAD_MATCH_LAT_M across, and no farther
     strong = O.STRUCTURE_RCS_DBSM + 5.0
     for lat, ok in ((O.OVERHEAD_MATCH_LAT_M - 0.1, True), (O.OVERHEAD_MATCH_LAT_M, True),
                     (O.OVERHEAD_MATCH_LAT_M + 0.1, False), (2 * O.OVERHEAD_MATCH_LAT_M, False)):
-        assert _landmark_map_with(lat, strong).structure_near(100.0, 0.0, 0.0) == ok, lat
+        assert (_at(_landmark_map_with(lat, strong)) == O.STRUCTURE_POSSIBLE) == ok, lat
 
 
 @pytest.mark.parametrize("along, near", [(O.MATCH_LONG_M + 0.1, False), (O.MATCH_LONG_M, True), (0.0, True),
@@ -879,4 +893,39 @@ def test_a_weak_landmark_reaches_match_lat_across(across, near):
                                          (-2 * (O.MATCH_LONG_M + O.OVERHEAD_DEPTH_M), False)])
 def test_a_structure_reaches_from_its_landmark_to_a_deck_s_depth_beyond(along, near):
     # the point ``along`` m before the landmark (negative: beyond it, where the ECU places a reflector above the road)
-    assert _landmark_map_with(0.0, 25.0).structure_near(100.0 - along, 0.0, 0.0) == near
+    assert (_at(_landmark_map_with(0.0, 25.0), 100.0 - along) == O.STRUCTURE_POSSIBLE) == near
+
+
+def _standing_then_car(rcs_stand: float, across_m: float, rcs_car: float, width_m: float = 0.5):
+    """An ECU that filed a standing object (``rcs_stand`` dBsm, ``width_m`` wide) ``across_m`` beside the lane 30 m
+    ahead, then sees a new object 6 m ahead at the ego's 4 m/s reflecting ``rcs_car``: whether it was seen moving."""
+    from radarnode.consumer.assembler import ObjectCycle
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
+    dt, v = 0.072, 4.0
+    n = int((30.0 - 8.0) / (v * dt))
+    for k in range(n + 12):
+        rows = [(1, 30.0 - v * k * dt, -across_m, 0.0, rcs_stand, DYN_STATIONARY, width_m)]
+        if k >= n:
+            rows.append((7, 6.0, 0.0, 4.0, rcs_car, DYN_MOVING, 1.8))
+        ol = ObjectList.empty(len(rows))
+        for j, (oid, x, y, ground, rcs, dyn, w) in enumerate(rows):
+            ol.id[j], ol.dist_long_m[j], ol.dist_lat_m[j], ol.rcs_dbsm[j], ol.obj_class[j] = oid, x, y, rcs, 1
+            ol.vrel_long_mps[j] = ground - v
+            ol.dyn_prop[j], ol.meas_state[j] = dyn, MEAS_MEASURED
+            ol.dist_long_sigma_m[j] = ol.dist_lat_sigma_m[j] = ol.vrel_long_sigma_mps[j] = ol.vrel_lat_sigma_mps[j] = 0.2
+            ol.length_m[j], ol.width_m[j] = 1.0, w
+        ecu.set_ego(k * dt, v, 0.0)
+        ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True))
+    return bool(ecu._moved)
+
+
+def test_a_lead_first_seen_beside_a_strong_roadside_object_is_seen_moving_and_a_weak_reflector_is_not():
+    """A second tester: one 16-dBsm reflector 6 m beside the lane where a close lead is first seen gave the lead the
+    elevation allowance back (a structure could stand there) and ACC drove into it. A structure's parts first seen
+    that near reflect less than a vehicle (seen from below through the elevation beam's sidelobes): a track that
+    reflects like a vehicle (OBSTACLE_RCS_DBSM, power-averaged) beside a narrow landmark counts its motion."""
+    for rcs_car, moved in ((ecu_module.OBSTACLE_RCS_DBSM - 10.0, False), (ecu_module.OBSTACLE_RCS_DBSM + 10.0, True)):
+        assert _standing_then_car(16.0, 6.0, rcs_car) == moved, rcs_car
+    # beside a landmark as wide as a structure (an unrecognised deck's), a strong track keeps the allowance too
+    assert not _standing_then_car(25.0, 6.0, 10.0, width_m=O.STRUCTURE_WIDTH_M + 1.0)

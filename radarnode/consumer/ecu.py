@@ -32,7 +32,7 @@ from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, 
                                      trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import LEVEL_WARNING, Fcw, FcwSettings
-from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, LandmarkMap
+from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, STRUCTURE_POSSIBLE, STRUCTURE_WIDE, LandmarkMap
 from radarnode.consumer.tracking import Tracker, line_of_sight, radial_mismatch2
 from radarnode.perception.motion import road_share
 from radarnode.perception.types import DYN_MOVING, DYN_ONCOMING, MEAS_PREDICTED
@@ -56,11 +56,15 @@ MOVING_MPS = 1.0                     # over ground: a track that moved faster ha
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
 OVERHEAD_HEIGHT_M = 8.0
-#: … but only for a track that a structure could be. One first seen where no structure could stand
-#: (LandmarkMap.structure_near: a structure is in view from far off and filed where it stands long before) and never
-#: measured standing still (a structure's own track is, from afar) is no structure's reflector: its speed over ground
-#: counts from MOVING_MPS (a lead first seen 6 m ahead at the ego's 4 m/s was never followed — within 8 m the allowance
-#: reaches the ego's speed — nor a car creeping at 1.5 m/s first seen 17–30 m ahead: the allowance grows as it nears)
+#: … but only for a track that could be a structure's reflector: one measured standing still (a structure's own track
+#: is, from afar), one first seen at a structure recognised as overhead or reported as wide as one
+#: (LandmarkMap.structure_at), or one first seen where a structure could stand that reflects less than a vehicle
+#: (OBSTACLE_RCS_DBSM, power-averaged: a deck's or a gantry's parts first seen within 16 m were −6 … −33 dBsm, seen
+#: from below through the elevation beam's sidelobes; a car is about 10). Any other track's speed over ground counts
+#: from MOVING_MPS (a lead first seen 6 m ahead at the ego's 4 m/s was never followed — within 8 m the allowance
+#: reaches the ego's speed — nor a car creeping at 1.5 m/s first seen 17–30 m ahead, nor either of them beside a
+#: parked truck or a sign). What the ECU knows of where each track was first seen (_born's third field): one of these
+BORN_CLEAR, BORN_NEAR_STRUCTURE, BORN_AT_STRUCTURE, STOOD_STILL = 0, 1, 2, 3
 STATIONARY_MPS = 1.0                 # over ground: slower is stationary (filed in the landmark map)
 MOVED_CYCLES = 3                     # cycles in a row of moving that make a track one seen moving
 #: over ground, against the predicted path's direction where the track is: faster is oncoming traffic, which neither
@@ -170,8 +174,8 @@ class Ecu:
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._placed: set[int] = set()            # tracks whose place was judged for continuing an object there
-        # where each track was first seen (odometry frame), and whether it can be no structure's (OVERHEAD_HEIGHT_M)
-        self._born: dict[int, tuple[float, float, bool]] = {}
+        # where each track was first seen (odometry frame), and whether it may be a structure's (BORN_CLEAR …)
+        self._born: dict[int, tuple[float, float, int]] = {}
         self._last_out_t: float | None = None
         if not (isinstance(wavelength_m, (int, float)) and 1e-4 < wavelength_m < 1.0):
             raise ValueError(f"Ecu wavelength_m: value {wavelength_m!r} is not allowed; expected the radar's carrier "
@@ -395,7 +399,7 @@ class Ecu:
         """Whether a track moves over ground more than a stationary reflector up to OVERHEAD_HEIGHT_M above the
         radar seems to: its Doppler is the ego's speed times cos(elevation), so at short range it seems to
         move away slowly (a bridge at 10 m, at 36 m/s: 3.2 m/s). ``clear``: the track cannot be a structure's
-        (:data:`OVERHEAD_HEIGHT_M`), and moving is faster than MOVING_MPS."""
+        (:data:`BORN_CLEAR`), and moving is faster than MOVING_MPS."""
         if clear:
             return ground_mps > MOVING_MPS
         el = math.asin(min(OVERHEAD_HEIGHT_M / max(range_m, 0.1), 1.0))      # highest elevation at that range
@@ -475,9 +479,21 @@ class Ecu:
             wy = oy + so * xv[i] + co * yv[i]
             heading_there = oh + kappa * max(xv[i], 0.0)
             if t.id not in self._born:
-                # first seen where no structure could stand: no structure's reflector (until measured standing)
-                self._born[t.id] = (wx, wy, not self.landmarks.structure_near(wx, wy, heading_there))
+                at = self.landmarks.structure_at(wx, wy, heading_there)
+                self._born[t.id] = (wx, wy, BORN_AT_STRUCTURE if at >= STRUCTURE_WIDE
+                                    else BORN_NEAR_STRUCTURE if at == STRUCTURE_POSSIBLE else BORN_CLEAR)
             if k is not None:
+                # what it reflects over its track's life (power average: one fade of a fluctuating car must not drop
+                # it; two merged guardrail posts stay near −2 dBsm): a stationary object is a collision candidate by it
+                # (below), and a track reflecting like a vehicle is no structure's part seen from below
+                rcs = float(ol.rcs_dbsm[k])
+                if math.isfinite(rcs):
+                    old = self._rcs_power.get(t.id)
+                    p = 10.0 ** (rcs / 10.0)
+                    self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
+                born = self._born[t.id][2]
+                structure = born in (STOOD_STILL, BORN_AT_STRUCTURE) or (
+                    born == BORN_NEAR_STRUCTURE and self._rcs_power.get(t.id, 0.0) < OBSTACLE_RCS_POWER)
                 dyn = int(ol.dyn_prop[k])
                 trail[i] = (dyn == DYN_MOVING and gx > MOVING_MPS
                             and int(ol.meas_state[k]) != MEAS_PREDICTED and xv[i] > self.mount.x_m
@@ -485,7 +501,7 @@ class Ecu:
                                  or ol.width_m[k] >= TRAIL_MIN_WIDTH_M))
                 # seen moving: the radar says so and its speed over ground is more than elevation explains, in
                 # MOVED_CYCLES cycles in a row (one glitch of a stationary object's velocity is no vehicle)
-                moving_now = dyn in (DYN_MOVING, DYN_ONCOMING) and self._moving(ground, rng, self._born[t.id][2])
+                moving_now = dyn in (DYN_MOVING, DYN_ONCOMING) and self._moving(ground, rng, not structure)
                 self._moving_for[t.id] = self._moving_for.get(t.id, 0) + 1 if moving_now else 0
                 if self._moving_for[t.id] >= MOVED_CYCLES:
                     self._moved.add(t.id)
@@ -498,23 +514,18 @@ class Ecu:
                     # stopped marks its place, so that a track the radar creates there anew is still one
                     filed.add(t.id)
                     bx, by, _ = self._born[t.id]
-                    self._born[t.id] = (bx, by, False)     # standing still: it could be a structure's after all
+                    self._born[t.id] = (bx, by, STOOD_STILL)     # it could be a structure's after all
                     landmark = self.landmarks.observe(t.id, int(ol.id[k]), wx, wy, heading_there, rng,
                                                       float(ol.rcs_dbsm[k]), moved=t.id in self._moved,
                                                       in_path=self._in_path.get(t.id, 0) > 0,
-                                                      drove_m=math.hypot(wx - bx, wy - by))
+                                                      drove_m=math.hypot(wx - bx, wy - by),
+                                                      width_m=float(ol.width_m[k]))
                     if landmark.moved:
                         self._moved.add(t.id)
                 elif landmark is not None and int(ol.meas_state[k]) != MEAS_PREDICTED:
                     landmark.left = True          # measured moving: the object left its place (it vouches for nothing)
-                # a stationary object counts by what it reflects over its track's life (power average: one
-                # fade of a fluctuating car must not drop it; two merged guardrail posts stay near −2 dBsm), once
+                # a stationary object counts by what it reflects over its track's life (averaged above), once
                 # tracked OBSTACLE_MIN_AGE cycles; once it qualified it stays a candidate (latched)
-                rcs = float(ol.rcs_dbsm[k])
-                if math.isfinite(rcs):
-                    old = self._rcs_power.get(t.id)
-                    p = 10.0 ** (rcs / 10.0)
-                    self._rcs_power[t.id] = p if old is None else (1.0 - RCS_AVERAGE_GAIN) * old + RCS_AVERAGE_GAIN * p
                 if t.age >= OBSTACLE_MIN_AGE and self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                     self._obstacles.add(t.id)
                 if t.id in self._obstacles and landmark is not None and int(ol.obj_class[k]) in VEHICLE_CLASSES:

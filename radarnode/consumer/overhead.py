@@ -67,8 +67,13 @@ MATCH_LONG_M, MATCH_LAT_M, OVERHEAD_MATCH_LAT_M = 4.0, 2.5, 25.0
 #: a standing landmark whose RCS, averaged in power over its history, is at least this strong could be a structure's
 #: (a bridge deck is 25 dBsm from the front and a gantry 20, their lobing adds up to 5 dB to the mean; a truck's rear
 #: is 20, a car's 10, a guardrail post −5): across the road it reaches as far as a recognised one
-#: (:meth:`LandmarkMap.structure_near`)
+#: (:meth:`LandmarkMap.structure_at`)
 STRUCTURE_RCS_DBSM = 15.0
+#: a landmark of an object reported this wide or wider is a structure's across the road (a deck or a gantry spans two
+#: lanes and more; a truck is 2.5 m wide): :meth:`LandmarkMap.structure_at`
+STRUCTURE_WIDTH_M = 6.0
+#: :meth:`LandmarkMap.structure_at`'s answers
+NO_STRUCTURE, STRUCTURE_POSSIBLE, STRUCTURE_WIDE, STRUCTURE_RECOGNISED = 0, 1, 2, 3
 #: a vehicle that stood in the ECU's path this many cycles in a row (0.72 s) is continued by a track the radar creates
 #: at its place after losing it (:meth:`Landmark.continues`); a shorter stay is no evidence (clutter on a guardrail road
 #: is classed a car at times), nor is a car standing beside the path (a deck part over the lane near it is no car)
@@ -245,6 +250,7 @@ class Landmark:
     latched_fit: Fit | None = None
     pooled: int = 1                                 # landmarks whose histories the last test pooled (itself too)
     power_sum: float = 0.0                          # Σ 10^(RCS/10) over the history kept (for its power mean)
+    width_m: float = 0.0                            # the widest object filed here, as the radar reported it
     _last_height: float = math.nan
 
     def continues(self) -> bool:
@@ -344,7 +350,8 @@ class LandmarkMap:
         return out
 
     def observe(self, track_id: int, object_id: int, x_m: float, y_m: float, heading_rad: float, range_m: float,
-                rcs_dbsm: float, moved: bool = False, in_path: bool = True, drove_m: float = 0.0) -> Landmark:
+                rcs_dbsm: float, moved: bool = False, in_path: bool = True, drove_m: float = 0.0,
+                width_m: float = 0.0) -> Landmark:
         """File a stationary track at odometry-frame position (x_m, y_m) with the ego's heading ``heading_rad``
         (matching is along and across the ego's heading); returns its landmark, re-evaluated. ``moved``: the
         track was seen moving (a vehicle that stopped: its landmark is never overhead, and a new track the radar
@@ -376,6 +383,8 @@ class LandmarkMap:
                 self.own[track_id] = Landmark(x_m, y_m)
             self.by_track[track_id] = lm
         lm.moved |= moved
+        if math.isfinite(width_m) and width_m > lm.width_m:
+            lm.width_m = width_m
         if math.isfinite(rcs_dbsm) and math.isfinite(range_m) and not lm.moved:
             lm.add(object_id, range_m, rcs_dbsm, self.cycle)
             if not lm.overhead:
@@ -431,15 +440,19 @@ class LandmarkMap:
                 best, best_d = cand, abs(along)
         return best
 
-    def structure_near(self, x_m: float, y_m: float, heading_rad: float) -> bool:
+    def structure_at(self, x_m: float, y_m: float, heading_rad: float) -> int:
         """Whether a structure could stand where a track is first seen, at odometry-frame (x_m, y_m): a landmark no
         vehicle stood at (never moved, no object of its own beside a structure) from MATCH_LONG_M beyond the point
         to MATCH_LONG_M + OVERHEAD_DEPTH_M before it along the ego's heading (the ECU places a reflector above the
         road at its slant range, beyond where it stands), and across within MATCH_LAT_M — or within
         OVERHEAD_MATCH_LAT_M for one recognised as overhead or as strong as a structure (STRUCTURE_RCS_DBSM: a deck's
-        reported point glints across the road, on a bend metres from where its landmark was filed)."""
+        reported point glints across the road, on a bend metres from where its landmark was filed).
+        :data:`STRUCTURE_RECOGNISED` where such a landmark is recognised as overhead, else :data:`STRUCTURE_WIDE`
+        where one was reported as wide as a structure (STRUCTURE_WIDTH_M), else :data:`STRUCTURE_POSSIBLE` where one
+        is, :data:`NO_STRUCTURE` where none is."""
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         strong = 10.0 ** (STRUCTURE_RCS_DBSM / 10.0)
+        found = NO_STRUCTURE
         for cand in self.landmarks:
             if cand.moved or cand.ground:
                 continue
@@ -447,10 +460,11 @@ class LandmarkMap:
             along, across = c * dx + s * dy, abs(-s * dx + c * dy)
             if not -MATCH_LONG_M - OVERHEAD_DEPTH_M <= along <= MATCH_LONG_M or across > OVERHEAD_MATCH_LAT_M:
                 continue
-            if across <= MATCH_LAT_M or cand.overhead or (
-                    cand.range_m and cand.power_sum >= strong * len(cand.range_m)):
-                return True
-        return False
+            if cand.overhead:
+                return STRUCTURE_RECOGNISED
+            if across <= MATCH_LAT_M or (cand.range_m and cand.power_sum >= strong * len(cand.range_m)):
+                found = max(found, STRUCTURE_WIDE if cand.width_m >= STRUCTURE_WIDTH_M else STRUCTURE_POSSIBLE)
+        return found
 
     def forget(self, alive: set[int], ego_x_m: float, ego_y_m: float, keep_m: float = 300.0) -> None:
         """Drop the tracks that ended and the landmarks far behind the ego."""
