@@ -256,3 +256,47 @@ def test_acc_asks_for_no_acceleration_while_fcw_warns():
     b = [acc.step(dt, 10.0, None, True, no_accel=True) for _ in range(20)]
     assert all(later <= earlier + 1e-12 for earlier, later in zip([a[-1]] + b, b)) and b[-1] == 0.0
     assert acc.step(dt, 10.0, None, True) > 0.0
+
+
+def test_acc_engaged_at_a_standstill_without_a_lead_holds_until_the_driver_resumes():
+    """An independent tester: ACC engaged at a standstill with a stopped car 4–32 m ahead, which it had never seen
+    move, drove off towards its set speed and into the car (ISO 22179 leaves such a start to the driver). Standing
+    with no lead to follow it now holds the brake until the driver resumes; behind a stopped lead that drives off it
+    still resumes by itself within AUTO_RESUME_S."""
+    from radarnode.consumer.acc import AUTO_RESUME_S, HOLD_MPS2
+    dt = 0.072
+    acc = Acc(AccSettings(set_speed_mps=15.0))
+    held = [acc.step(dt, 0.0, None, True) for _ in range(int(2 * AUTO_RESUME_S / dt))]
+    assert all(a == HOLD_MPS2 for a in held) and acc.standstill
+    acc.confirm_resume()
+    resumed = [acc.step(dt, 0.0, None, True) for _ in range(15)]       # from the hold, within the jerk limit
+    assert not acc.standstill and resumed[0] > HOLD_MPS2 and resumed[-1] > 0.0
+    # behind a stopped lead: held while it stands, resumed by itself when it drives off within AUTO_RESUME_S
+    acc = Acc(AccSettings(set_speed_mps=15.0))
+    assert acc.step(dt, 0.0, Target(1, 1, 6.0, 0.0, 0.0, 0.0), True) == HOLD_MPS2 and acc.behind_lead
+    acc.step(dt, 0.0, Target(1, 1, 6.0, 0.0, 2.0, 0.0), True)
+    assert not acc.standstill
+
+
+STANDSTILL_START = """
+name: standstill_start
+duration_s: 14
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 0}}
+road: {{lanes: 2, ego_lane: 0}}
+ecu: {{acc_enabled: true, set_speed_mps: 15.0, time_gap_s: 1.5, closed_loop: true,
+      expect: {{lead: lead, min_gap_m: 2.0, no_fcw: true}}}}
+actors:
+  - {{id: lead, class: car, x_m: {x}, lane: 0, speed_mps: 0, accel: [{{t_s: 3.0, accel_mps2: 1.5}}, {{t_s: 9.0, accel_mps2: 0.0}}]}}
+"""
+
+
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_acc_does_not_drive_off_into_a_stopped_car_and_follows_it_when_it_leaves(level):
+    # the tester's scene: the ego stands 8 m behind a stopped car that drives off at 3 s (its rear 8 m from the sensor)
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import parse_scenario
+    r = simulate(parse_scenario(STANDSTILL_START.format(x=13.95)), fidelity=level)
+    assert r.passed, r.reasons
+    assert r.trace["speed"][-1] > 5.0             # and it drove on behind the car

@@ -122,8 +122,12 @@ def cmd(args) -> int:
                 elif decision.warning_level != LEVEL_WARNING and warnings and warnings[-1][1] == "on":
                     warnings.append((out.t_s, "off"))
             if actuator is not None and ecu.acc.standstill:
-                # the driver confirms driving off a reaction time after seeing the target leave (as in report)
-                leaving = decision is not None and decision.target is not None and decision.target.rel_speed_mps > 1.0
+                # the driver confirms driving off a reaction time after seeing the target leave (as in report; with no
+                # target, a reaction time after the ego stands, unless FCW warns)
+                if decision is not None and decision.target is not None:
+                    leaving = decision.target.rel_speed_mps > 1.0
+                else:
+                    leaving = decision is None or decision.warning_level != LEVEL_WARNING
                 held[1] = held[1] + node.period_s if leaving else 0.0
                 if held[1] >= spec.driver_reaction_s:
                     ecu.acc.confirm_resume()

@@ -87,7 +87,9 @@ class Acc:
         self.state = STATE_ACTIVE if settings.enabled else STATE_OFF
         self.request = 0.0
         self.fault = False
-        self.standstill = False          # holding the ego at a standstill behind a stopped lead
+        self.standstill = False          # holding the ego at a standstill (behind a stopped lead, or with none)
+        self.behind_lead = False         # … entered behind a stopped lead (it may resume by itself when the lead goes)
+        self.departing = False           # resumed from a standstill, the ego not moving yet
         self.standstill_s = 0.0          # how long it has held
         self.resume_confirmed = False    # the driver's resume (needed after AUTO_RESUME_S of standstill)
         self.take_over = False           # the required deceleration exceeds ACC's authority: driver must brake
@@ -152,18 +154,27 @@ class Acc:
             lead_v = math.inf
         # standstill: hold the brake (no creep); drive off when the lead has, automatically after a short stop,
         # with the driver's confirmation after a long one (ISO 22179)
+        # standing with no lead to follow (engaged at a standstill, or stopped without one): it holds until the driver
+        # resumes — it drove off towards its set speed into a stopped car 4–32 m ahead that it had never seen move
+        # (an independent tester's finding; ISO 22179 leaves such a start to the driver)
         if self.standstill:
             self.standstill_s += max(dt, 0.0)
             lead_gone = target is None or lead_v > LEAD_STOPPED_MPS + 0.5
-            if lead_gone and (self.standstill_s <= AUTO_RESUME_S or self.resume_confirmed):
+            auto = self.behind_lead and self.standstill_s <= AUTO_RESUME_S
+            if lead_gone and (auto or self.resume_confirmed):
                 self.standstill, self.standstill_s, self.resume_confirmed = False, 0.0, False
+                self.departing = True
             else:
                 self.request = HOLD_MPS2
                 return self.request
-        elif ego_speed_mps < STANDSTILL_MPS and target is not None and lead_v < LEAD_STOPPED_MPS:
+        elif ego_speed_mps < STANDSTILL_MPS and ((target is None and not self.departing)
+                                                 or (target is not None and lead_v < LEAD_STOPPED_MPS)):
             self.standstill, self.standstill_s, self.resume_confirmed = True, 0.0, False
+            self.behind_lead = target is not None
             self.request = HOLD_MPS2
             return self.request
+        if ego_speed_mps >= STANDSTILL_MPS:
+            self.departing = False
         want = min(max(want, a_min), 0.0 if no_accel else a_max)
         if dt > 0:
             step = jerk * dt

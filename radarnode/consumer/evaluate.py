@@ -292,9 +292,11 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             driver.warn(t + latency)
         if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
             res.prewarning_time_s = t + latency
-        # the driver confirms driving off after a long standstill, a reaction time after the lead has left
-        if lead is not None and ecu.acc.standstill:
-            moving_for = moving_for + period if lead_v > 1.0 else 0.0
+        # the driver confirms driving off after a long standstill, a reaction time after the lead has left (with no
+        # lead in the scenario: a reaction time after the ego stands, unless FCW warns)
+        if ecu.acc.standstill:
+            go = lead_v > 1.0 if lead is not None else not warning
+            moving_for = moving_for + period if go else 0.0
             if moving_for >= spec.driver_reaction_s:
                 ecu.acc.confirm_resume()
         # closed loop: the ego follows the request through a first-order lag
