@@ -74,3 +74,26 @@ wait $CONSUMER
                        cwd=root, env={**os.environ, "PYTHONPATH": str(root)})
     assert r.returncode == 0, (r.stderr, (tmp_path / "consume.err").read_text(), (tmp_path / "node.err").read_text())
     return (tmp_path / out_name).read_text()
+
+
+def measured_objects(*rows: dict):
+    """An object list as the ECU receives it, a row for each dict of ObjectList fields (``id``, ``dist_long_m``,
+    ``vrel_long_mps``, ``rcs_dbsm``, ``obj_class``, ``dyn_prop``, …): every row measured, σ 0.2 m and 0.2 m/s, a car's
+    4.5 × 1.8 m, unless the row says otherwise."""
+    from radarnode.perception.types import MEAS_MEASURED, ObjectList
+    defaults = {"meas_state": MEAS_MEASURED, "dist_long_sigma_m": 0.2, "dist_lat_sigma_m": 0.2,
+                "vrel_long_sigma_mps": 0.2, "vrel_lat_sigma_mps": 0.2, "length_m": 4.5, "width_m": 1.8}
+    ol = ObjectList.empty(len(rows))
+    for j, row in enumerate(rows):
+        for name, value in {**defaults, **row}.items():
+            getattr(ol, name)[j] = value
+    return ol
+
+
+def feed_ecu(ecu, k: int, t_s: float, ego_mps: float | None, *rows: dict):
+    """Radar cycle ``k`` at ``t_s`` of these object rows (:func:`measured_objects`) into ``ecu``, after the ego's speed
+    (none: left as it is); returns its decision."""
+    from radarnode.consumer.assembler import ObjectCycle
+    if ego_mps is not None:
+        ecu.set_ego(t_s, ego_mps, 0.0)
+    return ecu.on_cycle(t_s, ObjectCycle(k, t_s, measured_objects(*rows), True, True))

@@ -225,21 +225,15 @@ def test_acc_asks_for_no_acceleration_while_fcw_warns():
     """An independent tester's scene: the ego starts from standstill with a stopped car 4–32 m ahead, which ACC, never
     having seen it move, does not follow; ACC went on towards its set speed at up to 4 m/s² while FCW warned. Now
     from the warning on the request falls to 0 or below within the jerk limit and stays there while it lasts."""
-    from radarnode.consumer.assembler import ObjectCycle
     from radarnode.consumer.ecu import Ecu
-    from radarnode.perception.types import DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    from radarnode.perception.types import DYN_STATIONARY
+    from tests.helpers import feed_ecu
     ecu = Ecu(acc=AccSettings(set_speed_mps=20.0))
     dt, v, x = 0.072, 5.0, 40.0
     outs = []
     for k in range(60):
-        ol = ObjectList.empty(1)
-        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = 3, x, 10.0, 1
-        ol.vrel_long_mps[0] = -v
-        ol.dyn_prop[0], ol.meas_state[0] = DYN_STATIONARY, MEAS_MEASURED
-        ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
-        ol.length_m[0], ol.width_m[0] = 4.5, 1.8
-        ecu.set_ego(k * dt, v, 0.0)
-        outs.append(ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True)))
+        outs.append(feed_ecu(ecu, k, k * dt, v, {"id": 3, "dist_long_m": x, "rcs_dbsm": 10.0, "obj_class": 1,
+                                                 "vrel_long_mps": -v, "dyn_prop": DYN_STATIONARY}))
         v = min(v + max(outs[-1].accel_request_mps2, -v / dt) * dt, 20.0)      # the ego follows the request
         x -= v * dt
         if x < 3.0:

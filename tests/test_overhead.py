@@ -21,6 +21,7 @@ from radarnode.radar.setup import load_scenario, parse_scenario
 from radarnode.scene.scenario import read_scenario_text
 from radarnode.wire.node import RadarNode
 from tests.conftest import SCENARIOS
+from tests.helpers import feed_ecu
 
 P = get_preset("ars408_like")
 LAM = P.wavelength_m
@@ -584,23 +585,15 @@ def _stationary_car_cycles(ecu, t0, n, oid, x0, speed=13.89, dt=0.072, deck=None
     """Feed ``n`` cycles of a stationary car in the path (object ``oid``, first at ``x0`` m) to ``ecu``, the ego at
     ``speed``; ``deck``: also a deck (object 1) this many metres nearer, measured in the same cycles. Returns the
     cycles in which FCW's target was the car's track and the last time."""
-    from radarnode.consumer.assembler import ObjectCycle
-    from radarnode.perception.types import DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    from radarnode.perception.types import DYN_STATIONARY
     chosen, t = [], t0
     for k in range(n):
         t = t0 + k * dt
         x = x0 - speed * k * dt
         rows = [(oid, x, 12.0, 1)] + ([(1, x - deck, 25.0, 7)] if deck is not None else [])
-        ol = ObjectList.empty(len(rows))
-        for j, (i, xx, rcs, cls) in enumerate(rows):
-            ol.id[j], ol.dist_long_m[j], ol.rcs_dbsm[j], ol.obj_class[j] = i, xx, rcs, cls
-            ol.vrel_long_mps[j] = -speed
-            ol.dyn_prop[j], ol.meas_state[j] = DYN_STATIONARY, MEAS_MEASURED
-            ol.dist_long_sigma_m[j] = ol.dist_lat_sigma_m[j] = 0.2
-            ol.vrel_long_sigma_mps[j] = ol.vrel_lat_sigma_mps[j] = 0.2
-            ol.length_m[j], ol.width_m[j] = 4.5, 1.8
-        ecu.set_ego(t, speed, 0.0)
-        d = ecu.on_cycle(t, ObjectCycle(k, t, ol, True, True))
+        d = feed_ecu(ecu, k, t, speed, *({"id": i, "dist_long_m": xx, "rcs_dbsm": rcs, "obj_class": cls,
+                                          "vrel_long_mps": -speed, "dyn_prop": DYN_STATIONARY}
+                                         for i, xx, rcs, cls in rows))
         target = d.fcw_target
         if target is not None and target.object_id == oid:
             chosen.append(k)
@@ -664,23 +657,16 @@ def test_a_car_lost_under_a_recognised_deck_is_that_car_again_not_a_part_of_the_
 
 
 def _stationary_car_cycles_deck_only(ecu, t, x):
-    from radarnode.consumer.assembler import ObjectCycle
-    from radarnode.perception.types import DYN_STATIONARY, MEAS_MEASURED, ObjectList
-    ol = ObjectList.empty(1)
-    ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = 1, x, 25.0, 7
-    ol.vrel_long_mps[0] = -13.89
-    ol.dyn_prop[0], ol.meas_state[0] = DYN_STATIONARY, MEAS_MEASURED
-    ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
-    ol.length_m[0], ol.width_m[0] = 10.0, 20.0
-    ecu.on_cycle(t, ObjectCycle(0, t, ol, True, True))
+    from radarnode.perception.types import DYN_STATIONARY
+    feed_ecu(ecu, 0, t, None, {"id": 1, "dist_long_m": x, "rcs_dbsm": 25.0, "obj_class": 7, "vrel_long_mps": -13.89,
+                               "dyn_prop": DYN_STATIONARY, "length_m": 10.0, "width_m": 20.0})
     return None, t
 
 
 def test_a_car_that_drove_away_from_its_place_vouches_for_nothing_there():
     # a car stands in the path (a collision candidate), then drives off and its track ends far ahead; a stationary
     # return later at the place where it stood is a new object (its four cycles of its own), not the car again
-    from radarnode.consumer.assembler import ObjectCycle
-    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY
 
     def run(drive_off: bool) -> int:
         ecu, t, ego, car_x, car_v = Ecu(), 0.0, 0.0, 120.0, 0.0
@@ -694,15 +680,8 @@ def test_a_car_that_drove_away_from_its_place_vouches_for_nothing_there():
                 rows = [(2, car_x - ego, car_v - 13.89, 10.0, DYN_MOVING)]
             if n >= 50:
                 rows.append((9, 120.0 - ego, -13.89, 10.0, DYN_STATIONARY))
-            ol = ObjectList.empty(len(rows))
-            for j, (i, x, vx, rcs, dyn) in enumerate(rows):
-                ol.id[j], ol.dist_long_m[j], ol.rcs_dbsm[j], ol.obj_class[j] = i, x, rcs, 1
-                ol.vrel_long_mps[j], ol.dyn_prop[j], ol.meas_state[j] = vx, dyn, MEAS_MEASURED
-                ol.dist_long_sigma_m[j] = ol.dist_lat_sigma_m[j] = 0.2
-                ol.vrel_long_sigma_mps[j] = ol.vrel_lat_sigma_mps[j] = 0.2
-                ol.length_m[j], ol.width_m[j] = 4.5, 1.8
-            ecu.set_ego(t, 13.89, 0.0)
-            d = ecu.on_cycle(t, ObjectCycle(n, t, ol, True, True))
+            d = feed_ecu(ecu, n, t, 13.89, *({"id": i, "dist_long_m": x, "rcs_dbsm": rcs, "obj_class": 1,
+                                              "vrel_long_mps": vx, "dyn_prop": dyn} for i, x, vx, rcs, dyn in rows))
             if n >= 50 and d.fcw_target is not None and d.fcw_target.object_id == 9:
                 return n - 50
             t += 0.072
@@ -757,20 +736,13 @@ actors:
 def _car_ahead_cycles(ecu, n, x0, ego, ground, t0=0.0, oid=5, k0=0, dt=0.072, rcs=10.0):
     """Feed ``n`` cycles of a car straight ahead (object ``oid``, first ``x0`` m from the sensor) driving at ``ground``
     m/s over ground, the ego at ``ego`` m/s, to ``ecu``. Returns the cycles whose ACC target is the car's track."""
-    from radarnode.consumer.assembler import ObjectCycle
-    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY
     followed = []
     for k in range(n):
         t = t0 + k * dt
-        ol = ObjectList.empty(1)
-        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = oid, x0 + (ground - ego) * k * dt, rcs, 1
-        ol.vrel_long_mps[0] = ground - ego
-        ol.dyn_prop[0], ol.meas_state[0] = (DYN_MOVING if ground > 0.5 else DYN_STATIONARY), MEAS_MEASURED
-        ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = 0.2
-        ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
-        ol.length_m[0], ol.width_m[0] = 4.5, 1.8
-        ecu.set_ego(t, ego, 0.0)
-        d = ecu.on_cycle(t, ObjectCycle(k0 + k, t, ol, True, True))
+        d = feed_ecu(ecu, k0 + k, t, ego, {"id": oid, "dist_long_m": x0 + (ground - ego) * k * dt, "rcs_dbsm": rcs,
+                                           "obj_class": 1, "vrel_long_mps": ground - ego,
+                                           "dyn_prop": DYN_MOVING if ground > 0.5 else DYN_STATIONARY})
         if d.target is not None and d.target.object_id == oid:
             followed.append(k)
     return followed
@@ -823,8 +795,7 @@ def test_a_track_measured_standing_keeps_the_elevation_allowance_after():
     """A deck's own track stands still in Doppler from afar: once measured standing it could be a structure's, and its
     Doppler motion near the deck (a reflector 7.5 m above the radar: 0.4 of the ego's speed at 12.5 m) is no motion.
     Its ground speed reaches 1 m/s at 31 m (the ego at 36 m/s) and 12 m/s at 10 m."""
-    from radarnode.consumer.assembler import ObjectCycle
-    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY
     ecu = Ecu(acc=AccSettings(set_speed_mps=40.0))
     v, h, dt = 36.0, 7.5, 0.072
     ground = []
@@ -832,14 +803,9 @@ def test_a_track_measured_standing_keeps_the_elevation_allowance_after():
         d = 100.0 - v * k * dt                    # the deck's horizontal distance
         r = math.hypot(d, h)
         ground.append(v * (1.0 - d / r))           # what its Doppler makes of its speed over ground
-        ol = ObjectList.empty(1)
-        ol.id[0], ol.dist_long_m[0], ol.rcs_dbsm[0], ol.obj_class[0] = 1, r, 25.0, 7
-        ol.vrel_long_mps[0] = -v * d / r
-        ol.dyn_prop[0], ol.meas_state[0] = (DYN_MOVING if ground[-1] > 0.5 else DYN_STATIONARY), MEAS_MEASURED
-        ol.dist_long_sigma_m[0] = ol.dist_lat_sigma_m[0] = ol.vrel_long_sigma_mps[0] = ol.vrel_lat_sigma_mps[0] = 0.2
-        ol.length_m[0], ol.width_m[0] = 2.0, 20.0
-        ecu.set_ego(k * dt, v, 0.0)
-        ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True))
+        feed_ecu(ecu, k, k * dt, v, {"id": 1, "dist_long_m": r, "rcs_dbsm": 25.0, "obj_class": 7,
+                                     "vrel_long_mps": -v * d / r, "length_m": 2.0, "width_m": 20.0,
+                                     "dyn_prop": DYN_MOVING if ground[-1] > 0.5 else DYN_STATIONARY})
     assert max(ground) > 12.0 and len(ecu._born) == 1 and next(iter(ecu._born.values()))[2] == ecu_module.STOOD_STILL
     assert not ecu._moved
 
@@ -899,8 +865,7 @@ def test_a_structure_reaches_from_its_landmark_to_a_deck_s_depth_beyond(along, n
 def _standing_then_car(rcs_stand: float, across_m: float, rcs_car: float, width_m: float = 0.5):
     """An ECU that filed a standing object (``rcs_stand`` dBsm, ``width_m`` wide) ``across_m`` beside the lane 30 m
     ahead, then sees a new object 6 m ahead at the ego's 4 m/s reflecting ``rcs_car``: whether it was seen moving."""
-    from radarnode.consumer.assembler import ObjectCycle
-    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY, MEAS_MEASURED, ObjectList
+    from radarnode.perception.types import DYN_MOVING, DYN_STATIONARY
     ecu = Ecu(acc=AccSettings(set_speed_mps=30.0))
     dt, v = 0.072, 4.0
     n = int((30.0 - 8.0) / (v * dt))
@@ -908,15 +873,9 @@ def _standing_then_car(rcs_stand: float, across_m: float, rcs_car: float, width_
         rows = [(1, 30.0 - v * k * dt, -across_m, 0.0, rcs_stand, DYN_STATIONARY, width_m)]
         if k >= n:
             rows.append((7, 6.0, 0.0, 4.0, rcs_car, DYN_MOVING, 1.8))
-        ol = ObjectList.empty(len(rows))
-        for j, (oid, x, y, ground, rcs, dyn, w) in enumerate(rows):
-            ol.id[j], ol.dist_long_m[j], ol.dist_lat_m[j], ol.rcs_dbsm[j], ol.obj_class[j] = oid, x, y, rcs, 1
-            ol.vrel_long_mps[j] = ground - v
-            ol.dyn_prop[j], ol.meas_state[j] = dyn, MEAS_MEASURED
-            ol.dist_long_sigma_m[j] = ol.dist_lat_sigma_m[j] = ol.vrel_long_sigma_mps[j] = ol.vrel_lat_sigma_mps[j] = 0.2
-            ol.length_m[j], ol.width_m[j] = 1.0, w
-        ecu.set_ego(k * dt, v, 0.0)
-        ecu.on_cycle(k * dt, ObjectCycle(k, k * dt, ol, True, True))
+        feed_ecu(ecu, k, k * dt, v, *({"id": oid, "dist_long_m": x, "dist_lat_m": y, "rcs_dbsm": rcs, "obj_class": 1,
+                                       "vrel_long_mps": ground - v, "dyn_prop": dyn, "length_m": 1.0, "width_m": w}
+                                      for oid, x, y, ground, rcs, dyn, w in rows))
     return bool(ecu._moved)
 
 

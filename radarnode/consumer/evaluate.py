@@ -183,7 +183,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     prev_a = None
     prev_gap = math.inf
     latency, request = spec.processing_latency_s, 0.0
-    moving_for, lead_v, prev_speed = 0.0, 0.0, scenario.ego.speed_mps
+    resume_cue_s, lead_v, prev_speed = 0.0, 0.0, scenario.ego.speed_mps
     res.latency_s = latency
     tr = {k: [] for k in ("t", "gap", "ttc", "rel_speed", "speed", "accel", "request", "warning", "state",
                           "time_gap", "target", "target_track", "fcw_target")}
@@ -296,8 +296,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # lead in the scenario: a reaction time after the ego stands, unless FCW warns)
         if ecu.acc.standstill:
             go = lead_v > 1.0 if lead is not None else not warning
-            moving_for = moving_for + period if go else 0.0
-            if moving_for >= spec.driver_reaction_s:
+            resume_cue_s = resume_cue_s + period if go else 0.0
+            if resume_cue_s >= spec.driver_reaction_s:
                 ecu.acc.confirm_resume()
         # closed loop: the ego follows the request through a first-order lag
         if actuator is not None:

@@ -96,6 +96,13 @@ TOGETHER_CYCLES, TOGETHER_SHARE = 6, 0.75
 TOGETHER_MIN_RANGE_M = 80.0
 
 
+def _along_across(cand: Landmark, x_m: float, y_m: float, c: float, s: float) -> tuple[float, float]:
+    """Where landmark ``cand`` lies from the point (x_m, y_m), odometry frame: along and across the heading whose
+    cosine and sine are ``c`` and ``s``."""
+    dx, dy = cand.x_m - x_m, cand.y_m - y_m
+    return c * dx + s * dy, -s * dx + c * dy
+
+
 def two_ray_db(range_m: np.ndarray, height_m: np.ndarray, radar_height_m: float, wavelength_m: float,
                reflection: float = GROUND_REFLECTION) -> np.ndarray:
     """Two-way power factor (dB) of a reflector ``height_m`` above the road at ranges ``range_m``, far field
@@ -337,8 +344,8 @@ class LandmarkMap:
         for cand in self.landmarks:
             if cand is lm or cand.moved or cand.ground or not cand.range_m:
                 continue
-            dx, dy = cand.x_m - lm.x_m, cand.y_m - lm.y_m
-            if abs(c * dx + s * dy) > MATCH_LONG_M or abs(-s * dx + c * dy) > OVERHEAD_MATCH_LAT_M:
+            along, across = _along_across(cand, lm.x_m, lm.y_m, c, s)
+            if abs(along) > MATCH_LONG_M or abs(across) > OVERHEAD_MATCH_LAT_M:
                 continue
             # taking turns: measured over the same stretch of time (a track that ended before the other began
             # takes no turns with it: a car that came into view after a deck's first track ended is no part)
@@ -433,8 +440,7 @@ class LandmarkMap:
             if (overhead_only and not cand.overhead) or (id(cand) in exclude and not cand.overhead) \
                     or (only is not None and not only(cand)):
                 continue
-            dx, dy = cand.x_m - x_m, cand.y_m - y_m
-            along, across = c * dx + s * dy, -s * dx + c * dy
+            along, across = _along_across(cand, x_m, y_m, c, s)
             lat = OVERHEAD_MATCH_LAT_M if cand.overhead else MATCH_LAT_M
             if -MATCH_LONG_M - beyond_m <= along <= MATCH_LONG_M and abs(across) <= lat and abs(along) < best_d:
                 best, best_d = cand, abs(along)
@@ -456,8 +462,8 @@ class LandmarkMap:
         for cand in self.landmarks:
             if cand.moved or cand.ground:
                 continue
-            dx, dy = cand.x_m - x_m, cand.y_m - y_m
-            along, across = c * dx + s * dy, abs(-s * dx + c * dy)
+            along, across = _along_across(cand, x_m, y_m, c, s)
+            across = abs(across)
             if not -MATCH_LONG_M - OVERHEAD_DEPTH_M <= along <= MATCH_LONG_M or across > OVERHEAD_MATCH_LAT_M:
                 continue
             if cand.overhead:

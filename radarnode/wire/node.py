@@ -147,6 +147,7 @@ class RadarNode:
         self._e2e = E2EProtector()
         self.last_boundaries: tuple[Boundary, Boundary] | None = None
         self._pipe = None                  # a BoundaryPipeline that computes the boundaries (defer_boundaries)
+        self._runtime: tuple | None = None    # the last RuntimeConfig and what it was made from (_runtime_config)
         self._pipe_index = 0
         self._blank: dict[int, np.ndarray] = {}
         self._last_t: float | None = None
@@ -484,7 +485,7 @@ class RadarNode:
         cfg = self.config
         key = (min(cfg.max_distance_m, self.preset.max_range_m), 3.0 * cfg.radar_power, cfg.rcs_threshold == 1,
                cfg.output_type == P.OUTPUT_CLUSTERS or self.boundaries is not None)
-        last = self.__dict__.get("_runtime")
+        last = self._runtime
         if last is None or last[0] != key:
             last = self._runtime = (key, RuntimeConfig(max_distance_m=key[0], power_reduction_db=key[1],
                                                        high_sensitivity=key[2], clusters=key[3]))
