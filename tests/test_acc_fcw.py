@@ -294,3 +294,11 @@ def test_acc_does_not_drive_off_into_a_stopped_car_and_follows_it_when_it_leaves
     r = simulate(parse_scenario(STANDSTILL_START.format(x=13.95)), fidelity=level)
     assert r.passed, r.reasons
     assert r.trace["speed"][-1] > 5.0             # and it drove on behind the car
+
+
+@pytest.mark.parametrize("speed, holds", [(0.09, True), (0.1, False), (0.11, False), (0.2, False)])
+def test_the_hold_with_no_lead_below_at_and_above_the_standstill_speed(speed, holds):
+    from radarnode.consumer.acc import HOLD_MPS2, STANDSTILL_MPS
+    assert STANDSTILL_MPS == 0.1
+    acc = Acc(AccSettings(set_speed_mps=15.0))
+    assert (acc.step(0.072, speed, None, True) == HOLD_MPS2) == holds and acc.standstill == holds

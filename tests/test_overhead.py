@@ -888,3 +888,12 @@ def test_a_lead_first_seen_beside_a_strong_roadside_object_is_seen_moving_and_a_
         assert _standing_then_car(16.0, 6.0, rcs_car) == moved, rcs_car
     # beside a landmark as wide as a structure (an unrecognised deck's), a strong track keeps the allowance too
     assert not _standing_then_car(25.0, 6.0, 10.0, width_m=O.STRUCTURE_WIDTH_M + 1.0)
+
+
+@pytest.mark.parametrize("rcs_car, moved", [(ecu_module.OBSTACLE_RCS_DBSM - 0.1, False),
+                                            (ecu_module.OBSTACLE_RCS_DBSM, True),
+                                            (ecu_module.OBSTACLE_RCS_DBSM + 0.1, True),
+                                            (ecu_module.OBSTACLE_RCS_DBSM + 10.0, True)])
+def test_reflecting_like_a_vehicle_beside_a_landmark_below_at_and_above_the_obstacle_rcs(rcs_car, moved):
+    # (OBSTACLE_RCS_DBSM is 0 dBsm: "twice" it is 0 too, so 10 dB above stands for it)
+    assert _standing_then_car(16.0, 6.0, rcs_car) == moved
