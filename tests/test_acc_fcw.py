@@ -195,18 +195,14 @@ def test_behind_a_stopped_lead_acc_slows_all_the_way_and_never_draws_fcw(speed, 
         assert min(ttc) > FcwSettings().ttc_warn_s, min(ttc)
 
 
-CLOSE_LEAD = """
-name: close_lead_{v}
-duration_s: 10
-seed: 1
-radar: {{preset: ars408_like}}
-ego: {{speed_mps: {v}}}
-road: {{lanes: 2, ego_lane: 0}}
-ecu: {{acc_enabled: true, set_speed_mps: 30.0, time_gap_s: 1.5, closed_loop: true,
-      expect: {{lead: lead, min_gap_m: 3.0, no_fcw: true, acc_follows: lead}}}}
-actors:
-  - {{id: lead, class: car, x_m: {x}, lane: 0, speed_mps: {v}}}
-"""
+def _acc_scene(ego_mps: float, lead: str, set_speed_mps: float, expect: str, duration: float):
+    """A closed-loop ACC scene on a two-lane road (tests.helpers.scenario): the ego at ``ego_mps``, one car ``lead``
+    (its YAML fields) in its lane, ACC set to ``set_speed_mps``, the ECU's ``expect``."""
+    from tests.helpers import scenario
+    return scenario(f"  - {{id: lead, class: car, lane: 0, {lead}}}", ego=f"{{speed_mps: {ego_mps}}}",
+                    road="{lanes: 2, ego_lane: 0}", duration=duration,
+                    extra=f"ecu: {{acc_enabled: true, set_speed_mps: {set_speed_mps}, time_gap_s: 1.5, closed_loop: true,"
+                          f" expect: {{{expect}}}}}")
 
 
 @pytest.mark.parametrize("level", ["object", "detection"])
@@ -216,8 +212,8 @@ def test_a_lead_first_seen_a_few_metres_ahead_is_followed_in_closed_loop(level, 
     followed it in no cycle and drove into it (gap 0.0 m) at both levels: within 8 m the ECU's elevation allowance
     reached the ego's speed. Now it follows the lead and no warning is drawn."""
     from radarnode.consumer.evaluate import simulate
-    from radarnode.radar.setup import parse_scenario
-    r = simulate(parse_scenario(CLOSE_LEAD.format(v=speed, x=x_m)), fidelity=level)
+    r = simulate(_acc_scene(speed, f"x_m: {x_m}, speed_mps: {speed}", 30.0,
+                            "lead: lead, min_gap_m: 3.0, no_fcw: true, acc_follows: lead", 10.0), fidelity=level)
     assert r.passed, r.reasons
 
 
@@ -272,26 +268,14 @@ def test_acc_engaged_at_a_standstill_without_a_lead_holds_until_the_driver_resum
     assert not acc.standstill
 
 
-STANDSTILL_START = """
-name: standstill_start
-duration_s: 14
-seed: 1
-radar: {{preset: ars408_like}}
-ego: {{speed_mps: 0}}
-road: {{lanes: 2, ego_lane: 0}}
-ecu: {{acc_enabled: true, set_speed_mps: 15.0, time_gap_s: 1.5, closed_loop: true,
-      expect: {{lead: lead, min_gap_m: 2.0, no_fcw: true}}}}
-actors:
-  - {{id: lead, class: car, x_m: {x}, lane: 0, speed_mps: 0, accel: [{{t_s: 3.0, accel_mps2: 1.5}}, {{t_s: 9.0, accel_mps2: 0.0}}]}}
-"""
 
 
 @pytest.mark.parametrize("level", ["object", "detection"])
 def test_acc_does_not_drive_off_into_a_stopped_car_and_follows_it_when_it_leaves(level):
     # the tester's scene: the ego stands 8 m behind a stopped car that drives off at 3 s (its rear 8 m from the sensor)
     from radarnode.consumer.evaluate import simulate
-    from radarnode.radar.setup import parse_scenario
-    r = simulate(parse_scenario(STANDSTILL_START.format(x=13.95)), fidelity=level)
+    lead = "x_m: 13.95, speed_mps: 0, accel: [{t_s: 3.0, accel_mps2: 1.5}, {t_s: 9.0, accel_mps2: 0.0}]"
+    r = simulate(_acc_scene(0.0, lead, 15.0, "lead: lead, min_gap_m: 2.0, no_fcw: true", 14.0), fidelity=level)
     assert r.passed, r.reasons
     assert r.trace["speed"][-1] > 5.0             # and it drove on behind the car
 
