@@ -182,6 +182,25 @@ def test_masking_factor_is_one_alone_and_falls_with_the_interference():
     assert np.allclose(f[2:], exact, atol=0.01)
 
 
+@pytest.mark.parametrize("rho_db", [79.0, 80.0, 81.0, 101.0, 160.0])
+@pytest.mark.parametrize("swerling", [0, 1])
+def test_the_masking_factor_holds_above_the_tables_top_snr(rho_db, swerling):
+    # below, at, just above and at twice the table's top SNR (80 dB), against the exact ratio of pd_interfered: the
+    # table clipped the SNR alone there, and read a car 8 m ahead (88 dB) as masked by a neighbour its own strength
+    # (0.11 where the exact factor is 0.98)
+    assert ds.DetectionStatistic.MASK_RHO_DB[-1] == 80.0
+    st = DspChain(PRESETS["ars408_like"]).statistic
+    e = st.energy(10.0 ** (rho_db / 10.0))
+    rel_db = np.array([-10.0, 0.0, 10.0, 15.0, 20.0, 25.0])
+    i = e * 10.0 ** (rel_db / 10.0)
+    rho = np.full(rel_db.size, rho_db)
+    f = st.masking_factor(rho, i, swerling)
+    exact = st.pd_interfered(rho, i, swerling) / st.pd_interfered(rho, np.zeros(rel_db.size), swerling)
+    assert np.allclose(f, exact, atol=0.02), (f, exact)
+    # a neighbour 10 dB weaker than the target costs it almost nothing, one 25 dB stronger hides it
+    assert f[0] > 0.98 and f[-1] < 0.05
+
+
 @pytest.mark.parametrize("level", ["object", "detection", "signal"])
 def test_a_weak_target_beside_a_strong_one_is_masked_at_every_level(level):
     # a 0 dBsm point in the next lane, 4 range bins behind a 35 dBsm one at the same speed, sits in its CA-CFAR

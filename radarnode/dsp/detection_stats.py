@@ -779,8 +779,13 @@ class DetectionStatistic:
         if not np.any(rel >= 0.01):                  # nothing in any ring: the table is not even built
             return np.ones(np.broadcast(np.asarray(rho_db), rel).shape)
         table = self._mask_table(swerling)
-        x = np.clip(np.asarray(rho_db, dtype=np.float64), self.MASK_RHO_DB[0], self.MASK_RHO_DB[-1])
-        y = np.clip(np.log10(np.maximum(rel, 1e-300)), self.MASK_LOG_I[0], self.MASK_LOG_I[-1])
+        rho_db = np.asarray(rho_db, dtype=np.float64)
+        # above the table's top SNR the noise counts for nothing beside the target and (where it masks at all) the
+        # interference: the factor depends on their ratio alone, so both are taken down together to the top row
+        # (clipping the SNR alone read a car 8 m ahead, at 88 dB, as masked by a neighbour its own strength)
+        over = np.maximum(rho_db - self.MASK_RHO_DB[-1], 0.0)
+        x = np.clip(rho_db - over, self.MASK_RHO_DB[0], self.MASK_RHO_DB[-1])
+        y = np.clip(np.log10(np.maximum(rel, 1e-300)) - over / 10.0, self.MASK_LOG_I[0], self.MASK_LOG_I[-1])
         fx = (x - self.MASK_RHO_DB[0]) / (self.MASK_RHO_DB[1] - self.MASK_RHO_DB[0])
         fy = (y - self.MASK_LOG_I[0]) / (self.MASK_LOG_I[1] - self.MASK_LOG_I[0])
         i0 = np.minimum(np.floor(fx).astype(np.int64), table.shape[0] - 2)
