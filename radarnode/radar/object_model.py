@@ -67,6 +67,11 @@ MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as
 ALIAS_GATE_M = math.sqrt(GATE_CHI2_3DOF * 2.0) * TRACKER_SIGMA_POS_M
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
+#: points on each sensor-facing edge of a body, for what it puts into a neighbour's CA-CFAR ring where its outline
+#: spans Doppler bins (:meth:`ObjectModel._outline_interference`) …
+OUTLINE_SAMPLES = 16
+#: … blended in from the first to the second of these Doppler bins spanned (below: the whole body at its nearest point)
+OUTLINE_SPAN_BINS = (0.5, 1.5)
 CHUNK_CYCLES = 1024       # at most this many cycles' physics in one vectorised pass (fewer for crowded scenes) …
 FIRST_CHUNK_CYCLES = 128  # … the first chunk after a restart (a configuration change, a step off sequence), …
 CHUNK_GROWTH = 4          # … each next one this many times the last
@@ -108,6 +113,14 @@ class StepInfo:
     #: signal level with ``keep_rd`` set: the non-coherent range–Doppler power of the cycle's first chirp sequence,
     #: shape (doppler, range), Doppler fftshifted (bin M/2 is zero speed), range bins of ``range_resolution_m``
     rd_power: np.ndarray | None = None
+
+
+def outline_share(span_bins: np.ndarray) -> np.ndarray:
+    """The share of a body's energy that :meth:`ObjectModel._masking` spreads over its outline (the rest at its nearest
+    point), from how many Doppler bins the outline spans: 0 up to the first of ``OUTLINE_SPAN_BINS``, 1 from the
+    second, linear between (no step in the interference where a body comes near)."""
+    lo, hi = OUTLINE_SPAN_BINS
+    return np.clip((np.asarray(span_bins, dtype=np.float64) - lo) / (hi - lo), 0.0, 1.0)
 
 
 def _expand(values, rows: np.ndarray, t_n: int):
@@ -687,7 +700,10 @@ class ObjectModel:
         stat = self.statistic
         pd = stat.pd_of_snr(snr, 1) if not (sc.swerling == 0).any() else \
             np.where(sc.swerling == 0, stat.pd_of_snr(snr, 0), stat.pd_of_snr(snr, 1))
-        pd = pd * self._masking(view, rng_m, snr, observable)
+        # a body a sector's edge crosses is measured at its point on the edge, but reflects from its parts inside
+        crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & ~((sc.length_m <= POINT_SIZE_M)
+                                                                    & (sc.width_m <= POINT_SIZE_M))
+        pd = pd * self._masking(view, rng_m, snr, observable, crossing, config.max_distance_m)
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
         er, ev, ea = chain_efficiency(snr)
@@ -700,11 +716,8 @@ class ObjectModel:
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = rng_m + sig_r * z[:, 0]
         m_az = az_seen + sig_az * z[:, 1]
-        # a body a sector's edge crosses is measured at its point on the edge, but reflects from its parts inside:
-        # its measured azimuth is mirrored back about the edge (the scatterer levels report its inner points); a
-        # small body is one point, reported only where it is measured inside (as at the other levels)
-        crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & ~((sc.length_m <= POINT_SIZE_M)
-                                                                    & (sc.width_m <= POINT_SIZE_M))
+        # such a body's measured azimuth is mirrored back about the edge (the scatterer levels report its inner
+        # points); a small body is one point, reported only where it is measured inside (as at the other levels)
         if crossing.any():
             past = crossing & (np.abs(m_az) > np.abs(az_seen))
             m_az = np.where(past, np.sign(m_az) * (2.0 * np.abs(az_seen) - np.abs(m_az)), m_az)
@@ -815,7 +828,8 @@ class ObjectModel:
                                                  np.broadcast_to(np.arange(n), (t_n, n)), ch["ambig"])
         return ch
 
-    def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray) -> np.ndarray:
+    def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray, crossing: np.ndarray,
+                 max_distance_m: float) -> np.ndarray:
         """Pd factor (T, n) from the other actors' energy in each actor's CA-CFAR training ring.
 
         As the chain masks a weak target beside a strong one at about the same range and speed, and the
@@ -823,6 +837,10 @@ class ObjectModel:
         energy, at its apparent range and Doppler bin, enters every other actor's ring through the window's
         response; the Pd with that interference over the Pd without it (both by
         :meth:`DetectionStatistic.masking_factor`) scales the tabulated Pd, so an actor alone keeps it exactly.
+        A body whose outline spans more than a Doppler bin (near the sensor, or beside its line of sight), and a body
+        a sector's edge crosses (``crossing``), puts in what its parts inside the field of view reflect, each at its
+        own range and speed (:meth:`_outline_interference`); one that spans less, its whole energy at its nearest
+        point (the two blended between ``OUTLINE_SPAN_BINS``, so the interference has no step).
         Guardrail posts are not counted here (they are drawn per cycle with the cluster list).
         """
         p, stat, sc = self.preset, self.statistic, self.scene
@@ -842,14 +860,76 @@ class ObjectModel:
         with np.errstate(divide="ignore", invalid="ignore"):
             spread = np.where(far > near * (1.0 + 1e-6),
                               near ** 4 * (near ** -3.0 - far ** -3.0) / (3.0 * (far - near)), 1.0)
-        energy = np.where(observable, stat.energy(10.0 ** (snr / 10.0)) * np.clip(spread, 0.0, 1.0), 0.0)  # (T, n)
+        on_bin = np.where(observable, stat.energy(10.0 ** (snr / 10.0)), 0.0)
+        # how many Doppler bins the outline spans: its radial speed at the ends of its azimuth extent and at its
+        # nearest point (a truck beside a sensor passing it at 4 m/s: 5–6 bins; a car 50 m ahead: a hundredth)
+        ends = [view.vx_mps * np.cos(a) + view.vy_mps * np.sin(a) for a in (view.az_lo_rad, view.az_hi_rad)]
+        span = (np.maximum(np.maximum(ends[0], ends[1]), v_rad) - np.minimum(np.minimum(ends[0], ends[1]), v_rad)) \
+            / p.doppler_bin_mps
+        w = np.where(observable & self.occluder & self.extended, np.where(crossing, 1.0, outline_share(span)), 0.0)
+        energy = (1.0 - w) * on_bin * np.clip(spread, 0.0, 1.0)                                    # (T, n)
         dd = np.mod(pos_d[:, None, :] - np.rint(pos_d)[:, :, None] + m / 2.0, m) - m / 2.0      # (T, i, j)
         dr = np.mod(pos_r[:, None, :] - np.rint(pos_r)[:, :, None] + n_r / 2.0, n_r) - n_r / 2.0
         interference = np.einsum("tij,tj->ti", stat.ring_kernel(dd, dr), energy)
+        if (w > 0.0).any():
+            interference += self._outline_interference(view, rng_m, w * on_bin, np.rint(pos_d), np.rint(pos_r),
+                                                       max_distance_m)
         if not (sc.swerling == 0).any():
             return stat.masking_factor(snr, interference, 1)
         return np.where(sc.swerling == 0, stat.masking_factor(snr, interference, 0),
                         stat.masking_factor(snr, interference, 1))
+
+    def _outline_interference(self, view, rng_m: np.ndarray, on_bin: np.ndarray, cell_d: np.ndarray,
+                              cell_r: np.ndarray, max_distance_m: float) -> np.ndarray:
+        """What the bodies of energy ``on_bin`` (T, n; the whole body's at its nearest point in the field of view,
+        its SNR's; 0: none) put into every actor's training ring (its cell ``cell_d``, ``cell_r``), (T, n): each body
+        as ``OUTLINE_SAMPLES`` points on each of its edges that face the sensor, weighted as the scatterer levels
+        share a body's RCS among its outline (:func:`radarnode.radar.scatterers.actor_scatterers`: tapered towards an
+        edge's ends, as many points as metres), of which only those inside the field of view reflect, each at its
+        own range, radial speed and element-pattern gain. Measured on a truck stopped in the next lane beside a lead
+        8 m ahead, as the ego passes it at 4 m/s: the whole energy on the truck's nearest point gave the lead a
+        masking factor of 0.0–0.16 once the edge of the field of view crossed the truck (its nearest point held
+        there at the Doppler of 60°), where the detection level's scatterers give 0.4–1.0."""
+        p, stat, sc = self.preset, self.statistic, self.scene
+        m, n_r = p.num_chirps, p.num_range_bins
+        t_i, j_i = np.nonzero(on_bin > 0.0)
+        L, W = sc.length_m[j_i], sc.width_m[j_i]
+        h = view.orientation_rad[t_i, j_i]
+        ch, sh = np.cos(h), np.sin(h)
+        cx, cy = view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i]
+        # the four edges (front, rear, left, right): midpoints and outward normals in the box frame, then sensor axes
+        zero = np.zeros_like(L)
+        ex, ey = np.stack([L / 2, -L / 2, zero, zero], axis=1), np.stack([zero, zero, W / 2, -W / 2], axis=1)
+        nx = np.broadcast_to(np.array([1.0, -1.0, 0.0, 0.0]), ex.shape)
+        ny = np.broadcast_to(np.array([0.0, 0.0, 1.0, -1.0]), ex.shape)
+        length = np.stack([W, W, L, L], axis=1)                                                     # (R, 4)
+        mx = cx[:, None] + ch[:, None] * ex - sh[:, None] * ey
+        my = cy[:, None] + sh[:, None] * ex + ch[:, None] * ey
+        wnx, wny = ch[:, None] * nx - sh[:, None] * ny, sh[:, None] * nx + ch[:, None] * ny
+        facing = (wnx * -mx + wny * -my) > 0
+        u = (np.arange(OUTLINE_SAMPLES) + 0.5) / OUTLINE_SAMPLES - 0.5                          # (S,)
+        px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (R, 4, S)
+        py = my[:, :, None] + wnx[:, :, None] * (u * length[:, :, None])
+        weight = np.where(facing[:, :, None], (0.3 + 0.7 * np.cos(np.pi * u)) * length[:, :, None], 0.0)
+        weight = weight / np.maximum(weight.sum(axis=(1, 2), keepdims=True), 1e-300)
+        # the points that reflect, flat: on a facing edge, inside the field of view
+        z = 0.0 if view.z_m is None else np.broadcast_to(
+            np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None], px.shape)
+        r_s = np.sqrt(px ** 2 + py ** 2 + z ** 2)
+        az_s = np.arctan2(py, px)
+        keep = (weight > 0.0) & in_fov(p, r_s, az_s) & (r_s <= max_distance_m)
+        row = np.broadcast_to(np.arange(t_i.size)[:, None, None], keep.shape)[keep]
+        px, py, r_s, az_s, weight = px[keep], py[keep], r_s[keep], az_s[keep], weight[keep]
+        t_k, j_k = t_i[row], j_i[row]
+        gain = 10.0 ** ((equation.pattern_db(p, az_s) - equation.pattern_db(p, view.azimuth_rad[t_k, j_k])) / 10.0)
+        e_s = on_bin[t_k, j_k] * weight * (np.maximum(rng_m[t_k, j_k], 0.1) / np.maximum(r_s, 0.1)) ** 4 * gain
+        v_s = (view.vx_mps[t_k, j_k] * px + view.vy_mps[t_k, j_k] * py) / np.maximum(r_s, 1e-9)
+        pos_d, pos_r = np.mod(v_s / p.doppler_bin_mps, m), np.mod(r_s / p.range_resolution_m, n_r)          # (K,)
+        dd = np.mod(pos_d[:, None] - cell_d[t_k] + m / 2.0, m) - m / 2.0                          # (K, n)
+        dr = np.mod(pos_r[:, None] - cell_r[t_k] + n_r / 2.0, n_r) - n_r / 2.0
+        out = np.zeros(on_bin.shape)
+        np.add.at(out, t_k, stat.ring_kernel(dd, dr) * e_s[:, None])
+        return out
 
     def _averaged_gain_db(self, k0: int, gain_db: np.ndarray, detected: np.ndarray, first_hit: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
