@@ -72,6 +72,8 @@ OCCLUSION_SAMPLES = 16
 OUTLINE_SAMPLES = 16
 #: … blended in from the first to the second of these Doppler bins spanned (below: the whole body at its nearest point)
 OUTLINE_SPAN_BINS = (0.5, 1.5)
+#: equally likely draws of a Swerling 1 neighbour's power over which a masking factor is averaged
+FLUCTUATION_POINTS = 16
 CHUNK_CYCLES = 1024       # at most this many cycles' physics in one vectorised pass (fewer for crowded scenes) …
 FIRST_CHUNK_CYCLES = 128  # … the first chunk after a restart (a configuration change, a step off sequence), …
 CHUNK_GROWTH = 4          # … each next one this many times the last
@@ -870,14 +872,49 @@ class ObjectModel:
         energy = (1.0 - w) * on_bin * np.clip(spread, 0.0, 1.0)                                    # (T, n)
         dd = np.mod(pos_d[:, None, :] - np.rint(pos_d)[:, :, None] + m / 2.0, m) - m / 2.0      # (T, i, j)
         dr = np.mod(pos_r[:, None, :] - np.rint(pos_r)[:, :, None] + n_r / 2.0, n_r) - n_r / 2.0
-        interference = np.einsum("tij,tj->ti", stat.ring_kernel(dd, dr), energy)
-        if (w > 0.0).any():
-            interference += self._outline_interference(view, rng_m, w * on_bin, np.rint(pos_d), np.rint(pos_r),
-                                                       max_distance_m)
-        if not (sc.swerling == 0).any():
-            return stat.masking_factor(snr, interference, 1)
-        return np.where(sc.swerling == 0, stat.masking_factor(snr, interference, 0),
-                        stat.masking_factor(snr, interference, 1))
+        kernel = stat.ring_kernel(dd, dr)
+        # the steady bodies' energy and the fluctuating ones' (Swerling 1: one exponential power factor a frame for
+        # the whole body, as the scatterer levels draw it), apart: the factor is averaged over the latter's draw
+        steady = sc.swerling == 0
+        parts = []
+        for own in (steady, ~steady):
+            if not own.any():
+                parts.append(np.zeros(snr.shape))
+                continue
+            part = np.einsum("tij,tj->ti", kernel, np.where(own, energy, 0.0))
+            if (w[:, own] > 0.0).any():
+                part += self._outline_interference(view, rng_m, np.where(own, w * on_bin, 0.0), np.rint(pos_d),
+                                                   np.rint(pos_r), max_distance_m)
+            parts.append(part)
+        return self._averaged_masking(snr, parts[0], parts[1])
+
+    def _averaged_masking(self, snr: np.ndarray, steady: np.ndarray, fluctuating: np.ndarray) -> np.ndarray:
+        """The masking factor (T, n) with ``steady`` interference in the ring and ``fluctuating`` interference of
+        Swerling 1 bodies, averaged over its exponential draw (taken as one: the dominant neighbour's), at
+        ``FLUCTUATION_POINTS`` equally likely values; each actor by its own Swerling case. A truck's mean energy
+        20 dB above the masking threshold hides a lead in every frame by the mean, but in one frame of ten the truck
+        draws a tenth of its mean and the lead comes through, as at the detection level (measured: a creeping lead
+        beside a stopped truck, the ego passing at 2.4 m/s, was detected in 2–5 % of the cycles at the object level
+        by the mean, 12–21 % at the detection level)."""
+        stat, sc = self.statistic, self.scene
+        case = np.broadcast_to(np.where(sc.swerling == 0, 0, 1), snr.shape)
+        out = np.ones(snr.shape)
+        mean_z = stat.n_channels * stat.eigenvalues.sum()
+        some = (steady + fluctuating) >= 0.01 * mean_z
+        if not some.any():
+            return out
+        x = -np.log1p(-(np.arange(FLUCTUATION_POINTS) + 0.5) / FLUCTUATION_POINTS)          # exponential quantiles
+        x = x / x.mean()                                                                   # mean 1 exactly
+        rho = np.repeat(snr[some], x.size)
+        i_all = (steady[some][:, None] + fluctuating[some][:, None] * x[None, :]).ravel()
+        cases = np.repeat(case[some], x.size)
+        f = np.empty(i_all.size)
+        for sw in (0, 1):
+            sel = cases == sw
+            if sel.any():
+                f[sel] = stat.masking_factor(rho[sel], i_all[sel], sw)
+        out[some] = f.reshape(-1, x.size).mean(axis=1)
+        return out
 
     def _outline_interference(self, view, rng_m: np.ndarray, on_bin: np.ndarray, cell_d: np.ndarray,
                               cell_r: np.ndarray, max_distance_m: float) -> np.ndarray:
