@@ -811,12 +811,13 @@ def test_a_track_measured_standing_keeps_the_elevation_allowance_after():
 
 
 def _landmark_map_with(across_m: float, rcs_dbsm: float, overhead: bool = False, moved: bool = False,
-                       width_m: float = 0.0):
+                       width_m: float = 0.0, crossed_path: bool = True):
     m = O.LandmarkMap(0.5, LAM)
     lm = m.observe(1, 1, 100.0, across_m, 0.0, 80.0, rcs_dbsm, moved=moved, width_m=width_m)
     for _ in range(9):
         lm.add(1, 80.0, rcs_dbsm)
     lm.overhead = overhead
+    lm.crossed_path = crossed_path
     return m
 
 
@@ -837,6 +838,8 @@ def test_a_landmark_as_strong_as_a_structure_reaches_across_the_road(rcs, near):
                                          (O.STRUCTURE_WIDTH_M + 0.1, True), (2 * O.STRUCTURE_WIDTH_M, True)])
 def test_a_landmark_of_an_object_as_wide_as_a_structure_is_one(width, wide):
     assert _at(_landmark_map_with(10.0, 20.0, width_m=width)) == (O.STRUCTURE_WIDE if wide else O.STRUCTURE_POSSIBLE)
+    # as wide, but never measured in the ego's path: a truck parked crosswise beside the road, no structure across it
+    assert _at(_landmark_map_with(10.0, 20.0, width_m=width, crossed_path=False)) == O.STRUCTURE_POSSIBLE
     # … where it reaches (a weak one 10 m across does not) and below a recognised one
     assert _at(_landmark_map_with(10.0, 10.0, width_m=width)) == O.NO_STRUCTURE
     assert _at(_landmark_map_with(10.0, 20.0, overhead=True, width_m=width)) == O.STRUCTURE_RECOGNISED
@@ -886,8 +889,11 @@ def test_a_lead_first_seen_beside_a_strong_roadside_object_is_seen_moving_and_a_
     reflects like a vehicle (OBSTACLE_RCS_DBSM, power-averaged) beside a narrow landmark counts its motion."""
     for rcs_car, moved in ((ecu_module.OBSTACLE_RCS_DBSM - 10.0, False), (ecu_module.OBSTACLE_RCS_DBSM + 10.0, True)):
         assert _standing_then_car(16.0, 6.0, rcs_car) == moved, rcs_car
-    # beside a landmark as wide as a structure (an unrecognised deck's), a strong track keeps the allowance too
-    assert not _standing_then_car(25.0, 6.0, 10.0, width_m=O.STRUCTURE_WIDTH_M + 1.0)
+    # at a landmark as wide as a structure that stood in the path (an unrecognised deck's), a strong track keeps the
+    # allowance too; beside one that never stood in the path (a truck parked crosswise 6 m beside the lane, 12 m
+    # wide: an independent tester's scene, where ACC drove into a creeping car first seen there), it does not
+    assert not _standing_then_car(25.0, 0.0, 10.0, width_m=O.STRUCTURE_WIDTH_M + 1.0)
+    assert _standing_then_car(25.0, 6.0, 10.0, width_m=2 * O.STRUCTURE_WIDTH_M)
 
 
 @pytest.mark.parametrize("rcs_car, moved", [(ecu_module.OBSTACLE_RCS_DBSM - 0.1, False),

@@ -591,6 +591,7 @@ class Ecu:
             lm = self.landmarks.by_track.get(tid)
             if lm is not None and tid in filed:
                 lm.in_path = lm.in_path + 1 if o else 0
+                lm.crossed_path |= bool(o)
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
         entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
         held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])

@@ -250,6 +250,7 @@ class Landmark:
     ground: bool = False                            # an object of its own beside a structure: never overhead
     obstacle: bool = False                          # a track filed here qualified as a collision candidate (the ECU)
     in_path: int = 0                                # cycles in a row its object was measured standing in the ECU's path
+    crossed_path: bool = False                      # its object was measured standing in the ECU's path, once or more
     left: bool = False                              # a track filed here was later measured moving away from it
     fit: Fit | None = None
     streak: int = 0                                 # consecutive cycles the test said "overhead" at one height
@@ -454,7 +455,8 @@ class LandmarkMap:
         OVERHEAD_MATCH_LAT_M for one recognised as overhead or as strong as a structure (STRUCTURE_RCS_DBSM: a deck's
         reported point glints across the road, on a bend metres from where its landmark was filed).
         :data:`STRUCTURE_RECOGNISED` where such a landmark is recognised as overhead, else :data:`STRUCTURE_WIDE`
-        where one was reported as wide as a structure (STRUCTURE_WIDTH_M), else :data:`STRUCTURE_POSSIBLE` where one
+        where one was reported as wide as a structure (STRUCTURE_WIDTH_M) and measured standing in the ECU's path
+        (:attr:`Landmark.crossed_path`), else :data:`STRUCTURE_POSSIBLE` where one
         is, :data:`NO_STRUCTURE` where none is."""
         c, s = math.cos(heading_rad), math.sin(heading_rad)
         strong = 10.0 ** (STRUCTURE_RCS_DBSM / 10.0)
@@ -469,7 +471,11 @@ class LandmarkMap:
             if cand.overhead:
                 return STRUCTURE_RECOGNISED
             if across <= MATCH_LAT_M or (cand.range_m and cand.power_sum >= strong * len(cand.range_m)):
-                found = max(found, STRUCTURE_WIDE if cand.width_m >= STRUCTURE_WIDTH_M else STRUCTURE_POSSIBLE)
+                # wide as a structure across the road, and seen where it crosses the ego's path (a truck parked
+                # crosswise beside the road is as wide, 12 m, and a creeping car first seen 6 m beside it was never
+                # followed: an independent tester's finding)
+                wide = cand.width_m >= STRUCTURE_WIDTH_M and cand.crossed_path
+                found = max(found, STRUCTURE_WIDE if wide else STRUCTURE_POSSIBLE)
         return found
 
     def forget(self, alive: set[int], ego_x_m: float, ego_y_m: float, keep_m: float = 300.0) -> None:
