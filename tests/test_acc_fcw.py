@@ -286,3 +286,128 @@ def test_the_hold_with_no_lead_below_at_and_above_the_standstill_speed(speed, ho
     assert STANDSTILL_MPS == 0.1
     acc = Acc(AccSettings(set_speed_mps=15.0))
     assert (acc.step(0.072, speed, None, True) == HOLD_MPS2) == holds and acc.standstill == holds
+
+
+def _lead_lost(lost_at_m: float, vanishes: bool = True, v: float = 6.0):
+    """An ECU following a lead 1 m/s slower than the ego's ``v``, whose track vanishes (or, ``vanishes`` False, moves
+    to the next lane) when it is ``lost_at_m`` ahead; the decisions, the cycle of the loss, the cycle period."""
+    from radarnode.consumer.ecu import Ecu
+    from radarnode.perception.types import DYN_MOVING
+    from tests.helpers import feed_ecu
+    ecu = Ecu(acc=AccSettings(set_speed_mps=20.0))
+    dt, n_lost = 0.072, 30
+    outs = []
+    for k in range(n_lost + 60):
+        x = lost_at_m + 1.0 * (n_lost - k) * dt
+        row = {"id": 3, "dist_long_m": x, "rcs_dbsm": 10.0, "obj_class": 1, "vrel_long_mps": -1.0,
+               "dyn_prop": DYN_MOVING}
+        if k >= n_lost:
+            if vanishes:
+                outs.append(feed_ecu(ecu, k, k * dt, v))
+                continue
+            row["dist_lat_m"] = -3.5
+        outs.append(feed_ecu(ecu, k, k * dt, v, row))
+    return outs, n_lost, dt
+
+
+@pytest.mark.parametrize("lost_at, holds", [(19.0, True), (20.0, True), (21.0, False), (40.0, False)])
+def test_a_lead_that_vanishes_near_holds_acc_from_accelerating(lost_at, holds):
+    """An independent tester: a lead braking to a stop beside a truck parked in the next lane was lost 9–11 m ahead
+    (masked in its CA-CFAR ring) and ACC accelerated into it. A target whose track vanishes within LOST_NEAR_M
+    (below, at, above and twice it) holds ACC from accelerating for LOST_HOLD_S; one that leaves the path does not."""
+    from radarnode.consumer.ecu import LOST_HOLD_S, LOST_NEAR_M
+    assert LOST_NEAR_M == 20.0
+    outs, n, dt = _lead_lost(lost_at)
+    assert outs[n - 1].target is not None and outs[n - 1].accel_request_mps2 > 0.0      # following, accelerating
+    # the ECU's own track of the lead coasts a cycle or two: the loss is where ACC's target goes
+    gone = next(k for k in range(n, len(outs)) if outs[k].target is None)
+    ramp = int(np.ceil(outs[gone - 1].accel_request_mps2 / (iso15622_limits(6.0)[2] * dt))) + 1
+    hold = [o.accel_request_mps2 for o in outs[gone + ramp:gone + int(LOST_HOLD_S / dt)]]
+    after = [o.accel_request_mps2 for o in outs[gone + int(LOST_HOLD_S / dt) + 2:]]
+    assert (max(hold) <= 1e-12) == holds, hold
+    assert max(after) > 0.0                                  # released after LOST_HOLD_S
+    # a lead that changes lanes away is no loss: ACC goes on towards its set speed
+    outs, n, dt = _lead_lost(lost_at, vanishes=False)
+    assert max(o.accel_request_mps2 for o in outs[n + 12:]) > 0.5
+
+
+def _stationary_car_ahead(v: float):
+    """An ECU at a constant ``v`` approaching a stopped car (10 dBsm, never seen moving) from 30 m: the decisions."""
+    from radarnode.consumer.ecu import Ecu
+    from radarnode.perception.types import DYN_STATIONARY
+    from tests.helpers import feed_ecu
+    ecu = Ecu(acc=AccSettings(set_speed_mps=20.0))
+    dt, x, outs = 0.072, 30.0, []
+    k = 0
+    while x > 2.0:
+        outs.append(feed_ecu(ecu, k, k * dt, v, {"id": 5, "dist_long_m": x, "rcs_dbsm": 10.0, "obj_class": 1,
+                                                 "vrel_long_mps": -v, "dyn_prop": DYN_STATIONARY}))
+        x -= v * dt
+        k += 1
+    return outs
+
+
+@pytest.mark.parametrize("v, brakes", [(4.9, True), (5.0, True), (5.1, False), (10.0, False)])
+def test_at_low_speed_acc_brakes_for_what_fcw_warns_of(v, brakes):
+    """An independent tester: ACC resumed by itself after a lead left and drove at 4.5 m/s into a car it had never
+    seen move, while FCW warned for 3 s (ACC asked for no acceleration and coasted). Up to FCW_BRAKE_MAX_MPS (below,
+    at, just above and twice it) ACC brakes for the object FCW warns of."""
+    from radarnode.consumer.ecu import FCW_BRAKE_MAX_MPS
+    assert FCW_BRAKE_MAX_MPS == 5.0
+    outs = _stationary_car_ahead(v)
+    warned = [o for o in outs if o.warning_level == LEVEL_WARNING]
+    assert warned and all(o.target is None for o in outs)         # braking for it is not following it
+    assert (min(o.accel_request_mps2 for o in warned) < -1.0) == brakes
+
+
+def _tester_scene(actors: str, ego_mps: float, set_mps: float, expect: str, lanes: int = 3, ego_lane: int = 1,
+                  duration: float = 14.0):
+    from tests.helpers import scenario
+    return scenario(actors, ego=f"{{speed_mps: {ego_mps}}}", road=f"{{lanes: {lanes}, ego_lane: {ego_lane}}}",
+                    duration=duration,
+                    extra=f"ecu: {{acc_enabled: true, set_speed_mps: {set_mps}, time_gap_s: 1.5, closed_loop: true,"
+                          f" expect: {{{expect}}}}}")
+
+
+@pytest.mark.parametrize("seed", [1, 2])
+@pytest.mark.parametrize("name", ["jam", "reveal", "crosswise_truck"])
+def test_the_testers_scenes_keep_their_gap_at_the_object_level(name, seed):
+    """An independent tester's closed-loop scenes (2026-11-30), each of which drove into a car at the object level:
+    a lead braking to a stop beside a truck parked in the next lane (lost 11 m ahead, 18 of 18 runs); ACC resuming
+    after a lead left into a car standing 17 m beyond (3 of 3); a car creeping at 1.5 m/s revealed by a van pulling
+    out, first seen 6 m beside a truck parked crosswise beside the road and taken for a structure's part (4 of 5)."""
+    from radarnode.consumer.evaluate import simulate
+    if name == "jam":
+        sc = _tester_scene("""  - {id: lead, class: car, x_m: 22.0, lane: 1, speed_mps: 8.0, accel: [{t_s: 2.0, accel_mps2: -2.0}]}
+  - {id: trk, class: truck, x_m: 45.0, lane: 0, speed_mps: 0.0}""", 8.0, 12.0, "lead: lead, min_gap_m: 2.0")
+    elif name == "reveal":
+        sc = _tester_scene("""  - {id: lead, class: car, waypoints: [{t_s: 0.0, x_m: 30.0, y_m: 0.0}, {t_s: 4.0, x_m: 50.0, y_m: 0.0}, {t_s: 5.5, x_m: 53.0, y_m: 0.0}, {t_s: 9.5, x_m: 53.0, y_m: 0.0}, {t_s: 12.5, x_m: 58.0, y_m: 3.5}, {t_s: 20.0, x_m: 100.0, y_m: 3.5}]}
+  - {id: parked, class: car, x_m: 65.5, lane: 1, speed_mps: 0.0}""", 5.0, 12.0, "lead: parked, min_gap_m: 2.0",
+                           duration=20.0)
+    else:
+        sc = _tester_scene("""  - {id: van, class: car, speed_mps: 6.0, waypoints: [{x_m: 16.0, y_m: 0.0}, {x_m: 18.0, y_m: 0.0}, {x_m: 26.0, y_m: 3.5}, {x_m: 300.0, y_m: 3.5}]}
+  - {id: lead, class: car, x_m: 32.0, lane: 1, speed_mps: 1.5}
+  - {id: trk, class: truck, x_m: 24.0, y_m: -12.0, heading_deg: 90, speed_mps: 0.0}""", 6.0, 6.0,
+                           "lead: lead, min_gap_m: 2.0", duration=12.0)
+    import dataclasses
+    r = simulate(dataclasses.replace(sc, seed=seed), "object")
+    assert r.min_gap_m >= 2.0 and r.impact_time_s is None, (r.min_gap_m, r.reasons)
+
+
+@pytest.mark.parametrize("gap, lane, resumes", [(6.0, 1, False), (99.0, 1, False), (101.0, 1, True),
+                                               (200.0, 1, True), (6.0, 2, True)])
+def test_the_simulated_driver_resumes_only_with_the_lane_ahead_clear(gap, lane, resumes):
+    """An independent tester: engaged at a standstill with a car stopped 6 m ahead and no lead in the scenario, the
+    simulated driver of ``report`` resumed (FCW is quiet while the ego stands) and ACC drove into the car. He now
+    resumes only with no standing actor in the lane within DRIVER_CLEAR_M ahead (below, above and at twice it; a car
+    in the next lane does not stop him). Where he holds, the ego stays put."""
+    from radarnode.consumer.evaluate import DRIVER_CLEAR_M, simulate
+    assert DRIVER_CLEAR_M == 100.0
+    x = 3.7 + gap + 4.5 / 2.0            # the car's centre: its rear ``gap`` m from the sensor (mounted 3.7 m ahead)
+    sc = _tester_scene(f"  - {{id: car, class: car, x_m: {x}, lane: {lane}, speed_mps: 0.0}}", 0.0, 12.0,
+                       "no_fcw: false", duration=6.0)
+    r = simulate(sc, "object")
+    assert (r.trace["speed"].max() > 0.5) == resumes
+    # how far the ego drove (the trace's speed, cycle by cycle; the scenario names no lead, so the judge keeps no gap)
+    travelled = float(np.sum(r.trace["speed"][:-1] * np.diff(r.trace["t"])))
+    assert travelled < (0.5 if not resumes else 200.0), travelled

@@ -99,9 +99,10 @@ class Acc:
         self.resume_confirmed = True
 
     def step(self, dt: float, ego_speed_mps: float, target: Target | None, radar_ok: bool,
-             no_accel: bool = False) -> float:
-        """The acceleration request (m/s²) for this cycle; ``no_accel`` (a collision warning is on): none above 0,
-        reached within the jerk limit."""
+             no_accel: bool = False, borrowed: bool = False) -> float:
+        """The acceleration request (m/s²) for this cycle; ``no_accel`` (a collision warning is on, or a near target
+        was just lost): none above 0, reached within the jerk limit. ``borrowed``: the target is the object FCW warns
+        of, not a vehicle ACC follows: stopped behind it, ACC holds until the driver resumes."""
         s = self.settings
         if not s.enabled:
             self.state, self.request = STATE_OFF, 0.0
@@ -170,7 +171,7 @@ class Acc:
         elif ego_speed_mps < STANDSTILL_MPS and ((target is None and not self.departing)
                                                  or (target is not None and lead_v < LEAD_STOPPED_MPS)):
             self.standstill, self.standstill_s, self.resume_confirmed = True, 0.0, False
-            self.behind_lead = target is not None
+            self.behind_lead = target is not None and not borrowed
             self.request = HOLD_MPS2
             return self.request
         if ego_speed_mps >= STANDSTILL_MPS:

@@ -88,8 +88,17 @@ STRAY_STEP_PERIODS = 3.0
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
+                  "_lost_until", "_last_acc", "_braking_for",
                   "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
                   "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
+#: a target ACC followed that vanished from the object list within this distance (m) …
+LOST_NEAR_M = 20.0
+#: … holds ACC from accelerating this long (s) unless another target is taken: the radar lost a lead braking beside a
+#: truck parked in the next lane (masked in its CA-CFAR ring) and ACC accelerated into it
+LOST_HOLD_S = 2.0
+#: up to this ego speed (m/s) ACC brakes for the object FCW warns of when it has no nearer target of its own (a
+#: stationary object it never saw move, which it does not follow): stopping there is within its authority
+FCW_BRAKE_MAX_MPS = 5.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -171,6 +180,9 @@ class Ecu:
         self._out_path: dict[int, int] = {}
         self._target_id: int | None = None
         self._fcw_target_id: int | None = None
+        self._last_acc: Target | None = None      # ACC's target in the last cycle
+        self._lost_until = -math.inf              # ACC holds from accelerating until then (LOST_HOLD_S)
+        self._braking_for: int | None = None      # the track of FCW's object ACC brakes for (FCW_BRAKE_MAX_MPS)
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
         self._placed: set[int] = set()            # tracks whose place was judged for continuing an object there
@@ -261,6 +273,7 @@ class Ecu:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
+        self._last_acc, self._lost_until, self._braking_for = None, -math.inf, None
         self._rcs_power, self._obstacles, self._placed, self._born = {}, set(), set(), {}
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
@@ -640,7 +653,30 @@ class Ecu:
             level = self.fcw.step(None, v, 0.0, 0.0, 0.0)
         # while FCW warns, ACC asks for no acceleration (it went on towards its set speed, at up to 4 m/s², into a
         # stopped car FCW warned for and ACC, never having seen it move, does not follow)
-        accel = self.acc.step(dt, v, target, radar_ok, no_accel=level >= LEVEL_WARNING)
+        no_accel = level >= LEVEL_WARNING
+        # a target that vanished near (not one that left the path: its track is gone) holds ACC from accelerating for
+        # LOST_HOLD_S, or until another target is taken: masked beside a truck parked in the next lane, a lead
+        # braking to a stop was lost 9–11 m ahead and ACC accelerated into it (an independent tester's finding)
+        alive = {t.id for t in tracks} if radar_ok else set()
+        last = self._last_acc
+        if (target is None and last is not None and last.track_id not in alive
+                and last.distance_m <= LOST_NEAR_M):
+            self._lost_until = t_s + LOST_HOLD_S
+        if target is not None:
+            self._lost_until = -math.inf
+        no_accel |= t_s < self._lost_until
+        self._last_acc = target
+        # at low speed ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it
+        # never saw move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), and goes on braking for
+        # it while FCW keeps it as its object, after the warning too, so the ego stops behind it (then holds until the
+        # driver resumes)
+        # (the decision's target stays ACC's own, the vehicle it follows: this is braking, not following)
+        controlled, borrowed = target, False
+        if fcw_target is not None and (level >= LEVEL_WARNING or fcw_target.track_id == self._braking_for) \
+                and v <= FCW_BRAKE_MAX_MPS and (target is None or fcw_target.distance_m < target.distance_m - 0.5):
+            controlled, borrowed = fcw_target, True
+        self._braking_for = fcw_target.track_id if borrowed else None
+        accel = self.acc.step(dt, v, controlled, radar_ok, no_accel=no_accel, borrowed=borrowed)
         fault = (0 if radar_ok else 1)
         out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
                         target, radar_ok,
