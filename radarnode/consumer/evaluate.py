@@ -40,6 +40,10 @@ TAG_WINDOW = 10
 AT_ACTOR_M = 0.75
 OVERHEAD_Z_M, AT_ACTOR_OVERHEAD_M = 0.5, 1.5
 STANDSTILL_JUDGE_MPS = 0.5     # below this the ego is stopping or standing: the ISO 15622 limits are not judged
+#: the simulated driver resumes ACC from a standstill (no lead in the scenario) only with no standing actor this near
+#: ahead in the ego's lane (m): he sees it (ACC, which never saw it move, would not brake for it above
+#: radarnode.consumer.ecu.FCW_BRAKE_MAX_MPS)
+DRIVER_CLEAR_M = 100.0
 NO_BRAKING_MPS2 = -0.5         # ``expect.no_braking``: an ACC request below this is braking (above: coasting)
 
 
@@ -295,7 +299,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # the driver confirms driving off after a long standstill, a reaction time after the lead has left (with no
         # lead in the scenario: a reaction time after the ego stands, unless FCW warns)
         if ecu.acc.standstill:
-            go = lead_v > 1.0 if lead is not None else not warning
+            go = lead_v > 1.0 if lead is not None else not warning and _lane_clear(scene, t)
             resume_cue_s = resume_cue_s + period if go else 0.0
             if resume_cue_s >= spec.driver_reaction_s:
                 ecu.acc.confirm_resume()
@@ -340,6 +344,19 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     res.trace["ecu"] = ecu                         # the ECU as it ended (its landmarks, for the benchmarks)
     _judge(scenario, res)
     return res
+
+
+def _lane_clear(scene, t_s: float) -> bool:
+    """The simulated driver's look ahead before he resumes ACC from a standstill, in a scenario without a lead: no
+    actor slower than 1 m/s in the ego's lane within DRIVER_CLEAR_M (he resumed into a car stopped 6 m ahead, where
+    FCW was quiet only because the ego stood: an independent tester's finding)."""
+    for i in range(scene.n):
+        if scene.elevated[i] or scene.is_guardrail[i]:          # a deck or a gantry above the road, a guardrail
+            continue
+        gap, lateral, _, speed, _ = scene.lane_gap(t_s, i)
+        if 0.0 < gap < DRIVER_CLEAR_M and abs(lateral) < 2.0 and speed < 1.0:
+            return False
+    return True
 
 
 def _actor_at(view, scene, mount: SensorMount, target) -> int | None:
