@@ -944,8 +944,12 @@ class ObjectModel:
         my = cy[:, None] + sh[:, None] * ex + ch[:, None] * ey
         wnx, wny = ch[:, None] * nx - sh[:, None] * ny, sh[:, None] * nx + ch[:, None] * ny
         facing = (wnx * -mx + wny * -my) > 0
+        # a box faces a point outside it with one or two edges: those two (a second that does not face gets no weight)
+        two = np.argsort(~facing, axis=1, kind="stable")[:, :2]
+        mx, my, wnx, wny, length, facing = (np.take_along_axis(a, two, axis=1)
+                                            for a in (mx, my, wnx, wny, length, facing))
         u = (np.arange(OUTLINE_SAMPLES) + 0.5) / OUTLINE_SAMPLES - 0.5                          # (S,)
-        px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (R, 4, S)
+        px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (R, 2, S)
         py = my[:, :, None] + wnx[:, :, None] * (u * length[:, :, None])
         weight = np.where(facing[:, :, None], (0.3 + 0.7 * np.cos(np.pi * u)) * length[:, :, None], 0.0)
         weight = weight / np.maximum(weight.sum(axis=(1, 2), keepdims=True), 1e-300)
@@ -964,9 +968,9 @@ class ObjectModel:
         pos_d, pos_r = np.mod(v_s / p.doppler_bin_mps, m), np.mod(r_s / p.range_resolution_m, n_r)          # (K,)
         dd = np.mod(pos_d[:, None] - cell_d[t_k] + m / 2.0, m) - m / 2.0                          # (K, n)
         dr = np.mod(pos_r[:, None] - cell_r[t_k] + n_r / 2.0, n_r) - n_r / 2.0
-        out = np.zeros(on_bin.shape)
-        np.add.at(out, t_k, stat.ring_kernel(dd, dr) * e_s[:, None])
-        return out
+        put = stat.ring_kernel(dd, dr) * e_s[:, None]
+        t_n = on_bin.shape[0]
+        return np.stack([np.bincount(t_k, weights=put[:, i], minlength=t_n) for i in range(put.shape[1])], axis=1)
 
     def _averaged_gain_db(self, k0: int, gain_db: np.ndarray, detected: np.ndarray, first_hit: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
