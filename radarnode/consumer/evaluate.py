@@ -299,7 +299,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # the driver confirms driving off after a long standstill, a reaction time after the lead has left (with no
         # lead in the scenario: a reaction time after the ego stands, unless FCW warns)
         if ecu.acc.standstill:
-            go = lead_v > 1.0 if lead is not None else not warning and _lane_clear(scene, t)
+            go = lead_v > 1.0 if lead is not None else not warning and lane_clear_ahead(scene, t)
             resume_cue_s = resume_cue_s + period if go else 0.0
             if resume_cue_s >= spec.driver_reaction_s:
                 ecu.acc.confirm_resume()
@@ -346,7 +346,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     return res
 
 
-def _lane_clear(scene, t_s: float) -> bool:
+def lane_clear_ahead(scene, t_s: float) -> bool:
     """The simulated driver's look ahead before he resumes ACC from a standstill, in a scenario without a lead: no
     actor slower than 1 m/s in the ego's lane within DRIVER_CLEAR_M (he resumed into a car stopped 6 m ahead, where
     FCW was quiet only because the ego stood: an independent tester's finding)."""
