@@ -364,6 +364,29 @@ def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) ->
     return inside & (range_m >= preset.min_range_m - tol)
 
 
+def facing_edges(centre_x: np.ndarray, centre_y: np.ndarray, heading_rad: np.ndarray, length_m: np.ndarray,
+                 width_m: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The four edges (front, rear, left, right) of boxes centred at (``centre_x``, ``centre_y``), sensor frame,
+    heading ``heading_rad``: their midpoints (x, y), outward normals (x, y), lengths, and whether each faces the sensor
+    at the origin (its outward normal points at it); each shape (n, 4)."""
+    L, W = length_m, width_m
+    ch, sh = np.cos(heading_rad), np.sin(heading_rad)
+    zero = np.zeros_like(L)
+    ex, ey = np.stack([L / 2, -L / 2, zero, zero], axis=1), np.stack([zero, zero, W / 2, -W / 2], axis=1)
+    nx = np.broadcast_to(np.array([1.0, -1.0, 0.0, 0.0]), ex.shape)
+    ny = np.broadcast_to(np.array([0.0, 0.0, 1.0, -1.0]), ex.shape)
+    mx = centre_x[:, None] + ch[:, None] * ex - sh[:, None] * ey
+    my = centre_y[:, None] + sh[:, None] * ex + ch[:, None] * ey
+    wnx, wny = ch[:, None] * nx - sh[:, None] * ny, sh[:, None] * nx + ch[:, None] * ny
+    return mx, my, wnx, wny, np.stack([W, W, L, L], axis=1), (wnx * -mx + wny * -my) > 0
+
+
+def edge_taper(u: np.ndarray) -> np.ndarray:
+    """The weight of a point ``u`` along an edge (−½ … ½) in the share of a body's RCS: 0.3 at the ends, 1 in the
+    middle."""
+    return 0.3 + 0.7 * np.cos(np.pi * u)
+
+
 def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray
                    ) -> tuple[np.ndarray, np.ndarray]:
     """The point of each actor's box nearest to the sensor *within the field of view*, sensor frame (x, y).
@@ -930,20 +953,9 @@ class ObjectModel:
         p, stat, sc = self.preset, self.statistic, self.scene
         m, n_r = p.num_chirps, p.num_range_bins
         t_i, j_i = np.nonzero(on_bin > 0.0)
-        L, W = sc.length_m[j_i], sc.width_m[j_i]
-        h = view.orientation_rad[t_i, j_i]
-        ch, sh = np.cos(h), np.sin(h)
-        cx, cy = view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i]
-        # the four edges (front, rear, left, right): midpoints and outward normals in the box frame, then sensor axes
-        zero = np.zeros_like(L)
-        ex, ey = np.stack([L / 2, -L / 2, zero, zero], axis=1), np.stack([zero, zero, W / 2, -W / 2], axis=1)
-        nx = np.broadcast_to(np.array([1.0, -1.0, 0.0, 0.0]), ex.shape)
-        ny = np.broadcast_to(np.array([0.0, 0.0, 1.0, -1.0]), ex.shape)
-        length = np.stack([W, W, L, L], axis=1)                                                     # (R, 4)
-        mx = cx[:, None] + ch[:, None] * ex - sh[:, None] * ey
-        my = cy[:, None] + sh[:, None] * ex + ch[:, None] * ey
-        wnx, wny = ch[:, None] * nx - sh[:, None] * ny, sh[:, None] * nx + ch[:, None] * ny
-        facing = (wnx * -mx + wny * -my) > 0
+        mx, my, wnx, wny, length, facing = facing_edges(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
+                                                        view.orientation_rad[t_i, j_i], sc.length_m[j_i],
+                                                        sc.width_m[j_i])
         # a box faces a point outside it with one or two edges: those two (a second that does not face gets no weight)
         two = np.argsort(~facing, axis=1, kind="stable")[:, :2]
         mx, my, wnx, wny, length, facing = (np.take_along_axis(a, two, axis=1)
@@ -951,7 +963,7 @@ class ObjectModel:
         u = (np.arange(OUTLINE_SAMPLES) + 0.5) / OUTLINE_SAMPLES - 0.5                          # (S,)
         px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (R, 2, S)
         py = my[:, :, None] + wnx[:, :, None] * (u * length[:, :, None])
-        weight = np.where(facing[:, :, None], (0.3 + 0.7 * np.cos(np.pi * u)) * length[:, :, None], 0.0)
+        weight = np.where(facing[:, :, None], edge_taper(u) * length[:, :, None], 0.0)
         weight = weight / np.maximum(weight.sum(axis=(1, 2), keepdims=True), 1e-300)
         # the points that reflect, flat: on a facing edge, inside the field of view
         z = 0.0 if view.z_m is None else np.broadcast_to(

@@ -19,7 +19,7 @@ import numpy as np
 
 from radarnode.perception.types import _Columns
 from radarnode.radar import elevation
-from radarnode.radar.object_model import POINT_SIZE_M, in_fov, nearest_in_fov
+from radarnode.radar.object_model import POINT_SIZE_M, edge_taper, facing_edges, in_fov, nearest_in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
 
@@ -105,22 +105,11 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
         return Scatterers.empty(0)
     cx = view.x_m[idx]
     cy = view.y_m[idx]
-    # box centre in the sensor frame, from the nearest point and the heading
     L, W = scene.length_m[idx], scene.width_m[idx]
-    h = view.orientation_rad[idx]
-    ch, sh = np.cos(h), np.sin(h)
-    centre_x, centre_y = view.centre_x_m[idx], view.centre_y_m[idx]
     small = (L <= POINT_SIZE_M) & (W <= POINT_SIZE_M)
-    # the four edges: midpoints and directions in the box frame
-    ex = np.stack([L / 2, -L / 2, np.zeros_like(L), np.zeros_like(L)], axis=1)     # (n, 4) edge midpoints, box frame
-    ey = np.stack([np.zeros_like(W), np.zeros_like(W), W / 2, -W / 2], axis=1)
-    nx = np.stack([np.ones_like(L), -np.ones_like(L), np.zeros_like(L), np.zeros_like(L)], axis=1)
-    ny = np.stack([np.zeros_like(W), np.zeros_like(W), np.ones_like(W), -np.ones_like(W)], axis=1)
-    length = np.stack([W, W, L, L], axis=1)
-    mx = centre_x[:, None] + ch[:, None] * ex - sh[:, None] * ey
-    my = centre_y[:, None] + sh[:, None] * ex + ch[:, None] * ey
-    wnx, wny = ch[:, None] * nx - sh[:, None] * ny, sh[:, None] * nx + ch[:, None] * ny
-    facing = (wnx * -mx + wny * -my) > 0                      # outward normal points at the sensor
+    # the four edges: midpoints, outward normals, lengths, and which face the sensor
+    mx, my, wnx, wny, length, facing = facing_edges(view.centre_x_m[idx], view.centre_y_m[idx],
+                                                    view.orientation_rad[idx], L, W)
     n_pts = np.where(facing & ~small[:, None], np.maximum(np.ceil(length / spacing_m).astype(np.int64), 1), 0)
     n_pts[small, 0] = 1                                       # small actors: one point
     counts = n_pts.ravel()
@@ -136,7 +125,7 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
     py = my.ravel()[edge] + u * length.ravel()[edge] * ty
     px = np.where(small[a_i], cx[a_i], px)
     py = np.where(small[a_i], cy[a_i], py)
-    weight = np.where(small[a_i], 1.0, 0.3 + 0.7 * np.cos(np.pi * u))
+    weight = np.where(small[a_i], 1.0, edge_taper(u))
     wsum = np.bincount(a_i, weights=weight, minlength=idx.size)
     rcs = scene.rcs_dbsm[idx][a_i] + 10.0 * np.log10(weight / wsum[a_i])
     actor = idx[a_i]
