@@ -196,13 +196,10 @@ def test_behind_a_stopped_lead_acc_slows_all_the_way_and_never_draws_fcw(speed, 
 
 
 def _acc_scene(ego_mps: float, lead: str, set_speed_mps: float, expect: str, duration: float):
-    """A closed-loop ACC scene on a two-lane road (tests.helpers.scenario): the ego at ``ego_mps``, one car ``lead``
+    """A closed-loop ACC scene on a two-lane road (:func:`_tester_scene`): the ego at ``ego_mps``, one car ``lead``
     (its YAML fields) in its lane, ACC set to ``set_speed_mps``, the ECU's ``expect``."""
-    from tests.helpers import scenario
-    return scenario(f"  - {{id: lead, class: car, lane: 0, {lead}}}", ego=f"{{speed_mps: {ego_mps}}}",
-                    road="{lanes: 2, ego_lane: 0}", duration=duration,
-                    extra=f"ecu: {{acc_enabled: true, set_speed_mps: {set_speed_mps}, time_gap_s: 1.5, closed_loop: true,"
-                          f" expect: {{{expect}}}}}")
+    return _tester_scene(f"  - {{id: lead, class: car, lane: 0, {lead}}}", ego_mps, set_speed_mps, expect, lanes=2,
+                         ego_lane=0, duration=duration)
 
 
 @pytest.mark.parametrize("level", ["object", "detection"])
@@ -362,6 +359,8 @@ def test_at_low_speed_acc_brakes_for_what_fcw_warns_of(v, brakes):
 
 def _tester_scene(actors: str, ego_mps: float, set_mps: float, expect: str, lanes: int = 3, ego_lane: int = 1,
                   duration: float = 14.0):
+    """A closed-loop ACC scene (tests.helpers.scenario) of these ``actors`` (YAML list items): the ego at ``ego_mps``
+    in lane ``ego_lane`` of ``lanes``, ACC set to ``set_mps`` at the 1.5-s time gap, the ECU's ``expect``."""
     from tests.helpers import scenario
     return scenario(actors, ego=f"{{speed_mps: {ego_mps}}}", road=f"{{lanes: {lanes}, ego_lane: {ego_lane}}}",
                     duration=duration,
