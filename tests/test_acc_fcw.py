@@ -285,26 +285,37 @@ def test_the_hold_with_no_lead_below_at_and_above_the_standstill_speed(speed, ho
     assert (acc.step(0.072, speed, None, True) == HOLD_MPS2) == holds and acc.standstill == holds
 
 
-def _lead_lost(lost_at_m: float, vanishes: bool = True, v: float = 6.0):
+def _lead_lost(lost_at_m: float, vanishes: bool = True, v: float = 6.0, drive: bool = False):
     """An ECU following a lead 1 m/s slower than the ego's ``v``, whose track vanishes (or, ``vanishes`` False, moves
-    to the next lane) when it is ``lost_at_m`` ahead; the decisions, the cycle of the loss, the cycle period."""
+    to the next lane) when it is ``lost_at_m`` ahead; the decisions, the cycle of the loss, the cycle period. With
+    ``drive`` the ego's speed follows ACC's request once ACC's target is gone (its own track of the lead coasts a
+    cycle or two), else it stays ``v``; and, from the loss on, the ego's (speed, distance driven since the loss) after
+    each decision."""
     from radarnode.consumer.ecu import Ecu
     from radarnode.perception.types import DYN_MOVING
     from tests.helpers import feed_ecu
     ecu = Ecu(acc=AccSettings(set_speed_mps=20.0))
     dt, n_lost = 0.072, 30
     outs = []
-    for k in range(n_lost + 60):
+    speed, driven, ego, driving = v, 0.0, [], False
+    for k in range(n_lost + (120 if drive else 60)):
         x = lost_at_m + 1.0 * (n_lost - k) * dt
         row = {"id": 3, "dist_long_m": x, "rcs_dbsm": 10.0, "obj_class": 1, "vrel_long_mps": -1.0,
                "dyn_prop": DYN_MOVING}
         if k >= n_lost:
             if vanishes:
-                outs.append(feed_ecu(ecu, k, k * dt, v))
-                continue
-            row["dist_lat_m"] = -3.5
+                outs.append(feed_ecu(ecu, k, k * dt, speed))
+            else:
+                row["dist_lat_m"] = -3.5
+                outs.append(feed_ecu(ecu, k, k * dt, speed, row))
+            driving = drive and (driving or outs[-1].target is None)
+            nxt = max(speed + outs[-1].accel_request_mps2 * dt, 0.0) if driving else speed
+            driven += 0.5 * (speed + nxt) * dt
+            speed = nxt
+            ego.append((speed, driven))
+            continue
         outs.append(feed_ecu(ecu, k, k * dt, v, row))
-    return outs, n_lost, dt
+    return outs, n_lost, dt, ego
 
 
 @pytest.mark.parametrize("lost_at, holds", [(19.0, True), (20.0, True), (21.0, False), (40.0, False)])
@@ -314,7 +325,7 @@ def test_a_lead_that_vanishes_near_holds_acc_from_accelerating(lost_at, holds):
     (below, at, above and twice it) holds ACC from accelerating for LOST_HOLD_S; one that leaves the path does not."""
     from radarnode.consumer.ecu import LOST_HOLD_S, LOST_NEAR_M
     assert LOST_NEAR_M == 20.0
-    outs, n, dt = _lead_lost(lost_at)
+    outs, n, dt, _ = _lead_lost(lost_at, v=8.0)       # a lead at 7 m/s: not a slow one (remembered: the next test)
     assert outs[n - 1].target is not None and outs[n - 1].accel_request_mps2 > 0.0      # following, accelerating
     # the ECU's own track of the lead coasts a cycle or two: the loss is where ACC's target goes
     gone = next(k for k in range(n, len(outs)) if outs[k].target is None)
@@ -324,7 +335,38 @@ def test_a_lead_that_vanishes_near_holds_acc_from_accelerating(lost_at, holds):
     assert (max(hold) <= 1e-12) == holds, hold
     assert max(after) > 0.0                                  # released after LOST_HOLD_S
     # a lead that changes lanes away is no loss: ACC goes on towards its set speed
-    outs, n, dt = _lead_lost(lost_at, vanishes=False)
+    outs, n, dt, _ = _lead_lost(lost_at, vanishes=False, v=8.0)
+    assert max(o.accel_request_mps2 for o in outs[n + 12:]) > 0.5
+
+
+@pytest.mark.parametrize("lead_mps, lost_at, remembered", [
+    (4.9, 10.0, True), (5.0, 10.0, True), (5.1, 10.0, False), (10.0, 10.0, False),
+    (3.0, 19.0, True), (3.0, 20.0, True), (3.0, 21.0, False), (3.0, 40.0, False)])
+def test_a_slow_lead_lost_near_is_remembered_standing_where_it_was_last_seen(lead_mps, lost_at, remembered):
+    """An independent tester's jam at the detection level: a lead braking to a stop beside a truck parked in the next
+    lane was lost 11 m ahead at 3.4 m/s (masked in the CA-CFAR ring of the truck's side beside the ego); ACC held for
+    LOST_HOLD_S, then accelerated from 0.3 m/s and drove into it, 8 m ahead. A lead lost within LOST_NEAR_M going at
+    most FCW_BRAKE_MAX_MPS over ground (below, at, above and twice each) is now remembered standing where it was last
+    seen: ACC brakes to stop behind that place instead of going on after the hold. A faster or farther one is not."""
+    from radarnode.consumer.ecu import FCW_BRAKE_MAX_MPS, LOST_HOLD_S, LOST_LEAD_DECEL_MPS2, LOST_NEAR_M
+    assert (FCW_BRAKE_MAX_MPS, LOST_NEAR_M) == (5.0, 20.0)
+    outs, n, dt, ego = _lead_lost(lost_at, v=lead_mps + 1.0, drive=True)
+    gone = next(k for k in range(n, len(outs)) if outs[k].target is None)
+    assert all(o.target is None for o in outs[gone:])       # ACC's own target stays gone: this is braking, not following
+    requests = [o.accel_request_mps2 for o in outs[gone:]]
+    after = [o.accel_request_mps2 for o in outs[gone + int(LOST_HOLD_S / dt) + 2:]]
+    if remembered:
+        # braking to stop behind the place (the lead's rear lost_at m ahead of the sensor) and standing there
+        assert min(requests) < -0.5 and max(after) <= 1e-12, requests
+        assert ego[-1][0] == 0.0 and outs[-1].standstill
+        # short of where the lead would stand had it braked as hard as a car can (LOST_LEAD_DECEL_MPS2) when it was
+        # lost, lost_at m ahead of the sensor
+        hard_stop = lost_at + lead_mps ** 2 / (2.0 * LOST_LEAD_DECEL_MPS2)
+        assert hard_stop - 5.0 < ego[-1][1] < hard_stop - 1.0, (hard_stop, ego[-1])
+    else:
+        assert max(after) > 0.0 and ego[-1][0] > lead_mps + 1.0               # the hold alone, then on
+    # a slow lead that changes lanes away is no loss: nothing is remembered
+    outs, n, dt, _ = _lead_lost(lost_at, vanishes=False, v=lead_mps + 1.0)
     assert max(o.accel_request_mps2 for o in outs[n + 12:]) > 0.5
 
 
@@ -391,6 +433,24 @@ def test_the_testers_scenes_keep_their_gap_at_the_object_level(name, seed):
     import dataclasses
     r = simulate(dataclasses.replace(sc, seed=seed), "object")
     assert r.min_gap_m >= 2.0 and r.impact_time_s is None, (r.min_gap_m, r.reasons)
+
+
+@pytest.mark.parametrize("truck_x, seed", [(41.0, 2), (50.0, 1)])
+def test_the_testers_jam_keeps_its_gap_at_the_detection_level(truck_x, seed):
+    """An independent tester's jam (2026-11-30) at the detection level: a lead braking from 8 m/s to a stop beside a
+    truck parked in the next lane, the ego following at 1.5 s. The truck's side beside the ego masks the lead in its
+    CA-CFAR ring (5 range bins off, the same Doppler): the lead was lost 11 m ahead at 3.4 m/s, ACC held for
+    LOST_HOLD_S and then drove into it (these two runs: gap 0.0 m; 5 of 21 runs of the tester's grid). Remembered
+    standing where it would stop, the lead is not run into (the grid: 0 of 21, the least gap 4.4 m)."""
+    import dataclasses
+
+    from radarnode.consumer.evaluate import simulate
+    sc = _tester_scene(f"""  - {{id: lead, class: car, x_m: 22.0, lane: 1, speed_mps: 8.0, accel: [{{t_s: 2.0, accel_mps2: -2.0}}]}}
+  - {{id: trk, class: truck, x_m: {truck_x}, lane: 0, speed_mps: 0.0}}""", 8.0, 12.0, "lead: lead, min_gap_m: 3.0",
+                       duration=18.0)
+    r = simulate(dataclasses.replace(sc, seed=seed), "detection")
+    assert r.min_gap_m >= 3.0 and r.impact_time_s is None, (r.min_gap_m, r.reasons)
+    assert r.trace["speed"][-1] < 0.05          # standing behind it at the end (the lead never drives on)
 
 
 @pytest.mark.parametrize("gap, lane, resumes", [(6.0, 1, False), (99.0, 1, False), (101.0, 1, True),

@@ -88,7 +88,7 @@ STRAY_STEP_PERIODS = 3.0
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
-                  "_lost_until", "_last_acc", "_braking_for",
+                  "_lost_until", "_last_acc", "_last_acc_place", "_lost_place", "_path_inputs", "_braking_for",
                   "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
                   "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
 #: a target ACC followed that vanished from the object list within this distance (m) …
@@ -97,8 +97,15 @@ LOST_NEAR_M = 20.0
 #: truck parked in the next lane (masked in its CA-CFAR ring) and ACC accelerated into it
 LOST_HOLD_S = 2.0
 #: up to this ego speed (m/s) ACC brakes for the object FCW warns of when it has no nearer target of its own (a
-#: stationary object it never saw move, which it does not follow): stopping there is within its authority
+#: stationary object it never saw move, which it does not follow): stopping there is within its authority; and a
+#: target lost within LOST_NEAR_M while it went at most this fast over ground (stop-and-go) is remembered standing
+#: where it was last seen: ACC stops behind that place, while it lies in the path, and holds there until the driver
+#: resumes (the radar lost a lead braking to a stop beside a truck parked in the next lane, masked in its CA-CFAR
+#: ring; after LOST_HOLD_S ACC accelerated from 0.3 m/s into it, 8 m ahead — an independent tester's scene) …
 FCW_BRAKE_MAX_MPS = 5.0
+#: … the place where it stands if it braked this hard (m/s², about what a car's brakes can) from its last speed: as
+#: near as it can be (taken where it was last seen, ACC stopped a lead's length short of a lead lost at 10 m, 5 m/s)
+LOST_LEAD_DECEL_MPS2 = 8.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -182,6 +189,10 @@ class Ecu:
         self._fcw_target_id: int | None = None
         self._last_acc: Target | None = None      # ACC's target in the last cycle
         self._lost_until = -math.inf              # ACC holds from accelerating until then (LOST_HOLD_S)
+        # where ACC's last target would stop (odometry frame; LOST_LEAD_DECEL_MPS2), and its speed
+        self._last_acc_place: tuple[float, float, float] | None = None
+        self._lost_place: tuple[float, float, Target] | None = None   # a near, slow target lost: its place
+        self._path_inputs: tuple = (None, None, None)   # the path test's boundaries, trails, crossing (last _select)
         self._braking_for: int | None = None      # the track of FCW's object ACC brakes for (FCW_BRAKE_MAX_MPS)
         self._rcs_power: dict[int, float] = {}   # per track: RCS averaged in power over its life
         self._obstacles: set[int] = set()         # stationary tracks that qualified as collision candidates
@@ -274,6 +285,7 @@ class Ecu:
         self.cluster_tracker = Tracker("clusters", "ca")
         self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
         self._last_acc, self._lost_until, self._braking_for = None, -math.inf, None
+        self._last_acc_place, self._lost_place, self._path_inputs = None, None, (None, None, None)
         self._rcs_power, self._obstacles, self._placed, self._born = {}, set(), set(), {}
         self._moved, self._moving_for = set(), {}
         self.landmarks = LandmarkMap(self.mount.z_m, self.wavelength_m)
@@ -580,6 +592,7 @@ class Ecu:
         self.trail_fits = (trail_fits(self.trails.trails(), curvature(self.ego_speed_mps, self.ego_yaw_rate_rps),
                                       boundary_reference(bounds, self.mount, crossing))
                            if self.acc.settings.path_from_trails else [])
+        self._path_inputs = (bounds, self.trail_fits, crossing)
         ok = in_path(x, y, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
                      bounds, self.mount, self.trail_fits, crossing)
         # beyond where the road's course is measured (the boundaries' valid range, the trails' farthest point) the
@@ -665,6 +678,7 @@ class Ecu:
         if target is not None:
             self._lost_until = -math.inf
         no_accel |= t_s < self._lost_until
+        remembered = self._remembered(target, last, alive, v)
         self._last_acc = target
         # at low speed ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it
         # never saw move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), and goes on braking for
@@ -676,6 +690,8 @@ class Ecu:
                 and v <= FCW_BRAKE_MAX_MPS and (target is None or fcw_target.distance_m < target.distance_m - 0.5):
             controlled, borrowed = fcw_target, True
         self._braking_for = fcw_target.track_id if borrowed else None
+        if remembered is not None and (controlled is None or remembered.distance_m < controlled.distance_m):
+            controlled, borrowed = remembered, True
         accel = self.acc.step(dt, v, controlled, radar_ok, no_accel=no_accel, borrowed=borrowed)
         fault = (0 if radar_ok else 1)
         out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
@@ -683,6 +699,43 @@ class Ecu:
                         self.acc.take_over and self.acc.settings.enabled, self.acc.standstill, fcw_target)
         self.outputs.append(out)
         return out
+
+    def _vehicle_to_odometry(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """A vehicle-frame point in the odometry frame (the dead-reckoned pose of this cycle)."""
+        ox, oy, oh = self.odometry
+        c, s = math.cos(oh), math.sin(oh)
+        return ox + x_m * c - y_m * s, oy + x_m * s + y_m * c
+
+    def _remembered(self, target: Target | None, last: Target | None, alive: set, v: float) -> Target | None:
+        """A near, slow target lost, as a standing object where it would stand had it braked hard when it was last
+        seen (see FCW_BRAKE_MAX_MPS), or None. Kept until ACC takes a target again, stands still (it then holds until the driver resumes), or the place
+        leaves the predicted path or falls behind the sensor."""
+        if target is not None:
+            self._lost_place = None
+            lead_v = max(self.ego_speed_mps + target.rel_speed_mps, 0.0)
+            ahead = target.distance_m + lead_v ** 2 / (2.0 * LOST_LEAD_DECEL_MPS2)
+            self._last_acc_place = (*self._vehicle_to_odometry(ahead + self.mount.x_m, target.lateral_m), lead_v)
+            return None
+        if last is not None and last.track_id not in alive and last.distance_m <= LOST_NEAR_M \
+                and self._last_acc_place is not None and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS:
+            self._lost_place = (*self._last_acc_place[:2], last)
+        self._last_acc_place = None
+        if self._lost_place is None:
+            return None
+        px, py, lost = self._lost_place
+        ox, oy, oh = self.odometry
+        c, s = math.cos(oh), math.sin(oh)
+        xv, yv = (px - ox) * c + (py - oy) * s, -(px - ox) * s + (py - oy) * c          # vehicle frame
+        m = self.mount
+        cy, sy = math.cos(math.radians(m.yaw_deg)), math.sin(math.radians(m.yaw_deg))
+        xs, ys = cy * (xv - m.x_m) + sy * (yv - m.y_m), -sy * (xv - m.x_m) + cy * (yv - m.y_m)   # sensor frame
+        bounds, trails, crossing = self._path_inputs
+        if self.acc.standstill or xv <= m.x_m or not in_path(
+                np.array([xs]), np.array([ys]), v, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
+                bounds, m, trails, crossing)[0]:
+            self._lost_place = None
+            return None
+        return Target(lost.track_id, lost.object_id, xv - m.x_m, yv, -v, 0.0)
 
     def frames(self, out: EcuOutput, timestamp: float | None = None) -> list[can.Message]:
         """AccStatus and FcwStatus for ``out``, E2E protected."""
