@@ -453,6 +453,22 @@ def test_the_testers_jam_keeps_its_gap_at_the_detection_level(truck_x, seed):
     assert r.trace["speed"][-1] < 0.05          # standing behind it at the end (the lead never drives on)
 
 
+@pytest.mark.parametrize("level, seed", [("detection", 1), ("detection", 2), ("object", 1)])
+def test_passing_a_truck_parked_in_the_next_lane_is_no_collision_warning(level, seed):
+    """An independent tester's scene at the detection level: the ego at 5 m/s (ACC set to 5) passes a truck parked in
+    the next lane, nothing else on the road. FCW warned (level 2) and ACC braked at −1.4 m/s² for a track of the
+    truck's side that crossed into the lane at 2.8 m/s (its nearest detections stay beside the sensor as it passes:
+    tests/test_rigid_groups.py) — seeds 1 and 2. Now no warning, at either level, and the ego keeps its speed."""
+    import dataclasses
+
+    from radarnode.consumer.evaluate import simulate
+    sc = _tester_scene("  - {id: trk, class: truck, x_m: 30.0, lane: 0, speed_mps: 0.0}", 5.0, 5.0, "no_fcw: true",
+                       duration=12.0)
+    r = simulate(dataclasses.replace(sc, seed=seed), level)
+    assert r.passed and r.warning_time_s is None, r.reasons
+    assert r.trace["speed"].min() > 4.8
+
+
 @pytest.mark.parametrize("gap, lane, resumes", [(6.0, 1, False), (99.0, 1, False), (101.0, 1, True),
                                                (200.0, 1, True), (6.0, 2, True)])
 def test_the_simulated_driver_resumes_only_with_the_lane_ahead_clear(gap, lane, resumes):

@@ -196,6 +196,22 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
         gx = np.where(joined, np.bincount(labels, weights=power * x, minlength=g) / wsum, xmin)
         r = np.maximum(np.hypot(gx, gy), 1e-6)
         vr = np.where(joined, (rigid_v[:, 0] * gx + rigid_v[:, 1] * gy) / r, vr)
+    # a group of its own spread over RIGID_MIN_SPAN_RAD or more of azimuth (a body beside the sensor) whose radial
+    # speeds one velocity explains: that velocity too, and its radial part at the group's place (which stays its
+    # own). A truck parked beside a sensor passing at 5 m/s: its side's detections, 1–3 m ahead at 35–60°, read as
+    # one standing body, where the nearest point alone — which stays beside the sensor as it passes — with the mean
+    # of the radial speeds made a track crossing into the lane at 2.8 m/s, and FCW warned and braked (an independent
+    # tester's scene at the detection level)
+    alone = ~joined & (np.bincount(labels, minlength=g) >= 2)
+    if alone.any():
+        own = np.flatnonzero(alone)
+        own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1))]
+        if own.size:
+            rigid_v, rigid_cov = rigid_v.copy(), rigid_cov.copy()
+            rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own)
+            r = np.maximum(np.hypot(gx[own], gy[own]), 1e-6)
+            vr = vr.copy()
+            vr[own] = (rigid_v[own, 0] * gx[own] + rigid_v[own, 1] * gy[own]) / r
     rcs = 10.0 * np.log10(np.bincount(labels, weights=10.0 ** (det.rcs_dbsm / 10.0), minlength=g))
     snr = 10.0 * np.log10(wsum)
     tags = np.full(g, -1, dtype=np.int64)
