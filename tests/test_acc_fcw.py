@@ -469,6 +469,52 @@ def test_passing_a_truck_parked_in_the_next_lane_is_no_collision_warning(level, 
     assert r.trace["speed"].min() > 4.8
 
 
+@pytest.mark.parametrize("centre_y, centre_x, resumes", [(3.0, 30.0, False), (6.0, 30.0, False), (7.5, 30.0, False),
+                                                    (9.0, 30.0, True), (0.0, 9.7 + 3.7, False)])
+def test_the_simulated_driver_sees_a_truck_parked_across_the_lane(centre_y, centre_x, resumes):
+    """An independent tester: the driver's look-ahead judged an actor by its centre (within 2 m of the lane's) and its
+    length along the road, so a 12-m truck parked crosswise 25 m ahead with its centre 3–6 m to the side — its body
+    across the whole lane — was clear, the driver resumed and ACC drove into it; and one 4 m ahead, its centre 10 m
+    ahead, was behind him. He now takes the truck's box turned by its heading: reaching into the lane it holds him
+    (its end 3 m past the lane's centre, at it, 1.5 m from it; ahead by its width, 4 m), clear of it not (its centre
+    9 m to the side: its end 1.25 m beyond the lane's edge)."""
+    from radarnode.consumer.evaluate import simulate
+    sc = _tester_scene(f"  - {{id: trk, class: truck, x_m: {centre_x}, y_m: {centre_y}, heading_deg: 90, "
+                       "speed_mps: 0.0}", 0.0, 12.0, "no_fcw: false", duration=6.0)
+    r = simulate(sc, "object")
+    assert (r.trace["speed"].max() > 0.5) == resumes, r.trace["speed"].max()
+
+
+def test_report_and_run_resume_alike_behind_a_car_that_squeezed_in(tmp_path):
+    """An independent tester: standing behind the scenario's lead with a car squeezing in 5 m ahead from the next
+    lane, ``report``'s driver went by the named lead alone and resumed when it drove off (ACC +2.5 m/s², FCW warned,
+    2.4 m short), where ``run --closed-loop`` held. Both now use one rule (:func:`evaluate.driver_resumes`): the car
+    in the lane holds the driver in both."""
+    import subprocess
+    import sys
+
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import load_scenario
+    path = tmp_path / "squeeze.yaml"
+    path.write_text("""name: squeeze
+duration_s: 20.0
+seed: 1
+radar: {preset: ars408_like}
+ego: {speed_mps: 0.0}
+road: {lanes: 2, lane_width_m: 3.5, ego_lane: 0}
+ecu: {acc_enabled: true, set_speed_mps: 12.0, time_gap_s: 1.5, closed_loop: true, expect: {lead: lead, min_gap_m: 2.0}}
+actors:
+  - {id: lead, class: car, waypoints: [{t_s: 0.0, x_m: 20.0, y_m: 0.0}, {t_s: 8.0, x_m: 20.0, y_m: 0.0}, {t_s: 14.0, x_m: 47.0, y_m: 0.0}, {t_s: 30.0, x_m: 200.0, y_m: 0.0}]}
+  - {id: sq, class: car, waypoints: [{t_s: 0.0, x_m: 8.95, y_m: 3.5}, {t_s: 2.0, x_m: 8.95, y_m: 3.5}, {t_s: 4.0, x_m: 10.95, y_m: 0.0}, {t_s: 30.0, x_m: 10.95, y_m: 0.0}]}
+""")
+    r = simulate(load_scenario(path), "object")
+    assert r.trace["speed"].max() < 0.05 and r.warning_time_s is None
+    out = subprocess.run([sys.executable, "-m", "radarnode", "run", str(path), "--fast", "--closed-loop",
+                          "--every", "1000"], capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    assert float(out.stdout.split("ego speed at the end ")[1].split(" m/s")[0]) < 0.05
+
+
 @pytest.mark.parametrize("gap, lane, resumes", [(6.0, 1, False), (99.0, 1, False), (101.0, 1, True),
                                                (200.0, 1, True), (6.0, 2, True)])
 def test_the_simulated_driver_resumes_only_with_the_lane_ahead_clear(gap, lane, resumes):

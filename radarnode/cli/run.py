@@ -20,7 +20,7 @@ from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, liv
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.fusion import FusingConsumer
-from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, lane_clear_ahead, make_ecu
+from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, driver_resumes, make_ecu
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.group import ego_motion_for, make_node
@@ -122,15 +122,8 @@ def cmd(args) -> int:
                 elif decision.warning_level != LEVEL_WARNING and warnings and warnings[-1][1] == "on":
                     warnings.append((out.t_s, "off"))
             if actuator is not None and ecu.acc.standstill:
-                # the driver confirms driving off a reaction time after seeing the target leave (as in report; with no
-                # target, a reaction time after the ego stands, unless FCW warns or he sees a standing actor ahead in
-                # the lane: lane_clear_ahead)
-                if decision is not None and decision.target is not None:
-                    leaving = decision.target.rel_speed_mps > 1.0
-                else:
-                    leaving = ((decision is None or decision.warning_level != LEVEL_WARNING)
-                               and lane_clear_ahead(node.scene, out.t_s))
-                held[1] = held[1] + node.period_s if leaving else 0.0
+                # the driver confirms driving off a reaction time after he sees the way clear (as in report)
+                held[1] = held[1] + node.period_s if driver_resumes(node.scene, out.t_s, decision) else 0.0
                 if held[1] >= spec.driver_reaction_s:
                     ecu.acc.confirm_resume()
             if actuator is not None:

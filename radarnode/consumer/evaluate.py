@@ -296,11 +296,9 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             driver.warn(t + latency)
         if decision is not None and decision.warning_level >= LEVEL_PREWARNING and res.prewarning_time_s is None:
             res.prewarning_time_s = t + latency
-        # the driver confirms driving off after a long standstill, a reaction time after the lead has left (with no
-        # lead in the scenario: a reaction time after the ego stands, unless FCW warns)
+        # the driver confirms driving off after a long standstill, a reaction time after he sees the way clear
         if ecu.acc.standstill:
-            go = lead_v > 1.0 if lead is not None else not warning and lane_clear_ahead(scene, t)
-            resume_cue_s = resume_cue_s + period if go else 0.0
+            resume_cue_s = resume_cue_s + period if driver_resumes(scene, t, decision) else 0.0
             if resume_cue_s >= spec.driver_reaction_s:
                 ecu.acc.confirm_resume()
         # closed loop: the ego follows the request through a first-order lag
@@ -347,16 +345,31 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
 
 
 def lane_clear_ahead(scene, t_s: float) -> bool:
-    """The simulated driver's look ahead before he resumes ACC from a standstill, in a scenario without a lead: no
-    actor slower than 1 m/s in the ego's lane within DRIVER_CLEAR_M (he resumed into a car stopped 6 m ahead, where
-    FCW was quiet only because the ego stood: an independent tester's finding)."""
+    """The simulated driver's look ahead before he resumes ACC from a standstill: no actor slower than 1 m/s whose box
+    reaches into the ego's lane (within 2 m of its centre) within DRIVER_CLEAR_M ahead (he resumed into a car stopped
+    6 m ahead, where FCW was quiet only because the ego stood; and, judging an actor by its centre and its length along
+    the road, past a truck parked crosswise across the lane with its centre 3–6 m to the side, or 4 m ahead with its
+    centre 10 m ahead: independent testers' findings)."""
     for i in range(scene.n):
         if scene.elevated[i] or scene.is_guardrail[i]:          # a deck or a gantry above the road, a guardrail
             continue
-        gap, lateral, _, speed, _ = scene.lane_gap(t_s, i)
-        if 0.0 < gap < DRIVER_CLEAR_M and abs(lateral) < 2.0 and speed < 1.0:
+        near, far, lat_lo, lat_hi = scene.lane_footprint(t_s, i)
+        speed = scene.lane_gap(t_s, i)[3]
+        if far > 0.0 and near < DRIVER_CLEAR_M and lat_lo < 2.0 and lat_hi > -2.0 and abs(speed) < 1.0:
             return False
     return True
+
+
+def driver_resumes(scene, t_s: float, decision) -> bool:
+    """Whether the simulated driver sees the way clear to resume ACC from a standstill (``report`` and
+    ``run --closed-loop`` alike): FCW not warning, the lane ahead clear (:func:`lane_clear_ahead`), and ACC's target,
+    if it has one, driving off (faster than the ego by 1 m/s). ``report`` went by the scenario's lead alone where it
+    names one: it resumed with a car that had squeezed in 5 m ahead, where ``run`` did not (a tester's finding)."""
+    if decision is not None and decision.warning_level == LEVEL_WARNING:
+        return False
+    if decision is not None and decision.target is not None and decision.target.rel_speed_mps <= 1.0:
+        return False
+    return lane_clear_ahead(scene, t_s)
 
 
 def _actor_at(view, scene, mount: SensorMount, target) -> int | None:
