@@ -290,7 +290,7 @@ def _lead_lost(lost_at_m: float, vanishes: bool = True, v: float = 6.0, drive: b
     to the next lane) when it is ``lost_at_m`` ahead; the decisions, the cycle of the loss, the cycle period. With
     ``drive`` the ego's speed follows ACC's request once ACC's target is gone (its own track of the lead coasts a
     cycle or two), else it stays ``v``; and, from the loss on, the ego's (speed, distance driven since the loss) after
-    each decision."""
+    each decision; and the ECU."""
     from radarnode.consumer.ecu import Ecu
     from radarnode.perception.types import DYN_MOVING
     from tests.helpers import feed_ecu
@@ -315,7 +315,7 @@ def _lead_lost(lost_at_m: float, vanishes: bool = True, v: float = 6.0, drive: b
             ego.append((speed, driven))
             continue
         outs.append(feed_ecu(ecu, k, k * dt, v, row))
-    return outs, n_lost, dt, ego
+    return outs, n_lost, dt, ego, ecu
 
 
 @pytest.mark.parametrize("lost_at, holds", [(19.0, True), (20.0, True), (21.0, False), (40.0, False)])
@@ -325,7 +325,7 @@ def test_a_lead_that_vanishes_near_holds_acc_from_accelerating(lost_at, holds):
     (below, at, above and twice it) holds ACC from accelerating for LOST_HOLD_S; one that leaves the path does not."""
     from radarnode.consumer.ecu import LOST_HOLD_S, LOST_NEAR_M
     assert LOST_NEAR_M == 20.0
-    outs, n, dt, _ = _lead_lost(lost_at, v=8.0)       # a lead at 7 m/s: not a slow one (remembered: the next test)
+    outs, n, dt, *_ = _lead_lost(lost_at, v=8.0)       # a lead at 7 m/s: not a slow one (remembered: the next test)
     assert outs[n - 1].target is not None and outs[n - 1].accel_request_mps2 > 0.0      # following, accelerating
     # the ECU's own track of the lead coasts a cycle or two: the loss is where ACC's target goes
     gone = next(k for k in range(n, len(outs)) if outs[k].target is None)
@@ -335,7 +335,7 @@ def test_a_lead_that_vanishes_near_holds_acc_from_accelerating(lost_at, holds):
     assert (max(hold) <= 1e-12) == holds, hold
     assert max(after) > 0.0                                  # released after LOST_HOLD_S
     # a lead that changes lanes away is no loss: ACC goes on towards its set speed
-    outs, n, dt, _ = _lead_lost(lost_at, vanishes=False, v=8.0)
+    outs, n, dt, *_ = _lead_lost(lost_at, vanishes=False, v=8.0)
     assert max(o.accel_request_mps2 for o in outs[n + 12:]) > 0.5
 
 
@@ -350,7 +350,7 @@ def test_a_slow_lead_lost_near_is_remembered_standing_where_it_was_last_seen(lea
     seen: ACC brakes to stop behind that place instead of going on after the hold. A faster or farther one is not."""
     from radarnode.consumer.ecu import FCW_BRAKE_MAX_MPS, LOST_HOLD_S, LOST_LEAD_DECEL_MPS2, LOST_NEAR_M
     assert (FCW_BRAKE_MAX_MPS, LOST_NEAR_M) == (5.0, 20.0)
-    outs, n, dt, ego = _lead_lost(lost_at, v=lead_mps + 1.0, drive=True)
+    outs, n, dt, ego, ecu = _lead_lost(lost_at, v=lead_mps + 1.0, drive=True)
     gone = next(k for k in range(n, len(outs)) if outs[k].target is None)
     assert all(o.target is None for o in outs[gone:])       # ACC's own target stays gone: this is braking, not following
     requests = [o.accel_request_mps2 for o in outs[gone:]]
@@ -363,10 +363,18 @@ def test_a_slow_lead_lost_near_is_remembered_standing_where_it_was_last_seen(lea
         # lost, lost_at m ahead of the sensor
         hard_stop = lost_at + lead_mps ** 2 / (2.0 * LOST_LEAD_DECEL_MPS2)
         assert hard_stop - 5.0 < ego[-1][1] < hard_stop - 1.0, (hard_stop, ego[-1])
+        # standing there it holds (the place is still remembered) until the driver resumes; then it drives off
+        from tests.helpers import feed_ecu
+        k0 = len(outs)
+        held = [feed_ecu(ecu, k, k * dt, 0.0) for k in range(k0, k0 + 40)]
+        assert all(o.standstill and o.accel_request_mps2 < 0.0 for o in held)
+        ecu.acc.confirm_resume()
+        off = [feed_ecu(ecu, k, k * dt, 0.0) for k in range(k0 + 40, k0 + 60)]
+        assert not off[-1].standstill and off[-1].accel_request_mps2 > 0.5
     else:
         assert max(after) > 0.0 and ego[-1][0] > lead_mps + 1.0               # the hold alone, then on
     # a slow lead that changes lanes away is no loss: nothing is remembered
-    outs, n, dt, _ = _lead_lost(lost_at, vanishes=False, v=lead_mps + 1.0)
+    outs, n, dt, *_ = _lead_lost(lost_at, vanishes=False, v=lead_mps + 1.0)
     assert max(o.accel_request_mps2 for o in outs[n + 12:]) > 0.5
 
 
@@ -375,7 +383,7 @@ def _stationary_car_ahead(v: float):
     from radarnode.consumer.ecu import Ecu
     from radarnode.perception.types import DYN_STATIONARY
     from tests.helpers import feed_ecu
-    ecu = Ecu(acc=AccSettings(set_speed_mps=20.0))
+    ecu = Ecu(acc=AccSettings(set_speed_mps=max(20.0, v)))
     dt, x, outs = 0.072, 30.0, []
     k = 0
     while x > 2.0:
@@ -386,17 +394,49 @@ def _stationary_car_ahead(v: float):
     return outs
 
 
-@pytest.mark.parametrize("v, brakes", [(4.9, True), (5.0, True), (5.1, False), (10.0, False)])
-def test_at_low_speed_acc_brakes_for_what_fcw_warns_of(v, brakes):
+@pytest.mark.parametrize("v, brakes", [(4.9, True), (5.0, True), (5.1, True), (10.0, True), (25.0, False)])
+def test_acc_brakes_for_what_fcw_warns_of_at_low_speed_and_within_its_authority(v, brakes):
     """An independent tester: ACC resumed by itself after a lead left and drove at 4.5 m/s into a car it had never
-    seen move, while FCW warned for 3 s (ACC asked for no acceleration and coasted). Up to FCW_BRAKE_MAX_MPS (below,
-    at, just above and twice it) ACC brakes for the object FCW warns of."""
+    seen move, while FCW warned for 3 s (ACC asked for no acceleration and coasted). ACC brakes for the object FCW
+    warns of up to FCW_BRAKE_MAX_MPS (below and at it) and, above it, where stopping behind it needs no more than its
+    authority (just above and twice it); at 25 m/s, warned for 30 m ahead, it would need 11 m/s²: it does not
+    (the driver is warned)."""
     from radarnode.consumer.ecu import FCW_BRAKE_MAX_MPS
     assert FCW_BRAKE_MAX_MPS == 5.0
     outs = _stationary_car_ahead(v)
     warned = [o for o in outs if o.warning_level == LEVEL_WARNING]
     assert warned and all(o.target is None for o in outs)         # braking for it is not following it
     assert (min(o.accel_request_mps2 for o in warned) < -1.0) == brakes
+
+
+@pytest.mark.parametrize("room_factor, within", [(0.99, False), (1.0, True), (1.01, True), (2.0, True)])
+def test_a_stop_is_within_acc_authority_up_to_the_iso_15622_deceleration(room_factor, within):
+    """stop_within_authority: the constant deceleration that stops the ego at the standstill gap behind the object,
+    against ISO 15622's limit at the ego's speed (4.5 m/s² at 10 m/s) — the room just short of, at, just beyond and
+    twice the room that limit needs."""
+    from radarnode.consumer.ecu import stop_within_authority
+    v, gap = 10.0, 4.0
+    limit = -iso15622_limits(v)[0]
+    assert abs(limit - 4.5) < 1e-12
+    room = v * v / (2.0 * limit) * room_factor
+    assert stop_within_authority(v, Target(1, 1, room + gap, 0.0, -v, 0.0), gap) == within
+
+
+@pytest.mark.parametrize("name, ego, car_x", [("accelerating through 5 m/s", 4.0, 25.0),
+                                              ("accelerating through 5 m/s, farther", 4.0, 45.0),
+                                              ("steady just above 5 m/s", 5.02, 50.0),
+                                              ("steady at twice", 10.0, 80.0)])
+def test_acc_stops_for_a_car_fcw_warns_of_through_and_above_the_low_speed_limit(name, ego, car_x):
+    """An independent tester (2026-11-30): with braking for FCW's object only up to 5 m/s, an ego accelerating from
+    4 m/s (set to 8) towards a stopped car 25–45 m ahead was warned at 4.7 m/s, the jerk-limited ramp let the speed
+    pass 5 m/s, the braking stopped and the car was run into at 5.2–7.1 m/s; at a steady 5.02 m/s after 2.6 s of
+    warning. Now braking goes on once begun, and begins above 5 m/s within ACC's authority: the ego stops short."""
+    from radarnode.consumer.evaluate import simulate
+    sc = _tester_scene(f"  - {{id: car, class: car, x_m: {car_x}, lane: 1, speed_mps: 0.0}}", ego,
+                       max(8.0, ego), "lead: car, min_gap_m: 2.0", duration=16.0)
+    r = simulate(sc, "object")
+    assert r.min_gap_m >= 2.0 and r.impact_time_s is None, (name, r.min_gap_m, r.reasons)
+    assert r.trace["speed"][-1] < 0.05
 
 
 def _tester_scene(actors: str, ego_mps: float, set_mps: float, expect: str, lanes: int = 3, ego_lane: int = 1,

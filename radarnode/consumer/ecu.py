@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import can
 import numpy as np
 
-from radarnode.consumer.acc import Acc, AccSettings, Target
+from radarnode.consumer.acc import Acc, AccSettings, Target, iso15622_limits
 from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, aligned_boundaries, boundary_reference,
                                      course_known, crossing_road, curvature, in_path, measured_reach_m, path_heading,
                                      trail_fits)
@@ -96,16 +96,25 @@ LOST_NEAR_M = 20.0
 #: … holds ACC from accelerating this long (s) unless another target is taken: the radar lost a lead braking beside a
 #: truck parked in the next lane (masked in its CA-CFAR ring) and ACC accelerated into it
 LOST_HOLD_S = 2.0
-#: up to this ego speed (m/s) ACC brakes for the object FCW warns of when it has no nearer target of its own (a
-#: stationary object it never saw move, which it does not follow): stopping there is within its authority; and a
-#: target lost within LOST_NEAR_M while it went at most this fast over ground (stop-and-go) is remembered standing
-#: where it was last seen: ACC stops behind that place, while it lies in the path, and holds there until the driver
-#: resumes (the radar lost a lead braking to a stop beside a truck parked in the next lane, masked in its CA-CFAR
-#: ring; after LOST_HOLD_S ACC accelerated from 0.3 m/s into it, 8 m ahead — an independent tester's scene) …
+#: ACC brakes for the object FCW warns of when it has no nearer target of its own (a stationary object it never saw
+#: move, which it does not follow) up to this ego speed (m/s), and above it where stopping behind the object needs no
+#: more than ACC's authority (ISO 15622's deceleration at that speed: :func:`stop_within_authority`); once braking, it
+#: goes on while FCW keeps that object, whatever the speed (braking only up to 5 m/s, a car warned for at 4.7 m/s was
+#: run into at 5.2 m/s once a jerk-limited ramp let the speed pass 5 m/s, and at a steady 5.02 m/s under a
+#: warning of 2.6 s — an independent tester's finding). And a target lost within LOST_NEAR_M while it went at most
+#: this fast over ground (stop-and-go) is remembered standing where it was last seen: ACC stops behind that place,
+#: while it lies in the path, and holds there until the driver resumes (the radar lost a lead braking to a stop
+#: beside a truck parked in the next lane, masked in its CA-CFAR ring; after LOST_HOLD_S ACC accelerated from
+#: 0.3 m/s into it, 8 m ahead — an independent tester's scene) …
 FCW_BRAKE_MAX_MPS = 5.0
 #: … the place where it stands if it braked this hard (m/s², about what a car's brakes can) from its last speed: as
 #: near as it can be (taken where it was last seen, ACC stopped a lead's length short of a lead lost at 10 m, 5 m/s)
 LOST_LEAD_DECEL_MPS2 = 8.0
+#: a target ACC takes within this distance (m) of a lost target's place along the path, and within
+#: LOST_MATCH_LATERAL_M across it, is that target found again (a track of a parked truck's side 1.2 m ahead at the
+#: lane's edge was not the lead lost 3 m ahead of it)
+LOST_MATCH_M = 3.0
+LOST_MATCH_LATERAL_M = 1.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -125,6 +134,14 @@ class EcuStats:
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
+
+
+def stop_within_authority(ego_speed_mps: float, target: Target, standstill_gap_m: float) -> bool:
+    """Whether ACC can stop behind ``target`` (closing at its relative speed, standing at ``standstill_gap_m``
+    behind it) at constant deceleration within ISO 15622's limit at ``ego_speed_mps`` (:func:`iso15622_limits`)."""
+    closing = max(-target.rel_speed_mps, 0.0)
+    room = max(target.distance_m - standstill_gap_m, 0.1)
+    return closing * closing / (2.0 * room) <= -iso15622_limits(ego_speed_mps)[0]
 
 
 @dataclass
@@ -680,14 +697,16 @@ class Ecu:
         no_accel |= t_s < self._lost_until
         remembered = self._remembered(target, last, alive, v)
         self._last_acc = target
-        # at low speed ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it
-        # never saw move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), and goes on braking for
-        # it while FCW keeps it as its object, after the warning too, so the ego stops behind it (then holds until the
-        # driver resumes)
+        # ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it never saw
+        # move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), at low speed or within its
+        # authority, and goes on braking for it while FCW keeps it as its object, after the warning too and at any
+        # speed, so the ego stops behind it (then holds until the driver resumes)
         # (the decision's target stays ACC's own, the vehicle it follows: this is braking, not following)
         controlled, borrowed = target, False
-        if fcw_target is not None and (level >= LEVEL_WARNING or fcw_target.track_id == self._braking_for) \
-                and v <= FCW_BRAKE_MAX_MPS and (target is None or fcw_target.distance_m < target.distance_m - 0.5):
+        if fcw_target is not None and (target is None or fcw_target.distance_m < target.distance_m - 0.5) and (
+                fcw_target.track_id == self._braking_for
+                or (level >= LEVEL_WARNING and (v <= FCW_BRAKE_MAX_MPS or stop_within_authority(
+                    v, fcw_target, self.acc.settings.standstill_gap_m)))):
             controlled, borrowed = fcw_target, True
         self._braking_for = fcw_target.track_id if borrowed else None
         if remembered is not None and (controlled is None or remembered.distance_m < controlled.distance_m):
@@ -708,18 +727,18 @@ class Ecu:
 
     def _remembered(self, target: Target | None, last: Target | None, alive: set, v: float) -> Target | None:
         """A near, slow target lost, as a standing object where it would stand had it braked hard when it was last
-        seen (see FCW_BRAKE_MAX_MPS), or None. Kept until ACC takes a target again, stands still (it then holds until the driver resumes), or the place
-        leaves the predicted path or falls behind the sensor."""
-        if target is not None:
-            self._lost_place = None
-            lead_v = max(self.ego_speed_mps + target.rel_speed_mps, 0.0)
-            ahead = target.distance_m + lead_v ** 2 / (2.0 * LOST_LEAD_DECEL_MPS2)
-            self._last_acc_place = (*self._vehicle_to_odometry(ahead + self.mount.x_m, target.lateral_m), lead_v)
-            return None
+        seen (see FCW_BRAKE_MAX_MPS), or None. Kept until ACC takes a target within LOST_MATCH_M of that place (the
+        lead found again), the driver resumes, or the place leaves the predicted path or falls behind the sensor —
+        not for a nearer target ACC takes meanwhile (it brakes for the nearer of the two), nor at a standstill (ACC,
+        stopped behind a track of a truck's side that then vanished, resumed by itself into the lead it had lost)."""
         if last is not None and last.track_id not in alive and last.distance_m <= LOST_NEAR_M \
                 and self._last_acc_place is not None and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS:
             self._lost_place = (*self._last_acc_place[:2], last)
         self._last_acc_place = None
+        if target is not None:
+            lead_v = max(self.ego_speed_mps + target.rel_speed_mps, 0.0)
+            ahead = target.distance_m + lead_v ** 2 / (2.0 * LOST_LEAD_DECEL_MPS2)
+            self._last_acc_place = (*self._vehicle_to_odometry(ahead + self.mount.x_m, target.lateral_m), lead_v)
         if self._lost_place is None:
             return None
         px, py, lost = self._lost_place
@@ -730,7 +749,9 @@ class Ecu:
         cy, sy = math.cos(math.radians(m.yaw_deg)), math.sin(math.radians(m.yaw_deg))
         xs, ys = cy * (xv - m.x_m) + sy * (yv - m.y_m), -sy * (xv - m.x_m) + cy * (yv - m.y_m)   # sensor frame
         bounds, trails, crossing = self._path_inputs
-        if self.acc.standstill or xv <= m.x_m or not in_path(
+        found = target is not None and abs(target.distance_m - (xv - m.x_m)) <= LOST_MATCH_M \
+            and abs(target.lateral_m - yv) <= LOST_MATCH_LATERAL_M
+        if found or self.acc.resume_confirmed or self.acc.departing or xv <= m.x_m or not in_path(
                 np.array([xs]), np.array([ys]), v, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
                 bounds, m, trails, crossing)[0]:
             self._lost_place = None
