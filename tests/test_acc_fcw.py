@@ -277,6 +277,55 @@ def test_acc_does_not_drive_off_into_a_stopped_car_and_follows_it_when_it_leaves
     assert r.trace["speed"][-1] > 5.0             # and it drove on behind the car
 
 
+def test_behind_a_stopped_lead_acc_resumes_by_itself_only_when_it_sees_the_lead_drive_off():
+    """An independent tester at the detection level: the ego standing 4 m behind a stopped lead, the lead's track slid
+    onto a truck parked beside it and left the path; ACC took that for the lead gone and resumed by itself within
+    AUTO_RESUME_S, into the lead. A lead that vanishes is no lead driving off: ACC holds until the driver resumes."""
+    from radarnode.consumer.acc import HOLD_MPS2
+    dt = 0.072
+    acc = Acc(AccSettings(set_speed_mps=15.0))
+    assert acc.step(dt, 0.0, Target(1, 1, 4.0, 0.0, 0.0, 0.0), True) == HOLD_MPS2 and acc.behind_lead
+    held = [acc.step(dt, 0.0, None, True) for _ in range(10)]         # within AUTO_RESUME_S
+    assert all(a == HOLD_MPS2 for a in held) and acc.standstill
+    acc.confirm_resume()
+    acc.step(dt, 0.0, None, True)
+    assert not acc.standstill
+
+
+def _standing_lead_leaves(lead_mps: float):
+    """An ECU creeping at 1 m/s (fed as a constant) behind a lead that drove ahead, stopped 8 m ahead (sensor to rear)
+    and then leaves the path sideways at 2 m/s while going ``lead_mps`` along it, its track alive throughout: the
+    decisions."""
+    from radarnode.consumer.ecu import Ecu
+    from radarnode.perception.types import DYN_MOVING
+    from tests.helpers import feed_ecu
+    ecu = Ecu(acc=AccSettings(set_speed_mps=12.0))
+    dt, outs, x, y, ego = 0.072, [], 6.0, 0.0, 1.0
+    for k in range(70):
+        ground, lateral = (3.0 if k < 15 else lead_mps if k >= 25 else 0.0), (2.0 if k >= 25 else 0.0)
+        x += (ground - ego) * dt
+        y -= lateral * dt
+        outs.append(feed_ecu(ecu, k, k * dt, ego, {"id": 3, "dist_long_m": x, "dist_lat_m": y, "rcs_dbsm": 10.0,
+                                                   "obj_class": 1, "vrel_long_mps": ground - ego,
+                                                   "vrel_lat_mps": -lateral, "dyn_prop": DYN_MOVING}))
+    return outs
+
+
+@pytest.mark.parametrize("lead_mps, remembered", [(0.0, True), (0.4, True), (1.0, False), (2.0, False)])
+def test_a_standing_lead_whose_track_slides_out_of_the_path_is_remembered(lead_mps, remembered):
+    """The tester's case as the ECU sees it: the lead's track, standing (at and below LEAD_STOPPED_MPS; the ECU's own
+    estimate of it is a filter's, the limit itself is not a test point), slides out of the path at 2 m/s — no
+    standing car changes lanes: its place, where it stood, is remembered, and ACC brakes to stop behind it. A lead
+    going 1 or 2 m/s that steers out of the lane is a lane change: ACC goes on towards its set speed."""
+    from radarnode.consumer.acc import LEAD_STOPPED_MPS
+    assert LEAD_STOPPED_MPS == 0.5
+    outs = _standing_lead_leaves(lead_mps)
+    assert outs[24].target is not None                       # following it while it stood
+    gone = next(k for k in range(25, len(outs)) if outs[k].target is None)   # it left the path
+    after = [o.accel_request_mps2 for o in outs[gone + 5:]]
+    assert (max(after) < 0.0) == remembered, after
+
+
 @pytest.mark.parametrize("speed, holds", [(0.09, True), (0.1, False), (0.11, False), (0.2, False)])
 def test_the_hold_with_no_lead_below_at_and_above_the_standstill_speed(speed, holds):
     from radarnode.consumer.acc import HOLD_MPS2, STANDSTILL_MPS

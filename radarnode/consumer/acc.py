@@ -161,7 +161,10 @@ class Acc:
         if self.standstill:
             self.standstill_s += max(dt, 0.0)
             lead_gone = target is None or lead_v > LEAD_STOPPED_MPS + 0.5
-            auto = self.behind_lead and self.standstill_s <= AUTO_RESUME_S
+            # by itself only behind a lead seen driving off: one that vanished or left the path standing was the
+            # radar's loss (a track that slid from the lead onto a truck parked beside it left the path, and ACC
+            # drove into the lead — an independent tester's finding at the detection level)
+            auto = self.behind_lead and self.standstill_s <= AUTO_RESUME_S and target is not None
             if lead_gone and (auto or self.resume_confirmed):
                 self.standstill, self.standstill_s, self.resume_confirmed = False, 0.0, False
                 self.departing = True

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import can
 import numpy as np
 
-from radarnode.consumer.acc import Acc, AccSettings, Target, iso15622_limits
+from radarnode.consumer.acc import LEAD_STOPPED_MPS, Acc, AccSettings, Target, iso15622_limits
 from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, aligned_boundaries, boundary_reference,
                                      course_known, crossing_road, curvature, in_path, measured_reach_m, path_heading,
                                      trail_fits)
@@ -206,8 +206,8 @@ class Ecu:
         self._fcw_target_id: int | None = None
         self._last_acc: Target | None = None      # ACC's target in the last cycle
         self._lost_until = -math.inf              # ACC holds from accelerating until then (LOST_HOLD_S)
-        # where ACC's last target would stop (odometry frame; LOST_LEAD_DECEL_MPS2), and its speed
-        self._last_acc_place: tuple[float, float, float] | None = None
+        # where ACC's last target would stop (odometry frame; LOST_LEAD_DECEL_MPS2), its speed, its track
+        self._last_acc_place: tuple[float, float, float, int] | None = None
         self._lost_place: tuple[float, float, Target] | None = None   # a near, slow target lost: its place
         self._path_inputs: tuple = (None, None, None)   # the path test's boundaries, trails, crossing (last _select)
         self._braking_for: int | None = None      # the track of FCW's object ACC brakes for (FCW_BRAKE_MAX_MPS)
@@ -726,19 +726,28 @@ class Ecu:
         return ox + x_m * c - y_m * s, oy + x_m * s + y_m * c
 
     def _remembered(self, target: Target | None, last: Target | None, alive: set, v: float) -> Target | None:
-        """A near, slow target lost, as a standing object where it would stand had it braked hard when it was last
-        seen (see FCW_BRAKE_MAX_MPS), or None. Kept until ACC takes a target within LOST_MATCH_M of that place (the
+        """A near, slow target lost (or a standing one that left ACC), as a standing object where it would stand had
+        it braked hard when it was last seen (see FCW_BRAKE_MAX_MPS), or None. Kept until ACC takes a target within LOST_MATCH_M of that place (the
         lead found again), the driver resumes, or the place leaves the predicted path or falls behind the sensor —
         not for a nearer target ACC takes meanwhile (it brakes for the nearer of the two), nor at a standstill (ACC,
         stopped behind a track of a truck's side that then vanished, resumed by itself into the lead it had lost)."""
-        if last is not None and last.track_id not in alive and last.distance_m <= LOST_NEAR_M \
-                and self._last_acc_place is not None and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS:
+        # lost: its track ended, or (alive) it left ACC standing — a standing car does not change lanes: the track
+        # slid onto something beside it (a lead stopped beside a parked truck, its track drawn onto the truck's side
+        # while the ego stood 4 m behind; ACC resumed by itself and drove into the lead — a tester's finding)
+        if last is not None and last.distance_m <= LOST_NEAR_M and self._last_acc_place is not None \
+                and (target is None or target.track_id != last.track_id) and (
+                    (last.track_id not in alive and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS)
+                    or self._last_acc_place[2] <= LEAD_STOPPED_MPS):
             self._lost_place = (*self._last_acc_place[:2], last)
-        self._last_acc_place = None
+        before, self._last_acc_place = self._last_acc_place, None
         if target is not None:
             lead_v = max(self.ego_speed_mps + target.rel_speed_mps, 0.0)
             ahead = target.distance_m + lead_v ** 2 / (2.0 * LOST_LEAD_DECEL_MPS2)
-            self._last_acc_place = (*self._vehicle_to_odometry(ahead + self.mount.x_m, target.lateral_m), lead_v)
+            place = self._vehicle_to_odometry(ahead + self.mount.x_m, target.lateral_m)
+            if before is not None and before[3] == target.track_id and before[2] <= LEAD_STOPPED_MPS \
+                    and lead_v <= LEAD_STOPPED_MPS:
+                place = before[:2]          # a standing target stays where it stood, whatever its track does
+            self._last_acc_place = (*place, lead_v, target.track_id)
         if self._lost_place is None:
             return None
         px, py, lost = self._lost_place
