@@ -255,16 +255,20 @@ def test_auto_on_a_curve_entry_beside_guardrail_posts_reports_the_car_as_the_det
     assert abs(np.mean(reported["auto"]) - np.mean(reported["detection"])) < 0.15
 
 
+@pytest.mark.slow          # (about 2 min: 24 seeds of the signal chain; on request, pytest -m slow)
 def test_cars_side_by_side_at_close_range_are_reported_by_the_detection_level_as_the_chain_reports_them():
     """Three cars at close range in 3.5 m lanes (a jam). The chain (signal level) loses the cars ahead in the beside
     car's range–Doppler lobe in some cycles: 0.74 / 0.62 / 0.91 of the cycles over these seeds. The detection level
     hides a weaker cell in stronger ones' lobes at any angle as the chain's local-maximum test does (0.69 / 0.73 /
     0.90 over seeds 1–12, the chain 0.77 / 0.53 / 0.95; 0.94 / 0.87 / 0.92 without it). The object level does not model the lobe (README, known limits):
     it must not mask the cars ahead more than the detection level does (taken whole at its nearest point, the car
-    beside had hidden them in 26 and 40 of 55 cycles). Rates are means over 12 seeds: one seed's varies by ±0.15, and
+    beside had hidden them in 26 and 40 of 55 cycles). Rates are means over 24 seeds: one seed's varies by ±0.15, and
     a few detections changed in one cell of one frame move the tracker's hits of a car by up to 18 of 55 cycles (the
     chain's re-judgement of cells on three plane waves, 2026-11-30, changed 9 of 1,320 frames here, all close-range
-    cells of the cars: car b 0.588 → 0.561 over 12 seeds, 0.645 → 0.564 over 4, every change in seed 3)."""
+    cells of the cars: car b 0.588 → 0.561 over 12 seeds, 0.645 → 0.564 over 4, every change in seed 3). Over 12
+    seeds the detection and signal levels' difference for car b was 0.18 in seeds 1–12 and 0.00 in seeds 13–24 with
+    the radar tracker's spread single groups (session 33; 0.14 and −0.05 before them): too noisy a measure, hence 24
+    (then: detection 0.75 / 0.70 / 0.98, signal 0.76 / 0.61 / 0.97)."""
     from radarnode.radar.setup import parse_scenario
     sc = parse_scenario("""
 name: side
@@ -283,7 +287,7 @@ actors:
     rate = {}
     for level in ("object", "detection", "signal"):
         hits = np.zeros(3)
-        for seed in range(1, 13):
+        for seed in range(1, 25):
             model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(seed), rc.signal)
             for k in range(sc.num_cycles):
                 frame, v = model.step(k * sc.period_s, cfg)
@@ -291,7 +295,7 @@ actors:
                 for i in range(3):
                     d = np.hypot(ol.dist_long_m - v.x_m[i], ol.dist_lat_m - v.y_m[i])
                     hits[i] += d.size > 0 and d.min() < 2.5
-        rate[level] = hits / (12 * sc.num_cycles)
+        rate[level] = hits / (24 * sc.num_cycles)
     assert np.all(np.abs(rate["detection"] - rate["signal"]) < 0.15), rate
     assert np.all(rate["object"] > 0.7) and np.all(rate["object"] > rate["detection"] - 0.1), rate
 
