@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import can
 import numpy as np
 
-from radarnode.consumer.acc import LEAD_STOPPED_MPS, Acc, AccSettings, Target, iso15622_limits
+from radarnode.consumer.acc import LEAD_STOPPED_MPS, Acc, AccSettings, Target
 from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, aligned_boundaries, boundary_reference,
                                      course_known, crossing_road, curvature, in_path, measured_reach_m, path_heading,
                                      trail_fits)
@@ -96,12 +96,12 @@ LOST_NEAR_M = 20.0
 #: … holds ACC from accelerating this long (s) unless another target is taken: the radar lost a lead braking beside a
 #: truck parked in the next lane (masked in its CA-CFAR ring) and ACC accelerated into it
 LOST_HOLD_S = 2.0
-#: ACC brakes for the object FCW warns of when it has no nearer target of its own (a stationary object it never saw
-#: move, which it does not follow) up to this ego speed (m/s), and above it where stopping behind the object needs no
-#: more than ACC's authority (ISO 15622's deceleration at that speed: :func:`stop_within_authority`); once braking, it
-#: goes on while FCW keeps that object, whatever the speed (braking only up to 5 m/s, a car warned for at 4.7 m/s was
-#: run into at 5.2 m/s once a jerk-limited ramp let the speed pass 5 m/s, and at a steady 5.02 m/s under a
-#: warning of 2.6 s — an independent tester's finding). And a target lost within LOST_NEAR_M while it went at most
+#: ACC begins to brake for the object FCW warns of when it has no nearer target of its own (a stationary object it
+#: never saw move, which it does not follow) up to this ego speed (m/s), and once braking goes on while FCW keeps that
+#: object, whatever the speed (braking only up to 5 m/s, a car warned for at 4.7 m/s was run into at 5.2 m/s once a
+#: jerk-limited ramp let the speed pass 5 m/s — an independent tester's finding). Above it ACC leaves a stationary
+#: object to the driver FCW warns, as ISO 15622 does: begun wherever stopping was within ACC's authority, it braked
+#: at up to −4.7 m/s² for FCW's false alarms at curve entries at 8–16 m/s (a second tester's finding). And a target lost within LOST_NEAR_M while it went at most
 #: this fast over ground (stop-and-go) is remembered standing where it was last seen: ACC stops behind that place,
 #: while it lies in the path, and holds there until the driver resumes (the radar lost a lead braking to a stop
 #: beside a truck parked in the next lane, masked in its CA-CFAR ring; after LOST_HOLD_S ACC accelerated from
@@ -134,14 +134,6 @@ class EcuStats:
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
-
-
-def stop_within_authority(ego_speed_mps: float, target: Target, standstill_gap_m: float) -> bool:
-    """Whether ACC can stop behind ``target`` (closing at its relative speed, standing at ``standstill_gap_m``
-    behind it) at constant deceleration within ISO 15622's limit at ``ego_speed_mps`` (:func:`iso15622_limits`)."""
-    closing = max(-target.rel_speed_mps, 0.0)
-    room = max(target.distance_m - standstill_gap_m, 0.1)
-    return closing * closing / (2.0 * room) <= -iso15622_limits(ego_speed_mps)[0]
 
 
 @dataclass
@@ -697,16 +689,14 @@ class Ecu:
         no_accel |= t_s < self._lost_until
         remembered = self._remembered(target, last, alive, v)
         self._last_acc = target
-        # ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it never saw
-        # move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), at low speed or within its
-        # authority, and goes on braking for it while FCW keeps it as its object, after the warning too and at any
-        # speed, so the ego stops behind it (then holds until the driver resumes)
+        # at low speed ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it
+        # never saw move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), and goes on braking for
+        # it while FCW keeps it as its object, after the warning too and at any speed, so the ego stops behind it
+        # (then holds until the driver resumes)
         # (the decision's target stays ACC's own, the vehicle it follows: this is braking, not following)
         controlled, borrowed = target, False
         if fcw_target is not None and (target is None or fcw_target.distance_m < target.distance_m - 0.5) and (
-                fcw_target.track_id == self._braking_for
-                or (level >= LEVEL_WARNING and (v <= FCW_BRAKE_MAX_MPS or stop_within_authority(
-                    v, fcw_target, self.acc.settings.standstill_gap_m)))):
+                fcw_target.track_id == self._braking_for or (level >= LEVEL_WARNING and v <= FCW_BRAKE_MAX_MPS)):
             controlled, borrowed = fcw_target, True
         self._braking_for = fcw_target.track_id if borrowed else None
         if remembered is not None and (controlled is None or remembered.distance_m < controlled.distance_m):

@@ -346,16 +346,18 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
 
 def lane_clear_ahead(scene, t_s: float) -> bool:
     """The simulated driver's look ahead before he resumes ACC from a standstill: no actor slower than 1 m/s whose box
-    reaches into the ego's lane (within 2 m of its centre) within DRIVER_CLEAR_M ahead (he resumed into a car stopped
-    6 m ahead, where FCW was quiet only because the ego stood; and, judging an actor by its centre and its length along
-    the road, past a truck parked crosswise across the lane with its centre 3–6 m to the side, or 4 m ahead with its
-    centre 10 m ahead: independent testers' findings)."""
+    reaches into the ego's lane (between its lines) within DRIVER_CLEAR_M ahead (he resumed into a car stopped 6 m
+    ahead, where FCW was quiet only because the ego stood; and, judging an actor by its centre and its length along the
+    road, past a truck parked crosswise across the lane with its centre 3–6 m to the side, or 4 m ahead with its
+    centre 10 m ahead; and, taking 2 m either side of the lane's centre, he never resumed behind a car parked at the
+    kerb 0.3 m beyond the line or a pedestrian on the pavement: independent testers' findings)."""
+    half = scene.scenario.road.lane_width_m / 2.0
     for i in range(scene.n):
         if scene.elevated[i] or scene.is_guardrail[i]:          # a deck or a gantry above the road, a guardrail
             continue
         near, far, lat_lo, lat_hi = scene.lane_footprint(t_s, i)
         speed = scene.lane_gap(t_s, i)[3]
-        if far > 0.0 and near < DRIVER_CLEAR_M and lat_lo < 2.0 and lat_hi > -2.0 and abs(speed) < 1.0:
+        if far > 0.0 and near < DRIVER_CLEAR_M and lat_lo < half and lat_hi > -half and abs(speed) < 1.0:
             return False
     return True
 
