@@ -101,8 +101,9 @@ LOST_HOLD_S = 2.0
 #: object, whatever the speed (braking only up to 5 m/s, a car warned for at 4.7 m/s was run into at 5.2 m/s once a
 #: jerk-limited ramp let the speed pass 5 m/s — an independent tester's finding). Above it ACC leaves a stationary
 #: object to the driver FCW warns, as ISO 15622 does: begun wherever stopping was within ACC's authority, it braked
-#: at up to −4.7 m/s² for FCW's false alarms at curve entries at 8–16 m/s (a second tester's finding). And a target lost within LOST_NEAR_M while it went at most
-#: this fast over ground (stop-and-go) is remembered standing where it was last seen: ACC stops behind that place,
+#: at up to −4.7 m/s² for FCW's false alarms at curve entries at 8–16 m/s (a second tester's finding).
+#: A target lost within LOST_NEAR_M while it went at most this fast over ground (stop-and-go), and a standing one that
+#: leaves ACC while its track lives on, is remembered standing (:meth:`Ecu._remembered`): ACC stops behind that place,
 #: while it lies in the path, and holds there until the driver resumes (the radar lost a lead braking to a stop
 #: beside a truck parked in the next lane, masked in its CA-CFAR ring; after LOST_HOLD_S ACC accelerated from
 #: 0.3 m/s into it, 8 m ahead — an independent tester's scene) …
@@ -717,10 +718,11 @@ class Ecu:
 
     def _remembered(self, target: Target | None, last: Target | None, alive: set, v: float) -> Target | None:
         """A near, slow target lost (or a standing one that left ACC), as a standing object where it would stand had
-        it braked hard when it was last seen (see FCW_BRAKE_MAX_MPS), or None. Kept until ACC takes a target within LOST_MATCH_M of that place (the
-        lead found again), the driver resumes, or the place leaves the predicted path or falls behind the sensor —
-        not for a nearer target ACC takes meanwhile (it brakes for the nearer of the two), nor at a standstill (ACC,
-        stopped behind a track of a truck's side that then vanished, resumed by itself into the lead it had lost)."""
+        it braked hard when it was last seen (see FCW_BRAKE_MAX_MPS; a standing one where it stood), or None. Kept
+        until ACC takes a target within LOST_MATCH_M along and LOST_MATCH_LATERAL_M across that place (the lead found
+        again), the driver resumes, or the place leaves the predicted path or falls behind the sensor — not for a nearer
+        target ACC takes meanwhile (it brakes for the nearer of the two), nor at a standstill (ACC, stopped behind a
+        track of a truck's side that then vanished, resumed by itself into the lead it had lost)."""
         # lost: its track ended, or (alive) it left ACC standing — a standing car does not change lanes: the track
         # slid onto something beside it (a lead stopped beside a parked truck, its track drawn onto the truck's side
         # while the ego stood 4 m behind; ACC resumed by itself and drove into the lead — a tester's finding)
