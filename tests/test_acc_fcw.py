@@ -536,7 +536,7 @@ def test_the_testers_jam_keeps_its_gap_at_the_detection_level(truck_x, seed):
     truck parked in the next lane, the ego following at 1.5 s. The truck's side beside the ego masks the lead in its
     CA-CFAR ring (5 range bins off, the same Doppler): the lead was lost 11 m ahead at 3.4 m/s, ACC held for
     LOST_HOLD_S and then drove into it (these two runs: gap 0.0 m; 5 of 21 runs of the tester's grid). Remembered
-    standing where it would stop, the lead is not run into (the grid: 0 of 21, the least gap 4.4 m). With the truck at
+    standing where it would stop, the lead is not run into (the grid: 0 of 21, the least gap 3.7 m). With the truck at
     55 m (seed 2; a second tester's) the ego stopped 4 m behind the lead, the lead's track slid onto the truck and
     left the path, and ACC resumed by itself into the lead at 5.5 m/s: a standing target that leaves ACC is remembered
     where it stood, and ACC resumes by itself only behind a lead seen driving off."""
