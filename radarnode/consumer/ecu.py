@@ -459,7 +459,7 @@ class Ecu:
         trail = np.zeros(len(tracks), dtype=bool)     # a vehicle ahead driving our way, measured this cycle
         xv, yv = self.mount.to_vehicle(x, y)
         ox, oy, oh = self.odometry
-        co, so = math.cos(oh), math.sin(oh)
+        wxs, wys = self._vehicle_to_odometry(xv, yv)           # each track's place in the odometry frame
         # stationary objects never seen moving count only up to this speed (above it the overhead test cannot
         # have its evidence before the warning distance: radarnode.consumer.overhead)
         stationary_ok = self.ego_speed_mps <= self.fcw.settings.stationary_max_speed_mps
@@ -510,8 +510,7 @@ class Ecu:
             k = by_id.get(t.meas_id)
             landmark = self.landmarks.by_track.get(t.id)
             # its place in the odometry frame, and the road's heading there
-            wx = ox + co * xv[i] - so * yv[i]
-            wy = oy + so * xv[i] + co * yv[i]
+            wx, wy = float(wxs[i]), float(wys[i])
             heading_there = oh + kappa * max(xv[i], 0.0)
             if t.id not in self._born:
                 at = self.landmarks.structure_at(wx, wy, heading_there)
@@ -682,13 +681,13 @@ class Ecu:
         # braking to a stop was lost 9–11 m ahead and ACC accelerated into it (an independent tester's finding)
         alive = {t.id for t in tracks} if radar_ok else set()
         last = self._last_acc
-        if (target is None and last is not None and last.track_id not in alive
-                and last.distance_m <= LOST_NEAR_M):
+        vanished = last is not None and last.track_id not in alive and last.distance_m <= LOST_NEAR_M
+        if target is None and vanished:
             self._lost_until = t_s + LOST_HOLD_S
         if target is not None:
             self._lost_until = -math.inf
         no_accel |= t_s < self._lost_until
-        remembered = self._remembered(target, last, alive, v)
+        remembered = self._remembered(target, last, vanished, v)
         self._last_acc = target
         # at low speed ACC brakes for the object FCW warns of, if it has no nearer target of its own (a stopped car it
         # never saw move: FCW warned for seconds while the ego, at 3–4.5 m/s, coasted into it), and goes on braking for
@@ -710,25 +709,32 @@ class Ecu:
         self.outputs.append(out)
         return out
 
-    def _vehicle_to_odometry(self, x_m: float, y_m: float) -> tuple[float, float]:
-        """A vehicle-frame point in the odometry frame (the dead-reckoned pose of this cycle)."""
+    def _vehicle_to_odometry(self, x_m, y_m):
+        """Vehicle-frame points (floats or arrays) in the odometry frame (the dead-reckoned pose of this cycle)."""
         ox, oy, oh = self.odometry
         c, s = math.cos(oh), math.sin(oh)
-        return ox + x_m * c - y_m * s, oy + x_m * s + y_m * c
+        return ox + c * x_m - s * y_m, oy + s * x_m + c * y_m
 
-    def _remembered(self, target: Target | None, last: Target | None, alive: set, v: float) -> Target | None:
+    def _odometry_to_vehicle(self, x_m: float, y_m: float) -> tuple[float, float]:
+        """An odometry-frame point in the vehicle frame of this cycle (the inverse of :meth:`_vehicle_to_odometry`)."""
+        ox, oy, oh = self.odometry
+        c, s = math.cos(oh), math.sin(oh)
+        return (x_m - ox) * c + (y_m - oy) * s, -(x_m - ox) * s + (y_m - oy) * c
+
+    def _remembered(self, target: Target | None, last: Target | None, vanished: bool, v: float) -> Target | None:
         """A near, slow target lost (or a standing one that left ACC), as a standing object where it would stand had
         it braked hard when it was last seen (see FCW_BRAKE_MAX_MPS; a standing one where it stood), or None. Kept
         until ACC takes a target within LOST_MATCH_M along and LOST_MATCH_LATERAL_M across that place (the lead found
         again), the driver resumes, or the place leaves the predicted path or falls behind the sensor — not for a nearer
         target ACC takes meanwhile (it brakes for the nearer of the two), nor at a standstill (ACC, stopped behind a
-        track of a truck's side that then vanished, resumed by itself into the lead it had lost)."""
+        track of a truck's side that then vanished, resumed by itself into the lead it had lost). ``vanished``: the
+        track of ``last`` (the target of the cycle before) ended within LOST_NEAR_M."""
         # lost: its track ended, or (alive) it left ACC standing — a standing car does not change lanes: the track
         # slid onto something beside it (a lead stopped beside a parked truck, its track drawn onto the truck's side
         # while the ego stood 4 m behind; ACC resumed by itself and drove into the lead — a tester's finding)
         if last is not None and last.distance_m <= LOST_NEAR_M and self._last_acc_place is not None \
                 and (target is None or target.track_id != last.track_id) and (
-                    (last.track_id not in alive and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS)
+                    (vanished and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS)
                     or self._last_acc_place[2] <= LEAD_STOPPED_MPS):
             self._lost_place = (*self._last_acc_place[:2], last)
         before, self._last_acc_place = self._last_acc_place, None
@@ -743,12 +749,9 @@ class Ecu:
         if self._lost_place is None:
             return None
         px, py, lost = self._lost_place
-        ox, oy, oh = self.odometry
-        c, s = math.cos(oh), math.sin(oh)
-        xv, yv = (px - ox) * c + (py - oy) * s, -(px - ox) * s + (py - oy) * c          # vehicle frame
+        xv, yv = self._odometry_to_vehicle(px, py)
         m = self.mount
-        cy, sy = math.cos(math.radians(m.yaw_deg)), math.sin(math.radians(m.yaw_deg))
-        xs, ys = cy * (xv - m.x_m) + sy * (yv - m.y_m), -sy * (xv - m.x_m) + cy * (yv - m.y_m)   # sensor frame
+        xs, ys = m.to_sensor(xv, yv)
         bounds, trails, crossing = self._path_inputs
         found = target is not None and abs(target.distance_m - (xv - m.x_m)) <= LOST_MATCH_M \
             and abs(target.lateral_m - yv) <= LOST_MATCH_LATERAL_M

@@ -355,8 +355,7 @@ def lane_clear_ahead(scene, t_s: float) -> bool:
     for i in range(scene.n):
         if scene.elevated[i] or scene.is_guardrail[i]:          # a deck or a gantry above the road, a guardrail
             continue
-        near, far, lat_lo, lat_hi = scene.lane_footprint(t_s, i)
-        speed = scene.lane_gap(t_s, i)[3]
+        near, far, lat_lo, lat_hi, speed = scene.lane_footprint(t_s, i)
         if far > 0.0 and near < DRIVER_CLEAR_M and lat_lo < half and lat_hi > -half and abs(speed) < 1.0:
             return False
     return True
@@ -382,9 +381,7 @@ def _actor_at(view, scene, mount: SensorMount, target) -> int | None:
     if not len(view.x_m):
         return None
     # the target is in the vehicle's axes (along the car from the sensor, across from its centre line)
-    c, s = math.cos(math.radians(mount.yaw_deg)), math.sin(math.radians(mount.yaw_deg))
-    dx, dy = target.distance_m, target.lateral_m - mount.y_m
-    x, y = c * dx + s * dy, -s * dx + c * dy
+    x, y = mount.to_sensor(target.distance_m + mount.x_m, target.lateral_m)
     co, so = np.cos(view.orientation_rad), np.sin(view.orientation_rad)
     rx, ry = x - view.centre_x_m, y - view.centre_y_m
     out_l = np.maximum(np.abs(co * rx + so * ry) - scene.length_m / 2.0, 0.0)

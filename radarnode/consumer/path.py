@@ -81,6 +81,12 @@ class SensorMount:
         c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
         return self.x_m + c * x - s * y, self.y_m + s * x + c * y
 
+    def to_sensor(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Vehicle-frame positions to the sensor frame (the inverse of :meth:`to_vehicle`)."""
+        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
+        dx, dy = x - self.x_m, y - self.y_m
+        return c * dx + s * dy, -s * dx + c * dy
+
     def rotate(self, vx: np.ndarray, vy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame vectors to vehicle axes: velocities relative to the sensor, or positions into the sensor's
         vehicle-aligned frame (the origin at the sensor, the vehicle's axes: the vehicle frame less the mount's

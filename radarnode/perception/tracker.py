@@ -207,10 +207,8 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
         own = np.flatnonzero(alone)
         own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1))]
         if own.size:
-            rigid_v, rigid_cov = rigid_v.copy(), rigid_cov.copy()
-            rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own)
+            rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own)      # (join_rigid's own arrays)
             r = np.maximum(np.hypot(gx[own], gy[own]), 1e-6)
-            vr = vr.copy()
             vr[own] = (rigid_v[own, 0] * gx[own] + rigid_v[own, 1] * gy[own]) / r
     rcs = 10.0 * np.log10(np.bincount(labels, weights=10.0 ** (det.rcs_dbsm / 10.0), minlength=g))
     snr = 10.0 * np.log10(wsum)

@@ -290,12 +290,13 @@ class Scene:
         return (gap, float(a.y_m[i]) - de, closing, float(a.vx_mps[i]) * scale_a,
                 float(a.ax_mps2[i]) * scale_a)
 
-    def lane_footprint(self, t_s: float, i: int) -> tuple[float, float, float, float]:
+    def lane_footprint(self, t_s: float, i: int) -> tuple[float, float, float, float, float]:
         """Actor ``i``'s box against the ego's lane, turned by its heading on the road (a truck parked crosswise
         spans the lane across, not along): the gaps along the ego's lane from the sensor to its nearest and its
-        farthest end (m), and its lateral extent from the centre of the ego's lane (m, left positive), lowest and
-        highest. :meth:`lane_gap` takes an actor along the lane (its centre and half its length)."""
-        gap, lateral, _, _, _ = self.lane_gap(t_s, i)
+        farthest end (m), its lateral extent from the centre of the ego's lane (m, left positive), lowest and
+        highest, and its speed along the lane (m/s, :meth:`lane_gap`'s). :meth:`lane_gap` takes an actor along the
+        lane (its centre and half its length)."""
+        gap, lateral, _, speed, _ = self.lane_gap(t_s, i)
         a = self._movers.state(t_s)
         vx, vy = float(a.vx_mps[i]), float(a.vy_mps[i])
         h = math.atan2(vy, vx) if math.hypot(vx, vy) > 0.1 else float(self.heading_rel[i])
@@ -303,7 +304,7 @@ class Scene:
         along = abs(half_l * math.cos(h)) + abs(half_w * math.sin(h))
         across = abs(half_l * math.sin(h)) + abs(half_w * math.cos(h))
         centre = gap + half_l
-        return centre - along, centre + along, lateral - across, lateral + across
+        return centre - along, centre + along, lateral - across, lateral + across, speed
 
     # --- the sensor's view -------------------------------------------------
     def sensor_pose(self, ego: EgoState) -> tuple[float, float, float, float, float]:
