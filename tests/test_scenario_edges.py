@@ -116,7 +116,7 @@ def test_structures_overhead_may_stand_over_the_ego_at_the_start(tmp_path, capsy
     """A bridge, a gantry or a sign 5 m up at x 0–2 m was refused as "overlaps the ego at t = 0": a run could not start
     under a bridge. An actor whose bottom is 2 m (EGO_HEIGHT_M) or more above the road now passes over the ego; one
     lower, or on the ground, on top of it is still an error."""
-    from radarnode.radar.checks import EGO_HEIGHT_M
+    from radarnode.scene.world import EGO_HEIGHT_M
     assert EGO_HEIGHT_M == 2.0
     path = _write(tmp_path, "over", "duration_s: 1.0", f"  - {actor}")
     rc, _, err = cli(capsys, "log", path, "-o", tmp_path / "over.blf")

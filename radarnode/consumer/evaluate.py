@@ -139,6 +139,9 @@ class ScenarioResult:
     peak_jerk_mps3: float = 0.0
     final_time_gap_s: float | None = None
     iso_limits_ok: bool = True
+    #: every actor whose box met the ego's (``Scene.ego_contacts``), with the first time: a failure where the ego is
+    #: driven (closed loop or ``ego.driver``), whichever actor it is; the script's doing where it is not
+    collisions: dict[str, float] = field(default_factory=dict)
     passed: bool = True
     reasons: list[str] = field(default_factory=list)
     trace: dict = field(default_factory=dict)
@@ -223,6 +226,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                 assembler.on_message_received(m)       # the ECU's frames, decoded and E2E-checked
         # truth
         ego_state = scene.ego_state(t)
+        for i in np.flatnonzero(scene.ego_contacts(np.array([t]))[0]):     # any actor's box meeting the ego's
+            res.collisions.setdefault(scenario.actors[i].id, t)
         gap = ttc = math.inf
         rel_speed = math.nan
         if lead is not None:
@@ -427,7 +432,13 @@ def _judge(scenario: Scenario, res: ScenarioResult) -> None:
     if e.fcw_prewarning and (res.prewarning_time_s is None or res.warning_time_s is not None
                              and res.prewarning_time_s >= res.warning_time_s):
         res.reasons.append("no prewarning before the warning")
-    res.checked = e.checks
+    # a driven ego (ACC in the loop or a driver braking) must touch no actor, whatever the expectation names: a car
+    # cutting in that the ego ran into passed when only the lead's gap was judged
+    driven = scenario.ecu.closed_loop or scenario.ego.driver is not None
+    if driven:
+        for name, t in res.collisions.items():
+            res.reasons.append(f"collision with {name} at t = {t:.2f} s")
+    res.checked = e.checks or (driven and bool(res.collisions))
     names = [a.id for a in scenario.actors]
     targets = res.trace["target"]
     for a in e.never_target:

@@ -10,7 +10,8 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
 * **An actor on top of the ego at the start** (error): its box and the ego's (``ego.length_m`` ×
   ``ego.width_m``, the rear axle 1 m ahead of the rear end, as the viewer draws it) intersect at t = 0. No radar
   reports a car inside the car it sits on; the model's output would be meaningless. An actor whose bottom is
-  ``EGO_HEIGHT_M`` (2 m) or more above the road (a bridge, a gantry, an overhead sign) passes over the ego.
+  ``EGO_HEIGHT_M`` (2 m, :mod:`radarnode.scene.world`) or more above the road (a bridge, a gantry, an overhead sign)
+  passes over the ego. The test is ``Scene.ego_contacts``, the one the report's collision judge takes.
 * **An expectation's option without the expectation** (error): ``min_gap_m``, ``fcw_ttc_min_s``,
   ``fcw_before_impact_s``, ``gap_settle_s`` or ``ttc_with_lead_decel`` without ``ecu.expect.lead`` (they are
   measured to the lead; without one they compared nothing and passed); ``ecu.expect.gap_tolerance`` without
@@ -47,11 +48,6 @@ from radarnode.schema import Source
 
 logger = logging.getLogger(__name__)
 
-EGO_REAR_OVERHANG_M = 1.0      # rear end to rear axle, as radarnode.viz draws the ego
-OVERLAP_TOLERANCE_M = 0.01     # boxes that only touch do not overlap
-#: an actor whose bottom is this high or higher (a bridge, a gantry, an overhead sign) passes over the ego: a car or
-#: a van (the scenario gives the ego no height); a run may start under a bridge
-EGO_HEIGHT_M = 2.0
 SPEED_TOLERANCE = (0.5, 0.05)  # m/s, or this fraction of the speed, whichever is larger
 HEADING_TOLERANCE_DEG = 5.0
 POSITION_TOLERANCE_M = 0.5
@@ -184,50 +180,34 @@ def _check_waypoint_fields(scenario: Scenario, src: Source, i: int, actor: Actor
 # --- an actor on top of the ego at t = 0 ----------------------------------------------------------------
 
 
-def _boxes_overlap(c1, h1, a1, c2, h2, a2, tol: float) -> bool:
-    """Separating-axis test of two rectangles (centre, half sizes (l, w), heading rad); True if they intersect
-    by more than ``tol`` along every axis."""
-    axes = [(math.cos(a), math.sin(a)) for a in (a1, a1 + math.pi / 2, a2, a2 + math.pi / 2)]
-    d = (c2[0] - c1[0], c2[1] - c1[1])
-    for ax in axes:
-        def radius(h, a):
-            u = (math.cos(a), math.sin(a))
-            v = (-math.sin(a), math.cos(a))
-            return h[0] * abs(u[0] * ax[0] + u[1] * ax[1]) + h[1] * abs(v[0] * ax[0] + v[1] * ax[1])
-        if abs(d[0] * ax[0] + d[1] * ax[1]) >= radius(h1, a1) + radius(h2, a2) - tol:
-            return False
-    return True
-
-
 def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
-    from radarnode.scene.world import Scene
+    from radarnode.scene.world import EGO_REAR_OVERHANG_M, Scene
     scene = Scene(scenario)
+    touching = scene.ego_contacts(np.zeros(1))[0]      # (a bridge, a gantry, a sign overhead: the ego passes under)
+    if not touching.any():
+        return
     view = scene.view(0.0)
     mx, my, myaw = scene.mount
     ego = scenario.ego
-    ego_c = (0.5 * ego.length_m - EGO_REAR_OVERHANG_M, 0.0)
     ego_h = (0.5 * ego.length_m, 0.5 * ego.width_m)
     c, s = math.cos(myaw), math.sin(myaw)
-    for i, actor in enumerate(scenario.actors):
-        if actor.z >= EGO_HEIGHT_M:        # a bridge, a gantry, a sign overhead: the ego passes under it
-            continue
-        # the actor's box in the ego frame (the sensor frame turned by the mount's yaw and moved by its position)
-        cx, cy = float(view.centre_x_m[i]), float(view.centre_y_m[i])
-        ex, ey = c * cx - s * cy + mx, s * cx + c * cy + my
-        heading = float(view.orientation_rad[i]) + myaw
-        half = (0.5 * actor.length, 0.5 * actor.width)
-        if actor.object_class == "guardrail":       # its posts run from x_m over length_m
-            ex, ey = ex + half[0] * math.cos(heading), ey + half[0] * math.sin(heading)
-        if _boxes_overlap(ego_c, ego_h, 0.0, (ex, ey), half, heading, OVERLAP_TOLERANCE_M):
-            base = f"actors[{i}]"
-            key = f"{base}.x_m" if f"{base}.x_m" in scenario.lines else f"{base}.waypoints" \
-                if actor.waypoints else base
-            front = ego.length_m - EGO_REAR_OVERHANG_M
-            raise src.error(key, f"actor '{actor.id}' ({base}) overlaps the ego at t = 0: its {actor.length:g} × "
-                                 f"{actor.width:g} m box centred at x {ex:.2f} m, y {ey + ego.y_m:.2f} m intersects "
-                                 f"the ego's (x {-EGO_REAR_OVERHANG_M:g} to {front:g} m, y {ego.y_m - ego_h[1]:.2f} "
-                                 f"to {ego.y_m + ego_h[1]:.2f} m); expected it clear of the ego, e.g. x_m >= "
-                                 f"{front + half[0] + 0.5:.1f} in the ego's lane")
+    i = int(np.flatnonzero(touching)[0])
+    actor = scenario.actors[i]
+    # the actor's box in the ego frame (the sensor frame turned by the mount's yaw and moved by its position)
+    cx, cy = float(view.centre_x_m[i]), float(view.centre_y_m[i])
+    ex, ey = c * cx - s * cy + mx, s * cx + c * cy + my
+    heading = float(view.orientation_rad[i]) + myaw
+    half = (0.5 * actor.length, 0.5 * actor.width)
+    if actor.object_class == "guardrail":       # its posts run from x_m over length_m
+        ex, ey = ex + half[0] * math.cos(heading), ey + half[0] * math.sin(heading)
+    base = f"actors[{i}]"
+    key = f"{base}.x_m" if f"{base}.x_m" in scenario.lines else f"{base}.waypoints" if actor.waypoints else base
+    front = ego.length_m - EGO_REAR_OVERHANG_M
+    raise src.error(key, f"actor '{actor.id}' ({base}) overlaps the ego at t = 0: its {actor.length:g} × "
+                         f"{actor.width:g} m box centred at x {ex:.2f} m, y {ey + ego.y_m:.2f} m intersects "
+                         f"the ego's (x {-EGO_REAR_OVERHANG_M:g} to {front:g} m, y {ego.y_m - ego_h[1]:.2f} "
+                         f"to {ego.y_m + ego_h[1]:.2f} m); expected it clear of the ego, e.g. x_m >= "
+                         f"{front + half[0] + 0.5:.1f} in the ego's lane")
 
 
 # --- an actor the radar can never see ----------------------------------------------------------------------

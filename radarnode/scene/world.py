@@ -23,6 +23,12 @@ from radarnode.scene.kinematics import MoverState, MoverTable
 from radarnode.scene.road import RoadGeometry
 from radarnode.scene.scenario import Scenario
 
+EGO_REAR_OVERHANG_M = 1.0      # rear end to rear axle, as radarnode.viz draws the ego
+OVERLAP_TOLERANCE_M = 0.01     # boxes that only touch do not overlap
+#: an actor whose bottom is this high or higher (a bridge, a gantry, an overhead sign) passes over the ego: a car or
+#: a van (the scenario gives the ego no height); a run may start under a bridge
+EGO_HEIGHT_M = 2.0
+
 
 @dataclass(frozen=True)
 class EgoState:
@@ -245,6 +251,41 @@ class Scene:
         turn = np.where(speed > 0.1, (st.ay_mps2 * v_s - v_d * st.ax_mps2) / np.maximum(speed * speed, 1e-2), 0.0)
         return x, y, heading, vxw, vyw, speed, st.ax_mps2, kappa * st.vx_mps + turn
 
+    def _actor_pose(self, st: MoverState) -> tuple[np.ndarray, ...]:
+        """World position, heading (its motion's direction, or the road's plus ``heading_deg`` when it stands) and
+        world velocity of the actors' reference points (a box's centre, a guardrail's start)."""
+        ax_, ay_, psi, avx, avy = self._world_motion(st)
+        heading = np.where(np.hypot(avx, avy) > 0.1, np.arctan2(avy, avx), psi + self.heading_rel)
+        return ax_, ay_, heading, avx, avy
+
+    def ego_contacts(self, times_s: np.ndarray) -> np.ndarray:
+        """Which actors' boxes intersect the ego's at the times ``times_s`` (T,): bool (T, n_actors).
+
+        The ego's box is ``ego.length_m`` × ``ego.width_m`` with the rear axle ``EGO_REAR_OVERHANG_M`` ahead of its
+        rear end, turned by the ego's heading; an actor's is its length × width turned by its heading (a guardrail's
+        runs from its start over its length). Boxes that meet by less than ``OVERLAP_TOLERANCE_M`` along some axis
+        only touch; an actor whose bottom is ``EGO_HEIGHT_M`` or more above the road passes over the ego. A
+        separating-axis test, every actor and time at once."""
+        t = np.asarray(times_s, dtype=np.float64)
+        ex, ey, epsi = (a[:, :1] for a in self._ego_pose(self._ego.state(t))[:3])           # (T, 1)
+        ax_, ay_, heading, _, _ = self._actor_pose(self._movers.state(t))                    # (T, n)
+        hl, hw = self.length_m / 2.0, self.width_m / 2.0
+        rail = self.is_guardrail
+        ax_ = ax_ + np.where(rail, hl * np.cos(heading), 0.0)
+        ay_ = ay_ + np.where(rail, hl * np.sin(heading), 0.0)
+        ego = self.scenario.ego
+        el, ew = ego.length_m / 2.0, ego.width_m / 2.0
+        dx, dy = _rot(-epsi, ax_ - ex, ay_ - ey)               # the actor's centre in the ego's axes (rear axle 0)
+        dx = dx - (el - EGO_REAR_OVERHANG_M)                   # … from the ego box's centre
+        rel = heading - epsi
+        c, s = np.abs(np.cos(rel)), np.abs(np.sin(rel))
+        tol = OVERLAP_TOLERANCE_M
+        along_u = np.abs(dx * np.cos(rel) + dy * np.sin(rel))  # the centres' distance along the actor's axes
+        along_v = np.abs(-dx * np.sin(rel) + dy * np.cos(rel))
+        return ((np.abs(dx) < el + hl * c + hw * s - tol) & (np.abs(dy) < ew + hl * s + hw * c - tol)
+                & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
+                & (self.z_m < EGO_HEIGHT_M))
+
     def ego_state(self, t_s: float) -> EgoState:
         """The ego at ``t_s``. On the cycle grid of a scripted ego (``t_s`` = k × period) it comes from a block of
         ``EGO_BLOCK`` cycles computed in one pass (the same numbers, element by element); a closed-loop ego, whose
@@ -334,10 +375,7 @@ class Scene:
         px, py, psi_s = ex + ox, ey + oy, epsi + myaw
         svx, svy = evx_w - w * oy, evy_w + w * ox
         st = self._movers.state(t)                                 # (T, n)
-        ax_, ay_, _, avx, avy = self._world_motion(st)
-        speed = np.hypot(avx, avy)
-        aheading = np.where(speed > 0.1, np.arctan2(avy, avx), self.road_to_world(st.x_m, st.y_m)[2]
-                            + self.heading_rel)
+        ax_, ay_, aheading, avx, avy = self._actor_pose(st)
         if self.road.straight:
             # straight road: the road frame is the world frame, the profiles' accelerations are exact
             aax, aay = st.ax_mps2, st.ay_mps2

@@ -1,0 +1,125 @@
+"""The report's collision judge: every actor's box against the ego's, each cycle (``Scene.ego_contacts``); a driven
+ego that meets any actor fails the run, whatever ``ecu.expect`` names (an independent tester's slow cut-in was run
+into at 6.6 m/s and passed: only the lead's gap was judged)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+DT = 0.072
+
+
+def _scene(actors: str, ego: str = "{speed_mps: 10.0}"):
+    """A Scene of these actors (a straight two-lane road), without the loader's checks (an actor may start on the
+    ego)."""
+    from radarnode.radar.setup import resolved
+    from radarnode.scene.scenario import read_scenario_text
+    from radarnode.scene.world import Scene
+    text = f"name: boxes\nseed: 1\nduration_s: 10\nego: {ego}\nroad: {{lanes: 3, ego_lane: 1}}\nactors:\n{actors}\n"
+    return Scene(resolved(read_scenario_text(text, "boxes.yaml")))
+
+
+def _reference_overlap(ego_box, box, grow: float) -> bool:
+    """Independent of the separating-axis test: do two rectangles (centre x, y, half length, half width, heading)
+    intersect, the second grown by ``grow`` on every side (negative: shrunk)? Dense points of each (its outline and
+    inside) tested inside the other, and their outlines' segments tested for crossing."""
+    def corners(b, g=0.0):
+        x, y, hl, hw, h = b
+        hl, hw = hl + g, hw + g
+        c, s = math.cos(h), math.sin(h)
+        return [(x + c * u - s * v, y + s * u + c * v) for u, v in ((hl, hw), (-hl, hw), (-hl, -hw), (hl, -hw))]
+
+    def inside(p, b, g=0.0):
+        x, y, hl, hw, h = b
+        c, s = math.cos(h), math.sin(h)
+        u, v = c * (p[0] - x) + s * (p[1] - y), -s * (p[0] - x) + c * (p[1] - y)
+        return abs(u) <= hl + g and abs(v) <= hw + g
+
+    def cross(a, b, c, d):
+        def orient(p, q, r):
+            return (q[0] - p[0]) * (r[1] - p[1]) - (q[1] - p[1]) * (r[0] - p[0])
+        return (orient(a, b, c) * orient(a, b, d) < 0.0) and (orient(c, d, a) * orient(c, d, b) < 0.0)
+
+    ca, cb = corners(ego_box), corners(box, grow)
+    if any(inside(p, box, grow) for p in ca) or any(inside(p, ego_box) for p in cb):
+        return True
+    return any(cross(ca[i], ca[(i + 1) % 4], cb[j], cb[(j + 1) % 4]) for i in range(4) for j in range(4))
+
+
+def test_ego_contacts_agree_with_an_independent_geometry():
+    """400 boxes of random size, place and heading around the ego at t = 0: every one the separating-axis test calls
+    touching overlaps by a reference of corners and crossing edges grown by 2 cm, and every one that overlaps by it
+    shrunk 2 cm is called touching (the 1-cm tolerance lies between)."""
+    rng = np.random.default_rng(3)
+    n = 400
+    xs, ys = rng.uniform(-8.0, 12.0, n), rng.uniform(-5.0, 5.0, n)
+    ls, ws, hs = rng.uniform(0.3, 12.0, n), rng.uniform(0.3, 3.0, n), rng.uniform(-180.0, 180.0, n)
+    rows = "\n".join(f"  - {{id: a{i}, class: car, x_m: {x:.4f}, y_m: {y:.4f}, speed_mps: 0, heading_deg: {h:.4f}, "
+                     f"length_m: {le:.4f}, width_m: {w:.4f}}}" for i, (x, y, le, w, h) in enumerate(zip(xs, ys, ls, ws,
+                                                                                                    hs)))
+    scene = _scene(rows)
+    got = scene.ego_contacts(np.zeros(1))[0]
+    ego = scene.scenario.ego
+    from radarnode.scene.world import EGO_REAR_OVERHANG_M
+    ego_box = (ego.length_m / 2.0 - EGO_REAR_OVERHANG_M, 0.0, ego.length_m / 2.0, ego.width_m / 2.0, 0.0)
+    loose = np.array([_reference_overlap(ego_box, (x, y, le / 2, w / 2, math.radians(h)), 0.02)
+                      for x, y, le, w, h in zip(xs, ys, ls, ws, hs)])
+    strict = np.array([_reference_overlap(ego_box, (x, y, le / 2, w / 2, math.radians(h)), -0.02)
+                       for x, y, le, w, h in zip(xs, ys, ls, ws, hs)])
+    assert 50 < got.sum() < 350                                # both kinds are well represented
+    assert not np.any(got & ~loose), np.flatnonzero(got & ~loose)
+    assert not np.any(strict & ~got), np.flatnonzero(strict & ~got)
+
+
+@pytest.mark.parametrize("overlap, touching", [(-0.05, False), (0.0, False), (0.05, True), (0.5, True)])
+def test_a_standing_car_ahead_is_met_when_the_fronts_cross(overlap, touching):
+    """The ego at 10 m/s towards a car standing 30 m ahead (centre; its rear 27.75 m from the rear axle, the ego's front
+    3.7 m): the boxes meet at t = 2.405 s. 5 cm short, exactly there (they touch: within OVERLAP_TOLERANCE_M),
+    5 cm and 50 cm into it."""
+    scene = _scene("  - {id: car, class: car, x_m: 30.0, lane: 1, speed_mps: 0}")
+    t = (27.75 - 3.7 + overlap) / 10.0
+    assert bool(scene.ego_contacts(np.array([t]))[0][0]) == touching
+
+
+@pytest.mark.parametrize("z, touching", [(1.99, True), (2.0, False), (2.01, False), (4.0, False)])
+def test_an_overhead_sign_is_passed_under(z, touching):
+    """A sign whose bottom is EGO_HEIGHT_M (2 m) or more above the road passes over the ego; one lower is met."""
+    scene = _scene(f"  - {{id: s, class: sign, x_m: 20.0, lane: 1, z_m: {z}, height_m: 1.0}}")
+    t = (20.0 - 3.7) / 10.0                                    # the ego's front under the sign's centre
+    assert bool(scene.ego_contacts(np.array([t]))[0][0]) == touching
+
+
+FOLLOWER = """name: rear_end
+seed: 1
+duration_s: 4.0
+ego: {{speed_mps: 10.0}}
+road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0}}
+ecu:
+  acc_enabled: true
+  set_speed_mps: 10
+  closed_loop: {closed}
+  expect: {{lead: lead, min_gap_m: 2.0}}
+actors:
+  - {{id: lead, class: car, x_m: 60.0, lane: 0, speed_mps: 10.0}}
+  - {{id: follower, class: car, x_m: -20.0, lane: 0, speed_mps: 20.0}}
+"""
+
+
+@pytest.mark.parametrize("closed", [True, False])
+def test_a_collision_with_any_actor_fails_a_driven_run(tmp_path, closed):
+    """A car running into the ego from behind while the lead's gap stays 50 m: a run whose ego is driven (closed loop)
+    fails naming the actor and the time; with the ego scripted the collision is the script's, recorded, not judged."""
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import load_scenario
+    path = tmp_path / "rear.yaml"
+    path.write_text(FOLLOWER.format(closed=str(closed).lower()))
+    res = simulate(load_scenario(path), "object")
+    # the follower's front (−20 + 2.25 m) meets the ego's rear (−1 m) at 10 m/s closing: t = 1.675 s
+    assert set(res.collisions) == {"follower"} and abs(res.collisions["follower"] - 1.675) <= DT
+    assert res.min_gap_m > 40.0
+    assert res.passed != closed
+    if closed:
+        assert any(r.startswith("collision with follower at t = 1.") for r in res.reasons), res.reasons
