@@ -87,8 +87,8 @@ STRAY_STEP_PERIODS = 3.0
 #: the least σ taken for a cluster's radial speed (its σ fields come quantised; a Doppler bin is 0.1–0.3 m/s)
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
-TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
-                  "_lost_until", "_last_acc", "_last_acc_place", "_lost_place", "_path_inputs", "_braking_for",
+TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_acc_in", "_out_path", "_target_id", "_fcw_target_id",
+                  "_rcs_power", "_lost_until", "_last_acc", "_last_acc_place", "_lost_place", "_path_inputs", "_braking_for",
                   "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
                   "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
 #: a target ACC followed that vanished from the object list within this distance (m) …
@@ -116,6 +116,22 @@ LOST_LEAD_DECEL_MPS2 = 8.0
 #: lane's edge was not the lead lost 3 m ahead of it)
 LOST_MATCH_M = 3.0
 LOST_MATCH_LATERAL_M = 1.0
+#: a vehicle cutting in is ACC's candidate before it is in the path: one whose place, moved by its motion across the
+#: path as the ego sees it (in the ego's turning frame), lies in the path within this time (s) … (ACC took a car drifting in from
+#: 12 m ahead at 0.6 m/s across only once its nearest point was inside, 0.7 m ahead, and ran into it at 6.6 m/s —
+#: an independent tester's scene; production ACC predicts cut-ins the same way)
+CUT_IN_HORIZON_S = 1.5
+#: … moving across the path at least this fast (m/s; a neighbour's weaving within its lane is slower, and the radar's
+#: lateral speed of a car is within about 0.3 m/s) and along it faster than across (crossing traffic is FCW's). FCW
+#: keeps to what is in the path: a prediction would warn for neighbours that never come in
+CUT_IN_MIN_MPS = 0.4
+#: … and twice its own uncertainty across (a young track's velocity is its filter's guess: a truck's track 38 m ahead
+#: on a 250-m bend started at 3.4 m/s across) …
+CUT_IN_SIGMAS = 2.0
+#: … ahead of the sensor by at least this much (m): beside the ego a car coming across is a side collision ACC's
+#: braking cannot prevent, and the nearest point of a truck being passed on a bend slides across its side as the ego
+#: passes (0.4 m/s seen on a 250-m bend, 0.3–2.3 m ahead, where ACC took the truck)
+CUT_IN_MIN_AHEAD_M = 3.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -194,6 +210,7 @@ class Ecu:
         self._e2e = E2EProtector()
         self.boundaries: dict | None = None
         self._in_path: dict[int, int] = {}      # consecutive cycles each track has been in the predicted path
+        self._acc_in: dict[int, int] = {}       # … in it or cutting in (ACC's candidates)
         self._out_path: dict[int, int] = {}
         self._target_id: int | None = None
         self._fcw_target_id: int | None = None
@@ -293,7 +310,7 @@ class Ecu:
     def _restart_tracking(self) -> None:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
-        self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
+        self._in_path, self._acc_in, self._out_path, self._target_id, self._fcw_target_id = {}, {}, {}, None, None
         self._last_acc, self._lost_until, self._braking_for = None, -math.inf, None
         self._last_acc_place, self._lost_place, self._path_inputs = None, None, (None, None, None)
         self._rcs_power, self._obstacles, self._placed, self._born = {}, set(), set(), {}
@@ -477,6 +494,10 @@ class Ecu:
         su, sv = self._sensor_velocity()
         ssv = self._sensor_motion()[0]                # the same, in the sensor's axes (the trackers' states)
         along = np.zeros(len(tracks))                 # each track's speed over ground along the path where it is
+        drift = np.zeros((len(tracks), 2))            # its motion in the sensor's turning frame (sensor axes)
+        across = np.zeros(len(tracks))                # … across the path where it is, and its σ
+        across_sigma = np.zeros(len(tracks))
+        normal = np.zeros((len(tracks), 2))           # the path's normal there (left), in the sensor's axes
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
@@ -490,6 +511,13 @@ class Ecu:
             there = road_share(self.ego_speed_mps, kappa) * path_heading(kappa, max(xv[i], 0.0))
             tangent[i] = math.cos(there), math.sin(there)
             along[i] = gx * tangent[i, 0] + gy * tangent[i, 1]
+            # its place's rate of change as the ego sees it: relative velocity less the frame's turning (a car keeping
+            # its lane on the ego's bend stays put); across the path there, for the cut-in prediction
+            w = self.ego_yaw_rate_rps
+            drift[i] = t.x[2] + w * t.x[1], t.x[3] - w * t.x[0]
+            normal[i] = self.mount.rotate(-tangent[i, 1], tangent[i, 0], inverse=True)    # sensor axes
+            across[i] = float(drift[i] @ normal[i])
+            across_sigma[i] = math.sqrt(max(float(normal[i] @ t.p[2:4, 2:4] @ normal[i]), 0.0))
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
             ahead = kappa * max(xv[i], 0.0)
@@ -585,6 +613,7 @@ class Ecu:
                     if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                         self._obstacles.add(t.id)
                     self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
+                    self._acc_in[t.id] = max(self._acc_in.get(t.id, 0), ENTER_CYCLES - 1)
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead
             obstacle[i] = t.id in self._obstacles and not overhead
@@ -617,11 +646,25 @@ class Ecu:
         self._born = {k: v for k, v in self._born.items() if k in alive}
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
+        # a vehicle cutting in (ACC's only): in the path half the horizon or the whole of it ahead, moved by its
+        # motion across the path where it is (not along: whether the ego reaches it first is ACC's gap control once it
+        # is the target — a car merging in 4 m ahead that the ego was catching up on was predicted beside the ego and
+        # no candidate); faster across than CUT_IN_MIN_MPS and CUT_IN_SIGMAS of its σ, faster along than across, and
+        # CUT_IN_MIN_AHEAD_M ahead
+        speed_across = np.abs(across)
+        cut = (~ok & moved & ~oncoming & (speed_across >= np.maximum(CUT_IN_MIN_MPS, CUT_IN_SIGMAS * across_sigma))
+               & (speed_across < along) & (xv - self.mount.x_m >= CUT_IN_MIN_AHEAD_M))
+        if cut.any():
+            h = np.array([0.5 * CUT_IN_HORIZON_S, CUT_IN_HORIZON_S])[:, None] * across[cut]
+            px, py = (x[cut] + h * normal[cut, 0]).ravel(), (y[cut] + h * normal[cut, 1]).ravel()
+            cut[cut] = in_path(px, py, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
+                               bounds, self.mount, self.trail_fits, crossing).reshape(2, -1).any(axis=0)
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
         # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
         # the target at its edge, does not switch)
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
+        self._acc_in = {tid: (self._acc_in.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok | cut)}
         for tid, o in zip(ids, ok):        # a place counts the cycles its object was measured standing in the path
             lm = self.landmarks.by_track.get(tid)
             if lm is not None and tid in filed:
@@ -629,9 +672,10 @@ class Ecu:
                 lm.crossed_path |= bool(o)
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
         entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
+        acc_entered = np.array([self._acc_in[tid] >= ENTER_CYCLES for tid in ids])
         held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])
 
-        def pick(user: np.ndarray, current: int | None) -> Target | None:
+        def pick(user: np.ndarray, current: int | None, entered: np.ndarray = entered) -> Target | None:
             steady = entered | (held & (np.array(ids) == (-1 if current is None else current)))
             cand = np.flatnonzero(steady & user)
             if cand.size == 0:
@@ -649,7 +693,7 @@ class Ecu:
             return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]),
                           float(along[i] - self.ego_speed_mps), float(lead_accel))
 
-        acc = pick(moved & ~oncoming, self._target_id)
+        acc = pick(moved & ~oncoming, self._target_id, acc_entered)
         fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
         self._fcw_target_id = fcw.track_id if fcw is not None else None

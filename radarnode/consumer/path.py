@@ -78,20 +78,20 @@ class SensorMount:
 
     def to_vehicle(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame positions to the vehicle frame."""
-        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
-        return self.x_m + c * x - s * y, self.y_m + s * x + c * y
+        xr, yr = self.rotate(x, y)
+        return self.x_m + xr, self.y_m + yr
 
     def to_sensor(self, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Vehicle-frame positions to the sensor frame (the inverse of :meth:`to_vehicle`)."""
-        c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
-        dx, dy = x - self.x_m, y - self.y_m
-        return c * dx + s * dy, -s * dx + c * dy
+        return self.rotate(x - self.x_m, y - self.y_m, inverse=True)
 
-    def rotate(self, vx: np.ndarray, vy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def rotate(self, vx: np.ndarray, vy: np.ndarray, inverse: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Sensor-frame vectors to vehicle axes: velocities relative to the sensor, or positions into the sensor's
         vehicle-aligned frame (the origin at the sensor, the vehicle's axes: the vehicle frame less the mount's
-        position)."""
+        position); ``inverse``: vehicle axes to the sensor's."""
         c, s = math.cos(math.radians(self.yaw_deg)), math.sin(math.radians(self.yaw_deg))
+        if inverse:
+            s = -s
         return c * vx - s * vy, s * vx + c * vy
 
 
