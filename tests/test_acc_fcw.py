@@ -427,6 +427,29 @@ def test_a_slow_lead_lost_near_is_remembered_standing_where_it_was_last_seen(lea
     assert max(o.accel_request_mps2 for o in outs[n + 12:]) > 0.5
 
 
+@pytest.mark.parametrize("along, across, found", [
+    (0.0, 0.0, True), (2.9, 0.0, True), (-2.9, 0.0, True), (3.1, 0.0, False), (-3.1, 0.0, False), (6.0, 0.0, False),
+    (0.0, 0.9, True), (0.0, -0.9, True), (0.0, 1.1, False), (0.0, -1.1, False), (0.0, 2.0, False),
+    (2.9, 0.9, True), (3.1, 0.9, False), (2.9, 1.1, False)])
+def test_a_target_near_the_remembered_place_is_the_lead_found_again(along, across, found):
+    """The remembered place of a lost lead (10 m ahead, in the path) is dropped when ACC takes a target within
+    LOST_MATCH_M (3 m) along and LOST_MATCH_LATERAL_M (1 m) across it — the lead found again; a target farther along
+    or across is another object (a track of a parked truck's side 1.2 m ahead at the lane's edge was not the lead lost
+    3 m ahead of it) and the place is kept. Just inside and just outside each limit, twice each, and both at once.
+    (Exactly at a limit the place's round trip through the odometry frame decides, to 1e-15 m: not a test point.)"""
+    from radarnode.consumer.ecu import LOST_MATCH_LATERAL_M, LOST_MATCH_M, Ecu
+    assert (LOST_MATCH_M, LOST_MATCH_LATERAL_M) == (3.0, 1.0)
+    ecu = Ecu(acc=AccSettings(set_speed_mps=12.0))
+    ecu.set_ego(0.0, 2.0, 0.0)
+    lost = Target(9, 9, 10.0, 0.0, -2.0, 0.0)
+    ecu._lost_place = (*ecu._vehicle_to_odometry(10.0 + ecu.mount.x_m, 0.0), lost)
+    other = Target(5, 5, 10.0 + along, across, 0.0, 0.0)
+    kept = ecu._remembered(other, None, False, 2.0)
+    assert (kept is None) == found and (ecu._lost_place is None) == found
+    if not found:                                  # still where the lead was lost: ACC brakes for the nearer of the two
+        assert abs(kept.distance_m - 10.0) < 1e-9 and abs(kept.lateral_m) < 1e-9
+
+
 def _stationary_car_ahead(v: float):
     """An ECU at a constant ``v`` approaching a stopped car (10 dBsm, never seen moving) from 30 m: the decisions."""
     from radarnode.consumer.ecu import Ecu
