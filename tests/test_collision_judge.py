@@ -123,3 +123,58 @@ def test_a_collision_with_any_actor_fails_a_driven_run(tmp_path, closed):
     assert res.passed != closed
     if closed:
         assert any(r.startswith("collision with follower at t = 1.") for r in res.reasons), res.reasons
+
+
+JUDGED = """name: judged
+duration_s: {duration}
+seed: 1
+cycle_period_s: {period}
+ego: {{speed_mps: {speed}, driver: {{reaction_s: 1.2, decel_mps2: 6.0}}}}
+road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0{road}}}
+ecu: {{acc_enabled: false, expect: {{no_fcw: true}}}}
+actors:
+  - {actor}
+"""
+
+
+def _judged(tmp_path, actor: str, speed: float = 20.0, road: str = "", period: float = 0.072,
+            duration: float = 8.0):
+    from radarnode.consumer.evaluate import simulate
+    from radarnode.radar.setup import load_scenario
+    path = tmp_path / "judged.yaml"
+    path.write_text(JUDGED.format(actor=actor, speed=speed, road=road, period=period, duration=duration))
+    return simulate(load_scenario(path), "object")
+
+
+@pytest.mark.parametrize("y, met", [(6.0, False), (1.5, False), (0.5, True)])
+def test_a_guardrail_actor_on_a_bend_is_met_only_where_its_posts_are(tmp_path, y, met):
+    """A 120-m guardrail actor on a 250-m left bend, its posts along the road's curve (as the radar sees them): 6 m
+    left of the ego lane's centre (beyond the far road edge) and 1.5 m (beside the ego's box, 0.95 m either side) it
+    is never met — its straight box from its start cut across the ego lane about 35 m on (an independent tester's false
+    collision); 0.5 m left its posts lie in the ego's box."""
+    res = _judged(tmp_path, f"{{id: rail, class: guardrail, x_m: 20.0, y_m: {y}, length_m: 120.0}}",
+                  road=", curvature_1pm: 0.004")
+    assert ("rail" in res.collisions) == met, res.collisions
+
+
+def test_a_guardrail_across_the_lane_is_met(tmp_path):
+    """A guardrail actor turned across the road (90°) 40 m ahead on a straight road: its posts cross the ego lane and
+    the ego, driven by a driver FCW does not warn (a rail is no vehicle), meets it."""
+    res = _judged(tmp_path, "{id: rail, class: guardrail, x_m: 40.0, y_m: -4.0, heading_deg: 90, length_m: 8.0}")
+    assert "rail" in res.collisions and any(r.startswith("collision with rail") for r in res.reasons), res.reasons
+
+
+@pytest.mark.parametrize("speed, period", [(75.0, 0.072), (40.0, 0.2)])
+def test_a_contact_between_two_cycles_is_found(tmp_path, speed, period):
+    """The boxes are tested every CONTACT_STEP_S between cycles: a 0.3-m point actor run through at 75 m/s is inside
+    the ego's 4.7-m box for 66 ms, between two 72-ms cycles, and a pedestrian at 40 m/s with 0.2-s cycles for 130 ms
+    (both passed when only the cycles were tested — an independent tester)."""
+    cls = "point" if speed == 75.0 else "pedestrian"
+    res = _judged(tmp_path, f"{{id: thing, class: {cls}, x_m: 63.3, y_m: 0.0, speed_mps: 0.0}}", speed=speed,
+                  period=period, duration=2.0)
+    # its near face at 63.3 − half its length from the rear axle, the ego's front 3.7 m ahead of it
+    from radarnode.radar.setup import load_scenario
+    from radarnode.scene.world import Scene
+    assert "thing" in res.collisions and not res.passed, res.reasons
+    half = Scene(load_scenario(tmp_path / "judged.yaml")).length_m[0] / 2.0
+    assert abs(res.collisions["thing"] - (63.3 - half - 3.7) / speed) <= 0.006

@@ -258,21 +258,30 @@ class Scene:
         heading = np.where(np.hypot(avx, avy) > 0.1, np.arctan2(avy, avx), psi + self.heading_rel)
         return ax_, ay_, heading, avx, avy
 
+    def _rail_posts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """World positions of guardrail actor ``i``'s posts: from its start over its length, along the road's curve
+        (its heading relative to the road), every ``road.guardrails.post_spacing_m``."""
+        a = self.actors[i]
+        n_posts = max(int(a.length / self.scenario.road.guardrails.post_spacing_m) + 1, 2)
+        u = np.linspace(0.0, a.length, n_posts)
+        h = self.heading_rel[i]
+        wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), self.scenario.actor_y_m(a) + u * math.sin(h))
+        return wx, wy
+
     def ego_contacts(self, times_s: np.ndarray) -> np.ndarray:
         """Which actors' boxes intersect the ego's at the times ``times_s`` (T,): bool (T, n_actors).
 
         The ego's box is ``ego.length_m`` × ``ego.width_m`` with the rear axle ``EGO_REAR_OVERHANG_M`` ahead of its
-        rear end, turned by the ego's heading; an actor's is its length × width turned by its heading (a guardrail's
-        runs from its start over its length). Boxes that meet by less than ``OVERLAP_TOLERANCE_M`` along some axis
-        only touch; an actor whose bottom is ``EGO_HEIGHT_M`` or more above the road passes over the ego. A
-        separating-axis test, every actor and time at once."""
+        rear end, turned by the ego's heading; an actor's is its length × width turned by its heading. Boxes that meet
+        by less than ``OVERLAP_TOLERANCE_M`` along some axis only touch; an actor whose bottom is ``EGO_HEIGHT_M`` or
+        more above the road passes over the ego. A separating-axis test, every actor and time at once. A guardrail
+        actor is its posts, along the road's curve as the radar sees them (its straight box cut across the lane on a
+        bend: an independent tester's false collision): met when a post lies inside the ego's box by more than the
+        tolerance."""
         t = np.asarray(times_s, dtype=np.float64)
         ex, ey, epsi = (a[:, :1] for a in self._ego_pose(self._ego.state(t))[:3])           # (T, 1)
         ax_, ay_, heading, _, _ = self._actor_pose(self._movers.state(t))                    # (T, n)
         hl, hw = self.length_m / 2.0, self.width_m / 2.0
-        rail = self.is_guardrail
-        ax_ = ax_ + np.where(rail, hl * np.cos(heading), 0.0)
-        ay_ = ay_ + np.where(rail, hl * np.sin(heading), 0.0)
         ego = self.scenario.ego
         el, ew = ego.length_m / 2.0, ego.width_m / 2.0
         dx, dy = _rot(-epsi, ax_ - ex, ay_ - ey)               # the actor's centre in the ego's axes (rear axle 0)
@@ -282,9 +291,15 @@ class Scene:
         tol = OVERLAP_TOLERANCE_M
         along_u = np.abs(dx * np.cos(rel) + dy * np.sin(rel))  # the centres' distance along the actor's axes
         along_v = np.abs(-dx * np.sin(rel) + dy * np.cos(rel))
-        return ((np.abs(dx) < el + hl * c + hw * s - tol) & (np.abs(dy) < ew + hl * s + hw * c - tol)
-                & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
-                & (self.z_m < EGO_HEIGHT_M))
+        met = ((np.abs(dx) < el + hl * c + hw * s - tol) & (np.abs(dy) < ew + hl * s + hw * c - tol)
+               & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
+               & (self.z_m < EGO_HEIGHT_M))
+        for i in np.flatnonzero(self.is_guardrail):
+            wx, wy = self._rail_posts(int(i))
+            px, py = _rot(-epsi, wx - ex, wy - ey)                     # (T, posts) in the ego's axes
+            inside = (np.abs(px - (el - EGO_REAR_OVERHANG_M)) < el - tol) & (np.abs(py) < ew - tol)
+            met[:, i] = inside.any(axis=1) & (self.z_m[i] < EGO_HEIGHT_M)
+        return met
 
     def ego_state(self, t_s: float) -> EgoState:
         """The ego at ``t_s``. On the cycle grid of a scripted ego (``t_s`` = k × period) it comes from a block of
@@ -482,13 +497,8 @@ class Scene:
             xs.append(wx)
             ys.append(wy)
         for i in np.flatnonzero(self.is_guardrail):
-            a = self.actors[i]
-            n_posts = max(int(a.length / g.post_spacing_m) + 1, 2)
-            u = np.linspace(0.0, a.length, n_posts)
-            y0 = sc.actor_y_m(a)
-            h = self.heading_rel[i]
-            wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), y0 + u * math.sin(h))
-            rows.append(np.repeat(np.arange(t.size), n_posts))
+            wx, wy = self._rail_posts(int(i))
+            rows.append(np.repeat(np.arange(t.size), wx.size))
             xs.append(np.tile(wx, t.size))
             ys.append(np.tile(wy, t.size))
         if not xs:
