@@ -87,9 +87,9 @@ STRAY_STEP_PERIODS = 3.0
 #: the least σ taken for a cluster's radial speed (its σ fields come quantised; a Doppler bin is 0.1–0.3 m/s)
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
-TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_acc_in", "_out_path", "_target_id", "_fcw_target_id",
-                  "_rcs_power", "_lost_until", "_last_acc", "_last_acc_place", "_lost_place", "_path_inputs", "_braking_for",
-                  "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
+TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_acc_in", "_out_path", "_acc_out", "_target_id",
+                  "_fcw_target_id", "_rcs_power", "_lost_until", "_last_acc", "_last_acc_place", "_lost_place",
+                  "_path_inputs", "_braking_for", "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
                   "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
 #: a target ACC followed that vanished from the object list within this distance (m) …
 LOST_NEAR_M = 20.0
@@ -128,10 +128,19 @@ CUT_IN_MIN_MPS = 0.4
 #: … and twice its own uncertainty across (a young track's velocity is its filter's guess: a truck's track 38 m ahead
 #: on a 250-m bend started at 3.4 m/s across) …
 CUT_IN_SIGMAS = 2.0
-#: … ahead of the sensor by at least this much (m): beside the ego a car coming across is a side collision ACC's
-#: braking cannot prevent, and the nearest point of a truck being passed on a bend slides across its side as the ego
-#: passes (0.4 m/s seen on a 250-m bend, 0.3–2.3 m ahead, where ACC took the truck)
-CUT_IN_MIN_AHEAD_M = 3.0
+#: … and only up to this ego speed (m/s, 36 km/h: stop-and-go, where gaps are a few metres and the tester's car was run
+#: into), never while the boundaries show the ego itself crossing the road. A second tester found the prediction
+#: braking at motorway speed (25–33 m/s) for cars that never came in: at up to −2.9 m/s² for a car two lanes over
+#: while the ego changed lanes (every car ahead then moves across the ego's axes), −1.3 to −2.7 m/s² for a car changing
+#: into the next lane (the straight-line prediction does not know it stops there), −1.4 to −1.7 m/s² for a neighbour
+#: weaving ±0.5 m in its lane, for a truck passed on a 250-m bend, whose nearest point slid across its side at
+#: 0.4 m/s as the ego passed. There the gap is long enough for the in-path test
+CUT_IN_MAX_EGO_MPS = 10.0
+#: … and only a car the ego would reach within this time (s) of its entering the path, at the speeds of now: one that
+#: comes in farther ahead leaves ACC the time to brake once it is in (at 6–10 m/s the prediction braked at −1 to
+#: −2.3 m/s² for a car two lanes over 15 m ahead while the ego changed lanes, for a car changing into the next lane,
+#: for a neighbour weaving in its lane — none closing fast; the tester's car came in 2.5 m ahead closing at 1.9 m/s)
+CUT_IN_TTC_S = 2.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -211,6 +220,7 @@ class Ecu:
         self.boundaries: dict | None = None
         self._in_path: dict[int, int] = {}      # consecutive cycles each track has been in the predicted path
         self._acc_in: dict[int, int] = {}       # … in it or cutting in (ACC's candidates)
+        self._acc_out: dict[int, int] = {}      # cycles since each track was last in it or cutting in
         self._out_path: dict[int, int] = {}
         self._target_id: int | None = None
         self._fcw_target_id: int | None = None
@@ -310,7 +320,8 @@ class Ecu:
     def _restart_tracking(self) -> None:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
-        self._in_path, self._acc_in, self._out_path, self._target_id, self._fcw_target_id = {}, {}, {}, None, None
+        self._in_path, self._acc_in, self._out_path, self._acc_out = {}, {}, {}, {}
+        self._target_id, self._fcw_target_id = None, None
         self._last_acc, self._lost_until, self._braking_for = None, -math.inf, None
         self._last_acc_place, self._lost_place, self._path_inputs = None, None, (None, None, None)
         self._rcs_power, self._obstacles, self._placed, self._born = {}, set(), set(), {}
@@ -649,16 +660,24 @@ class Ecu:
         # a vehicle cutting in (ACC's only): in the path half the horizon or the whole of it ahead, moved by its
         # motion across the path where it is (not along: whether the ego reaches it first is ACC's gap control once it
         # is the target — a car merging in 4 m ahead that the ego was catching up on was predicted beside the ego and
-        # no candidate); faster across than CUT_IN_MIN_MPS and CUT_IN_SIGMAS of its σ, faster along than across, and
-        # CUT_IN_MIN_AHEAD_M ahead
+        # no candidate); faster across than CUT_IN_MIN_MPS and CUT_IN_SIGMAS of its σ, faster along than across; up to
+        # CUT_IN_MAX_EGO_MPS, the ego not crossing the road; and closing so fast that the ego would reach it within
+        # CUT_IN_TTC_S of its entering (its entry: the first quarter of the horizon that has it in the path)
         speed_across = np.abs(across)
         cut = (~ok & moved & ~oncoming & (speed_across >= np.maximum(CUT_IN_MIN_MPS, CUT_IN_SIGMAS * across_sigma))
-               & (speed_across < along) & (xv - self.mount.x_m >= CUT_IN_MIN_AHEAD_M))
+               & (speed_across < along))
+        if self.ego_speed_mps > CUT_IN_MAX_EGO_MPS or crossing:
+            cut[:] = False
         if cut.any():
-            h = np.array([0.5 * CUT_IN_HORIZON_S, CUT_IN_HORIZON_S])[:, None] * across[cut]
+            steps = CUT_IN_HORIZON_S * np.arange(1, 5)[:, None] / 4.0
+            h = steps * across[cut]
             px, py = (x[cut] + h * normal[cut, 0]).ravel(), (y[cut] + h * normal[cut, 1]).ravel()
-            cut[cut] = in_path(px, py, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                               bounds, self.mount, self.trail_fits, crossing).reshape(2, -1).any(axis=0)
+            inside = in_path(px, py, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
+                             bounds, self.mount, self.trail_fits, crossing).reshape(4, -1)
+            enters = np.where(inside.any(axis=0), steps[np.argmax(inside, axis=0), 0], np.inf)
+            closing = self.ego_speed_mps - along[cut]
+            gap_then = xv[cut] - self.mount.x_m - closing * np.minimum(enters, CUT_IN_HORIZON_S)
+            cut[cut] = np.isfinite(enters) & (closing > 0.0) & (gap_then <= CUT_IN_TTC_S * closing)
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
         # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
@@ -671,11 +690,14 @@ class Ecu:
                 lm.in_path = lm.in_path + 1 if o else 0
                 lm.crossed_path |= bool(o)
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
+        self._acc_out = {tid: (0 if o else self._acc_out.get(tid, 0) + 1) for tid, o in zip(ids, ok | cut)}
         entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
         acc_entered = np.array([self._acc_in[tid] >= ENTER_CYCLES for tid in ids])
         held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])
+        acc_held = np.array([self._acc_out[tid] < EXIT_CYCLES for tid in ids])
 
-        def pick(user: np.ndarray, current: int | None, entered: np.ndarray = entered) -> Target | None:
+        def pick(user: np.ndarray, current: int | None, entered: np.ndarray = entered,
+                 held: np.ndarray = held) -> Target | None:
             steady = entered | (held & (np.array(ids) == (-1 if current is None else current)))
             cand = np.flatnonzero(steady & user)
             if cand.size == 0:
@@ -693,7 +715,7 @@ class Ecu:
             return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]),
                           float(along[i] - self.ego_speed_mps), float(lead_accel))
 
-        acc = pick(moved & ~oncoming, self._target_id, acc_entered)
+        acc = pick(moved & ~oncoming, self._target_id, acc_entered, acc_held)
         fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
         self._fcw_target_id = fcw.track_id if fcw is not None else None
