@@ -450,6 +450,23 @@ def test_a_target_near_the_remembered_place_is_the_lead_found_again(along, acros
         assert abs(kept.distance_m - 10.0) < 1e-9 and abs(kept.lateral_m) < 1e-9
 
 
+@pytest.mark.parametrize("second_at, kept_at", [(15.0, 10.0), (10.5, 10.0), (9.5, 9.5), (6.0, 6.0)])
+def test_a_second_lost_target_never_replaces_a_nearer_remembered_one(second_at, kept_at):
+    """A lead lost and remembered standing 10 m ahead; then another slow target ACC had taken vanishes ``second_at``
+    ahead: the nearer of the two places is remembered. (A truck side's track taken as a cut-in and lost replaced the
+    remembered lead, its place lay out of the path and was dropped, and ACC drove off into the lead — a tester's jam.)
+    Farther, just farther, just nearer, much nearer."""
+    from radarnode.consumer.ecu import Ecu
+    ecu = Ecu(acc=AccSettings(set_speed_mps=12.0))
+    ecu.set_ego(0.0, 1.0, 0.0)
+    mx = ecu.mount.x_m
+    ecu._lost_place = (*ecu._vehicle_to_odometry(10.0 + mx, 0.0), Target(9, 9, 10.0, 0.0, -1.0, 0.0))
+    second = Target(4, 4, second_at, 0.0, -1.0, 0.0)
+    ecu._last_acc_place = (*ecu._vehicle_to_odometry(second_at + mx, 0.0), 0.0, 4)
+    kept = ecu._remembered(None, second, True, 1.0)
+    assert kept is not None and abs(kept.distance_m - kept_at) < 1e-9, kept
+
+
 def _stationary_car_ahead(v: float):
     """An ECU at a constant ``v`` approaching a stopped car (10 dBsm, never seen moving) from 30 m: the decisions."""
     from radarnode.consumer.ecu import Ecu

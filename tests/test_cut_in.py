@@ -100,6 +100,17 @@ def test_only_a_car_the_ego_would_reach_soon_after_it_enters_is_predicted(ttc, e
     assert (_taken(0.8, gap_at_entry_m=2.0 * ttc) > 0.5) == early
 
 
+@pytest.mark.parametrize("along, early", [(1.0, False), (1.8, False), (2.2, True), (4.0, True)])
+def test_only_a_vehicle_driving_along_is_predicted(along, early):
+    """A car going along the road at least CUT_IN_MIN_ALONG_MPS (2 m/s; 1.8 and 2.2 lie clear of the ECU's filtered
+    speed, the limit itself is not a test point), 0.8 m/s across, the ego at 6 m/s: at the detection level the track
+    of a truck's side beside the ego in a jam slid across at 0.5 m/s going 0.8 m/s along, was taken as a cut-in 1 m
+    ahead, and made ACC forget the lead it had lost and drive into it (a tester's jam, seed 2)."""
+    from radarnode.consumer.ecu import CUT_IN_MIN_ALONG_MPS
+    assert CUT_IN_MIN_ALONG_MPS == 2.0
+    assert (_taken(0.8, along_mps=along) > 0.5) == early
+
+
 def _bend_neighbour(car_mps: float, ego_mps: float, radius_m: float, lane_offset_m: float, cycles: int = 90):
     """An ECU driving a left bend of ``radius_m`` at ``ego_mps`` and a car keeping the lane ``lane_offset_m`` to the
     left (inside; negative: right, outside) at ``car_mps``, starting 25 m ahead along the arc, measured at the exact

@@ -141,6 +141,10 @@ CUT_IN_MAX_EGO_MPS = 10.0
 #: −2.3 m/s² for a car two lanes over 15 m ahead while the ego changed lanes, for a car changing into the next lane,
 #: for a neighbour weaving in its lane — none closing fast; the tester's car came in 2.5 m ahead closing at 1.9 m/s)
 CUT_IN_TTC_S = 2.0
+#: … and only a vehicle driving along the road at least this fast (m/s): at the detection level the track of a truck's
+#: side, standing beside the ego in a jam, slid across at 0.5 m/s going 0.8 m/s along; taken as a cut-in 1 m ahead, it
+#: replaced the lead ACC had lost and remembered standing, and ACC drove off into that lead (a tester's jam, seed 2)
+CUT_IN_MIN_ALONG_MPS = 2.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -657,15 +661,16 @@ class Ecu:
         self._born = {k: v for k, v in self._born.items() if k in alive}
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
-        # a vehicle cutting in (ACC's only): in the path half the horizon or the whole of it ahead, moved by its
-        # motion across the path where it is (not along: whether the ego reaches it first is ACC's gap control once it
-        # is the target — a car merging in 4 m ahead that the ego was catching up on was predicted beside the ego and
-        # no candidate); faster across than CUT_IN_MIN_MPS and CUT_IN_SIGMAS of its σ, faster along than across; up to
-        # CUT_IN_MAX_EGO_MPS, the ego not crossing the road; and closing so fast that the ego would reach it within
-        # CUT_IN_TTC_S of its entering (its entry: the first quarter of the horizon that has it in the path)
+        # a vehicle cutting in (ACC's only): in the path within the horizon (a quarter of it, half, three quarters or
+        # the whole ahead), moved by its motion across the path where it is (not along: whether the ego reaches it
+        # first is ACC's gap control once it is the target — a car merging in 4 m ahead that the ego was catching up on
+        # was predicted beside the ego and no candidate); faster across than CUT_IN_MIN_MPS and CUT_IN_SIGMAS of its σ,
+        # faster along than across and than CUT_IN_MIN_ALONG_MPS; up to CUT_IN_MAX_EGO_MPS, the ego not crossing the
+        # road; and closing so fast that the ego would reach it within CUT_IN_TTC_S of its entering (its entry: the
+        # first of those steps that has it in the path)
         speed_across = np.abs(across)
         cut = (~ok & moved & ~oncoming & (speed_across >= np.maximum(CUT_IN_MIN_MPS, CUT_IN_SIGMAS * across_sigma))
-               & (speed_across < along))
+               & (speed_across < along) & (along >= CUT_IN_MIN_ALONG_MPS))
         if self.ego_speed_mps > CUT_IN_MAX_EGO_MPS or crossing:
             cut[:] = False
         if cut.any():
@@ -802,7 +807,12 @@ class Ecu:
                 and (target is None or target.track_id != last.track_id) and (
                     (vanished and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS)
                     or self._last_acc_place[2] <= LEAD_STOPPED_MPS):
-            self._lost_place = (*self._last_acc_place[:2], last)
+            # a second target lost while one is remembered: the nearer place is kept (a track taken and lost meanwhile
+            # replaced the lead lost and remembered standing ahead of it, and ACC, its new place out of the path,
+            # drove off into that lead)
+            if self._lost_place is None or (self._odometry_to_vehicle(*self._last_acc_place[:2])[0]
+                                            < self._odometry_to_vehicle(*self._lost_place[:2])[0]):
+                self._lost_place = (*self._last_acc_place[:2], last)
         before, self._last_acc_place = self._last_acc_place, None
         if target is not None:
             lead_v = max(self.ego_speed_mps + target.rel_speed_mps, 0.0)
