@@ -87,9 +87,9 @@ STRAY_STEP_PERIODS = 3.0
 #: the least σ taken for a cluster's radial speed (its σ fields come quantised; a Doppler bin is 0.1–0.3 m/s)
 RADIAL_SIGMA_FLOOR_MPS = 0.5
 #: what tracking is: restored when the cycle after a jump ahead continues from before it (the jump was a stray)
-TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_acc_in", "_out_path", "_acc_out", "_target_id",
-                  "_fcw_target_id", "_rcs_power", "_lost_until", "_last_acc", "_last_acc_place", "_lost_place",
-                  "_path_inputs", "_braking_for", "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
+TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
+                  "_lost_until", "_last_acc", "_last_acc_place", "_lost_place", "_path_inputs", "_braking_for",
+                  "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
                   "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
 #: a target ACC followed that vanished from the object list within this distance (m) …
 LOST_NEAR_M = 20.0
@@ -116,35 +116,6 @@ LOST_LEAD_DECEL_MPS2 = 8.0
 #: lane's edge was not the lead lost 3 m ahead of it)
 LOST_MATCH_M = 3.0
 LOST_MATCH_LATERAL_M = 1.0
-#: a vehicle cutting in is ACC's candidate before it is in the path: one whose place, moved by its motion across the
-#: path as the ego sees it (in the ego's turning frame), lies in the path within this time (s) … (ACC took a car drifting in from
-#: 12 m ahead at 0.6 m/s across only once its nearest point was inside, 0.7 m ahead, and ran into it at 6.6 m/s —
-#: an independent tester's scene; production ACC predicts cut-ins the same way)
-CUT_IN_HORIZON_S = 1.5
-#: … moving across the path at least this fast (m/s; a neighbour's weaving within its lane is slower, and the radar's
-#: lateral speed of a car is within about 0.3 m/s) and along it faster than across (crossing traffic is FCW's). FCW
-#: keeps to what is in the path: a prediction would warn for neighbours that never come in
-CUT_IN_MIN_MPS = 0.4
-#: … and twice its own uncertainty across (a young track's velocity is its filter's guess: a truck's track 38 m ahead
-#: on a 250-m bend started at 3.4 m/s across) …
-CUT_IN_SIGMAS = 2.0
-#: … and only up to this ego speed (m/s, 36 km/h: stop-and-go, where gaps are a few metres and the tester's car was run
-#: into), never while the boundaries show the ego itself crossing the road. A second tester found the prediction
-#: braking at motorway speed (25–33 m/s) for cars that never came in: at up to −2.9 m/s² for a car two lanes over
-#: while the ego changed lanes (every car ahead then moves across the ego's axes), −1.3 to −2.7 m/s² for a car changing
-#: into the next lane (the straight-line prediction does not know it stops there), −1.4 to −1.7 m/s² for a neighbour
-#: weaving ±0.5 m in its lane, for a truck passed on a 250-m bend, whose nearest point slid across its side at
-#: 0.4 m/s as the ego passed. There the gap is long enough for the in-path test
-CUT_IN_MAX_EGO_MPS = 10.0
-#: … and only a car the ego would reach within this time (s) of its entering the path, at the speeds of now: one that
-#: comes in farther ahead leaves ACC the time to brake once it is in (at 6–10 m/s the prediction braked at −1 to
-#: −2.3 m/s² for a car two lanes over 15 m ahead while the ego changed lanes, for a car changing into the next lane,
-#: for a neighbour weaving in its lane — none closing fast; the tester's car came in 2.5 m ahead closing at 1.9 m/s)
-CUT_IN_TTC_S = 2.0
-#: … and only a vehicle driving along the road at least this fast (m/s): at the detection level the track of a truck's
-#: side, standing beside the ego in a jam, slid across at 0.5 m/s going 0.8 m/s along; taken as a cut-in 1 m ahead, it
-#: replaced the lead ACC had lost and remembered standing, and ACC drove off into that lead (a tester's jam, seed 2)
-CUT_IN_MIN_ALONG_MPS = 2.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
 
@@ -223,8 +194,6 @@ class Ecu:
         self._e2e = E2EProtector()
         self.boundaries: dict | None = None
         self._in_path: dict[int, int] = {}      # consecutive cycles each track has been in the predicted path
-        self._acc_in: dict[int, int] = {}       # … in it or cutting in (ACC's candidates)
-        self._acc_out: dict[int, int] = {}      # cycles since each track was last in it or cutting in
         self._out_path: dict[int, int] = {}
         self._target_id: int | None = None
         self._fcw_target_id: int | None = None
@@ -324,8 +293,7 @@ class Ecu:
     def _restart_tracking(self) -> None:
         self.tracker = Tracker("objects", "imm")
         self.cluster_tracker = Tracker("clusters", "ca")
-        self._in_path, self._acc_in, self._out_path, self._acc_out = {}, {}, {}, {}
-        self._target_id, self._fcw_target_id = None, None
+        self._in_path, self._out_path, self._target_id, self._fcw_target_id = {}, {}, None, None
         self._last_acc, self._lost_until, self._braking_for = None, -math.inf, None
         self._last_acc_place, self._lost_place, self._path_inputs = None, None, (None, None, None)
         self._rcs_power, self._obstacles, self._placed, self._born = {}, set(), set(), {}
@@ -509,10 +477,6 @@ class Ecu:
         su, sv = self._sensor_velocity()
         ssv = self._sensor_motion()[0]                # the same, in the sensor's axes (the trackers' states)
         along = np.zeros(len(tracks))                 # each track's speed over ground along the path where it is
-        drift = np.zeros((len(tracks), 2))            # its motion in the sensor's turning frame (sensor axes)
-        across = np.zeros(len(tracks))                # … across the path where it is, and its σ
-        across_sigma = np.zeros(len(tracks))
-        normal = np.zeros((len(tracks), 2))           # the path's normal there (left), in the sensor's axes
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
@@ -526,13 +490,6 @@ class Ecu:
             there = road_share(self.ego_speed_mps, kappa) * path_heading(kappa, max(xv[i], 0.0))
             tangent[i] = math.cos(there), math.sin(there)
             along[i] = gx * tangent[i, 0] + gy * tangent[i, 1]
-            # its place's rate of change as the ego sees it: relative velocity less the frame's turning (a car keeping
-            # its lane on the ego's bend stays put); across the path there, for the cut-in prediction
-            w = self.ego_yaw_rate_rps
-            drift[i] = t.x[2] + w * t.x[1], t.x[3] - w * t.x[0]
-            normal[i] = self.mount.rotate(-tangent[i, 1], tangent[i, 0], inverse=True)    # sensor axes
-            across[i] = float(drift[i] @ normal[i])
-            across_sigma[i] = math.sqrt(max(float(normal[i] @ t.p[2:4, 2:4] @ normal[i]), 0.0))
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
             ahead = kappa * max(xv[i], 0.0)
@@ -628,7 +585,6 @@ class Ecu:
                     if self._rcs_power.get(t.id, 0.0) >= OBSTACLE_RCS_POWER:
                         self._obstacles.add(t.id)
                     self._in_path[t.id] = max(self._in_path.get(t.id, 0), ENTER_CYCLES - 1)
-                    self._acc_in[t.id] = max(self._acc_in.get(t.id, 0), ENTER_CYCLES - 1)
             # a bridge or a gantry is no road user, whatever its Doppler makes of it at short range
             moved[i] = t.id in self._moved and not overhead
             obstacle[i] = t.id in self._obstacles and not overhead
@@ -661,48 +617,21 @@ class Ecu:
         self._born = {k: v for k, v in self._born.items() if k in alive}
         self._moved &= alive
         self._moving_for = {k: v for k, v in self._moving_for.items() if k in alive}
-        # a vehicle cutting in (ACC's only): in the path within the horizon (a quarter of it, half, three quarters or
-        # the whole ahead), moved by its motion across the path where it is (not along: whether the ego reaches it
-        # first is ACC's gap control once it is the target — a car merging in 4 m ahead that the ego was catching up on
-        # was predicted beside the ego and no candidate); faster across than CUT_IN_MIN_MPS and CUT_IN_SIGMAS of its σ,
-        # faster along than across and than CUT_IN_MIN_ALONG_MPS; up to CUT_IN_MAX_EGO_MPS, the ego not crossing the
-        # road; and closing so fast that the ego would reach it within CUT_IN_TTC_S of its entering (its entry: the
-        # first of those steps that has it in the path)
-        speed_across = np.abs(across)
-        cut = (~ok & moved & ~oncoming & (speed_across >= np.maximum(CUT_IN_MIN_MPS, CUT_IN_SIGMAS * across_sigma))
-               & (speed_across < along) & (along >= CUT_IN_MIN_ALONG_MPS))
-        if self.ego_speed_mps > CUT_IN_MAX_EGO_MPS or crossing:
-            cut[:] = False
-        if cut.any():
-            steps = CUT_IN_HORIZON_S * np.arange(1, 5)[:, None] / 4.0
-            h = steps * across[cut]
-            px, py = (x[cut] + h * normal[cut, 0]).ravel(), (y[cut] + h * normal[cut, 1]).ravel()
-            inside = in_path(px, py, self.ego_speed_mps, self.ego_yaw_rate_rps, self.acc.settings.path_half_width_m,
-                             bounds, self.mount, self.trail_fits, crossing).reshape(4, -1)
-            enters = np.where(inside.any(axis=0), steps[np.argmax(inside, axis=0), 0], np.inf)
-            closing = self.ego_speed_mps - along[cut]
-            gap_then = xv[cut] - self.mount.x_m - closing * np.minimum(enters, CUT_IN_HORIZON_S)
-            cut[cut] = np.isfinite(enters) & (closing > 0.0) & (gap_then <= CUT_IN_TTC_S * closing)
         # lane association with hysteresis, as production ACC does it: a track becomes a candidate after
         # ENTER_CYCLES cycles in the path in a row; the current target stays one until it has been out of the
         # path EXIT_CYCLES cycles in a row (one cycle of a neighbour drifting into the path's edge, or of
         # the target at its edge, does not switch)
         self._in_path = {tid: (self._in_path.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok)}
-        self._acc_in = {tid: (self._acc_in.get(tid, 0) + 1 if o else 0) for tid, o in zip(ids, ok | cut)}
         for tid, o in zip(ids, ok):        # a place counts the cycles its object was measured standing in the path
             lm = self.landmarks.by_track.get(tid)
             if lm is not None and tid in filed:
                 lm.in_path = lm.in_path + 1 if o else 0
                 lm.crossed_path |= bool(o)
         self._out_path = {tid: (0 if o else self._out_path.get(tid, 0) + 1) for tid, o in zip(ids, ok)}
-        self._acc_out = {tid: (0 if o else self._acc_out.get(tid, 0) + 1) for tid, o in zip(ids, ok | cut)}
         entered = np.array([self._in_path[tid] >= ENTER_CYCLES for tid in ids])
-        acc_entered = np.array([self._acc_in[tid] >= ENTER_CYCLES for tid in ids])
         held = np.array([self._out_path[tid] < EXIT_CYCLES for tid in ids])
-        acc_held = np.array([self._acc_out[tid] < EXIT_CYCLES for tid in ids])
 
-        def pick(user: np.ndarray, current: int | None, entered: np.ndarray = entered,
-                 held: np.ndarray = held) -> Target | None:
+        def pick(user: np.ndarray, current: int | None) -> Target | None:
             steady = entered | (held & (np.array(ids) == (-1 if current is None else current)))
             cand = np.flatnonzero(steady & user)
             if cand.size == 0:
@@ -720,7 +649,7 @@ class Ecu:
             return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]),
                           float(along[i] - self.ego_speed_mps), float(lead_accel))
 
-        acc = pick(moved & ~oncoming, self._target_id, acc_entered, acc_held)
+        acc = pick(moved & ~oncoming, self._target_id)
         fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
         self._fcw_target_id = fcw.track_id if fcw is not None else None
@@ -807,9 +736,9 @@ class Ecu:
                 and (target is None or target.track_id != last.track_id) and (
                     (vanished and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS)
                     or self._last_acc_place[2] <= LEAD_STOPPED_MPS):
-            # a second target lost while one is remembered: the nearer place is kept (a track taken and lost meanwhile
-            # replaced the lead lost and remembered standing ahead of it, and ACC, its new place out of the path,
-            # drove off into that lead)
+            # a second target lost while one is remembered: the nearer place is kept (a track ACC took and lost
+            # meanwhile — the track of a truck's side beside the ego in a jam — replaced the lead lost and remembered
+            # standing ahead of it; its place lay out of the path and was dropped, and ACC drove off into that lead)
             if self._lost_place is None or (self._odometry_to_vehicle(*self._last_acc_place[:2])[0]
                                             < self._odometry_to_vehicle(*self._lost_place[:2])[0]):
                 self._lost_place = (*self._last_acc_place[:2], last)
