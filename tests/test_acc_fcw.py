@@ -453,8 +453,9 @@ def test_a_target_near_the_remembered_place_is_the_lead_found_again(along, acros
 @pytest.mark.parametrize("second_at, kept_at", [(15.0, 10.0), (10.5, 10.0), (9.5, 9.5), (6.0, 6.0)])
 def test_a_second_lost_target_never_replaces_a_nearer_remembered_one(second_at, kept_at):
     """A lead lost and remembered standing 10 m ahead; then another slow target ACC had taken vanishes ``second_at``
-    ahead: the nearer of the two places is remembered. (A truck side's track taken as a cut-in and lost replaced the
-    remembered lead, its place lay out of the path and was dropped, and ACC drove off into the lead — a tester's jam.)
+    ahead: the nearer of the two places is remembered. (With a cut-in prediction tried in session 34, a truck side's
+    track taken 1 m ahead and lost replaced the remembered lead, its place lay out of the path and was dropped, and
+    ACC drove off into the lead — a tester's jam.)
     Farther, just farther, just nearer, much nearer."""
     from radarnode.consumer.ecu import Ecu
     ecu = Ecu(acc=AccSettings(set_speed_mps=12.0))

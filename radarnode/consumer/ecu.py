@@ -736,9 +736,10 @@ class Ecu:
                 and (target is None or target.track_id != last.track_id) and (
                     (vanished and self._last_acc_place[2] <= FCW_BRAKE_MAX_MPS)
                     or self._last_acc_place[2] <= LEAD_STOPPED_MPS):
-            # a second target lost while one is remembered: the nearer place is kept (a track ACC took and lost
-            # meanwhile — the track of a truck's side beside the ego in a jam — replaced the lead lost and remembered
-            # standing ahead of it; its place lay out of the path and was dropped, and ACC drove off into that lead)
+            # a second target lost while one is remembered: the nearer place is kept (with a cut-in prediction tried
+            # in session 34, the track of a truck's side beside the ego in a jam, taken 1 m ahead and lost, replaced
+            # the lead lost and remembered standing ahead of it; its place lay out of the path and was dropped, and
+            # ACC drove off into that lead — any target taken and lost meanwhile could do the same)
             if self._lost_place is None or (self._odometry_to_vehicle(*self._last_acc_place[:2])[0]
                                             < self._odometry_to_vehicle(*self._lost_place[:2])[0]):
                 self._lost_place = (*self._last_acc_place[:2], last)
