@@ -120,7 +120,6 @@ def drive(actuator: EgoActuator, t_s: float, period_s: float, latency_s: float, 
         actuator.apply(0.0 if scripted and a < brake else request, b - a)
 
 
-
 @dataclass
 class ScenarioResult:
     """Figures of one run; ``passed`` against the scenario's ``ecu.expect``."""
@@ -232,7 +231,7 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
         # any actor's box meeting the ego's since the last cycle, every CONTACT_STEP_S (a point actor crossed at
         # 75 m/s meets the ego for 66 ms, between two 72-ms cycles)
         steps = max(int(math.ceil(period / CONTACT_STEP_S - 1e-9)), 1) if k else 1
-        times = t - period + period * np.arange(1, steps + 1) / steps if k else np.array([t])
+        times = t - period * np.arange(steps - 1, -1, -1) / steps
         met = scene.ego_contacts(times)
         for i in np.flatnonzero(met.any(axis=0)):
             res.collisions.setdefault(scenario.actors[i].id, float(times[np.argmax(met[:, i])]))

@@ -197,6 +197,7 @@ class Scene:
                                [scenario.ego_lateral()])
         self.dynamic_ego: DynamicEgo | None = None
         self._ego_block: tuple | None = None          # (ego, block, states) of :meth:`ego_state` on the cycle grid
+        self._rails: dict[int, tuple[np.ndarray, np.ndarray]] = {}     # :meth:`_rail_posts`, by actor
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
@@ -260,13 +261,17 @@ class Scene:
 
     def _rail_posts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """World positions of guardrail actor ``i``'s posts: from its start over its length, along the road's curve
-        (its heading relative to the road), every ``road.guardrails.post_spacing_m``."""
-        a = self.actors[i]
-        n_posts = max(int(a.length / self.scenario.road.guardrails.post_spacing_m) + 1, 2)
-        u = np.linspace(0.0, a.length, n_posts)
-        h = self.heading_rel[i]
-        wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), self.scenario.actor_y_m(a) + u * math.sin(h))
-        return wx, wy
+        (its heading relative to the road), every ``road.guardrails.post_spacing_m``. They stand still: computed once
+        (the radar's view and the collision judge ask every cycle)."""
+        posts = self._rails.get(i)
+        if posts is None:
+            a = self.actors[i]
+            n_posts = max(int(a.length / self.scenario.road.guardrails.post_spacing_m) + 1, 2)
+            u = np.linspace(0.0, a.length, n_posts)
+            h = self.heading_rel[i]
+            wx, wy, _ = self.road_to_world(a.x_m + u * math.cos(h), self.scenario.actor_y_m(a) + u * math.sin(h))
+            posts = self._rails[i] = (wx, wy)
+        return posts
 
     def ego_contacts(self, times_s: np.ndarray) -> np.ndarray:
         """Which actors' boxes intersect the ego's at the times ``times_s`` (T,): bool (T, n_actors).
@@ -284,20 +289,21 @@ class Scene:
         hl, hw = self.length_m / 2.0, self.width_m / 2.0
         ego = self.scenario.ego
         el, ew = ego.length_m / 2.0, ego.width_m / 2.0
+        centre = el - EGO_REAR_OVERHANG_M                      # the ego box's centre ahead of the rear axle
         dx, dy = _rot(-epsi, ax_ - ex, ay_ - ey)               # the actor's centre in the ego's axes (rear axle 0)
-        dx = dx - (el - EGO_REAR_OVERHANG_M)                   # … from the ego box's centre
-        rel = heading - epsi
-        c, s = np.abs(np.cos(rel)), np.abs(np.sin(rel))
+        dx = dx - centre                                       # … from the ego box's centre
+        cr, sr = np.cos(heading - epsi), np.sin(heading - epsi)
+        c, s = np.abs(cr), np.abs(sr)
         tol = OVERLAP_TOLERANCE_M
-        along_u = np.abs(dx * np.cos(rel) + dy * np.sin(rel))  # the centres' distance along the actor's axes
-        along_v = np.abs(-dx * np.sin(rel) + dy * np.cos(rel))
+        along_u = np.abs(dx * cr + dy * sr)                    # the centres' distance along the actor's axes
+        along_v = np.abs(-dx * sr + dy * cr)
         met = ((np.abs(dx) < el + hl * c + hw * s - tol) & (np.abs(dy) < ew + hl * s + hw * c - tol)
                & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
                & (self.z_m < EGO_HEIGHT_M))
         for i in np.flatnonzero(self.is_guardrail):
             wx, wy = self._rail_posts(int(i))
             px, py = _rot(-epsi, wx - ex, wy - ey)                     # (T, posts) in the ego's axes
-            inside = (np.abs(px - (el - EGO_REAR_OVERHANG_M)) < el - tol) & (np.abs(py) < ew - tol)
+            inside = (np.abs(px - centre) < el - tol) & (np.abs(py) < ew - tol)
             met[:, i] = inside.any(axis=1) & (self.z_m[i] < EGO_HEIGHT_M)
         return met
 
