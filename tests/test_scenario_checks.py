@@ -149,6 +149,26 @@ def test_a_waypoint_actor_overlapping_the_ego_names_its_waypoints(tmp_path):
     assert msg.startswith(f"{p}:9: actor 'w' (actors[0]) overlaps the ego"), msg
 
 
+@pytest.mark.parametrize("road,actor", [
+    ("", "{id: g, class: guardrail, x_m: -10.0, y_m: 0.5, length_m: 30.0}"),          # along the lane, through the ego
+    ("road: {lanes: 2, ego_lane: 1, curvature_1pm: 0.02}\n",                      # on a 50-m bend, through the ego
+     "{id: g, class: guardrail, x_m: -5.0, y_m: -0.4, length_m: 20.0}"),
+    ("", "{id: g, class: guardrail, x_m: 2.0, y_m: -4.0, heading_deg: 90, length_m: 8.0}"),   # across the lane
+])
+def test_a_guardrail_overlapping_the_ego_is_named_by_a_post_inside_the_ego(tmp_path, road, actor):
+    """The error described a guardrail by its straight box, centred where none of its posts need be (on a bend the
+    posts follow the road): it names a post, which the ego's box holds (checked here against the numbers printed)."""
+    import re
+    p, msg = _error(tmp_path, HEAD + road + f"actors:\n  - {actor}\n")
+    assert msg.startswith(f"{p}:") and "actor 'g' (actors[0]) overlaps the ego at t = 0: its posts" in msg, msg
+    m = re.search(r"include one at x (-?[\d.]+) m, y (-?[\d.]+) m, inside the ego's \(x (-?[\d.]+) to (-?[\d.]+) m, "
+                  r"y (-?[\d.]+) to (-?[\d.]+) m\)", msg)
+    assert m, msg
+    x, y, x0, x1, y0, y1 = map(float, m.groups())
+    assert x0 < x < x1 and y0 < y < y1, msg
+    assert "expected every post clear of the ego" in msg
+
+
 def test_an_empty_waypoint_list_is_named_not_taken_for_an_actor_at_the_origin(tmp_path):
     """``waypoints: []`` was read as no waypoints: the actor stood at x 0 and the error said it overlapped the ego
     (an independent tester's finding)."""
