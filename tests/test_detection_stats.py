@@ -367,6 +367,43 @@ def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(c
     assert abs(rate["detection"] - rate["signal"]) <= 0.2, rate
 
 
+@pytest.mark.parametrize("axis,sep", [("range", 1.0), ("range", 2.0), ("range", 3.0), ("Doppler", 1.0),
+                                      ("Doppler", 2.0)])
+def test_two_equal_returns_bins_apart_in_one_beam_are_never_both_lost(axis, sep):
+    """Two equal steady returns 1, 2 or 3 bins apart in one beam, each astride its cell's edge (0.49 bin off its
+    centre): the chain's map always has a maximum, so it reports one or both in every frame. The detection level lost
+    both in about half the frames at 1 bin (the cell the stronger took the weaker's energy from counted again beside
+    it and hid it) and in 1–2 of 14 at 2 bins (the map's maximum between them, where neither stands); an independent
+    tester's finding on two motorcycles riding staggered. Now: never both lost at either level, and 2 or 3 bins apart
+    the frames with two reported within 0.25 of each other (measured: 0.29 / 0.29 at 2 bins, 0.88 / 1.00 at 3)."""
+    from radarnode.radar.signal_model import synthesize_rd
+    p = PRESETS["ars408_like"]
+    chain = DspChain(p)
+    trials = 24
+    counts = {"detection": [], "signal": []}
+    for t in range(trials):
+        r0 = (22.49 + 0.02 * (t % 3)) * p.range_resolution_m
+        if axis == "range":
+            r, v = [r0, r0 + sep * p.range_resolution_m], [0.0, 0.0]
+        else:
+            r, v = [r0, r0], [0.49 * p.doppler_bin_mps, (0.49 + sep) * p.doppler_bin_mps]
+        scat = point_targets(r, [0.0, 0.3], v)
+        scat.rcs_dbsm = 45.0 - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)     # ρ 45 dB each
+        for level in counts:
+            rng = np.random.default_rng(9100 + t)
+            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
+                else chain.process_rd(synthesize_rd(p, scat, rng))
+            near = (np.abs(det.range_m - np.mean(r)) < (0.5 * sep + 1.0) * p.range_resolution_m) & \
+                (np.abs(det.range_rate_mps - np.mean(v)) < (0.5 * sep + 1.0) * p.doppler_bin_mps)
+            counts[level].append(int(near.sum()))
+    for level, c in counts.items():
+        assert min(c) >= 1, (level, c)
+    two = {level: np.mean(np.array(c) >= 2) for level, c in counts.items()}
+    if sep >= 2.0:     # (1 bin apart the chain splits the pair in 0.2–0.5 of these frames, by its phases; the
+        # detection level's resolution box merges it in every frame: BENCHMARKS.md, "Resolution")
+        assert abs(two["detection"] - two["signal"]) <= 0.25, (two, counts)
+
+
 @pytest.mark.parametrize("tested", [0.0, 0.4, 1.0])
 def test_the_lobe_test_of_some_cells_is_their_answer_among_every_cell(tested):
     """The detection level asks the lobe test about its peaks only (0.4 of the cells on a guardrail road): each

@@ -232,7 +232,13 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
 
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
     peak, energy, owner = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
-    peak &= ~_inside_lobes(c_r, c_v, c_u, field, energy, tag, n_r, m, k_el, statistic, peak)
+    hidden, at = _inside_lobes(c_r, c_v, c_u, field, energy, tag, n_r, m, k_el, statistic, peak, owner, hiders=True)
+    lost = np.flatnonzero(hidden & peak)
+    if lost.size >= 2:
+        peaks = np.flatnonzero(peak)
+        own = np.mod(np.rint(c_r[peaks]), n_r).astype(np.int64) * m + np.mod(np.rint(c_v[peaks]), m).astype(np.int64)
+        hidden[_seen_between(lost, at[lost], own, energy[lost])] = False
+    peak &= ~hidden
     rd = (uniq // n_a)
     idx = np.flatnonzero(peak)
     cells_rd, grp = np.unique(rd[idx], return_inverse=True)
@@ -425,7 +431,7 @@ LOBE_REACH_BINS = 4.0
 
 def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray, energy: np.ndarray,
                   tag: np.ndarray, n_r: int, m: int, n_channels: int, statistic: DetectionStatistic,
-                  candidates: np.ndarray | None = None) -> np.ndarray:
+                  candidates: np.ndarray | None = None, owner: np.ndarray | None = None, hiders: bool = False):
     """The cells other returns' range–Doppler lobes hide, at any angle: the chain reports a peak only where its
     map, which sums the channels, is a local maximum, so a weaker target a couple of bins from stronger ones is
     lost when their lobes in the cell towards them outweigh its own peak (the chain resolves two equal tones at
@@ -442,27 +448,35 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     ``energy`` the cells' energies at their own bins. A hidden cell gives its energy to no one. ``candidates`` (bool,
     per cell): the cells to test (the peaks; every cell still counts as another return); None tests every cell.
     A cell's answer does not depend on which others are tested (the peaks alone are 0.4 of the cells on a guardrail
-    road)."""
+    road). ``owner`` (per cell, :func:`_peaks`'): a cell whose energy a peak took is left out of that peak's map too
+    (its energy is in the peak's own): counted again beside it, two equal returns one range bin apart, each astride
+    its cell's edge, hid their one peak behind the cell that was not one, and the chain's one detection was lost in
+    about half the frames (an independent tester's finding). Returns the cells hidden (bool); with ``hiders``, also the
+    range–Doppler cell (key range bin · m + Doppler bin; −1 for a cell not hidden) of each hidden cell's highest
+    hiding neighbour (:func:`_seen_between`)."""
     n = energy.size
     hidden = np.zeros(n, dtype=bool)
+    none = (hidden, np.full(n, -1, dtype=np.int64)) if hiders else hidden     # nothing hidden
     if n < 2:
-        return hidden
+        return none
     reach = LOBE_REACH_BINS
     box = np.array([n_r, m]) / reach
     pts = np.mod(np.stack([np.mod(r, n_r), np.mod(v, m)], axis=1) / reach, box)
     import scipy.spatial  # imported when first needed: a faster start
     pairs = scipy.spatial.cKDTree(pts, boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
-        return hidden
+        return none
     # both directions: i the tested cell, j another return around it (not of the same body)
     i = np.concatenate([pairs[:, 0], pairs[:, 1]])
     j = np.concatenate([pairs[:, 1], pairs[:, 0]])
     other = (tag[i] != tag[j]) | (tag[i] < 0)
+    if owner is not None:
+        other &= owner[j] != i
     if candidates is not None:
         other &= candidates[i]
     i, j = i[other], j[other]
     if i.size == 0:
-        return hidden
+        return none
     kr = lambda x: statistic.response("r", x)           # noqa: E731
     kd = lambda x: statistic.response("d", x)           # noqa: E731
     cr, cd = np.rint(r), np.rint(v)
@@ -488,8 +502,35 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
         cells, weights=(cross * a_i[:, slot] * a_j).ravel(), minlength=9 * tested.size).reshape(tested.size, 9)
     rising = others > others[:, 4:5]
     rising[:, 4] = False
-    hidden[tested] = np.any(rising & (total > total[:, 4:5]), axis=1)
-    return hidden
+    hiding = rising & (total > total[:, 4:5])
+    hidden[tested] = np.any(hiding, axis=1)
+    if not hiders:
+        return hidden
+    # the range–Doppler cell (bin key range·m + Doppler) of each hidden cell's highest hiding neighbour
+    q = np.where(hiding, total, -np.inf).argmax(axis=1)
+    at = np.full(n, -1, dtype=np.int64)
+    at[tested] = np.where(hidden[tested], np.mod(cr[tested] + q // 3 - 1, n_r) * m + np.mod(cd[tested] + q % 3 - 1, m),
+                          -1).astype(np.int64)
+    return hidden, at
+
+
+def _seen_between(lost: np.ndarray, at: np.ndarray, own: np.ndarray, strength: np.ndarray) -> np.ndarray:
+    """Of the peaks ``lost`` to another return's lobe (indices), those the chain still sees: where two or more are
+    lost to the same neighbour cell (``at``, each one's range–Doppler key from :func:`_inside_lobes`) and no peak
+    stands there (``own``: the peaks' keys), that cell is the map's maximum between them (two returns about two bins
+    apart, in phase) and the chain reports its peak there: the strongest (``strength``, per lost peak) stays, as that
+    one peak. Without it both were lost in 1–2 of 14 frames where the chain always reported one or two (an
+    independent tester's finding)."""
+    cells, inv, count = np.unique(at, return_inverse=True, return_counts=True)
+    inv = inv.ravel()
+    between = (count >= 2) & ~np.isin(cells, own)
+    if not between.any():
+        return np.zeros(0, dtype=np.int64)
+    best = np.full(cells.size, -np.inf)
+    np.maximum.at(best, inv, strength)
+    keep = between[inv] & (strength == best[inv])
+    _, first = np.unique(at[keep], return_index=True)       # one a cell, should two be equally strong
+    return lost[keep][first]
 
 
 def _array_likeness(du: np.ndarray, n: int) -> np.ndarray:
