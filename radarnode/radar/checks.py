@@ -196,7 +196,6 @@ def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
     # the actor's box in the ego frame (the sensor frame turned by the mount's yaw and moved by its position)
     cx, cy = float(view.centre_x_m[i]), float(view.centre_y_m[i])
     ex, ey = c * cx - s * cy + mx, s * cx + c * cy + my
-    heading = float(view.orientation_rad[i]) + myaw
     half = (0.5 * actor.length, 0.5 * actor.width)
     base = f"actors[{i}]"
     key = f"{base}.x_m" if f"{base}.x_m" in scenario.lines else f"{base}.waypoints" if actor.waypoints else base
@@ -221,7 +220,7 @@ def _first_post_inside(scene, i: int, ego) -> tuple[float, float]:
     from its centre line), by the judge's own test (:meth:`Scene.ego_contacts`)."""
     from radarnode.scene.world import EGO_REAR_OVERHANG_M, OVERLAP_TOLERANCE_M
     st = scene.ego_state(0.0)
-    wx, wy = scene._rail_posts(i)
+    wx, wy = scene.rail_posts(i)
     c, s = math.cos(st.heading_rad), math.sin(st.heading_rad)
     dx, dy = wx - st.x_m, wy - st.y_m
     px, py = c * dx + s * dy, -s * dx + c * dy

@@ -197,7 +197,7 @@ class Scene:
                                [scenario.ego_lateral()])
         self.dynamic_ego: DynamicEgo | None = None
         self._ego_block: tuple | None = None          # (ego, block, states) of :meth:`ego_state` on the cycle grid
-        self._rails: dict[int, tuple[np.ndarray, np.ndarray]] = {}     # :meth:`_rail_posts`, by actor
+        self._rails: dict[int, tuple[np.ndarray, np.ndarray]] = {}     # :meth:`rail_posts`, by actor
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
@@ -259,7 +259,7 @@ class Scene:
         heading = np.where(np.hypot(avx, avy) > 0.1, np.arctan2(avy, avx), psi + self.heading_rel)
         return ax_, ay_, heading, avx, avy
 
-    def _rail_posts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+    def rail_posts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """World positions of guardrail actor ``i``'s posts: from its start over its length, along the road's curve
         (its heading relative to the road), every ``road.guardrails.post_spacing_m``. They stand still: computed once
         (the radar's view and the collision judge ask every cycle)."""
@@ -301,7 +301,7 @@ class Scene:
                & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
                & (self.z_m < EGO_HEIGHT_M))
         for i in np.flatnonzero(self.is_guardrail):
-            wx, wy = self._rail_posts(int(i))
+            wx, wy = self.rail_posts(int(i))
             px, py = _rot(-epsi, wx - ex, wy - ey)                     # (T, posts) in the ego's axes
             inside = (np.abs(px - centre) < el - tol) & (np.abs(py) < ew - tol)
             met[:, i] = inside.any(axis=1) & (self.z_m[i] < EGO_HEIGHT_M)
@@ -503,7 +503,7 @@ class Scene:
             xs.append(wx)
             ys.append(wy)
         for i in np.flatnonzero(self.is_guardrail):
-            wx, wy = self._rail_posts(int(i))
+            wx, wy = self.rail_posts(int(i))
             rows.append(np.repeat(np.arange(t.size), wx.size))
             xs.append(np.tile(wx, t.size))
             ys.append(np.tile(wy, t.size))
