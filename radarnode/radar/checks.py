@@ -204,7 +204,7 @@ def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
                f"{ego.y_m + ego_h[1]:.2f} m)")
     if actor.object_class == "guardrail":
         # a guardrail is its posts along the road's curve (what the judge tests), not its box: name the post inside
-        px, py = _first_post_inside(scene, i, ego)
+        px, py = scene.post_inside_ego(i, 0.0)
         raise src.error(key, f"actor '{actor.id}' ({base}) overlaps the ego at t = 0: its posts (from x_m, over its "
                              f"{actor.length:g} m) include one at x {px:.2f} m, y {py + ego.y_m:.2f} "
                              f"m, inside {ego_box}; expected every post clear of the ego (e.g. x_m >= "
@@ -213,22 +213,6 @@ def _check_overlap_at_start(scenario: Scenario, src: Source) -> None:
                          f"{actor.width:g} m box centred at x {ex:.2f} m, y {ey + ego.y_m:.2f} m intersects "
                          f"{ego_box}; expected it clear of the ego, e.g. x_m >= {front + half[0] + 0.5:.1f} in the "
                          f"ego's lane")
-
-
-def _first_post_inside(scene, i: int, ego) -> tuple[float, float]:
-    """Guardrail actor ``i``'s first post inside the ego's box at t = 0, in the ego's axes (x from the rear axle, y
-    from its centre line), by the judge's own test (:meth:`Scene.ego_contacts`)."""
-    from radarnode.scene.world import EGO_REAR_OVERHANG_M, OVERLAP_TOLERANCE_M
-    st = scene.ego_state(0.0)
-    wx, wy = scene.rail_posts(i)
-    c, s = math.cos(st.heading_rad), math.sin(st.heading_rad)
-    dx, dy = wx - st.x_m, wy - st.y_m
-    px, py = c * dx + s * dy, -s * dx + c * dy
-    centre = 0.5 * ego.length_m - EGO_REAR_OVERHANG_M
-    inside = np.flatnonzero((np.abs(px - centre) < 0.5 * ego.length_m - OVERLAP_TOLERANCE_M)
-                            & (np.abs(py) < 0.5 * ego.width_m - OVERLAP_TOLERANCE_M))
-    k = int(inside[0]) if inside.size else int(np.argmin(np.hypot(px - centre, py)))
-    return float(px[k]), float(py[k])
 
 
 # --- an actor the radar can never see ----------------------------------------------------------------------

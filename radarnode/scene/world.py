@@ -197,7 +197,7 @@ class Scene:
                                [scenario.ego_lateral()])
         self.dynamic_ego: DynamicEgo | None = None
         self._ego_block: tuple | None = None          # (ego, block, states) of :meth:`ego_state` on the cycle grid
-        self._rails: dict[int, tuple[np.ndarray, np.ndarray]] = {}     # :meth:`rail_posts`, by actor
+        self._rails: dict[int, tuple[np.ndarray, np.ndarray]] = {}     # :meth:`_rail_posts`, by actor
         self._movers = MoverTable(
             [a.x_m for a in actors], [scenario.actor_y_m(a) for a in actors], [a.speed_mps for a in actors],
             [math.radians(a.heading_deg) for a in actors], [a.accel for a in actors], [a.waypoints for a in actors])
@@ -259,7 +259,7 @@ class Scene:
         heading = np.where(np.hypot(avx, avy) > 0.1, np.arctan2(avy, avx), psi + self.heading_rel)
         return ax_, ay_, heading, avx, avy
 
-    def rail_posts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+    def _rail_posts(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """World positions of guardrail actor ``i``'s posts: from its start over its length, along the road's curve
         (its heading relative to the road), every ``road.guardrails.post_spacing_m``. They stand still: computed once
         (the radar's view and the collision judge ask every cycle)."""
@@ -301,11 +301,30 @@ class Scene:
                & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
                & (self.z_m < EGO_HEIGHT_M))
         for i in np.flatnonzero(self.is_guardrail):
-            wx, wy = self.rail_posts(int(i))
-            px, py = _rot(-epsi, wx - ex, wy - ey)                     # (T, posts) in the ego's axes
-            inside = (np.abs(px - centre) < el - tol) & (np.abs(py) < ew - tol)
-            met[:, i] = inside.any(axis=1) & (self.z_m[i] < EGO_HEIGHT_M)
+            met[:, i] = self._posts_in_ego(int(i), ex, ey, epsi)[2].any(axis=1) & (self.z_m[i] < EGO_HEIGHT_M)
         return met
+
+    def _posts_in_ego(self, i: int, ex: np.ndarray, ey: np.ndarray, epsi: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Guardrail actor ``i``'s posts in the ego's axes (x from the rear axle, y from its centre line) at the ego's
+        poses ``ex``, ``ey``, ``epsi`` (T, 1), and which lie inside the ego's box by more than the tolerance: (T, posts)
+        each (:meth:`ego_contacts`' test of a guardrail actor)."""
+        ego = self.scenario.ego
+        el, ew = ego.length_m / 2.0, ego.width_m / 2.0
+        wx, wy = self._rail_posts(i)
+        px, py = _rot(-epsi, wx - ex, wy - ey)
+        inside = (np.abs(px - (el - EGO_REAR_OVERHANG_M)) < el - OVERLAP_TOLERANCE_M) \
+            & (np.abs(py) < ew - OVERLAP_TOLERANCE_M)
+        return px, py, inside
+
+    def post_inside_ego(self, i: int, t_s: float) -> tuple[float, float]:
+        """Guardrail actor ``i``'s first post inside the ego's box at ``t_s`` (the nearest to the box's centre if none
+        is), in the ego's axes: what the scenario check names where :meth:`ego_contacts` finds the actor on the ego."""
+        ex, ey, epsi = self._ego_pose(self._ego.state(np.array([float(t_s)])))[:3]
+        px, py, inside = (a[0] for a in self._posts_in_ego(i, ex[:, :1], ey[:, :1], epsi[:, :1]))
+        centre = self.scenario.ego.length_m / 2.0 - EGO_REAR_OVERHANG_M
+        k = int(np.flatnonzero(inside)[0]) if inside.any() else int(np.argmin(np.hypot(px - centre, py)))
+        return float(px[k]), float(py[k])
 
     def ego_state(self, t_s: float) -> EgoState:
         """The ego at ``t_s``. On the cycle grid of a scripted ego (``t_s`` = k × period) it comes from a block of
@@ -503,7 +522,7 @@ class Scene:
             xs.append(wx)
             ys.append(wy)
         for i in np.flatnonzero(self.is_guardrail):
-            wx, wy = self.rail_posts(int(i))
+            wx, wy = self._rail_posts(int(i))
             rows.append(np.repeat(np.arange(t.size), wx.size))
             xs.append(np.tile(wx, t.size))
             ys.append(np.tile(wy, t.size))
