@@ -232,13 +232,12 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
 
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
     peak, energy, owner = _peaks(c_r, c_v, c_u / beam, energy, n_r, m, k_el)
-    hidden, at, step = _inside_lobes(c_r, c_v, c_u, field, energy, tag, n_r, m, k_el, statistic, peak, owner,
-                                     hiders=True)
+    hidden, step = _inside_lobes(c_r, c_v, c_u, field, energy, tag, n_r, m, k_el, statistic, peak, owner, hiders=True)
     lost = np.flatnonzero(hidden & peak)
     if lost.size >= 2:
-        peaks = np.flatnonzero(peak)
-        own = np.mod(np.rint(c_r[peaks]), n_r).astype(np.int64) * m + np.mod(np.rint(c_v[peaks]), m).astype(np.int64)
-        hidden[_seen_between(lost, at[lost], step[lost], own, energy[lost])] = False
+        cr, cd = np.rint(c_r), np.rint(c_v)
+        own = np.mod(cr[peak], n_r).astype(np.int64) * m + np.mod(cd[peak], m).astype(np.int64)
+        hidden[_seen_between(lost, step[lost], cr[lost], cd[lost], own, energy[lost], n_r, m)] = False
     peak &= ~hidden
     rd = (uniq // n_a)
     idx = np.flatnonzero(peak)
@@ -452,12 +451,12 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     road). ``owner`` (per cell, :func:`_peaks`'): a cell whose energy a peak took is left out of that peak's map too
     (its energy is in the peak's own): counted again beside it, two equal returns one range bin apart, each astride
     its cell's edge, hid their one peak behind the cell that was not one, and the chain's one detection was lost in
-    about half the frames (an independent tester's finding). Returns the cells hidden (bool); with ``hiders``, also the
-    range–Doppler cell (key range bin · m + Doppler bin; −1 for a cell not hidden) of each hidden cell's highest
-    hiding neighbour and which of its eight neighbours that is (0 … 8 row-major, −1) (:func:`_seen_between`)."""
+    about half the frames (an independent tester's finding). Returns the cells hidden (bool); with ``hiders``, also which of
+    its eight neighbours hides each hidden cell most (0 … 8 row-major about it; −1 for a cell not hidden)
+    (:func:`_seen_between`)."""
     n = energy.size
     hidden = np.zeros(n, dtype=bool)
-    none = (hidden, np.full(n, -1, dtype=np.int64), np.full(n, -1, dtype=np.int64)) if hiders else hidden
+    none = (hidden, np.full(n, -1, dtype=np.int64)) if hiders else hidden
     if n < 2:
         return none
     reach = LOBE_REACH_BINS
@@ -507,30 +506,28 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     hidden[tested] = np.any(hiding, axis=1)
     if not hiders:
         return hidden
-    # the range–Doppler cell (bin key range·m + Doppler) of each hidden cell's highest hiding neighbour, and which
-    # neighbour it is (0 … 8, row-major about the cell: range step q // 3 − 1, Doppler step q % 3 − 1)
-    q = np.where(hiding, total, -np.inf).argmax(axis=1)
-    at = np.full(n, -1, dtype=np.int64)
-    at[tested] = np.where(hidden[tested], np.mod(cr[tested] + q // 3 - 1, n_r) * m + np.mod(cd[tested] + q % 3 - 1, m),
-                          -1).astype(np.int64)
+    # which neighbour of each hidden cell hides it most (0 … 8, row-major about the cell: range step q // 3 − 1,
+    # Doppler step q % 3 − 1)
     step = np.full(n, -1, dtype=np.int64)
-    step[tested] = np.where(hidden[tested], q, -1)
-    return hidden, at, step
+    step[tested] = np.where(hidden[tested], np.where(hiding, total, -np.inf).argmax(axis=1), -1)
+    return hidden, step
 
 
-def _seen_between(lost: np.ndarray, at: np.ndarray, step: np.ndarray, own: np.ndarray, strength: np.ndarray
-                  ) -> np.ndarray:
+def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.ndarray, own: np.ndarray,
+                  strength: np.ndarray, n_r: int, m: int) -> np.ndarray:
     """Of the peaks ``lost`` to another return's lobe (indices), those the chain still sees: where peaks on opposite
-    sides of one neighbour cell (``at``, each one's range–Doppler key from :func:`_inside_lobes`; ``step``, which
-    neighbour of its own cell that is) are all lost to it and no peak stands there (``own``: the peaks' keys), that
-    cell is the map's maximum between them (two returns about two bins apart, in phase) and the chain reports its peak
-    there: the strongest (``strength``, per lost peak) stays, as that one peak. Without it both were lost in 1–2 of 14
-    frames where the chain always reported one or two (an independent tester's finding). Peaks lost to a cell on one
-    side only (a weak target and its companion in one cell, behind a stronger return two bins on) stay lost: that cell
-    is on the stronger one's slope, not a maximum."""
+    sides of one neighbour cell (``step``, which neighbour of its own cell, bins ``cr``, ``cd``, hides each lost peak:
+    :func:`_inside_lobes`) are all lost to it and no peak stands there (``own``: the peaks' range–Doppler keys, range
+    bin · m + Doppler bin), that cell is the map's maximum between them (two returns about two bins apart, in phase)
+    and the chain reports its peak there: the strongest (``strength``, per lost peak) stays, as that one peak. Without
+    it both were lost in 1–2 of 14 frames where the chain always reported one or two (an independent tester's
+    finding). Peaks lost to a cell on one side only (a weak target and its companion in one cell, behind a stronger
+    return two bins on) stay lost: that cell is on the stronger one's slope, not a maximum. ``step``, ``cr``, ``cd``
+    and ``strength`` are the lost peaks' own."""
+    dr, dd = step // 3 - 1, step % 3 - 1
+    at = np.mod(cr + dr, n_r).astype(np.int64) * m + np.mod(cd + dd, m).astype(np.int64)
     cells, inv, count = np.unique(at, return_inverse=True, return_counts=True)
     inv = inv.ravel()
-    dr, dd = step // 3 - 1, step % 3 - 1
     sides = np.zeros((4, cells.size), dtype=bool)             # a lost peak with the cell at range +1, −1, Doppler +1, −1
     for k, hit in enumerate((dr == 1, dr == -1, dd == 1, dd == -1)):
         sides[k, inv[hit]] = True
