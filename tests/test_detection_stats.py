@@ -404,6 +404,42 @@ def test_two_equal_returns_bins_apart_in_one_beam_are_never_both_lost(axis, sep)
         assert abs(two["detection"] - two["signal"]) <= 0.25, (two, counts)
 
 
+@pytest.mark.parametrize("axis", ["range", "doppler"])
+@pytest.mark.parametrize("layout", ["two_cells_between", "row_behind_its_head"])
+def test_a_group_of_returns_apart_from_the_rest_is_never_all_lost(axis, layout):
+    """Returns each within a few bins of the next, in one beam, nothing else near: the chain's map has a maximum
+    among them in every frame and reports it. Two equal returns at 22.49 and 24.50 bins (each peak lost to the cell
+    on its own side, two different cells between them), and a peak astride its cell's edge at the head of a row of
+    weaker returns a bin apart (−3, −6 dB; the row's slope hid it): the detection level lost every one of them in
+    16–30 of 56 frames of an independent tester's scenes, the chain never. Now: at least one in every frame, at
+    both levels."""
+    from radarnode.radar.signal_model import synthesize_rd
+    p = PRESETS["ars408_like"]
+    chain = DspChain(p)
+    if layout == "two_cells_between":
+        pos, gain_db = np.array([22.49, 24.50]), np.array([0.0, 0.0])
+    else:
+        pos, gain_db = np.array([22.49, 23.49, 24.49]), np.array([0.0, -3.0, -6.0])
+    counts = {"detection": [], "signal": []}
+    for t in range(24):
+        shift = 0.01 * (t % 4)
+        if axis == "range":
+            r, v = (pos + shift) * p.range_resolution_m, np.zeros(pos.size)
+        else:
+            r, v = np.full(pos.size, 22.0 * p.range_resolution_m), (pos - 22.0 + shift) * p.doppler_bin_mps
+        scat = point_targets(r, np.linspace(0.0, 0.6, pos.size), v)
+        scat.rcs_dbsm = 45.0 + gain_db - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
+        for level in counts:
+            rng = np.random.default_rng(9300 + t)
+            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
+                else chain.process_rd(synthesize_rd(p, scat, rng))
+            near = (np.abs(det.range_m - r.mean()) < (np.ptp(r) / 2 + 1.5 * p.range_resolution_m)) & \
+                (np.abs(det.range_rate_mps - v.mean()) < (np.ptp(v) / 2 + 1.5 * p.doppler_bin_mps))
+            counts[level].append(int(near.sum()))
+    for level, c in counts.items():
+        assert min(c) >= 1, (level, c)
+
+
 @pytest.mark.parametrize("tested", [0.0, 0.4, 1.0])
 def test_the_lobe_test_of_some_cells_is_their_answer_among_every_cell(tested):
     """The detection level asks the lobe test about its peaks only (0.4 of the cells on a guardrail road): each
