@@ -12,13 +12,12 @@ modulo 2·v_max, v_max = λ/(4T). Two things resolve it:
   4.9 m/s for ``ars408_like``). Unique over a span of
   2·v_max,1·p where T₂/T₁ = (p + 1)/p.
 * **A resolved neighbour** (AmbigState 2 too): a reflector the second
-  sequence missed, within a car's length (along and across the line of
-  sight) and a beamwidth of one it resolved, whose measured speed is that
-  speed modulo 2·v_max,1 (within a Doppler bin), is taken for another
-  reflector of the same body and takes that wrap of its own measurement. A
-  car has several reflectors; the pairing is one to one, so the first
-  sequence's extra ones stayed at their alias, and the trackers listed an
-  oncoming convoy as cars receding at +4.9 m/s.
+  sequence missed, within a car's length and a beamwidth of one it resolved, whose
+  measured speed is that speed modulo 2·v_max,1 (within a Doppler bin),
+  is taken for another reflector of the same body and takes that wrap of its own
+  measurement. A car has several reflectors in a cell; the pairing is one to
+  one, so the first sequence's extra ones stayed at their alias, and the
+  trackers listed an oncoming convoy as cars receding at +4.9 m/s.
 * **Stationary candidates** (AmbigState 4): with the ego motion known, a
   stationary reflector at azimuth θ has range rate −(v_x cosθ + v_y sinθ);
   a detection that equals it modulo 2·v_max is unwrapped to it.
@@ -44,9 +43,8 @@ STATIONARY_TOLERANCE_BINS = 2.0
 #: a single ramp that measures this range rate without aliasing measures every road user's (400 km/h closing)
 UNAMBIGUOUS_SPEED_MPS = 400.0 / 3.6
 _K = np.arange(-STAGGER_MAX_WRAPS, STAGGER_MAX_WRAPS + 1)     # wraps considered on each side
-#: an ambiguous detection this close in range and across (or within 1.5 range cells, if more) and within a beamwidth
-#: of one the staggered pair resolved may be another reflector of its body (:func:`resolve_by_neighbours`): a car's
-#: length
+#: an ambiguous detection this close in range (or within 1.5 range cells, if more) and within a beamwidth of one
+#: the staggered pair resolved may be another reflector of its body (:func:`resolve_by_neighbours`): a car's length
 NEIGHBOUR_REACH_M = 5.0
 
 
@@ -149,7 +147,7 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
 def resolve_by_neighbours(det: Detections, preset: RadarPreset, sensor_velocity: tuple[float, float]
                           ) -> Detections:
     """The staggered pair's ambiguous detections (AmbigState 1) that a resolved one (AmbigState 2) within
-    ``NEIGHBOUR_REACH_M`` in range and across the line of sight, and a beamwidth in angle, explains: their measured speed is its resolved
+    ``NEIGHBOUR_REACH_M`` in range and a beamwidth in angle explains: their measured speed is its resolved
     speed modulo 2·v_max,1 within a Doppler bin (a rigid body's reflectors, a few beamwidths at most apart, move
     alike). Each takes that wrap of its own measurement (the nearest such neighbour's, by speed mismatch and
     distance) and AmbigState 2; a stationary candidate is left to :func:`flag_stationary`. Another body there whose
@@ -166,13 +164,9 @@ def resolve_by_neighbours(det: Detections, preset: RadarPreset, sensor_velocity:
         return det
     v1max = preset.alias_speed_mps
     lo, hi = preset.range_rate_span_mps
-    reach = max(NEIGHBOUR_REACH_M, 1.5 * preset.range_resolution_m)
-    dr = np.abs(det.range_m[ia, None] - det.range_m[None, ir]) / reach
-    dsin = np.abs(np.sin(det.azimuth_rad)[ia, None] - np.sin(det.azimuth_rad)[None, ir])
-    # a beamwidth, and a car's length across the line of sight too (a beamwidth is 25 m across at 100 m: the cars
-    # of other lanes, an independent tester noticed)
-    across = dsin * 0.5 * (det.range_m[ia, None] + det.range_m[None, ir]) / reach
-    da = np.maximum(dsin / preset.angular_resolution_rad, across)
+    dr = np.abs(det.range_m[ia, None] - det.range_m[None, ir]) / max(NEIGHBOUR_REACH_M, 1.5 * preset.range_resolution_m)
+    da = np.abs(np.sin(det.azimuth_rad)[ia, None] - np.sin(det.azimuth_rad)[None, ir]) \
+        / preset.angular_resolution_rad
     wraps = np.rint((det.range_rate_mps[None, ir] - det.range_rate_mps[ia, None]) / (2 * v1max))
     speed = det.range_rate_mps[ia, None] + 2 * v1max * wraps
     miss = np.abs(speed - det.range_rate_mps[None, ir])

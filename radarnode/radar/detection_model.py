@@ -554,24 +554,20 @@ def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.nda
 def _strongest_of_lost_groups(lost: np.ndarray, alive: np.ndarray, group: np.ndarray, strength: np.ndarray
                               ) -> np.ndarray:
     """Of the peaks ``lost`` to other returns' lobes (indices), those the chain still sees: in a group of returns
-    each within the lobe reach of the next (``group``, per cell: :func:`_inside_lobes`), the strongest lost peak
-    stays where it is stronger (``strength``, per cell) than every peak of the group left (``alive``, per cell). The
-    chain's map has a maximum near a group's strongest returns and reports a peak there; the test cell by cell can
-    lose them to the cells between them (two returns two bins apart with two cells between, each peak lost to the
-    cell on its side; a peak at the head of a row of weaker returns a bin apart, lost to the row's slope). Without it
-    an independent tester's scenes were empty in 16–30 of 56 frames where the chain never was; with a first form of
-    it (only a group with no peak left), a weak return's surviving peak 4 bins off, too weak to be detected, switched
-    it off (another tester: 7 of 48 frames empty, the chain none). A weaker return beside a stronger one that stays
-    (a lobe, a crowd) stays lost."""
-    n_groups = group.max() + 1
-    top_alive = np.full(n_groups, -np.inf)
-    np.maximum.at(top_alive, group[alive], strength[alive])
+    each within the lobe reach of the next (``group``, per cell: :func:`_inside_lobes`) where no peak is left
+    (``alive``, per cell), the strongest (``strength``, per cell) stays. The chain's map has a maximum wherever
+    returns stand apart from the rest, and reports a peak there; the test cell by cell can lose every peak of such
+    a group to the cells between them (two returns two bins apart with two cells between, each peak lost to the
+    cell on its side; a peak at the head of a row of weaker returns a bin apart, lost to the row's slope). Without
+    it an independent tester's scenes were empty in 16–30 of 56 frames where the chain never was."""
     g = group[lost]
-    top_lost = np.full(n_groups, -np.inf)
-    np.maximum.at(top_lost, g, strength[lost])
-    keep = (strength[lost] == top_lost[g]) & (strength[lost] > top_alive[g])
-    if not keep.any():
+    orphan = ~np.isin(g, group[alive])
+    if not orphan.any():
         return np.zeros(0, dtype=np.int64)
+    lost, g = lost[orphan], g[orphan]
+    best = np.full(group.max() + 1, -np.inf)
+    np.maximum.at(best, g, strength[lost])
+    keep = strength[lost] == best[g]
     _, first = np.unique(g[keep], return_index=True)          # one a group, should two be equally strong
     return lost[keep][first]
 
