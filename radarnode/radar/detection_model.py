@@ -457,7 +457,7 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     about half the frames (an independent tester's finding). Returns the cells hidden (bool); with ``hiders``, also which of
     its eight neighbours hides each hidden cell most (0 … 8 row-major about it; −1 for a cell not hidden)
     (:func:`_seen_between`) and each cell's group: the cells joined by steps within the lobe reach
-    (:func:`_strongest_of_lost_groups`)."""
+    (:func:`_strongest_of_lost_groups`; computed only where a cell is hidden, else each cell its own)."""
     n = energy.size
     hidden = np.zeros(n, dtype=bool)
     none = (hidden, np.full(n, -1, dtype=np.int64), np.arange(n)) if hiders else hidden
@@ -470,12 +470,6 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     pairs = scipy.spatial.cKDTree(pts, boxsize=box).query_pairs(1.0, p=np.inf, output_type="ndarray")
     if pairs.size == 0:
         return none
-    if hiders:
-        import scipy.sparse
-        import scipy.sparse.csgraph
-        graph = scipy.sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-        group = scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
-        none = (hidden, np.full(n, -1, dtype=np.int64), group)
     # both directions: i the tested cell, j another return around it (not of the same body)
     i = np.concatenate([pairs[:, 0], pairs[:, 1]])
     j = np.concatenate([pairs[:, 1], pairs[:, 0]])
@@ -520,7 +514,13 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     # Doppler step q % 3 − 1)
     step = np.full(n, -1, dtype=np.int64)
     step[tested] = np.where(hidden[tested], np.where(hiding, total, -np.inf).argmax(axis=1), -1)
-    return hidden, step, group
+    # the groups are read only about hidden cells: where none is, each cell stands for itself
+    if not hidden.any():
+        return hidden, step, np.arange(n)
+    import scipy.sparse
+    import scipy.sparse.csgraph
+    graph = scipy.sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    return hidden, step, scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
 
 
 def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.ndarray, own: np.ndarray,
