@@ -216,6 +216,31 @@ def test_oncoming_car_at_45_mps_is_reported_at_its_true_speed(level):
     assert truth < -2 * ARS.max_unambiguous_speed_mps      # −65 m/s: beyond two wraps of one ramp
 
 
+@pytest.mark.parametrize("axis", ["range", "speed", "angle"])
+@pytest.mark.parametrize("factor,taken", [(0.5, True), (1.0 - 1e-9, True), (1.02, False), (2.0, False)])
+def test_a_resolved_neighbour_lends_its_wrap_only_within_its_reach(axis, factor, taken):
+    """``ambiguity.resolve_by_neighbours``' three bounds, each alone, below, at, just above and at twice its limit:
+    5 m in range (``NEIGHBOUR_REACH_M``), a Doppler bin of speed mismatch modulo 2·v_max, a beamwidth in angle. A
+    resolved detection at −34.05 m/s, 50 m, boresight; an ambiguous one measured at its first-sequence alias."""
+    vmax = ARS.alias_speed_mps
+    r, v, az = 50.0, -34.05 + 2 * vmax, 0.0
+    if axis == "range":
+        r += factor * ambiguity.NEIGHBOUR_REACH_M
+    elif axis == "speed":
+        v += factor * ARS.doppler_bin_mps
+    else:
+        az = math.asin(factor * ARS.angular_resolution_rad)
+    det = Detections(np.array([50.0, r]), np.array([-34.05, v]), np.array([0.0, az]), np.zeros(2),
+                     np.full(2, 30.0), np.zeros(2, dtype=np.int64),
+                     ambig_state=np.array([AMBIG_STAGGERED, AMBIG_AMBIGUOUS]))
+    out = ambiguity.resolve_by_neighbours(det, ARS, (20.0, 0.0))
+    if taken:
+        assert out.ambig_state[1] == AMBIG_STAGGERED and abs(out.range_rate_mps[1] - (v - 2 * vmax)) < 1e-9
+    else:
+        assert out.ambig_state[1] == AMBIG_AMBIGUOUS and out.range_rate_mps[1] == v
+    assert out.ambig_state[0] == AMBIG_STAGGERED and out.range_rate_mps[0] == -34.05
+
+
 @pytest.mark.parametrize("level", ["object", "detection"])
 def test_an_oncoming_convoy_whose_speed_the_second_sequence_aliases_to_zero_is_never_listed_receding(level):
     """Cars closing at −34.05 m/s past ``ars408_like`` (ego 20 m/s): the second sequence sees them at 0 m/s and
