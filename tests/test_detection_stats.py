@@ -440,6 +440,35 @@ def test_a_group_of_returns_apart_from_the_rest_is_never_all_lost(axis, layout):
         assert min(c) >= 1, (level, c)
 
 
+@pytest.mark.parametrize("axis", ["range", "doppler"])
+@pytest.mark.parametrize("sep,joined", [(2.0, True), (4.0 - 1e-9, True), (4.08, False), (8.0, False)])
+def test_two_returns_are_one_group_only_within_the_lobe_reach(axis, sep, joined):
+    """The groups of :func:`_strongest_of_lost_groups` (returns each within ``LOBE_REACH_BINS``, 4, of the next,
+    circular axes): two returns apart from a crowd (which hides some cells, so that the groups are found) are one
+    group below and at the reach and two just beyond it and at twice it, along either axis; across the range axis's
+    wrap too."""
+    from radarnode.radar import detection_model
+    p = PRESETS["ars408_like"]
+    stat = DspChain(p).statistic
+    rng = np.random.default_rng(11)
+    n = 300
+    r, v = rng.uniform(20.0, 60.0, n), rng.uniform(-8.0, 8.0, n)
+    u = rng.uniform(-0.5, 0.5, n)
+    field = rng.normal(size=n) * 10.0 ** rng.uniform(0.0, 3.0, n) * np.exp(2j * np.pi * rng.random(n))
+    tag = rng.integers(-1, 6, n)
+    for at in (150.0, p.num_range_bins - 0.5 * sep):          # the second pair astride the range axis's wrap
+        a, b = (at, 40.0), (at + sep, 40.0) if axis == "range" else (at, 40.0 + sep)
+        rr = np.concatenate([r, [a[0], np.mod(b[0], p.num_range_bins)]])
+        vv = np.concatenate([v, [a[1], b[1]]])
+        ff = np.concatenate([field, [100.0, 100.0j]])
+        args = (rr, vv, np.concatenate([u, [0.0, 0.0]]), ff, np.abs(ff) ** 2, np.concatenate([tag, [7, 8]]),
+                p.num_range_bins, p.num_chirps, p.num_virtual, stat)
+        hidden, _, group = detection_model._inside_lobes(*args, hiders=True)
+        assert hidden.any()
+        assert (group[n] == group[n + 1]) == joined
+        assert group[n] not in group[:n]           # far from the crowd
+
+
 @pytest.mark.parametrize("tested", [0.0, 0.4, 1.0])
 def test_the_lobe_test_of_some_cells_is_their_answer_among_every_cell(tested):
     """The detection level asks the lobe test about its peaks only (0.4 of the cells on a guardrail road): each
