@@ -27,7 +27,11 @@ Prints Markdown tables:
 12. (``--only spacing``) the same with both rails against the posts' spacing, across the object level's 1.7-bin box
    and the windows' 2-bin main lobe, on ars408_like and mimo12, and at walking pace and motorway speed;
 13. (``--only triples``) three equal reflectors in one range–Doppler cell, apart in angle, standing and beyond the
-   alias speed: the frames in which a level reports a detection at none of their angles (a ghost).
+   alias speed: the frames in which a level reports a detection at none of their angles (a ghost);
+14. (``--only abreast``) two returns at two angles (two cars abreast, one a little ahead) across a cell's edge,
+   less than a bin to a bin and a half apart in range or in Doppler, equal or 6 dB apart: the detections each level
+   reports a frame (the chain: one maximum of its channel-summed map and both angles in its snapshot up to about
+   0.8 bins, one from 1.1).
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 10 minutes; ``--quick`` about 3).
 """
@@ -891,12 +895,53 @@ actors:
     print()
 
 
+def abreast_table(quick: bool) -> None:
+    positions = 16 if not quick else 6
+    seps = (0.3, 0.5, 0.7, 0.8, 0.9, 1.0, 1.1, 1.5)
+    cases = (("ars408_like", "range", (-10.0, 10.0), 0.0), ("ars408_like", "range", (-10.0, 10.0), 6.0),
+             ("ars408_like", "Doppler", (-10.0, 10.0), 0.0), ("mimo12", "range", (-20.0, 20.0), 0.0),
+             ("mimo12", "Doppler", (-20.0, 20.0), 6.0))
+    print(f"### Two returns abreast at two angles ({positions} positions a point)\n")
+    print("ρ 35 dB (the second one 0 or 6 dB weaker), the pair's middle at a random point of a cell along the axis "
+          "they are apart in (40–41 range bins, 5–6 Doppler bins), each frame its own seed; detections within 2 bins "
+          "of the pair a frame (mean), signal / detection\n")
+    print("| preset | angles | axis | weaker by | " + " | ".join(f"{x:.1f} bins" for x in seps) + " |")
+    print("|---|---|---|---:|" + "---:|" * len(seps))
+    for name, axis, az, ratio in cases:
+        p = PRESETS[name]
+        chain = DspChain(p)
+        row = []
+        for sep in seps:
+            count = {"signal": 0, "detection": 0}
+            for t in range(positions):
+                g = np.random.default_rng(300 + t)
+                r0, v0 = 40.0 + g.random(), 5.0 + g.random()
+                rb, vb = (np.array([r0, r0 + sep]), np.full(2, v0)) if axis == "range" else \
+                    (np.full(2, r0), np.array([v0, v0 + sep]))
+                r, v = rb * p.range_resolution_m, vb * p.doppler_bin_mps
+                scat = point_targets(r, list(az), v)
+                scat.rcs_dbsm = np.array([35.0, 35.0 - ratio]) - equation.snr_db(p, scat.range_m, 0.0, 0.0,
+                                                                                 scat.azimuth_rad)
+                for level in count:
+                    rng = np.random.default_rng(700 + t)
+                    det = (detection_model.detect(p, scat, rng, chain.statistic) if level == "detection"
+                           else chain.process_rd(synthesize_rd(p, scat, rng)))
+                    near = ((det.range_m > r.min() - 2 * p.range_resolution_m)
+                            & (det.range_m < r.max() + 2 * p.range_resolution_m)
+                            & (det.range_rate_mps > v.min() - 2 * p.doppler_bin_mps)
+                            & (det.range_rate_mps < v.max() + 2 * p.doppler_bin_mps))
+                    count[level] += int(near.sum())
+            row.append(f"{count['signal'] / positions:.2f} / {count['detection'] / positions:.2f}")
+        print(f"| {name} | ±{abs(az[0]):.0f}° | {axis} | {ratio:.0f} dB | " + " | ".join(row) + " |", flush=True)
+    print()
+
+
 def main() -> None:
     global LEVELS, RESOLUTION_TRIALS, PD_FRAMES, PD_SWERLING
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
-                                       "pairs", "rcs", "posts", "spacing", "triples"))
+                                       "pairs", "rcs", "posts", "spacing", "triples", "abreast"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -923,7 +968,7 @@ def main() -> None:
                      ("resolution", resolution_table), ("lobe", lobe_table), ("beam", beam_table),
                      ("crowd", crowd_table), ("edge", edge_table), ("pairs", pairs_table),
                      ("rcs", rcs_table), ("posts", posts_table), ("spacing", spacing_table),
-                     ("triples", triples_table)):
+                     ("triples", triples_table), ("abreast", abreast_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")

@@ -474,6 +474,31 @@ def test_returns_abreast_at_other_angles_are_angle_peaks_of_one_maximum_as_in_th
         assert mean["detection"] >= 1.75, counts
 
 
+def test_a_strong_return_lost_to_a_weak_ones_cell_is_reported_there_in_its_place():
+    """A return astride its cell's edge (40.45 range bins, −10°) beside one 10 dB weaker 0.75 bins on at +10°: the
+    weak one's lobe tips the strong one's cell below its neighbour, so the chain's maximum is the weak one's cell,
+    and its snapshot there holds the strong one (the weak one 16 dB below it: no angle peak). The chain reports the
+    strong one in 16 of 16 frames and the weak one in none; the detection level reported the weak one alone in 9 of
+    them (the strong one lost). Now the strong one moves into that cell and the weak one is dropped there."""
+    from radarnode.radar.signal_model import synthesize_rd
+    p = PRESETS["ars408_like"]
+    chain = DspChain(p)
+    r = np.array([40.45, 41.2]) * p.range_resolution_m
+    scat = point_targets(r, [-10.0, 10.0], np.full(2, 5.3 * p.doppler_bin_mps))
+    scat.rcs_dbsm = np.array([40.0, 30.0]) - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
+    seen = {"detection": [0, 0], "signal": [0, 0]}
+    for seed in range(16):
+        for level, count in seen.items():
+            rng = np.random.default_rng(seed)
+            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
+                else chain.process_rd(synthesize_rd(p, scat, rng))
+            az = np.degrees(det.azimuth_rad[np.abs(det.range_m - r.mean()) < 3.0 * p.range_resolution_m])
+            count[0] += int(np.any(np.abs(az + 10.0) < 3.0))
+            count[1] += int(np.any(np.abs(az - 10.0) < 3.0))
+    assert seen["signal"] == [16, 0], seen
+    assert seen["detection"] == seen["signal"], seen
+
+
 def test_returns_moved_into_a_maximum_keep_its_angle_resolution():
     """A return at −10° with one on either side of it 0.9 range bins away, at 10° and 8.5° (1.8 bins apart: two
     peaks of their own; in some frames the middle one's cell hides both, each within SHARED_CELL_FLOOR_DB of it

@@ -244,9 +244,10 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     rd = (uniq // n_a)
     if lost.size and k_el >= 2:
         # a peak lost to the lobe of a peak beside it at another angle is one more angle peak of that one's cell
-        moved, into, e_moved = _angle_peaks_of_neighbours(np.flatnonzero(hidden & peak), peak & ~hidden, rd, c_r,
-                                                          c_v, c_u / beam, energy, n_r, m, k_el, statistic)
+        moved, into, e_moved, dropped = _angle_peaks_of_neighbours(np.flatnonzero(hidden & peak), peak & ~hidden, rd,
+                                                                   c_r, c_v, c_u / beam, energy, n_r, m, k_el, statistic)
         hidden[moved], rd[moved], energy[moved] = False, into, e_moved
+        hidden[dropped] = True
     peak &= ~hidden
     idx = np.flatnonzero(peak)
     cells_rd, grp = np.unique(rd[idx], return_inverse=True)
@@ -560,8 +561,10 @@ def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.nda
 #: peak of that one's range–Doppler cell where its power through the windows' response at its offset from that peak
 #: is within this many dB of the peak's own (:func:`_angle_peaks_of_neighbours`); measured on the chain
 #: (ars408_like at ±10° and mimo12 at ±20°, ρ 35 dB, 16 positions a point, range or Doppler apart): two equal returns
-#: are two up to 0.8 bins apart, 1.4–1.6 at 0.9, 1.0–1.4 at 1.0 and one from 1.1 (the response there: −4.8, −6.0
-#: and −7.4 dB); one 6 dB weaker is two up to 0.4 bins apart, one from 0.6
+#: are two up to 0.8 bins apart, 1.5–1.75 at 0.9, 1.0–1.2 at 1.0 and one from 1.1 (the response there: −4.8, −6.0
+#: and −7.4 dB); one 6 dB weaker is two up to 0.3 bins apart, one from 0.7 (`benchmarks/calibration.py --only
+#: abreast`). The same floor the other way: a peak standing that a stronger one moved into its cell outshines by more
+#: than it at its offset is no angle peak there
 SHARED_CELL_FLOOR_DB = 6.0
 
 
@@ -578,9 +581,10 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
     or the eight around it (keys ``rd``, range bin · m + Doppler bin; positions ``r``, ``v`` in bins, circular); the
     lost peak moves into that cell where every peak standing there is at least ``RESOLUTION[2]`` beamwidths from it
     in angle (``beams``, circular over ``n_beams``) and its power through the windows' response at its offset from
-    the maximum's peak is within :data:`SHARED_CELL_FLOOR_DB` of that one's (``energy`` at the cells' own bins).
-    Returns the peaks moved, the cell each goes into (its key) and its energy there."""
-    none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0))
+    the maximum's peak is within :data:`SHARED_CELL_FLOOR_DB` of that one's (``energy`` at the cells' own bins); and
+    that peak is no angle peak of it where the moved one outshines it there by more than the same floor. Returns the
+    peaks moved, the cell each goes into (its key), its energy there, and the peaks standing that it outshines."""
+    none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64))
     host = np.flatnonzero(alive)
     if lost.size == 0 or host.size == 0:
         return none
@@ -618,19 +622,28 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
 
     def on_bin(i):
         return energy[i] / np.maximum((kr(r[i] - cr[i]) * kd(v[i] - cd[i])) ** 2, 1e-12)
-    e_b = on_bin(b)
-    seen = e_b * (kr(_circular(r[b] - r[a], n_r)) * kd(_circular(v[b] - v[a], m))) ** 2
-    keep = apart & (seen >= on_bin(a) * 10.0 ** (-SHARED_CELL_FLOOR_DB / 10.0))
-    b, a, into = b[keep], a[keep], into[keep]
+    e_a, e_b = on_bin(a), on_bin(b)
+    # the chain's snapshot is fitted at the stronger return's position: the weaker one is seen through the windows'
+    # response at its offset from it, and is an angle peak there if within the floor of the stronger one
+    k = (kr(_circular(r[b] - r[a], n_r)) * kd(_circular(v[b] - v[a], m))) ** 2
+    floor = 10.0 ** (-SHARED_CELL_FLOOR_DB / 10.0)
+    over = e_b > e_a
+    keep = apart & (over | (e_b * k >= e_a * floor))
+    b, a, into, e_a, e_b, k, over = b[keep], a[keep], into[keep], e_a[keep], e_b[keep], k[keep], over[keep]
     # its energy in that cell: its response at the offset from the cell's centre
-    e_in = e_b[keep] * (kr(_circular(r[b] - cr[a], n_r)) * kd(_circular(v[b] - cd[a], m))) ** 2
+    e_in = e_b * (kr(_circular(r[b] - cr[a], n_r)) * kd(_circular(v[b] - cd[a], m))) ** 2
     # two moved into one cell within the angle resolution of each other are one angle peak there: the stronger
     same = (into[:, None] == into[None, :]) & (np.abs(_circular(beams[b][:, None] - beams[b][None, :], n_beams))
                                                < RESOLUTION[2])
     stronger = (e_in[None, :] > e_in[:, None]) | ((e_in[None, :] == e_in[:, None])
                                                   & (np.arange(b.size)[None, :] < np.arange(b.size)[:, None]))
     first = ~np.any(same & stronger, axis=1)
-    return b[first], into[first], e_in[first]
+    b, a, into, e_in, e_a, e_b, k, over = (x[first] for x in (b, a, into, e_in, e_a, e_b, k, over))
+    # the other way round: a peak standing that the moved one outshines by more than the floor there is no angle peak
+    # of the snapshot (a strong return astride its cell's edge lost to the cell of a weak one beside it: the chain
+    # reports the strong one at that maximum, where the detection level reported the weak one alone)
+    dropped = np.unique(a[over & (e_a * k < e_b * floor)])
+    return b, into, e_in, dropped
 
 
 def _strongest_of_lost_groups(lost: np.ndarray, alive: np.ndarray, group: np.ndarray, strength: np.ndarray
