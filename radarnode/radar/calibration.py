@@ -39,3 +39,5 @@ def false_alarms_per_pfa_cell(pfa: float) -> float:
     return max(0.0, 1.0 - c * pfa ** beta)
 #: the chain's DOA reports every angle peak within this many dB of a cell's strongest
 DOA_FLOOR_DB = 9.0
+#: at most this many sources a cell's snapshot gives (``radarnode.dsp.doa``'s CLEAN, as the chain calls it)
+DOA_MAX_SOURCES = 4

@@ -22,6 +22,7 @@ from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
 from radarnode.radar import equation, tables
+from radarnode.radar.calibration import DOA_MAX_SOURCES
 from radarnode.radar.presets import RadarPreset
 
 
@@ -373,7 +374,8 @@ class DspChain:
         delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))
         rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
         if d.size and c > 1:   # every angle peak of a cell is a detection, sharing the cell's energy
-            row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db)
+            row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db,
+                                                         DOA_MAX_SOURCES)
             # in proportion to the peaks' powers, so that the cell's peaks add up to its energy (the strongest took
             # all of it before, and each other one its share on top: two equal reflectors resolved in angle in one
             # range–Doppler cell were each reported 3 dB above their RCS)

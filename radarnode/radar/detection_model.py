@@ -68,7 +68,8 @@ from radarnode.dsp.spectra import circular as _circular
 from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
 from radarnode.radar import ambiguity, equation
-from radarnode.radar.calibration import DOA_FLOOR_DB, RESOLUTION, chain_efficiency, false_alarms_per_pfa_cell
+from radarnode.radar.calibration import (DOA_FLOOR_DB, DOA_MAX_SOURCES, RESOLUTION, chain_efficiency,
+                                         false_alarms_per_pfa_cell)
 from radarnode.radar.options import check_snr_db
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers
@@ -244,8 +245,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     rd = (uniq // n_a)
     if lost.size and k_el >= 2:
         # a peak lost to the lobe of a peak beside it at another angle is one more angle peak of that one's cell
-        moved, into, e_moved, dropped = _angle_peaks_of_neighbours(np.flatnonzero(hidden & peak), peak & ~hidden, rd,
-                                                                   c_r, c_v, c_u / beam, energy, n_r, m, k_el, statistic)
+        moved, into, e_moved, dropped = _angle_peaks_of_neighbours(
+            np.flatnonzero(hidden & peak), peak & ~hidden, rd, c_r, c_v, c_u / beam, energy, n_r, m, k_el, statistic)
         hidden[moved], rd[moved], energy[moved] = False, into, e_moved
         hidden[dropped] = True
     peak &= ~hidden
@@ -279,6 +280,11 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     top = np.zeros(cells_rd.size)
     np.maximum.at(top, grp, e_peak)
     keep = hit_rd[grp] & (e_peak >= top[grp] * 10.0 ** (-DOA_FLOOR_DB / 10.0))
+    # the chain's angle estimator takes at most DOA_MAX_SOURCES sources out of a cell's snapshot: its strongest
+    order = np.lexsort((-e_peak, grp))
+    rank = np.empty(grp.size, dtype=np.int64)
+    rank[order] = np.arange(grp.size) - np.searchsorted(grp[order], grp[order], side="left")
+    keep &= rank < DOA_MAX_SOURCES
     idx, grp, e_peak = idx[keep], grp[keep], e_peak[keep]
     pos_r, pos_v, alias_v = g_r[grp], g_v[grp], g_alias[grp]
     # the chain shares its cell's energy among the angle peaks it reports in proportion to their powers
@@ -562,15 +568,17 @@ def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.nda
 #: is within this many dB of the peak's own (:func:`_angle_peaks_of_neighbours`); measured on the chain
 #: (ars408_like at ±10° and mimo12 at ±20°, ρ 35 dB, 16 positions a point, range or Doppler apart): two equal returns
 #: are two up to 0.8 bins apart, 1.5–1.75 at 0.9, 1.0–1.2 at 1.0 and one from 1.1 (the response there: −4.8, −6.0
-#: and −7.4 dB); one 6 dB weaker is two up to 0.3 bins apart, one from 0.7 (`benchmarks/calibration.py --only
-#: abreast`). The same floor the other way: a peak standing that a stronger one moved into its cell outshines by more
-#: than it at its offset is no angle peak there
+#: and −7.4 dB); one 6 dB weaker is two at 0.3 bins apart, one from 0.7 (`benchmarks/calibration.py --only abreast`).
+#: The floor does not reach that 6-dB pair (its response at 0.3 bins: −6.5 dB); 7 dB would, but would keep equal
+#: returns 1.0 bin apart, which the chain reports as one in 0.8–1.0 of the frames. Each return of the maximum is
+#: judged against its strongest one, the peak standing there included
 SHARED_CELL_FLOOR_DB = 6.0
 
 
 def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarray, r: np.ndarray, v: np.ndarray,
                                beams: np.ndarray, energy: np.ndarray, n_r: int, m: int, n_beams: int,
-                               statistic: DetectionStatistic) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+                               statistic: DetectionStatistic
+                               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Of the peaks ``lost`` to other returns' lobes (indices), those the chain reports as one more angle peak of a
     range–Doppler maximum beside them: the chain looks for local maxima of the map that sums the channels, then
     for every angle in the maximum's snapshot, so two returns at different angles less than a bin apart — two cars
@@ -580,10 +588,14 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
     findings). The maximum is the strongest peak still standing (``alive``) in the lost one's range–Doppler cell
     or the eight around it (keys ``rd``, range bin · m + Doppler bin; positions ``r``, ``v`` in bins, circular); the
     lost peak moves into that cell where every peak standing there is at least ``RESOLUTION[2]`` beamwidths from it
-    in angle (``beams``, circular over ``n_beams``) and its power through the windows' response at its offset from
-    the maximum's peak is within :data:`SHARED_CELL_FLOOR_DB` of that one's (``energy`` at the cells' own bins); and
-    that peak is no angle peak of it where the moved one outshines it there by more than the same floor. Returns the
-    peaks moved, the cell each goes into (its key), its energy there, and the peaks standing that it outshines."""
+    in angle (``beams``, circular over ``n_beams``). The chain fits that maximum's snapshot at its strongest return
+    (the peak standing there or one moved into it, by ``energy`` at the cells' own bins, taken to the bin's centre)
+    and sees each other one through the windows' response at its offset from it: a moved one is an angle peak there
+    where that power is within :data:`SHARED_CELL_FLOOR_DB` of the strongest's, and the peak standing there, where it
+    is not the strongest, is dropped where its own is not (judged against the weak peak standing, returns lost beside
+    it went in 2.6–3.0 a frame where the chain reports 1.0–1.7: an independent tester's layouts). Two moved into one
+    cell within the angle resolution of each other are one. Returns the peaks moved, the cell each goes into (its
+    key), its energy there, and the peaks standing that are dropped."""
     none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64))
     host = np.flatnonzero(alive)
     if lost.size == 0 or host.size == 0:
@@ -622,14 +634,32 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
 
     def on_bin(i):
         return energy[i] / np.maximum((kr(r[i] - cr[i]) * kd(v[i] - cd[i])) ** 2, 1e-12)
+    b, a, into = b[apart], a[apart], into[apart]
     e_a, e_b = on_bin(a), on_bin(b)
-    # the chain's snapshot is fitted at the stronger return's position: the weaker one is seen through the windows'
-    # response at its offset from it, and is an angle peak there if within the floor of the stronger one
-    k = (kr(_circular(r[b] - r[a], n_r)) * kd(_circular(v[b] - v[a], m))) ** 2
+    # the chain's snapshot is fitted at the strongest return of the maximum (the peak standing there and every return
+    # moved into it): each other one is seen through the windows' response at its offset from that one, and is an
+    # angle peak there where within the floor of it
+    cell, ci = np.unique(into, return_inverse=True)
+    ci = ci.ravel()
+    host_of = np.empty(cell.size, dtype=np.int64)
+    host_of[ci] = a
+    best = np.zeros(cell.size)
+    best[ci] = e_a
+    np.maximum.at(best, ci, e_b)
+    top = host_of.copy()                                    # the strongest of each maximum: its host, or a moved one
+    is_top = (e_b == best[ci]) & (e_b > e_a)
+    top[ci[is_top]] = b[is_top]
     floor = 10.0 ** (-SHARED_CELL_FLOOR_DB / 10.0)
-    over = e_b > e_a
-    keep = apart & (over | (e_b * k >= e_a * floor))
-    b, a, into, e_a, e_b, k, over = b[keep], a[keep], into[keep], e_a[keep], e_b[keep], k[keep], over[keep]
+
+    def seen(i, e_i):
+        t = top[ci]
+        return e_i * (kr(_circular(r[i] - r[t], n_r)) * kd(_circular(v[i] - v[t], m))) ** 2
+    keep = (b == top[ci]) | (seen(b, e_b) >= best[ci] * floor)
+    # a peak standing there that a moved one outshines by more than the floor at its offset is no angle peak of it
+    # (a strong return astride its cell's edge, lost to the cell of a weak one beside it: the chain reports the
+    # strong one at that maximum, where the detection level reported the weak one alone)
+    dropped = np.unique(a[(top[ci] != a) & (seen(a, e_a) < best[ci] * floor)])
+    b, a, into, e_b = b[keep], a[keep], into[keep], e_b[keep]
     # its energy in that cell: its response at the offset from the cell's centre
     e_in = e_b * (kr(_circular(r[b] - cr[a], n_r)) * kd(_circular(v[b] - cd[a], m))) ** 2
     # two moved into one cell within the angle resolution of each other are one angle peak there: the stronger
@@ -638,11 +668,7 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
     stronger = (e_in[None, :] > e_in[:, None]) | ((e_in[None, :] == e_in[:, None])
                                                   & (np.arange(b.size)[None, :] < np.arange(b.size)[:, None]))
     first = ~np.any(same & stronger, axis=1)
-    b, a, into, e_in, e_a, e_b, k, over = (x[first] for x in (b, a, into, e_in, e_a, e_b, k, over))
-    # the other way round: a peak standing that the moved one outshines by more than the floor there is no angle peak
-    # of the snapshot (a strong return astride its cell's edge lost to the cell of a weak one beside it: the chain
-    # reports the strong one at that maximum, where the detection level reported the weak one alone)
-    dropped = np.unique(a[over & (e_a * k < e_b * floor)])
+    b, into, e_in = b[first], into[first], e_in[first]
     return b, into, e_in, dropped
 
 
