@@ -636,32 +636,34 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
         return energy[i] / np.maximum((kr(r[i] - cr[i]) * kd(v[i] - cd[i])) ** 2, 1e-12)
     b, a, into = b[apart], a[apart], into[apart]
     e_a, e_b = on_bin(a), on_bin(b)
-    # the chain's snapshot is fitted at the strongest return of the maximum (the peak standing there and every return
-    # moved into it): each other one is seen through the windows' response at its offset from that one, and is an
-    # angle peak there where within the floor of it
+    # each one's energy in that cell (the peak standing there: its own; a moved one: through the windows' response at
+    # its offset from the cell's centre)
+    e_in = e_b * (kr(_circular(r[b] - cr[a], n_r)) * kd(_circular(v[b] - cd[a], m))) ** 2
+    # the chain's snapshot is fitted at the return that stands highest in that cell (ranked at its own bin's centre, a
+    # return 1.5–2 bins off took the fit from the peak standing there, which was then dropped: frames left empty where
+    # the chain reports one; an independent tester's finding): each other one is seen through the windows' response
+    # at its offset from that one, and is an angle peak there where within the floor of its power
     cell, ci = np.unique(into, return_inverse=True)
     ci = ci.ravel()
     host_of = np.empty(cell.size, dtype=np.int64)
     host_of[ci] = a
-    best = np.zeros(cell.size)
-    best[ci] = e_a
-    np.maximum.at(best, ci, e_b)
-    top = host_of.copy()                                    # the strongest of each maximum: its host, or a moved one
-    is_top = (e_b == best[ci]) & (e_b > e_a)
+    high = energy[host_of].astype(np.float64)
+    np.maximum.at(high, ci, e_in)
+    top = host_of.copy()                                    # the highest of each maximum: its host, or a moved one
+    is_top = (e_in == high[ci]) & (e_in > energy[a])
     top[ci[is_top]] = b[is_top]
     floor = 10.0 ** (-SHARED_CELL_FLOOR_DB / 10.0)
+    e_top = on_bin(top)
 
     def seen(i, e_i):
         t = top[ci]
         return e_i * (kr(_circular(r[i] - r[t], n_r)) * kd(_circular(v[i] - v[t], m))) ** 2
-    keep = (b == top[ci]) | (seen(b, e_b) >= best[ci] * floor)
+    keep = (b == top[ci]) | (seen(b, e_b) >= e_top[ci] * floor)
     # a peak standing there that a moved one outshines by more than the floor at its offset is no angle peak of it
     # (a strong return astride its cell's edge, lost to the cell of a weak one beside it: the chain reports the
     # strong one at that maximum, where the detection level reported the weak one alone)
-    dropped = np.unique(a[(top[ci] != a) & (seen(a, e_a) < best[ci] * floor)])
-    b, a, into, e_b = b[keep], a[keep], into[keep], e_b[keep]
-    # its energy in that cell: its response at the offset from the cell's centre
-    e_in = e_b * (kr(_circular(r[b] - cr[a], n_r)) * kd(_circular(v[b] - cd[a], m))) ** 2
+    dropped = np.unique(a[(top[ci] != a) & (seen(a, e_a) < e_top[ci] * floor)])
+    b, a, into, e_in = b[keep], a[keep], into[keep], e_in[keep]
     # two moved into one cell within the angle resolution of each other are one angle peak there: the stronger
     same = (into[:, None] == into[None, :]) & (np.abs(_circular(beams[b][:, None] - beams[b][None, :], n_beams))
                                                < RESOLUTION[2])
