@@ -571,7 +571,7 @@ def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.nda
 #: and −7.4 dB); one 6 dB weaker is two at 0.3 bins apart, one from 0.7 (`benchmarks/calibration.py --only abreast`).
 #: The floor does not reach that 6-dB pair (its response at 0.3 bins: −6.5 dB); 7 dB would, but would keep equal
 #: returns 1.0 bin apart, which the chain reports as one in 0.8–1.0 of the frames. Each return of the maximum is
-#: judged against its strongest one, the peak standing there included
+#: judged against the one standing highest in its cell, the peak standing there included
 SHARED_CELL_FLOOR_DB = 6.0
 
 
@@ -588,12 +588,13 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
     findings). The maximum is the strongest peak still standing (``alive``) in the lost one's range–Doppler cell
     or the eight around it (keys ``rd``, range bin · m + Doppler bin; positions ``r``, ``v`` in bins, circular); the
     lost peak moves into that cell where every peak standing there is at least ``RESOLUTION[2]`` beamwidths from it
-    in angle (``beams``, circular over ``n_beams``). The chain fits that maximum's snapshot at its strongest return
-    (the peak standing there or one moved into it, by ``energy`` at the cells' own bins, taken to the bin's centre)
-    and sees each other one through the windows' response at its offset from it: a moved one is an angle peak there
-    where that power is within :data:`SHARED_CELL_FLOOR_DB` of the strongest's, and the peak standing there, where it
-    is not the strongest, is dropped where its own is not (judged against the weak peak standing, returns lost beside
-    it went in 2.6–3.0 a frame where the chain reports 1.0–1.7: an independent tester's layouts). Two moved into one
+    in angle (``beams``, circular over ``n_beams``). The chain fits that maximum's snapshot at the return standing
+    highest in its cell (the peak standing there, ``energy`` at its cell, or one moved into it, through the windows'
+    response at its offset from the cell's centre) and sees each other one through that response at its offset from
+    that one: a moved one is an angle peak there where that power is within :data:`SHARED_CELL_FLOOR_DB` of the
+    highest one's own, and the peak standing there, where it is not the highest, is dropped where its own is not
+    (judged against the weak peak standing, returns lost beside it went in 2.6–3.0 a frame where the chain reports
+    1.0–1.7: an independent tester's layouts). Two moved into one
     cell within the angle resolution of each other are one. Returns the peaks moved, the cell each goes into (its
     key), its energy there, and the peaks standing that are dropped."""
     none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64))
