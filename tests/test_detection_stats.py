@@ -95,6 +95,15 @@ def test_the_detection_levels_draw_follows_the_exact_pd(swerling):
         assert measured == pytest.approx(float(stat.pd(10 ** (e_db / 10), swerling)), abs=0.015)
 
 
+def _detections(level: str, p, chain, scat, seed: int):
+    """One frame's detections of ``scat`` at the detection level, or at the signal level through the chain (its
+    range–Doppler synthesis), drawn from ``seed``."""
+    from radarnode.radar.signal_model import synthesize_rd
+    rng = np.random.default_rng(seed)
+    return detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
+        else chain.process_rd(synthesize_rd(p, scat, rng))
+
+
 def _small_preset():
     """A 4-channel, 64 × 64 radar: the same chain, cheap enough for hundreds of trials in a test."""
     return PRESETS["mimo12"].with_overrides({"num_chirps": 64, "num_samples": 64, "num_tx": 1})
@@ -272,7 +281,6 @@ def test_a_target_behind_a_strong_one_near_the_first_range_bins_is_masked_as_the
     the weak one in every frame; in mid-range the full ring keeps it about 80 % of the frames. The detection level
     draws the chain's cut ring (it gave 0.78 near the edge, where the chain gives 0, before)."""
     from radarnode.radar import detection_model
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["ars408_like"]
     chain = DspChain(p)
     rs, rw = base * p.range_resolution_m, (base + 3.0) * p.range_resolution_m
@@ -282,9 +290,7 @@ def test_a_target_behind_a_strong_one_near_the_first_range_bins_is_masked_as_the
     trials = 30
     for t in range(trials):
         for level in seen:
-            rng = np.random.default_rng(9000 + t)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, 9000 + t)
             seen[level] += bool(np.any((np.abs(det.range_m - rw) < p.range_resolution_m)
                                        & (np.abs(det.azimuth_rad) < 0.05)))
     rate = {k: v / trials for k, v in seen.items()}
@@ -336,7 +342,6 @@ def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(c
     behind it 40° away never; 3 bins away it always is, and so at the lobe test's reach (4 bins) and twice it. The
     detection level's lobe test gives the same (it reported the first two in every frame before)."""
     from radarnode.radar import detection_model
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["mimo12"]
     chain = DspChain(p)
     trials = 30
@@ -353,9 +358,7 @@ def test_a_weaker_target_in_a_stronger_ones_lobe_is_lost_as_the_chain_loses_it(c
         scat = point_targets(r, az, v)
         scat.rcs_dbsm = np.array([50.0, 38.0]) - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
         for level in seen:
-            rng = np.random.default_rng(7000 + t)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, 7000 + t)
             seen[level] += bool(np.any((np.abs(det.range_m - r[1]) < 0.75 * p.range_resolution_m)
                                        & (np.abs(det.range_rate_mps - v[1]) < 0.75 * p.doppler_bin_mps)
                                        & (np.abs(det.azimuth_rad - math.radians(az[1])) < math.radians(6.0))))
@@ -376,7 +379,6 @@ def test_two_equal_returns_bins_apart_in_one_beam_are_never_both_lost(axis, sep)
     it and hid it) and in 1–2 of 14 at 2 bins (the map's maximum between them, where neither stands); an independent
     tester's finding on two motorcycles riding staggered. Now: never both lost at either level, and 2 or 3 bins apart
     the frames with two reported within 0.25 of each other (measured: 0.29 / 0.29 at 2 bins, 0.88 / 1.00 at 3)."""
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["ars408_like"]
     chain = DspChain(p)
     trials = 24
@@ -390,9 +392,7 @@ def test_two_equal_returns_bins_apart_in_one_beam_are_never_both_lost(axis, sep)
         scat = point_targets(r, [0.0, 0.3], v)
         scat.rcs_dbsm = 45.0 - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)     # ρ 45 dB each
         for level in counts:
-            rng = np.random.default_rng(9100 + t)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, 9100 + t)
             near = (np.abs(det.range_m - np.mean(r)) < (0.5 * sep + 1.0) * p.range_resolution_m) & \
                 (np.abs(det.range_rate_mps - np.mean(v)) < (0.5 * sep + 1.0) * p.doppler_bin_mps)
             counts[level].append(int(near.sum()))
@@ -413,7 +413,6 @@ def test_a_group_of_returns_apart_from_the_rest_is_never_all_lost(axis, layout):
     weaker returns a bin apart (−3, −6 dB; the row's slope hid it): the detection level lost every one of them in
     16–30 of 56 frames of an independent tester's scenes, the chain never. Now: at least one in every frame, at
     both levels."""
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["ars408_like"]
     chain = DspChain(p)
     if layout == "two_cells_between":
@@ -430,9 +429,7 @@ def test_a_group_of_returns_apart_from_the_rest_is_never_all_lost(axis, layout):
         scat = point_targets(r, np.linspace(0.0, 0.6, pos.size), v)
         scat.rcs_dbsm = 45.0 + gain_db - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
         for level in counts:
-            rng = np.random.default_rng(9300 + t)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, 9300 + t)
             near = (np.abs(det.range_m - r.mean()) < (np.ptp(r) / 2 + 1.5 * p.range_resolution_m)) & \
                 (np.abs(det.range_rate_mps - v.mean()) < (np.ptp(v) / 2 + 1.5 * p.doppler_bin_mps))
             counts[level].append(int(near.sum()))
@@ -449,7 +446,6 @@ def test_returns_abreast_at_other_angles_are_angle_peaks_of_one_maximum_as_in_th
     0.8 bins (the lobe test hid the other, an independent tester's finding; 1.0 against the chain's 2.0); now it
     moves the lost one into the maximum's cell as an angle peak. Below (0.3), just below (0.8) and just above (1.1)
     the measured cut, and at twice it (2.2: two maxima): the two levels' mean counts within 0.3."""
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["ars408_like"]
     chain = DspChain(p)
     pos = 40.5 + np.array([-0.5, 0.5]) * sep            # astride the edge of cells 40 and 41
@@ -462,9 +458,7 @@ def test_returns_abreast_at_other_angles_are_angle_peaks_of_one_maximum_as_in_th
         scat = point_targets(r, [-10.0, 10.0], v)
         scat.rcs_dbsm = 35.0 - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)     # ρ 35 dB each
         for level in counts:
-            rng = np.random.default_rng(700 + t)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, 700 + t)
             near = (np.abs(det.range_m - r.mean()) < (np.ptp(r) / 2 + 2.0 * p.range_resolution_m)) & \
                 (np.abs(det.range_rate_mps - v.mean()) < (np.ptp(v) / 2 + 2.0 * p.doppler_bin_mps))
             counts[level].append(int(near.sum()))
@@ -480,7 +474,6 @@ def test_a_strong_return_lost_to_a_weak_ones_cell_is_reported_there_in_its_place
     and its snapshot there holds the strong one (the weak one 16 dB below it: no angle peak). The chain reports the
     strong one in 16 of 16 frames and the weak one in none; the detection level reported the weak one alone in 9 of
     them (the strong one lost). Now the strong one moves into that cell and the weak one is dropped there."""
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["ars408_like"]
     chain = DspChain(p)
     r = np.array([40.45, 41.2]) * p.range_resolution_m
@@ -489,9 +482,7 @@ def test_a_strong_return_lost_to_a_weak_ones_cell_is_reported_there_in_its_place
     seen = {"detection": [0, 0], "signal": [0, 0]}
     for seed in range(16):
         for level, count in seen.items():
-            rng = np.random.default_rng(seed)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, seed)
             az = np.degrees(det.azimuth_rad[np.abs(det.range_m - r.mean()) < 3.0 * p.range_resolution_m])
             count[0] += int(np.any(np.abs(az + 10.0) < 3.0))
             count[1] += int(np.any(np.abs(az - 10.0) < 3.0))
@@ -506,7 +497,6 @@ def test_returns_moved_into_one_maximum_are_judged_against_its_strongest(layout)
     that weak one, so the detection level reported 2.6–3.0 a frame where the chain reports 1.0–1.7. The chain fits
     the maximum's snapshot at its strongest return and sees each other one through the windows' response at its
     offset from it: now so does the detection level, within 0.5 of the chain."""
-    from radarnode.radar.signal_model import synthesize_rd
     r, v, az, rho, seed0 = {
         "fz35": ([40.99, 40.13, 41.56, 41.13], [6.54, 5.46, 6.21, 5.64], [-27.9, 35.3, -49.7, 0.4],
                  [32.0, 35.0, 25.0, 25.0], 1460),
@@ -521,9 +511,7 @@ def test_returns_moved_into_one_maximum_are_judged_against_its_strongest(layout)
     counts = {"detection": [], "signal": []}
     for seed in range(seed0, seed0 + 16):
         for level, c in counts.items():
-            rng = np.random.default_rng(seed)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, seed)
             near = ((det.range_m > r.min() - 2 * p.range_resolution_m)
                     & (det.range_m < r.max() + 2 * p.range_resolution_m)
                     & (det.range_rate_mps > v.min() - 2 * p.doppler_bin_mps)
@@ -542,7 +530,6 @@ def test_a_return_moved_from_afar_does_not_take_the_maximum_from_the_peak_standi
     frames empty, or a detection 7–15 dB low at the other return's angle (an independent tester's finding). Now the
     highest in the cell holds it: one detection at one of the returns' angles (equal ones: the chain takes either, by
     its noise) and within 2 dB of the chain's SNR, every frame."""
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS[preset]
     chain = DspChain(p)
     rr, vv = np.array(r) * p.range_resolution_m, np.array(v) * p.doppler_bin_mps
@@ -551,9 +538,7 @@ def test_a_return_moved_from_afar_does_not_take_the_maximum_from_the_peak_standi
     for seed in range(700, 704):
         out = {}
         for level in ("detection", "signal"):
-            rng = np.random.default_rng(seed)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, seed)
             near = np.abs(det.range_m - rr.mean()) < 3.0 * p.range_resolution_m
             out[level] = (np.degrees(det.azimuth_rad[near]), det.snr_db[near])
         (az_d, snr_d), (az_s, snr_s) = out["detection"], out["signal"]
@@ -565,7 +550,6 @@ def test_a_cell_gives_at_most_the_chains_four_angle_peaks():
     """Six equal returns at six angles in one range–Doppler cell (mimo12): the chain's angle estimator takes at most
     DOA_MAX_SOURCES (4) sources out of a snapshot; the detection level reported all six."""
     from radarnode.radar.calibration import DOA_MAX_SOURCES
-    from radarnode.radar.signal_model import synthesize_rd
     p = PRESETS["mimo12"]
     chain = DspChain(p)
     az = [-50.0, -30.0, -10.0, 10.0, 30.0, 50.0]
@@ -574,9 +558,7 @@ def test_a_cell_gives_at_most_the_chains_four_angle_peaks():
     scat.rcs_dbsm = 35.0 - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
     for seed in range(4):
         for level in ("detection", "signal"):
-            rng = np.random.default_rng(seed)
-            det = detection_model.detect(p, scat, rng, chain.statistic) if level == "detection" \
-                else chain.process_rd(synthesize_rd(p, scat, rng))
+            det = _detections(level, p, chain, scat, seed)
             n = int(np.sum(np.abs(det.range_m - r[0]) < 2 * p.range_resolution_m))
             assert n <= DOA_MAX_SOURCES, (level, seed, n)
             if level == "detection":
