@@ -926,14 +926,7 @@ def abreast_table(quick: bool) -> None:
                 scat.rcs_dbsm = np.array([35.0, 35.0 - ratio]) - equation.snr_db(p, scat.range_m, 0.0, 0.0,
                                                                                  scat.azimuth_rad)
                 for level in count:
-                    rng = np.random.default_rng(700 + t)
-                    det = (detection_model.detect(p, scat, rng, chain.statistic) if level == "detection"
-                           else chain.process_rd(synthesize_rd(p, scat, rng)))
-                    near = ((det.range_m > r.min() - 2 * p.range_resolution_m)
-                            & (det.range_m < r.max() + 2 * p.range_resolution_m)
-                            & (det.range_rate_mps > v.min() - 2 * p.doppler_bin_mps)
-                            & (det.range_rate_mps < v.max() + 2 * p.doppler_bin_mps))
-                    count[level] += int(near.sum())
+                    count[level] += _near_count(level, p, chain, scat, 700 + t, r, v)
             row.append(f"{count['signal'] / positions:.2f} / {count['detection'] / positions:.2f}")
         print(f"| {name} | ±{abs(az[0]):.0f}° | {axis} | {ratio:.0f} dB | " + " | ".join(row) + " |", flush=True)
     print()
@@ -962,14 +955,7 @@ def layouts_table(quick: bool) -> None:
         count = {"signal": 0, "detection": 0}
         for t in range(frames):
             for level in count:
-                rng = np.random.default_rng(900 + 16 * i + t)
-                det = (detection_model.detect(p, scat, rng, chain.statistic) if level == "detection"
-                       else chain.process_rd(synthesize_rd(p, scat, rng)))
-                near = ((det.range_m > r.min() - 2 * p.range_resolution_m)
-                        & (det.range_m < r.max() + 2 * p.range_resolution_m)
-                        & (det.range_rate_mps > v.min() - 2 * p.doppler_bin_mps)
-                        & (det.range_rate_mps < v.max() + 2 * p.doppler_bin_mps))
-                count[level] += int(near.sum())
+                count[level] += _near_count(level, p, chain, scat, 900 + 16 * i + t, r, v)
         diff[name].append((count["detection"] - count["signal"]) / frames)
     print(f"### Random layouts of returns within two bins ({layouts} layouts, {frames} frames each)\n")
     print("2–5 point returns at 40–42 range bins and 5–7 Doppler bins (half the layouts at one speed), azimuths uniform "
@@ -982,6 +968,18 @@ def layouts_table(quick: bool) -> None:
         print(f"| {name} | {d.size} | {d.mean():+.3f} | {np.abs(d).mean():.3f} | {int((d > 0.5).sum())} | "
               f"{int((d < -0.5).sum())} |", flush=True)
     print()
+
+
+def _near_count(level: str, p, chain, scat, seed: int, r: np.ndarray, v: np.ndarray) -> int:
+    """How many detections one frame of ``scat`` gives at ``level`` (the detection level, or the chain on the
+    range–Doppler synthesis) within 2 bins of the returns' extent in range ``r`` and speed ``v``, drawn from ``seed``."""
+    rng = np.random.default_rng(seed)
+    det = (detection_model.detect(p, scat, rng, chain.statistic) if level == "detection"
+           else chain.process_rd(synthesize_rd(p, scat, rng)))
+    near = ((det.range_m > r.min() - 2 * p.range_resolution_m) & (det.range_m < r.max() + 2 * p.range_resolution_m)
+            & (det.range_rate_mps > v.min() - 2 * p.doppler_bin_mps)
+            & (det.range_rate_mps < v.max() + 2 * p.doppler_bin_mps))
+    return int(near.sum())
 
 
 _CHAINS: dict = {}
