@@ -594,9 +594,9 @@ def _angle_peaks_of_neighbours(lost: np.ndarray, alive: np.ndarray, rd: np.ndarr
     that one: a moved one is an angle peak there where that power is within :data:`SHARED_CELL_FLOOR_DB` of the
     highest one's own, and the peak standing there, where it is not the highest, is dropped where its own is not
     (judged against the weak peak standing, returns lost beside it went in 2.6–3.0 a frame where the chain reports
-    1.0–1.7: an independent tester's layouts). Two moved into one
-    cell within the angle resolution of each other are one. Returns the peaks moved, the cell each goes into (its
-    key), its energy there, and the peaks standing that are dropped."""
+    1.0–1.7: an independent tester's layouts). Two moved into one cell within the angle resolution of each other are
+    one. Returns the peaks moved, the cell each goes into (its key), its energy there, and the peaks standing that are
+    dropped."""
     none = (np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0, dtype=np.int64))
     host = np.flatnonzero(alive)
     if lost.size == 0 or host.size == 0:
