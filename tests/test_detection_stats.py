@@ -104,6 +104,16 @@ def _detections(level: str, p, chain, scat, seed: int):
         else chain.process_rd(synthesize_rd(p, scat, rng))
 
 
+def _crowd(n: int):
+    """``n`` returns crowded within a few bins (positions in bins, d·sinθ, coherent fields 0–30 dB, tags of several
+    bodies and posts), from seed 11: the lobe test's crowd; and the generator, to draw on from."""
+    rng = np.random.default_rng(11)
+    r, v = rng.uniform(20.0, 60.0, n), rng.uniform(-8.0, 8.0, n)
+    u = rng.uniform(-0.5, 0.5, n)
+    field = rng.normal(size=n) * 10.0 ** rng.uniform(0.0, 3.0, n) * np.exp(2j * np.pi * rng.random(n))
+    return r, v, u, field, rng.integers(-1, 6, n), rng
+
+
 def _small_preset():
     """A 4-channel, 64 × 64 radar: the same chain, cheap enough for hundreds of trials in a test."""
     return PRESETS["mimo12"].with_overrides({"num_chirps": 64, "num_samples": 64, "num_tx": 1})
@@ -599,12 +609,8 @@ def test_two_returns_are_one_group_only_within_the_lobe_reach(axis, sep, joined)
     from radarnode.radar import detection_model
     p = PRESETS["ars408_like"]
     stat = DspChain(p).statistic
-    rng = np.random.default_rng(11)
     n = 300
-    r, v = rng.uniform(20.0, 60.0, n), rng.uniform(-8.0, 8.0, n)
-    u = rng.uniform(-0.5, 0.5, n)
-    field = rng.normal(size=n) * 10.0 ** rng.uniform(0.0, 3.0, n) * np.exp(2j * np.pi * rng.random(n))
-    tag = rng.integers(-1, 6, n)
+    r, v, u, field, tag, _ = _crowd(n)
     for at in (150.0, p.num_range_bins - 0.5 * sep):          # the second pair astride the range axis's wrap
         a, b = (at, 40.0), (at + sep, 40.0) if axis == "range" else (at, 40.0 + sep)
         rr = np.concatenate([r, [a[0], np.mod(b[0], p.num_range_bins)]])
@@ -627,13 +633,9 @@ def test_the_lobe_test_of_some_cells_is_their_answer_among_every_cell(tested):
     from radarnode.radar import detection_model
     p = PRESETS["ars408_like"]
     stat = DspChain(p).statistic
-    rng = np.random.default_rng(11)
     n = 300
-    r, v = rng.uniform(20.0, 60.0, n), rng.uniform(-8.0, 8.0, n)
-    u = rng.uniform(-0.5, 0.5, n)
-    field = rng.normal(size=n) * 10.0 ** rng.uniform(0.0, 3.0, n) * np.exp(2j * np.pi * rng.random(n))
+    r, v, u, field, tag, rng = _crowd(n)
     energy = np.abs(field) ** 2
-    tag = rng.integers(-1, 6, n)
     args = (r, v, u, field, energy, tag, p.num_range_bins, p.num_chirps, p.num_virtual, stat)
     every = detection_model._inside_lobes(*args)
     assert 20 < every.sum() < n - 20               # the crowd hides many, not all
