@@ -367,27 +367,24 @@ class RoadBoundaryEstimator:
         count = [int(mom[k][0]) if use[k] else 0 for k in range(rows)]
         if max(count) < 4:
             return [UNAVAILABLE] * rows
-        # seed 002: M cross-sections along x from each row's nearest inlier, at most k of them without a point (every
-        # row's sections in one pass: a row's cells counted at offset k·M)
+        # seed 002: M cross-sections along x from each row's nearest inlier, at most k of them without a point (a row's
+        # inliers taken out once: its cells are few, so the rest is in Python numbers)
         sections = self.sections
-        lo = np.where(inliers, x, np.inf).min(axis=1)
-        x_max = np.where(inliers, x, -np.inf).max(axis=1).tolist()
-        cell = np.floor((x - lo[:, None]) / self.section_m)       # (x > 0: the nearest inlier is the start)
-        cell += (sections * np.arange(rows))[:, None]
-        valid = inliers & (cell < (sections * np.arange(1, rows + 1))[:, None])
-        occupied = (np.bincount(cell[valid].astype(np.intp), minlength=rows * sections) > 0).tolist()
-        lo = lo.tolist()
-        ok, seen, deg2, start = [False] * rows, [0] * rows, [False] * rows, [0.0] * rows
+        ok, seen, deg2, start, x_max = [False] * rows, [0] * rows, [False] * rows, [0.0] * rows, [0.0] * rows
         for k in range(rows):
             if count[k] < 4:
                 continue
-            start[k] = max(lo[k], 0.0)
-            row = occupied[k * sections:(k + 1) * sections]
-            reach = sections - row[::-1].index(True) if True in row else 0
-            seen[k] = sum(row[:reach])
+            xs = x.compress(inliers[k])
+            lo, x_max[k] = float(xs.min()), float(xs.max())
+            xs -= lo
+            xs /= self.section_m                          # (x > 0: the nearest inlier is the start)
+            row = np.bincount(xs.astype(np.intp), minlength=sections)[:sections].tolist()
+            start[k] = max(lo, 0.0)
+            reach = sections - next((j for j in range(sections) if row[sections - 1 - j]), sections)
+            seen[k] = sum(1 for j in range(reach) if row[j])
             missing = (reach - seen[k]) + max(0, sections - reach - self.max_missing)
             ok[k] = missing <= self.max_missing and reach >= 2
-            deg2[k] = ok[k] and x_max[k] - lo[k] > 40.0 and count[k] >= 8
+            deg2[k] = ok[k] and x_max[k] - lo > 40.0 and count[k] >= 8
         if not any(ok):
             return [UNAVAILABLE] * rows
         coef = solve_x(mom, deg2)
