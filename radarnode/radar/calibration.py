@@ -41,3 +41,6 @@ def false_alarms_per_pfa_cell(pfa: float) -> float:
 DOA_FLOOR_DB = 9.0
 #: at most this many sources a cell's snapshot gives (``radarnode.dsp.doa``'s CLEAN, as the chain calls it)
 DOA_MAX_SOURCES = 4
+#: a cell's second and later angle peaks must stand this many dB above the beam's noise (K·σ²) in the snapshot's
+#: residual (the chain's CLEAN, ``DspConfig.doa_secondary_snr_db``'s default)
+DOA_SECONDARY_SNR_DB = 12.0

@@ -22,7 +22,7 @@ from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
 from radarnode.radar import equation, tables
-from radarnode.radar.calibration import DOA_MAX_SOURCES
+from radarnode.radar.calibration import DOA_FLOOR_DB, DOA_MAX_SOURCES, DOA_SECONDARY_SNR_DB
 from radarnode.radar.presets import RadarPreset
 
 
@@ -40,8 +40,9 @@ class DspConfig:
     train_range: int = 8
     doa: str = "fft"
     doa_fft_size: int = 256
-    doa_floor_db: float = 9.0
-    doa_secondary_snr_db: float = 12.0   # a cell's second angle peak must stand this far above the beam noise
+    doa_floor_db: float = DOA_FLOOR_DB
+    # a cell's second angle peak must stand this far above the beam noise
+    doa_secondary_snr_db: float = DOA_SECONDARY_SNR_DB
     range_ml: bool = True          # maximum-likelihood range and Doppler refinement of the strongest peaks
     range_ml_max_peaks: int = 128
     ml_patch_half: int = 12        # its patch: ±12 bins each way where no other peak is near
