@@ -56,6 +56,21 @@ RadarState 0x201 (a stray or forged one must not strip groups):
   :meth:`CycleAssembler.expire`, in wall-clock time of arrival), or on
   :meth:`CycleAssembler.flush` (end of a log).
 
+Frames on the list's IDs that are not the sensor's (random or forged content with the right DLC) cost no cycle
+they can be told apart in, and never enter a delivered one:
+
+* a general frame beyond the header's count is kept beside the others; the later groups, which name the sensor's
+  objects, tell which are its (the others are counted in ``extra_frames``); without a later group the cycle is
+  dropped;
+* a later group's frame for an object the (whole) general group lacks is counted in ``unexpected_ids`` and left out;
+* a later group's frame out of the general group's order (the sensor sends every group in one order) holds the cycle
+  to its end instead of delivering it the moment its layout is complete, so that a second frame for the same place
+  is seen as a conflict and the cycle dropped (a forged frame for the last place of the last group, sent before the
+  group's own frames, was delivered with the cycle); a frame for the same place after a cycle delivered whole in
+  order is counted in ``conflicting_frames`` (the cycle went out with the first: a known limit, for a forged frame
+  that imitates the sensor's last frame in its place). Two frames for one place in an open cycle drop it: which is
+  the sensor's cannot be told.
+
 A frame of a group that arrives before the groups the sensor sends ahead of it (0x60B, 0x60C, 0x60D, 0x60E,
 each whole before the next) are whole in the cycle in progress waits aside: the next header, of higher CAN
 priority, overtakes the last frames of a cycle, which must not take the next cycle's places. The cycle's own
@@ -220,6 +235,13 @@ class _Pending:
         self.provisional: dict[int, dict[int, tuple[bytes, dict]]] = {}
         self.order: list[int] = []
         self.bad = False
+        # a later group's frame came out of the general group's order (a gateway's reordering, or a frame that is not
+        # the sensor's): the cycle is not delivered the moment its layout is complete, but at its end, so that a
+        # frame for the same place after it is still seen as a conflict
+        self.reordered = False
+        # more general frames than the header's count (one that is not the sensor's among them): which are the
+        # sensor's is read from the later groups (:meth:`CycleAssembler._resolve_overflow`)
+        self.overflow = False
         self.early = False             # delivered as soon as the layout was complete
         self.announced: frozenset[int] = frozenset()   # groups announced before its header
         self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
@@ -697,7 +719,8 @@ class CycleAssembler(can.Listener):
     def _fits(p: _Pending, base: int, oid: int) -> bool:
         """Whether a list frame has a place in cycle ``p``: a general frame while the header's count is not
         reached, another group's frame for an object of the general group that this group lacks. (The order of
-        a cycle's frames is not checked: a gateway may reorder them, and a cycle reordered is still whole.)"""
+        a cycle's frames does not decide a place: a gateway may reorder them, and a cycle reordered is still whole;
+        it is delivered at its end rather than the moment its layout is complete.)"""
         general = p.groups.get(GENERAL[p.kind], {})
         if base == GENERAL[p.kind]:
             return len(general) < p.expected and oid not in general
@@ -795,12 +818,40 @@ class CycleAssembler(can.Listener):
             return False
         if base == GENERAL[p.kind]:
             if len(group) >= p.expected:
+                # one too many: one of them is not the sensor's. Kept, and the later groups, which name the sensor's
+                # objects, tell which (a frame of random content on the list's ID inside a cycle cost the cycle)
                 self.stats.extra_frames += 1
-                p.bad = True
-                return False
+                p.overflow = True
             p.order.append(oid)
+        else:
+            general = p.groups.get(GENERAL[p.kind], {})
+            if oid not in general and len(general) >= p.expected:
+                # an object the general group does not have, whole: not the sensor's (it cost the cycle before)
+                self.stats.unexpected_ids += 1
+                return False
+            at = len(group)
+            if at >= len(p.order) or p.order[at] != oid:
+                p.reordered = True
         group[oid] = (data, values)
+        if p.overflow:
+            self._resolve_overflow(p)
         return True
+
+    def _resolve_overflow(self, p: _Pending) -> None:
+        """Cycle ``p`` took more general frames than its header's count: where a later group holds the count for
+        objects all among them, and every later group's objects are among those, those are the sensor's, and the
+        others (counted in ``extra_frames`` as they came) leave the cycle. Otherwise it stays unresolved, and the
+        cycle ends incomplete."""
+        general = p.groups.get(GENERAL[p.kind], {})
+        later = [set(group) for g, group in p.groups.items() if g != GENERAL[p.kind] and group]
+        named = next((ids_ for ids_ in later if len(ids_) == p.expected and ids_ <= set(general)), None)
+        if named is None or not all(ids_ <= named for ids_ in later):
+            return
+        for oid in set(general) - named:
+            del general[oid]
+        p.order = [oid for oid in p.order if oid in named]
+        p.overflow = False
+        p.reordered = True            # (its later groups were checked against an order with the intruder in it)
 
     def _stray_list_frame(self, kind: str, base: int, oid: int, data: bytes) -> None:
         """A list frame with no cycle open: a repeat, a late group of the last cycle, or an orphan."""
@@ -809,6 +860,13 @@ class CycleAssembler(can.Listener):
             prior = done.groups.get(base, {}).get(oid)
             if prior is not None and prior[0] == data:
                 self.stats.duplicate_frames += 1
+                return
+            if prior is not None and done.early:
+                # another frame for a place of the cycle just delivered, in order, whole: one of the two was not the
+                # sensor's, and the cycle went out with the first (a known limit: a forged frame that imitates the
+                # last frame of a cycle's last group, in its place, is taken; the sensor's own after it is counted
+                # here)
+                self.stats.conflicting_frames += 1
                 return
             if base not in done.groups and oid in done.groups.get(GENERAL[kind], {}):
                 # a group the layout did not expect, for an object of the last cycle: expect it again
@@ -820,7 +878,7 @@ class CycleAssembler(can.Listener):
     def _layout_complete(self, p: _Pending) -> bool:
         """Whether cycle ``p`` holds the header's count in its general group and in every group of the expected
         layout, every group for the same objects (none bad)."""
-        if p.bad:
+        if p.bad or p.overflow:
             return False
         general = p.groups.get(GENERAL[p.kind], {})
         if len(general) != p.expected:
@@ -832,7 +890,7 @@ class CycleAssembler(can.Listener):
 
     def _maybe_complete(self, kind: str) -> None:
         p = self._pending[kind]
-        if self._layout_complete(p):
+        if self._layout_complete(p) and not p.reordered:
             p.early = True
             del self._pending[kind]
             self._finish(p)
@@ -865,6 +923,8 @@ class CycleAssembler(can.Listener):
         """A cycle ended (its layout complete, the next header, a time-out or the end of data): delivered whole,
         held while short of a group of the layout, or dropped."""
         self._promote(p)
+        if p.overflow:
+            self._resolve_overflow(p)
         general_id = GENERAL[p.kind]
         general = p.groups.get(general_id, {})
         unexpected = sum(len(set(group) - set(general)) for g, group in p.groups.items() if g != general_id)
