@@ -71,6 +71,20 @@ def test_log_and_decode_every_format(capsys, tmp_path, reference, suffix):
     assert max(abs(a[2] - b[2]) for a, b in zip(frames, reference)) < 1e-4    # MF4 keeps times to ~0.2 µs
 
 
+@pytest.mark.parametrize("suffix", WRITTEN)
+def test_a_name_with_dots_before_the_suffix_is_written_and_read_back(capsys, tmp_path, reference, suffix):
+    """An independent tester's finding: ``drive.2026-12-01.log.gz`` (and every compressed format with a dot in the
+    name) passed radarnode's suffix check and then python-can's writer refused it, reading every suffix of the name
+    (".2026-12-01.log.gz"), exit status 1. The format is the name's last suffix, or its last two with .gz."""
+    out = tmp_path / f"drive.2026-12-01.v2{suffix}"
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", out, "--duration", "2")
+    assert rc == 0, err
+    assert [p.name for p in tmp_path.iterdir()] == [out.name]
+    rc, text, err = cli(capsys, "decode", out)       # (python-can's own reader refuses such a name, too)
+    assert rc == 0 and "error" not in err, err
+    assert text.count("objects\n") == 27 and "consumer: frames=241, cycles=27" in text
+
+
 def _damage(path: Path, how: str) -> Path:
     data = path.read_bytes()
     bad = path.with_name(f"{how}_{path.name}")

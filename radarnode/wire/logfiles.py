@@ -154,6 +154,15 @@ def open_writer(path: str):
         return _SqliteWriter(path)
     if fmt == ".blf":
         return _BlfWriter(path)
+    if fmt.endswith(".gz"):
+        # the writer of the format before .gz on a gzip stream, as can.Logger makes it: but chosen by the last two
+        # suffixes only (can.Logger reads every suffix of the name, and refused 'drive.2026-12-01.log.gz')
+        import gzip
+        from can.io.generic import TextIOMessageWriter
+        from can.io.logger import MESSAGE_WRITERS
+
+        writer = MESSAGE_WRITERS[fmt[:-3]]
+        return writer(file=gzip.open(path, mode="wt" if issubclass(writer, TextIOMessageWriter) else "wb"))
     return can.Logger(path)
 
 
