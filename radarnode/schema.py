@@ -82,14 +82,30 @@ class Schema:
     non_empty: dict = field(default_factory=dict)
 
 
+#: a scenario's values nest a few levels deep (actors → waypoints → a waypoint's fields): deeper is a mistake
+MAX_DEPTH = 64
+#: values in one scenario file once its aliases are expanded, at most (the largest shipped scenario holds a few
+#: hundred)
+MAX_VALUES = 100_000
+
+
+def _short(path: str, most: int = 60) -> str:
+    """A dotted field path for a message, cut to its first ``most`` characters."""
+    return path if len(path) <= most else path[:most] + "…"
+
+
 class Source:
     """A parsed YAML document with the line of every node, keyed by its dotted path."""
 
     def __init__(self, path: str, text: str) -> None:
         self.path = path
         self.lines: dict[str, int] = {}
+        self._values = 0
         try:
             node = yaml.compose(text, Loader=Loader)
+        except RecursionError:                           # thousands of nested brackets
+            raise ScenarioError(f"{path}: not valid YAML here: nested deeper than the YAML parser can follow; expected "
+                                f"a scenario's few levels (at most {MAX_DEPTH})") from None
         except yaml.reader.ReaderError as exc:          # a character YAML does not allow (a control character)
             line = text[:exc.position].count("\n") + 1
             char = exc.character if isinstance(exc.character, int) else ord(exc.character)
@@ -112,8 +128,17 @@ class Source:
         src.path, src.lines, src.data = path, dict(lines), None
         return src
 
-    def _convert(self, node: yaml.Node, path: str) -> object:
+    def _convert(self, node: yaml.Node, path: str, depth: int = 0) -> object:
         self.lines[path] = node.start_mark.line + 1
+        self._values += 1
+        if depth > MAX_DEPTH:
+            # (a recursive alias, ``a: &a [*a]``, nests without end: a RecursionError traceback before)
+            raise ScenarioError(f"{self.path}:{node.start_mark.line + 1}: field '{_short(path)}' is nested deeper than "
+                                f"{MAX_DEPTH} levels (a recursive alias?); expected a scenario's few levels")
+        if self._values > MAX_VALUES:
+            # (aliases of aliases expand exponentially: such a file ran for minutes before)
+            raise ScenarioError(f"{self.path}:{node.start_mark.line + 1}: more than {MAX_VALUES} values once its "
+                                f"aliases are expanded (at field '{_short(path)}'); expected a scenario of at most that many")
         if isinstance(node, yaml.MappingNode):
             out = {}
             for key_node, value_node in node.value:
@@ -122,10 +147,10 @@ class Source:
                 if key in out:
                     raise ScenarioError(f"{self.path}:{key_node.start_mark.line + 1}: field '{child}' appears twice")
                 self.lines[child] = key_node.start_mark.line + 1
-                out[key] = self._convert(value_node, child)
+                out[key] = self._convert(value_node, child, depth + 1)
             return out
         if isinstance(node, yaml.SequenceNode):
-            return [self._convert(v, f"{path}[{i}]") for i, v in enumerate(node.value)]
+            return [self._convert(v, f"{path}[{i}]", depth + 1) for i, v in enumerate(node.value)]
         loader = Loader("")
         return loader.construct_object(node, deep=True)
 

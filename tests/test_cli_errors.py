@@ -245,6 +245,14 @@ def _bad_scenario(d: Path, kind: str) -> Path:
         p.write_bytes(text.replace("Three-lane", "Dreispurige Autobahn, Überholer").encode("latin-1"))
     elif kind == "wrong-format":
         shutil.copy(ROOT / "dbc" / "ars408.dbc", p)     # a text file of another kind
+    elif kind == "recursive-alias":                   # a RecursionError traceback before (an independent tester)
+        p.write_text(text + "extra: &a [*a]\n")
+    elif kind == "deep-nesting":
+        p.write_text(text + "extra: " + "[" * 5000 + "]" * 5000 + "\n")
+    elif kind == "alias-bomb":                        # ran for minutes before
+        bomb = "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n" + "".join(
+            f"a{k}: &a{k} [" + ", ".join([f"*a{k - 1}"] * 10) + "]\n" for k in range(1, 9))
+        p.write_text(text + bomb)
     elif kind == "unreadable":
         p.write_text(text)
         p.chmod(0)
@@ -359,7 +367,7 @@ SCENARIO_COMMANDS = {
 }
 
 
-@pytest.mark.parametrize("kind", FILE_KINDS)
+@pytest.mark.parametrize("kind", FILE_KINDS + ("recursive-alias", "deep-nesting", "alias-bomb"))
 @pytest.mark.parametrize("command", sorted(SCENARIO_COMMANDS))
 def test_a_bad_scenario_file_is_one_line_naming_it_exit_1(capsys, logs, shared_dir, command, kind):
     if command in ("image", "export"):
