@@ -146,6 +146,9 @@ def test_nothing_to_check_is_said_and_skipped_not_passed(tmp_path, capsys):
     assert "nothing to check" in capsys.readouterr().out
     case = ET.parse(junit).getroot().find(".//testcase")
     assert case.find("skipped") is not None and case.find("failure") is None
+    # the suite's pass count says so too (an independent tester: it counted the skipped runs as passes)
+    props = {p.get("name"): p.get("value") for p in ET.parse(junit).getroot().iter("property")}
+    assert props["passes"] == "0", props
 
 
 
