@@ -438,19 +438,27 @@ def test_a_preset_that_sees_less_than_the_smallest_max_distance_still_loads():
     by default; a max_distance_m given for it names why no value fits (an independent tester's finding: the default
     was refused, the error naming a field the user never wrote)."""
     node = RadarNode(scenario(ACTORS, radar="{preset: ars408_like, overrides: {max_range_m: 9.0}}"))
-    assert node.config.max_distance_m == 9.0
+    assert node.config.max_distance_m == 8.0          # on RadarState's 2-m grid, as it echoes it (below)
     with pytest.raises(ScenarioError, match=r"value 10 is not allowed; expected no value: preset ars408_like sees "
                                             r"9 m, less than the 10 m"):
         scenario(ACTORS, radar="{preset: ars408_like, max_distance_m: 10, overrides: {max_range_m: 9.0}}")
 
 
 @pytest.mark.parametrize("preset, given, in_force", [("mimo12", None, 112.0), ("ars408_like", None, 250.0),
-                                                     ("ars408_like", 10, 10.0), ("mimo12", 112, 112.0)])
+                                                     ("ars408_like", 10, 10.0), ("mimo12", 112, 112.0),
+                                                     ("ars408_like:5", None, 4.0), ("ars408_like:2046", None, 2046.0),
+                                                     ("ars408_like:2047", None, 2046.0),
+                                                     ("ars408_like:3000", None, 2046.0)])
 def test_radar_state_echoes_the_max_distance_in_force(preset, given, in_force):
     """mimo12 sees 112.5 m, which RadarState's 2-m grid cannot say (it echoed 112 with 112.5 in force): 112 m is in
-    force by default, and what RadarState says is what the model uses."""
+    force by default, and what RadarState says is what the model uses. A preset's range overridden to 5 m or beyond
+    the 2046 m RadarState's field can say (below, at, just above and well above it): 5 m was in force while it said
+    4, and 3000 m while it said 2046 (an independent tester's finding)."""
     extra = "" if given is None else f", max_distance_m: {given}"
-    node = RadarNode(scenario(ACTORS, radar=f"{{preset: {preset}{extra}}}"))
+    name, _, reach = preset.partition(":")
+    if reach:
+        extra += f", overrides: {{max_range_m: {reach}}}"
+    node = RadarNode(scenario(ACTORS, radar=f"{{preset: {name}{extra}}}"))
     assert node.config.max_distance_m == in_force
     state = next(m for m in node.cycle(0.0).messages if m.arbitration_id == P.RADAR_STATE)
     assert node.db.decode_message(P.RADAR_STATE, state.data)["RadarState_MaxDistanceCfg"] == in_force

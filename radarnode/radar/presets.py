@@ -376,6 +376,8 @@ PRESETS: dict[str, RadarPreset] = {
 #: RadarConfiguration's MaxDistance: the smallest the sensor takes, and its resolution (RadarState echoes it on the
 #: same grid)
 MIN_MAX_DISTANCE_M, MAX_DISTANCE_STEP_M = 10, 2
+#: the largest MaxDistance RadarState's field says (its DBC's range, 0…2046 m)
+MAX_MAX_DISTANCE_M = 2046
 
 
 def max_distance(preset: RadarPreset, given: float | None) -> tuple[float, str | None]:
@@ -383,9 +385,11 @@ def max_distance(preset: RadarPreset, given: float | None) -> tuple[float, str |
     the 2-m grid), and what is wrong with ``given`` (None when the sensor takes it): from 10 m up to what the
     preset sees, in steps of 2 m, so that RadarState echoes the value in force (mimo12 sees 112.5 m: 112 by
     default)."""
-    top = MAX_DISTANCE_STEP_M * math.floor(preset.max_range_m / MAX_DISTANCE_STEP_M + 1e-9)
+    # on RadarState's 2-m grid, and within what its field can say (2046 m): an override beyond was in force at 3000 m
+    # while RadarState said 2046, and one of 5 m in force while it said 4 (an independent tester's finding)
+    top = min(MAX_DISTANCE_STEP_M * math.floor(preset.max_range_m / MAX_DISTANCE_STEP_M + 1e-9), MAX_MAX_DISTANCE_M)
     if given is None:
-        return (float(top) if top >= MIN_MAX_DISTANCE_M else preset.max_range_m), None
+        return (float(top) if top >= MAX_DISTANCE_STEP_M else preset.max_range_m), None
     steps = given / MAX_DISTANCE_STEP_M
     if MIN_MAX_DISTANCE_M <= given <= top + 1e-9 and abs(steps - round(steps)) < 1e-9:
         return float(given), None
