@@ -869,3 +869,28 @@ def test_random_frames_on_the_list_ids_never_alter_a_delivered_cycle():
     delivered = {c.meas_counter for c in got}
     lost = [k for k, c in enumerate(cycles) if c[4] not in delivered]
     assert set(lost) <= clashes, (lost, clashes)
+
+
+def test_cycles_the_sensor_was_told_not_to_send_are_not_lost_and_a_real_loss_still_is():
+    """OutputType none for ten cycles, then objects again (an independent tester: ``lost_cycles`` counted the ten,
+    though RadarState had said none and nothing was lost); three cycles cut from the stream after that are still
+    counted lost."""
+    none = _cfg(RadarCfg_OutputType=0, RadarCfg_OutputType_valid=1)
+    back = _cfg(RadarCfg_OutputType=1, RadarCfg_OutputType_valid=1)
+    sc = scenario(TRAFFIC, duration=50 * 0.072 + 0.1)
+    node = RadarNode(sc)
+    vehicle = EgoMotionSender(node.scene)
+    cycles = []
+    for k in range(50):
+        t = k * node.period_s
+        frames = vehicle.frames(t)
+        for m in frames + ([none] if k == 19 else [back] if k == 29 else []):
+            node.receive(m, t)
+        cycles.append(frames + node.cycle(t).messages)
+    assert sum(any(m.arbitration_id == P.OBJ_STATUS for m in c) for c in cycles) == 40
+    assembler = CycleAssembler()
+    list(assembler.feed([m for c in cycles for m in c]))
+    assert assembler.stats.lost_cycles == 0 and assembler.stats.cycles == 40
+    assembler = CycleAssembler()
+    list(assembler.feed([m for k, c in enumerate(cycles) if k not in (40, 41, 42) for m in c]))
+    assert assembler.stats.lost_cycles == 3

@@ -318,6 +318,7 @@ class CycleAssembler(can.Listener):
         self._held: dict[str, _Pending] = {}
         self._behind: dict[str, list[_Pending]] = {}    # empty cycles that ended while one was held: after it
         self._stride: dict[str, int] = {}
+        self._told_none = False          # a RadarState said OutputType none since the last header taken
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
         self._counters: dict[str, collections.deque] = {k: collections.deque(maxlen=COUNTER_MEMORY) for k in GROUPS}
@@ -554,7 +555,10 @@ class CycleAssembler(can.Listener):
             self.relay = v
 
     def _announce(self, state: dict) -> None:
-        """RadarState can add groups to the expected layout (for LAYOUT_MEMORY headers), never remove any."""
+        """RadarState can add groups to the expected layout (for LAYOUT_MEMORY headers), never remove any; one that
+        says OutputType none marks the gap in the count up to the next header as the sensor's silence, not loss."""
+        if int(state["RadarState_OutputTypeCfg"]) == 0:
+            self._told_none = True
         if int(state["RadarState_SendQualityCfg"]):
             self._announced["obj"][P.OBJ_QUALITY] = LAYOUT_MEMORY
             self._announced["cl"][P.CLUSTER_QUALITY] = LAYOUT_MEMORY
@@ -661,8 +665,11 @@ class CycleAssembler(can.Listener):
             stride = self._stride.get(kind)
             if stride is None or gap < stride:
                 self._stride[kind] = stride = gap
-            if gap > stride:
+            if gap > stride and not self._told_none:
+                # (cycles the sensor was told not to send, OutputType none, are not lost: an independent tester
+                # found ten such cycles counted in lost_cycles; a RadarState that says so comes at the change)
                 self._count_lost(kind, last, counter, stride)
+        self._told_none = False
         self._last_counter[kind] = counter
         self._counters[kind].append(counter)
         announced = self._announced[kind]
