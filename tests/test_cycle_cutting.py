@@ -307,7 +307,8 @@ def _check_fuzz(expected, stream, counts):
     assert matched == len(expected), f"{len(expected) - matched} of {len(expected)} well-formed cycles not intact"
     assert len(extra) <= counts["bogus_empty"] and all(len(c.objects) == 0 for c in extra)
     assert st.late_frames == 0 and st.dropped() > 0
-    assert st.lost_cycles >= counts["lost"]
+    # (a stray RadarState that says OutputType none moves a loss after it to quiet_cycles: still counted)
+    assert st.lost_cycles + st.quiet_cycles >= counts["lost"]
     assert st.incomplete_cycles >= counts["truncated"]
     return asm, len(extra)
 
@@ -890,7 +891,7 @@ def test_cycles_the_sensor_was_told_not_to_send_are_not_lost_and_a_real_loss_sti
     assert sum(any(m.arbitration_id == P.OBJ_STATUS for m in c) for c in cycles) == 40
     assembler = CycleAssembler()
     list(assembler.feed([m for c in cycles for m in c]))
-    assert assembler.stats.lost_cycles == 0 and assembler.stats.cycles == 40
+    assert assembler.stats.lost_cycles == 0 and assembler.stats.quiet_cycles == 10 and assembler.stats.cycles == 40
     assembler = CycleAssembler()
     list(assembler.feed([m for k, c in enumerate(cycles) if k not in (40, 41, 42) for m in c]))
     assert assembler.stats.lost_cycles == 3

@@ -151,6 +151,7 @@ class ConsumerStats:
     incomplete_cycles: int = 0      # started but not well-formed: dropped
     timed_out_cycles: int = 0       # closed after cycle_timeout_s of silence (delivered or dropped)
     lost_cycles: int = 0            # gaps in MeasCounter
+    quiet_cycles: int = 0           # gaps in MeasCounter after RadarState said OutputType none: not sent, not lost
     counter_resets: int = 0         # MeasCounter went backwards: sensor restart
     unknown_id: int = 0
     other_sensor_frames: int = 0    # frames of another sensor ID (its ARS 408 or own messages): not ours
@@ -665,9 +666,12 @@ class CycleAssembler(can.Listener):
             stride = self._stride.get(kind)
             if stride is None or gap < stride:
                 self._stride[kind] = stride = gap
-            if gap > stride and not self._told_none:
-                # (cycles the sensor was told not to send, OutputType none, are not lost: an independent tester
-                # found ten such cycles counted in lost_cycles; a RadarState that says so comes at the change)
+            if gap > stride and self._told_none:
+                # cycles the sensor was told not to send (OutputType none; its RadarState says so at the change) are
+                # counted apart: an independent tester found ten such cycles in lost_cycles. (A stray RadarState
+                # that says none moves a real loss here: it is still counted.)
+                self.stats.quiet_cycles += gap // stride - 1
+            elif gap > stride:
                 self._count_lost(kind, last, counter, stride)
         self._told_none = False
         self._last_counter[kind] = counter
