@@ -130,6 +130,10 @@ def test_node_and_consumer_in_two_processes_over_udp_multicast(tmp_path):
     # in real time a cycle that cannot go out on its deadline (a loaded machine) is dropped and counted, and
     # MeasCounter moves on: every gap the consumer sees is one the node counted
     assert sent + missed == 34
+    # the node's own 0x300/0x301 come back over the multicast loop: taken once, as sent, not twice (an independent
+    # tester found 53 of each taken for 27 sent)
+    rx = {k: int(v) for k, v in re.findall(r"(rx_speed|rx_yaw_rate|rx_own_echo)=(\d+)", node_err)}
+    assert 0 < rx["rx_speed"] == rx["rx_yaw_rate"] <= 34 and rx.get("rx_own_echo", 0) >= rx["rx_speed"], rx
     assert len(lines) == min(20, sent)
     counters = [x["cycle_counter"] for x in lines]
     gaps = np.diff(counters) - 1

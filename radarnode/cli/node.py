@@ -11,7 +11,7 @@ import sys
 
 from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
-from radarnode.wire.bus import add_bus_arguments, open_bus
+from radarnode.wire.bus import add_bus_arguments, echoes_own, open_bus
 from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
 
@@ -48,7 +48,7 @@ def cmd(args) -> int:
               f"{100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr, flush=True)
         stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send, *live.sinks],
                          recv=live.tap(lambda timeout: bus.recv(timeout)), vehicle=vehicle, stop=stop,
-                         on_cycle=live.on_node_cycle)
+                         on_cycle=live.on_node_cycle, echoes_own=echoes_own(bus))
     print(f"{'interrupted: ' if stop.is_set() else ''}sent {stats.cycles} cycles, {stats.frames} frames; " +
           ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())), file=sys.stderr)
     return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM

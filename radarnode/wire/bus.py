@@ -113,6 +113,15 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
     return bus
 
 
+def echoes_own(bus: can.BusABC) -> bool:
+    """Whether ``bus`` gives back the frames this process sends: udp_multicast loops its datagrams back to every
+    listener on the host, the sender's own socket included; other interfaces only when asked to
+    (``receive_own_messages``)."""
+    config = getattr(bus, "init_config", None) or {}
+    return type(bus).__name__ == "UdpMulticastBus" or bool(getattr(bus, "receive_own_messages", False)) \
+        or bool(config.get("receive_own_messages", False))
+
+
 #: what a channel of an interface looks like, for the error of a bus that cannot be opened
 _CHANNEL_HINTS = {
     "udp_multicast": " (udp_multicast: an IPv4 or IPv6 multicast group, e.g. 239.74.163.2 or ff15:7079:7468:6f6e:6465:6d6f:6d63:6173)",

@@ -27,6 +27,7 @@ A stop request (Ctrl-C in the CLI) ends the run between cycles, so a log never e
 
 from __future__ import annotations
 
+import collections
 import math
 import statistics
 import threading
@@ -159,7 +160,8 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
              recv: Callable[[float], can.Message | None] | None = None,
              vehicle: EgoMotionSender | None = None, duration_s: float | None = None,
              on_cycle: Callable[[CycleOutput], None] | None = None,
-             stop: threading.Event | None = None, pipeline: BoundaryPipeline | None = None) -> RunStats:
+             stop: threading.Event | None = None, pipeline: BoundaryPipeline | None = None,
+             echoes_own: bool = False) -> RunStats:
     """Run ``node`` for the scenario's duration (or ``duration_s``) and return statistics.
 
     Parameters
@@ -173,6 +175,10 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         frames in the same order on the wire, so real time and simulated time give the same payloads.
     on_cycle : callable(CycleOutput), optional
         Called after each cycle sent (not for a cycle dropped at its deadline).
+    echoes_own : bool
+        The bus gives back the frames this process sends (udp_multicast; :func:`radarnode.wire.bus.echoes_own`):
+        ``vehicle``'s frames, which the node takes as they are sent, are not taken again when they come back (each
+        one sent skips one identical frame received; counted in the node's ``rx_own_echo``).
     pipeline : BoundaryPipeline, optional
         The process that computes the node's road boundaries (:mod:`radarnode.wire.pipeline`; simulated time only):
         each cycle goes to the sinks, whole and in order, once its boundary frames are filled in.
@@ -193,6 +199,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             if hasattr(model, "planned_cycles"):   # the object level computes its cycles in chunks: none past the end
                 model.planned_cycles = n_cycles
     rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
+    echoes: collections.Counter = collections.Counter()    # the vehicle frames sent, as the bus returns them
 
     def poll(timeout: float) -> None:
         """Receive for up to ``timeout`` seconds: whatever is queued, then what arrives until then.
@@ -215,7 +222,14 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
                     return
             else:
                 unreadable_in_row = 0
-                node.receive(msg, rx_t[0])
+                key = (msg.arbitration_id, bytes(msg.data))
+                if echoes.get(key):
+                    # the bus gave back a frame this run sent (udp_multicast loops its datagrams back to the sender):
+                    # the node took it when it was sent (an independent tester found 0x300/0x301 taken twice)
+                    echoes[key] -= 1
+                    node.counters["rx_own_echo"] += 1
+                else:
+                    node.receive(msg, rx_t[0])
             if clock.realtime and time.perf_counter() >= end:
                 stats.rx_drain_cut += 1
                 return
@@ -249,6 +263,8 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             ego_frames = vehicle.frames(t, clock.timestamp(t))
             for m in ego_frames:
                 node.receive(m, t)
+            if echoes_own:          # what the bus will give back of them
+                echoes.update((m.arbitration_id, bytes(m.data)) for m in ego_frames)
             if pipeline is not None:             # behind the held cycles
                 held.append((pipeline.submitted, ego_frames, None))
             else:
