@@ -644,6 +644,10 @@ SCHEMA = Schema(
                                     "or lane)"}})
 
 
+#: the largest scenario file read (the shipped ones are a few kB; a waypoint list of 100,000 points fits)
+MAX_SCENARIO_BYTES = 16 << 20
+
+
 def read_scenario(path: str | Path) -> Scenario:
     """Read a scenario file and validate the scene (the radar options are checked by radarnode.radar.setup).
 
@@ -654,7 +658,14 @@ def read_scenario(path: str | Path) -> Scenario:
     """
     p = Path(path)
     try:
-        text = p.read_text(encoding="utf-8")
+        with open(p, "rb") as f:
+            # at most a little more than any scenario needs (an 800-MB capture given by mistake was read whole first,
+            # and /dev/zero until the kernel killed the process: an independent tester's finding)
+            raw = f.read(MAX_SCENARIO_BYTES + 1)
+        if len(raw) > MAX_SCENARIO_BYTES:
+            raise ScenarioError(f"{p}: not a scenario file: more than {MAX_SCENARIO_BYTES // (1 << 20)} MiB; expected a "
+                                "YAML scenario (a few kB)")
+        text = raw.decode("utf-8")
     except OSError as exc:
         raise ScenarioError(f"{p}: cannot read scenario file: {exc.strerror}") from None
     except UnicodeDecodeError as exc:
