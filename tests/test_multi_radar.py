@@ -476,3 +476,23 @@ def test_decode_of_a_capture_of_two_buses_picks_one_with_channel(tmp_path, capsy
     # the channels it holds
     rc, out, err = cli(capsys, "decode", both, "--summary", "--channel", "can2")
     assert "warning: no frame on channel 'can2' (option --channel); the log's frames are on: can0, can1" in err, err
+
+
+def test_a_bit_rate_too_low_for_the_cycle_keeps_the_log_in_time_order_and_says_so(capsys, caplog, tmp_path):
+    """An independent tester's finding: at 10 kbit/s three radars' cycles need more than a 72-ms period holds, and the
+    next cycle's frames were stamped at its start, before the last frames of the one before (8 of 1047 frames out of
+    order in the log); and one radar's cycles whose fixed frames alone exceed the budget said nothing but the drops.
+    The bus carries one frame at a time: a cycle's frames follow the last one before them, and the budget that
+    cannot be kept is warned of and counted."""
+    import can
+    from tests.helpers import cli
+    from tests.conftest import SCENARIOS
+    rc, _, err = cli(capsys, "log", SCENARIOS / "highway_cut_in.yaml", "-o", tmp_path / "fast.log")
+    assert rc == 0 and "fixed frames alone" not in caplog.text, caplog.text
+    rc, _, err = cli(capsys, "log", SCENARIOS / "highway_cut_in.yaml", "-b", "10000", "-o", tmp_path / "one.log")
+    assert rc == 0 and "its fixed frames alone need" in caplog.text and "cycles_over_budget" in caplog.text, err
+    out = tmp_path / "three.log"
+    rc, _, err = cli(capsys, "log", SCENARIOS / "front_and_corners.yaml", "-b", "10000", "-o", out)
+    assert rc == 0, err
+    stamps = [m.timestamp for m in can.LogReader(str(out))]
+    assert len(stamps) > 500 and all(b >= a for a, b in zip(stamps, stamps[1:]))

@@ -199,6 +199,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             if hasattr(model, "planned_cycles"):   # the object level computes its cycles in chunks: none past the end
                 model.planned_cycles = n_cycles
     rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
+    busy_until = [-math.inf]   # simulated time: when the last frame computed leaves the bus
     echoes: collections.Counter = collections.Counter()    # the vehicle frames sent, as the bus returns them
 
     def poll(timeout: float) -> None:
@@ -259,8 +260,13 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         if recv is not None:
             poll(0.0)
         after = 0.0
+        start = clock.timestamp(t)
+        if not clock.realtime and start < busy_until[0]:
+            # the bus still carries the cycle before (more frames than a period holds, at a low bit rate): this one's
+            # frames follow them, never stamped before them (an independent tester's log ran backwards)
+            start = busy_until[0]
         if vehicle is not None:
-            ego_frames = vehicle.frames(t, clock.timestamp(t))
+            ego_frames = vehicle.frames(t, start)
             for m in ego_frames:
                 node.receive(m, t)
             if echoes_own:          # what the bus will give back of them
@@ -272,7 +278,10 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             stats.frames += len(ego_frames)
             # the radar's frames follow the vehicle's on the wire
             after = sum(frame_time_s(len(m.data), node.bitrate, worst_case=False) for m in ego_frames)
-        out = node.cycle(t, clock.timestamp(t) + after)
+        out = node.cycle(t, start + after)
+        if out.messages:
+            last = out.messages[-1]
+            busy_until[0] = last.timestamp + frame_time_s(len(last.data), node.bitrate, worst_case=False)
         rx_t[0] = t
         return out
 
