@@ -59,10 +59,12 @@ RadarState 0x201 (a stray or forged one must not strip groups):
 Frames on the list's IDs that are not the sensor's (random or forged content with the right DLC) cost no cycle
 they can be told apart in, and never enter a delivered one:
 
-* a general frame beyond the header's count is kept beside the others; the later groups, which name the sensor's
-  objects, tell which are its (the others are counted in ``extra_frames``); without a later group the cycle is
-  dropped;
-* a later group's frame for an object the (whole) general group lacks is counted in ``unexpected_ids`` and left out;
+* a general frame beyond the header's count is kept beside the others; at the cycle's end the later groups, which
+  name the sensor's objects, tell which are its if they all name the same ones, as many as the count (the others are
+  counted in ``extra_frames``); otherwise (no later group, or one holding a frame that is not the sensor's too) the
+  cycle is dropped;
+* a later group's frame for an object the general group lacks waits aside to the cycle's end: it takes its place if
+  its general frame came meanwhile (a gateway's reordering), else it is counted in ``orphan_frames``;
 * a later group's frame out of the general group's order (the sensor sends every group in one order) holds the cycle
   to its end instead of delivering it the moment its layout is complete, so that a second frame for the same place
   is seen as a conflict and the cycle dropped (a forged frame for the last place of the last group, sent before the
@@ -836,27 +838,34 @@ class CycleAssembler(can.Listener):
             p.order.append(oid)
         else:
             general = p.groups.get(GENERAL[p.kind], {})
-            if oid not in general and len(general) >= p.expected:
-                # an object the general group does not have, whole: not the sensor's (it cost the cycle before)
-                self.stats.unexpected_ids += 1
+            if oid not in general:
+                # an object the general group does not have (yet): a frame that is not the sensor's (it cost the
+                # cycle before), or the sensor's own ahead of its general frame (a gateway's reordering, with a frame
+                # that is not the sensor's filling the general group's count meanwhile): aside until the cycle's end,
+                # where it takes its place if its object came (:meth:`_promote`), else is an orphan
+                if oid in p.provisional.get(base, {}):
+                    self.stats.conflicting_frames += 1
+                else:
+                    p.provisional.setdefault(base, {})[oid] = (data, values)
                 return False
             at = len(group)
             if at >= len(p.order) or p.order[at] != oid:
                 p.reordered = True
         group[oid] = (data, values)
-        if p.overflow:
-            self._resolve_overflow(p)
         return True
 
     def _resolve_overflow(self, p: _Pending) -> None:
-        """Cycle ``p`` took more general frames than its header's count: where a later group holds the count for
-        objects all among them, and every later group's objects are among those, those are the sensor's, and the
-        others (counted in ``extra_frames`` as they came) leave the cycle. Otherwise it stays unresolved, and the
-        cycle ends incomplete."""
+        """At the end of cycle ``p``, which took more general frames than its header's count: where every later group
+        it holds names the same objects, as many as the count, all among the general frames, those are the sensor's,
+        and the others (counted in ``extra_frames`` as they came) leave the cycle. Otherwise (a later group with one
+        frame too many, or groups that disagree: a frame that is not the sensor's in a later group too) it stays
+        unresolved, and the cycle is dropped. (Resolved as soon as one later group reached the count, a forged
+        object's frames in every group took a genuine object's place: an independent tester's finding.)"""
         general = p.groups.get(GENERAL[p.kind], {})
         later = [set(group) for g, group in p.groups.items() if g != GENERAL[p.kind] and group]
-        named = next((ids_ for ids_ in later if len(ids_) == p.expected and ids_ <= set(general)), None)
-        if named is None or not all(ids_ <= named for ids_ in later):
+        named = later[0] if later else None
+        if named is None or len(named) != p.expected or not named <= set(general) \
+                or any(ids_ != named for ids_ in later):
             return
         for oid in set(general) - named:
             del general[oid]
