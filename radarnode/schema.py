@@ -101,6 +101,7 @@ class Source:
         self.path = path
         self.lines: dict[str, int] = {}
         self._values = 0
+        self._count_events(path, text)
         try:
             node = yaml.compose(text, Loader=Loader)
         except RecursionError:                           # thousands of nested brackets
@@ -120,6 +121,21 @@ class Source:
         if node is None:
             raise ScenarioError(f"{path}: the file is empty; expected a mapping with name, duration_s and seed")
         self.data = self._convert(node, "")
+
+    @staticmethod
+    def _count_events(path: str, text: str) -> None:
+        """Refuse a file of more than MAX_VALUES values before the (pure-Python) composer builds its nodes: a 16-MB
+        list took minutes and gigabytes to be refused after it (an independent tester's finding). The C parser where
+        PyYAML has it; a file it cannot parse is left to the composer, which says where."""
+        events = 0
+        try:
+            for _ in yaml.parse(text, Loader=getattr(yaml, "CSafeLoader", yaml.SafeLoader)):
+                events += 1
+                if events > 2 * MAX_VALUES + 16:        # (a value is one event, a mapping's key another)
+                    raise ScenarioError(f"{path}: more than {MAX_VALUES} values; expected a scenario of at most that "
+                                        "many")
+        except (yaml.YAMLError, RecursionError):
+            return
 
     @classmethod
     def of_lines(cls, path: str, lines: dict[str, int]) -> Source:

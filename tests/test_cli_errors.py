@@ -249,6 +249,8 @@ def _bad_scenario(d: Path, kind: str) -> Path:
         p.write_text(text + "extra: &a [*a]\n")
     elif kind == "deep-nesting":
         p.write_text(text + "extra: " + "[" * 5000 + "]" * 5000 + "\n")
+    elif kind == "many-values":                       # minutes and gigabytes before its error (16 MB of them)
+        p.write_text(text + "extra: [" + ", ".join(["1"] * 150_000) + "]\n")
     elif kind == "huge":                              # read whole before (800 MB, or /dev/zero until killed)
         p.write_text(text + "# " + "x" * (17 << 20) + "\n")
     elif kind == "alias-bomb":                        # ran for minutes before
@@ -369,7 +371,8 @@ SCENARIO_COMMANDS = {
 }
 
 
-@pytest.mark.parametrize("kind", FILE_KINDS + ("recursive-alias", "deep-nesting", "alias-bomb", "huge"))
+@pytest.mark.parametrize("kind", FILE_KINDS + ("recursive-alias", "deep-nesting", "alias-bomb", "huge",
+                                                 "many-values"))
 @pytest.mark.parametrize("command", sorted(SCENARIO_COMMANDS))
 def test_a_bad_scenario_file_is_one_line_naming_it_exit_1(capsys, logs, shared_dir, command, kind):
     if command in ("image", "export"):
