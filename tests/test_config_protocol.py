@@ -433,6 +433,16 @@ def test_a_scenario_max_distance_the_sensor_would_not_take_is_an_error(value):
         RadarNode(scenario(ACTORS, radar=f"{{preset: ars408_like, max_distance_m: {value}}}"))
 
 
+@pytest.mark.parametrize("reach", [1.0, 1.99])
+def test_a_preset_reach_under_radar_states_2_m_step_is_refused(reach):
+    """A second independent tester's finding: a preset overridden to 1 m had 1 m in force while RadarState said 0
+    (its MaxDistance field counts in steps of 2 m): such a reach is refused by name; 2 m loads."""
+    with pytest.raises(ScenarioError, match=rf"max_range_m': value {reach} is not allowed; expected a number >= 2"):
+        RadarNode(scenario(ACTORS, radar=f"{{preset: ars408_like, overrides: {{max_range_m: {reach}}}}}"))
+    node = RadarNode(scenario(ACTORS, radar="{preset: ars408_like, overrides: {max_range_m: 2.0}}"))
+    assert node.config.max_distance_m == 2.0
+
+
 def test_a_preset_that_sees_less_than_the_smallest_max_distance_still_loads():
     """A preset whose range is overridden below 10 m (the smallest MaxDistance the sensor takes) works to its range
     by default; a max_distance_m given for it names why no value fits (an independent tester's finding: the default

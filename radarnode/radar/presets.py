@@ -94,8 +94,11 @@ class RadarPreset:
     def __post_init__(self) -> None:
         validate.text("name", self.name)
         for f in ("carrier_hz", "bandwidth_hz", "chirp_period_s", "element_spacing_wl", "cycle_period_s",
-                  "max_range_m", "near_range_m", "lateral_speed_sigma_mps", "size_sigma_m"):
+                  "near_range_m", "lateral_speed_sigma_mps", "size_sigma_m"):
             validate.number(f, getattr(self, f), lo=0.0, lo_open=True)
+        # RadarState says the MaxDistance in force on a 2-m grid: a reach under one step of it cannot be said (1 m was
+        # in force while it said 0: an independent tester's finding)
+        validate.number("max_range_m", self.max_range_m, lo=2.0)       # (MAX_DISTANCE_STEP_M, defined below)
         for f in ("range_sigma_floor_m", "speed_sigma_floor_mps", "azimuth_sigma_floor_deg", "min_range_m",
                   "system_loss_db", "noise_figure_db"):
             validate.number(f, getattr(self, f), lo=0.0)
