@@ -789,6 +789,21 @@ def _list_frames_of(frames, base: int) -> list[int]:
     return [i for i, m in enumerate(frames) if m.arbitration_id == base]
 
 
+def _one_more_frame_a_cycle(cycles, base: int, make) -> tuple[list, int]:
+    """The stream of ``cycles`` with one more frame on list ID ``base`` in every cycle that has that group:
+    ``make(frames, indices of the group's frames)`` gives its data and where it goes; returns (stream, frames put in)."""
+    stream, added = [], 0
+    for frames, *_ in cycles:
+        at = _list_frames_of(frames, base)
+        if not at:
+            stream += frames
+            continue
+        data, where = make(frames, at)
+        stream += frames[:where] + [_msg(base, data)] + frames[where:]
+        added += 1
+    return stream, added
+
+
 @pytest.mark.parametrize("base", [P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED])
 def test_a_forged_frame_for_a_place_of_any_group_costs_its_cycle_never_its_content(base):
     """An independent tester's finding: in every cycle one frame on a list ID, with the DLC and the object ID of the
@@ -799,17 +814,12 @@ def test_a_forged_frame_for_a_place_of_any_group_costs_its_cycle_never_its_conte
     conflict drops it: no cycle is delivered with a forged frame, each is counted (incomplete and conflicting)."""
     cycles = _node_cycles(30)
     rng = np.random.default_rng(5)
-    stream, forged = [], 0
-    for frames, sent, *_ in cycles:
-        at = _list_frames_of(frames, base)
-        if not at:
-            stream += frames
-            continue
-        last = frames[at[-1]]
-        fake = bytearray(last.data)
+
+    def forge(frames, at):            # the last frame's object ID, other content, before the group's first frame
+        fake = bytearray(frames[at[-1]].data)
         fake[1:] = rng.integers(0, 256, len(fake) - 1, dtype=np.uint8).tobytes()
-        stream += frames[:at[0]] + [_msg(base, fake)] + frames[at[0]:]
-        forged += 1
+        return fake, at[0]
+    stream, forged = _one_more_frame_a_cycle(cycles, base, forge)
     assembler = CycleAssembler()
     got = [c for c in assembler.feed(stream) if isinstance(c, ObjectCycle) and len(c.objects)]
     assert forged >= 25
@@ -827,16 +837,12 @@ def test_a_frame_for_an_object_the_cycle_does_not_have_costs_nothing(base):
     lacks waits aside and is an orphan at the end: every cycle is delivered whole."""
     cycles = _node_cycles(30)
     rng = np.random.default_rng(6)
-    stream, injected = [], 0
-    for frames, sent, *_ in cycles:
-        at = _list_frames_of(frames, base)
-        if not at:
-            stream += frames
-            continue
+
+    def intrude(frames, at):          # random content, an ID no object of this scene has, after the group's first
         data = bytearray(rng.integers(0, 256, len(frames[at[0]].data), dtype=np.uint8).tobytes())
-        data[0] = 200                                    # no object of this scene has that ID
-        stream += frames[:at[0] + 1] + [_msg(base, data)] + frames[at[0] + 1:]
-        injected += 1
+        data[0] = 200
+        return data, at[0] + 1
+    stream, injected = _one_more_frame_a_cycle(cycles, base, intrude)
     assembler = CycleAssembler()
     got = [c for c in assembler.feed(stream) if isinstance(c, ObjectCycle)]
     assert injected >= 25
