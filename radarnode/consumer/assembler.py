@@ -803,9 +803,13 @@ class CycleAssembler(can.Listener):
         order: kept aside until it is the cycle's own, :meth:`_promote`)."""
         if base != GENERAL[p.kind]:
             aside = p.provisional.get(base, {})
-            if self._ahead_of_order(p, base):
+            if self._ahead_of_order(p, base) or oid not in p.groups.get(GENERAL[p.kind], {}):
                 # the next header overtakes the last frames of a cycle on a bus (it has the higher priority): such a
-                # frame must not fill this cycle's place before its own frame comes
+                # frame must not fill this cycle's place before its own frame comes. Nor does a frame for an object
+                # the general group does not have (yet): one that is not the sensor's (it cost the cycle before), or
+                # the sensor's own ahead of its general frame (a gateway's reordering, with a frame that is not the
+                # sensor's filling the general group's count meanwhile). Aside until the cycle's end, where it takes
+                # its place if its object came (:meth:`_promote`), else is an orphan
                 if oid in aside:
                     # (two out of order for one place: the first stays; the cycle's own, in order, still decides)
                     if aside[oid][0] == data:
@@ -837,17 +841,6 @@ class CycleAssembler(can.Listener):
                 p.overflow = True
             p.order.append(oid)
         else:
-            general = p.groups.get(GENERAL[p.kind], {})
-            if oid not in general:
-                # an object the general group does not have (yet): a frame that is not the sensor's (it cost the
-                # cycle before), or the sensor's own ahead of its general frame (a gateway's reordering, with a frame
-                # that is not the sensor's filling the general group's count meanwhile): aside until the cycle's end,
-                # where it takes its place if its object came (:meth:`_promote`), else is an orphan
-                if oid in p.provisional.get(base, {}):
-                    self.stats.conflicting_frames += 1
-                else:
-                    p.provisional.setdefault(base, {})[oid] = (data, values)
-                return False
             at = len(group)
             if at >= len(p.order) or p.order[at] != oid:
                 p.reordered = True
