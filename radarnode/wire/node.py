@@ -521,15 +521,15 @@ class RadarNode:
         fixed = [len(p) for _, p in out + own] + [8] + (self.coll_det.state_dlcs() if coll_det_now else []) \
             + ([1] if relay else [])
         fixed_bits = sum(frame_bits(d) for d in fixed)
-        if fixed_bits > self.bus_load_limit * self.bitrate * self.period_s:
+        budget = self.bus_load_limit * self.bitrate * self.period_s
+        if fixed_bits > budget:
             # the frames every such cycle sends (states, the list's header, the boundaries) alone exceed the budget:
             # no list item can make it fit (an independent tester saw it at 10 kbit/s with only the drops warned of)
             self.counters["cycles_over_budget"] += 1
             self._warn_once("overbudget", "cycle at t=%.3f s: its fixed frames alone need %d bits, more than %.0f %% "
                             "of %d bit/s in %.1f ms (%d bits); the bus-load budget cannot be kept at this bit rate "
                             "(counted in cycles_over_budget; warned once)", t_s, fixed_bits,
-                            100 * self.bus_load_limit, self.bitrate, 1e3 * self.period_s,
-                            int(self.bus_load_limit * self.bitrate * self.period_s))
+                            100 * self.bus_load_limit, self.bitrate, 1e3 * self.period_s, int(budget))
         lifetime = self._lifetimes(frame.objects, t_s)
         dropped = filtered = 0
         header_at = len(out)
