@@ -18,7 +18,7 @@ run: $(VENV)/.installed
 	$(VENV)/bin/radarnode run $(SCENARIO)
 
 test: $(VENV)/.installed
-	$(VENV)/bin/python -m pytest -q
+	$(VENV)/bin/python -m pytest -q -n auto
 
 bench: $(VENV)/.installed
 	$(VENV)/bin/python benchmarks/wire.py
