@@ -14,19 +14,24 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 def main(argv: list[str] | None = None) -> int:
     """The ``radarnode`` command (:func:`radarnode.cli.main.main`). The command line's modules (argparse, logging
     and the rest, some 20 ms) load inside this call, so a Ctrl-C while they load ends the command quietly with 130
-    instead of Python's traceback: only the interpreter's own start-up and this package's few lines come before. A
+    instead of Python's traceback, as one while this function puts its handler in place does: only the interpreter's
+    own start-up and the console script's import of this package come before. A
     Ctrl-C that finds a module importing is sent again a moment later (:mod:`radarnode.cli.interrupt`): a library's
     import-time code can turn it into another error or swallow it."""
-    import signal
-    import threading
+    try:
+        import signal
+        import threading
 
-    from radarnode.cli import interrupt
+        from radarnode.cli import interrupt
 
-    # Python's own handler only (a SIGINT ignored, as a job in the background of a shell inherits it, stays ignored)
-    ours = (threading.current_thread() is threading.main_thread()
-            and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
-    if ours:
-        signal.signal(signal.SIGINT, interrupt.on_sigint)
+        # Python's own handler only (a SIGINT ignored, as a job in the background of a shell inherits it, stays
+        # ignored)
+        ours = (threading.current_thread() is threading.main_thread()
+                and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+        if ours:
+            signal.signal(signal.SIGINT, interrupt.on_sigint)
+    except KeyboardInterrupt:       # a Ctrl-C before the handler is in place (an independent tester: 36 of 100
+        return 130                  # Ctrl-Cs in the first 25 ms printed Python's traceback from here)
     try:
         try:
             from radarnode.cli.main import main as command
