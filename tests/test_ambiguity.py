@@ -387,11 +387,13 @@ def test_a_staggered_pair_that_cannot_resolve_its_span_is_refused(overrides, fie
                                              ("noise_figure_db", 1e3, 40.0), ("bandwidth_hz", 1e-300, 1e6),
                                              ("bandwidth_hz", 999e3, 4e9), ("chirp_period_s", 1e-300, 1e-7),
                                              ("chirp_period_s", 0.011, 0.01), ("carrier_hz", 1e300, 3e11),
-                                             ("carrier_hz", 9.99e8, 24e9)])
+                                             ("carrier_hz", 9.99e8, 24e9), ("element_spacing_wl", 1e300, 100.0),
+                                             ("element_spacing_wl", 100.1, 57.5)])
 def test_a_radar_no_hardware_can_be_is_refused_by_name(field, bad, good):
     """A loss of 1e308 dB, a 1e-300-Hz sweep or a 1e-300-s chirp passed the loader, turned into NaN inside (numpy's
     RuntimeWarnings) and the car ahead vanished from every cycle; a carrier of 1e300 Hz was refused naming a field
-    the user never set (an independent tester's finding). Each is refused by its own name just beyond its bound;
+    the user never set (an independent tester's finding), and an element spacing of 1e300 wavelengths (a later
+    tester's: a target at 20° came out at 0°). Each is refused by its own name just beyond its bound;
     the bound itself and a common value pass (on mimo12, one chirp sequence: a staggered pair's span check has its
     own say on the period and the carrier)."""
     import dataclasses
