@@ -993,3 +993,28 @@ def test_a_72_channel_array_keeps_two_wrapped_sources_at_their_angles():
         a = np.degrees(det.azimuth_rad[np.abs(det.range_m - 40.0) < 3.0])
         astray += int(np.any(np.abs(a[:, None] - az[None, :]).min(axis=1) > half_beam))
     assert astray <= 1, astray
+
+
+@pytest.mark.parametrize("cls", ["car", "point"])
+@pytest.mark.parametrize("speed_mps", [-60.0, 54.0, 60.0, 120.0])
+def test_a_fast_cars_signal_level_detections_are_tagged_with_it(speed_mps, cls):
+    """ars408_like, ego standing, a car (or a point target) 40 m ahead at −60 (resolved by the staggered pair), +54 (just inside the
+    span), +60 (beyond it: AmbigState 1) and +120 m/s: every detection of it at the signal level carries its actor
+    index, as the detection level's do. The chain's range of an aliased speed is off by the wrong alias' coupling
+    (about 1 m a wrap), and the detections 2 m or more from the car went untagged (−1), so that a report lost what
+    a warning was for (an independent tester's finding)."""
+    heading = 0.0 if speed_mps > 0 else 180.0
+    sc = scenario(f"  - {{id: car, class: {cls}, x_m: 43.7, y_m: 2.0, speed_mps: {abs(speed_mps)}, "
+                  f"heading_deg: {heading}}}", ego="{speed_mps: 0.0}", radar="{preset: ars408_like}",
+                  road="{lanes: 3, lane_width_m: 3.5, ego_lane: 1}", duration=1.0, seed=3)
+    cfg = radar_config(sc)
+    seen = 0
+    for level in ("detection", "signal"):
+        model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(3), cfg.signal)
+        for k in range(4):
+            model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
+            det = model.info.detections
+            strong = det.snr_db > 20.0              # the car's returns, not a false alarm
+            seen += int(strong.sum())
+            assert np.all(det.actor_index[strong] == 0), (level, det.range_m[strong], det.actor_index[strong])
+    assert seen >= 8
