@@ -279,3 +279,27 @@ def test_an_absurdly_strong_scatterer_is_refused_by_the_rd_synthesis_for_its_str
         synthesize_rd(p, point_targets([40.0], [0.0], [3.0], [rcs_dbsm]), np.random.default_rng(1))
     cube = synthesize_rd(p, point_targets([40.0], [0.0], [3.0], [150.0]), np.random.default_rng(1))
     assert np.all(np.isfinite(cube))
+
+
+def test_the_refit_is_on_for_complex128_spectra_off_for_complex64_and_refused_for_other_values():
+    """``signal.dsp.refit``: auto (the default) refits on complex128 spectra only (complex64 is the fast setting:
+    the same detections as refit off); true and false force it; anything else, or true without range_ml, is an
+    error naming the field."""
+    from radarnode.errors import FieldError
+    from radarnode.radar.chain import DspConfig
+    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
+    p = PRESETS["ars408_like"]
+    r = [40.3, 40.3 + 3.0 * p.range_resolution_m]
+    scat = point_targets(r, [0.0, 4.0], [0.7, 0.7 + 0.4 * p.doppler_bin_mps], [0.0, 40.0 * math.log10(r[1] / r[0])])
+    snr = 30.0 - 10.0 * math.log10(num_range_samples(p) * p.num_chirps * p.num_virtual)
+    for dtype in (np.complex128, np.complex64):
+        rd = synthesize_rd(p, scat, np.random.default_rng(3), snr_db=snr, dtype=dtype)
+        auto, on, off = (DspChain(p, DspConfig(refit=mode)).process_rd(rd) for mode in ("auto", True, False))
+        same_as = on if dtype == np.complex128 else off
+        assert np.array_equal(auto.range_m, same_as.range_m)
+        assert not np.array_equal(on.range_m, off.range_m)
+    for bad in ("yes", 1, None):
+        with pytest.raises(FieldError, match="refit"):
+            DspConfig(refit=bad)
+    with pytest.raises(FieldError, match="refit"):
+        DspConfig(refit=True, range_ml=False)

@@ -53,6 +53,11 @@ class DspConfig:
     #: least MIGRATION_AUTO_MIN_BINS; off for complex64 ones (the fast setting: with the fit its frames miss the 30 ms
     #: target at 60–70 m/s) and single-transmitter presets
     migration_fit: bool | str = "auto"
+    #: a patch cut short by a neighbour fitted again, wider, with the other peaks' tones taken out (PatchFit.refit):
+    #: two returns 3–6 bins apart at 1.13–1.33× the CRB in range instead of 1.46–2.25×, at 1.2–1.46× the frame's cost
+    #: on the post-lined highway_mimo12 (BENCHMARKS.md, "Signal level at every ego speed"). true, false, or "auto"
+    #: (the default): on for complex128 spectra, off for complex64 ones (the fast setting)
+    refit: bool | str = "auto"
     max_detections: int = 1000
 
     def __post_init__(self) -> None:
@@ -75,6 +80,11 @@ class DspConfig:
             raise FieldError("migration_fit", self.migration_fit,
                              "false or auto while range_ml is false (the migration fit refines the patch fit's "
                              "peaks)")
+        if self.refit is not True and self.refit is not False and self.refit != "auto":
+            raise FieldError("refit", self.refit, "true, false or auto")
+        if self.refit is True and not self.range_ml:
+            raise FieldError("refit", self.refit, "false or auto while range_ml is false (the refit refines the patch "
+                             "fit's peaks)")
         validate.integer("max_detections", self.max_detections, lo=1, hi=100_000)
 
 
@@ -335,7 +345,8 @@ class DspChain:
             # a patch cut short by a neighbour is fitted again, larger, with the other peaks' fitted tones taken
             # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before
             again = np.flatnonzero(half < fit.max_half)
-            if again.size and REFIT_PASSES:
+            refits = cfg.refit is True or (cfg.refit == "auto" and rd.dtype == np.complex128)
+            if again.size and REFIT_PASSES and refits:
                 wider = np.full(again.size, min(fit.max_half, REFIT_HALF), dtype=np.int64)
                 if top.size < d.size:              # only as far as the peaks not fitted (not in the model)
                     rest = np.setdiff1d(np.arange(d.size), top)
