@@ -54,9 +54,10 @@ class DspConfig:
     #: target at 60–70 m/s) and single-transmitter presets
     migration_fit: bool | str = "auto"
     #: a patch cut short by a neighbour fitted again, wider, with the other peaks' tones taken out (PatchFit.refit):
-    #: two returns 3–6 bins apart at 1.13–1.33× the CRB in range instead of 1.46–2.25×, at 1.2–1.46× the frame's cost
-    #: on the post-lined highway_mimo12 (BENCHMARKS.md, "Signal level at every ego speed"). true, false, or "auto"
-    #: (the default): on for complex128 spectra, off for complex64 ones (the fast setting)
+    #: two returns 3–6 bins apart at 1.13–1.33× the CRB in range instead of 1.46–2.25×, at about 1.4× the frame's cost
+    #: on the post-lined highway_mimo12 (medians 1.33× and 1.46× over 18 speeds; BENCHMARKS.md, "Signal level at
+    #: every ego speed"). true, false, or "auto" (the default): on for complex128 spectra, off for complex64 ones (the
+    #: fast setting)
     refit: bool | str = "auto"
     max_detections: int = 1000
 
