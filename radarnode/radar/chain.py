@@ -346,18 +346,17 @@ class DspChain:
             half = patch_halves(d, r, top, (m, n), fit.max_half)
             fd, fr, s_top = fit(rd, d[top], r[top], dd[top], dr[top], half)
             # a patch cut short by a neighbour is fitted again, larger, with the other peaks' fitted tones taken
-            # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before
-            # (not a peak whose first fit lies within REFIT_APART bins of another's: two maxima of one response, or
-            # two sources within a bin or so, which the chain resolves only from 1.7 bins at 50 %; refitted, they
-            # were pulled apart — 0.11–0.15 of two equal returns 0.75–1 bin apart "resolved", a pedestrian's length
-            # error p90 0.30 → 1.75 m)
-            pd_, pr_ = d[top] + fd, r[top] + fr
-            dd_, dr_ = np.abs(pd_[:, None] - pd_[None, :]), np.abs(pr_[:, None] - pr_[None, :])
-            apart = np.maximum(np.minimum(dd_, m - dd_), np.minimum(dr_, n - dr_))
-            np.fill_diagonal(apart, np.inf)
-            again = np.flatnonzero((half < fit.max_half) & (apart.min(axis=1, initial=np.inf) > REFIT_APART))
-            refits = cfg.refit is True or (cfg.refit == "auto" and rd.dtype == np.complex128)
-            if again.size and REFIT_PASSES and refits:
+            # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before. Not a
+            # peak whose first fit lies within REFIT_APART bins of another's: two maxima of one response, whose fits
+            # meet, are left as the first fit put them
+            again = np.zeros(0, dtype=np.int64)
+            if REFIT_PASSES and (cfg.refit is True or (cfg.refit == "auto" and rd.dtype == np.complex128)):
+                pd_, pr_ = d[top] + fd, r[top] + fr
+                dd_, dr_ = np.abs(pd_[:, None] - pd_[None, :]), np.abs(pr_[:, None] - pr_[None, :])
+                apart = np.maximum(np.minimum(dd_, m - dd_), np.minimum(dr_, n - dr_))
+                np.fill_diagonal(apart, np.inf)
+                again = np.flatnonzero((half < fit.max_half) & (apart.min(axis=1, initial=np.inf) > REFIT_APART))
+            if again.size:
                 wider = np.full(again.size, min(fit.max_half, REFIT_HALF), dtype=np.int64)
                 if top.size < d.size:              # only as far as the peaks not fitted (not in the model)
                     rest = np.setdiff1d(np.arange(d.size), top)
