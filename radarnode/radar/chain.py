@@ -244,10 +244,14 @@ class DspChain:
         p = self.preset
         r_bins = r + dr
         speed = (d - m // 2 + dd) * p.doppler_bin_mps
-        # the range FFT is circular: a beat frequency past the last bin is the first bins' (never a negative
-        # range); coupling and migration to mid-frame are taken out (RadarPreset.range_rate_coupling_s)
-        range_m = np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s, n * p.range_resolution_m)
-        return r_bins, speed, range_m
+        return r_bins, speed, self._range(r_bins, speed, n)
+
+    def _range(self, r_bins, speed, n: int):
+        """Range of peaks at ``r_bins`` reported at ``speed``: the range FFT is circular, so a beat frequency past
+        the last bin is the first bins' (never a negative range); coupling and migration to mid-frame are taken out
+        (RadarPreset.range_rate_coupling_s)."""
+        p = self.preset
+        return np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s, n * p.range_resolution_m)
 
     def _tdm_phase(self, speed: np.ndarray) -> np.ndarray:
         """The factor that takes each channel's TDM Doppler phase out of snapshots at ``speed``, (n, channels)."""
@@ -431,7 +435,7 @@ class DspChain:
         beyond = (speed < -v_a) | (speed >= v_a)
         if beyond.any():
             speed = np.where(beyond, np.mod(speed + v_a, 2.0 * v_a) - v_a, speed)
-            range_m = np.mod(r_bins * p.range_resolution_m - speed * p.range_rate_coupling_s, n * p.range_resolution_m)
+            range_m = self._range(r_bins, speed, n)
         with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
             energy = np.minimum(np.maximum(power[d, r] / sigma2 - c, 1e-30), 1e300)
         delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))

@@ -176,10 +176,8 @@ class SignalModel(ScattererModel):
         # it is, or where the chain sees it (an aliased speed's range coupling, a grating lobe's angle: a fast car's
         # detections were 1–2 m from it on ars408_like and went untagged, an independent tester's finding)
         if len(det) and len(scat):
-            rb, vb, u = detection_model.apparent_positions(preset, scat)
-            seen_r = np.mod((rb - vb * preset.doppler_bin_mps * preset.range_rate_coupling_s
-                             / preset.range_resolution_m) * preset.range_resolution_m,
-                            preset.num_range_bins * preset.range_resolution_m)
+            vb = detection_model.apparent_positions(preset, scat)[1]
+            seen_r = ambiguity.coupled_range(preset, scat.range_m, scat.range_rate_mps, vb * preset.doppler_bin_mps)
             seen_az = ambiguity.apparent_azimuth(preset, scat.azimuth_rad)
             d2 = np.minimum((det.x_m[:, None] - scat.x_m[None, :]) ** 2 + (det.y_m[:, None] - scat.y_m[None, :]) ** 2,
                             (det.x_m[:, None] - (seen_r * np.cos(seen_az))[None, :]) ** 2
