@@ -208,6 +208,34 @@ def test_a_neighbour_a_few_bins_away_leaves_the_signal_levels_accuracy_at_the_bo
     assert np.all(ratio <= 1.4), ratio
 
 
+@pytest.mark.parametrize("doppler_bins", [0.0, 0.4])
+def test_two_returns_two_bins_apart_are_refitted_where_their_first_fits_came_within_a_bin_and_a_half(doppler_bins):
+    """Two equal returns 2 range bins apart (``doppler_bins`` apart in Doppler, 4° apart), ρ = 30 dB, 100 frames,
+    those the chain resolves: range RMSE within 2.5× the CRB (1.6–2.0× over 200 frames). Their first fits, on
+    3 × 3 patches beside each other's main lobe, come 0.5 bin towards each other; under the refit's 1.5-bin rule they
+    were not refitted, 3.3× and 6.2× the CRB. (2.1–2.2 bins apart, where the first fits pass each other's middle,
+    stay 4–9× the bound: README, known limits.)"""
+    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
+    p = PRESETS["mimo12"]
+    chain = DspChain(p)
+    snr = 30.0 - 10.0 * math.log10(num_range_samples(p) * p.num_chirps * p.num_virtual)
+    rng = np.random.default_rng(7)
+    r = np.array([40.3, 40.3 + 2.0 * p.range_resolution_m])
+    v, az = np.array([0.7, 0.7 + doppler_bins * p.doppler_bin_mps]), np.array([0.0, 4.0])
+    scat = point_targets(r, az, v, 40.0 * np.log10(r / r[0]))
+    err = []
+    for _ in range(100):
+        det = chain.process_rd(synthesize_rd(p, scat, rng, snr_db=snr))
+        cost = (np.abs(det.range_m[None] - r[:, None]) / p.range_resolution_m
+                + np.abs(det.range_rate_mps[None] - v[:, None]) / p.doppler_bin_mps)
+        if det.range_m.size >= 2:
+            j = np.argmin(cost, axis=1)
+            if j[0] != j[1] and np.all(cost[[0, 1], j] <= 1.0):
+                err.append(det.range_m[j] - r)
+    assert len(err) >= 60, len(err)
+    assert np.sqrt(np.mean(np.square(err))) <= 2.5 * equation.crb_range_m(p, 30.0)
+
+
 def test_the_patch_fits_refit_takes_a_neighbours_tone_out_exactly():
     """Two noise-free tones 4 range and 2 Doppler bins apart: the first fit, on patches cut 3 bins short of the
     other peak, is off by some 3e-5 bin; fitted again on the full patch with the other tone taken out, each comes
