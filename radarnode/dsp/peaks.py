@@ -311,6 +311,18 @@ class PatchFit:
 
         return _per_bucket(self.buckets, new, fd[which], fr[which], rd.shape[0], fit)
 
+    def snapshot(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
+                 half: np.ndarray | int | None = None) -> np.ndarray:
+        """The channels' amplitudes of tones at (``d``, ``r``) + (``delta_d``, ``delta_r``), fitted over patches of
+        half-width ``half`` without a search: the snapshot :meth:`__call__` returns for those offsets, shape
+        (K, channel)."""
+        d, r, fd, fr, halves = _checked(rd, d, r, delta_d, delta_r, half, self.max_half)
+        if np.any(halves > self.max_half):
+            raise ValueError(f"half: values must lie in 1…{self.max_half}")
+        return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0], lambda sel, b: self._fit_patches(
+            _patches(rd, d[sel], r[sel], b, (1, 2, 0, 3)), fd[sel], fr[sel], halves[sel], *self.axes[b],
+            rounds=()))[2]
+
     def _fit(self, rd, d, r, fd, fr, halves, axis_d: _PatchAxis, axis_r: _PatchAxis):
         """:meth:`__call__` for peaks whose patches fit in the axes' size."""
         return self._fit_patches(_patches(rd, d, r, axis_d.max_half, (1, 2, 0, 3)), fd, fr, halves, axis_d, axis_r)

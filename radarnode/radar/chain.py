@@ -119,17 +119,18 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
 #: an earlier version of the fit)
 MIGRATION_HALF = 12
 #: passes of the patch fit's refit of crowded peaks (DspChain.process_rd, PatchFit.refit): each takes the others'
-#: tones from the pass before out of a peak's wider patch (the second only for peaks with a neighbour within 4 bins)
-REFIT_PASSES = 2
+#: tones from the pass before out of a peak's wider patch (the later ones only for peaks whose neighbour's lobe
+#: touched their cell); two equal returns 2.0–2.2 bins apart, started from their cells, came to 1.35–1.45× the CRB in
+#: range with three, 1.6–2.1× with two (mimo12, ρ = 30 dB, 200 frames)
+REFIT_PASSES = 3
 #: … and their patch half-width there, at most: measured on two returns 3–6 bins apart, ρ = 30 dB, 200 draws,
 #: 1.13–1.33× the CRB in range (one alone 1.09–1.20×); ±12 came to 1.1× at 4–6 bins for twice the cost (it grows
 #: as the square)
 REFIT_HALF = 6
-#: … and only peaks whose first fit lies more than this many bins (Chebyshev) from every other's: two maxima whose
-#: first fits nearly meet are left as they are (refitted from there, each with the other's tone taken out, they came
-#: apart anywhere in the patch: azimuth 7.7× the CRB at 2.1 bins with 0.5). Two equal returns 2 range bins apart,
-#: their first fits pulled 0.5 bin towards each other, fell under the 1.5 bins of the rule before: 3.3–6.2× the CRB
-#: in range there, 1.6–2.0× with 1.0 (200 frames, mimo12, ρ = 30 dB)
+#: … and a peak whose first fit came within this many bins (Chebyshev) of another's starts its refit again from
+#: its cell (DspChain.process_rd): two returns about 2 bins apart whose 3 × 3 fits leaned into each other's lobe.
+#: Refitted from where they met they stayed there (3.0–10.8× the CRB in range at 2.0–2.1 bins, mimo12, ρ = 30 dB);
+#: left unrefitted, under a 1.5-bin rule before, likewise
 REFIT_APART = 1.0
 #: a wrap hypothesis is taken where its score (DspChain._wrap_score: the energy one plane wave, or two less a
 #: penalty, explain under it, over one channel's noise power: a log-likelihood) beats no wrap's by this much; the
@@ -354,16 +355,10 @@ class DspChain:
             half = patch_halves(d, r, top, (m, n), fit.max_half)
             fd, fr, s_top = fit(rd, d[top], r[top], dd[top], dr[top], half)
             # a patch cut short by a neighbour is fitted again, larger, with the other peaks' fitted tones taken
-            # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before. Not a
-            # peak whose first fit lies within REFIT_APART bins of another's: two maxima of one response, whose fits
-            # meet, are left as the first fit put them
+            # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before
             again = np.zeros(0, dtype=np.int64)
             if REFIT_PASSES and (cfg.refit is True or (cfg.refit == "auto" and rd.dtype == np.complex128)):
-                pd_, pr_ = d[top] + fd, r[top] + fr
-                dd_, dr_ = np.abs(pd_[:, None] - pd_[None, :]), np.abs(pr_[:, None] - pr_[None, :])
-                apart = np.maximum(np.minimum(dd_, m - dd_), np.minimum(dr_, n - dr_))
-                np.fill_diagonal(apart, np.inf)
-                again = np.flatnonzero((half < fit.max_half) & (apart.min(axis=1, initial=np.inf) > REFIT_APART))
+                again = np.flatnonzero(half < fit.max_half)
             if again.size:
                 wider = np.full(again.size, min(fit.max_half, REFIT_HALF), dtype=np.int64)
                 if top.size < d.size:              # only as far as the peaks not fitted (not in the model)
@@ -373,6 +368,19 @@ class DspChain:
                                          min(fit.max_half, REFIT_HALF), among=np.arange(again.size, both.size))
                 grow = again[wider > half[again]]
                 wider = wider[wider > half[again]]
+                # peaks whose first fits came within REFIT_APART bins of another's start again from their cells:
+                # two returns about 2 bins apart, each 3 × 3 fit leaning half a bin or more into the other's lobe,
+                # stayed where they met when refitted from there (3–11× the CRB in range at 2.0–2.1 bins); their
+                # cells, two local maxima, are where the returns stand within half a bin
+                pd_, pr_ = d[top[grow]] + fd[grow], r[top[grow]] + fr[grow]
+                dd_ = np.abs(pd_[:, None] - (d[top] + fd)[None, :])
+                dr_ = np.abs(pr_[:, None] - (r[top] + fr)[None, :])
+                apart = np.maximum(np.minimum(dd_, m - dd_), np.minimum(dr_, n - dr_))
+                apart[np.arange(grow.size), grow] = np.inf
+                meet = grow[apart.min(axis=1, initial=np.inf) <= REFIT_APART]
+                if meet.size:
+                    fd[meet], fr[meet] = 0.0, 0.0
+                    s_top[meet] = fit.snapshot(rd, d[top[meet]], r[top[meet]], 0.0, 0.0, half[meet])
                 seen = half.copy()
                 for k in range(REFIT_PASSES if grow.size else 0):
                     # the later passes for the peaks whose neighbour's lobe touched their cell (half-width 1): what
