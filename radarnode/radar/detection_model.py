@@ -460,8 +460,10 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     return in one range–Doppler cell adds to it, whatever its angle, as in the chain) and each one's cross-term
     with the tested cell (this frame's phases of their coherent sums, times how alike their channel phases are:
     full in one beam, about none a few beamwidths apart). The cell is hidden where a neighbour towards which the
-    other returns' lobes rise stands higher than its own cell. A body's own other cells are left out of its
-    cells' map (the resolution box of :func:`_peaks` merges those: with them a car passing a corner radar split
+    other returns' lobes rise stands higher than its own cell, unless that neighbour holds the cell's own return's
+    other half (:data:`ASTRIDE_OWN_DB` over the others' there) and the map falls again beyond it. A body's own
+    other cells are left out of its cells' map (the resolution box of :func:`_peaks` merges those: with them a car
+    passing a corner radar split
     into three objects, more often than in the chain). Positions in bins, both axes circular, ``u`` in d·sinθ;
     ``energy`` the cells' energies at their own bins. A hidden cell gives its energy to no one. ``candidates`` (bool,
     per cell): the cells to test (the peaks; every cell still counts as another return); None tests every cell.
