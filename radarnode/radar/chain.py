@@ -130,8 +130,10 @@ REFIT_HALF = 6
 #: … and a peak whose first fit came within this many bins (Chebyshev) of another's starts its refit again from
 #: its cell (DspChain.process_rd): two returns about 2 bins apart whose 3 × 3 fits leaned into each other's lobe.
 #: Refitted from where they met they stayed there (3.0–10.8× the CRB in range at 2.0–2.1 bins, mimo12, ρ = 30 dB);
-#: left unrefitted, under a 1.5-bin rule before, likewise
-REFIT_APART = 1.0
+#: left unrefitted, under a 1.5-bin rule before, likewise. With 1.0 here, pairs whose first fits met 1.0–1.2 bins
+#: apart stayed 4–11× the bound (an independent tester: 2.0–2.4 bins apart, mimo12 and ars408_like); with 1.5,
+#: 0.9–1.3× (mimo12, 100 frames a separation)
+REFIT_APART = 1.5
 #: a wrap hypothesis is taken where its score (DspChain._wrap_score: the energy one plane wave, or two less a
 #: penalty, explain under it, over one channel's noise power: a log-likelihood) beats no wrap's by this much; the
 #: margin keeps noise from wrapping weak unaliased targets (a 3σ excursion of the difference). A margin
