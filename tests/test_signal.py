@@ -215,7 +215,7 @@ def test_two_returns_about_two_bins_apart_are_fitted_to_their_own_positions(bins
     1.1–1.25×). Their first fits, on 3 × 3 patches each beside the other's main lobe, lean half a bin or more towards
     each other; refitted from there, or not at all under the refit's 1.5-bin rule before, they stayed where they met:
     3.0, 5.1 and 10.8× the CRB on these frames at 2.0, 2.0 (0.4 Doppler bin) and 2.1 bins. Now a peak whose first fit
-    came within a bin of another's starts its refit again from its cell."""
+    came within 1.5 bins of another's starts its refit again from its cell."""
     from radarnode.radar.signal_model import num_range_samples, synthesize_rd
     p = PRESETS["mimo12"]
     chain = DspChain(p)
