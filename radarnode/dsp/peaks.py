@@ -390,15 +390,26 @@ def patch_halves(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[i
     which = np.asarray(which)
     if which.size == 0:
         return np.zeros(0, dtype=np.int64)
-    m, n = shape
     others = np.arange(d.size) if among is None else np.asarray(among, dtype=np.int64)
     if others.size == 0:
         return np.full(which.size, max_half, dtype=np.int64)
+    return np.clip(nearest_peak(d, r, which, shape, others) - 3, 1, max_half).astype(np.int64)
+
+
+def nearest_peak(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[int, int],
+                 among: np.ndarray | None = None) -> np.ndarray:
+    """Distance from each of the peaks ``which`` to the nearest other of the peaks (d, r) (cells or fractional
+    positions, bins), Chebyshev, circular on both axes (map ``shape`` = (doppler, range)); ``among``: only these
+    count as others (default all); inf where there is none. Shape (len(which),)."""
+    which = np.asarray(which)
+    d, r = np.asarray(d, dtype=np.float64), np.asarray(r, dtype=np.float64)
+    m, n = shape
+    others = np.arange(d.size) if among is None else np.asarray(among, dtype=np.int64)
     dd = np.abs(d[which, None] - d[None, others])
     dr = np.abs(r[which, None] - r[None, others])
     dist = np.maximum(np.minimum(dd, m - dd), np.minimum(dr, n - dr))             # (len(which), others)
-    dist[which[:, None] == others[None, :]] = np.iinfo(np.int64).max // 2          # not itself
-    return np.clip(dist.min(axis=1) - 3, 1, max_half).astype(np.int64)
+    dist[which[:, None] == others[None, :]] = np.inf                                 # not itself
+    return dist.min(axis=1, initial=np.inf)
 
 
 def _tone_table(weights: np.ndarray, reach: float, steps: int) -> tuple[np.ndarray, float]:

@@ -17,7 +17,7 @@ from radarnode.errors import ConfigError, FieldError, short_repr
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
-from radarnode.dsp.peaks import MigrationFit, PatchFit, interpolate, local_maxima, patch_halves
+from radarnode.dsp.peaks import MigrationFit, PatchFit, interpolate, local_maxima, nearest_peak, patch_halves
 from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
@@ -374,12 +374,7 @@ class DspChain:
                 # two returns about 2 bins apart, each 3 × 3 fit leaning half a bin or more into the other's lobe,
                 # stayed where they met when refitted from there (3–11× the CRB in range at 2.0–2.1 bins); their
                 # cells, two local maxima, are where the returns stand within half a bin
-                pd_, pr_ = d[top[grow]] + fd[grow], r[top[grow]] + fr[grow]
-                dd_ = np.abs(pd_[:, None] - (d[top] + fd)[None, :])
-                dr_ = np.abs(pr_[:, None] - (r[top] + fr)[None, :])
-                apart = np.maximum(np.minimum(dd_, m - dd_), np.minimum(dr_, n - dr_))
-                apart[np.arange(grow.size), grow] = np.inf
-                meet = grow[apart.min(axis=1, initial=np.inf) <= REFIT_APART]
+                meet = grow[nearest_peak(d[top] + fd, r[top] + fr, grow, (m, n)) <= REFIT_APART]
                 if meet.size:
                     fd[meet], fr[meet] = 0.0, 0.0
                     s_top[meet] = fit.snapshot(rd, d[top[meet]], r[top[meet]], 0.0, 0.0, half[meet])
