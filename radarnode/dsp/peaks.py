@@ -227,6 +227,17 @@ class PatchFit:
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         self.max_half, self.buckets, self.axes = _patch_axes(doppler_window, range_window, max_half)
+        env_d, env_r = sidelobe_envelope(doppler_window), sidelobe_envelope(range_window)
+        size = max(env_d.size, env_r.size)
+        self.envelope = np.maximum(*(np.pad(e, (0, size - e.size), mode="edge") for e in (env_d, env_r)))
+
+    def leak_reach(self, power: np.ndarray, level: float) -> np.ndarray:
+        """How far, in whole bins, the tones of peaks whose cells hold ``power`` (shape (K,)) leak at ``level``
+        (the same units) or above on either axis: the number of distances e = 0, 1, … from a peak's cell at which
+        the windows' worst-case sidelobe (:func:`sidelobe_envelope`, the worse axis) times that power reaches the
+        level. Shape (K,)."""
+        cell = np.asarray(power, dtype=np.float64)
+        return np.sum(self.envelope[None, :] * cell[:, None] >= level, axis=1).astype(np.int64)
 
     def __call__(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
                  half: np.ndarray | int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -257,8 +268,8 @@ class PatchFit:
                            lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], halves[sel], *self.axes[b]))
 
     def refit(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
-              snapshot: np.ndarray, half: np.ndarray, which: np.ndarray, new_half: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              snapshot: np.ndarray, half: np.ndarray, which: np.ndarray, new_half: np.ndarray,
+              reach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fit the peaks ``which`` of a first fit again over larger patches, every other peak's fitted tone taken
         out of them.
 
@@ -267,7 +278,8 @@ class PatchFit:
         bound in range. Here each of the first fit's peaks — (``d``, ``r``) + (``delta_d``, ``delta_r``), its
         ``snapshot`` as :meth:`__call__` returned it for its patch half-width ``half`` — is a tone a_c·W_d·W_r
         whose channel amplitudes are the snapshot over √(h^H R⁻¹ h) of each axis; the tones of the other peaks
-        within ``REFIT_REACH`` bins of a patch are subtracted from it, and the peak is fitted on what is left
+        within ``REFIT_REACH`` bins of a patch, or within their own ``reach`` (shape (K,), e.g. :meth:`leak_reach`:
+        a strong tone's sidelobes reach further), are subtracted from it, and the peak is fitted on what is left
         with half-width ``new_half``. Returns (δ_d, δ_r, snapshot) of the peaks ``which``, as :meth:`__call__`.
         """
         d, r, fd, fr, halves = _checked(rd, d, r, delta_d, delta_r, half, self.max_half)
@@ -280,6 +292,8 @@ class PatchFit:
         big_d, big_r = self.axes[self.max_half]
         amp = np.asarray(snapshot) / np.sqrt(big_d.norm(fd[:, None], halves) * big_r.norm(fr[:, None], halves))
         rows, cols = rd.shape[1], rd.shape[2]
+        far = np.full(d.size, REFIT_REACH) if reach is None else np.maximum(np.broadcast_to(reach, d.shape),
+                                                                              REFIT_REACH)
 
         def fit(sel, b):
             axis_d, axis_r = self.axes[b]
@@ -288,7 +302,7 @@ class PatchFit:
             # the other peaks near enough to reach the patch: pairs (patch, peak), circular distances in bins
             dd = (d[None, :] - d[p][:, None] + rows // 2) % rows - rows // 2
             dr = (r[None, :] - r[p][:, None] + cols // 2) % cols - cols // 2
-            near = np.maximum(np.abs(dd), np.abs(dr)) <= b + REFIT_REACH
+            near = np.maximum(np.abs(dd), np.abs(dr)) <= b + far[None, :]
             near[np.arange(p.size), p] = False
             i, q = np.nonzero(near)
             if i.size:
@@ -401,15 +415,43 @@ def nearest_peak(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[i
     """Distance from each of the peaks ``which`` to the nearest other of the peaks (d, r) (cells or fractional
     positions, bins), Chebyshev, circular on both axes (map ``shape`` = (doppler, range)); ``among``: only these
     count as others (default all); inf where there is none. Shape (len(which),)."""
+    others = np.arange(np.size(d)) if among is None else np.asarray(among, dtype=np.int64)
+    return _distances(d, r, which, shape, others).min(axis=1, initial=np.inf)
+
+
+def reached(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[int, int], half: np.ndarray,
+            reach: np.ndarray) -> np.ndarray:
+    """Whether the patch of half-width ``half`` (shape (len(which),)) around each of the peaks ``which`` comes
+    within ``reach`` (shape (len(d),), e.g. :meth:`PatchFit.leak_reach`) of another of the peaks (d, r): its
+    nearest cell less than that peak's reach away (Chebyshev, circular). Shape (len(which),), bool."""
+    gap = _distances(d, r, which, shape, np.arange(np.size(d))) - np.asarray(half)[:, None]
+    return np.any(gap < np.asarray(reach)[None, :], axis=1)
+
+
+def _distances(d, r, which, shape, others) -> np.ndarray:
+    """Chebyshev distances, circular on both axes, from the peaks ``which`` to ``others`` (inf to itself)."""
     which = np.asarray(which)
     d, r = np.asarray(d, dtype=np.float64), np.asarray(r, dtype=np.float64)
     m, n = shape
-    others = np.arange(d.size) if among is None else np.asarray(among, dtype=np.int64)
     dd = np.abs(d[which, None] - d[None, others])
     dr = np.abs(r[which, None] - r[None, others])
     dist = np.maximum(np.minimum(dd, m - dd), np.minimum(dr, n - dr))             # (len(which), others)
     dist[which[:, None] == others[None, :]] = np.inf                                 # not itself
-    return dist.min(axis=1, initial=np.inf)
+    return dist
+
+
+def sidelobe_envelope(window: np.ndarray, oversample: int = 16) -> np.ndarray:
+    """The worst case over a tone's offset f ∈ [−½, ½] from its cell of |W(e + f)|² / |W(f)|², for whole bins
+    e = 0 … L/2 from the cell (W the window's spectrum, L its length), made non-increasing in e: how much of a
+    peak cell's power a tone leaks e bins away at most (Hann: −14 / −31 / −53 / −72 dB at 2 / 3 / 6 / 12)."""
+    w = np.asarray(window, dtype=np.float64)
+    size, half = w.size, w.size // 2
+    spec = np.abs(np.fft.fft(w, size * oversample)) ** 2                          # |W(k / oversample)|²
+    f = np.arange(-(oversample // 2), oversample // 2 + 1)                           # f·oversample
+    e = np.arange(half + 1)
+    ratio = spec[(e[:, None] * oversample + f[None, :]) % spec.size] / spec[f % spec.size][None, :]
+    worst = ratio.max(axis=1)
+    return np.maximum.accumulate(worst[::-1])[::-1]
 
 
 def _tone_table(weights: np.ndarray, reach: float, steps: int) -> tuple[np.ndarray, float]:

@@ -17,7 +17,8 @@ from radarnode.errors import ConfigError, FieldError, short_repr
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
-from radarnode.dsp.peaks import MigrationFit, PatchFit, interpolate, local_maxima, nearest_peak, patch_halves
+from radarnode.dsp.peaks import (MigrationFit, PatchFit, interpolate, local_maxima, nearest_peak, patch_halves,
+                                 reached)
 from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
@@ -134,6 +135,13 @@ REFIT_HALF = 6
 #: apart stayed 4–11× the bound (an independent tester: 2.0–2.4 bins apart, mimo12 and ars408_like); with 1.5,
 #: 0.9–1.3× (mimo12, 100 frames a separation)
 REFIT_APART = 1.5
+#: … and a peak whose patch another peak's sidelobes reach at this level or above (that peak's cell power summed
+#: over the channels times the windows' worst-case sidelobe at the patch's nearest cell, over one channel's noise
+#: variance, dB) is refitted too, at its own half-width, with that tone taken out: two equal returns 9–20 bins
+#: apart at ρ = 45 dB, whose patches end 3–8 bins short of the other, came to 1.3–2.7× the CRB in range without
+#: it, 1.0–1.3× with it (mimo12 and ars408_like, 60 frames); at −20 dB 20 bins apart stayed 1.3–1.4×. A 25-dB return
+#: 16 bins from a 60-dB one: 11× without, 1.15× with it
+LEAK_REFIT_DB = -30.0
 #: a wrap hypothesis is taken where its score (DspChain._wrap_score: the energy one plane wave, or two less a
 #: penalty, explain under it, over one channel's noise power: a log-likelihood) beats no wrap's by this much; the
 #: margin keeps noise from wrapping weak unaliased targets (a 3σ excursion of the difference). A margin
@@ -340,6 +348,9 @@ class DspChain:
         if not np.all(np.isfinite(power)):
             raise ConfigError(f"rd: {int(np.sum(~np.isfinite(power)))} range–Doppler cells are NaN or infinite; "
                               "expected a finite spectrum (check the cube's samples)")
+        # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
+        # which a strong target's sidelobes inflate
+        sigma2 = stat.noise_floor(power)
         d, r = local_maxima(power, stat.cfar.detect(power))
         if d.size > cfg.max_detections:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
@@ -357,10 +368,13 @@ class DspChain:
             half = patch_halves(d, r, top, (m, n), fit.max_half)
             fd, fr, s_top = fit(rd, d[top], r[top], dd[top], dr[top], half)
             # a patch cut short by a neighbour is fitted again, larger, with the other peaks' fitted tones taken
-            # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before
+            # out of it (PatchFit.refit): a neighbour 3–6 bins away cost 1.5–2.2× the bound in range before; and
+            # a patch a loud neighbour's sidelobes reach (LEAK_REFIT_DB) at its own half-width
             again = np.zeros(0, dtype=np.int64)
             if REFIT_PASSES and (cfg.refit is True or (cfg.refit == "auto" and rd.dtype == np.complex128)):
-                again = np.flatnonzero(half < fit.max_half)
+                reach = fit.leak_reach(power[d, r], sigma2 * 10.0 ** (LEAK_REFIT_DB / 10.0))
+                loud = reached(d, r, top, (m, n), half, reach)
+                again = np.flatnonzero((half < fit.max_half) | loud)
             if again.size:
                 wider = np.full(again.size, min(fit.max_half, REFIT_HALF), dtype=np.int64)
                 if top.size < d.size:              # only as far as the peaks not fitted (not in the model)
@@ -368,8 +382,16 @@ class DspChain:
                     both = np.concatenate([top[again], rest])
                     wider = patch_halves(d[both], r[both], np.arange(again.size), (m, n),
                                          min(fit.max_half, REFIT_HALF), among=np.arange(again.size, both.size))
-                grow = again[wider > half[again]]
-                wider = wider[wider > half[again]]
+                take = (wider > half[again]) | loud[again]
+                grow, wider = again[take], np.maximum(wider, half[again])[take]
+                # … those far from every other peak (≥ REFIT_HALF + 3 bins) start from the three-bin interpolation:
+                # their first fit took a loud neighbour's sidelobes at its patch's edge for their own and may lie
+                # beyond the refit's search (a 25-dB return 12–14 bins from a 60-dB one: 1.7–2.9× the CRB in range
+                # from there, 1.07× from the interpolation, whose three cells lie 9+ bins from that neighbour)
+                fresh = grow[half[grow] >= REFIT_HALF]
+                if fresh.size:
+                    fd[fresh], fr[fresh] = dd[top[fresh]], dr[top[fresh]]
+                    s_top[fresh] = fit.snapshot(rd, d[top[fresh]], r[top[fresh]], fd[fresh], fr[fresh], half[fresh])
                 # peaks whose first fits came within REFIT_APART bins of another's start again from their cells:
                 # two returns about 2 bins apart, each 3 × 3 fit leaning half a bin or more into the other's lobe,
                 # stayed where they met when refitted from there (3–11× the CRB in range at 2.0–2.1 bins); their
@@ -388,7 +410,7 @@ class DspChain:
                     if not fit_now.size:
                         break
                     fd[fit_now], fr[fit_now], s_top[fit_now] = fit.refit(rd, d[top], r[top], fd, fr, s_top, seen,
-                                                                          fit_now, wide)
+                                                                          fit_now, wide, reach[top])
                     seen[fit_now] = wide
             dd, dr, snap = dd.copy(), dr.copy(), snap.copy()
             dd[top], dr[top], snap[top] = fd, fr, s_top
@@ -397,9 +419,6 @@ class DspChain:
         r_bins, speed, range_m = self._positions(d, r, dd, dr, m, n)
         # TDM: transmitter t fires t·T_c after transmitter 0 — remove that Doppler phase, then beamform
         raw, snap = snap, snap * self._tdm_phase(speed)
-        # energy over the calibrated noise floor (the median cell is noise), not the CFAR's local estimate,
-        # which a strong target's sidelobes inflate
-        sigma2 = stat.noise_floor(power)
         if p.num_tx > 1 and d.size:
             trial, peak, two = self._tdm_hypotheses(snap, sigma2)
             rows = np.arange(d.size)
