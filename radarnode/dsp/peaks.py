@@ -269,7 +269,8 @@ class PatchFit:
 
     def refit(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
               snapshot: np.ndarray, half: np.ndarray, which: np.ndarray, new_half: np.ndarray,
-              reach: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+              reach: np.ndarray | None = None, rounds: tuple | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fit the peaks ``which`` of a first fit again over larger patches, every other peak's fitted tone taken
         out of them.
 
@@ -280,7 +281,8 @@ class PatchFit:
         whose channel amplitudes are the snapshot over √(h^H R⁻¹ h) of each axis; the tones of the other peaks
         within ``REFIT_REACH`` bins of a patch, or within their own ``reach`` (shape (K,), e.g. :meth:`leak_reach`:
         a strong tone's sidelobes reach further), are subtracted from it, and the peak is fitted on what is left
-        with half-width ``new_half``. Returns (δ_d, δ_r, snapshot) of the peaks ``which``, as :meth:`__call__`.
+        with half-width ``new_half``, searched on ``rounds`` (default ``REFIT_ROUNDS``; ``ROUNDS``, the first fit's,
+        for a start further off). Returns (δ_d, δ_r, snapshot) of the peaks ``which``, as :meth:`__call__`.
         """
         d, r, fd, fr, halves = _checked(rd, d, r, delta_d, delta_r, half, self.max_half)
         which = np.asarray(which, dtype=np.int64)
@@ -321,7 +323,8 @@ class PatchFit:
                 left[i, slot] = wd[:, :, None] * amp[q][:, None, :]
                 right[i, slot] = wr
                 x -= (left.reshape(p.size, -1, j * c).transpose(0, 2, 1) @ right).reshape(p.size, j, c, j)
-            return self._fit_patches(x, fd[p], fr[p], new[sel], axis_d, axis_r, self.REFIT_ROUNDS)
+            return self._fit_patches(x, fd[p], fr[p], new[sel], axis_d, axis_r,
+                                     self.REFIT_ROUNDS if rounds is None else rounds)
 
         return _per_bucket(self.buckets, new, fd[which], fr[which], rd.shape[0], fit)
 
