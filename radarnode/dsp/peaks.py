@@ -423,12 +423,18 @@ def nearest_peak(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[i
 
 
 def reached(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[int, int], half: np.ndarray,
-            reach: np.ndarray) -> np.ndarray:
+            reach: np.ndarray, power: np.ndarray | None = None) -> np.ndarray:
     """Whether the patch of half-width ``half`` (shape (len(which),)) around each of the peaks ``which`` comes
     within ``reach`` (shape (len(d),), e.g. :meth:`PatchFit.leak_reach`) of another of the peaks (d, r): its
-    nearest cell less than that peak's reach away (Chebyshev, circular). Shape (len(which),), bool."""
+    nearest cell less than that peak's reach away (Chebyshev, circular). With ``power`` (shape (len(d),)) only the
+    peaks of more power than the patch's own count. Shape (len(which),), bool."""
+    which = np.asarray(which)
     gap = _distances(d, r, which, shape, np.arange(np.size(d))) - np.asarray(half)[:, None]
-    return np.any(gap < np.asarray(reach)[None, :], axis=1)
+    hit = gap < np.asarray(reach)[None, :]
+    if power is not None:
+        power = np.asarray(power)
+        hit &= power[None, :] > power[which][:, None]
+    return np.any(hit, axis=1)
 
 
 def _distances(d, r, which, shape, others) -> np.ndarray:

@@ -389,6 +389,7 @@ class DspChain:
                 # beyond the refit's search (a 25-dB return 12–14 bins from a 60-dB one: 1.7–2.9× the CRB in range
                 # from there, 1.07× from the interpolation, whose three cells lie 9+ bins from that neighbour)
                 fresh = grow[half[grow] >= REFIT_HALF]
+                first_last = fresh[~reached(d, r, top[fresh], (m, n), half[fresh], reach, power[d, r])]
                 if fresh.size:
                     fd[fresh], fr[fresh] = dd[top[fresh]], dr[top[fresh]]
                     s_top[fresh] = fit.snapshot(rd, d[top[fresh]], r[top[fresh]], fd[fresh], fr[fresh], half[fresh])
@@ -410,13 +411,17 @@ class DspChain:
                     if not fit_now.size:
                         break
                     # (the fresh starts with the first fit's wider search: from the interpolation the refit's
-                    # narrow one lost at ρ = 20 dB, 1.25× the CRB in range against 1.19×)
+                    # narrow one lost at ρ = 20 dB, 1.25× the CRB in range against 1.19×; and those no louder peak
+                    # reaches after the others: a much weaker neighbour's first fit, which the loud one's sidelobes
+                    # swamp, is no tone to take out — an 80-dB return 14 bins from a 25-dB one came to 5× the CRB)
                     far = np.isin(fit_now, fresh) if k == 0 else np.zeros(fit_now.size, dtype=bool)
-                    fits = [(fit_now[sel], fit.refit(rd, d[top], r[top], fd, fr, s_top, seen, fit_now[sel], wide[sel],
-                                                     reach[top], rounds))
-                            for sel, rounds in ((~far, None), (far, fit.ROUNDS)) if sel.any()]
-                    for which, (new_d, new_r, new_s) in fits:
-                        fd[which], fr[which], s_top[which] = new_d, new_r, new_s
+                    last = np.isin(fit_now, first_last) if k == 0 else far
+                    for stage in (~last, last):
+                        fits = [(fit_now[sel], fit.refit(rd, d[top], r[top], fd, fr, s_top, seen, fit_now[sel],
+                                                         wide[sel], reach[top], rounds))
+                                for sel, rounds in ((stage & ~far, None), (stage & far, fit.ROUNDS)) if sel.any()]
+                        for which, (new_d, new_r, new_s) in fits:
+                            fd[which], fr[which], s_top[which] = new_d, new_r, new_s
                     seen[fit_now] = wide
             dd, dr, snap = dd.copy(), dr.copy(), snap.copy()
             dd[top], dr[top], snap[top] = fd, fr, s_top
