@@ -237,6 +237,31 @@ def test_two_returns_about_two_bins_apart_are_fitted_to_their_own_positions(bins
     assert np.sqrt(np.mean(np.square(err))) <= 1.8 * equation.crb_range_m(p, 30.0)
 
 
+def _pair_rmse_over_crb(preset: str, bins: float, rho_db: float, weaker_db: float, frames: int) -> np.ndarray:
+    """Two returns ``bins`` range bins apart (4° apart, the same speed) at ρ = ``rho_db`` and ``rho_db`` − ``weaker_db``,
+    ``frames`` frames through the chain (those with both detected, at least half): RMSE over each one's own CRB,
+    shape (return, quantity: range, range rate, azimuth)."""
+    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
+    p = PRESETS[preset]
+    chain = DspChain(p)
+    snr = rho_db - 10.0 * math.log10(num_range_samples(p) * p.num_chirps * p.num_virtual)
+    rng = np.random.default_rng(17)
+    r, v, az = np.array([40.3, 40.3 + bins * p.range_resolution_m]), np.array([0.7, 0.7]), np.array([0.0, 4.0])
+    err = []
+    for _ in range(frames):
+        rd = (synthesize_rd(p, point_targets(r[:1], az[:1], v[:1]), rng, snr_db=snr)
+              + synthesize_rd(p, point_targets(r[1:], az[1:], v[1:]), rng, snr_db=snr - weaker_db, noise=False))
+        det = chain.process_rd(rd)
+        if det.range_m.size >= 2:                     # the 25-dB return beside an 80-dB one is lost in some frames
+            err.append(_match(det, r, v, az))
+    assert len(err) >= frames // 2, len(err)
+    err = np.stack(err)                                                            # (frame, return, quantity)
+    rho = np.array([rho_db, rho_db - weaker_db])
+    crb = np.stack([equation.crb_range_m(p, rho), equation.crb_speed_mps(p, rho),
+                    np.degrees(equation.crb_azimuth_rad(p, rho, np.radians(az)))], axis=1)
+    return np.sqrt(np.mean(err ** 2, axis=0)) / crb
+
+
 @pytest.mark.parametrize("preset, bins, rho_db, weaker_db", [("mimo12", 11.0, 45.0, 0.0), ("ars408_like", 16.0, 45.0, 0.0),
                                                             ("mimo12", 13.0, 60.0, 35.0), ("mimo12", 16.0, 60.0, 35.0),
                                                             ("ars408_like", 14.0, 80.0, 55.0)])
@@ -250,28 +275,25 @@ def test_a_loud_neighbours_sidelobes_at_the_patchs_edge_do_not_pull_the_fit(pres
     interpolation where its first fit may have been pulled beyond the refit's search (with the first fit's wider
     search: an 80-dB return 14 bins from a 25-dB one came to 5× with the refit's, a second tester's finding), and the
     loudest after the weaker ones, whose first fits its sidelobes swamp."""
-    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
-    p = PRESETS[preset]
-    chain = DspChain(p)
-    snr = rho_db - 10.0 * math.log10(num_range_samples(p) * p.num_chirps * p.num_virtual)
-    rng = np.random.default_rng(17)
-    r, v, az = np.array([40.3, 40.3 + bins * p.range_resolution_m]), np.array([0.7, 0.7]), np.array([0.0, 4.0])
-    err = []
-    for _ in range(40):
-        rd = (synthesize_rd(p, point_targets(r[:1], az[:1], v[:1]), rng, snr_db=snr)
-              + synthesize_rd(p, point_targets(r[1:], az[1:], v[1:]), rng, snr_db=snr - weaker_db, noise=False))
-        det = chain.process_rd(rd)
-        if det.range_m.size >= 2:                     # the 25-dB return beside an 80-dB one is lost in some frames
-            err.append(_match(det, r, v, az))
-    assert len(err) >= 20, len(err)
-    err = np.stack(err)                                                            # (frame, return, quantity)
-    rho = np.array([rho_db, rho_db - weaker_db])
-    crb = np.stack([equation.crb_range_m(p, rho), equation.crb_speed_mps(p, rho),
-                    np.degrees(equation.crb_azimuth_rad(p, rho, np.radians(az)))], axis=1)
-    ratio = np.sqrt(np.mean(err ** 2, axis=0)) / crb
+    ratio = _pair_rmse_over_crb(preset, bins, rho_db, weaker_db, 40)
     # (beside the 80-dB return the 25-dB one is found in 27 of the 40 frames, whose RMSE carries about ±14 %: its range
     # rate is 1.50× there with and without the staging; the 80-dB return's range 1.72× without it, 1.01× with it)
     assert np.all(ratio <= (1.6 if rho_db == 80.0 else 1.45)), ratio
+
+
+@pytest.mark.parametrize("preset, bins, rho_db, weaker_db", [("ars408_like", 6.0, 55.0, 10.0), ("mimo12", 7.0, 45.0, 0.0),
+                                                            ("ars408_like", 8.0, 55.0, 10.0), ("ars408_like", 9.0, 55.0, 10.0),
+                                                            ("ars408_like", 10.0, 55.0, 10.0)])
+def test_returns_six_to_ten_bins_apart_are_fitted_again_until_their_tones_agree(preset, bins, rho_db, weaker_db):
+    """Two returns 6–10 range bins apart at 45–55 dB, 40 frames: range RMSE of each within 1.3× its own CRB
+    (1.05–1.22× on these frames; 1.27–1.76× before at 6–8 bins), range rate and azimuth within 1.45×. Their patches (half-width 3–5, up to 8 bins apart) are refitted at 6 with the other's tone
+    taken out; that tone was the other's first fit, which leaned into this one's lobe. One pass (as for the peaks
+    cut short by a neighbour 4–6 bins away at ρ = 30 dB) left the louder of a 55/45-dB pair at 1.6–2.0× the CRB in
+    range (ars408_like, 6–8 bins) and the second of an equal 45-dB pair at 1.6× (mimo12, 7 bins); now the peaks a
+    neighbour cut short (half-width below REFIT_HALF) take all REFIT_PASSES. 9 and 10 bins: the first patches
+    half-width 6 and 7, one pass, started from the three-bin interpolation (the rule's other side)."""
+    ratio = _pair_rmse_over_crb(preset, bins, rho_db, weaker_db, 40)
+    assert np.all(ratio[:, 0] <= 1.3) and np.all(ratio <= 1.45), ratio
 
 
 def test_the_patch_fits_snapshot_at_given_offsets_is_the_fits_own_there():

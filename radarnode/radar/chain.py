@@ -403,11 +403,16 @@ class DspChain:
                     s_top[meet] = fit.snapshot(rd, d[top[meet]], r[top[meet]], 0.0, 0.0, half[meet])
                 seen = half.copy()
                 for k in range(REFIT_PASSES if grow.size else 0):
-                    # the later passes for the peaks whose neighbour's lobe touched their cell (half-width 1): what
-                    # the first pass took out for the neighbour was its first fit's, 2× off; one pass left them at
-                    # 1.4× the bound in range on ars408_like, two at 1.3×, where neighbours 4–6 bins away need one
-                    fit_now = grow if k == 0 else grow[half[grow] == 1]
-                    wide = wider if k == 0 else wider[half[grow] == 1]
+                    # the later passes for the peaks a neighbour cut short (half-width below REFIT_HALF: within
+                    # REFIT_HALF + 2 bins): what the first pass took out for the neighbour was its first fit's, which
+                    # leaned into this peak's lobe. Neighbours 2 bins apart: one pass left them at 1.4× the bound in
+                    # range on ars408_like, two at 1.3×. Neighbours 6–8 bins apart at 45–55 dB: one pass left the
+                    # louder at 1.6–2.0× (ars408_like, 55/45 dB, 200 frames) and the other at 1.4–1.6× (mimo12, 45/45),
+                    # three at 1.2× and 1.15–1.3× (at ρ = 30 dB one was enough: those passes were for half-width 1
+                    # only before)
+                    again_k = half[grow] < REFIT_HALF
+                    fit_now = grow if k == 0 else grow[again_k]
+                    wide = wider if k == 0 else wider[again_k]
                     if not fit_now.size:
                         break
                     # (the fresh starts with the first fit's wider search: from the interpolation the refit's
