@@ -264,7 +264,8 @@ def _pair_rmse_over_crb(preset: str, bins: float, rho_db: float, weaker_db: floa
 
 @pytest.mark.parametrize("preset, bins, rho_db, weaker_db", [("mimo12", 11.0, 45.0, 0.0), ("ars408_like", 16.0, 45.0, 0.0),
                                                             ("mimo12", 13.0, 60.0, 35.0), ("mimo12", 16.0, 60.0, 35.0),
-                                                            ("ars408_like", 14.0, 80.0, 55.0)])
+                                                            ("ars408_like", 14.0, 80.0, 55.0), ("ars408_like", 11.0, 80.0, 0.0),
+                                                            ("mimo12", 9.0, 70.0, 0.0)])
 def test_a_loud_neighbours_sidelobes_at_the_patchs_edge_do_not_pull_the_fit(preset, bins, rho_db, weaker_db):
     """Two returns ``bins`` range bins apart at ρ = ``rho_db`` and ``rho_db`` − ``weaker_db``, 40 frames (those with both
     detected, at least 20): range, range rate and azimuth RMSE of each within 1.45× its own CRB. The patch fit's patch ends 3 bins short of the other
@@ -274,7 +275,9 @@ def test_a_loud_neighbours_sidelobes_at_the_patchs_edge_do_not_pull_the_fit(pres
     patch a loud neighbour's sidelobes reach is refitted with that tone taken out, from the three-bin
     interpolation where its first fit may have been pulled beyond the refit's search (with the first fit's wider
     search: an 80-dB return 14 bins from a 25-dB one came to 5× with the refit's, a second tester's finding), and the
-    loudest after the weaker ones, whose first fits its sidelobes swamp."""
+    loudest after the weaker ones, whose first fits its sidelobes swamp. Two equal returns 9–11 bins apart at 70–80
+    dB: each refit took out the other's first fit, which had taken this one's sidelobes for its own, and one pass left
+    one of them at 1.9× (70 dB) and 4.9–5.2× (80 dB) the CRB in range; now every refitted peak takes every pass."""
     ratio = _pair_rmse_over_crb(preset, bins, rho_db, weaker_db, 40)
     # (beside the 80-dB return the 25-dB one is found in 27 of the 40 frames, whose RMSE carries about ±14 %: its range
     # rate is 1.50× there with and without the staging; the 80-dB return's range 1.72× without it, 1.01× with it)

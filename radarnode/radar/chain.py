@@ -120,9 +120,9 @@ def detection_statistic(config: DspConfig, n_channels: int, n_doppler: int, n_ra
 #: an earlier version of the fit)
 MIGRATION_HALF = 12
 #: passes of the patch fit's refit of crowded peaks (DspChain.process_rd, PatchFit.refit): each takes the others'
-#: tones from the pass before out of a peak's wider patch (the later ones only for peaks whose neighbour's lobe
-#: touched their cell); two equal returns 2.0–2.2 bins apart, started from their cells, came to 1.35–1.45× the CRB in
-#: range with three, 1.6–2.1× with two (mimo12, ρ = 30 dB, 200 frames)
+#: tones from the pass before out of a peak's wider patch (every refitted peak, every pass); two equal returns
+#: 2.0–2.2 bins apart, started from their cells, came to 1.35–1.45× the CRB in range with three, 1.6–2.1× with two
+#: (mimo12, ρ = 30 dB, 200 frames)
 REFIT_PASSES = 3
 #: … and their patch half-width there, at most: measured on two returns 3–6 bins apart, ρ = 30 dB, 200 draws,
 #: 1.13–1.33× the CRB in range (one alone 1.09–1.20×); ±12 came to 1.1× at 4–6 bins for twice the cost (it grows
@@ -401,20 +401,16 @@ class DspChain:
                 if meet.size:
                     fd[meet], fr[meet] = 0.0, 0.0
                     s_top[meet] = fit.snapshot(rd, d[top[meet]], r[top[meet]], 0.0, 0.0, half[meet])
-                seen = half.copy()
+                seen, fit_now, wide = half.copy(), grow, wider
                 for k in range(REFIT_PASSES if grow.size else 0):
-                    # the later passes for the peaks a neighbour cut short (half-width below REFIT_HALF: within
-                    # REFIT_HALF + 2 bins): what the first pass took out for the neighbour was its first fit's, which
-                    # leaned into this peak's lobe. Neighbours 2 bins apart: one pass left them at 1.4× the bound in
-                    # range on ars408_like, two at 1.3×. Neighbours 6–8 bins apart at 45–55 dB: one pass left the
-                    # louder at 1.6–2.0× (ars408_like, 55/45 dB, 200 frames) and the other at 1.4–1.6× (mimo12, 45/45),
-                    # three at 1.2× and 1.15–1.3× (at ρ = 30 dB one was enough: those passes were for half-width 1
-                    # only before)
-                    again_k = half[grow] < REFIT_HALF
-                    fit_now = grow if k == 0 else grow[again_k]
-                    wide = wider if k == 0 else wider[again_k]
-                    if not fit_now.size:
-                        break
+                    # every pass for every peak refitted: what the first pass took out for a neighbour was the
+                    # neighbour's first fit, which leaned into this peak's lobe or took its sidelobes for its own.
+                    # Neighbours 2 bins apart: one pass left them at 1.4× the bound in range on ars408_like, two at
+                    # 1.3×. Neighbours 6–8 bins apart at 45–55 dB: one pass left the louder at 1.6–2.0× (ars408_like,
+                    # 55/45 dB, 200 frames) and the other at 1.4–1.6× (mimo12, 45/45), three 1.2× and 1.15–1.3×. Equal
+                    # returns 9–14 bins apart at 70–80 dB: one pass 1.5–5.2×, three 1.1–1.4× (60 frames). (The later
+                    # passes were for the peaks 1 bin from a neighbour only before: at ρ = 30 dB one pass is enough
+                    # 3–6 bins apart)
                     # (the fresh starts with the first fit's wider search: from the interpolation the refit's
                     # narrow one lost at ρ = 20 dB, 1.25× the CRB in range against 1.19×; and those no louder peak
                     # reaches after the others: a much weaker neighbour's first fit, which the loud one's sidelobes
