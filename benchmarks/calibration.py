@@ -39,8 +39,8 @@ Prints Markdown tables:
    chain's angle-search thresholds (its second source within DOA_FLOOR_DB of the first and DOA_SECONDARY_SNR_DB above
    the beam noise): how often each level reports the weaker one;
 17. (``--only neighbours``) accuracy beside a neighbour: two equal returns 2–6 bins apart at ρ = 30 dB and 6–24
-   bins apart at 45 dB, a 25-dB return 12–26 bins from a 60-dB one, a 45-dB return 6–10 bins from a 55-dB one,
-   rows of 3 and 4 equal returns: the resolved
+   bins apart at 45 dB and 9–14 at 70–80 dB, a 25-dB return 12–26 bins from a 60-dB one, a 45-dB return 6–10 bins
+   from a 55-dB one, rows of 3 and 4 equal returns: the resolved
    frames and the worst return's RMSE over its CRB, detection against signal level.
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 12 minutes; ``--quick`` about 3).
@@ -1071,6 +1071,8 @@ def neighbours_table(quick: bool) -> None:
     # 6–10 bins at 45–55 dB: patches cut to half-width 3–5 below 9 bins (every refit pass), 6 and 7 above (one)
     cases += [("mimo12", (45.0, 45.0), s) for s in (6.0, 7.0, 8.0)]
     cases += [("ars408_like", (55.0, 45.0), s) for s in (6.0, 7.0, 8.0, 9.0, 10.0)]
+    cases += [("mimo12", (70.0, 70.0), s) for s in (9.0, 11.0, 14.0)]
+    cases += [("ars408_like", (80.0, 80.0), s) for s in (9.0, 11.0, 14.0)]
     cases += [("mimo12", (30.0,) * k, s) for k in (3, 4) for s in (2.1, 2.5)]          # rows: an open case
     for name, rho, sep in cases:
         p = PRESETS[name]
