@@ -299,6 +299,53 @@ def test_returns_six_to_ten_bins_apart_are_fitted_again_until_their_tones_agree(
     assert np.all(ratio[:, 0] <= 1.3) and np.all(ratio <= 1.45), ratio
 
 
+def test_the_leak_refit_takes_a_patch_from_minus_30_db_of_a_neighbours_sidelobes_and_not_below(monkeypatch):
+    """LEAK_REFIT_DB, swept across: a 30-dB return 30–33 range bins beyond a 60.5-dB one (ars408_like, one frame each,
+    the same noise). Its patch (half-width 12) ends D − 12 bins from the loud cell, where the windows' worst-case
+    sidelobe (sidelobe_envelope) times the loud cell's power, over one channel's noise variance measured here on cells
+    far from both, is −27.9, −29.3, −30.7 and −32.0 dB: the chain refits it at 30 and 31 bins and not at 32 and 33."""
+    from radarnode.dsp import peaks
+    from radarnode.dsp.spectra import noncoherent_power, window
+    from radarnode.radar.chain import LEAK_REFIT_DB
+    from radarnode.radar.signal_model import num_range_samples, synthesize_rd
+    p = PRESETS["ars408_like"]
+    chain = DspChain(p)
+    k = 10.0 * math.log10(num_range_samples(p) * p.num_chirps * p.num_virtual)
+
+    def frame(bins: int) -> np.ndarray:
+        rng = np.random.default_rng(3)
+        weak = point_targets(np.array([40.3 + bins * p.range_resolution_m]), np.array([4.0]), np.array([0.7]))
+        return (synthesize_rd(p, point_targets(np.array([40.3]), np.array([0.0]), np.array([0.7])), rng,
+                              snr_db=60.5 - k)
+                + synthesize_rd(p, weak, rng, snr_db=30.0 - k, noise=False))
+
+    rd = frame(30)
+    c, m, n = rd.shape
+    power = noncoherent_power(rd)
+    dl, rl = np.unravel_index(np.argmax(power), power.shape)
+    far = np.ones((m, n), dtype=bool)
+    far[max(dl - 40, 0):dl + 40, :] = False
+    far[:, max(rl - 10, 0):rl + 60] = False
+    sigma2 = np.mean(np.abs(rd[:, far]) ** 2)                   # one channel's noise variance, the loud one's cells out
+    envelope = peaks.PatchFit(window(chain.config.doppler_window, m), window(chain.config.range_window, n)).envelope
+    cells: list = []
+    refit = peaks.PatchFit.refit
+
+    def spy(self, rd, d, r, *args, **kwargs):
+        which = args[4]                                        # (delta_d, delta_r, snapshot, half, which, …)
+        cells.extend(zip(np.asarray(d)[which].tolist(), np.asarray(r)[which].tolist()))
+        return refit(self, rd, d, r, *args, **kwargs)
+
+    monkeypatch.setattr(peaks.PatchFit, "refit", spy)
+    for bins in (30, 31, 32, 33):
+        leak_db = 10.0 * math.log10(envelope[bins - 12] * power[dl, rl] / sigma2)
+        assert abs(leak_db - LEAK_REFIT_DB) >= 0.5, leak_db              # the sweep's premise: clear of the threshold
+        cells.clear()
+        chain.process_rd(frame(bins))
+        weak_refitted = any(abs(d - dl) <= 1 and abs(r - (rl + bins)) <= 1 for d, r in cells)
+        assert weak_refitted == (leak_db >= LEAK_REFIT_DB), (bins, leak_db, sorted(set(cells)))
+
+
 def test_the_patch_fits_snapshot_at_given_offsets_is_the_fits_own_there():
     """PatchFit.snapshot (no search) at the offsets the fit found gives the fit's snapshot; at other offsets another."""
     from radarnode.dsp.peaks import PatchFit
