@@ -571,7 +571,7 @@ def test_the_testers_scenes_keep_their_gap_at_the_object_level(name, seed):
     assert r.min_gap_m >= 2.0 and r.impact_time_s is None, (r.min_gap_m, r.reasons)
 
 
-@pytest.mark.parametrize("truck_x, seed", [(41.0, 2), (50.0, 1), (55.0, 2)])
+@pytest.mark.parametrize("truck_x, seed", [(41.0, 2), pytest.param(50.0, 1, marks=pytest.mark.slow), (55.0, 2)])
 def test_the_testers_jam_keeps_its_gap_at_the_detection_level(truck_x, seed):
     """An independent tester's jam (2026-11-30) at the detection level: a lead braking from 8 m/s to a stop beside a
     truck parked in the next lane, the ego following at 1.5 s. The truck's side beside the ego masks the lead in its
@@ -580,7 +580,8 @@ def test_the_testers_jam_keeps_its_gap_at_the_detection_level(truck_x, seed):
     standing where it would stop, the lead is not run into (the grid: 0 of 21, the least gap 3.7 m). With the truck at
     55 m (seed 2; a second tester's) the ego stopped 4 m behind the lead, the lead's track slid onto the truck and
     left the path, and ACC resumed by itself into the lead at 5.5 m/s: a standing target that leaves ACC is remembered
-    where it stood, and ACC resumes by itself only behind a lead seen driving off."""
+    where it stood, and ACC resumes by itself only behind a lead seen driving off. (The truck at 50 m, seed 1, the
+    first tester's second run, is the same case as at 41 m: with -m slow, to keep CI within 20 minutes.)"""
     import dataclasses
 
     from radarnode.consumer.evaluate import simulate

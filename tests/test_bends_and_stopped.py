@@ -77,10 +77,14 @@ def test_acc_on_a_250_m_bend_follows_its_lead_and_never_the_truck_in_the_outer_l
     sc = load_scenario(SCENARIOS / "acc_follow_bend_250.yaml")
     r = simulate(sc)
     assert r.passed, r.reasons
-    # the judge can fail: the same run, judged as if the truck were the one to follow
+    # the judge can fail: the same run, judged as if the truck were the one to follow (the expectation does not
+    # steer the run: judged again, not simulated again, which took half of this test's minute)
+    from radarnode.consumer.evaluate import _judge
     e = dataclasses.replace(sc.ecu.expect, acc_follows="truck", never_target=("lead",))
-    r = simulate(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, expect=e)))
-    assert not r.passed and any("lead selected as the target" in x for x in r.reasons), r.reasons
+    again = dataclasses.replace(r, reasons=[], passed=True)
+    _judge(dataclasses.replace(sc, ecu=dataclasses.replace(sc.ecu, expect=e)), again)
+    assert not again.passed and any("lead selected as the target" in x for x in again.reasons), again.reasons
+    assert any("ACC followed truck in 0%" in x for x in again.reasons), again.reasons
 
 
 def test_an_expectation_names_actors_that_exist(tmp_path):
