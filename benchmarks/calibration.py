@@ -1068,7 +1068,8 @@ def neighbours_table(quick: bool) -> None:
     cases += [(name, (45.0, 45.0), s) for name in ("mimo12", "ars408_like") for s in (9.0, 11.0, 14.0, 16.0, 18.0,
                                                                                       20.0, 24.0)]
     cases += [("mimo12", (60.0, 25.0), s) for s in (12.0, 13.0, 14.0, 16.0, 20.0, 26.0)]
-    # 6–10 bins at 45–55 dB: patches cut to half-width 3–5 below 9 bins (every refit pass), 6 and 7 above (one)
+    # 6–10 bins at 45–55 dB: patches cut to half-width 3–5 below 9 bins, 6 and 7 above (refitted where the louder
+    # one's sidelobes reach them, from the three-bin interpolation)
     cases += [("mimo12", (45.0, 45.0), s) for s in (6.0, 7.0, 8.0)]
     cases += [("ars408_like", (55.0, 45.0), s) for s in (6.0, 7.0, 8.0, 9.0, 10.0)]
     cases += [("mimo12", (70.0, 70.0), s) for s in (9.0, 11.0, 14.0)]

@@ -292,9 +292,9 @@ def test_returns_six_to_ten_bins_apart_are_fitted_again_until_their_tones_agree(
     (1.05–1.22× on these frames; 1.27–1.76× before at 6–8 bins), range rate and azimuth within 1.45×. Their patches (half-width 3–5, up to 8 bins apart) are refitted at 6 with the other's tone
     taken out; that tone was the other's first fit, which leaned into this one's lobe. One pass (as for the peaks
     cut short by a neighbour 4–6 bins away at ρ = 30 dB) left the louder of a 55/45-dB pair at 1.6–2.0× the CRB in
-    range (ars408_like, 6–8 bins) and the second of an equal 45-dB pair at 1.6× (mimo12, 7 bins); now the peaks a
-    neighbour cut short (half-width below REFIT_HALF) take all REFIT_PASSES. 9 and 10 bins: the first patches
-    half-width 6 and 7, one pass, started from the three-bin interpolation (the rule's other side)."""
+    range (ars408_like, 6–8 bins) and the second of an equal 45-dB pair at 1.6× (mimo12, 7 bins); now every refitted
+    peak takes all REFIT_PASSES. 9 and 10 bins, the other side of the patches' cut: half-width 6 and 7, refitted where
+    the louder one's sidelobes reach them, from the three-bin interpolation."""
     ratio = _pair_rmse_over_crb(preset, bins, rho_db, weaker_db, 40)
     assert np.all(ratio[:, 0] <= 1.3) and np.all(ratio <= 1.45), ratio
 
