@@ -401,7 +401,7 @@ class DspChain:
                 if meet.size:
                     fd[meet], fr[meet] = 0.0, 0.0
                     s_top[meet] = fit.snapshot(rd, d[top[meet]], r[top[meet]], 0.0, 0.0, half[meet])
-                seen, fit_now, wide = half.copy(), grow, wider
+                seen = half.copy()
                 for k in range(REFIT_PASSES if grow.size else 0):
                     # every pass for every peak refitted: what the first pass took out for a neighbour was the
                     # neighbour's first fit, which leaned into this peak's lobe or took its sidelobes for its own.
@@ -416,15 +416,15 @@ class DspChain:
                     # reaches after the others: a much weaker neighbour's first fit, which the loud one's sidelobes
                     # swamp, is no tone to take out — an 80-dB return 14 bins from a 25-dB one: 1.7× the CRB in
                     # range before it, 1.0× with it, ars408_like; 5× with the refit's search)
-                    far = np.isin(fit_now, fresh) if k == 0 else np.zeros(fit_now.size, dtype=bool)
-                    last = np.isin(fit_now, first_last) if k == 0 else far
+                    far = np.isin(grow, fresh) if k == 0 else np.zeros(grow.size, dtype=bool)
+                    last = np.isin(grow, first_last) if k == 0 else far
                     for stage in (~last, last):
-                        fits = [(sel, fit.refit(rd, d[top], r[top], fd, fr, s_top, seen, fit_now[sel], wide[sel],
+                        fits = [(sel, fit.refit(rd, d[top], r[top], fd, fr, s_top, seen, grow[sel], wider[sel],
                                                 reach[top], rounds))
                                 for sel, rounds in ((stage & ~far, None), (stage & far, fit.ROUNDS)) if sel.any()]
                         for sel, (new_d, new_r, new_s) in fits:
-                            which = fit_now[sel]
-                            fd[which], fr[which], s_top[which], seen[which] = new_d, new_r, new_s, wide[sel]
+                            which = grow[sel]
+                            fd[which], fr[which], s_top[which], seen[which] = new_d, new_r, new_s, wider[sel]
             dd, dr, snap = dd.copy(), dr.copy(), snap.copy()
             dd[top], dr[top], snap[top] = fd, fr, s_top
             fitted_half = np.zeros(d.size, dtype=np.int64)
