@@ -17,7 +17,8 @@ For each level and field, split into objects reported moving and standing (DynPr
 object-cycles, the share of them whose error is within 1σ and 2σ (68.3 % and 95.4 % for errors the σ describes;
 a share well below says σ is too small) and the root mean square of error/σ (1 where σ is right). A second table
 says where the objects sit on their bodies: how many objects an actor has in a cycle (one body split into several),
-and how far its nearest object lies beyond the nearest face of its box (what ACC and FCW take for the gap).
+and how far its nearest object lies beyond the nearest point of its box (what ACC and FCW take for the gap; every
+object, its track's first cycles too).
 
 Run: ``python benchmarks/object_sigma.py [--levels object,detection] [--seeds 3] [--root DIR]``. Markdown.
 """
@@ -138,8 +139,9 @@ def main() -> None:
                       f"{np.mean(np.abs(z) <= 2):.1%} | {np.sqrt(np.mean(z * z)):.2f} | "
                       f"{np.median(np.abs(es[:, 0])):.2f} | {np.median(es[:, 1]):.2f} |")
     print("\nWhere the objects sit: each actor-cycle with an object (the whole box in view), how many objects the "
-          "actor has (a body split into several), and how far the nearest one lies beyond the box's nearest face (m)\n")
-    print("| level | actor class | actor-cycles | objects each | split | nearest − face: median | p90 | > 1 m |")
+          "actor has (a body split into several), and how far the nearest one lies beyond the box's nearest point "
+          "(m)\n")
+    print("| level | actor class | actor-cycles | objects each | split | nearest − box: median | p90 | > 1 m |")
     print("|---|---|---:|---:|---:|---:|---:|---:|")
     for level, cls, b in places:
         n, e = b[:, 0], b[:, 1]
