@@ -43,7 +43,7 @@ from radarnode.wire.dbc import load_bus_database, load_own_database  # noqa: E40
 ROOT = Path(__file__).resolve().parents[1]
 HIGHWAY = ROOT / "scenarios" / "highway_cut_in.yaml"
 CLUSTERS = ROOT / "scenarios" / "guardrail_traffic.yaml"
-DURATION = "8"          # through the cut-in (4 s) and the FCW warning (7.3 s)
+DURATION = "9"          # through the cut-in (4 s) and the FCW warning (8.3 s)
 
 WIRE_TOPICS = {"/can/frames", "/radar/objects", "/radar/road_boundaries", "/ecu/acc", "/ecu/fcw"}
 SCENE_TOPICS = {"/tf", "/ego", "/ego/state", "/ground_truth/actors", "/ground_truth/road"}
@@ -163,7 +163,7 @@ def test_log_mcap_boundaries_ecu_and_raw_frames_are_the_decoded_frames(highway):
             for name, value in s.items():
                 assert abs(g[name] - value) < 1e-9, (topic, name)
     fcw = [rec["FCW_WarningLevel_label"] for _, rec in m["topics"]["/ecu/fcw"][3]]
-    assert "Warning" in fcw and fcw[0] == "None"                      # the warning at 7.3 s, as `run` shows it
+    assert "Warning" in fcw and fcw[0] == "None"                      # the warning at 8.3 s, as `run` shows it
     sides = {ids.ROAD_BOUNDARY_LEFT: "left", ids.ROAD_BOUNDARY_RIGHT: "right"}
     sent = [(sides[f.arbitration_id], own.decode_message(f.arbitration_id, f.data, decode_choices=False))
             for f in frames if f.arbitration_id in sides]
