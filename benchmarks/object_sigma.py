@@ -17,8 +17,9 @@ For each level and field, split into objects reported moving and standing (DynPr
 object-cycles, the share of them whose error is within 1σ and 2σ (68.3 % and 95.4 % for errors the σ describes;
 a share well below says σ is too small) and the root mean square of error/σ (1 where σ is right). A second table
 says where the objects sit on their bodies: how many objects an actor has in a cycle (one body split into several),
-and how far its nearest object lies beyond the nearest point of its box (what ACC and FCW take for the gap; every
-object, its track's first cycles too).
+and how far its nearest object lies beyond the nearest point of its box along the sensor's axis (the box's least x:
+its rear face, or its nearest corner where it is turned; what ACC and FCW take for the gap; every object, its
+track's first cycles too).
 
 Run: ``python benchmarks/object_sigma.py [--levels object,detection] [--seeds 3] [--root DIR]``. Markdown.
 """
