@@ -933,7 +933,10 @@ def test_the_block_signal_of_returns_is_the_windowed_spectrum_of_their_tones():
                                rtol=1e-6)
 
 
-@pytest.mark.parametrize("axis", ["range", "doppler", "angle"])
+# doppler and angle take 15 s each on the CI machine: -m slow (range, the same test along the axis the chain
+# fits finest, runs in CI)
+@pytest.mark.parametrize("axis", ["range", pytest.param("doppler", marks=pytest.mark.slow),
+                                  pytest.param("angle", marks=pytest.mark.slow)])
 def test_where_the_grid_cuts_a_pair_of_reflectors_does_not_change_how_often_it_is_seen(axis):
     """Two equal reflectors of one body a tenth of a cell apart, 4 dB above the threshold's mean: their random
     phases fade the pair as one return |1 + e^{iφ}|² of one at their middle, wherever the cells' grid cuts it. Inside
