@@ -64,13 +64,15 @@ def test_a_parked_car_a_few_metres_away_masks_a_pedestrian_in_the_ca_cfar_ring_n
     # the pedestrian 11 m beyond a car parked 4 m ahead of the sensor (6 range cells: inside the ring), both standing
     ca_alone = _reported(parse_scenario(_stopped_ego_pedestrian("ca", False)), level, 1)[0]
     # masked in most cycles, not in all: where the car's reflectors happen to fade together for a few frames its
-    # energy in the ring drops and the pedestrian comes through, at the signal level too (seeds 1–8: 9 of 224
-    # cycles, all in seed 6; the detection level 18, in seeds 1 and 4)
+    # energy in the ring drops and the pedestrian comes through, in a few seeds' runs and then for some 10 cycles.
+    # Seeds 1–24 with each face weighted by its aspect (2026-12-02): 62, 58 and 63 of 672 cycles at the object,
+    # detection and signal levels (seeds 1–8 alone: 15, 39 and 9 — too few runs to bound a rate that comes in lumps)
+    seeds = range(1, 25)
     ca_parked = sum(_reported(parse_scenario(_stopped_ego_pedestrian("ca", True)), level, seed)[0]
-                    for seed in range(1, 9))
+                    for seed in seeds)
     os_parked = _reported(parse_scenario(_stopped_ego_pedestrian("os", True)), level, 1)[0]
     assert ca_alone >= 20                              # of 28 cycles (two to confirm)
-    assert ca_parked <= 0.15 * 8 * 28
+    assert ca_parked <= 0.15 * len(seeds) * 28
     # OS-CFAR ignores the car's cells: the object level misses none; at the detection level (and at the signal
     # level, 13–24 of 27 over seeds 1–3) the car's near-range response still costs some cycles (12–26 of 27)
     assert os_parked >= (25 if level == "object" else 10)

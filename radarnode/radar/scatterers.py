@@ -19,7 +19,7 @@ import numpy as np
 
 from radarnode.perception.types import _Columns
 from radarnode.radar import elevation
-from radarnode.radar.object_model import POINT_SIZE_M, edge_taper, facing_edges, in_fov, nearest_in_fov
+from radarnode.radar.object_model import POINT_SIZE_M, aspect_weight, edge_taper, facing_edges, in_fov, nearest_in_fov
 from radarnode.radar.presets import RadarPreset
 from radarnode.scene.world import Scene, SensorView
 
@@ -95,7 +95,9 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
     """Scatterers on the sensor-facing edges of every actor's box, spaced at most ``spacing_m``.
 
     The actor's RCS is shared among its points with weights tapering towards
-    the ends of each edge (0.3 at the ends, 1 in the middle); small actors are
+    the ends of each edge (0.3 at the ends, 1 in the middle) and following each
+    face's aspect (:func:`~radarnode.radar.object_model.aspect_weight`: its
+    projected width as seen from the sensor); small actors are
     one point at their nearest point. Guardrail actors are left to
     :func:`guardrail_scatterers`.
     """
@@ -125,7 +127,7 @@ def actor_scatterers(scene: Scene, view: SensorView, spacing_m: float = 1.0) -> 
     py = my.ravel()[edge] + u * length.ravel()[edge] * ty
     px = np.where(small[a_i], cx[a_i], px)
     py = np.where(small[a_i], cy[a_i], py)
-    weight = np.where(small[a_i], 1.0, edge_taper(u))
+    weight = np.where(small[a_i], 1.0, edge_taper(u) * aspect_weight(px, py, wnx.ravel()[edge], wny.ravel()[edge]))
     wsum = np.bincount(a_i, weights=weight, minlength=idx.size)
     rcs = scene.rcs_dbsm[idx][a_i] + 10.0 * np.log10(weight / wsum[a_i])
     actor = idx[a_i]
