@@ -780,7 +780,8 @@ def test_an_aliased_speed_leaves_its_range_doppler_coupling_in_the_range_at_ever
 @pytest.mark.parametrize("preset, v, listed", [
     ("mimo12", -39.9, False),           # one wrap (64.7 m/s) puts the next detection 4.7 m off: never confirmed
     ("ars408_like", 60.0, False),       # beyond the staggered span, two wraps of the first sequence: 5.6 m
-    ("ars408_like", 56.0, True),        # beyond the span, one wrap: 2.8 m, inside the tracker's gate (2.85 m)
+    ("ars408_like", 56.0, False),       # beyond the span every detection is ambiguous: a track no unambiguous one
+                                        # measured is never listed (one wrap, 2.8 m, was inside the gate: listed)
     ("fast_chirp", -30.0, True),        # one wrap: 1.9 m
 ])
 def test_an_aliased_target_is_an_object_at_the_object_level_where_the_tracker_follows_it(preset, v, listed):
@@ -788,7 +789,8 @@ def test_an_aliased_target_is_an_object_at_the_object_level_where_the_tracker_fo
     it. The detection and signal levels' tracker follows it at the aliased speed where that is inside its gate, and
     never confirms it beyond; the object level listed it every cycle at the aliased speed whatever the preset (an
     oncoming car on mimo12 as a car receding at +24.6 m/s where the other levels listed nothing; an independent
-    tester's finding). Now both levels list it, or neither, and at the aliased speed."""
+    tester's finding). Now both levels list it, or neither, and at the aliased speed. With staggered ramps a track
+    whose speed only ambiguous detections measured is not listed at all (the tracker's ``alias_span_mps``)."""
     x = 40.0 if v >= 0 else 120.0
     heading = "" if v >= 0 else ", heading_deg: 180"
     sc = scenario(f"  - {{id: a, class: point, x_m: {x}, y_m: 0.0, speed_mps: {abs(v)}{heading}, rcs_dbsm: 25}}\n",
@@ -1021,3 +1023,44 @@ def test_a_fast_cars_signal_level_detections_are_tagged_with_it(speed_mps, cls):
             seen += int(strong.sum())
             assert np.all(det.actor_index[strong] == 0), (level, det.range_m[strong], det.actor_index[strong])
     assert seen >= 8
+
+
+def _cycle(r, v, state, az=0.0):
+    d = _det([v], az=az, r=r)
+    d.ambig_state = np.array([state], dtype=np.int64)
+    return d
+
+
+def test_the_tracker_takes_an_ambiguous_detection_at_its_tracks_wrap_and_lists_no_track_only_they_measured():
+    """A car closing at −34.05 m/s, ego standing: ars408_like's first sequence aliases it to +4.87 m/s. (a) A track
+    the staggered pair resolved takes the cycles the second sequence missed (ambiguous, +4.87) at its own wrap: it
+    keeps −34.05 and is never listed receding. (b) A track started from ambiguous detections only is not listed;
+    the first resolved detection moves it by whole spans to that speed and lists it. (c) Without ``alias_span_mps``
+    (a single ramp) the old rule: an ambiguous detection is taken as measured."""
+    from radarnode.radar.models import tracker_for
+    span = 2 * ARS.alias_speed_mps
+    v, alias = -34.05, _alias(-34.05, ARS)
+    assert alias == pytest.approx(v + span)
+    dt = 0.072
+
+    def run(tracker, states):
+        out = []
+        for k, st in enumerate(states):
+            r = 150.0 + v * dt * k
+            out.append(tracker.step(k * dt, _cycle(r, v if st == AMBIG_STAGGERED else alias, st), (0.0, 0.0)))
+        return out
+
+    # (a): resolved, then every other cycle the second sequence misses it
+    lists = run(tracker_for(ARS), [AMBIG_STAGGERED] * 3 + [AMBIG_AMBIGUOUS, AMBIG_STAGGERED] * 5)
+    assert all(len(o) == 1 for o in lists[2:])
+    assert all(o.vrel_long_mps[0] == pytest.approx(v, abs=0.5) for o in lists[2:])
+    # (b): five ambiguous cycles list nothing; the resolved one lists it at the resolved speed
+    lists = run(tracker_for(ARS), [AMBIG_AMBIGUOUS] * 5 + [AMBIG_STAGGERED] * 3)
+    assert [len(o) for o in lists[:5]] == [0] * 5
+    listed = [o for o in lists[5:] if len(o)]
+    assert listed and all(o.vrel_long_mps[0] == pytest.approx(v, abs=1.0) for o in listed)
+    # (c): a single ramp's tracker (no span) lists the alias as measured
+    assert tracker_for(PRESETS["mimo12"]).alias_span_mps is None
+    from radarnode.perception.tracker import ObjectTracker
+    lists = run(ObjectTracker(), [AMBIG_AMBIGUOUS] * 5)
+    assert len(lists[-1]) >= 1 and lists[-1].vrel_long_mps[0] > 0.0

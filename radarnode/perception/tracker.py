@@ -28,8 +28,8 @@ import numpy as np
 from radarnode.dsp.cluster import dbscan
 from radarnode.perception.motion import road_predict, transition
 from radarnode.perception.types import (
-    DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW,
-    MEAS_PREDICTED, ClusterList, Detections, ObjectList)
+    AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED,
+    MEAS_NEW, MEAS_PREDICTED, ClusterList, Detections, ObjectList)
 
 GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
 TRACKER_SIGMA_POS_M = 0.5     # a detection group's position noise (ObjectTracker's default)
@@ -139,6 +139,7 @@ class Groups:
     cross_sigma_m: np.ndarray | None = None   # glint across the line of sight: half the span its reflector shows
     velocity: np.ndarray | None = None        # (n, 2) a joined near body's fitted relative velocity (NaN: none)
     velocity_cov: np.ndarray | None = None    # (n, 2, 2) its covariance
+    ambiguous: np.ndarray | None = None       # (n,) every detection's range rate known only modulo 2·v_max
 
     def __len__(self) -> int:
         return int(self.x_m.shape[0])
@@ -170,7 +171,7 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     if n == 0:
         z = np.zeros(0)
         return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), z,
-                      np.zeros((0, 2)), np.zeros((0, 2, 2)))
+                      np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0, dtype=bool))
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
     labels, rigid_v, rigid_cov = join_rigid(det, labels)
@@ -222,7 +223,10 @@ def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5, 
     # across the line of sight is the group's position uncertainty from glint
     glint = np.zeros(g)
     np.maximum.at(glint, labels, 0.5 * det.range_m * det.azimuth_spread_rad)
-    return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov)
+    # a group of only ambiguous detections (a staggered pair's unpaired ones): its range rate is known modulo 2·v_max
+    ambiguous = np.bincount(labels, weights=det.ambig_state != AMBIG_AMBIGUOUS, minlength=g) == 0
+    return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov,
+                  ambiguous)
 
 
 def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -411,10 +415,18 @@ def mahalanobis3(nu: np.ndarray, s: np.ndarray) -> np.ndarray:
     return np.where((s00 > 0) & (d1 > 0) & (d2 > 0) & np.isfinite(out), out, np.inf)
 
 
-def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, int]]:
+def wrap_rate(nu: np.ndarray, span_mps: float) -> np.ndarray:
+    """A range-rate difference ``nu`` taken modulo ``span_mps`` into −span/2 … span/2."""
+    return np.mod(nu + 0.5 * span_mps, span_mps) - 0.5 * span_mps
+
+
+def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF, wrap: np.ndarray | None = None,
+              span_mps: float = 0.0) -> list[tuple[int, int]]:
     """Global nearest neighbour on the squared Mahalanobis distance, inside the gate.
 
-    ``r_cov`` is one measurement covariance (3, 3) or one per measurement (m, 3, 3)."""
+    ``r_cov`` is one measurement covariance (3, 3) or one per measurement (m, 3, 3). Where ``wrap`` (n, m) is true
+    the pair's range rates are compared modulo ``span_mps`` (an ambiguous measurement, or a track whose speed no
+    unambiguous one has measured yet)."""
     if x.shape[0] == 0 or z.shape[0] == 0:
         return []
     r_cov = np.asarray(r_cov)
@@ -424,6 +436,8 @@ def associate(x, p, z, r_cov, gate: float = GATE_CHI2_3DOF) -> list[tuple[int, i
     else:
         nu, s, _ = innovation(x, p, z, r_cov)
         s = s[:, None]
+    if wrap is not None and span_mps > 0.0 and wrap.any():
+        nu[..., 2] = np.where(wrap, wrap_rate(nu[..., 2], span_mps), nu[..., 2])
     d2 = mahalanobis3(nu, s)
     cost = np.where(d2 <= gate, d2, 1e9)
     import scipy.optimize  # imported when first needed: a faster start
@@ -464,10 +478,16 @@ class ObjectTracker:
     sigma_pos_m, sigma_vr_mps : measurement noise of a detection group (position, range rate)
     sigma_az_rad : the group's bearing noise; across the line of sight it adds range × σ_az to the
         position noise, so a far object is placed less well sideways than a near one
+    alias_span_mps : with staggered ramps, the first sequence's 2·v_max: a group of only ambiguous detections
+        (AmbigState 1, unpaired) measures its range rate modulo this span. It joins a track at the wrap nearest the
+        track's; a track started from such groups is not listed until an unambiguous group joins it (at the wrap
+        that group shows: its speed is then moved by whole spans). Without it (a single ramp, which flags every
+        moving detection ambiguous and can resolve none) range rates are taken as measured.
     """
 
     def __init__(self, sigma_pos_m: float = TRACKER_SIGMA_POS_M, sigma_vr_mps: float = 0.3, max_objects: int = 100,
-                 sigma_az_rad: float = math.radians(0.3)) -> None:
+                 sigma_az_rad: float = math.radians(0.3), alias_span_mps: float | None = None) -> None:
+        self.alias_span_mps = alias_span_mps
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
         self.sigma_az_rad = sigma_az_rad
         self.max_objects = max_objects
@@ -476,6 +496,8 @@ class ObjectTracker:
         self.hist = np.zeros(0, dtype=np.uint8)
         self.misses = np.zeros(0, dtype=np.int64)
         self.confirmed = np.zeros(0, dtype=bool)
+        # whether an unambiguous group has measured the track's range rate (always, without alias_span_mps)
+        self.resolved = np.zeros(0, dtype=bool)
         self.ids = np.zeros(0, dtype=np.int64)
         self.was_moving = np.zeros(0, dtype=bool)
         # which of the last MOVING_EVIDENCE_WINDOW measured cycles showed the track moving, a bit each, newest lowest
@@ -508,11 +530,15 @@ class ObjectTracker:
                                      sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])))
         z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
         r_cov = self._measurement_cov(z, groups.cross_sigma_m)
-        pairs = associate(self.x, self.p, z, r_cov)
+        span = self.alias_span_mps or 0.0
+        wrap = (groups.ambiguous[None, :] | ~self.resolved[:, None]) if span else None
+        pairs = associate(self.x, self.p, z, r_cov, wrap=wrap, span_mps=span)
         hit = np.zeros(len(self.x), dtype=bool)
         used = np.zeros(len(groups), dtype=bool)
         if pairs:
             ti, gi = np.array(pairs).T
+            if span:
+                z = self._unwrap(ti, gi, z, groups.ambiguous, span)
             hop = self._hops(ti, z[gi], sensor_velocity)
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
             if hop.any():
@@ -561,7 +587,7 @@ class ObjectTracker:
         bits = np.unpackbits(self.hist[:, None], axis=1)
         recent = np.where(moving, bits[:, -CONFIRM_WINDOW:].sum(axis=1),
                           bits[:, -CONFIRM_WINDOW_STATIONARY:].sum(axis=1))
-        newly = ~self.confirmed & (recent >= CONFIRM_HITS)
+        newly = ~self.confirmed & (recent >= CONFIRM_HITS) & self.resolved
         self._assign_ids(np.flatnonzero(newly))
         self.confirmed |= newly & (self.ids >= 0)
         coast = np.where(moving, COAST_CYCLES, COAST_STATIONARY_CYCLES)
@@ -569,6 +595,28 @@ class ObjectTracker:
         self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
                      | self._duplicates())
         return self._object_list(sensor_velocity)
+
+    def _unwrap(self, ti: np.ndarray, gi: np.ndarray, z: np.ndarray, ambiguous: np.ndarray, span: float
+                ) -> np.ndarray:
+        """Tracks ``ti`` about to take groups ``gi`` whose range rates were compared modulo ``span``: an ambiguous
+        group's measurement moved by whole spans to the track's (a copy of ``z`` returned); an unresolved track
+        that takes an unambiguous group moved to the group's wrap instead (its velocity along the line of sight by
+        the whole spans between them) and marked resolved."""
+        h, _ = measure(self.x[ti])
+        nu = z[gi, 2] - h[:, 2]
+        shift = nu - wrap_rate(nu, span)                      # whole spans (0 where they agree already)
+        amb = ambiguous[gi]
+        z = z.copy()
+        z[gi[amb], 2] -= shift[amb]
+        move = ~amb & ~self.resolved[ti] & (shift != 0.0)
+        if move.any():
+            t = ti[move]
+            r = np.maximum(np.hypot(self.x[t, 0], self.x[t, 1]), 1e-3)
+            self.x[t, 2] += shift[move] * self.x[t, 0] / r
+            self.x[t, 3] += shift[move] * self.x[t, 1] / r
+            self.nh[t] = 0                  # its velocities so far were at another wrap: the slope starts again
+        self.resolved[ti[~amb]] = True
+        return z
 
     def _hops(self, idx: np.ndarray, z: np.ndarray, sensor_velocity) -> np.ndarray:
         """Which of the tracks ``idx``, each about to take detection ``z`` (x, y, range rate), stand still (never
@@ -671,6 +719,8 @@ class ObjectTracker:
         self.hist = np.concatenate([self.hist, np.ones(k, dtype=np.uint8)])
         self.misses = np.concatenate([self.misses, np.zeros(k, dtype=np.int64)])
         self.confirmed = np.concatenate([self.confirmed, np.zeros(k, dtype=bool)])
+        self.resolved = np.concatenate([self.resolved, ~groups.ambiguous[idx] if self.alias_span_mps
+                                        else np.ones(k, dtype=bool)])
         self.ids = np.concatenate([self.ids, np.full(k, -1, dtype=np.int64)])
         self.was_moving = np.concatenate([self.was_moving, np.zeros(k, dtype=bool)])
         near = np.hypot(z[idx, 0], z[idx, 1]) <= MOVING_EVIDENCE_RANGE_M
@@ -740,7 +790,7 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "ids", "was_moving", "evidence", "size", "power",
+        for name in ("x", "p", "hist", "misses", "confirmed", "resolved", "ids", "was_moving", "evidence", "size", "power",
                      "tag", "vh", "th", "nh"):
             setattr(self, name, getattr(self, name)[keep])
 

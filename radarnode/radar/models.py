@@ -33,6 +33,14 @@ from radarnode.radar.signal_model import check_cube_memory, decimation_for, synt
 from radarnode.scene.world import Scene, SensorView
 
 
+def tracker_for(preset: RadarPreset) -> ObjectTracker:
+    """The detection and signal levels' tracker for ``preset``: with staggered ramps it takes an unpaired
+    detection's range rate modulo the first sequence's 2·v_max, and lists no track whose speed only such detections
+    measured (:class:`radarnode.perception.tracker.ObjectTracker`)."""
+    span = 2.0 * preset.alias_speed_mps if preset.stagger_chirp_period_s > 0 else None
+    return ObjectTracker(alias_span_mps=span)
+
+
 def reportable(preset: RadarPreset, det: Detections, config: RuntimeConfig) -> np.ndarray:
     """Detections the radar reports: inside its field of view as it measured them and within MaxDistance.
 
@@ -53,7 +61,7 @@ class ScattererModel:
         self.preset = preset
         self.rng = rng
         self.options = options
-        self.tracker = ObjectTracker()
+        self.tracker = tracker_for(preset)
         self.cycle = 0
         self.info = StepInfo()
         self.keep_cube = keep_cube
@@ -314,7 +322,7 @@ class AutoModel:
         self.options = options
         self.clusters_wanted = clusters_wanted
         self.preset = preset
-        self.tracker = ObjectTracker()
+        self.tracker = tracker_for(preset)
         cfar = self.detection.statistic.cfar
         #: the CA-CFAR training ring's reach (range bins, Doppler bins) from a cell under test
         self.ring = (cfar.guard[1] + cfar.train[1], cfar.guard[0] + cfar.train[0])

@@ -610,6 +610,7 @@ class ObjectModel:
     obj_id = _TrackerField()        # the object's ID, −1 when none (n,)
     state = _TrackerField()         # last reported x, y, vx, vy (n, 4)
     was_moving = _TrackerField()    # seen moving while listed, ever (n,) bool: "stopped" rather than "stationary"
+    run_resolved = _TrackerField()  # an unambiguous detection since the last miss (n,) bool (staggered ramps)
 
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
                  options: SignalOptions = SignalOptions()) -> None:
@@ -627,7 +628,8 @@ class ObjectModel:
         self._pos: tuple[dict, int] | None = None     # the chunk and row of the last step
         self._trk = {"hist": np.zeros(n, dtype=np.uint8), "misses": np.zeros(n, dtype=np.int64),
                      "alive": np.zeros(n, dtype=bool), "obj_id": np.full(n, -1, dtype=np.int64),
-                     "state": np.zeros((n, 4)), "was_moving": np.zeros(n, dtype=bool)}
+                     "state": np.zeros((n, 4)), "was_moving": np.zeros(n, dtype=bool),
+                     "run_resolved": np.zeros(n, dtype=bool)}
         self.last_t = 0.0
         self.cycle = 0
         self.period_s = scene.scenario.period_s
@@ -792,10 +794,13 @@ class ObjectModel:
         offset = np.abs(m_vr - v_meas)
         trackable = offset * self.period_s <= ALIAS_GATE_M
         if p.stagger_chirp_period_s:
-            # inside the staggered span a track runs at the true speed: a cycle the second sequence missed reports an
-            # alias a wrap or more off it in speed, which its gate (σ 0.3 m/s) refuses; the track coasts
-            lo, hi = p.range_rate_span_mps
-            trackable &= (v_meas < lo) | (v_meas > hi) | (offset < 0.5 * p.alias_speed_mps)
+            # with staggered ramps the tracker compares an ambiguous detection's speed with its track's modulo
+            # 2·v_max,1 and takes the wrap nearest its own (radarnode.perception.tracker.ObjectTracker): a track
+            # running at the true speed takes a cycle the second sequence missed as a measurement of that speed. A
+            # track only ambiguous detections measured is never listed (_track_flags): beyond the span, none is
+            trackable = np.ones(offset.shape, dtype=bool)
+            m_vr_track = np.where(ambig == AMBIG_AMBIGUOUS, v_meas, m_vr)
+            meas = np.stack([m_r * mc, m_r * ms, m_vr_track * mc - m_vt * ms, m_vr_track * ms + m_vt * mc], axis=-1)
         out = {"det_in": observable & (u < pd) & measured_in, "trackable": trackable, "fov": fov,
                "still": ground < MOVING_THRESHOLD_MPS,
                "az": az, "pd": pd, "sx": sx, "sy": sy, "orientation_truth": view.orientation_rad,
@@ -816,7 +821,9 @@ class ObjectModel:
         from them and the physics ``ph``, for every cycle of the chunk."""
         p, sc = self.preset, self.scene
         seen = ph.pop("det_in")                  # every detection (the cluster list); the tracker takes the trackable
-        flags = self._track_flags(seen & ph.pop("trackable"), ph["fov"], ph.pop("still"))
+        # a staggered radar's tracker lists no track until an unambiguous detection measured its speed
+        resolved = ph["ambig"] != AMBIG_AMBIGUOUS if p.stagger_chirp_period_s else None
+        flags = self._track_flags(seen & ph.pop("trackable"), ph["fov"], ph.pop("still"), resolved)
         if "body" in ph:
             # the object's reported RCS is its track's average in power (RCS_GAIN per measured cycle, from the
             # track's first detection, as the detection level's tracker and the real sensor report it): so is this
@@ -1063,14 +1070,17 @@ class ObjectModel:
         return {"rcs_obj": rcs, "obj_class": cls, "length": np.maximum(length, body[..., 0]),
                 "width": np.maximum(width, body[..., 1])}
 
-    def _track_flags(self, det: np.ndarray, fov: np.ndarray, stationary: np.ndarray) -> dict[str, np.ndarray]:
+    def _track_flags(self, det: np.ndarray, fov: np.ndarray, stationary: np.ndarray,
+                     resolved: np.ndarray | None = None) -> dict[str, np.ndarray]:
         """The tracker's bookkeeping for a chunk of cycles, from its state before the chunk.
 
         Detection history, consecutive misses, confirmation (``CONFIRM_HITS`` of the last
         ``CONFIRM_WINDOW``) and loss (more than ``COAST_CYCLES`` misses, or out of the field of view) depend
         only on the detections, so they are computed for all cycles at once: ``alive`` is a set/reset
         latch — set by a confirmation, reset by a loss (the two never coincide: a detection needs the field
-        of view) — i.e. the forward fill of the last event.
+        of view) — i.e. the forward fill of the last event. Where ``resolved`` (T, n) is given (staggered ramps:
+        the detection's speed unambiguous), a track is confirmed only once a resolved detection came since its
+        last miss, as the tracker lists no track whose speed only ambiguous detections measured.
         """
         t_n, n = det.shape
         prior = ((self.hist[None, :] >> np.arange(7, -1, -1)[:, None]) & 1).astype(bool)    # (8, n) oldest first
@@ -1085,6 +1095,14 @@ class ObjectModel:
         last = np.maximum.accumulate(np.where(det, steps, -1 - self.misses[None, :]), axis=0)
         misses = steps - last
         confirm = det & (recent >= CONFIRM_HITS) & self.reportable
+        run_resolved = np.ones((t_n, n), dtype=bool)
+        if resolved is not None:
+            # the last resolved detection after the last miss (before the chunk: the state's flag says which)
+            last_res = np.maximum.accumulate(np.where(det & resolved, steps, np.where(self.run_resolved, -1, -3)),
+                                             axis=0)
+            last_miss = np.maximum.accumulate(np.where(det, -2, steps), axis=0)
+            run_resolved = last_res > last_miss
+            confirm &= run_resolved
         loss = (misses > np.where(stationary, COAST_STATIONARY_CYCLES, COAST_CYCLES)) | ~fov
         event = np.where(confirm, 1, np.where(loss, -1, 0))
         at = np.maximum.accumulate(np.where(event != 0, steps, -1), axis=0)
@@ -1094,7 +1112,7 @@ class ObjectModel:
         # the first detection of a track in the making: no other hit in its confirmation window, not alive before
         first_hit = det & ~before & (recent == 1)
         return {"detected": det, "hist": hist, "hits": _POPCOUNT[hist], "misses": misses, "alive": alive,
-                "new": alive & ~before, "lost": before & ~alive, "first_hit": first_hit}
+                "new": alive & ~before, "lost": before & ~alive, "first_hit": first_hit, "run_resolved": run_resolved}
 
     def _track(self, ch: dict) -> None:
         """The internal tracker over a chunk's cycles, from its state before the chunk: positions and velocities,
@@ -1158,7 +1176,7 @@ class ObjectModel:
         ch["ever0"] = trk["was_moving"]
         ch["by_cycle"] = False
         ch["trk"] = {"hist": ch["hist"], "misses": ch["misses"], "alive": alive, "obj_id": ids, "state": state,
-                     "was_moving": ever}
+                     "was_moving": ever, "run_resolved": ch["run_resolved"]}
         if "gain_power" in ch:          # structures above the road: their averaged elevation factor
             ch["trk"]["gain"] = ch["gain_power"]
         kk, aa = np.nonzero(alive)
