@@ -790,8 +790,8 @@ class ObjectTracker:
 
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
-        for name in ("x", "p", "hist", "misses", "confirmed", "resolved", "ids", "was_moving", "evidence", "size", "power",
-                     "tag", "vh", "th", "nh"):
+        for name in ("x", "p", "hist", "misses", "confirmed", "resolved", "ids", "was_moving", "evidence", "size",
+                     "power", "tag", "vh", "th", "nh"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:

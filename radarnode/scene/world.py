@@ -157,6 +157,20 @@ def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.nd
     return c * x - s * y, s * x + c * y
 
 
+def boxes_meet(dx, dy, turn, a_half_l, a_half_w, b_half_l, b_half_w, tol: float = OVERLAP_TOLERANCE_M):
+    """Whether box B, its centre at (``dx``, ``dy``) in box A's axes (from A's centre) and turned by ``turn`` against
+    them, overlaps box A by more than ``tol`` along every axis (boxes that only touch do not): a separating-axis
+    test on the four axes of the two rectangles, half lengths and half widths given; arrays broadcast."""
+    cr, sr = np.cos(turn), np.sin(turn)
+    c, s = np.abs(cr), np.abs(sr)
+    along_u = np.abs(dx * cr + dy * sr)                    # the centres' distance along B's axes
+    along_v = np.abs(-dx * sr + dy * cr)
+    return ((np.abs(dx) < a_half_l + b_half_l * c + b_half_w * s - tol)
+            & (np.abs(dy) < a_half_w + b_half_l * s + b_half_w * c - tol)
+            & (along_u < b_half_l + a_half_l * c + a_half_w * s - tol)
+            & (along_v < b_half_w + a_half_l * s + a_half_w * c - tol))
+
+
 class DynamicEgo:
     """An ego driven from outside (closed loop): position, speed and acceleration set each cycle.
 
@@ -292,17 +306,31 @@ class Scene:
         centre = el - EGO_REAR_OVERHANG_M                      # the ego box's centre ahead of the rear axle
         dx, dy = _rot(-epsi, ax_ - ex, ay_ - ey)               # the actor's centre in the ego's axes (rear axle 0)
         dx = dx - centre                                       # … from the ego box's centre
-        cr, sr = np.cos(heading - epsi), np.sin(heading - epsi)
-        c, s = np.abs(cr), np.abs(sr)
-        tol = OVERLAP_TOLERANCE_M
-        along_u = np.abs(dx * cr + dy * sr)                    # the centres' distance along the actor's axes
-        along_v = np.abs(-dx * sr + dy * cr)
-        met = ((np.abs(dx) < el + hl * c + hw * s - tol) & (np.abs(dy) < ew + hl * s + hw * c - tol)
-               & (along_u < hl + el * c + ew * s - tol) & (along_v < hw + el * s + ew * c - tol)
-               & (self.z_m < EGO_HEIGHT_M))
+        met = boxes_meet(dx, dy, heading - epsi, el, ew, hl, hw) & (self.z_m < EGO_HEIGHT_M)
         for i in np.flatnonzero(self.is_guardrail):
             met[:, i] = self._posts_in_ego(int(i), ex, ey, epsi)[2].any(axis=1) & (self.z_m[i] < EGO_HEIGHT_M)
         return met
+
+    def actor_contacts(self, times_s: np.ndarray, block: int = 256) -> np.ndarray:
+        """Which pairs of actors' boxes overlap at the times ``times_s`` (T,): bool (T, n, n), symmetric, the diagonal
+        false. The boxes and the touch tolerance are :meth:`ego_contacts`'; a pair one of whose bottoms is
+        ``EGO_HEIGHT_M`` or more above the road does not meet (a bridge over a car), nor does a guardrail actor (its
+        box is not its posts: see :meth:`ego_contacts`). Computed ``block`` times at a time."""
+        t = np.asarray(times_s, dtype=np.float64)
+        n = self.n
+        out = np.zeros((t.size, n, n), dtype=bool)
+        hl, hw = self.length_m / 2.0, self.width_m / 2.0
+        road = (self.z_m < EGO_HEIGHT_M) & ~self.is_guardrail
+        both = road[:, None] & road[None, :] & ~np.eye(n, dtype=bool)
+        if not both.any():
+            return out
+        for k in range(0, t.size, block):
+            ax_, ay_, heading, _, _ = self._actor_pose(self._movers.state(t[k:k + block]))      # (B, n)
+            dx, dy = _rot(-heading[:, :, None], ax_[:, None, :] - ax_[:, :, None], ay_[:, None, :] - ay_[:, :, None])
+            turn = heading[:, None, :] - heading[:, :, None]
+            met = boxes_meet(dx, dy, turn, hl[:, None], hw[:, None], hl[None, :], hw[None, :])
+            out[k:k + block] = met & both
+        return out
 
     def _posts_in_ego(self, i: int, ex: np.ndarray, ey: np.ndarray, epsi: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
