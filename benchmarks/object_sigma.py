@@ -19,7 +19,9 @@ a share well below says σ is too small) and the root mean square of error/σ (1
 says where the objects sit on their bodies: how many objects an actor has in a cycle (one body split into several),
 and how far its nearest object lies beyond the nearest point of its box along the sensor's axis (the box's least x:
 its rear face, or its nearest corner where it is turned; what ACC and FCW take for the gap; every object, its
-track's first cycles too).
+track's first cycles too), and how far across that object's lateral distance lies from the box's point nearest to
+the sensor (the point the object level reports; a car in the next lane reported at its rear face's middle lies half
+a width from it).
 
 Run: ``python benchmarks/object_sigma.py [--levels object,detection] [--seeds 3] [--root DIR]``. Markdown.
 """
@@ -62,8 +64,9 @@ def box(view, scene: Scene, a: int) -> tuple[np.ndarray, np.ndarray]:
 
 def collect(level: str, seeds: int) -> tuple[dict, dict]:
     """{(field, 'moving' | 'standing'): list of (error, σ)} over the scenarios and seeds, and {actor class: list of
-    (objects the actor has this cycle, the nearest one's x less the box's least x)} for the actor-cycles with an
-    object whose whole box is in view."""
+    (objects the actor has this cycle, the nearest one's x less the box's least x, how far across its y lies from
+    the y of the box's point nearest to the sensor)} for the actor-cycles with an object whose whole box is in
+    view."""
     out: dict = defaultdict(list)
     bodies: dict = defaultdict(list)
     for name in SCENARIOS:
@@ -105,8 +108,10 @@ def collect(level: str, seeds: int) -> tuple[dict, dict]:
                     mine = np.flatnonzero(ol.actor_index == a)
                     bx, by = box(view, scene, a)
                     if in_fov(rc.preset, np.hypot(bx, by), np.arctan2(by, bx)).all():
+                        first = mine[np.argmin(ol.dist_long_m[mine])]
                         bodies[sc.actors[a].object_class].append(
-                            (mine.size, float(ol.dist_long_m[mine].min()) - bx.min()))
+                            (mine.size, float(ol.dist_long_m[first]) - bx.min(),
+                             abs(float(ol.dist_lat_m[first]) - float(view.y_m[a]))))
                 for gone in set(age) - ids:
                     del age[gone]
     return out, bodies
@@ -140,14 +145,16 @@ def main() -> None:
                       f"{np.mean(np.abs(z) <= 2):.1%} | {np.sqrt(np.mean(z * z)):.2f} | "
                       f"{np.median(np.abs(es[:, 0])):.2f} | {np.median(es[:, 1]):.2f} |")
     print("\nWhere the objects sit: each actor-cycle with an object (the whole box in view), how many objects the "
-          "actor has (a body split into several), and how far the nearest one lies beyond the box's nearest point "
-          "(m)\n")
-    print("| level | actor class | actor-cycles | objects each | split | nearest − box: median | p90 | > 1 m |")
-    print("|---|---|---:|---:|---:|---:|---:|---:|")
+          "actor has (a body split into several), how far the nearest one lies beyond the box's nearest point along "
+          "the sensor's axis, and how far across from that point (|Δy|) (m)\n")
+    print("| level | actor class | actor-cycles | objects each | split | nearest − box: median | p90 | > 1 m "
+          "| across: median | p90 |")
+    print("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")
     for level, cls, b in places:
-        n, e = b[:, 0], b[:, 1]
+        n, e, c = b[:, 0], b[:, 1], b[:, 2]
         print(f"| {level} | {cls} | {len(n)} | {n.mean():.3f} | {np.mean(n > 1):.1%} | {np.median(e):.2f} | "
-              f"{np.percentile(e, 90):.2f} | {np.mean(e > 1.0):.1%} |")
+              f"{np.percentile(e, 90):.2f} | {np.mean(e > 1.0):.1%} | {np.median(c):.2f} | "
+              f"{np.percentile(c, 90):.2f} |")
 
 
 if __name__ == "__main__":
