@@ -61,9 +61,9 @@ CLUSTER_BLOCK = 64
 MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
 #: how far along the line of sight a detection may lie from a young track's prediction and still be its (the
 #: detection and signal levels' tracker: its χ² gate on a radial residual whose variance is the track's and the
-#: measurement's position noise, 2·σ²): 2.85 m. A target reported at an aliased speed lands (true − aliased)·cycle
-#: from the prediction: one wrap of fast_chirp (1.9 m) or ars408_like (2.8 m) is followed at the aliased speed, one of
-#: mimo12 (4.7 m) or acc_lrr (13 m) never confirmed
+#: measurement's position noise, 2·σ²): 2.85 m. A target a single ramp reports at an aliased speed lands
+#: (true − aliased)·cycle from the prediction: one wrap of fast_chirp (1.9 m) is followed at the aliased speed, one of
+#: mimo12 (4.7 m) or acc_lrr (13 m) never confirmed (staggered ramps: see _physics)
 ALIAS_GATE_M = math.sqrt(GATE_CHI2_3DOF * 2.0) * TRACKER_SIGMA_POS_M
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
