@@ -102,22 +102,14 @@ def test_actor_contacts_finds_a_car_running_into_another_and_passes_a_bridge_ove
     never meets the deck."""
     import numpy as np
 
-    from radarnode.radar.setup import parse_scenario
     from radarnode.scene.world import Scene
+    from tests.helpers import scenario
 
-    sc = parse_scenario("""
-name: t
-duration_s: 6.0
-seed: 1
-radar: {preset: ars408_like}
-ego: {speed_mps: 0.0}
-road: {lanes: 3, lane_width_m: 3.5, ego_lane: 1}
-actors:
-  - {id: slow, class: car, x_m: 60.0, lane: 0, speed_mps: 20.0}
+    sc = scenario("""  - {id: slow, class: car, x_m: 60.0, lane: 0, speed_mps: 20.0}
   - {id: fast, class: car, x_m: 40.0, lane: 0, speed_mps: 25.0}
   - {id: bridge, class: bridge, x_m: 100.0, y_m: 0.0}
   - {id: stopped, class: car, x_m: 104.25, lane: 1, speed_mps: 0.0}
-""")
+""", ego="{speed_mps: 0.0}", duration=6.0)
     scene = Scene(sc)
     times = np.arange(sc.num_cycles) * sc.period_s
     met = scene.actor_contacts(times)
