@@ -781,7 +781,11 @@ class ObjectModel:
         m_r = ambiguity.coupled_range(p, m_r, v_meas, m_vr)
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
-        meas = np.stack([m_r * mc, m_r * ms, m_vr * mc - m_vt * ms, m_vr * ms + m_vt * mc], axis=-1)
+        # the radial speed the internal tracker takes: with staggered ramps an ambiguous detection's at its track's
+        # wrap, the true one's (below); the cluster list keeps m_vr
+        stagger = bool(p.stagger_chirp_period_s)
+        m_vr_track = np.where(ambig == AMBIG_AMBIGUOUS, v_meas, m_vr) if stagger else m_vr
+        meas = np.stack([m_r * mc, m_r * ms, m_vr_track * mc - m_vt * ms, m_vr_track * ms + m_vt * mc], axis=-1)
         sx, sy = sigma_to_xy(rng_m, az_seen, sig_r, sig_az)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
         # a detection is reported where it was measured inside the field of view, as the other levels report
@@ -793,14 +797,12 @@ class ObjectModel:
         # ambiguous): the internal tracker takes the same detections (ALIAS_GATE_M)
         offset = np.abs(m_vr - v_meas)
         trackable = offset * self.period_s <= ALIAS_GATE_M
-        if p.stagger_chirp_period_s:
+        if stagger:
             # with staggered ramps the tracker compares an ambiguous detection's speed with its track's modulo
             # 2·v_max,1 and takes the wrap nearest its own (radarnode.perception.tracker.ObjectTracker): a track
             # running at the true speed takes a cycle the second sequence missed as a measurement of that speed. A
             # track only ambiguous detections measured is never listed (_track_flags): beyond the span, none is
             trackable = np.ones(offset.shape, dtype=bool)
-            m_vr_track = np.where(ambig == AMBIG_AMBIGUOUS, v_meas, m_vr)
-            meas = np.stack([m_r * mc, m_r * ms, m_vr_track * mc - m_vt * ms, m_vr_track * ms + m_vt * mc], axis=-1)
         out = {"det_in": observable & (u < pd) & measured_in, "trackable": trackable, "fov": fov,
                "still": ground < MOVING_THRESHOLD_MPS,
                "az": az, "pd": pd, "sx": sx, "sy": sy, "orientation_truth": view.orientation_rad,
