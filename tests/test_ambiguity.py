@@ -1064,3 +1064,28 @@ def test_the_tracker_takes_an_ambiguous_detection_at_its_tracks_wrap_and_lists_n
     from radarnode.perception.tracker import ObjectTracker
     lists = run(ObjectTracker(), [AMBIG_AMBIGUOUS] * 5)
     assert len(lists[-1]) >= 1 and lists[-1].vrel_long_mps[0] > 0.0
+
+
+@pytest.mark.parametrize("v, listed", [
+    (55.4, True), (55.7, False), (111.1, False),          # +200 km/h: just below, just above, twice
+    (-110.9, True), (-111.3, False), (-222.2, False),     # −400 km/h: the same
+])
+def test_a_target_is_listed_inside_the_staggered_span_and_never_beyond_it_at_both_levels(v, listed):
+    """ars408_like resolves −400…+200 km/h. Inside, a point target is listed (at its true speed); beyond, every
+    detection is ambiguous and the trackers list nothing, at the object and detection levels alike."""
+    lo, hi = ARS.range_rate_span_mps
+    assert (lo <= v <= hi) == listed
+    x, heading = (40.0, "") if v > 0 else (240.0, ", heading_deg: 180")
+    ego = max(0.0, -v - 140.0)            # an actor drives at most 150 m/s: the ego closes the rest
+    sc = scenario(f"  - {{id: a, class: point, x_m: {x}, y_m: 0.0, speed_mps: {abs(v) - ego:.2f}{heading}, "
+                  "rcs_dbsm: 25}\n", ego=f"{{speed_mps: {ego:.2f}}}", radar="{preset: ars408_like}", duration=1.0)
+    for level in ("object", "detection"):
+        model = make_model(level, Scene(sc), ARS, np.random.default_rng(1), radar_config(sc).signal)
+        shown = []
+        for k in range(sc.num_cycles):
+            frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=ARS.max_range_m))
+            o = frame.objects
+            if k >= 3:
+                shown.append(len(o) > 0)
+                assert np.all(np.abs(o.vrel_long_mps - v) < 1.0), (level, o.vrel_long_mps, v)
+        assert (np.mean(shown) >= 0.8) if listed else not any(shown), (level, v, shown)
