@@ -357,7 +357,9 @@ def test_collision_detection_regions_warnings_and_state(bench):
 
 
 def test_collision_detection_reset_deactivate_clear_relay(bench, caplog):
-    bench.send(region_cfg(0, *REGIONS[0]), coll_det_cfg(1, min_time=0.0),
+    # region 0 out to the near half of the right lane: the truck there (its rear face's middle, 3.0–3.2 m right) is
+    # inside throughout, the lead in the own lane too, but for two cycles behind the crossing bicycle
+    bench.send(region_cfg(0, (20.0, -3.6), (60.0, 2.4)), coll_det_cfg(1, min_time=0.0),
                radar_cfg(RadarCfg_CtrlRelay_valid=1, RadarCfg_CtrlRelay=1))
     steps = bench.run(10)
     relay = [bench.decode(m)["CollDetRelayCtrl_Param"] for s in steps for m in s[0]["frames"]
@@ -383,7 +385,7 @@ def test_collision_detection_reset_deactivate_clear_relay(bench, caplog):
     assert bench.asm[0].coll_det_state["CollDetState_MinDetectTime"] == pytest.approx(2.0)
     first = [bench.decode(m)["CollDetRegState_WarningLevel"] for m in steps[0][0]["frames"]
              if P.unshifted(m.arbitration_id)[0] == P.COLL_DET_REGION_STATE]
-    assert first == [0] and levels == [1]       # reset, then the lead has been inside 2 s again: it warns
+    assert first == [0] and levels == [1]       # reset, then the truck has been inside 2 s again: it warns
     # collision detection off: one CollDetState with Active 0, regions "warning deactivated", no more 0x60E
     bench.send(coll_det_cfg(0))
     steps = bench.run(6)

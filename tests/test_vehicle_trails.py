@@ -218,11 +218,14 @@ def test_on_a_curve_entry_the_trails_keep_fcw_off_the_outer_lane_and_on_the_own_
     own_off = simulate(_curve_entry("clothoid_stopped_own_lane", seed, False), fidelity="object")
     # the trails were used, and the car ahead was never FCW's or ACC's target
     assert outer.trace["ecu"].trail_fits and not (outer.trace["fcw_target"] == 1).any()
-    # the stopped car in the outer lane after the entry: no warning with the trails; a false one without
+    # the stopped car in the outer lane after the entry: no warning with the trails, and FCW's target in far fewer
+    # cycles than from the yaw rate alone (16 in each seed; since the object level measures a body across at its
+    # visible faces' middle, not at its nearest corner, 2026-12-02, the yaw-rate circle no longer draws a false
+    # warning for it either)
     assert outer.warning_time_s is None, outer.warning_time_s
-    assert outer_off.warning_time_s is not None
     n_on, n_off = (int(np.sum(r.trace["fcw_target"] == 0)) for r in (outer, outer_off))
-    assert n_on <= 12 and n_off >= 16 and n_off - n_on >= 6, (n_on, n_off)
-    # the stopped car in the own lane: warned in time with the trails; too late from the yaw rate alone
+    assert n_on <= 12 and n_off >= 14 and n_off - n_on >= 6, (n_on, n_off)
+    # the stopped car in the own lane: warned in time with the trails (2.7 s), later from the yaw rate alone
+    # (2.13–2.20 s; 1.7–1.8 s with the nearest corner)
     assert own.warning_time_s is not None and own.ttc_at_warning_s >= 2.4, own.ttc_at_warning_s
-    assert own_off.ttc_at_warning_s < 2.0, own_off.ttc_at_warning_s
+    assert own_off.ttc_at_warning_s <= own.ttc_at_warning_s - 0.3, (own_off.ttc_at_warning_s, own.ttc_at_warning_s)

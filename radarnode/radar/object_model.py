@@ -436,6 +436,56 @@ def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, 
     return x_out, y_out
 
 
+def outline_points(centre_x: np.ndarray, centre_y: np.ndarray, heading_rad: np.ndarray, length_m: np.ndarray,
+                   width_m: np.ndarray) -> tuple[np.ndarray, ...]:
+    """``OUTLINE_SAMPLES`` points on each of the (at most two) edges of each box (n,) that face the sensor, as the
+    scatterer levels share a body's RCS among its outline (:func:`radarnode.radar.scatterers.actor_scatterers`):
+    their (x, y), each (n, 2, S), and each point's share of the body's RCS before range and antenna gain (tapered
+    towards an edge's ends, as many points as metres, each weighted by its face's aspect; summing to 1 over a box,
+    0 on an edge that does not face)."""
+    mx, my, wnx, wny, length, facing = facing_edges(centre_x, centre_y, heading_rad, length_m, width_m)
+    # a box faces a point outside it with one or two edges: those two (a second that does not face gets no weight)
+    two = np.argsort(~facing, axis=1, kind="stable")[:, :2]
+    mx, my, wnx, wny, length, facing = (np.take_along_axis(a, two, axis=1)
+                                        for a in (mx, my, wnx, wny, length, facing))
+    u = (np.arange(OUTLINE_SAMPLES) + 0.5) / OUTLINE_SAMPLES - 0.5                          # (S,)
+    px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (n, 2, S)
+    py = my[:, :, None] + wnx[:, :, None] * (u * length[:, :, None])
+    weight = np.where(facing[:, :, None], edge_taper(u) * length[:, :, None]
+                      * aspect_weight(px, py, wnx[:, :, None], wny[:, :, None]), 0.0)
+    return px, py, weight / np.maximum(weight.sum(axis=(1, 2), keepdims=True), 1e-300)
+
+
+def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray,
+                     rows: np.ndarray, max_distance_m: float) -> np.ndarray:
+    """Where across the sensor's axis the scatterer levels measure each body: the y of its outline's reflected
+    power centroid (the :func:`outline_points` inside the field of view, each by its share, its range to the
+    fourth and the element pattern), for the actors where ``rows`` (shape like ``view.x_m``) is True, and
+    ``view.y_m`` elsewhere or where no point is inside.
+
+    The detection and signal levels' tracker measures a group of detections at its nearest x and its detections'
+    power-weighted y (:func:`radarnode.perception.tracker.group_detections`); a body narrower than a beam is one
+    peak at its power centroid's azimuth. A car seen from behind is then measured at its rear face's middle, not at
+    its nearest corner: in the next lane the two lie about 0.9 m apart (``benchmarks/object_sigma.py``: the object
+    level's `across` column was 0.05 m where the detection level's was 0.58)."""
+    y = view.y_m.copy()
+    t_i, j_i = np.nonzero(rows)
+    if t_i.size == 0:
+        return y
+    px, py, share = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
+                                   view.orientation_rad[t_i, j_i], length_m[j_i], width_m[j_i])
+    z2 = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None] ** 2
+    r_s = np.sqrt(px * px + py * py + z2)
+    az_s = np.arctan2(py, px)
+    inside = (share > 0.0) & in_fov(preset, r_s, az_s) & (r_s <= max_distance_m)
+    power = np.where(inside, share * np.maximum(r_s, 0.1) ** -4 * 10.0 ** (equation.pattern_db(preset, az_s) / 10.0),
+                     0.0)
+    total = power.sum(axis=(1, 2))
+    seen = total > 0.0
+    y[t_i[seen], j_i[seen]] = (power * py).sum(axis=(1, 2))[seen] / total[seen]
+    return y
+
+
 def may_be_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray) -> np.ndarray:
     """Where a part of each actor's box may lie inside a sector: a necessary condition of :func:`in_fov` for any of
     its points (1e-6 m and rad to spare). Its nearest point within the farthest sector's range, its azimuth extent
@@ -748,6 +798,11 @@ class ObjectModel:
         crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & ~((sc.length_m <= POINT_SIZE_M)
                                                                     & (sc.width_m <= POINT_SIZE_M))
         pd = pd * self._masking(view, rng_m, snr, observable, crossing, config.max_distance_m)
+        # where the chain measures it: at its nearest x and its outline's power centroid across (visible_centre_y),
+        # as the other levels' tracker measures a group of detections
+        seen = dataclasses.replace(view, y_m=visible_centre_y(p, view, sc.length_m, sc.width_m,
+                                                              observable & self.extended, config.max_distance_m))
+        r_seen, az = seen.range_m, seen.azimuth_rad
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
         er, ev, ea = chain_efficiency(snr)
@@ -756,19 +811,20 @@ class ObjectModel:
         sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
         # where the array sees the actor: a sparse array's grating lobe folds it (the other levels' beamformer does)
         az_seen = ambiguity.apparent_azimuth(p, az)
+        edge_seen = ambiguity.apparent_azimuth(p, view.azimuth_rad)    # a crossing body's nearest point: on the edge
         sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az_seen),
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
-        m_r = rng_m + sig_r * z[:, 0]
+        m_r = r_seen + sig_r * z[:, 0]
         m_az = az_seen + sig_az * z[:, 1]
         # such a body's measured azimuth is mirrored back about the edge (the scatterer levels report its inner
         # points); a small body is one point, reported only where it is measured inside (as at the other levels)
         if crossing.any():
-            past = crossing & (np.abs(m_az) > np.abs(az_seen))
-            m_az = np.where(past, np.sign(m_az) * (2.0 * np.abs(az_seen) - np.abs(m_az)), m_az)
+            past = crossing & (np.abs(m_az) > np.abs(edge_seen))
+            m_az = np.where(past, np.sign(m_az) * (2.0 * np.abs(edge_seen) - np.abs(m_az)), m_az)
         c, s = np.cos(az), np.sin(az)
         v_rad = view.vx_mps * c + view.vy_mps * s
         if sc.elevated.any():
-            v_rad = v_rad * (np.hypot(view.x_m, view.y_m) / np.maximum(rng_m, 1e-9))   # cos(elevation)
+            v_rad = v_rad * (np.hypot(seen.x_m, seen.y_m) / np.maximum(r_seen, 1e-9))   # cos(elevation)
         v_tan = -view.vx_mps * s + view.vy_mps * c
         # the speed the radar can measure: aliased and resolved by the same rules as the other levels
         v_meas = v_rad + sig_v * z[:, 2]
@@ -786,7 +842,7 @@ class ObjectModel:
         stagger = bool(p.stagger_chirp_period_s)
         m_vr_track = np.where(ambig == AMBIG_AMBIGUOUS, v_meas, m_vr) if stagger else m_vr
         meas = np.stack([m_r * mc, m_r * ms, m_vr_track * mc - m_vt * ms, m_vr_track * ms + m_vt * mc], axis=-1)
-        sx, sy = sigma_to_xy(rng_m, az_seen, sig_r, sig_az)
+        sx, sy = sigma_to_xy(r_seen, az_seen, sig_r, sig_az)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
         # a detection is reported where it was measured inside the field of view, as the other levels report
         # theirs (radarnode.radar.models.reportable): a body at a sector's edge is seen on its inner side only
@@ -969,30 +1025,17 @@ class ObjectModel:
                               cell_r: np.ndarray, max_distance_m: float) -> np.ndarray:
         """What the bodies of energy ``on_bin`` (T, n; the whole body's at its nearest point in the field of view,
         its SNR's; 0: none) put into every actor's training ring (its cell ``cell_d``, ``cell_r``), (T, n): each body
-        as ``OUTLINE_SAMPLES`` points on each of its edges that face the sensor, weighted as the scatterer levels
-        share a body's RCS among its outline (:func:`radarnode.radar.scatterers.actor_scatterers`: tapered towards an
-        edge's ends, as many points as metres, each weighted by its face's aspect), of which only those inside the
-        field of view reflect, each at its own range, radial speed and element-pattern gain. Measured on a truck
-        stopped in the next lane beside a lead 8 m ahead, as the ego passes it at 4 m/s: the whole energy on the
+        as its :func:`outline_points` (weighted as the scatterer levels share a body's RCS), of which only those
+        inside the field of view reflect, each at its own range, radial speed and element-pattern gain. Measured on a
+        truck stopped in the next lane beside a lead 8 m ahead, as the ego passes it at 4 m/s: the whole energy on the
         truck's nearest point gave the lead a masking factor of 0.0–0.16 once the edge of the field of view crossed
         the truck (its nearest point held there at the Doppler of 60°), where the detection level's scatterers give
         0.4–1.0."""
         p, stat, sc = self.preset, self.statistic, self.scene
         m, n_r = p.num_chirps, p.num_range_bins
         t_i, j_i = np.nonzero(on_bin > 0.0)
-        mx, my, wnx, wny, length, facing = facing_edges(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
-                                                        view.orientation_rad[t_i, j_i], sc.length_m[j_i],
-                                                        sc.width_m[j_i])
-        # a box faces a point outside it with one or two edges: those two (a second that does not face gets no weight)
-        two = np.argsort(~facing, axis=1, kind="stable")[:, :2]
-        mx, my, wnx, wny, length, facing = (np.take_along_axis(a, two, axis=1)
-                                            for a in (mx, my, wnx, wny, length, facing))
-        u = (np.arange(OUTLINE_SAMPLES) + 0.5) / OUTLINE_SAMPLES - 0.5                          # (S,)
-        px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (R, 2, S)
-        py = my[:, :, None] + wnx[:, :, None] * (u * length[:, :, None])
-        weight = np.where(facing[:, :, None], edge_taper(u) * length[:, :, None]
-                          * aspect_weight(px, py, wnx[:, :, None], wny[:, :, None]), 0.0)
-        weight = weight / np.maximum(weight.sum(axis=(1, 2), keepdims=True), 1e-300)
+        px, py, weight = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
+                                        view.orientation_rad[t_i, j_i], sc.length_m[j_i], sc.width_m[j_i])
         # the points that reflect, flat: on a facing edge, inside the field of view
         z = 0.0 if view.z_m is None else np.broadcast_to(
             np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None], px.shape)
