@@ -221,6 +221,7 @@ def test_signal_options_in_scenario_files_are_validated(tmp_path):
             load_scenario(path)
 
 
+@pytest.mark.slow      # (about 40 s: 12 seeds at two levels; on request, pytest -m slow; benchmarks/auto.py's row)
 def test_auto_on_a_curve_entry_beside_guardrail_posts_reports_the_car_as_the_detection_level_does():
     """clothoid_stopped_own_lane: the stopped car 127 m ahead stands within the chain's resolution of the guardrail
     posts (8 channels: ~30 m of cross range there), so auto renders it at the detection level in every cycle and

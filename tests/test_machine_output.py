@@ -168,6 +168,12 @@ def test_consume_json_carries_timestamp_sensor_and_cycle_counter(tmp_path, capsy
     assert [x["cycle_counter"] for x in lines] == [c for _, c in headers][:len(lines)]
 
 
+@pytest.fixture(scope="module")
+def short_blf(tmp_path_factory):
+    """A 0.5-s log of highway_cut_in, written once for the module's tests that only read it."""
+    return _log(tmp_path_factory.mktemp("short"), ".blf", duration="0.5")
+
+
 @pytest.mark.parametrize("fmt, output, refused", [
     ("text", "text.blf", True), ("text", "t.log.gz", True), ("text", "t.json", True), ("text", "t.mcap", True),
     ("json", "frames.csv", True), ("json", "frames.asc", True), ("csv", "frames.json", True),
@@ -175,8 +181,8 @@ def test_consume_json_carries_timestamp_sensor_and_cycle_counter(tmp_path, capsy
     ("text", "t.txt", False), ("json", "f.jsonl", False), ("json", "f.txt", False), ("csv", "f.csv", False),
     ("csv", "f.txt", False),
 ])
-def test_decode_output_suffix_must_not_say_another_format(tmp_path, fmt, output, refused):
-    log = _log(tmp_path, ".blf", duration="0.5")
+def test_decode_output_suffix_must_not_say_another_format(tmp_path, short_blf, fmt, output, refused):
+    log = short_blf
     r = run("decode", str(log), "--format", fmt, "-o", str(tmp_path / output))
     if refused:
         assert r.returncode == 2, r.stderr

@@ -112,7 +112,8 @@ def test_detection_model_agrees_with_the_signal_chain():
         np.testing.assert_allclose(d.snr_db[order], truth, atol=1.0)
 
 
-@pytest.mark.parametrize("v", [0.0, 30.0])
+# standing (no coupling) takes 11 s: -m slow (CI's 20 minutes; the moving case, this test's own, runs in CI)
+@pytest.mark.parametrize("v", [pytest.param(0.0, marks=pytest.mark.slow), 30.0])
 def test_detection_model_has_the_chains_pd_where_the_coupling_moves_the_peak(v):
     """A point target on a range-bin centre at ρ = 20 dB: at 30 m/s the range–Doppler coupling moves its peak 0.42
     bin off that centre in the chain's map, with the straddle loss that brings; the detection level puts its peak
@@ -180,7 +181,8 @@ def test_signal_level_accuracy_within_1_3_of_the_cramer_rao_bound_at_25_db():
 
 
 @pytest.mark.parametrize("preset", ["mimo12", "ars408_like"])
-@pytest.mark.parametrize("bins", [3.0, 4.0, 6.0])
+# 4 bins, between the two in CI: -m slow (CI's 20 minutes)
+@pytest.mark.parametrize("bins", [3.0, pytest.param(4.0, marks=pytest.mark.slow), 6.0])
 def test_a_neighbour_a_few_bins_away_leaves_the_signal_levels_accuracy_at_the_bound(preset, bins):
     """Two equal returns ``bins`` range bins apart (0.4 Doppler bin, 4° apart), ρ = 30 dB, 100 frames: range, range
     rate and azimuth RMSE of both within 1.4× the CRB (measured over 200 draws: 1.13–1.33×; one alone 1.09–1.20×). The patch fit stopped 3 bins short of the neighbour's peak, and lost
@@ -208,7 +210,9 @@ def test_a_neighbour_a_few_bins_away_leaves_the_signal_levels_accuracy_at_the_bo
     assert np.all(ratio <= 1.4), ratio
 
 
-@pytest.mark.parametrize("bins, doppler_bins", [(2.0, 0.0), (2.0, 0.4), (2.1, 0.0), (2.2, 0.0), (2.5, 0.0)])
+# 2.1 and 2.2 bins, between the ends in CI: -m slow (CI's 20 minutes)
+@pytest.mark.parametrize("bins, doppler_bins", [(2.0, 0.0), (2.0, 0.4), pytest.param(2.1, 0.0, marks=pytest.mark.slow),
+                                                pytest.param(2.2, 0.0, marks=pytest.mark.slow), (2.5, 0.0)])
 def test_two_returns_about_two_bins_apart_are_fitted_to_their_own_positions(bins, doppler_bins):
     """Two equal returns ``bins`` range bins apart (``doppler_bins`` in Doppler, 4° apart), ρ = 30 dB, 100 frames,
     those the chain resolves: range RMSE within 1.8× the CRB (1.17–1.38× on these frames; the detection level
