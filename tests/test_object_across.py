@@ -40,3 +40,32 @@ def test_the_object_level_reports_a_body_in_the_next_lane_across_where_the_detec
     # both between the nearest corner and the centre line, nearer the centre: what a radar sees of the rear face
     for y in (obj, det):
         assert nearest + 0.5 <= y <= centre + 0.15, (y, nearest, centre)
+
+
+@pytest.mark.parametrize("preset, cls, x_m, y_m, heading_deg", [
+    ("acc_lrr", "car", 30.0, 6.0, 5.0),                 # its nearest x with its centroid's y: 0.4° beyond the 10° edge
+    ("ars408_like", "truck", 16.85, -18.35, -19.4),     # … 0.4 m beyond the ±60° sector's 20 m
+    ("scanning_ka", "truck", 22.95, -18.96, -10.0),
+])
+def test_a_turned_body_the_field_of_views_edge_crosses_is_still_reported(preset, cls, x_m, y_m, heading_deg):
+    """A standing body whose nearest point is inside the field of view, turned so that its nearest x with its
+    outline's centroid y lies outside: the object level measured it there in every cycle and never reported it (0 of
+    24 cycles; the detection level 24 of 24; an independent tester's finding). It takes the nearest point's y there
+    now: reported in at least 22 of 24 cycles, inside the field of view."""
+    from radarnode.radar.object_model import in_fov
+    shown = 0
+    for seed in (1, 2):
+        sc = scenario(f"  - {{id: a, class: {cls}, x_m: {3.7 + x_m}, y_m: {y_m}, speed_mps: 0.0, "
+                      f"heading_deg: {heading_deg}}}", ego="{speed_mps: 0.0}", radar=f"{{preset: {preset}}}",
+                      road="{lanes: 10, lane_width_m: 6.0, ego_lane: 5}", duration=1.5, seed=seed)
+        cfg = radar_config(sc)
+        model = make_model("object", Scene(sc), cfg.preset, np.random.default_rng(seed), cfg.signal)
+        for k in range(16):
+            frame, _ = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
+            ol = frame.objects
+            mine = np.flatnonzero(ol.actor_index == 0)
+            if k >= 4 and mine.size:
+                shown += 1
+                x, y = float(ol.dist_long_m[mine[0]]), float(ol.dist_lat_m[mine[0]])
+                assert in_fov(cfg.preset, np.array([np.hypot(x, y)]), np.array([np.arctan2(y, x)]))[0], (x, y)
+    assert shown >= 22, shown

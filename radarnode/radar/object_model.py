@@ -458,10 +458,14 @@ def outline_points(centre_x: np.ndarray, centre_y: np.ndarray, heading_rad: np.n
 
 def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray,
                      rows: np.ndarray, max_distance_m: float) -> np.ndarray:
-    """Where across the sensor's axis the scatterer levels measure each body: the y of its outline's reflected
-    power centroid (the :func:`outline_points` inside the field of view, each by its share, its range to the
-    fourth and the element pattern), for the actors where ``rows`` (shape like ``view.x_m``) is True, and
-    ``view.y_m`` elsewhere or where no point is inside.
+    """Where across the sensor's axis the scatterer levels measure each body (at its nearest point's x): the y of its
+    outline's reflected power centroid (the :func:`outline_points` inside the field of view, each by its share, its
+    range to the fourth and the element pattern), for the actors where ``rows`` (shape like ``view.x_m``) is True;
+    ``view.y_m`` (the nearest point's) elsewhere or where no outline point is inside. Where the point at the nearest
+    x and that y falls outside the field of view (a body its edge crosses, turned: its nearest x with its centroid's y lay 0.4°
+    beyond acc_lrr's edge, or 0.4 m beyond the ±60° sector's 20 m, and the body was never reported — an independent
+    tester's finding): the nearest point's y, as before (moved onto the edge, the measurement's noise put it outside
+    in half the cycles).
 
     The detection and signal levels' tracker measures a group of detections at its nearest x and its detections'
     power-weighted y (:func:`radarnode.perception.tracker.group_detections`); a body narrower than a beam is one
@@ -482,7 +486,12 @@ def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray
                      0.0)
     total = power.sum(axis=(1, 2))
     seen = total > 0.0
-    y[t_i[seen], j_i[seen]] = (power * py).sum(axis=(1, 2))[seen] / total[seen]
+    t_i, j_i, total = t_i[seen], j_i[seen], total[seen]
+    yc = (power * py).sum(axis=(1, 2))[seen] / total
+    z0 = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i]
+    r3 = np.sqrt(view.x_m[t_i, j_i] ** 2 + yc * yc + z0 * z0)
+    inside = in_fov(preset, r3, np.arctan2(yc, view.x_m[t_i, j_i])) & (r3 <= max_distance_m)
+    y[t_i[inside], j_i[inside]] = yc[inside]
     return y
 
 
