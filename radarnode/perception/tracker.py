@@ -116,11 +116,11 @@ def initial_velocity(x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarra
     ground along the ego's road where it is — the sensor's own direction of motion, turned on a bend as the ego's
     circle (curvature κ, the yaw rate over the sensor's speed) and the lanes beside it turn at the body's angle about
     their centre, as much as :func:`~radarnode.perception.motion.road_share` says the others follow the ego's road —,
-    as a standing reflector (ground speed 0) and most road users do. Where that motion is not known or says little (the sensor slower than
-    ``PRIOR_MIN_SENSOR_MPS``, the line of sight more than ``PRIOR_MAX_ANGLE_RAD`` off the body's road, or a ground
-    speed beyond ``RIGID_MAX_SPEED_MPS``): the standing world's tangential velocity. ``yaw_rate_rps`` is the bend's
-    (:meth:`ObjectTracker.steady_yaw_rate`: a lane change's yaw rate is no bend, and taken for one it started a car
-    120 m ahead at the ego's speed 6.5 m/s across, an independent tester's finding).
+    as a standing reflector (ground speed 0) and most road users do. Where that motion is not known or says little (the
+    sensor slower than ``PRIOR_MIN_SENSOR_MPS``, the line of sight more than ``PRIOR_MAX_ANGLE_RAD`` off the body's
+    road, or a ground speed beyond ``RIGID_MAX_SPEED_MPS``): the standing world's tangential velocity. ``yaw_rate_rps``
+    is the bend's (:meth:`ObjectTracker.steady_yaw_rate`: a lane change's yaw rate is no bend, and taken for one it
+    started a car 120 m ahead at the ego's speed 6.5 m/s across, an independent tester's finding).
 
     The standing world's prior alone gave a car in the next lane at the ego's speed the standing world's speed
     across the line of sight, v·sin(azimuth): 2.8 m/s outwards at 30 m ahead and 20 m/s, which the track carried for
@@ -570,7 +570,7 @@ class ObjectTracker:
         self.snh = np.zeros(1, dtype=np.int64)
         self.last_yaw_rate_rps = 0.0
         self.last_t: float | None = None
-        self.yaw_history: list[tuple[float, float]] = []      # (t, yaw rate) over the last BEND_STEADY_S and one more
+        self.yaw_history: list[tuple[float, float]] = []      # (t, yaw rate) of the last 2·BEND_STEADY_S
 
     def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float], yaw_rate_rps: float = 0.0
              ) -> ObjectList:
@@ -757,7 +757,7 @@ class ObjectTracker:
         ux, uy = z[idx, 0] / r, z[idx, 1] / r
         fit = np.isfinite(groups.velocity[idx, 0])          # a joined near body: its fitted velocity
         # initial covariance: the position as measured; the velocity's radial part as measured, its tangential
-        # part from the stationary prior (2 m/s). A looser position (it was 1 m) let a new track of a guardrail
+        # part from the prior (initial_velocity; σ 2 m/s). A looser position (it was 1 m) let a new track of a guardrail
         # post take the next post 4 m on, and leave at a false speed.
         p0 = np.zeros((k, 4, 4))
         p0[:, 0:2, 0:2] = r_cov[idx, 0:2, 0:2]

@@ -461,11 +461,11 @@ def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray
     """Where across the sensor's axis the scatterer levels measure each body (at its nearest point's x): the y of its
     outline's reflected power centroid (the :func:`outline_points` inside the field of view, each by its share, its
     range to the fourth and the element pattern), for the actors where ``rows`` (shape like ``view.x_m``) is True;
-    ``view.y_m`` (the nearest point's) elsewhere or where no outline point is inside. Where the point at the nearest
-    x and that y falls outside the field of view (a body its edge crosses, turned: its nearest x with its centroid's y lay 0.4°
-    beyond acc_lrr's edge, or 0.4 m beyond the ±60° sector's 20 m, and the body was never reported — an independent
-    tester's finding): the nearest point's y, as before (moved onto the edge, the measurement's noise put it outside
-    in half the cycles).
+    ``view.y_m`` (the nearest point's) elsewhere or where no outline point is inside. Where the point at the nearest x
+    and that y falls outside the field of view (a body its edge crosses, turned: its nearest x with its centroid's y lay
+    0.4° beyond acc_lrr's edge, or 0.4 m beyond the ±60° sector's 20 m, and the body was never reported — an independent
+    tester's finding): the nearest point's y, as before (moved onto the edge, the measurement's noise put it outside in
+    half the cycles).
 
     The detection and signal levels' tracker measures a group of detections at its nearest x and its detections'
     power-weighted y (:func:`radarnode.perception.tracker.group_detections`); a body narrower than a beam is one
