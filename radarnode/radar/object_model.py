@@ -456,6 +456,19 @@ def outline_points(centre_x: np.ndarray, centre_y: np.ndarray, heading_rad: np.n
     return px, py, weight / np.maximum(weight.sum(axis=(1, 2), keepdims=True), 1e-300)
 
 
+def visible_outline(preset: RadarPreset, view: SensorView, t_i: np.ndarray, j_i: np.ndarray, length_m: np.ndarray,
+                    width_m: np.ndarray, max_distance_m: float) -> tuple[np.ndarray, ...]:
+    """The :func:`outline_points` of the bodies ``view[t_i, j_i]`` (actor j_i's ``length_m``, ``width_m``), with each
+    point's slant range and azimuth from the sensor and whether it reflects: on a facing edge, inside the field of
+    view, within ``max_distance_m``. Returns (x, y, range, azimuth, share, reflects), each (R, 2, S)."""
+    px, py, share = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
+                                   view.orientation_rad[t_i, j_i], length_m[j_i], width_m[j_i])
+    z = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None]
+    r_s = np.sqrt(px ** 2 + py ** 2 + z ** 2)
+    az_s = np.arctan2(py, px)
+    return px, py, r_s, az_s, share, (share > 0.0) & in_fov(preset, r_s, az_s) & (r_s <= max_distance_m)
+
+
 def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray,
                      rows: np.ndarray, max_distance_m: float) -> np.ndarray:
     """Where across the sensor's axis the scatterer levels measure each body (at its nearest point's x): the y of its
@@ -476,12 +489,7 @@ def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray
     t_i, j_i = np.nonzero(rows)
     if t_i.size == 0:
         return y
-    px, py, share = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
-                                   view.orientation_rad[t_i, j_i], length_m[j_i], width_m[j_i])
-    z2 = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None] ** 2
-    r_s = np.sqrt(px * px + py * py + z2)
-    az_s = np.arctan2(py, px)
-    inside = (share > 0.0) & in_fov(preset, r_s, az_s) & (r_s <= max_distance_m)
+    _, py, r_s, az_s, share, inside = visible_outline(preset, view, t_i, j_i, length_m, width_m, max_distance_m)
     power = np.where(inside, share * np.maximum(r_s, 0.1) ** -4 * 10.0 ** (equation.pattern_db(preset, az_s) / 10.0),
                      0.0)
     total = power.sum(axis=(1, 2))
@@ -820,7 +828,6 @@ class ObjectModel:
         sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
         # where the array sees the actor: a sparse array's grating lobe folds it (the other levels' beamformer does)
         az_seen = ambiguity.apparent_azimuth(p, az)
-        edge_seen = ambiguity.apparent_azimuth(p, view.azimuth_rad)    # a crossing body's nearest point: on the edge
         sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az_seen),
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = r_seen + sig_r * z[:, 0]
@@ -828,6 +835,7 @@ class ObjectModel:
         # such a body's measured azimuth is mirrored back about the edge (the scatterer levels report its inner
         # points); a small body is one point, reported only where it is measured inside (as at the other levels)
         if crossing.any():
+            edge_seen = ambiguity.apparent_azimuth(p, view.azimuth_rad)    # a crossing body's nearest point: the edge
             past = crossing & (np.abs(m_az) > np.abs(edge_seen))
             m_az = np.where(past, np.sign(m_az) * (2.0 * np.abs(edge_seen) - np.abs(m_az)), m_az)
         c, s = np.cos(az), np.sin(az)
@@ -1043,14 +1051,8 @@ class ObjectModel:
         p, stat, sc = self.preset, self.statistic, self.scene
         m, n_r = p.num_chirps, p.num_range_bins
         t_i, j_i = np.nonzero(on_bin > 0.0)
-        px, py, weight = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
-                                        view.orientation_rad[t_i, j_i], sc.length_m[j_i], sc.width_m[j_i])
         # the points that reflect, flat: on a facing edge, inside the field of view
-        z = 0.0 if view.z_m is None else np.broadcast_to(
-            np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None], px.shape)
-        r_s = np.sqrt(px ** 2 + py ** 2 + z ** 2)
-        az_s = np.arctan2(py, px)
-        keep = (weight > 0.0) & in_fov(p, r_s, az_s) & (r_s <= max_distance_m)
+        px, py, r_s, az_s, weight, keep = visible_outline(p, view, t_i, j_i, sc.length_m, sc.width_m, max_distance_m)
         row = np.broadcast_to(np.arange(t_i.size)[:, None, None], keep.shape)[keep]
         px, py, r_s, az_s, weight = px[keep], py[keep], r_s[keep], az_s[keep], weight[keep]
         t_k, j_k = t_i[row], j_i[row]
