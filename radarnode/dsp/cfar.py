@@ -25,6 +25,7 @@ Rohling, IEEE Trans. AES-19 (1983).
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -128,20 +129,17 @@ class CellAveragingCfar(Cfar):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         self.eigenvalues = self._eigenvalues(self.offsets())
-        self.alpha = stats.ca_alpha(self.pfa, self.n_channels, self.eigenvalues)   # on the mean of the ring
-        self._alpha_by_cut: dict[tuple[int, int], float] = {}
+        self.alpha = self.alpha_for_cut(None, None)                                 # on the mean of the whole ring
 
     def _eigenvalues(self, offsets: np.ndarray) -> np.ndarray:
         return stats.ring_eigenvalues(offsets, self.rho_d, self.rho_r)
 
-    def alpha_for_cut(self, left: int, right: int) -> float:
-        """α of a ring that loses the range columns beyond ``left`` bins to the left and ``right`` to the right."""
-        key = (left, right)
-        if key not in self._alpha_by_cut:
-            off = self.offsets()
-            keep = (off[:, 1] >= -left) & (off[:, 1] <= right)
-            self._alpha_by_cut[key] = stats.ca_alpha(self.pfa, self.n_channels, self._eigenvalues(off[keep]))
-        return self._alpha_by_cut[key]
+    def alpha_for_cut(self, left: int | None, right: int | None) -> float:
+        """α of a ring that loses the range columns beyond ``left`` bins to the left and ``right`` to the right
+        (``None``: none lost). Each is a root of the exact false-alarm probability (about 10 ms): computed once per
+        process for each CFAR configuration and cut, whichever detector asks."""
+        return _ca_alpha_for_cut(self.pfa, self.n_channels, self.guard, self.train, self.rho_d.tobytes(),
+                                 self.rho_r.tobytes(), left, right)
 
     def _ring_sum(self, x: np.ndarray) -> np.ndarray:
         # ring sum = box sum over guard+training − box sum over the guard: two separable O(n) box filters;
@@ -250,6 +248,17 @@ class OrderedStatisticCfar(Cfar):
 
 
 CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStatisticCfar}
+
+
+@functools.lru_cache(maxsize=1024)
+def _ca_alpha_for_cut(pfa: float, n_channels: int, guard: tuple[int, int], train: tuple[int, int], rho_d: bytes,
+                      rho_r: bytes, left: int | None, right: int | None) -> float:
+    """:meth:`CellAveragingCfar.alpha_for_cut` of a CFAR with these settings (correlations: complex128 bytes)."""
+    off = stats.ring_offsets(guard, train)
+    if left is not None:
+        off = off[(off[:, 1] >= -left) & (off[:, 1] <= right)]
+    eig = stats.ring_eigenvalues(off, *(np.frombuffer(rho, dtype=np.complex128) for rho in (rho_d, rho_r)))
+    return stats.ca_alpha(pfa, n_channels, eig)
 
 
 def make_cfar(kind: str, **kwargs) -> Cfar:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 
 
@@ -100,10 +102,17 @@ class _PatchAxis:
             sl = slice(max_half - m, max_half + m + 1)
             self.inverse[m, sl, sl] = np.linalg.inv(corr)
         # h^H R⁻¹ h depends only on δ and m: tabulated on a fine grid (linear interpolation moves a fit by
-        # < 1e-5 bin), so the search needs R⁻¹ only once per peak, on the data
+        # < 1e-5 bin), so the search needs R⁻¹ only once per peak, on the data. R⁻¹ is real and symmetric, so
+        # h^H R⁻¹ h = Re(h)ᵀR⁻¹Re(h) + Im(h)ᵀR⁻¹Im(h): two real products per patch size on its own block of R⁻¹
+        # (a loop over the sizes, not the grid; one einsum over the embedded blocks took 0.26 s for max_half 12)
         self._norm_grid = np.linspace(-self.NORM_SPAN, self.NORM_SPAN, int(2 * self.NORM_SPAN * self.NORM_STEPS) + 1)
         h = self.response(self._norm_grid)                                               # (G, J)
-        self._norm = np.einsum("gj,mjl,gl->mg", h.conj(), self.inverse, h).real          # (m, G)
+        self._norm = np.zeros((max_half + 1, self._norm_grid.size))                     # (m, G); m = 0: no patch
+        for m in range(1, max_half + 1):
+            sl = slice(max_half - m, max_half + m + 1)
+            block = self.inverse[m, sl, sl].real
+            for part in (h.real[:, sl], h.imag[:, sl]):
+                self._norm[m] += np.sum((part @ block) * part, axis=1)
 
     #: the norm table: δ within ±NORM_SPAN bins, NORM_STEPS points a bin
     NORM_SPAN, NORM_STEPS = 1.5, 2048
@@ -156,7 +165,31 @@ def _patch_axes(doppler_window: np.ndarray, range_window: np.ndarray, max_half: 
         raise ValueError(f"max_half: value {max_half!r} is not allowed for a map of {len(doppler_window)} × "
                          f"{len(range_window)} bins; expected at most {(shortest - 1) // 2} (a patch within the map)")
     buckets = sorted({b for b in PATCH_BUCKETS if b < max_half} | {int(max_half)})
-    return int(max_half), buckets, {b: (_PatchAxis(doppler_window, b), _PatchAxis(range_window, b)) for b in buckets}
+    return int(max_half), buckets, {b: (_patch_axis(doppler_window, b), _patch_axis(range_window, b)) for b in buckets}
+
+
+def _patch_axis(window: np.ndarray, max_half: int) -> _PatchAxis:
+    """The :class:`_PatchAxis` of ``window`` and ``max_half``, built once per process for each window (by its
+    values) and half-width: a chain's Doppler and range axes, its patch and migration fits and every chain of the same
+    preset share it (it is read only after it is built)."""
+    w = np.ascontiguousarray(window, dtype=np.float64)
+    return _patch_axis_of(w.tobytes(), int(max_half))
+
+
+@functools.lru_cache(maxsize=64)
+def _patch_axis_of(window_bytes: bytes, max_half: int) -> _PatchAxis:
+    return _read_only(_PatchAxis(np.frombuffer(window_bytes, dtype=np.float64), max_half))
+
+
+def _read_only(obj):
+    """``obj`` with its arrays (attributes, and arrays in its list and tuple attributes) made read only: a shared
+    table written by mistake raises instead of changing every fit that shares it."""
+    for value in vars(obj).values():
+        for a in (value if isinstance(value, (list, tuple)) else (value,)):
+            for x in (a if isinstance(a, (list, tuple)) else (a,)):
+                if isinstance(x, np.ndarray):
+                    x.flags.writeable = False
+    return obj
 
 
 def _checked(rd: np.ndarray, d, r, delta_d, delta_r, half, max_half: int):
@@ -529,6 +562,31 @@ def _real_left(m: np.ndarray, z: np.ndarray) -> np.ndarray:
     return (m @ z.view(np.float64)).view(np.complex128)
 
 
+@functools.lru_cache(maxsize=16)
+def _migration_tables(doppler_bytes: bytes, range_bytes: bytes, max_half: int, order: int, steps: int,
+                      max_migration: float) -> tuple[np.ndarray, _ShiftTable, _ShiftTable]:
+    """:class:`MigrationFit`'s Chebyshev nodes and its Doppler and range tables, built once per process for each
+    pair of windows (by their values) and half-width (eight FFTs of L·steps points: about 0.2 s; read only after)."""
+    wd, wr = np.frombuffer(doppler_bytes, dtype=np.float64), np.frombuffer(range_bytes, dtype=np.float64)
+    M = wd.size
+    q = np.arange(order)
+    nodes = 0.5 * np.cos(np.pi * (2 * q + 1) / (2 * order))                             # Chebyshev, in [−½, ½]
+    s = (np.arange(M) - M / 2) / M
+    # Lagrange basis L_q(s_m), shape (M, order)
+    basis = np.ones((M, order))
+    for a in range(order):
+        for b in range(order):
+            if a != b:
+                basis[:, a] *= (s - nodes[b]) / (nodes[a] - nodes[b])
+    reach = max_half + 2.0 + max_migration / 2.0
+    # the Doppler tables side by side, (U, order): one lookup gathers every term of a cell
+    tables = [_tone_table(wd * basis[:, a], reach, steps) for a in range(order)]
+    doppler = _ShiftTable(np.stack([t for t, _ in tables], axis=1), tables[0][1], steps)
+    nodes.flags.writeable = False
+    return nodes, _read_only(doppler), _read_only(_ShiftTable(*_tone_table(wr, reach + max_migration / 2.0, steps),
+                                                              steps))
+
+
 class MigrationFit:
     """The patch fit for a target that moves across range bins during the frame (range migration).
 
@@ -576,23 +634,10 @@ class MigrationFit:
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         # patches embedded in the smallest bucket that holds them, as PatchFit does
         self.max_half, self.buckets, self.axes = _patch_axes(doppler_window, range_window, max_half)
-        wd = np.asarray(doppler_window, dtype=np.float64)
-        wr = np.asarray(range_window, dtype=np.float64)
-        M = wd.size
-        q = np.arange(self.ORDER)
-        self.nodes = 0.5 * np.cos(np.pi * (2 * q + 1) / (2 * self.ORDER))             # Chebyshev, in [−½, ½]
-        s = (np.arange(M) - M / 2) / M
-        # Lagrange basis L_q(s_m), shape (M, ORDER)
-        basis = np.ones((M, self.ORDER))
-        for a in range(self.ORDER):
-            for b in range(self.ORDER):
-                if a != b:
-                    basis[:, a] *= (s - self.nodes[b]) / (self.nodes[a] - self.nodes[b])
-        reach = self.max_half + 2.0 + self.MAX_MIGRATION / 2.0
-        # the Doppler tables side by side, (U, ORDER): one lookup gathers every term of a cell
-        tables = [_tone_table(wd * basis[:, a], reach, self.STEPS) for a in range(self.ORDER)]
-        self._doppler = _ShiftTable(np.stack([t for t, _ in tables], axis=1), tables[0][1], self.STEPS)
-        self._range = _ShiftTable(*_tone_table(wr, reach + self.MAX_MIGRATION / 2.0, self.STEPS), self.STEPS)
+        wd = np.ascontiguousarray(doppler_window, dtype=np.float64)
+        wr = np.ascontiguousarray(range_window, dtype=np.float64)
+        self.nodes, self._doppler, self._range = _migration_tables(wd.tobytes(), wr.tobytes(), self.max_half,
+                                                                   self.ORDER, self.STEPS, self.MAX_MIGRATION)
         # δ_d is the Doppler of the phase at the chirp's middle in time, sample N/2, where the chain's speed takes
         # λ (mid-sweep): the range terms carry the turning phase of the window's centre, sample (N − 1)/2, less
         # that of sample N/2 (taken at (N − 1)/2, δ_d was μ/2N bins off: 0.6 mm/s at 70 m/s on mimo12, against
