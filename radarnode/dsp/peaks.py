@@ -562,7 +562,7 @@ def _real_left(m: np.ndarray, z: np.ndarray) -> np.ndarray:
     return (m @ z.view(np.float64)).view(np.complex128)
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=4)             # a pair of tables holds about 16 MB: a few presets' shapes at once
 def _migration_tables(doppler_bytes: bytes, range_bytes: bytes, max_half: int, order: int, steps: int,
                       max_migration: float) -> tuple[np.ndarray, _ShiftTable, _ShiftTable]:
     """:class:`MigrationFit`'s Chebyshev nodes and its Doppler and range tables, built once per process for each
