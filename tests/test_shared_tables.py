@@ -14,11 +14,13 @@ from radarnode.dsp.spectra import window
 
 
 @pytest.mark.parametrize("name, length, half", [("hann", 256, 12), ("hann", 64, 3), ("hamming", 128, 6),
-                                                ("blackman", 256, 1)])
+                                                ("blackman", 256, 1), ("np.hanning", 64, 12), ("np.kaiser", 64, 6)])
 def test_the_norm_table_is_h_r_inverse_h_computed_directly(name, length, half):
     """h^H R⁻¹ h at the table's grid points against R built from the window's noise correlation and inverted here,
-    for every patch size up to the half-width."""
-    w = window(name, length)
+    for every patch size up to the half-width; numpy's symmetric Hann and a Kaiser window are not DFT-even, so their
+    noise correlation and R⁻¹ are complex (an independent tester found the table taking R⁻¹'s real part only)."""
+    w = {"np.hanning": lambda n: np.hanning(n), "np.kaiser": lambda n: np.kaiser(n, 8.0)}.get(
+        name, lambda n: window(name, n))(length)
     axis = peaks._PatchAxis(w, half)
     rho = noise_correlation(w)
     grid = axis._norm_grid[::257]
@@ -80,3 +82,18 @@ def test_the_memoised_threshold_of_a_cut_ring_is_the_exact_one(cut):
     assert np.exp(stats.ca_log_pfa(alpha, 12, eig)) == pytest.approx(1e-5, rel=1e-9)
     other = CellAveragingCfar(pfa=1e-4, guard=(2, 2), train=(4, 10), n_channels=12, correlation=(rho, rho))
     assert other.alpha_for_cut(left, right) < alpha                                # another Pfa: its own
+
+
+def test_a_cfar_with_eigenvalues_of_its_own_gets_its_own_thresholds():
+    """A subclass that models the ring its own way (here: independent cells) is not given the shared threshold of the
+    correlated ring (an independent tester's case)."""
+    class Independent(CellAveragingCfar):
+        def _eigenvalues(self, offsets):
+            return np.ones(len(offsets))
+
+    rho = noise_correlation(window("hann", 64))
+    own = Independent(pfa=1e-6, n_channels=4, correlation=(rho, rho))
+    shared = CellAveragingCfar(pfa=1e-6, n_channels=4, correlation=(rho, rho))
+    assert own.alpha == stats.ca_alpha(1e-6, 4, np.ones(own.n_train))
+    assert own.alpha_for_cut(2, 10) == stats.ca_alpha(1e-6, 4, np.ones(int(np.sum(own.offsets()[:, 1] >= -2))))
+    assert shared.alpha != own.alpha

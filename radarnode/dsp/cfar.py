@@ -137,7 +137,13 @@ class CellAveragingCfar(Cfar):
     def alpha_for_cut(self, left: int | None, right: int | None) -> float:
         """α of a ring that loses the range columns beyond ``left`` bins to the left and ``right`` to the right
         (``None``: none lost). Each is a root of the exact false-alarm probability (about 10 ms): computed once per
-        process for each CFAR configuration and cut, whichever detector asks."""
+        process for each CFAR configuration and cut, whichever detector asks (a subclass with eigenvalues of its own,
+        :meth:`_eigenvalues`, computes its own each time)."""
+        if type(self)._eigenvalues is not CellAveragingCfar._eigenvalues:
+            off = self.offsets()
+            if left is not None:
+                off = off[(off[:, 1] >= -left) & (off[:, 1] <= right)]
+            return stats.ca_alpha(self.pfa, self.n_channels, self._eigenvalues(off))
         return _ca_alpha_for_cut(self.pfa, self.n_channels, self.guard, self.train, self.rho_d.tobytes(),
                                  self.rho_r.tobytes(), left, right)
 

@@ -102,17 +102,22 @@ class _PatchAxis:
             sl = slice(max_half - m, max_half + m + 1)
             self.inverse[m, sl, sl] = np.linalg.inv(corr)
         # h^H R⁻¹ h depends only on δ and m: tabulated on a fine grid (linear interpolation moves a fit by
-        # < 1e-5 bin), so the search needs R⁻¹ only once per peak, on the data. R⁻¹ is real and symmetric, so
-        # h^H R⁻¹ h = Re(h)ᵀR⁻¹Re(h) + Im(h)ᵀR⁻¹Im(h): two real products per patch size on its own block of R⁻¹
-        # (a loop over the sizes, not the grid; one einsum over the embedded blocks took 0.26 s for max_half 12)
+        # < 1e-5 bin), so the search needs R⁻¹ only once per peak, on the data. One product per patch size on its
+        # own block of R⁻¹ (a loop over the sizes, not the grid; one einsum over the blocks embedded in the largest
+        # took 0.26 s for max_half 12): where R⁻¹ is real (a DFT-even window, every one radarnode.dsp.spectra makes)
+        # h^H R⁻¹ h = Re(h)ᵀR⁻¹Re(h) + Im(h)ᵀR⁻¹Im(h), two real products; otherwise (numpy's symmetric np.hanning,
+        # a Kaiser window: R Hermitian) the complex one
         self._norm_grid = np.linspace(-self.NORM_SPAN, self.NORM_SPAN, int(2 * self.NORM_SPAN * self.NORM_STEPS) + 1)
         h = self.response(self._norm_grid)                                               # (G, J)
         self._norm = np.zeros((max_half + 1, self._norm_grid.size))                     # (m, G); m = 0: no patch
         for m in range(1, max_half + 1):
             sl = slice(max_half - m, max_half + m + 1)
-            block = self.inverse[m, sl, sl].real
+            block = self.inverse[m, sl, sl]
+            if np.any(block.imag):
+                self._norm[m] = np.sum((h[:, sl].conj() @ block) * h[:, sl], axis=1).real
+                continue
             for part in (h.real[:, sl], h.imag[:, sl]):
-                self._norm[m] += np.sum((part @ block) * part, axis=1)
+                self._norm[m] += np.sum((part @ block.real) * part, axis=1)
 
     #: the norm table: δ within ±NORM_SPAN bins, NORM_STEPS points a bin
     NORM_SPAN, NORM_STEPS = 1.5, 2048
@@ -176,7 +181,7 @@ def _patch_axis(window: np.ndarray, max_half: int) -> _PatchAxis:
     return _patch_axis_of(w.tobytes(), int(max_half))
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=24)          # an axis holds 0.05–0.8 MB up to max_half 12, 3.7 MB at 32
 def _patch_axis_of(window_bytes: bytes, max_half: int) -> _PatchAxis:
     return _read_only(_PatchAxis(np.frombuffer(window_bytes, dtype=np.float64), max_half))
 
@@ -562,7 +567,7 @@ def _real_left(m: np.ndarray, z: np.ndarray) -> np.ndarray:
     return (m @ z.view(np.float64)).view(np.complex128)
 
 
-@functools.lru_cache(maxsize=4)             # a pair of tables holds about 16 MB: a few presets' shapes at once
+@functools.lru_cache(maxsize=4)      # a pair of tables: 16 MB at max_half 12, 36 MB at 32; a few presets at once
 def _migration_tables(doppler_bytes: bytes, range_bytes: bytes, max_half: int, order: int, steps: int,
                       max_migration: float) -> tuple[np.ndarray, _ShiftTable, _ShiftTable]:
     """:class:`MigrationFit`'s Chebyshev nodes and its Doppler and range tables, built once per process for each
