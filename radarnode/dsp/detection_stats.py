@@ -113,7 +113,7 @@ def ca_log_pfa(alpha: float, n_channels: int, eig: np.ndarray) -> float:
     eig = np.asarray(eig, dtype=np.float64)
     a = alpha / eig.size
     q = a * eig / (1.0 + a * eig)
-    s = np.array([np.sum(q ** m) for m in range(1, n_channels)])     # S_1 … S_{N−1}
+    s = np.sum(q[None, :] ** np.arange(1, n_channels)[:, None], axis=1)  # S_1 … S_{N−1}
     nu = np.zeros(n_channels)
     nu[0] = 1.0
     for k in range(n_channels - 1):           # N terms of a recurrence, not a loop over cells
@@ -171,17 +171,45 @@ def os_alpha(pfa: float, n_channels: int, ranked: np.ndarray) -> float:
 
 
 def _root_decreasing(f, lo: float) -> float:
-    """The root of a decreasing function above ``lo`` (f(lo) > 0), by doubling then bisection to 1e-13 relative
-    (a few ms; scipy.optimize's import alone costs more)."""
+    """The root of a decreasing function above ``lo`` (f(lo) > 0), by doubling, then regula falsi with the Illinois
+    rule (the end that stayed put twice has its value halved) within the bracket, to 1e-13 relative; a step that does
+    not halve the bracket is followed by a bisection. About 10 evaluations where bisection took 46 (scipy.optimize's
+    import alone costs more than either)."""
     hi = 1.0
-    while f(hi) > 0:
+    f_hi = f(hi)
+    while f_hi > 0:
         lo, hi = hi, hi * 2.0
+        f_hi = f(hi)
+    f_lo = f(lo)
+    side = 0
     while hi - lo > 1e-13 * hi:
-        mid = 0.5 * (lo + hi)
-        if f(mid) > 0:
-            lo = mid
+        width = hi - lo
+        x = hi - f_hi * width / (f_hi - f_lo) if f_lo > f_hi else 0.5 * (lo + hi)
+        if not lo < x < hi:
+            x = 0.5 * (lo + hi)
+        fx = f(x)
+        if fx > 0:
+            lo, f_lo = x, fx
+            if side == -1:
+                f_hi *= 0.5
+            side = -1
+        elif fx < 0:
+            hi, f_hi = x, fx
+            if side == 1:
+                f_lo *= 0.5
+            side = 1
         else:
-            hi = mid
+            return x
+        if hi - lo > 0.5 * width:               # a slow step: bisect once
+            mid = 0.5 * (lo + hi)
+            fm = f(mid)
+            if fm > 0:
+                lo, f_lo = mid, fm
+            elif fm < 0:
+                hi, f_hi = mid, fm
+            else:
+                return mid
+            side = 0
     return 0.5 * (lo + hi)
 
 
