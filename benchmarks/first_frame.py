@@ -2,16 +2,17 @@
 
 A signal-level chain builds tables when it first needs them: the patch fit's noise correlation and norm tables (each
 window and patch size), CA-CFAR's threshold for each ring the range edges cut, and — at the first frame whose peaks
-migrate, past the alias speed — the migration fit's tone tables. A real-time node pays them in its first cycle and in
-the cycle where the ego first passes the alias speed; a test or a `report` worker pays them in every new process.
+migrate, past the alias speed — the migration fit's tone tables. A real-time node pays them before its schedule starts
+(its first cycle) and in the cycle where the ego first passes the alias speed; a test or a `report` worker pays them
+once in every new process.
 
 Each run is a fresh Python process (the tables are shared within a process), on `scenarios/highway_mimo12.yaml`'s
 frames (12 × 256 × 256, complex128), which it times one by one: a new chain's first frame at ego 20 m/s, its second
 and third (steady), then the same chain's first frame at 50 m/s (past mimo12's 32.3 m/s alias speed: its peaks take
 the migration fit, as a node's do when the ego passes it) and its next, and last a new chain's first frame at 50 m/s
 (what a new scene of the same preset pays in the process). The spectra are synthesised before the clock starts (the
-synthesis builds nothing). Medians over ``--runs`` processes; with ``--before DIR`` the same runs of another tree (``git archive REV``),
-alternated with this one's, side by side.
+synthesis builds nothing). Medians over ``--runs`` processes; with ``--before DIR`` the same runs of another tree
+(``git archive REV``), alternated with this one's, side by side.
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/first_frame.py [--runs 5] [--before DIR]``. Markdown.
 """
