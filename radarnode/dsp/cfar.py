@@ -116,9 +116,10 @@ class Cfar:
         """The detection mask alone: ``self(power).mask``, bit for bit (a detector may get it more cheaply)."""
         return self(power).mask
 
-    def offsets(self) -> np.ndarray:
-        """(doppler, range) offsets of the full training ring, shape (n_train, 2)."""
-        return stats.ring_offsets(self.guard, self.train)
+    def offsets(self, left: int | None = None, right: int | None = None) -> np.ndarray:
+        """(doppler, range) offsets of the full training ring, shape (n_train, 2), or of the ring the range edges cut
+        (:func:`radarnode.dsp.detection_stats.ring_offsets`)."""
+        return stats.ring_offsets(self.guard, self.train, left, right)
 
 
 class CellAveragingCfar(Cfar):
@@ -140,10 +141,7 @@ class CellAveragingCfar(Cfar):
         process for each CFAR configuration and cut, whichever detector asks (a subclass with eigenvalues of its own,
         :meth:`_eigenvalues`, computes its own each time)."""
         if type(self)._eigenvalues is not CellAveragingCfar._eigenvalues:
-            off = self.offsets()
-            if left is not None:
-                off = off[(off[:, 1] >= -left) & (off[:, 1] <= right)]
-            return stats.ca_alpha(self.pfa, self.n_channels, self._eigenvalues(off))
+            return stats.ca_alpha(self.pfa, self.n_channels, self._eigenvalues(self.offsets(left, right)))
         return _ca_alpha_for_cut(self.pfa, self.n_channels, self.guard, self.train, self.rho_d.tobytes(),
                                  self.rho_r.tobytes(), left, right)
 
@@ -260,10 +258,7 @@ CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStati
 def _ca_alpha_for_cut(pfa: float, n_channels: int, guard: tuple[int, int], train: tuple[int, int], rho_d: bytes,
                       rho_r: bytes, left: int | None, right: int | None) -> float:
     """:meth:`CellAveragingCfar.alpha_for_cut` of a CFAR with these settings (correlations: complex128 bytes)."""
-    off = stats.ring_offsets(guard, train)
-    if left is not None:
-        off = off[(off[:, 1] >= -left) & (off[:, 1] <= right)]
-    eig = stats.ring_eigenvalues(off, *(np.frombuffer(rho, dtype=np.complex128) for rho in (rho_d, rho_r)))
+    eig = stats.ring_eigenvalues(stats.ring_offsets(guard, train, left, right), *(np.frombuffer(rho, dtype=np.complex128) for rho in (rho_d, rho_r)))
     return stats.ca_alpha(pfa, n_channels, eig)
 
 

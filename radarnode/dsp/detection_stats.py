@@ -299,9 +299,13 @@ def _cached_ring(guard: tuple[int, int], train: tuple[int, int]) -> np.ndarray:
     return np.stack([d[ring], r[ring]], axis=1)
 
 
-def ring_offsets(guard: tuple[int, int], train: tuple[int, int]) -> np.ndarray:
-    """(doppler, range) offsets of the training cells of a rectangular ring, shape (n_train, 2)."""
-    return _cached_ring(tuple(guard), tuple(train))
+def ring_offsets(guard: tuple[int, int], train: tuple[int, int], left: int | None = None,
+                 right: int | None = None) -> np.ndarray:
+    """(doppler, range) offsets of the training cells of a rectangular ring, shape (n_train, 2); with ``left`` and
+    ``right``, of the ring that loses the range columns beyond ``left`` bins to the left and ``right`` to the right
+    (the map's first or last range bins cut it)."""
+    off = _cached_ring(tuple(guard), tuple(train))
+    return off if left is None else off[(off[:, 1] >= -left) & (off[:, 1] <= right)]
 
 
 # --- the statistic of one processing chain -----------------------------------------------------------------
@@ -628,9 +632,7 @@ class DetectionStatistic:
         for k in np.unique(key).tolist():
             if k not in cuts:
                 a, b = divmod(k, reach + 1)
-                off = self.cfar.offsets()
-                keep = (off[:, 1] >= -a) & (off[:, 1] <= b)
-                eig = self.cfar._eigenvalues(off[keep])
+                eig = self.cfar._eigenvalues(self.cfar.offsets(a, b))
                 cuts[k] = (self.cfar.alpha_for_cut(a, b), self.n_channels * eig.sum(),
                            self.n_channels * np.sum(eig ** 2), float(eig.size))
                 built = True
