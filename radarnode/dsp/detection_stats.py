@@ -821,8 +821,11 @@ class DetectionStatistic:
         i0 = np.minimum(np.floor(fx).astype(np.int64), table.shape[0] - 2)
         j0 = np.minimum(np.floor(fy).astype(np.int64), table.shape[1] - 2)
         ax, ay = fx - i0, fy - j0
-        f = ((1 - ax) * (1 - ay) * table[i0, j0] + ax * (1 - ay) * table[i0 + 1, j0]
-             + (1 - ax) * ay * table[i0, j0 + 1] + ax * ay * table[i0 + 1, j0 + 1])
+        # the four corners by flat index into the table (one take each, not a 2-D fancy index)
+        flat, row = table.ravel(), table.shape[1]
+        at = i0 * row + j0
+        f = ((1 - ax) * (1 - ay) * flat.take(at) + ax * (1 - ay) * flat.take(at + row)
+             + (1 - ax) * ay * flat.take(at + 1) + ax * ay * flat.take(at + row + 1))
         return np.where(rel < 0.01, 1.0, f)
 
     def pd_interfered(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:

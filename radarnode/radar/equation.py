@@ -74,6 +74,15 @@ def pattern_db(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
     return 2.0 * preset.element_pattern_exponent * 10.0 * np.log10(np.maximum(c, 1e-6))
 
 
+def pattern_gain(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
+    """:func:`pattern_db` as a power ratio, cos(θ)^2q (cos θ floored at 1e-6, as there), without the logarithm and
+    the exponential: the same gain to rounding, a few times cheaper where it weights every outline point of a
+    body (:mod:`radarnode.radar.object_model`)."""
+    c = np.maximum(np.cos(np.asarray(azimuth_rad, dtype=np.float64)), 1e-6)
+    e = 2.0 * preset.element_pattern_exponent
+    return c * c if e == 2.0 else c ** e
+
+
 def crb_range_m(preset: RadarPreset, snr_db_: np.ndarray) -> np.ndarray:
     """σ_R ≥ ΔR·√6 / (2π·√ρ), ρ the per-cell SNR (linear)."""
     rho = 10.0 ** (np.asarray(snr_db_, dtype=np.float64) / 10.0)

@@ -469,8 +469,38 @@ def visible_outline(preset: RadarPreset, view: SensorView, t_i: np.ndarray, j_i:
     return px, py, r_s, az_s, share, (share > 0.0) & in_fov(preset, r_s, az_s) & (r_s <= max_distance_m)
 
 
+class SharedOutline:
+    """:func:`visible_outline` of the bodies ``rows`` (shape like ``view.x_m``) selects, computed once, on first use,
+    for every caller that needs a subset of them: a chunk's masking (:meth:`ObjectModel._outline_interference`) and
+    its centroid across (:func:`visible_centre_y`) took the outline of mostly the same bodies twice. Each body's
+    points are computed on their own (element by element, the sums per body), so a subset read from here holds the
+    same numbers as the subset computed alone."""
+
+    def __init__(self, preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray,
+                 rows: np.ndarray, max_distance_m: float) -> None:
+        self._args = (preset, view, length_m, width_m, max_distance_m)
+        self.rows = rows
+        self._arrays: tuple[np.ndarray, ...] | None = None
+        self._index: np.ndarray | None = None
+
+    def of(self, t_i: np.ndarray, j_i: np.ndarray) -> tuple[np.ndarray, ...]:
+        """:func:`visible_outline`'s arrays for the bodies ``(t_i, j_i)``; those outside ``rows`` computed here."""
+        preset, view, length_m, width_m, max_distance_m = self._args
+        if self._arrays is None:
+            t_all, j_all = np.nonzero(self.rows)
+            self._arrays = visible_outline(preset, view, t_all, j_all, length_m, width_m, max_distance_m)
+            self._index = np.full(self.rows.shape, -1, dtype=np.intp)
+            self._index[t_all, j_all] = np.arange(t_all.size)
+        k = self._index[t_i, j_i]
+        if k.size and k.min() < 0:              # not among the rows: computed alone (no caller of this module asks)
+            return visible_outline(preset, view, t_i, j_i, length_m, width_m, max_distance_m)
+        if k.size == self._arrays[0].shape[0] and np.array_equal(k, np.arange(k.size)):
+            return self._arrays
+        return tuple(a[k] for a in self._arrays)
+
+
 def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray, width_m: np.ndarray,
-                     rows: np.ndarray, max_distance_m: float) -> np.ndarray:
+                     rows: np.ndarray, max_distance_m: float, outline: SharedOutline | None = None) -> np.ndarray:
     """Where across the sensor's axis the scatterer levels measure each body (at its nearest point's x): the y of its
     outline's reflected power centroid (the :func:`outline_points` inside the field of view, each by its share, its
     range to the fourth and the element pattern), for the actors where ``rows`` (shape like ``view.x_m``) is True;
@@ -484,14 +514,17 @@ def visible_centre_y(preset: RadarPreset, view: SensorView, length_m: np.ndarray
     power-weighted y (:func:`radarnode.perception.tracker.group_detections`); a body narrower than a beam is one
     peak at its power centroid's azimuth. A car seen from behind is then measured at its rear face's middle, not at
     its nearest corner: in the next lane the two lie about 0.9 m apart (``benchmarks/object_sigma.py``: the object
-    level's `across` column was 0.05 m where the detection level's was 0.58)."""
+    level's `across` column was 0.05 m where the detection level's was 0.58). ``outline``: the bodies' outlines where
+    already computed (:class:`SharedOutline`, whose ``rows`` include these)."""
     y = view.y_m.copy()
     t_i, j_i = np.nonzero(rows)
     if t_i.size == 0:
         return y
-    _, py, r_s, az_s, share, inside = visible_outline(preset, view, t_i, j_i, length_m, width_m, max_distance_m)
-    power = np.where(inside, share * np.maximum(r_s, 0.1) ** -4 * 10.0 ** (equation.pattern_db(preset, az_s) / 10.0),
-                     0.0)
+    _, py, r_s, az_s, share, inside = visible_outline(preset, view, t_i, j_i, length_m, width_m, max_distance_m) \
+        if outline is None else outline.of(t_i, j_i)
+    r2 = np.maximum(r_s, 0.1)
+    r2 *= r2
+    power = np.where(inside, share * equation.pattern_gain(preset, az_s) / (r2 * r2), 0.0)   # share·G(θ)/r⁴
     total = power.sum(axis=(1, 2))
     seen = total > 0.0
     t_i, j_i, total = t_i[seen], j_i[seen], total[seen]
@@ -814,11 +847,13 @@ class ObjectModel:
         # a body a sector's edge crosses is measured at its point on the edge, but reflects from its parts inside
         crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & ~((sc.length_m <= POINT_SIZE_M)
                                                                     & (sc.width_m <= POINT_SIZE_M))
-        pd = pd * self._masking(view, rng_m, snr, observable, crossing, config.max_distance_m)
+        # the outlines of the extended bodies in view: the masking's (a subset) and the centroid's
+        outline = SharedOutline(p, view, sc.length_m, sc.width_m, observable & self.extended, config.max_distance_m)
+        pd = pd * self._masking(view, rng_m, snr, observable, crossing, config.max_distance_m, outline)
         # where the chain measures it: at its nearest x and its outline's power centroid across (visible_centre_y),
         # as the other levels' tracker measures a group of detections
-        seen = dataclasses.replace(view, y_m=visible_centre_y(p, view, sc.length_m, sc.width_m,
-                                                              observable & self.extended, config.max_distance_m))
+        seen = dataclasses.replace(view, y_m=visible_centre_y(p, view, sc.length_m, sc.width_m, outline.rows,
+                                                              config.max_distance_m, outline))
         r_seen, az = seen.range_m, seen.azimuth_rad
         # measurement noise: what the signal chain achieves (its efficiency times the Cramér–Rao bound); an
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
@@ -953,7 +988,7 @@ class ObjectModel:
         return ch
 
     def _masking(self, view, rng_m: np.ndarray, snr: np.ndarray, observable: np.ndarray, crossing: np.ndarray,
-                 max_distance_m: float) -> np.ndarray:
+                 max_distance_m: float, outline: SharedOutline | None = None) -> np.ndarray:
         """Pd factor (T, n) from the other actors' energy in each actor's CA-CFAR training ring.
 
         As the chain masks a weak target beside a strong one at about the same range and speed, and the
@@ -965,7 +1000,8 @@ class ObjectModel:
         a sector's edge crosses (``crossing``), puts in what its parts inside the field of view reflect, each at its
         own range and speed (:meth:`_outline_interference`); one that spans less, its whole energy at its nearest
         point (the two blended between ``OUTLINE_SPAN_BINS``, so the interference has no step).
-        Guardrail posts are not counted here (they are drawn per cycle with the cluster list).
+        Guardrail posts are not counted here (they are drawn per cycle with the cluster list). ``outline``: the bodies'
+        outlines where already computed (:class:`SharedOutline`, whose ``rows`` hold every extended body in view).
         """
         p, stat, sc = self.preset, self.statistic, self.scene
         if sc.n < 2 or stat.cfar.name != "ca":
@@ -1006,7 +1042,7 @@ class ObjectModel:
             part = np.einsum("tij,tj->ti", kernel, np.where(own, energy, 0.0))
             if (w[:, own] > 0.0).any():
                 part += self._outline_interference(view, rng_m, np.where(own, w * on_bin, 0.0), np.rint(pos_d),
-                                                   np.rint(pos_r), max_distance_m)
+                                                   np.rint(pos_r), max_distance_m, outline)
             parts.append(part)
         return self._averaged_masking(snr, parts[0], parts[1])
 
@@ -1039,7 +1075,8 @@ class ObjectModel:
         return out
 
     def _outline_interference(self, view, rng_m: np.ndarray, on_bin: np.ndarray, cell_d: np.ndarray,
-                              cell_r: np.ndarray, max_distance_m: float) -> np.ndarray:
+                              cell_r: np.ndarray, max_distance_m: float, outline: SharedOutline | None = None
+                              ) -> np.ndarray:
         """What the bodies of energy ``on_bin`` (T, n; the whole body's at its nearest point in the field of view,
         its SNR's; 0: none) put into every actor's training ring (its cell ``cell_d``, ``cell_r``), (T, n): each body
         as its :func:`outline_points` (weighted as the scatterer levels share a body's RCS), of which only those
@@ -1052,19 +1089,25 @@ class ObjectModel:
         m, n_r = p.num_chirps, p.num_range_bins
         t_i, j_i = np.nonzero(on_bin > 0.0)
         # the points that reflect, flat: on a facing edge, inside the field of view
-        px, py, r_s, az_s, weight, keep = visible_outline(p, view, t_i, j_i, sc.length_m, sc.width_m, max_distance_m)
+        px, py, r_s, az_s, weight, keep = visible_outline(p, view, t_i, j_i, sc.length_m, sc.width_m, max_distance_m) \
+            if outline is None else outline.of(t_i, j_i)
         row = np.broadcast_to(np.arange(t_i.size)[:, None, None], keep.shape)[keep]
         px, py, r_s, az_s, weight = px[keep], py[keep], r_s[keep], az_s[keep], weight[keep]
         t_k, j_k = t_i[row], j_i[row]
-        gain = 10.0 ** ((equation.pattern_db(p, az_s) - equation.pattern_db(p, view.azimuth_rad[t_k, j_k])) / 10.0)
-        e_s = on_bin[t_k, j_k] * weight * (np.maximum(rng_m[t_k, j_k], 0.1) / np.maximum(r_s, 0.1)) ** 4 * gain
+        gain = equation.pattern_gain(p, az_s) / equation.pattern_gain(p, view.azimuth_rad[t_k, j_k])
+        q = np.maximum(rng_m[t_k, j_k], 0.1) / np.maximum(r_s, 0.1)
+        q *= q
+        e_s = on_bin[t_k, j_k] * weight * (q * q) * gain                  # (its range over the point's)⁴
         v_s = (view.vx_mps[t_k, j_k] * px + view.vy_mps[t_k, j_k] * py) / np.maximum(r_s, 1e-9)
         pos_d, pos_r = np.mod(v_s / p.doppler_bin_mps, m), np.mod(r_s / p.range_resolution_m, n_r)          # (K,)
         dd = np.mod(pos_d[:, None] - cell_d[t_k] + m / 2.0, m) - m / 2.0                          # (K, n)
         dr = np.mod(pos_r[:, None] - cell_r[t_k] + n_r / 2.0, n_r) - n_r / 2.0
         put = stat.ring_kernel(dd, dr) * e_s[:, None]
-        t_n = on_bin.shape[0]
-        return np.stack([np.bincount(t_k, weights=put[:, i], minlength=t_n) for i in range(put.shape[1])], axis=1)
+        t_n, n = on_bin.shape[0], put.shape[1]
+        # every (cycle, actor) sum in one bincount over the flat (point, actor) table: each sum in the points' order,
+        # as a bincount per actor adds them
+        at = (t_k * n)[:, None] + np.arange(n)
+        return np.bincount(at.ravel(), weights=put.ravel(), minlength=t_n * n).reshape(t_n, n)
 
     def _averaged_gain_db(self, k0: int, gain_db: np.ndarray, detected: np.ndarray, first_hit: np.ndarray
                           ) -> tuple[np.ndarray, np.ndarray]:
