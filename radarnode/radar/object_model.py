@@ -1459,18 +1459,18 @@ class ObjectModel:
         g = self._posts(ch, lo, hi)
         if g is not None:
             u_hit = rngs["hit"].random(g["range"].size)
-            hit = u_hit < g["pd"]
+            hit = np.flatnonzero(u_hit < g["pd"])       # (indices: one pass over the mask, then a take a column)
             post_cycle = g["cycle"] - lo
-            g = {key: val[hit] for key, val in g.items()}
+            g = {key: val.take(hit) for key, val in g.items()}
             g["cos"], g["sin"] = np.cos(g["true_azimuth"]), np.sin(g["true_azimuth"])
-            u_hit = u_hit[hit]
+            u_hit = u_hit.take(hit)
             # posts within the chain's resolution of a stronger one are its peak, not peaks of their own
-            hit = resolved_posts(p, g, u_hit, np.arange(u_hit.size), svx, svy, self.statistic.response)
-            g = {key: val[hit] for key, val in g.items()}
+            hit = np.flatnonzero(resolved_posts(p, g, u_hit, np.arange(u_hit.size), svx, svy, self.statistic.response))
+            g = {key: val.take(hit) for key, val in g.items()}
             self._post_accuracy(p, g)
             # a staggered radar's second sequence, given the first (as for the actors: _second_look)
             second = None if not p.stagger_chirp_period_s else \
-                u_hit[hit] < g["pd"] * self.statistic.pd_second_look(g["snr"], self.second_gain_db, 1)
+                u_hit.take(hit) < g["pd"] * self.statistic.pd_second_look(g["snr"], self.second_gain_db, 1)
             k = g["cycle"]
             hit_cycle = k - lo
             nz = rngs["noise"].standard_normal((k.size, 3))
