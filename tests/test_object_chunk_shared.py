@@ -29,6 +29,9 @@ def test_the_pattern_gain_is_the_pattern_in_db_as_a_power_ratio(exponent):
     gain = equation.pattern_gain(p, az)
     assert gain == pytest.approx(10.0 ** (equation.pattern_db(p, az) / 10.0), rel=1e-12, abs=0.0)
     assert gain[6] == 1.0                                   # boresight: exactly 1
+    where = np.arange(az.size) % 2 == 0
+    part = equation.pattern_gain(p, az, where)
+    assert np.array_equal(part[where], gain[where]) and np.all(part[~where] == 1.0)
     # at and beyond ±90° the floor of cos θ at 1e-6, as in dB (−120·q dB)
     assert np.all(gain[[0, 1, 2, 11, 12]] == pytest.approx(1e-6 ** (2.0 * exponent), rel=1e-12))
 
@@ -57,6 +60,12 @@ def test_a_shared_outline_gives_each_subset_the_bits_it_gives_computed_alone():
     shared = SharedOutline(p, view, scene.length_m, scene.width_m, rows, p.max_range_m)
     t_all, j_all = np.nonzero(rows)
     assert t_all.size > 100
+    px, py, _, az, share, reflects = visible_outline(p, view, t_all, j_all, scene.length_m, scene.width_m,
+                                                     p.max_range_m)
+    facing = share > 0.0
+    # the azimuth of every point on a facing edge, exactly; the others never reflect
+    assert np.array_equal(az[facing], np.arctan2(py, px)[facing]) and not reflects[~facing].any()
+    assert facing.any() and (~facing).any()
     every = np.arange(t_all.size)
     for pick in (every, every[::3], every[every % 7 == 2], every[:0]):
         alone = visible_outline(p, view, t_all[pick], j_all[pick], scene.length_m, scene.width_m, p.max_range_m)

@@ -74,11 +74,18 @@ def pattern_db(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
     return 2.0 * preset.element_pattern_exponent * 10.0 * np.log10(np.maximum(c, 1e-6))
 
 
-def pattern_gain(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
+def pattern_gain(preset: RadarPreset, azimuth_rad: np.ndarray, where: np.ndarray | None = None) -> np.ndarray:
     """:func:`pattern_db` as a power ratio, cos(θ)^2q (cos θ floored at 1e-6, as there), without the logarithm and
     the exponential: the same gain to rounding, a few times cheaper where it weights every outline point of a
-    body (:mod:`radarnode.radar.object_model`)."""
-    c = np.maximum(np.cos(np.asarray(azimuth_rad, dtype=np.float64)), 1e-6)
+    body (:mod:`radarnode.radar.object_model`). ``where`` (bool, the shape of ``azimuth_rad``): the gain only there,
+    1 elsewhere (a cosine saved a point its caller drops)."""
+    az = np.asarray(azimuth_rad, dtype=np.float64)
+    if where is None:
+        c = np.cos(az)
+    else:
+        c = np.ones(az.shape)
+        np.cos(az, out=c, where=where)
+    c = np.maximum(c, 1e-6)
     e = 2.0 * preset.element_pattern_exponent
     return c * c if e == 2.0 else c ** e
 
