@@ -126,3 +126,124 @@ def test_the_masking_table_is_read_bilinearly_as_its_corners_say():
         want = np.where(rel_in < 0.01, 1.0, want)
         assert np.array_equal(got, want)
         assert got.min() < 0.5 and got.max() == 1.0
+
+
+# --- the new formulas against the old ones (978e87d's, written out here), on bodies crossing the beam's edge too ---
+
+def _old_centre_y(p, view, length_m, width_m, rows, max_distance_m):
+    """visible_centre_y as it was: the pattern through dB, r⁻⁴ by pow, every outline point's arctangent."""
+    from radarnode.radar.object_model import outline_points
+    y = view.y_m.copy()
+    t_i, j_i = np.nonzero(rows)
+    px, py, share = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
+                                   view.orientation_rad[t_i, j_i], length_m[j_i], width_m[j_i])
+    z = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None]
+    r_s = np.sqrt(px ** 2 + py ** 2 + z ** 2)
+    az_s = np.arctan2(py, px)
+    inside = (share > 0.0) & in_fov(p, r_s, az_s) & (r_s <= max_distance_m)
+    power = np.where(inside, share * np.maximum(r_s, 0.1) ** -4 * 10.0 ** (equation.pattern_db(p, az_s) / 10.0), 0.0)
+    total = power.sum(axis=(1, 2))
+    seen = total > 0.0
+    t_i, j_i, total = t_i[seen], j_i[seen], total[seen]
+    yc = (power * py).sum(axis=(1, 2))[seen] / total
+    z0 = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i]
+    r3 = np.sqrt(view.x_m[t_i, j_i] ** 2 + yc * yc + z0 * z0)
+    ok = in_fov(p, r3, np.arctan2(yc, view.x_m[t_i, j_i])) & (r3 <= max_distance_m)
+    y[t_i[ok], j_i[ok]] = yc[ok]
+    return y
+
+
+def _old_outline_interference(self, view, rng_m, on_bin, cell_d, cell_r, max_distance_m, outline=None):
+    """ObjectModel._outline_interference as it was: gains through dB, (r/r)⁴ by pow, a bincount per actor."""
+    p, stat, sc = self.preset, self.statistic, self.scene
+    m, n_r = p.num_chirps, p.num_range_bins
+    t_i, j_i = np.nonzero(on_bin > 0.0)
+    from radarnode.radar.object_model import outline_points
+    px, py, weight = outline_points(view.centre_x_m[t_i, j_i], view.centre_y_m[t_i, j_i],
+                                    view.orientation_rad[t_i, j_i], sc.length_m[j_i], sc.width_m[j_i])
+    z = 0.0 if view.z_m is None else np.asarray(view.z_m, dtype=np.float64)[t_i, j_i][:, None, None]
+    r_s = np.sqrt(px ** 2 + py ** 2 + z ** 2)
+    az_s = np.arctan2(py, px)
+    keep = (weight > 0.0) & in_fov(p, r_s, az_s) & (r_s <= max_distance_m)
+    row = np.broadcast_to(np.arange(t_i.size)[:, None, None], keep.shape)[keep]
+    px, py, r_s, az_s, weight = px[keep], py[keep], r_s[keep], az_s[keep], weight[keep]
+    t_k, j_k = t_i[row], j_i[row]
+    gain = 10.0 ** ((equation.pattern_db(p, az_s) - equation.pattern_db(p, view.azimuth_rad[t_k, j_k])) / 10.0)
+    e_s = on_bin[t_k, j_k] * weight * (np.maximum(rng_m[t_k, j_k], 0.1) / np.maximum(r_s, 0.1)) ** 4 * gain
+    v_s = (view.vx_mps[t_k, j_k] * px + view.vy_mps[t_k, j_k] * py) / np.maximum(r_s, 1e-9)
+    pos_d, pos_r = np.mod(v_s / p.doppler_bin_mps, m), np.mod(r_s / p.range_resolution_m, n_r)
+    dd = np.mod(pos_d[:, None] - cell_d[t_k] + m / 2.0, m) - m / 2.0
+    dr = np.mod(pos_r[:, None] - cell_r[t_k] + n_r / 2.0, n_r) - n_r / 2.0
+    put = stat.ring_kernel(dd, dr) * e_s[:, None]
+    t_n = on_bin.shape[0]
+    return np.stack([np.bincount(t_k, weights=put[:, i], minlength=t_n) for i in range(put.shape[1])], axis=1)
+
+
+def _crossing_traffic():
+    # a truck in the next lane the ego passes (the beam's edge crosses it), a car ahead, one far off: bodies whose
+    # outlines reach the ring of another, some crossing the edge of the field of view
+    return scenario("""  - {id: lead, class: car, x_m: 14.0, lane: 1, speed_mps: 6.0}
+  - {id: truck, class: truck, x_m: 30.0, lane: 0, speed_mps: 0.0}
+  - {id: far, class: car, x_m: 60.0, lane: 2, speed_mps: 9.0}""",
+                    ego="{speed_mps: 6.0}", road="{lanes: 3, ego_lane: 1}", duration=9.0, seed=2)
+
+
+@pytest.mark.parametrize("exponent", [1.0, 1.5])
+def test_the_centroid_and_the_masking_agree_with_the_old_formulas(exponent, monkeypatch):
+    sc = _crossing_traffic()
+    rc = radar_config(sc)
+    p = dataclasses.replace(rc.preset, element_pattern_exponent=exponent)
+    scene = Scene(sc)
+    model = make_model("object", scene, p, np.random.default_rng(1), rc.signal)
+    truth = scene.views(np.arange(120) * sc.period_s)
+    x_in, y_in = nearest_in_fov(p, truth, scene.length_m, scene.width_m)
+    view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
+    rng_m, az = view.range_m, view.azimuth_rad
+    observable = in_fov(p, rng_m, az)
+    snr = equation.snr_db(p, rng_m, scene.rcs_dbsm + np.zeros(rng_m.shape), 0.0, az)
+    crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & model.extended
+    assert crossing.any()                                   # the edge-crossing path is taken
+    rows = observable & model.extended
+    shared = SharedOutline(p, view, scene.length_m, scene.width_m, rows, p.max_range_m)
+    new_m = model._masking(view, rng_m, snr, observable, crossing, p.max_range_m, shared)
+    new_y = visible_centre_y(p, view, scene.length_m, scene.width_m, rows, p.max_range_m, shared)
+    old_y = _old_centre_y(p, view, scene.length_m, scene.width_m, rows, p.max_range_m)
+    monkeypatch.setattr(type(model), "_outline_interference", _old_outline_interference)
+    old_m = model._masking(view, rng_m, snr, observable, crossing, p.max_range_m)
+    assert (old_m < 0.99).any() and (old_y != view.y_m).any()       # both formulas do something here
+    np.testing.assert_allclose(new_y, old_y, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(new_m, old_m, rtol=1e-12, atol=1e-12)
+
+
+def test_the_detected_and_resolved_posts_are_those_the_draws_and_the_resolution_select():
+    """The cluster block's guardrail posts (their cycles, in order) against the selection replayed on its own: the
+    block's hit stream drawn again from its recorded state, Pd and the resolution rule applied with boolean masks."""
+    from radarnode.radar.object_model import RuntimeConfig, resolved_posts
+    sc = scenario("  - {id: lead, class: car, x_m: 40.0, lane: 0, speed_mps: 20.0}", ego="{speed_mps: 25.0}",
+                  road="{lanes: 2, lane_width_m: 3.5, ego_lane: 0, guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, "
+                       "post_spacing_m: 2.0, rcs_dbsm: 5.0}}", duration=8.0, seed=4)
+    rc = radar_config(sc)
+    model = make_model("object", Scene(sc), rc.preset, np.random.default_rng(3), rc.signal, clusters_wanted=True)
+    cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=True)
+    model.planned_cycles = 100
+    for k in range(100):
+        model.step(k * sc.period_s, cfg)
+    ch = model._cache
+    blocks = ch["cluster_blocks"]
+    assert len(blocks) >= 2
+    svx, svy = ch["view"].sensor_vx_mps, ch["view"].sensor_vy_mps
+    for b, block in enumerate(blocks):
+        lo = b * block["cycles"] if b == 0 else sum(x["cycles"] for x in blocks[:b])
+        hi = lo + block["cycles"]
+        g = model._posts(ch, lo, hi)
+        rng = np.random.default_rng()
+        rng.bit_generator.state = block["states"]["hit"]
+        u = rng.random(g["range"].size)
+        first = u < g["pd"]
+        g1 = {key: val[first] for key, val in g.items()}
+        g1["cos"], g1["sin"] = np.cos(g1["true_azimuth"]), np.sin(g1["true_azimuth"])
+        kept = resolved_posts(rc.preset, g1, u[first], np.arange(int(first.sum())), svx, svy,
+                              model.statistic.response)
+        assert 0 < kept.sum() < first.sum() < g["range"].size      # draws and resolution both drop some
+        np.testing.assert_array_equal(block["hit_cycle"], g1["cycle"][kept] - lo)
+        np.testing.assert_array_equal(block["post_cycle"], g["cycle"] - lo)
