@@ -25,6 +25,23 @@ actors:
     return parse_scenario(text)
 
 
+def masking_inputs(p, scene, times):
+    """What the object level's masking and centroid read at ``times`` of ``scene`` with preset ``p``, as its chunk
+    computes them: (truth, view at the nearest points inside the field of view, range, azimuth, observable, SNR)."""
+    import dataclasses
+
+    import numpy as np
+
+    from radarnode.radar import equation
+    from radarnode.radar.object_model import in_fov, nearest_in_fov
+    truth = scene.views(times)
+    x_in, y_in = nearest_in_fov(p, truth, scene.length_m, scene.width_m)
+    view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
+    rng_m, az = view.range_m, view.azimuth_rad
+    snr = equation.snr_db(p, rng_m, scene.rcs_dbsm + np.zeros(rng_m.shape), 0.0, az)
+    return truth, view, rng_m, az, in_fov(p, rng_m, az), snr
+
+
 def can_unshare(flags: str = "-n") -> bool:
     """Whether ``unshare <flags>`` and iproute2 work here (udp_multicast tests keep their traffic inside a private
     network namespace so it never leaves this machine)."""

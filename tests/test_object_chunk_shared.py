@@ -13,10 +13,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from helpers import scenario
+from helpers import masking_inputs, scenario
 from radarnode.radar import equation
 from radarnode.radar.models import make_model
-from radarnode.radar.object_model import SharedOutline, in_fov, nearest_in_fov, visible_centre_y, visible_outline
+from radarnode.radar.object_model import SharedOutline, in_fov, visible_centre_y, visible_outline
 from radarnode.radar.presets import PRESETS
 from radarnode.radar.setup import radar_config
 from radarnode.scene.world import Scene
@@ -48,15 +48,12 @@ def _traffic(seed: int = 3):
 def _view_of(sc):
     rc = radar_config(sc)
     p, scene = rc.preset, Scene(sc)
-    truth = scene.views(np.arange(80) * sc.period_s)
-    x_in, y_in = nearest_in_fov(p, truth, scene.length_m, scene.width_m)
-    view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
-    rows = in_fov(p, view.range_m, view.azimuth_rad) & (scene.length_m > 0.5)
-    return p, scene, view, rows
+    _, view, _, _, observable, snr = masking_inputs(p, scene, np.arange(80) * sc.period_s)
+    return p, scene, view, observable & (scene.length_m > 0.5), observable, snr
 
 
 def test_a_shared_outline_gives_each_subset_the_bits_it_gives_computed_alone():
-    p, scene, view, rows = _view_of(_traffic())
+    p, scene, view, rows, observable, snr = _view_of(_traffic())
     shared = SharedOutline(p, view, scene.length_m, scene.width_m, rows, p.max_range_m)
     t_all, j_all = np.nonzero(rows)
     assert t_all.size > 100
@@ -83,12 +80,10 @@ def test_a_shared_outline_gives_each_subset_the_bits_it_gives_computed_alone():
 
 def test_the_centroid_and_the_masking_are_the_same_with_the_outline_shared():
     sc = _traffic()
-    p, scene, view, rows = _view_of(sc)
+    p, scene, view, rows, observable, snr = _view_of(sc)
     rc = radar_config(sc)
     model = make_model("object", scene, p, np.random.default_rng(1), rc.signal)
-    rng_m, az = view.range_m, view.azimuth_rad
-    observable = in_fov(p, rng_m, az)
-    snr = equation.snr_db(p, rng_m, scene.rcs_dbsm + np.zeros(rng_m.shape), 0.0, az)
+    rng_m = view.range_m
     crossing = np.zeros(rng_m.shape, dtype=bool)
     extended = observable & model.extended
     direct_y = visible_centre_y(p, view, scene.length_m, scene.width_m, extended, p.max_range_m)
@@ -195,13 +190,8 @@ def test_the_centroid_and_the_masking_agree_with_the_old_formulas(exponent, monk
     p = dataclasses.replace(rc.preset, element_pattern_exponent=exponent)
     scene = Scene(sc)
     model = make_model("object", scene, p, np.random.default_rng(1), rc.signal)
-    truth = scene.views(np.arange(120) * sc.period_s)
-    x_in, y_in = nearest_in_fov(p, truth, scene.length_m, scene.width_m)
-    view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
-    rng_m, az = view.range_m, view.azimuth_rad
-    observable = in_fov(p, rng_m, az)
-    snr = equation.snr_db(p, rng_m, scene.rcs_dbsm + np.zeros(rng_m.shape), 0.0, az)
-    crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & model.extended
+    truth, view, rng_m, az, observable, snr = masking_inputs(p, scene, np.arange(120) * sc.period_s)
+    crossing = ((view.x_m != truth.x_m) | (view.y_m != truth.y_m)) & model.extended
     assert crossing.any()                                   # the edge-crossing path is taken
     rows = observable & model.extended
     shared = SharedOutline(p, view, scene.length_m, scene.width_m, rows, p.max_range_m)

@@ -10,16 +10,13 @@ several Doppler bins, mostly outside the lead's ring.
 
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 
-from helpers import scenario
+from helpers import masking_inputs, scenario
 from radarnode.consumer.evaluate import simulate
-from radarnode.radar import equation
 from radarnode.radar.models import make_model
-from radarnode.radar.object_model import OUTLINE_SPAN_BINS, RuntimeConfig, in_fov, nearest_in_fov, outline_share
+from radarnode.radar.object_model import OUTLINE_SPAN_BINS, RuntimeConfig, outline_share
 from radarnode.radar.setup import radar_config
 from radarnode.scene.world import Scene
 
@@ -46,13 +43,8 @@ def _lead_masking(sc, times: np.ndarray) -> np.ndarray:
     rc = radar_config(sc)
     p, scene = rc.preset, Scene(sc)
     model = make_model("object", scene, p, np.random.default_rng(1), rc.signal)
-    truth = scene.views(times)
-    x_in, y_in = nearest_in_fov(p, truth, scene.length_m, scene.width_m)
-    view = dataclasses.replace(truth, x_m=x_in, y_m=y_in)
-    rng_m, az = view.range_m, view.azimuth_rad
-    observable = in_fov(p, rng_m, az)
-    snr = equation.snr_db(p, rng_m, scene.rcs_dbsm + np.zeros(rng_m.shape), 0.0, az)
-    crossing = ((x_in != truth.x_m) | (y_in != truth.y_m)) & model.extended
+    truth, view, rng_m, az, observable, snr = masking_inputs(p, scene, times)
+    crossing = ((view.x_m != truth.x_m) | (view.y_m != truth.y_m)) & model.extended
     assert crossing[:, 1].any() and not crossing[0, 1]          # the edge crosses the truck within the times
     return model._masking(view, rng_m, snr, observable, crossing, p.max_range_m)[:, 0]
 
