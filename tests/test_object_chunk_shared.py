@@ -210,8 +210,8 @@ def test_the_detected_and_resolved_posts_are_those_the_draws_and_the_resolution_
     block's hit stream drawn again from its recorded state, Pd and the resolution rule applied with boolean masks."""
     from radarnode.radar.object_model import RuntimeConfig, resolved_posts
     sc = scenario("  - {id: lead, class: car, x_m: 40.0, lane: 0, speed_mps: 20.0}", ego="{speed_mps: 25.0}",
-                  road="{lanes: 2, lane_width_m: 3.5, ego_lane: 0, guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, "
-                       "post_spacing_m: 2.0, rcs_dbsm: 5.0}}", duration=8.0, seed=4)
+                  road="{lanes: 2, lane_width_m: 3.5, ego_lane: 0, guardrails: {left_offset_m: 1.0, "
+                       "right_offset_m: 1.0, post_spacing_m: 2.0, rcs_dbsm: 5.0}}", duration=8.0, seed=4)
     rc = radar_config(sc)
     model = make_model("object", Scene(sc), rc.preset, np.random.default_rng(3), rc.signal, clusters_wanted=True)
     cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=True)

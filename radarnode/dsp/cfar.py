@@ -258,7 +258,8 @@ CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStati
 def _ca_alpha_for_cut(pfa: float, n_channels: int, guard: tuple[int, int], train: tuple[int, int], rho_d: bytes,
                       rho_r: bytes, left: int | None, right: int | None) -> float:
     """:meth:`CellAveragingCfar.alpha_for_cut` of a CFAR with these settings (correlations: complex128 bytes)."""
-    eig = stats.ring_eigenvalues(stats.ring_offsets(guard, train, left, right), *(np.frombuffer(rho, dtype=np.complex128) for rho in (rho_d, rho_r)))
+    correlations = (np.frombuffer(rho, dtype=np.complex128) for rho in (rho_d, rho_r))
+    eig = stats.ring_eigenvalues(stats.ring_offsets(guard, train, left, right), *correlations)
     return stats.ca_alpha(pfa, n_channels, eig)
 
 
