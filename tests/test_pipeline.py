@@ -207,6 +207,78 @@ def test_a_sensor_id_changed_mid_run_moves_the_boundary_frames_as_in_one_process
     assert sum(f[0] in (0x680, 0x681) for f in a) >= 2 * 35
 
 
+def _radar_cfg(**signals) -> can.Message:
+    """A RadarConfiguration (0x200) for sensor 0 setting ``signals`` (each with its _valid bit)."""
+    from radarnode.wire import ars408 as P
+    from radarnode.wire.dbc import load_database
+    m = load_database().get_message_by_name("RadarConfiguration")
+    values = {sig.name: 0 for sig in m.signals}
+    for name, value in signals.items():
+        values[f"RadarCfg_{name}"] = value
+        values[f"RadarCfg_{name}_valid"] = 1
+    return can.Message(arbitration_id=P.shifted(m.frame_id, 0), data=m.encode(values), is_extended_id=False)
+
+
+def test_the_object_level_hands_its_cluster_rows_over_only_while_objects_are_sent(monkeypatch):
+    """While the node sends objects, the object level's clusters go to the boundary process as its blocks' rows
+    (no list object here); a switch to clusters (the list sent: built here, handed over as columns) and back, and a
+    MaxDistance that restarts the chunk in the middle of a block of rows (the cluster streams rewound), give the
+    frames of one process, byte for byte, across blocks that straddle batches."""
+    from radarnode.radar import object_model as om
+    kinds = []
+    for name in ("submit", "submit_rows"):
+        real = getattr(pl.BoundaryPipeline, name)
+
+        def spy(self, *a, _real=real, _name=name, **k):
+            kinds.append(_name)
+            return _real(self, *a, **k)
+        monkeypatch.setattr(pl.BoundaryPipeline, name, spy)
+    cycles = 3 * om.CLUSTER_BLOCK + 10
+    changes = {30: _radar_cfg(OutputType=2), 60: _radar_cfg(OutputType=1), 100: _radar_cfg(MaxDistance=120)}
+    a, _, _ = _run(CUT_IN, cycles, True, received=dict(changes))
+    b, _, _ = _run(CUT_IN, cycles, False, received=dict(changes))
+    _same(a, b)
+    assert len(kinds) == cycles
+    # rows, then the cluster list's columns for the cycles it was sent (from the poll that took the change on; one
+    # poll a cycle from the second), then rows again
+    first, count = kinds.index("submit"), kinds.count("submit")
+    assert 25 <= first <= 31 and 28 <= count <= 30 and kinds[first:first + count] == ["submit"] * count
+    assert set(kinds[:first]) == set(kinds[first + count:]) == {"submit_rows"}
+    assert sum(f[0] == 0x600 for f in a) >= 25, "the cluster list was sent while asked for"
+
+
+def test_cluster_rows_are_the_cluster_lists_columns():
+    """ObjectModel.cluster_rows: the rows of the block a cycle's cluster list is cut from, the same numbers as the
+    list step builds (position and speed), one array per block; refused where the step computed no clusters."""
+    import radarnode.radar.object_model as om
+    from radarnode.radar.setup import radar_config
+    from radarnode.scene.world import Scene
+    sc = load_scenario(CUT_IN)
+    rc = radar_config(sc)
+    twins = [om.ObjectModel(Scene(sc), rc.preset, np.random.default_rng(sc.seed)) for _ in range(2)]
+    cfg = om.RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=True)
+    blocks = set()
+    with pytest.raises(ValueError, match="no step yet"):
+        twins[1].cluster_rows()
+    for k in range(2 * om.CLUSTER_BLOCK + 3):
+        frame, _ = twins[0].step(k * sc.period_s, cfg)
+        bare, _ = twins[1].step(k * sc.period_s, cfg, cluster_list=False)
+        rows, a, b = twins[1].cluster_rows()
+        cl = frame.clusters
+        assert len(bare.clusters) == 0 and len(cl) == b - a
+        for row, col in zip(rows[:, a:b], (cl.dist_long_m, cl.dist_lat_m, cl.vrel_long_mps, cl.vrel_lat_mps)):
+            assert np.array_equal(row, col)
+        np.testing.assert_array_equal(bare.objects.dist_long_m, frame.objects.dist_long_m)
+        blocks.add(id(rows))
+        if k == 40:
+            assert len(cl) > 20          # the guardrail posts
+    assert len(blocks) == 3
+    plain, _ = twins[1].step((2 * om.CLUSTER_BLOCK + 3) * sc.period_s, om.RuntimeConfig(
+        max_distance_m=rc.preset.max_range_m, clusters=False))
+    with pytest.raises(ValueError, match="clusters=False"):
+        twins[1].cluster_rows()
+
+
 def test_saturated_boundary_values_are_counted_in_the_node_as_in_one_process():
     a, _, sat_a = _run(CUT_IN, 40, True, saturate=True)
     b, _, sat_b = _run(CUT_IN, 40, False, saturate=True)

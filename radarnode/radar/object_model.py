@@ -1341,8 +1341,8 @@ class ObjectModel:
         self._cache["times_list"] = times.tolist()
         return self._cache, 0
 
-    def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None
-             ) -> tuple[RadarFrame, SensorView]:
+    def step(self, t_s: float, config: RuntimeConfig, sensor_velocity_est: tuple[float, float] | None = None,
+             cluster_list: bool = True) -> tuple[RadarFrame, SensorView]:
         """Advance to ``t_s`` and return the cycle's frame and the ground truth it came from.
 
         ``sensor_velocity_est`` is the sensor's velocity over ground (sensor axes)
@@ -1351,6 +1351,8 @@ class ObjectModel:
         ``CHUNK_CYCLES``) are computed in one vectorised pass and reused while the
         configuration stays the same: a step takes its cycle's rows. The lists'
         arrays are views of the chunk's tables: read them, do not write to them.
+        ``cluster_list`` False: the frame's cluster list is left empty even where ``config.clusters`` asks for one,
+        for a caller that reads the cycle's clusters from :meth:`cluster_rows` instead.
         """
         check_step(t_s, sensor_velocity_est)
         if sensor_velocity_est is not None and len(sensor_velocity_est) == 3:
@@ -1370,8 +1372,25 @@ class ObjectModel:
         objects = ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
                                 f[14], f[15], f[16], g[5])
         self.info.at(ch, i, self.reportable)
-        clusters = self._cluster_list(ch, i, sv) if config.clusters else _NO_CLUSTERS
+        clusters = self._cluster_list(ch, i, sv) if config.clusters and cluster_list else _NO_CLUSTERS
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
+
+    def cluster_rows(self) -> tuple[np.ndarray, int, int]:
+        """The last step's cluster list as rows of its block's table, for a reader of positions and velocities only
+        (the road-boundary process, :mod:`radarnode.wire.pipeline`): the block's dist_long, dist_lat, vrel_long and
+        vrel_lat, shape (4, m), one array for every cycle of the block (read it, do not write to it), and the
+        cycle's rows a … b−1 of it — the values of the ClusterList :meth:`step` builds, without its DynProp, σ and
+        the list object (step with ``cluster_list=False`` to skip those). The step's configuration must ask for
+        clusters."""
+        pos = self.__dict__.get("_pos")
+        if pos is None or not pos[0]["config"].clusters:
+            raise ValueError("cluster_rows: the last step computed no cluster list (no step yet, or a configuration "
+                             "with clusters=False)")
+        tab, j = self._cluster_table(*pos)
+        rows = tab.get("rows")
+        if rows is None:
+            rows = tab["rows"] = tab["f"][:4]
+        return rows, tab["starts"][j], tab["starts"][j + 1]
 
     def _dyn_cycle(self, ch: dict, i: int, idx: np.ndarray, vx: np.ndarray, vy: np.ndarray, sv) -> np.ndarray:
         """DynProp of cycle i's objects with the sensor velocity ``sv`` (the ego-motion input's estimate), where

@@ -149,7 +149,8 @@ class RadarNode:
         self._pipe = None                  # a BoundaryPipeline that computes the boundaries (defer_boundaries)
         self._runtime: tuple | None = None    # the last RuntimeConfig and what it was made from (_runtime_config)
         self._pipe_index = 0
-        self._blank: dict[int, np.ndarray] = {}
+        self._blank: list = [None, None, {}]   # blank boundary payloads for the pipeline (defer_boundaries)
+        self._pipe_rows = False                 # the clusters go to the pipeline as block rows (defer_boundaries)
         self._last_t: float | None = None
         self._speed: tuple[float, float] | None = None    # (value m/s signed, time received)
         self._yaw: tuple[float, float] | None = None      # (deg/s, time received)
@@ -342,24 +343,32 @@ class RadarNode:
         """Yaw rate (rad/s) from the ego-motion input; missing input counts as zero."""
         return math.radians(self._yaw[0]) if not self.motion_rx_state(t_s) & 2 else 0.0
 
-    def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float]
-                         ) -> list[tuple[int, np.ndarray]]:
+    def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float],
+                         rows: bool = False) -> list[tuple[int, np.ndarray]]:
         """Update the road-boundary estimate and encode RoadBoundary_Left/Right (E2E protected).
 
         Returns (CAN ID, payload) pairs: 0x680/0x681 + 8 × SensorID (``radarnode.wire.ids``). With a
         :class:`~radarnode.wire.pipeline.BoundaryPipeline` (:meth:`defer_boundaries`) the estimate is handed to its
-        process and the payloads returned are blanks of the frames' length, filled when it answers."""
-        cl = frame.clusters
+        process and the payloads returned are blanks of the frames' length, filled when it answers; ``rows``: the
+        clusters go to it as the object level's block rows (:meth:`ObjectModel.cluster_rows
+        <radarnode.radar.object_model.ObjectModel.cluster_rows>`), not from ``frame``."""
         dt = 0.0 if self._last_t is None else t_s - self._last_t
-        columns = (cl.dist_long_m, cl.dist_lat_m, cl.vrel_long_mps, cl.vrel_lat_mps, cl.range_m)
-        if self._pipe is None:
-            return self.boundary_payloads(columns, dt, sensor_velocity, self._yaw_rate_estimate(t_s))
-        self._pipe.submit(self._pipe_index, columns, (dt, sensor_velocity, self._yaw_rate_estimate(t_s),
-                                                      self.config.sensor_id))
+        scalars = (dt, sensor_velocity, self._yaw_rate_estimate(t_s), self.config.sensor_id)
+        if rows:
+            self._pipe.submit_rows(self._pipe_index, *self.model.cluster_rows(), scalars)
+        else:
+            cl = frame.clusters
+            columns = (cl.dist_long_m, cl.dist_lat_m, cl.vrel_long_mps, cl.vrel_lat_mps, cl.range_m)
+            if self._pipe is None:
+                return self.boundary_payloads(columns, *scalars[:3])
+            self._pipe.submit(self._pipe_index, columns, scalars)
         self.last_boundaries = None
-        sensor = self.config.sensor_id
-        return [(ids.own_id(base, sensor), self._blank[base])
-                for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)]
+        blank = self._blank
+        if blank[0] != self.config.sensor_id:        # the frames' IDs, for the sensor ID in force
+            blank[0] = self.config.sensor_id
+            blank[1] = [(ids.own_id(base, blank[0]), blank[2][base])
+                        for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)]
+        return list(blank[1])
 
     def boundary_payloads(self, columns: tuple[np.ndarray, ...], dt_s: float, sensor_velocity: tuple[float, float],
                           yaw_rate_rps: float, sensor_id: int | None = None) -> list[tuple[int, np.ndarray]]:
@@ -404,8 +413,13 @@ class RadarNode:
         and the pipe fills them in when its process has computed them (the output's ``boundaries`` stay None: a
         reader of the estimate decodes the frames)."""
         self._pipe, self._pipe_index = pipe, index
-        self._blank = {base: np.zeros(self.own_codecs[base].length, dtype=np.uint8)
-                       for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)}
+        # the frames' blank payloads, and their (CAN ID, payload) pairs for the sensor ID they were made for
+        self._blank = [None, None, {base: np.zeros(self.own_codecs[base].length, dtype=np.uint8)
+                                    for base in (ids.ROAD_BOUNDARY_LEFT, ids.ROAD_BOUNDARY_RIGHT)}]
+        # the object level hands its clusters over as its blocks' rows (the list itself is read by nobody here
+        # while the objects are sent); a pipe that lost its process (no submit_rows) refuses every cycle as it is
+        self._pipe_rows = (pipe is not None and hasattr(pipe, "submit_rows")
+                           and callable(getattr(self.model, "cluster_rows", None)))
 
     # --- output -------------------------------------------------------------
     def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
@@ -500,8 +514,16 @@ class RadarNode:
         cfg = self.config
         runtime = self._runtime_config()
         sensor_velocity = self._sensor_velocity_estimate(t_s)
-        frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),))
-        own = self._boundary_frames(frame, t_s, sensor_velocity) if self.boundaries is not None else []
+        # with a boundary process and an object list to send, the cluster list is computed for that process only:
+        # the object level hands it over as rows (no list object, no DynProp here)
+        rows = self._pipe_rows and self._pipe is not None and self.boundaries is not None and runtime.clusters \
+            and cfg.output_type == P.OUTPUT_OBJECTS
+        if rows:
+            frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),),
+                                          cluster_list=False)
+        else:
+            frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),))
+        own = self._boundary_frames(frame, t_s, sensor_velocity, rows) if self.boundaries is not None else []
         self._last_t = t_s
         out: list[tuple[int, np.ndarray]] = []
         if self._status_now or t_s + 1e-9 >= self._next_status_s:

@@ -81,8 +81,12 @@ class BoundaryPipeline:
         self._nodes = nodes
         self.submitted = 0        # cycles' estimates handed over (a node's cycle each)
         self.done = 0             # of those, answered and filled in
-        self._batch: list = []          # per cycle of the batch: (node, clusters, (dt, sensor velocity, yaw rate, ID))
+        # per cycle of the batch: (node, clusters, (dt, sensor velocity, yaw rate, ID)[, block, first row, end]);
+        # clusters: how many, their columns in _columns; −1: rows of a block (submit_rows)
+        self._batch: list = []
         self._columns: list = []        # the batch's cluster columns, five a cycle, sent as one array
+        self._blocks: list = []         # the blocks of rows first used in the batch, sent with it
+        self._block_of: dict = {}       # per node: the block of rows it used last (sent already)
         self._in_flight = 0
         self._next_look = 0             # collect looks at the pipe when this many estimates are submitted
         self._waiting: deque = deque()   # per estimate submitted and not filled: its frames
@@ -130,6 +134,23 @@ class BoundaryPipeline:
             raise PipelineError("this BoundaryPipeline is closed: its nodes compute their boundaries themselves")
         self._batch.append((index, len(columns[0]), scalars))
         self._columns.extend(columns)
+        self._waiting.append(None)
+        self.submitted += 1
+        if len(self._batch) >= BATCH:
+            self._send()
+
+    def submit_rows(self, index: int, block: np.ndarray, a: int, b: int, scalars: tuple) -> None:
+        """As :meth:`submit`, the clusters as rows a … b−1 of ``block`` (dist_long, dist_lat, vrel_long, vrel_lat;
+        shape (4, m)): the object level's table of a block of cycles (:meth:`ObjectModel.cluster_rows
+        <radarnode.radar.object_model.ObjectModel.cluster_rows>`), sent once, with the first cycle that uses it."""
+        if self._closed:
+            raise PipelineError("this BoundaryPipeline is closed: its nodes compute their boundaries themselves")
+        new = -1
+        if self._block_of.get(index) is not block:
+            self._block_of[index] = block
+            new = len(self._blocks)
+            self._blocks.append(block)
+        self._batch.append((index, -1, scalars, new, a, b))
         self._waiting.append(None)
         self.submitted += 1
         if len(self._batch) >= BATCH:
@@ -205,11 +226,11 @@ class BoundaryPipeline:
         while self._in_flight >= MAX_IN_FLIGHT:
             self._receive()
         try:
-            self._conn.send((self._batch, np.concatenate(self._columns)))
+            self._conn.send((self._batch, np.concatenate(self._columns) if self._columns else None, self._blocks))
         except OSError:          # the process is gone: what it answered before (an error?) says why
             while True:
                 self._receive()
-        self._batch, self._columns = [], []
+        self._batch, self._columns, self._blocks = [], [], []
         self._in_flight += 1
 
     def _receive(self) -> None:
@@ -263,6 +284,7 @@ def _serve(conn, parent_end, nodes: list) -> None:
         os.dup2(devnull, fd)
     for n in nodes:
         n.saturated.clear()
+    blocks: dict = {}        # per node: the block of rows its cycles read (submit_rows)
     while True:
         try:
             batch = conn.recv()
@@ -272,11 +294,18 @@ def _serve(conn, parent_end, nodes: list) -> None:
             conn.send(("state", [n.boundary_state() for n in nodes]))
             return
         try:
-            cycles, columns = batch
+            cycles, columns, new_blocks = batch
             payloads, at = [], 0
-            for index, n, scalars in cycles:
-                cols = [columns[at + k * n:at + (k + 1) * n] for k in range(5)]
-                at += 5 * n
+            for index, n, scalars, *rows in cycles:
+                if n >= 0:
+                    cols = [columns[at + k * n:at + (k + 1) * n] for k in range(5)]
+                    at += 5 * n
+                else:                  # rows a … b−1 of a block (a new one, or the node's last)
+                    new, a, b = rows
+                    if new >= 0:
+                        blocks[index] = new_blocks[new]
+                    x, y, vx, vy = blocks[index][:, a:b]
+                    cols = [x, y, vx, vy, np.hypot(x, y)]   # (the range as ClusterList.range_m computes it)
                 payloads += [p.tobytes() for _, p in nodes[index].boundary_payloads(cols, *scalars)]
             payloads = b"".join(payloads)
             saturated = [(k, Counter(n.saturated)) for k, n in enumerate(nodes) if n.saturated]
