@@ -190,6 +190,16 @@ class Boundary:
     def y_at(self, x_m: np.ndarray) -> np.ndarray:
         return self.offset_m + math.tan(self.heading_rad) * x_m + 0.5 * self.curvature_1pm * x_m * x_m
 
+    @classmethod
+    def found(cls, offset_m: float, heading_rad: float, curvature_1pm: float, range_start_m: float,
+              range_end_m: float, confidence: float) -> Boundary:
+        """A valid boundary, as ``Boundary(True, …)`` makes it, without the frozen dataclass's ``__init__`` (which
+        sets each field through ``object.__setattr__``: the estimator makes two a cycle)."""
+        out = object.__new__(cls)
+        out.__dict__.update(valid=True, offset_m=offset_m, heading_rad=heading_rad, curvature_1pm=curvature_1pm,
+                            range_start_m=range_start_m, range_end_m=range_end_m, confidence=confidence)
+        return out
+
 
 UNAVAILABLE = Boundary(False)
 
@@ -375,13 +385,14 @@ class RoadBoundaryEstimator:
             if count[k] < 4:
                 continue
             xs = x.compress(inliers[k])
-            lo, x_max[k] = float(xs.min()), float(xs.max())
+            lo, x_max[k] = float(np.minimum.reduce(xs)), float(np.maximum.reduce(xs))
             xs -= lo
             xs /= self.section_m                          # (x > 0: the nearest inlier is the start)
-            row = np.bincount(xs.astype(np.intp), minlength=sections)[:sections].tolist()
+            # the sections with a point: how far they reach (the last one's end) and how many there are
+            filled = np.bincount(xs.astype(np.intp), minlength=sections)[:sections].nonzero()[0]
             start[k] = max(lo, 0.0)
-            reach = sections - next((j for j in range(sections) if row[sections - 1 - j]), sections)
-            seen[k] = sum(1 for j in range(reach) if row[j])
+            reach = int(filled[-1]) + 1 if filled.size else 0
+            seen[k] = filled.size
             missing = (reach - seen[k]) + max(0, sections - reach - self.max_missing)
             ok[k] = missing <= self.max_missing and reach >= 2
             deg2[k] = ok[k] and x_max[k] - lo > 40.0 and count[k] >= 8
@@ -394,6 +405,5 @@ class RoadBoundaryEstimator:
                 out.append(UNAVAILABLE)
                 continue
             c0, c1, c2 = coef[k]
-            out.append(Boundary(True, c0, math.atan(c1), 2.0 * c2 + kappa, start[k], x_max[k],
-                                seen[k] / self.sections))
+            out.append(Boundary.found(c0, math.atan(c1), 2.0 * c2 + kappa, start[k], x_max[k], seen[k] / self.sections))
         return out

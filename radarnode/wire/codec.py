@@ -127,18 +127,24 @@ class MessageCodec:
         """One frame from scalars (a header, a status, a boundary: several a cycle), in Python numbers: the same
         arithmetic as :meth:`encode`'s columns — clip, minus offset, over scale, round half to even — without
         numpy's per-call cost for a dozen one-element arrays."""
-        values = [float(c) for c in cols]
-        for f, v in zip(self.fields, values):
+        return np.frombuffer(self.encode_values(cols), dtype=np.uint8).reshape(1, self.length)
+
+    def encode_values(self, values) -> bytes:
+        """One frame's payload from its signals' physical values in the message's signal order
+        (:attr:`signal_names`), as :meth:`encode` makes it for scalars (saturation counted, NaN refused)."""
+        values = [float(c) for c in values]
+        if len(values) != len(self.fields):
+            raise WireError(f"message {self.name}: {len(values)} values for {len(self.fields)} signals")
+        for (name, lo, hi, *_), v in zip(self._scalar, values):     # (nothing counted for a frame refused)
             if v != v:
-                raise WireError(f"message {self.name}: signal {f.name} got NaN; expected a number in "
-                                f"[{f.minimum:g}, {f.maximum:g}]")
+                raise WireError(f"message {self.name}: signal {name} got NaN; expected a number in [{lo:g}, {hi:g}]")
         word = 0
         for (name, lo, hi, below, above, offset, scale, mask, shift), v in zip(self._scalar, values):
             if v < below or v > above:
                 self.saturated[name] += 1
             v = lo if v < lo else hi if v > hi else v
             word |= (round((v - offset) / scale) & mask) << shift
-        return np.frombuffer(word.to_bytes(8, "big")[: self.length], dtype=np.uint8).reshape(1, self.length)
+        return word.to_bytes(8, "big")[: self.length]
 
     def as_sent(self, name: str, value: np.ndarray) -> np.ndarray:
         """Signal ``name``'s physical values as a receiver decodes them: clipped to its range and rounded to its

@@ -41,6 +41,7 @@ from radarnode.schema import Source
 from radarnode.wire import ars408 as P
 from radarnode.wire import ids
 from radarnode.wire.busload import frame_bits
+from radarnode.errors import WireError
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.config import MAX_OBJECT_ID, TYPE_CLUSTER, TYPE_NAMES, TYPE_OBJECT, CollisionDetection, ListFilters
 from radarnode.wire.dbc import load_database, load_own_database
@@ -376,21 +377,72 @@ class RadarNode:
         vrel_lat, range) and its two frames (CAN ID, E2E-protected payload), left then right, for ``sensor_id``
         (default: the configured one; a pipeline's process is told the one in force at the cycle); sets
         ``last_boundaries``."""
+        sensor = self.config.sensor_id if sensor_id is None else sensor_id
+        out = []
+        for side, b in enumerate(self._boundary_update(columns, dt_s, sensor_velocity, yaw_rate_rps)):
+            codec, order, can_id, key = self._boundary_layout(side, sensor)
+            values = self._boundary_values(b)
+            protected = self._e2e.protect(key, codec.encode_values([values[k] for k in order]))
+            out.append((can_id, np.frombuffer(protected, dtype=np.uint8)))
+        return out
+
+    def boundary_payloads_many(self, cycles: list[tuple]) -> list[bytes]:
+        """:meth:`boundary_payloads` of several cycles in order (each ``(columns, dt_s, sensor_velocity,
+        yaw_rate_rps, sensor_id)``): per cycle its two payloads joined, left then right — the same bytes, the same
+        saturation counts and E2E counters, each side's frames encoded in one pass (the road-boundary process
+        answers a batch of cycles at a time: :mod:`radarnode.wire.pipeline`)."""
+        values: tuple[list, list] = ([], [])
+        sensors = []
+        for columns, dt_s, sensor_velocity, yaw_rate_rps, sensor_id in cycles:
+            for side, b in enumerate(self._boundary_update(columns, dt_s, sensor_velocity, yaw_rate_rps)):
+                values[side].append(self._boundary_values(b))
+            sensors.append(self.config.sensor_id if sensor_id is None else sensor_id)
+        if not sensors:
+            return []
+        encoded = []
+        for side in (0, 1):
+            codec, order = self._boundary_layout(side, sensors[0])[:2]
+            table = list(zip(*values[side]))           # a column per signal, in _BOUNDARY_SIGNALS' order
+            encoded.append(codec.encode({name: np.array(table[k], dtype=np.float64)
+                                         for name, k in zip(codec.signal_names, order)}))
+        protect = self._e2e.protect
+        return [protect(self._boundary_layout(0, sensor)[3], left.tobytes())
+                + protect(self._boundary_layout(1, sensor)[3], right.tobytes())
+                for sensor, left, right in zip(sensors, encoded[0], encoded[1])]
+
+    def _boundary_update(self, columns: tuple[np.ndarray, ...], dt_s: float, sensor_velocity: tuple[float, float],
+                         yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
+        """One cycle of the road-boundary estimator on the clusters' columns; sets ``last_boundaries``."""
         x_m, y_m, vx, vy, r = columns
         rate = (x_m * vx + y_m * vy) / np.maximum(r, 1e-6)
-        left, right = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps)
-        self.last_boundaries = (left, right)
-        out = []
-        sensor = self.config.sensor_id if sensor_id is None else sensor_id
-        for base, prefix, b in ((ids.ROAD_BOUNDARY_LEFT, "RBL", left), (ids.ROAD_BOUNDARY_RIGHT, "RBR", right)):
-            payload = self.own_codecs[base].encode({
-                f"{prefix}_CRC": 0, f"{prefix}_Counter": 0, f"{prefix}_Valid": int(b.valid),
-                f"{prefix}_Confidence": round(7 * b.confidence), f"{prefix}_LatOffset": b.offset_m,
-                f"{prefix}_Heading": math.degrees(b.heading_rad), f"{prefix}_Curvature": b.curvature_1pm,
-                f"{prefix}_RangeStart": 4 * math.floor(b.range_start_m / 4), f"{prefix}_RangeEnd": b.range_end_m})[0]
-            protected = self._e2e.protect(ids.e2e_key(base, sensor), payload.tobytes())
-            out.append((ids.own_id(base, sensor), np.frombuffer(protected, dtype=np.uint8)))
-        return out
+        self.last_boundaries = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps)
+        return self.last_boundaries
+
+    @staticmethod
+    def _boundary_values(b: Boundary) -> tuple:
+        """A boundary's signals in :data:`_BOUNDARY_SIGNALS`' order (CRC and counter 0: the E2E protection's)."""
+        return (0, 0, int(b.valid), round(7 * b.confidence), b.offset_m, math.degrees(b.heading_rad),
+                b.curvature_1pm, 4 * math.floor(b.range_start_m / 4), b.range_end_m)
+
+    #: RoadBoundary_Left/Right's signals, as :meth:`boundary_payloads` computes them (after the side's prefix)
+    _BOUNDARY_SIGNALS = ("CRC", "Counter", "Valid", "Confidence", "LatOffset", "Heading", "Curvature", "RangeStart",
+                         "RangeEnd")
+
+    def _boundary_layout(self, side: int, sensor: int) -> tuple:
+        """Side ``side``'s (0 left, 1 right) boundary frame for ``sensor``: its codec, where each of its signals is
+        among :data:`_BOUNDARY_SIGNALS`, its CAN ID and its E2E key (made once a side and sensor ID)."""
+        layouts = self.__dict__.setdefault("_boundary_layouts", {})
+        layout = layouts.get((side, sensor))
+        if layout is None:
+            base, prefix = ((ids.ROAD_BOUNDARY_LEFT, "RBL"), (ids.ROAD_BOUNDARY_RIGHT, "RBR"))[side]
+            codec = self.own_codecs[base]
+            names = [f"{prefix}_{name}" for name in self._BOUNDARY_SIGNALS]
+            if sorted(names) != sorted(codec.signal_names):
+                raise WireError(f"message {codec.name}: signals {', '.join(codec.signal_names)}; expected "
+                                f"{', '.join(names)}")
+            layout = layouts[(side, sensor)] = (codec, [names.index(n) for n in codec.signal_names],
+                                                ids.own_id(base, sensor), ids.e2e_key(base, sensor))
+        return layout
 
     @property
     def boundary_pipe(self):

@@ -295,8 +295,9 @@ def _serve(conn, parent_end, nodes: list) -> None:
             return
         try:
             cycles, columns, new_blocks = batch
-            payloads, at = [], 0
-            for index, n, scalars, *rows in cycles:
+            at = 0
+            by_node: dict = {}          # per node: (the cycle's place in the batch, its inputs), in order
+            for place, (index, n, scalars, *rows) in enumerate(cycles):
                 if n >= 0:
                     cols = [columns[at + k * n:at + (k + 1) * n] for k in range(5)]
                     at += 5 * n
@@ -306,8 +307,12 @@ def _serve(conn, parent_end, nodes: list) -> None:
                         blocks[index] = new_blocks[new]
                     x, y, vx, vy = blocks[index][:, a:b]
                     cols = [x, y, vx, vy, np.hypot(x, y)]   # (the range as ClusterList.range_m computes it)
-                payloads += [p.tobytes() for _, p in nodes[index].boundary_payloads(cols, *scalars)]
-            payloads = b"".join(payloads)
+                by_node.setdefault(index, []).append((place, (cols, *scalars)))
+            answers = [b""] * len(cycles)
+            for index, items in by_node.items():       # each node's cycles in their order, a node at a time
+                for (place, _), p in zip(items, nodes[index].boundary_payloads_many([c for _, c in items])):
+                    answers[place] = p
+            payloads = b"".join(answers)
             saturated = [(k, Counter(n.saturated)) for k, n in enumerate(nodes) if n.saturated]
             for n in nodes:
                 n.saturated.clear()

@@ -1,0 +1,120 @@
+"""The road-boundary process's batch path (``RadarNode.boundary_payloads_many``, ``MessageCodec.encode_values``) and
+the estimator's gap rule and result type written for speed: each gives what the plain path gives, bit for bit."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from radarnode.errors import WireError
+from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
+from radarnode.radar.setup import load_scenario
+from radarnode.wire.dbc import load_own_database
+from radarnode.wire.codec import MessageCodec
+from radarnode.wire.group import make_node
+
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _old_gap_rule(xs: np.ndarray, sections: int, section_m: float, max_missing: int) -> tuple[int, int, bool]:
+    """Seed 002's rule as _fit computed it before it was written with nonzero(): (reach, seen, ok)."""
+    xs = xs - xs.min()
+    row = np.bincount((xs / section_m).astype(np.intp), minlength=sections)[:sections].tolist()
+    reach = sections - next((j for j in range(sections) if row[sections - 1 - j]), sections)
+    seen = sum(1 for j in range(reach) if row[j])
+    missing = (reach - seen) + max(0, sections - reach - max_missing)
+    return reach, seen, missing <= max_missing and reach >= 2
+
+
+def test_the_gap_rule_is_the_old_one_for_every_pattern_of_filled_sections():
+    """Every pattern of filled sections among the first 12 (gaps at the start, in the middle, at the end, points
+    past the last section, all, one): the same validity and confidence as the rule written with Python loops."""
+    est = RoadBoundaryEstimator()
+    rng = np.random.default_rng(1)
+    checked = 0
+    for pattern in range(1, 1 << 12):
+        cells = [j for j in range(12) if pattern >> j & 1]
+        if cells[0] != 0:                     # the nearest inlier starts the first section
+            continue
+        x = np.concatenate([10.0 + est.section_m * (j + rng.uniform(0.05, 0.95, 3)) for j in cells])
+        y = 2.0 + 0.01 * x
+        x[np.argmin(x)] = 10.0
+        reach, seen, ok = _old_gap_rule(x, est.sections, est.section_m, est.max_missing)
+        b = est._fit(x, y, np.ones((1, x.size), dtype=bool), np.ones(1, dtype=bool), kappa=0.0)[0]
+        assert b.valid == ok, cells
+        if ok:
+            assert b.confidence == seen / est.sections and b.range_start_m == 10.0 and b.range_end_m == x.max()
+        checked += 1
+    assert checked == 1 << 11
+
+
+def test_a_found_boundary_is_the_dataclass_built_the_usual_way():
+    fast = Boundary.found(1.5, 0.01, 2e-4, 4.0, 120.0, 0.7)
+    plain = Boundary(True, 1.5, 0.01, 2e-4, 4.0, 120.0, 0.7)
+    assert fast == plain and hash(fast) == hash(plain) and repr(fast) == repr(plain)
+    assert dataclasses.astuple(fast) == dataclasses.astuple(plain)
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        fast.offset_m = 0.0
+
+
+def _twins():
+    sc = load_scenario(ROOT / "scenarios" / "highway_cut_in.yaml")
+    return make_node(sc, fidelity="object"), make_node(sc, fidelity="object")
+
+
+def test_a_batch_of_boundary_frames_is_the_frames_of_its_cycles_one_by_one():
+    """Cycles of guardrail-like points (found, lost, saturating offsets) with the sensor ID changed in the
+    middle: the same payloads, saturation counts, E2E counters and last estimate as one cycle at a time."""
+    one, many = _twins()
+    for node in (one, many):          # from cycle 30 a left boundary far beyond RBL_LatOffset's range: saturated
+        update, calls = node.boundaries.update, [0]
+
+        def far(*a, _update=update, _calls=calls, **k):
+            left, right = _update(*a, **k)
+            _calls[0] += 1
+            return (Boundary.found(1e4, 0.0, 0.0, 0.0, 1e4, 1.0) if _calls[0] > 30 else left), right
+        node.boundaries.update = far
+    rng = np.random.default_rng(4)
+    cycles = []
+    for k in range(40):
+        x = np.concatenate([np.arange(5.0, 150.0, 2.0)] * 2) + rng.normal(0, 0.05, 146)
+        y = np.concatenate([np.full(73, 3.0), np.full(73, -3.0)]) + rng.normal(0, 0.1, 146)
+        if 12 <= k < 16:                            # a gap: nothing seen
+            x, y = x[:0], y[:0]
+        vx = np.full(x.size, -27.0)
+        cols = (x, y, vx, np.zeros(x.size), np.hypot(x, y))
+        cycles.append((cols, 0.072 if k else 0.0, (27.0, 0.0), 0.0, 0 if k < 20 else 5))
+    want = [b"".join(p.tobytes() for _, p in one.boundary_payloads(*c)) for c in cycles]
+    got = many.boundary_payloads_many(cycles[:7]) + many.boundary_payloads_many(cycles[7:])
+    assert got == want
+    assert any(w[2:] != b"\x00" * 6 for w in want[:12]), "boundaries were found"
+    assert one.saturated == many.saturated and one.saturated["RBL_LatOffset"] > 0
+    assert one._e2e._counter == many._e2e._counter and one.last_boundaries == many.last_boundaries
+    assert many.boundary_payloads_many([]) == []
+
+
+def test_encode_values_is_encode_for_one_frame_and_refuses_nan_counting_nothing():
+    db = load_own_database()
+    codec = MessageCodec(db.get_message_by_name("RoadBoundary_Left"), Counter())
+    rng = np.random.default_rng(2)
+    for _ in range(200):
+        values = [float(rng.uniform(f.minimum - 0.2 * (f.maximum - f.minimum), f.maximum + 0.2 * (f.maximum -
+                                                                                                   f.minimum)))
+                  for f in codec.fields]
+        assert codec.encode_values(values) == codec.encode(dict(zip(codec.signal_names, values)))[0].tobytes()
+        assert codec.encode_values(values) == codec.encode(
+            {n: np.array([v, v]) for n, v in zip(codec.signal_names, values)})[1].tobytes()
+    before = Counter(codec.saturated)
+    bad = [1e9] * len(codec.fields)
+    bad[-1] = math.nan
+    with pytest.raises(WireError, match=f"signal {codec.signal_names[-1]} got NaN"):
+        codec.encode_values(bad)
+    assert codec.saturated == before
+    with pytest.raises(WireError, match="values for"):
+        codec.encode_values([0.0])
