@@ -193,6 +193,8 @@ class RuntimeConfig:
 
 def _real(x) -> bool:
     """A finite real number (not a bool)."""
+    if type(x) is float:                  # (a step's time and ego motion: four a cycle)
+        return math.isfinite(x)
     return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_)) \
         and math.isfinite(x)
 
@@ -205,7 +207,7 @@ def check_step(t_s, sensor_velocity_est) -> None:
         raise ConfigError(f"t_s: value {t_s!r} is not allowed; expected a finite time in seconds")
     if sensor_velocity_est is not None and not (
             isinstance(sensor_velocity_est, (tuple, list, np.ndarray)) and len(sensor_velocity_est) in (2, 3)
-            and all(_real(v) for v in sensor_velocity_est)):
+            and all(map(_real, sensor_velocity_est))):
         raise ConfigError(f"sensor_velocity_est: value {sensor_velocity_est!r} is not allowed; expected None or "
                           "(vx, vy) or (vx, vy, yaw rate), finite numbers (m/s, rad/s)")
 

@@ -40,7 +40,7 @@ from radarnode.scene.world import Scene, SensorView
 from radarnode.schema import Source
 from radarnode.wire import ars408 as P
 from radarnode.wire import ids
-from radarnode.wire.busload import frame_bits
+from radarnode.wire.busload import STANDARD_BITS_NOMINAL, STANDARD_BITS_WORST, frame_bits
 from radarnode.errors import WireError
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.config import MAX_OBJECT_ID, TYPE_CLUSTER, TYPE_NAMES, TYPE_OBJECT, CollisionDetection, ListFilters
@@ -139,6 +139,7 @@ class RadarNode:
         self._rx_t = 0.0                 # scenario time given to the frame being received
         # when the model's tracker first reported each object ID (NaN: not reported last cycle), for Lifetime
         self._born = np.full(MAX_OBJECT_ID + 1, np.nan)
+        self._born_any = False          # whether _born holds a time (an object was listed last cycle)
         wants = setup.road_boundaries
         if wants is None:
             g = scenario.road.guardrails
@@ -332,20 +333,24 @@ class RadarNode:
         Like the real sensor, missing input counts as standstill, so DynProp
         goes wrong in a moving car until speed and yaw rate arrive.
         """
+        return self._motion_estimate(t_s)[0]
+
+    def _motion_estimate(self, t_s: float) -> tuple[tuple[float, float], float]:
+        """(:meth:`_sensor_velocity_estimate`, :meth:`_yaw_rate_estimate`) at ``t_s``, from one look at the input."""
         state = self.motion_rx_state(t_s)
         v = self._speed[0] if not state & 1 else 0.0
         w = math.radians(self._yaw[0]) if not state & 2 else 0.0
         mx, my, myaw = self.scene.mount
         vx, vy = v - w * my, w * mx
         c, s = math.cos(-myaw), math.sin(-myaw)
-        return c * vx - s * vy, s * vx + c * vy
+        return (c * vx - s * vy, s * vx + c * vy), w
 
     def _yaw_rate_estimate(self, t_s: float) -> float:
         """Yaw rate (rad/s) from the ego-motion input; missing input counts as zero."""
         return math.radians(self._yaw[0]) if not self.motion_rx_state(t_s) & 2 else 0.0
 
     def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float],
-                         rows: bool = False) -> list[tuple[int, np.ndarray]]:
+                         rows: bool = False, yaw_rate: float | None = None) -> list[tuple[int, np.ndarray]]:
         """Update the road-boundary estimate and encode RoadBoundary_Left/Right (E2E protected).
 
         Returns (CAN ID, payload) pairs: 0x680/0x681 + 8 × SensorID (``radarnode.wire.ids``). With a
@@ -354,7 +359,8 @@ class RadarNode:
         clusters go to it as the object level's block rows (:meth:`ObjectModel.cluster_rows
         <radarnode.radar.object_model.ObjectModel.cluster_rows>`), not from ``frame``."""
         dt = 0.0 if self._last_t is None else t_s - self._last_t
-        scalars = (dt, sensor_velocity, self._yaw_rate_estimate(t_s), self.config.sensor_id)
+        scalars = (dt, sensor_velocity, self._yaw_rate_estimate(t_s) if yaw_rate is None else yaw_rate,
+                   self.config.sensor_id)
         if rows:
             self._pipe.submit_rows(self._pipe_index, *self.model.cluster_rows(), scalars)
         else:
@@ -477,8 +483,8 @@ class RadarNode:
     def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
         # ARS 408 messages are shifted by 0x10 × SensorID; own messages arrive here with their final ID
         can_id = base_id if ids.split_own_id(base_id) is not None else P.shifted(base_id, self.config.sensor_id)
-        return can.Message(arbitration_id=can_id, is_extended_id=False, data=payload.tobytes(), timestamp=t,
-                           check=False)
+        return can.Message(arbitration_id=can_id, is_extended_id=False,
+                           data=payload if type(payload) is bytes else payload.tobytes(), timestamp=t, check=False)
 
     def _status_frames(self, t_s: float) -> list[tuple[int, np.ndarray]]:
         cfg = self.config
@@ -504,8 +510,11 @@ class RadarNode:
 
         An object is born when its ID was not in the previous cycle's list or its MeasState is "new"."""
         if not len(ol):
-            self._born.fill(np.nan)
+            if self._born_any:
+                self._born.fill(np.nan)
+                self._born_any = False
             return np.zeros(0)
+        self._born_any = True
         slot = np.clip(ol.id, 0, MAX_OBJECT_ID)
         born = self._born[slot]
         new = np.isnan(born) | (ol.meas_state == MEAS_NEW)
@@ -565,17 +574,17 @@ class RadarNode:
         """
         cfg = self.config
         runtime = self._runtime_config()
-        sensor_velocity = self._sensor_velocity_estimate(t_s)
+        sensor_velocity, yaw_rate = self._motion_estimate(t_s)
         # with a boundary process and an object list to send, the cluster list is computed for that process only:
         # the object level hands it over as rows (no list object, no DynProp here)
         rows = self._pipe_rows and self._pipe is not None and self.boundaries is not None and runtime.clusters \
             and cfg.output_type == P.OUTPUT_OBJECTS
         if rows:
-            frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),),
-                                          cluster_list=False)
+            frame, view = self.model.step(t_s, runtime, sensor_velocity + (yaw_rate,), cluster_list=False)
         else:
-            frame, view = self.model.step(t_s, runtime, sensor_velocity + (self._yaw_rate_estimate(t_s),))
-        own = self._boundary_frames(frame, t_s, sensor_velocity, rows) if self.boundaries is not None else []
+            frame, view = self.model.step(t_s, runtime, sensor_velocity + (yaw_rate,))
+        own = self._boundary_frames(frame, t_s, sensor_velocity, rows, yaw_rate) if self.boundaries is not None \
+            else []
         self._last_t = t_s
         out: list[tuple[int, np.ndarray]] = []
         if self._status_now or t_s + 1e-9 >= self._next_status_s:
@@ -594,7 +603,7 @@ class RadarNode:
         relay = self.coll_det.active and cfg.ctrl_relay
         fixed = [len(p) for _, p in out + own] + [8] + (self.coll_det.state_dlcs() if coll_det_now else []) \
             + ([1] if relay else [])
-        fixed_bits = sum(frame_bits(d) for d in fixed)
+        fixed_bits = sum([STANDARD_BITS_WORST[d] for d in fixed])
         budget = self.bus_load_limit * self.bitrate * self.period_s
         if fixed_bits > budget:
             # the frames every such cycle sends (states, the list's header, the boundaries) alone exceed the budget:
@@ -626,9 +635,10 @@ class RadarNode:
                 ol = ol.take(keep[:n_fit])
                 ol = ol.take(self._send_order(ol.id, ol.range_m, ol.rcs_dbsm))
                 frame.objects = ol
-            out.append((P.OBJ_STATUS, self.codecs[P.OBJ_STATUS].encode({
-                "Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
-                "Obj_InterfaceVersion": P.INTERFACE_VERSION})[0]))
+            status = self.codecs[P.OBJ_STATUS]
+            values = {"Obj_NofObjects": len(ol), "Obj_MeasCounter": self._meas_counter,
+                      "Obj_InterfaceVersion": P.INTERFACE_VERSION}
+            out.append((P.OBJ_STATUS, status.encode_values([values[name] for name in status.signal_names])))
             if len(ol):
                 general, quality, extended = P.object_signals(ol)
                 rows = self.codecs[P.OBJ_GENERAL].encode(general)
@@ -698,10 +708,10 @@ class RadarNode:
         messages, elapsed = [], 0                  # frame k at t0 + the nominal bits of the frames before it
         for (base, payload), dlc in zip(out, dlcs):
             messages.append(self._msg(base, payload, t0 + elapsed / self.bitrate))
-            elapsed += frame_bits(dlc, worst_case=False)
+            elapsed += STANDARD_BITS_NOMINAL[dlc]
         self.counters["cycles"] += 1
         self.counters["frames"] += len(messages)
-        result = CycleOutput(t_s, messages, frame, view, sum(frame_bits(d) for d in dlcs), dropped,
+        result = CycleOutput(t_s, messages, frame, view, sum([STANDARD_BITS_WORST[d] for d in dlcs]), dropped,
                              boundaries=(self.last_boundaries if own else None), lead=min(header_at + 1, len(messages)))
         if own and self._pipe is not None:
             self._pipe.attach(messages[-len(own):])

@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 
 import can
 
-from radarnode.wire.busload import frame_time_s
+from radarnode.wire.busload import STANDARD_BITS_NOMINAL
 from radarnode.wire.node import CycleOutput, EgoMotionSender, RadarNode
 from radarnode.wire.pipeline import BoundaryPipeline
 
@@ -198,6 +198,7 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
         for model in (one.model, getattr(one.model, "object", None)):
             if hasattr(model, "planned_cycles"):   # the object level computes its cycles in chunks: none past the end
                 model.planned_cycles = n_cycles
+    bitrate = float(node.bitrate)     # (frame_time_s's division: a frame's nominal time on the wire)
     rx_t = [0.0]       # scenario time given to received frames: the last cycle computed
     busy_until = [-math.inf]   # simulated time: when the last frame computed leaves the bus
     echoes: collections.Counter = collections.Counter()    # the vehicle frames sent, as the bus returns them
@@ -277,11 +278,11 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
                 send(ego_frames)
             stats.frames += len(ego_frames)
             # the radar's frames follow the vehicle's on the wire
-            after = sum(frame_time_s(len(m.data), node.bitrate, worst_case=False) for m in ego_frames)
+            after = sum([STANDARD_BITS_NOMINAL[len(m.data)] / bitrate for m in ego_frames])
         out = node.cycle(t, start + after)
         if out.messages:
             last = out.messages[-1]
-            busy_until[0] = last.timestamp + frame_time_s(len(last.data), node.bitrate, worst_case=False)
+            busy_until[0] = last.timestamp + STANDARD_BITS_NOMINAL[len(last.data)] / bitrate
         rx_t[0] = t
         return out
 
