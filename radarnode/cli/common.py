@@ -298,10 +298,27 @@ def progress(total: int | None, label: str, unit: str = "cycle", *, to_stdout: b
     second whatever the loop's speed, adapts to the terminal width and to resizes, and leaves a clean line when
     closed or interrupted. ``total`` None shows a running count without a bar.
     """
+    if not sys.stderr.isatty() or (to_stdout and sys.stdout.isatty()):
+        return _NoBar()                # (tqdm not even imported: some 6 ms of a command's start)
     from tqdm import tqdm
-    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr,
-                disable=not sys.stderr.isatty() or (to_stdout and sys.stdout.isatty()),
-                dynamic_ncols=True, leave=False)
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, dynamic_ncols=True, leave=False)
+
+
+class _NoBar:
+    """What :func:`progress` gives where no bar is shown: a disabled tqdm's interface (``update``, ``close``,
+    ``disable``, ``write``), doing nothing but ``write``'s printing."""
+
+    disable = True
+
+    def update(self, n: int = 1) -> None:
+        pass
+
+    def close(self) -> None:
+        pass
+
+    @staticmethod
+    def write(s: str, file=None, end: str = "\n") -> None:
+        print(s, file=sys.stdout if file is None else file, end=end)
 
 
 def _special(path: str | os.PathLike) -> bool:
