@@ -158,3 +158,28 @@ def test_scratch_reused_across_point_sets_gives_the_same_accumulator():
         w = rng.uniform(0.1, 3.0, n)
         assert np.array_equal(accumulate(x, y, GRID, scratch=scratch), accumulate(x, y, GRID))
         assert np.array_equal(accumulate(x, y, GRID, weights=w, scratch=scratch), accumulate(x, y, GRID, weights=w))
+
+
+def test_the_votes_are_integer_counts_of_each_cell_and_a_scratch_accumulator_lasts_until_its_next_call():
+    """The unweighted accumulator (votes added one by one into the scratch's memory) against the cell counts
+    computed independently (ρ of each point and θ, rounded to the nearest cell, outside ones dropped); with a
+    scratch the result is its memory: the next call with it replaces it, a copy keeps it."""
+    from radarnode.dsp.hough import Scratch
+    rng = np.random.default_rng(8)
+    scratch = Scratch()
+    step = GRID.rho_m[1] - GRID.rho_m[0]
+    for n in (1, 5, 300, 2000):
+        x, y = rng.uniform(0.0, 80.0, n), rng.uniform(-40.0, 40.0, n)     # many beyond the ρ range
+        acc = accumulate(x, y, GRID, scratch=scratch)
+        rho = np.outer(x, np.cos(GRID.theta_rad)) + np.outer(y, np.sin(GRID.theta_rad))
+        cell = np.floor((rho - GRID.rho_m[0]) / step + 0.5).astype(int)
+        want = np.zeros((GRID.theta_rad.size, GRID.rho_m.size))
+        t = np.broadcast_to(np.arange(GRID.theta_rad.size), cell.shape)
+        inside = (cell >= 0) & (cell < GRID.rho_m.size)
+        np.add.at(want, (t[inside], cell[inside]), 1.0)
+        # (a point within rounding of a cell edge may fall either side: at most a handful of such votes)
+        assert acc.dtype == np.float64 and np.all(acc == np.round(acc)) and np.abs(acc - want).sum() <= 4
+        kept = acc.copy()
+        accumulate(x[:1], y[:1], GRID, scratch=scratch)
+        assert np.array_equal(kept, accumulate(x, y, GRID))
+    assert accumulate(x[:1], y[:1], GRID, scratch=scratch).sum() <= GRID.theta_rad.size

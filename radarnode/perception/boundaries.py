@@ -162,7 +162,7 @@ def _to_odometry(x: np.ndarray, y: np.ndarray, origin: np.ndarray, c: float, s: 
     """Sensor-frame points into the odometry frame of a sensor at ``origin`` (2, 1) with heading cos c, sin s:
     x = ox + c·x − s·y, y = oy + s·x + c·y; shape (2, *x.shape), the rows x and y (one outer product a column)."""
     out = np.multiply.outer((c, s), x)
-    out += origin.reshape(2, *([1] * x.ndim))
+    out += origin if x.ndim == 1 else origin.reshape(2, *([1] * x.ndim))
     out += np.multiply.outer((-s, c), y)
     return out
 
@@ -243,11 +243,13 @@ class RoadBoundaryEstimator:
         self.right = UNAVAILABLE
 
     def update(self, x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarray, dt_s: float,
-               sensor_velocity: tuple[float, float], yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
+               sensor_velocity: tuple[float, float], yaw_rate_rps: float, range_m: np.ndarray | None = None
+               ) -> tuple[Boundary, Boundary]:
         """Add one cycle's detections (sensor frame; radial speed negative when closing) and re-estimate.
 
         ``sensor_velocity`` is the sensor's velocity over ground in its own axes, as known from the ego-
-        motion input; ``dt_s`` is the time since the previous call.
+        motion input; ``dt_s`` is the time since the previous call. ``range_m``: the detections' ranges at least
+        1e-6 m, ``np.maximum(np.hypot(x_m, y_m), 1e-6)``, where the caller has them (else computed here).
         """
         # move the odometry pose by the ego motion since the last cycle
         vx, vy = sensor_velocity
@@ -257,7 +259,7 @@ class RoadBoundaryEstimator:
         self._pose = (ox, oy, h)
         c, s = math.cos(h), math.sin(h)
         origin = np.array([[ox], [oy]])                  # (2, 1)
-        r = np.maximum(np.hypot(x_m, y_m), 1e-6)
+        r = np.maximum(np.hypot(x_m, y_m), 1e-6) if range_m is None else range_m
         ground = range_rate_mps + (vx * x_m + vy * y_m) / r
         still = np.abs(ground) < STATIONARY_MPS
         self._points.append(_to_odometry(x_m[still], y_m[still], origin, c, s))

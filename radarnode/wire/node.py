@@ -420,8 +420,9 @@ class RadarNode:
                          yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
         """One cycle of the road-boundary estimator on the clusters' columns; sets ``last_boundaries``."""
         x_m, y_m, vx, vy, r = columns
-        rate = (x_m * vx + y_m * vy) / np.maximum(r, 1e-6)
-        self.last_boundaries = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps)
+        r = np.maximum(r, 1e-6)
+        rate = (x_m * vx + y_m * vy) / r
+        self.last_boundaries = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps, r)
         return self.last_boundaries
 
     @staticmethod
