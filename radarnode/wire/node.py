@@ -470,7 +470,8 @@ class RadarNode:
         """Hand every cycle's road-boundary estimate to ``pipe`` (a :class:`~radarnode.wire.pipeline.BoundaryPipeline`,
         this node its ``index``-th) instead of computing it here: :meth:`cycle` then returns the two frames blank,
         and the pipe fills them in when its process has computed them (the output's ``boundaries`` stay None: a
-        reader of the estimate decodes the frames)."""
+        reader of the estimate decodes the frames; at the object level, while objects are sent, the frame's cluster
+        list stays empty too: its rows go to the pipe)."""
         self._pipe, self._pipe_index = pipe, index
         # the frames' blank payloads, and their (CAN ID, payload) pairs for the sensor ID they were made for
         self._blank = [None, None, {base: np.zeros(self.own_codecs[base].length, dtype=np.uint8)

@@ -16,7 +16,12 @@ run — another operating system than Linux (the process is started by ``fork``,
 some 0.2 s, more than a log of a minute saves) — and the run is then computed in one process, to the same frames.
 
 The cycles go over in batches of ``BATCH`` (one pickle a batch, not a cycle), with at most ``MAX_IN_FLIGHT`` batches
-unanswered, so neither process can block the other on a full pipe. The process ignores SIGINT and SIGTERM: a Ctrl-C
+unanswered, so neither process can block the other on a full pipe. While a node at the object level sends objects,
+its cluster list is read by nobody but the estimator: the model's table of a block of cycles goes over once
+(:meth:`submit_rows`, :meth:`ObjectModel.cluster_rows <radarnode.radar.object_model.ObjectModel.cluster_rows>`) and
+each cycle names its rows in it, so this process builds no cluster list (the frame's stays empty); the process
+answers a batch's boundary frames encoded a side at a time (:meth:`RadarNode.boundary_payloads_many
+<radarnode.wire.node.RadarNode.boundary_payloads_many>`). The process ignores SIGINT and SIGTERM: a Ctrl-C
 of the terminal reaches both processes, and the run, which ends after the current cycle, still needs the boundary
 frames of the cycles it has computed; it ends when this process closes the pipe (:meth:`BoundaryPipeline.close`) or
 exits, however it exits (it holds no copy of this process's end of the pipe, nor of its standard streams). An
