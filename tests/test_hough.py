@@ -163,10 +163,10 @@ def test_scratch_reused_across_point_sets_gives_the_same_accumulator():
 def test_the_votes_are_integer_counts_of_each_cell_and_a_scratch_accumulator_lasts_until_its_next_call():
     """The unweighted accumulator (votes added one by one into the scratch's memory) against the cell counts
     computed independently (ρ of each point and θ, rounded to the nearest cell, outside ones dropped); with a
-    scratch the result is its memory: the next call with it replaces it, a copy keeps it."""
+    scratch that shares its result, the result is its memory: the next call with it replaces it, a copy keeps it."""
     from radarnode.dsp.hough import Scratch
     rng = np.random.default_rng(8)
-    scratch = Scratch()
+    scratch = Scratch(share_result=True)
     step = GRID.rho_m[1] - GRID.rho_m[0]
     for n in (1, 5, 300, 2000):
         x, y = rng.uniform(0.0, 80.0, n), rng.uniform(-40.0, 40.0, n)     # many beyond the ρ range
@@ -183,3 +183,8 @@ def test_the_votes_are_integer_counts_of_each_cell_and_a_scratch_accumulator_las
         accumulate(x[:1], y[:1], GRID, scratch=scratch)
         assert np.array_equal(kept, accumulate(x, y, GRID))
     assert accumulate(x[:1], y[:1], GRID, scratch=scratch).sum() <= GRID.theta_rad.size
+    # a scratch that does not share its result (the default): every accumulator is the caller's own
+    own = Scratch()
+    first = accumulate(x, y, GRID, scratch=own)
+    second = accumulate(x[:1], y[:1], GRID, scratch=own)
+    assert np.array_equal(first, accumulate(x, y, GRID)) and not np.shares_memory(first, second)

@@ -270,6 +270,7 @@ def test_cluster_rows_are_the_cluster_lists_columns():
             assert np.array_equal(row, col)
         np.testing.assert_array_equal(bare.objects.dist_long_m, frame.objects.dist_long_m)
         blocks.add(id(rows))
+        assert not rows.flags.writeable
         if k == 40:
             assert len(cl) > 20          # the guardrail posts
     assert len(blocks) == 3

@@ -62,10 +62,14 @@ class Scratch:
     points × 120 θ a call) keeps one; each array is then about 0.8 MB, beyond malloc's mmap threshold, so that a
     fresh pair a call was page-faulted in anew every call (about half the call's time on a 2-core machine)."""
 
-    def __init__(self) -> None:
+    def __init__(self, share_result: bool = False) -> None:
         self._cell = np.empty(0)
         self._idx = np.empty(0, dtype=np.intp)
         self._votes = np.empty(0)
+        #: :func:`accumulate` returns the accumulator in this scratch's memory (valid until its next call with it)
+        #: instead of a copy: for a caller that reads each accumulator before the next (the road-boundary search:
+        #: a new 270 kB array a call, written page by page, was most of the search's time)
+        self.share_result = share_result
 
     def arrays(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(n,) float64 and intp views of the work arrays, grown (to 1.5× what is asked) when too small."""
@@ -86,8 +90,8 @@ class Scratch:
 def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarray | None = None,
                scratch: Scratch | None = None) -> np.ndarray:
     """The Hough accumulator, shape (n_theta, n_rho); points beyond the ρ range vote nowhere. ``scratch``: work
-    arrays to reuse (:class:`Scratch`; the result is the same with or without, but with it the result is held in
-    the scratch's memory: valid until the next call with the same scratch — copy it to keep it)."""
+    arrays to reuse (:class:`Scratch`; the result is the same with or without; with ``Scratch(share_result=True)``
+    it is held in the scratch's memory, valid until the next call with the same scratch)."""
     x = np.asarray(x, dtype=np.float64)
     y = np.asarray(y, dtype=np.float64)
     if x.shape != y.shape or x.ndim != 1:
@@ -122,6 +126,8 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
         # took 0.2 ms a call here to write bincount's new 270 kB result and its conversion to float page by page
         votes = scratch.votes(n_t * (n_r + 2))
         np.add.at(votes, idx, 1.0)
+        if not scratch.share_result:
+            votes = votes.copy()
     else:
         votes = np.bincount(idx, weights=np.broadcast_to(w[:, None], (x.size, n_t)).ravel(),
                             minlength=n_t * (n_r + 2))

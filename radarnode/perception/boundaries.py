@@ -231,7 +231,7 @@ class RoadBoundaryEstimator:
         # (one continuous range through 90°, where the full [−90°, 90°) grid would split them at its ends)
         full = HoughGrid.make(rho_max_m=max_offset_m + 5.0, rho_step_m=0.25, theta_step_deg=0.5)
         self.grid = HoughGrid(np.radians(np.arange(60.0, 120.0, 0.5)), full.rho_m)
-        self._scratch = Scratch()                    # the Hough search's work arrays, reused
+        self._scratch = Scratch(share_result=True)   # the Hough search's work arrays and accumulator, reused
         self._points: list[np.ndarray] = []          # per cycle: (2, n), the rows x and y in the odometry frame
         self._pose = (0.0, 0.0, 0.0)                 # odometry: x, y, heading of the sensor
         # the followed boundaries' samples in the odometry frame (per side: the lists x and y, or None), and which

@@ -1380,7 +1380,7 @@ class ObjectModel:
     def cluster_rows(self) -> tuple[np.ndarray, int, int]:
         """The last step's cluster list as rows of its block's table, for a reader of positions and velocities only
         (the road-boundary process, :mod:`radarnode.wire.pipeline`): the block's dist_long, dist_lat, vrel_long and
-        vrel_lat, shape (4, m), one array for every cycle of the block (read it, do not write to it), and the
+        vrel_lat, shape (4, m), one read-only array for every cycle of the block, and the
         cycle's rows a … b−1 of it — the values of the ClusterList :meth:`step` builds, without its DynProp, σ and
         the list object (step with ``cluster_list=False`` to skip those). The step's configuration must ask for
         clusters."""
@@ -1392,6 +1392,7 @@ class ObjectModel:
         rows = tab.get("rows")
         if rows is None:
             rows = tab["rows"] = tab["f"][:4]
+            rows.flags.writeable = False       # (a view: the table's cluster lists stay as they are)
         return rows, tab["starts"][j], tab["starts"][j + 1]
 
     def _dyn_cycle(self, ch: dict, i: int, idx: np.ndarray, vx: np.ndarray, vy: np.ndarray, sv) -> np.ndarray:
