@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import can
 import numpy as np
 
+from radarnode.errors import WireError
 from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
 from radarnode.radar import presets
@@ -41,7 +42,6 @@ from radarnode.schema import Source
 from radarnode.wire import ars408 as P
 from radarnode.wire import ids
 from radarnode.wire.busload import STANDARD_BITS_NOMINAL, STANDARD_BITS_WORST, frame_bits
-from radarnode.errors import WireError
 from radarnode.wire.codec import MessageCodec
 from radarnode.wire.config import MAX_OBJECT_ID, TYPE_CLUSTER, TYPE_NAMES, TYPE_OBJECT, CollisionDetection, ListFilters
 from radarnode.wire.dbc import load_database, load_own_database
@@ -327,16 +327,12 @@ class RadarNode:
         yaw_missing = self._yaw is None or t_s - self._yaw[1] > MOTION_TIMEOUT_S
         return int(speed_missing) | (int(yaw_missing) << 1)
 
-    def _sensor_velocity_estimate(self, t_s: float) -> tuple[float, float]:
-        """Sensor velocity over ground (sensor axes) from the ego-motion input.
+    def _motion_estimate(self, t_s: float) -> tuple[tuple[float, float], float]:
+        """The sensor's velocity over ground (sensor axes) and the yaw rate (rad/s) from the ego-motion input.
 
-        Like the real sensor, missing input counts as standstill, so DynProp
+        Like the real sensor, missing input counts as standstill (speed and yaw rate zero), so DynProp
         goes wrong in a moving car until speed and yaw rate arrive.
         """
-        return self._motion_estimate(t_s)[0]
-
-    def _motion_estimate(self, t_s: float) -> tuple[tuple[float, float], float]:
-        """(:meth:`_sensor_velocity_estimate`, :meth:`_yaw_rate_estimate`) at ``t_s``, from one look at the input."""
         state = self.motion_rx_state(t_s)
         v = self._speed[0] if not state & 1 else 0.0
         w = math.radians(self._yaw[0]) if not state & 2 else 0.0
@@ -345,12 +341,8 @@ class RadarNode:
         c, s = math.cos(-myaw), math.sin(-myaw)
         return (c * vx - s * vy, s * vx + c * vy), w
 
-    def _yaw_rate_estimate(self, t_s: float) -> float:
-        """Yaw rate (rad/s) from the ego-motion input; missing input counts as zero."""
-        return math.radians(self._yaw[0]) if not self.motion_rx_state(t_s) & 2 else 0.0
-
-    def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float],
-                         rows: bool = False, yaw_rate: float | None = None) -> list[tuple[int, np.ndarray]]:
+    def _boundary_frames(self, frame: RadarFrame, t_s: float, sensor_velocity: tuple[float, float], yaw_rate: float,
+                         rows: bool) -> list[tuple[int, np.ndarray]]:
         """Update the road-boundary estimate and encode RoadBoundary_Left/Right (E2E protected).
 
         Returns (CAN ID, payload) pairs: 0x680/0x681 + 8 × SensorID (``radarnode.wire.ids``). With a
@@ -359,8 +351,7 @@ class RadarNode:
         clusters go to it as the object level's block rows (:meth:`ObjectModel.cluster_rows
         <radarnode.radar.object_model.ObjectModel.cluster_rows>`), not from ``frame``."""
         dt = 0.0 if self._last_t is None else t_s - self._last_t
-        scalars = (dt, sensor_velocity, self._yaw_rate_estimate(t_s) if yaw_rate is None else yaw_rate,
-                   self.config.sensor_id)
+        scalars = (dt, sensor_velocity, yaw_rate, self.config.sensor_id)
         if rows:
             self._pipe.submit_rows(self._pipe_index, *self.model.cluster_rows(), scalars)
         else:
@@ -585,7 +576,7 @@ class RadarNode:
             frame, view = self.model.step(t_s, runtime, sensor_velocity + (yaw_rate,), cluster_list=False)
         else:
             frame, view = self.model.step(t_s, runtime, sensor_velocity + (yaw_rate,))
-        own = self._boundary_frames(frame, t_s, sensor_velocity, rows, yaw_rate) if self.boundaries is not None \
+        own = self._boundary_frames(frame, t_s, sensor_velocity, yaw_rate, rows) if self.boundaries is not None \
             else []
         self._last_t = t_s
         out: list[tuple[int, np.ndarray]] = []
