@@ -7,6 +7,9 @@ import functools
 import numpy as np
 
 
+_TINY = np.finfo(np.float64).tiny
+
+
 def local_maxima(power: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Cells of ``mask`` that are the maximum of their 3×3 neighbourhood (both axes wrap: both FFTs are circular).
 
@@ -85,12 +88,17 @@ class _PatchAxis:
         # with q an integer: sin(π(q−δ)) = −(−1)^q·sin(πδ) and sin(π(q−δ)/L) = sin(πq/L)cos(πδ/L) −
         # cos(πq/L)sin(πδ/L), so no transcendental function is evaluated per patch cell
         self._sign = -np.where(q % 2, -1.0, 1.0)
-        self._sin_q, self._cos_q = np.sin(np.pi * q / L), np.cos(np.pi * q / L)
+        self._den = np.stack((np.sin(np.pi * q / L), -np.cos(np.pi * q / L)))          # (2, Q)
         # W(i − δ) = Σ_k c_k·D(i − k − δ): term k reads the q = i − k, a slice of the q axis, times c_k·phase(q)
         phase = np.exp(-1j * np.pi * q * (L - 1) / L)
         self._slices = [slice(self.reach - int(t), self.reach - int(t) + 2 * max_half + 1) for t in self.terms_k]
-        coef = [c * self._sign[sl] * phase[sl] for c, sl in zip(self.terms_c, self._slices)]
-        self._coef = [x.real.copy() for x in coef], [x.imag.copy() for x in coef]
+        # the response is then one real product, ratio (…, Q) @ mix (Q, 2J), whose columns hold each patch offset's
+        # real and imaginary coefficients side by side (so the product is the complex response's memory)
+        mix = np.zeros((q.size, 2 * max_half + 1), dtype=np.complex128)
+        cols = np.arange(2 * max_half + 1)
+        for c, sl in zip(self.terms_c, self._slices):
+            mix[np.arange(sl.start, sl.stop), cols] += c * self._sign[sl] * phase[sl]
+        self._mix = np.ascontiguousarray(mix.view(np.float64).reshape(q.size, 2 * (2 * max_half + 1)))
         rho = noise_correlation(w)
         # R⁻¹ of each patch size m ≤ max_half, embedded in the largest patch (zero outside): one batch serves
         # patches of every size, the cells outside a peak's own patch get no weight
@@ -101,6 +109,9 @@ class _PatchAxis:
             corr = rho[(lag[:, None] - lag[None, :]) % L]                        # E[X_i X_l*] / σ²
             sl = slice(max_half - m, max_half + m + 1)
             self.inverse[m, sl, sl] = np.linalg.inv(corr)
+        # its real part in its own memory: the fits' products read it (a strided .real view is copied by every
+        # product that reads it)
+        self.inverse_real = np.ascontiguousarray(self.inverse.real)
         # h^H R⁻¹ h depends only on δ and m: tabulated on a fine grid (linear interpolation moves a fit by
         # < 1e-5 bin), so the search needs R⁻¹ only once per peak, on the data. One product per patch size on its
         # own block of R⁻¹ (a loop over the sizes, not the grid; one einsum over the blocks embedded in the largest
@@ -135,8 +146,10 @@ class _PatchAxis:
         """W(i − δ)·e^{−iπδ(L−1)/L} for the patch offsets i = −max_half…max_half: shape delta.shape + (J,)."""
         L = self.length
         delta = np.asarray(delta, dtype=np.float64)[..., None]
-        den = self._sin_q * np.cos(np.pi * delta / L)
-        den -= self._cos_q * np.sin(np.pi * delta / L)                                  # (..., Q)
+        a = np.pi * delta / L
+        # sin(πq/L)cos(a) − cos(πq/L)sin(a), one product (…, 2) @ (2, Q)
+        den = (np.concatenate((np.cos(a), np.sin(a)), axis=-1).reshape(-1, 2) @ self._den
+               ).reshape(delta.shape[:-1] + (self._den.shape[1],))                        # (..., Q)
         tiny = np.abs(den) < 1e-12
         if tiny.any():
             den[tiny] = 1.0
@@ -144,14 +157,8 @@ class _PatchAxis:
             ratio[tiny] = float(L) * self._sign[np.nonzero(tiny)[-1]]                  # the limit at q = δ
         else:
             ratio = np.sin(np.pi * delta) / den
-        re_c, im_c = self._coef
-        out = np.empty(ratio.shape[:-1] + (len(re_c[0]),), dtype=np.complex128)
-        out.real = ratio[..., self._slices[0]] * re_c[0]
-        out.imag = ratio[..., self._slices[0]] * im_c[0]
-        for sl, cr, ci in zip(self._slices[1:], re_c[1:], im_c[1:]):                     # a few window terms
-            out.real += ratio[..., sl] * cr
-            out.imag += ratio[..., sl] * ci
-        return out                                                           # (..., J)
+        flat = ratio.reshape(-1, ratio.shape[-1]) @ self._mix                            # one product, (…, 2J)
+        return flat.view(np.complex128).reshape(ratio.shape[:-1] + (self._mix.shape[1] // 2,))   # (..., J)
 
 
 #: patch sizes computed together: a peak's patch is embedded in the smallest of these that holds it
@@ -159,6 +166,8 @@ PATCH_BUCKETS = (3, 6, 12, 32)
 #: PatchFit.refit takes out of a patch the tones of the peaks within this many bins of its edge (a Hann tone's
 #: sidelobes 5 bins from its peak are 50 dB down)
 REFIT_REACH = 5
+#: … one product for the patches of each count of such peaks rounded up to a multiple of this
+SUBTRACT_GROUP = 4
 
 
 def _patch_axes(doppler_window: np.ndarray, range_window: np.ndarray, max_half: int):
@@ -307,7 +316,7 @@ class PatchFit:
 
     def refit(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
               snapshot: np.ndarray, half: np.ndarray, which: np.ndarray, new_half: np.ndarray,
-              reach: np.ndarray | None = None, rounds: tuple | None = None
+              reach: np.ndarray | None = None, rounds: tuple | None = None, store: PatchStore | None = None
               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fit the peaks ``which`` of a first fit again over larger patches, every other peak's fitted tone taken
         out of them.
@@ -320,9 +329,14 @@ class PatchFit:
         within ``REFIT_REACH`` bins of a patch, or within their own ``reach`` (shape (K,), e.g. :meth:`leak_reach`:
         a strong tone's sidelobes reach further), are subtracted from it, and the peak is fitted on what is left
         with half-width ``new_half``, searched on ``rounds`` (default ``REFIT_ROUNDS``; ``ROUNDS``, the first fit's,
-        for a start further off). Returns (δ_d, δ_r, snapshot) of the peaks ``which``, as :meth:`__call__`.
+        for a start further off). ``store``: a :class:`PatchStore` of ``rd`` and these peaks, which cuts each patch
+        once for every call that shares it (the same results). Returns (δ_d, δ_r, snapshot) of the peaks ``which``,
+        as :meth:`__call__`.
         """
         d, r, fd, fr, halves = _checked(rd, d, r, delta_d, delta_r, half, self.max_half)
+        if store is not None and not store.holds(rd, d, r):
+            raise ValueError("store: a PatchStore of another map or other peaks is not allowed; expected one made "
+                             "with this rd, d and r")
         which = np.asarray(which, dtype=np.int64)
         new = np.broadcast_to(np.asarray(new_half), which.shape)
         if which.size == 0:
@@ -338,7 +352,7 @@ class PatchFit:
         def fit(sel, b):
             axis_d, axis_r = self.axes[b]
             p = which[sel]
-            x = _patches(rd, d[p], r[p], b, (1, 2, 0, 3))                                 # (S, J_d, C, J_r)
+            x = _patches(rd, d[p], r[p], b, (1, 2, 0, 3)) if store is None else store.take(p, b)   # (S, J_d, C, J_r)
             # the other peaks near enough to reach the patch: pairs (patch, peak), circular distances in bins
             dd = (d[None, :] - d[p][:, None] + rows // 2) % rows - rows // 2
             dr = (r[None, :] - r[p][:, None] + cols // 2) % cols - cols // 2
@@ -351,16 +365,27 @@ class PatchFit:
                 ld, lr = axis_d.length, axis_r.length
                 wd = axis_d.response(dd[i, q] + fd[q]) * np.exp(1j * np.pi * dd[i, q] * (ld - 1) / ld)[:, None]
                 wr = axis_r.response(dr[i, q] + fr[q]) * np.exp(1j * np.pi * dr[i, q] * (lr - 1) / lr)[:, None]
-                # Σ over a patch's neighbours of wd ⊗ a ⊗ wr: one product per patch over its neighbours (padded to
-                # the most any patch has), (J_d·C × K) @ (K × J_r)
+                # Σ over a patch's neighbours of wd ⊗ a ⊗ wr: one product per patch over its neighbours,
+                # (J_d·C × K) @ (K × J_r), the patches grouped by their count of neighbours rounded up to
+                # SUBTRACT_GROUP (padded with zeros to it: one padding to the most any patch has did 1.7× the
+                # arithmetic on the post-lined highway, and zeroed 8 MB a call)
                 count = np.bincount(i, minlength=p.size)
                 slot = np.arange(i.size) - np.repeat(np.cumsum(count) - count, count)     # i is sorted
                 j, c = wd.shape[1], amp.shape[1]
-                left = np.zeros((p.size, count.max(), j, c), dtype=np.complex128)
-                right = np.zeros((p.size, count.max(), j), dtype=np.complex128)
-                left[i, slot] = wd[:, :, None] * amp[q][:, None, :]
-                right[i, slot] = wr
-                x -= (left.reshape(p.size, -1, j * c).transpose(0, 2, 1) @ right).reshape(p.size, j, c, j)
+                tone = wd[:, :, None] * amp[q][:, None, :]                                   # (pairs, J_d, C)
+                cap = -(-count // SUBTRACT_GROUP) * SUBTRACT_GROUP
+                at = np.empty(p.size, dtype=np.int64)
+                for size in np.unique(cap[cap > 0]):                                      # a few sizes
+                    members = np.flatnonzero(cap == size)
+                    at[:] = -1
+                    at[members] = np.arange(members.size)
+                    pair = np.flatnonzero(at[i] >= 0)
+                    left = np.zeros((members.size, size, j, c), dtype=np.complex128)
+                    right = np.zeros((members.size, size, j), dtype=np.complex128)
+                    left[at[i[pair]], slot[pair]] = tone[pair]
+                    right[at[i[pair]], slot[pair]] = wr[pair]
+                    x[members] -= (left.reshape(members.size, -1, j * c).transpose(0, 2, 1) @ right
+                                   ).reshape(members.size, j, c, j)
             return self._fit_patches(x, fd[p], fr[p], new[sel], axis_d, axis_r,
                                      self.REFIT_ROUNDS if rounds is None else rounds)
 
@@ -391,7 +416,7 @@ class PatchFit:
         # a (J_d·C × J_r) @ (J_r × 1) one
         by_d, by_r = x.reshape(k, j, c * j), x.reshape(k, j * c, j)
         # R⁻¹ is real: its products run on real and imaginary parts side by side (_real_left)
-        inv_d, inv_r = axis_d.inverse[halves].real, axis_r.inverse[halves].real          # (K, J, J)
+        inv_d, inv_r = axis_d.inverse_real[halves], axis_r.inverse_real[halves]          # (K, J, J)
 
         def over_range(g):            # Σ_j conj(g_j)·X_c[i, j] for templates g (K, J_r): (K, C, J_d)
             return (by_r @ g.conj()[:, :, None]).reshape(k, j, c).transpose(0, 2, 1)
@@ -422,8 +447,8 @@ class PatchFit:
         parabola through the best grid point and its neighbours; and the best grid point's template h."""
         cand = np.clip(start[:, None] + grid[None, :], -1.0, 1.0)                   # (K, P)
         h = axis.response(cand)                                                      # (K, P, J)
-        s = u @ np.swapaxes(h, 1, 2).conj()                                          # (K, C, P)
-        obj = (s.real ** 2 + s.imag ** 2).sum(axis=1) / np.maximum(axis.norm(cand, halves), np.finfo(np.float64).tiny)
+        s = (h.conj() @ np.swapaxes(u, 1, 2)).view(np.float64)                         # (K, P, 2C): h^H u_c side by side
+        obj = np.einsum("kpc,kpc->kp", s, s) / np.maximum(axis.norm(cand, halves), _TINY)
         best = np.clip(np.argmax(obj, axis=1), 1, grid.size - 2)
         rows = np.arange(obj.shape[0])
         o_m, o_0, o_p = obj[rows, best - 1], obj[rows, best], obj[rows, best + 1]
@@ -541,6 +566,35 @@ class _ShiftTable:
         out *= frac.reshape(frac.shape + (1,) * (win[0].ndim - 2))
         out += win[0][f, k]
         return out
+
+
+class PatchStore:
+    """The patches of peaks (``d``, ``r``) of one map ``rd``, cut once a size and handed out as copies:
+    :meth:`PatchFit.refit`'s passes fit the same peaks of the same map again (cutting them was a tenth of a refit on
+    the post-lined highway). The map must not change while the store is in use."""
+
+    def __init__(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray) -> None:
+        self.rd, self.d, self.r = rd, np.asarray(d), np.asarray(r)
+        self._cut: dict[int, tuple[np.ndarray, np.ndarray]] = {}      # half-width -> (patches, which are cut)
+
+    def holds(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray) -> bool:
+        """Whether this is the store of map ``rd`` and peaks (``d``, ``r``)."""
+        return rd is self.rd and np.array_equal(d, self.d) and np.array_equal(r, self.r)
+
+    def take(self, which: np.ndarray, m: int) -> np.ndarray:
+        """A copy of the (2m + 1) × (2m + 1) patches of the peaks ``which``, as :func:`_patches` with axes
+        (1, 2, 0, 3): shape (len(which), J_d, channel, J_r)."""
+        got = self._cut.get(m)
+        if got is None:                 # rows only written where a peak is cut: the rest of the memory stays untouched
+            j = 2 * m + 1
+            got = self._cut[m] = (np.empty((self.d.size, j, self.rd.shape[0], j), dtype=np.complex128),
+                                  np.zeros(self.d.size, dtype=bool))
+        cut, done = got
+        need = np.unique(which[~done[which]])
+        if need.size:
+            cut[need] = _patches(self.rd, self.d[need], self.r[need], m, (1, 2, 0, 3))
+            done[need] = True
+        return cut[which]
 
 
 def _patches(rd: np.ndarray, d: np.ndarray, r: np.ndarray, m: int, axes: tuple[int, ...] = (1, 0, 2, 3)
@@ -711,7 +765,7 @@ class MigrationFit:
         x_all = _patches(rd, d, r, m)                                                    # (K, C, J_d, J_r)
         # R⁻¹ is real (the noise correlation of a real window): products with it run on the real and imaginary
         # parts side by side (_real_left), half the arithmetic of a complex product
-        inv_d, inv_r = axis_d.inverse[halves].real, axis_r.inverse[halves].real          # (K, J, J)
+        inv_d, inv_r = axis_d.inverse_real[halves], axis_r.inverse_real[halves]          # (K, J, J)
         if channels is None:
             x = x_all
         else:                                         # the patch along the channel vector: (K, 1, J_d, J_r)

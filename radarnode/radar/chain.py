@@ -17,8 +17,8 @@ from radarnode.errors import ConfigError, FieldError, short_repr
 from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
-from radarnode.dsp.peaks import (MigrationFit, PatchFit, interpolate, local_maxima, nearest_peak, patch_halves,
-                                 reached)
+from radarnode.dsp.peaks import (MigrationFit, PatchFit, PatchStore, interpolate, local_maxima, nearest_peak,
+                                 patch_halves, reached)
 from radarnode.dsp import spread
 from radarnode.dsp.spectra import WINDOWS, noncoherent_power, range_doppler, window
 from radarnode.perception.types import Detections
@@ -402,6 +402,7 @@ class DspChain:
                     fd[meet], fr[meet] = 0.0, 0.0
                     s_top[meet] = fit.snapshot(rd, d[top[meet]], r[top[meet]], 0.0, 0.0, half[meet])
                 seen = half.copy()
+                store = PatchStore(rd, d[top], r[top])          # every pass cuts the same patches of the same map
                 for k in range(REFIT_PASSES if grow.size else 0):
                     # every pass for every peak refitted: what the first pass took out for a neighbour was the
                     # neighbour's first fit, which leaned into this peak's lobe or took its sidelobes for its own.
@@ -420,7 +421,7 @@ class DspChain:
                     last = np.isin(grow, first_last) if k == 0 else far
                     for stage in (~last, last):
                         fits = [(sel, fit.refit(rd, d[top], r[top], fd, fr, s_top, seen, grow[sel], wider[sel],
-                                                reach[top], rounds))
+                                                reach[top], rounds, store))
                                 for sel, rounds in ((stage & ~far, None), (stage & far, fit.ROUNDS)) if sel.any()]
                         for sel, (new_d, new_r, new_s) in fits:
                             which = grow[sel]
