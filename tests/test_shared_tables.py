@@ -43,8 +43,8 @@ def test_fits_of_the_same_windows_share_their_axes_and_the_shared_arrays_are_rea
     assert peaks.PatchFit(other, w, 12).axes[12][0] is not a.axes[12][0]          # another window: its own
     assert peaks.PatchFit(w, w, 6).axes[6][0] is a.axes[6][0]                      # a bucket of the larger fit
     assert peaks.MigrationFit(w.copy(), w.copy(), 12)._doppler is mig._doppler
-    for arr in (a.axes[12][0].inverse, a.axes[12][0]._norm, a.axes[12][0]._coef[0][0], mig._doppler.value,
-                mig._range.slope, mig.nodes):
+    for arr in (a.axes[12][0].inverse, a.axes[12][0].inverse_real, a.axes[12][0]._norm, a.axes[12][0]._mix,
+                a.axes[12][0]._den, mig._doppler.value, mig._range.slope, mig.nodes):
         with pytest.raises(ValueError, match="read-only"):
             arr[(0,) * arr.ndim] = 1.0
 
