@@ -10,6 +10,12 @@ import numpy as np
 _TINY = np.finfo(np.float64).tiny
 
 
+def _clamp(x, lo, hi):
+    """``np.clip(x, lo, hi)`` for lo ≤ hi (NaN stays NaN), two ufuncs without np.clip's Python-level wrappers: the
+    fits' loops clamp some 500 times a frame."""
+    return np.minimum(np.maximum(x, lo), hi)
+
+
 def local_maxima(power: np.ndarray, mask: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Cells of ``mask`` that are the maximum of their 3×3 neighbourhood (both axes wrap: both FFTs are circular).
 
@@ -49,20 +55,20 @@ def interpolate(power: np.ndarray, d: np.ndarray, r: np.ndarray, window: str = "
 
 
 def _hann_ratio(p_m, p_0, p_p):
-    tiny = np.finfo(np.float64).tiny
+    tiny = _TINY
     right = p_p >= p_m
     alpha = np.sqrt(np.where(right, p_p, p_m) / np.maximum(p_0, tiny))
-    delta = np.clip((2.0 * alpha - 1.0) / (alpha + 1.0), 0.0, 0.5)
+    delta = _clamp((2.0 * alpha - 1.0) / (alpha + 1.0), 0.0, 0.5)
     return np.where(right, delta, -delta)
 
 
 def _log_parabola(p_m, p_0, p_p):
-    tiny = np.finfo(np.float64).tiny
+    tiny = _TINY
     a_m, a_0, a_p = (np.log(np.maximum(x, tiny)) for x in (p_m, p_0, p_p))
     den = a_m - 2.0 * a_0 + a_p
     with np.errstate(divide="ignore", invalid="ignore"):
         delta = np.where(den < 0, 0.5 * (a_m - a_p) / den, 0.0)
-    return np.clip(delta, -0.5, 0.5)
+    return _clamp(delta, -0.5, 0.5)
 
 
 class _PatchAxis:
@@ -136,7 +142,7 @@ class _PatchAxis:
     def norm(self, delta: np.ndarray, halves: np.ndarray) -> np.ndarray:
         """h^H R⁻¹ h of tones at ``delta`` (shape (K, P)) for patch half-widths ``halves`` (shape (K,))."""
         pos = (np.asarray(delta) + self.NORM_SPAN) * self.NORM_STEPS
-        i0 = np.clip(np.floor(pos).astype(np.int64), 0, self._norm.shape[1] - 2)
+        i0 = _clamp(np.floor(pos).astype(np.int64), 0, self._norm.shape[1] - 2)
         frac = pos - i0
         row = self._norm[np.asarray(halves)[:, None], i0]
         nxt = self._norm[np.asarray(halves)[:, None], i0 + 1]
@@ -221,7 +227,7 @@ def _checked(rd: np.ndarray, d, r, delta_d, delta_r, half, max_half: int):
     halves = np.full(k, max_half) if half is None else np.broadcast_to(np.asarray(half), (k,))
     if not np.issubdtype(halves.dtype, np.integer) or np.any(halves < 1):
         raise ValueError(f"half: values {np.unique(halves)[:5]} are not allowed; expected integers of at least 1")
-    return d, r, np.clip(fd, -1.0, 1.0), np.clip(fr, -1.0, 1.0), halves
+    return d, r, _clamp(fd, -1.0, 1.0), _clamp(fr, -1.0, 1.0), halves
 
 
 def _per_bucket(buckets, halves: np.ndarray, fd: np.ndarray, fr: np.ndarray, channels: int, fit):
@@ -445,18 +451,18 @@ class PatchFit:
                 ) -> np.ndarray:
         """The offset on ``start`` + ``grid`` that maximises Σ_c |h^H u_c|²/h^H R⁻¹ h (u = R⁻¹v), refined by a
         parabola through the best grid point and its neighbours; and the best grid point's template h."""
-        cand = np.clip(start[:, None] + grid[None, :], -1.0, 1.0)                   # (K, P)
+        cand = _clamp(start[:, None] + grid[None, :], -1.0, 1.0)                   # (K, P)
         h = axis.response(cand)                                                      # (K, P, J)
         s = (h.conj() @ np.swapaxes(u, 1, 2)).view(np.float64)                         # (K, P, 2C): h^H u_c side by side
         obj = np.einsum("kpc,kpc->kp", s, s) / np.maximum(axis.norm(cand, halves), _TINY)
-        best = np.clip(np.argmax(obj, axis=1), 1, grid.size - 2)
+        best = _clamp(np.argmax(obj, axis=1), 1, grid.size - 2)
         rows = np.arange(obj.shape[0])
         o_m, o_0, o_p = obj[rows, best - 1], obj[rows, best], obj[rows, best + 1]
         den = o_m - 2.0 * o_0 + o_p
         with np.errstate(divide="ignore", invalid="ignore"):
             frac = np.where(den < 0, 0.5 * (o_m - o_p) / den, 0.0)
         step = grid[1] - grid[0]
-        return np.clip(cand[rows, best] + np.clip(frac, -1.0, 1.0) * step, -1.0, 1.0), h[rows, best]
+        return _clamp(cand[rows, best] + _clamp(frac, -1.0, 1.0) * step, -1.0, 1.0), h[rows, best]
 
 
 def patch_halves(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[int, int], max_half: int,
@@ -473,7 +479,7 @@ def patch_halves(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[i
     others = np.arange(d.size) if among is None else np.asarray(among, dtype=np.int64)
     if others.size == 0:
         return np.full(which.size, max_half, dtype=np.int64)
-    return np.clip(nearest_peak(d, r, which, shape, others) - 3, 1, max_half).astype(np.int64)
+    return _clamp(nearest_peak(d, r, which, shape, others) - 3, 1, max_half).astype(np.int64)
 
 
 def nearest_peak(d: np.ndarray, r: np.ndarray, which: np.ndarray, shape: tuple[int, int],
@@ -770,7 +776,7 @@ class MigrationFit:
             x = x_all
         else:                                         # the patch along the channel vector: (K, 1, J_d, J_r)
             u = np.asarray(channels, dtype=np.complex128)
-            u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), np.finfo(np.float64).tiny)
+            u = u / np.maximum(np.linalg.norm(u, axis=1, keepdims=True), _TINY)
             x = (u.conj()[:, None, :] @ x_all.reshape(k, x_all.shape[1], -1)).reshape(k, 1, 2 * m + 1, 2 * m + 1)
         # the patches whitened once: Y_c = R_d⁻¹·X_c·R_r⁻¹ (R real and symmetric)
         y = _real_left(inv_d[:, None], x)
@@ -790,7 +796,7 @@ class MigrationFit:
         num = (x_all.reshape(k, x_all.shape[1], -1) @ tmpl.reshape(k, -1, 1))[..., 0]   # (K, C)
         den = np.einsum("kqr,kqr->k", a.conj().transpose(0, 2, 1) @ ga, b.conj().transpose(0, 2, 1) @ gb).real
         # <T, X_c> = <T, T>·a_c for a noise-free X_c = a_c·T: over √<T, T>, the amplitude with one cell's noise
-        return fd, fr, num / np.sqrt(np.maximum(den, np.finfo(np.float64).tiny))[:, None]
+        return fd, fr, num / np.sqrt(np.maximum(den, _TINY))[:, None]
 
     @staticmethod
     def _likelihood(a, b, y, inv_d, inv_r) -> np.ndarray:
@@ -811,7 +817,7 @@ class MigrationFit:
         bq = np.ascontiguousarray(b.conj().transpose(0, 3, 1, 2)).reshape(n, q * j, p)   # (n, Q·J_r, P)
         num = z.reshape(n, c * i, q * j) @ bq                                            # (n, C·I, P)
         like = (num.real ** 2 + num.imag ** 2).reshape(n, c, i, p).sum(axis=1)
-        return like / np.maximum(den, np.finfo(np.float64).tiny)
+        return like / np.maximum(den, _TINY)
 
     def _newton(self, y, fd, fr, mu, off, inv_d, inv_r):
         """The offsets that maximise the likelihood (:meth:`_likelihood`) of the whitened patches ``y`` (K, C,
@@ -835,8 +841,8 @@ class MigrationFit:
             if not going.size:
                 break
             n, g, e_d, e_r = going.size, h[going], fd[going], fr[going]
-            cd = np.clip(e_d[:, None] + g[:, None] * three, -1.0, 1.0)                     # (n, 3)
-            cr = np.clip(e_r[:, None] + g[:, None] * three, -1.0, 1.0)
+            cd = _clamp(e_d[:, None] + g[:, None] * three, -1.0, 1.0)                     # (n, 3)
+            cr = _clamp(e_r[:, None] + g[:, None] * three, -1.0, 1.0)
             like = self._likelihood(self._doppler_terms(cd, off), self._range_terms(cr, mu[going, None], off),
                                     y[going], inv_d[going], inv_r[going])                # (n, i: Doppler, j: range)
             worse = like[:, 1, 1] < held[going]             # the last step went down: back, on a finer grid
@@ -856,10 +862,10 @@ class MigrationFit:
             best = np.argmax(like.reshape(n, 9), axis=1)
             best[~peak & (like.reshape(n, 9)[np.arange(n), best] <= like[:, 1, 1])] = 4    # flat (a zero patch): stay
             reach = self.NEWTON_REACH * g
-            sx = np.where(peak, np.clip(sx, -reach, reach), (best // 3 - 1) * g)
-            sy = np.where(peak, np.clip(sy, -reach, reach), (best % 3 - 1) * g)
-            fd[going] = np.where(worse, kept_d[going], np.clip(e_d + sx, -1.0, 1.0))
-            fr[going] = np.where(worse, kept_r[going], np.clip(e_r + sy, -1.0, 1.0))
+            sx = np.where(peak, _clamp(sx, -reach, reach), (best // 3 - 1) * g)
+            sy = np.where(peak, _clamp(sy, -reach, reach), (best % 3 - 1) * g)
+            fd[going] = np.where(worse, kept_d[going], _clamp(e_d + sx, -1.0, 1.0))
+            fr[going] = np.where(worse, kept_r[going], _clamp(e_r + sy, -1.0, 1.0))
             small = (peak | (best == 4)) & (np.maximum(np.abs(sx), np.abs(sy)) <= 0.5 * g)
             # outside the concave region, uphill to an edge of the grid: the next grid twice as wide (a start half
             # a bin or more off the peak is reached in a few steps instead of one grid step at a time)
