@@ -176,6 +176,14 @@ REFIT_REACH = 5
 SUBTRACT_GROUP = 4
 
 
+@functools.lru_cache(maxsize=16)
+def _grid(span: float, points: int) -> np.ndarray:
+    """``np.linspace(-span, span, points)``, made once for each of the fits' few search grids (read only)."""
+    grid = np.linspace(-span, span, points)
+    grid.flags.writeable = False
+    return grid
+
+
 def _patch_axes(doppler_window: np.ndarray, range_window: np.ndarray, max_half: int):
     """(max_half, buckets, {bucket: (Doppler axis, range axis)}) of a patch fit of half-width up to ``max_half``."""
     if not (isinstance(max_half, (int, np.integer)) and 1 <= max_half <= 32):
@@ -429,7 +437,7 @@ class PatchFit:
 
         gd = _real_left(inv_d, axis_d.response(fd)[:, :, None])[:, :, 0]                # R⁻¹h
         for span, points in self.ROUNDS if rounds is None else rounds:
-            grid = np.linspace(-span, span, points)
+            grid = _grid(span, points)
             # range with the Doppler template fixed (the patch collapsed over Doppler), then Doppler likewise;
             # u = R⁻¹v once, so each candidate costs its template and one product: Σ_c |h^H u_c|² / h^H R⁻¹ h.
             # Each collapse uses the other axis' best grid template (within half a step of its estimate)
