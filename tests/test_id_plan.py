@@ -212,7 +212,7 @@ def test_two_nodes_and_an_ecu_on_one_virtual_bus(other, output):
                 sent_lists[s].append(out.frame.objects if output == "objects" else out.frame.clusters)
             pump()
             if got[0]:
-                ecu.set_ego(t, asm[0].ego_speed_mps, asm[0].ego_yaw_rate_dps)
+                ecu.set_ego(t, asm[0].ego_speed_mps, asm[0].ego_yaw_rate_dps, asm[0].ego_frames)
                 d = ecu.on_cycle(t, got[0][-1])
                 assert d is not None
                 decisions.append(d)
@@ -244,4 +244,7 @@ def test_two_nodes_and_an_ecu_on_one_virtual_bus(other, output):
             nodes[s].last_boundaries[0].offset_m, abs=0.02)
         acc = asm[s].ecu_status["AccStatus"]
         assert acc["ACC_State"] == decisions[-1].acc_state and acc["ACC_Fault"] == decisions[-1].fault
+        assert decisions[-1].fault == 0                                 # its ego motion read, each cycle's
+        fcw = asm[s].ecu_status["FcwStatus"]
+        assert fcw["FCW_WarningLevel"] == decisions[-1].warning_level and fcw["FCW_Fault"] == decisions[-1].fault
     assert abs(asm[0].road_boundaries["left"].offset_m - asm[other].road_boundaries["left"].offset_m) > 1.5

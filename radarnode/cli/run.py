@@ -56,8 +56,10 @@ def format_ecu(d, ego_speed_mps: float) -> str:
         acc += (f", target track {d.target.track_id} at {d.target.distance_m:.1f} m "
                 f"({d.target.rel_speed_mps:+.1f} m/s, gap {gap:.2f} s)")
     acc += f", request {d.accel_request_mps2:+.2f} m/s²"
-    if not d.radar_ok:
-        acc += " [FAULT: radar unavailable]"
+    faults = [name for bad, name in ((not d.radar_ok, "radar unavailable"), (not d.ego_ok, "ego motion missing"))
+              if bad]
+    if faults:
+        acc += f" [FAULT: {', '.join(faults)}]"
     fcw = ["none", "pre-warning", "WARNING"][d.warning_level]
     ttc = f"{d.ttc_s:.1f} s" if d.ttc_s < 99 else "-"
     return f"{acc}; FCW {fcw} (TTC {ttc})"
@@ -105,8 +107,9 @@ def cmd(args) -> int:
             # a cycle that waited for its next header (learning the layout) comes with this one
             cycles = [cycle] + assembler.drain() if cycle is not None else []
             decision = None
+            # the ego motion the assembler decoded, every cycle (its frame count tells a new one from the last)
+            ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames)
             if cycles:
-                ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps)
                 ecu.boundaries = assembler.road_boundaries
                 for c in cycles:
                     decision = ecu.on_cycle(out.t_s, c) or decision

@@ -304,6 +304,9 @@ class CycleAssembler(can.Listener):
         self.version: dict | None = None
         self.ego_speed_mps: float | None = None
         self.ego_yaw_rate_dps: float | None = None
+        #: SpeedInformation frames decoded so far: a reader tells a new ego speed from the last one by it
+        #: (:meth:`radarnode.consumer.ecu.Ecu.set_ego`'s ``frames``)
+        self.ego_frames = 0
         self.queue_overflow = 0
         self._queue: queue.Queue = queue.Queue(maxsize=maxsize)
         self._lock = threading.RLock()
@@ -500,6 +503,7 @@ class CycleAssembler(can.Listener):
             elif base == P.SPEED_INFO:
                 sign = -1.0 if int(values["RadarDevice_SpeedDirection"]) == 2 else 1.0
                 self.ego_speed_mps = sign * values["RadarDevice_Speed"]
+                self.ego_frames += 1
             elif base == P.YAW_RATE_INFO:
                 self.ego_yaw_rate_dps = values["RadarDevice_YawRate"]
 

@@ -4,7 +4,11 @@
 ego's speed and yaw rate from the same bus (0x300/0x301, as the radar does), and after every radar cycle
 produces the ACC request, the FCW level and the two status frames AccStatus 0x6C0 and FcwStatus 0x6C1
 (``dbc/radarnode.dbc``, E2E Profile 2; one ECU per bus, so these IDs do not move with the sensor ID). When no complete radar cycle has arrived for ``timeout_cycles``
-cycle periods the radar is unavailable: ACC goes to fault and releases its request (:meth:`Ecu.tick`).
+cycle periods the radar is unavailable: ACC goes to fault and releases its request (:meth:`Ecu.tick`), and FCW
+keeps judging the object it judged last, dead-reckoned with the ego motion (``FCW_COAST_S``), so that a warning is
+not withdrawn because the sensor fell silent. Once the ECU reads the ego motion (:meth:`Ecu.set_ego`), no new
+ego speed for the same time-out is a missing input too: ACC goes to fault and FCW goes on with the last values.
+Both are reported in ACC_Fault and FCW_Fault (bit 0 radar, bit 1 ego motion).
 
 Every time the ECU is given is checked before it reaches the tracker (:attr:`Ecu.stats` counts what was refused):
 a timestamp that is not a finite number or lies beyond ±1e11 s is refused; one that runs backwards or jumps
@@ -90,7 +94,11 @@ RADIAL_SIGMA_FLOOR_MPS = 0.5
 TRACKING_STATE = ("tracker", "cluster_tracker", "_in_path", "_out_path", "_target_id", "_fcw_target_id", "_rcs_power",
                   "_lost_until", "_last_acc", "_last_acc_place", "_lost_place", "_path_inputs", "_braking_for",
                   "_obstacles", "_placed", "_born", "_moved", "_moving_for", "landmarks", "trails", "trail_fits",
-                  "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift")
+                  "last_cycle_t", "_last_out_t", "acc", "fcw", "odometry", "drift", "_coast")
+#: while the radar is unavailable FCW judges the object it judged last, moved by the ego motion and the object's
+#: last speed and acceleration (a lead that brakes stops and stays), for at most this long (s): the time-out and
+#: this cover the TTC at which FCW pre-warns (4 s); after it the warning falls as the hysteresis lets it
+FCW_COAST_S = 4.0
 #: a target ACC followed that vanished from the object list within this distance (m) …
 LOST_NEAR_M = 20.0
 #: … holds ACC from accelerating this long (s) unless another target is taken: the radar lost a lead braking beside a
@@ -153,6 +161,7 @@ class EcuOutput:
     take_over: bool = False        # the driver must brake: the target needs more than ACC's authority
     standstill: bool = False       # ACC holds the ego at a standstill
     fcw_target: Target | None = None   # the object FCW judges (ACC's target, or a stationary object ACC ignores)
+    ego_ok: bool = True            # the ego motion is current (fault bit 1 when not)
 
 
 class Ecu:
@@ -187,6 +196,11 @@ class Ecu:
         self.ego_yaw_rate_rps = 0.0
         self.ego_accel_mps2 = 0.0
         self._prev_speed: tuple[float, float] | None = None
+        self._ego_t: float | None = None          # when the last new ego speed was given (None: none yet)
+        self._ego_frames: int | None = None       # the reader's count of ego-speed frames at that time
+        self._ego_read = False                    # whether ego motion is an input at all (set_ego was called)
+        # FCW's object while the radar is unavailable: (target, its speed over ground, when the radar fell silent)
+        self._coast: tuple[Target, float, float] | None = None
         self.outputs: list[EcuOutput] = []
         db = load_own_database()
         self._acc_codec = MessageCodec(db.get_message_by_frame_id(ACC_STATUS))
@@ -231,14 +245,22 @@ class Ecu:
             return None
         return t if math.isfinite(t) and abs(t) <= MAX_TIME_S else None
 
-    def set_ego(self, t_s: float, speed_mps: float | None, yaw_rate_dps: float | None) -> None:
+    def set_ego(self, t_s: float, speed_mps: float | None, yaw_rate_dps: float | None, frames: int | None = None
+                ) -> None:
         """Ego motion as read from the bus; the acceleration is differentiated (and smoothed).
+
+        ``frames``: the reader's count of ego-speed frames decoded so far (:attr:`CycleAssembler.ego_frames`), when
+        the values are the reader's latest, which stay there when no new frame comes: a call with the count of the
+        call before is no new measurement. Without it each call with a speed is one. From the first call on, ego motion
+        is an input: none new for ``timeout_cycles`` cycle periods is a missing input (fault bit 1; ACC goes to
+        fault). An ECU never given ego motion takes the ego as standing, without a fault (a library use).
 
         A non-finite time, or a speed or yaw rate that is not finite or beyond what the bus carries
         (``EGO_SPEED_LIMIT_MPS``, ``EGO_YAW_RATE_RANGE_DPS``), is ignored (counted in ``stats.bad_ego``); after a backwards step
         or a gap longer than ``max_gap_s`` the differentiation starts again instead of using that step.
         """
-        if speed_mps is None:
+        self._ego_read = True
+        if speed_mps is None or (frames is not None and frames == self._ego_frames):
             return
         t = self._finite_time(t_s)
         yaw = 0.0 if yaw_rate_dps is None else yaw_rate_dps
@@ -252,6 +274,7 @@ class Ecu:
             a = (speed_mps - self._prev_speed[1]) / (t - self._prev_speed[0])
             self.ego_accel_mps2 += 0.5 * (a - self.ego_accel_mps2)
         self._prev_speed = (t, speed_mps)
+        self._ego_t, self._ego_frames = t, frames
         self.ego_speed_mps = speed_mps
         self.ego_yaw_rate_rps = math.radians(yaw)
 
@@ -305,6 +328,7 @@ class Ecu:
         self.last_cycle_t = None
         self._last_out_t = None
         self._prev_speed = None
+        self._coast = None
         self._candidate_t = None
         self._before_jump = None
 
@@ -668,6 +692,12 @@ class Ecu:
         self.trails.advance(v, w, dt)           # the same motion carries the trails into this cycle's frame
         target, fcw_target = self._select(t_s, tracks, ol, by_id, cluster_strength) if radar_ok else (None, None)
         v = self.ego_speed_mps
+        # (cycle times k·period: rounding must not decide the edge)
+        ego_ok = not self._ego_read or (self._ego_t is not None and 0.0 <= t_s - self._ego_t <= self.timeout_s + 1e-9)
+        if radar_ok:
+            self._coast = None if fcw_target is None else (fcw_target, max(v + fcw_target.rel_speed_mps, 0.0), t_s)
+        else:
+            fcw_target = self._coasted(t_s, dt, v)
         if fcw_target is not None:
             lead_v = max(v + fcw_target.rel_speed_mps, 0.0)
             level = self.fcw.step(fcw_target.distance_m, v, lead_v, self.ego_accel_mps2, fcw_target.lead_accel_mps2)
@@ -695,19 +725,39 @@ class Ecu:
         # (then holds until the driver resumes)
         # (the decision's target stays ACC's own, the vehicle it follows: this is braking, not following)
         controlled, borrowed = target, False
-        if fcw_target is not None and (target is None or fcw_target.distance_m < target.distance_m - 0.5) and (
+        # (not for an object only coasted while the radar is unavailable: ACC is in fault then)
+        if radar_ok and fcw_target is not None and (
+                target is None or fcw_target.distance_m < target.distance_m - 0.5) and (
                 fcw_target.track_id == self._braking_for or (level >= LEVEL_WARNING and v <= FCW_BRAKE_MAX_MPS)):
             controlled, borrowed = fcw_target, True
         self._braking_for = fcw_target.track_id if borrowed else None
         if remembered is not None and (controlled is None or remembered.distance_m < controlled.distance_m):
             controlled, borrowed = remembered, True
-        accel = self.acc.step(dt, v, controlled, radar_ok, no_accel=no_accel, borrowed=borrowed)
-        fault = (0 if radar_ok else 1)
+        accel = self.acc.step(dt, v, controlled, radar_ok and ego_ok, no_accel=no_accel, borrowed=borrowed)
+        fault = (0 if radar_ok else 1) | (0 if ego_ok else 2)
         out = EcuOutput(t_s, accel, self.acc.state, fault, level, self.fcw.ttc_s, self.fcw.required_decel_mps2,
                         target, radar_ok,
-                        self.acc.take_over and self.acc.settings.enabled, self.acc.standstill, fcw_target)
+                        self.acc.take_over and self.acc.settings.enabled, self.acc.standstill, fcw_target, ego_ok)
         self.outputs.append(out)
         return out
+
+    def _coasted(self, t_s: float, dt: float, v: float) -> Target | None:
+        """While the radar is unavailable: FCW's last object moved over ``dt`` by the ego's speed ``v`` and its own
+        last speed and acceleration (it stops and stays when it brakes), for FCW_COAST_S after the radar fell silent
+        and until the ego reaches it; else None (and forgotten)."""
+        if self._coast is None:
+            return None
+        last, lead_v, since = self._coast
+        if not 0.0 <= t_s - since <= FCW_COAST_S or last.distance_m <= 0.0:
+            self._coast = None
+            return None
+        a = min(last.lead_accel_mps2, 0.0)          # a lead that accelerates away is not counted on
+        new_v = max(lead_v + a * dt, 0.0)
+        gap = max(last.distance_m + (0.5 * (lead_v + new_v) - v) * dt, 0.0)
+        moved = dataclasses.replace(last, distance_m=gap, rel_speed_mps=new_v - v,
+                                    lead_accel_mps2=a if new_v > 0 else 0.0)
+        self._coast = (moved, new_v, since)
+        return moved
 
     def _vehicle_to_odometry(self, x_m, y_m):
         """Vehicle-frame points (floats or arrays) in the odometry frame (the dead-reckoned pose of this cycle)."""
@@ -780,7 +830,7 @@ class Ecu:
             "ACC_Standstill": int(out.standstill)})[0]
         ft = out.fcw_target
         fcw = self._fcw_codec.encode({
-            "FCW_CRC": 0, "FCW_Counter": 0, "FCW_WarningLevel": out.warning_level,
+            "FCW_CRC": 0, "FCW_Counter": 0, "FCW_WarningLevel": out.warning_level, "FCW_Fault": out.fault,
             "FCW_TargetID": ft.track_id % 255 if ft else 255, "FCW_TTC": min(out.ttc_s, 25.5),
             "FCW_RequiredDecel": -out.required_decel_mps2,
             "FCW_LeadAccel": ft.lead_accel_mps2 if ft else 0.0})[0]
