@@ -29,6 +29,39 @@ def test_ca_threshold_matches_the_beta_closed_form_without_correlation(n_channel
     assert scipy.stats.beta.sf(a / (1 + a), n_channels, n_channels * n_t) == pytest.approx(pfa, rel=1e-8)
 
 
+@pytest.mark.parametrize("n_channels", [400, 449, 450, 451, 512, 900, 2304, 4096])
+def test_ca_pfa_holds_for_hundreds_to_thousands_of_channels(n_channels):
+    """The recurrence's terms pass 1e308 from N ≈ 450 on a 248-cell ring (α came out infinite: the radar blind, an
+    independent tester's finding); scaled as it goes, log Pfa is the Beta closed form's at every N and α, and the
+    threshold for 1e-6 gives 1e-6. A correlated (Hann) ring's α stays finite and falls with N, as more channels
+    average the noise."""
+    n_t = 248
+    for alpha in (0.6, 1.0, 1.3, 2.5):
+        a = alpha / n_t
+        want = scipy.stats.beta.logsf(a / (1 + a), n_channels, n_channels * n_t)
+        got = ds.ca_log_pfa(alpha, n_channels, np.ones(n_t))
+        if math.isfinite(want):
+            assert got == pytest.approx(want, rel=1e-9, abs=1e-9)
+        else:                                   # beyond SciPy's reach (below 1e-308): ours finite, as far down
+            assert -math.inf < got < math.log(1e-300)
+    alpha = ds.ca_alpha(1e-6, n_channels, np.ones(n_t))
+    a = alpha / n_t
+    assert scipy.stats.beta.sf(a / (1 + a), n_channels, n_channels * n_t) == pytest.approx(1e-6, rel=1e-7)
+    rho = ds.noise_correlation(window("hann", 128))
+    eig = ds.ring_eigenvalues(ds.ring_offsets((2, 2), (4, 8)), rho, rho)
+    hann = ds.ca_alpha(1e-3, n_channels, eig)
+    assert 1.0 < hann < ds.ca_alpha(1e-3, n_channels // 2, eig) < math.inf
+
+
+def test_a_preset_of_more_than_4096_virtual_channels_is_refused_by_name():
+    from radarnode.errors import FieldError
+    from radarnode.radar.presets import MAX_VIRTUAL_CHANNELS
+    base = PRESETS["ars408_like"]
+    assert base.with_overrides({"num_tx": 2, "num_rx": 2048}).num_virtual == MAX_VIRTUAL_CHANNELS == 4096
+    with pytest.raises(FieldError, match=r"num_rx.*2049.*at most 4096 virtual channels"):
+        base.with_overrides({"num_tx": 2, "num_rx": 2049})
+
+
 def test_single_cell_formula_is_the_one_channel_case():
     n_t = 248
     assert ds.ca_alpha(1e-6, 1, np.ones(n_t)) == pytest.approx(n_t * (1e-6 ** (-1 / n_t) - 1), rel=1e-9)

@@ -108,6 +108,11 @@ def ring_eigenvalues(offsets: np.ndarray, rho_d: np.ndarray, rho_r: np.ndarray) 
     return np.clip(lam, 0.0, None)
 
 
+#: :func:`ca_log_pfa` scales its ν down once one exceeds this (a step multiplies them by at most N·N_T: far below
+#: the 1e108 left to overflow)
+_RESCALE_ABOVE = 1e200
+
+
 def ca_log_pfa(alpha: float, n_channels: int, eig: np.ndarray) -> float:
     """log Pfa of CA-CFAR with threshold α·mean(training) (see the module docstring)."""
     eig = np.asarray(eig, dtype=np.float64)
@@ -116,9 +121,17 @@ def ca_log_pfa(alpha: float, n_channels: int, eig: np.ndarray) -> float:
     s = np.sum(q[None, :] ** np.arange(1, n_channels)[:, None], axis=1)  # S_1 … S_{N−1}
     nu = np.zeros(n_channels)
     nu[0] = 1.0
+    # the ν_k grow like the Poisson weights of a mean near N·a·Σλ (past 1e308 from N ≈ 450 on a 248-cell ring: α
+    # came out infinite, the radar blind, an independent tester's finding); the recurrence is linear and homogeneous
+    # in ν, so every ν computed so far is scaled down together and the scale kept as a logarithm
+    log_scale = 0.0
     for k in range(n_channels - 1):           # N terms of a recurrence, not a loop over cells
         nu[k + 1] = n_channels / (k + 1) * np.dot(s[: k + 1], nu[k::-1])
-    return float(-n_channels * np.sum(np.log1p(a * eig)) + np.log(np.sum(nu)))
+        if nu[k + 1] > _RESCALE_ABOVE:
+            top = nu[: k + 2].max()
+            nu[: k + 2] /= top
+            log_scale += math.log(top)
+    return float(-n_channels * np.sum(np.log1p(a * eig)) + log_scale + np.log(np.sum(nu)))
 
 
 def ca_alpha(pfa: float, n_channels: int, eig: np.ndarray) -> float:
