@@ -567,3 +567,21 @@ def test_the_cube_memory_check_refuses_just_above_its_share(monkeypatch, share, 
             signal_model.check_cube_memory(p, "complex128")
     else:
         signal_model.check_cube_memory(p, "complex128")
+
+
+def test_fidelity_auto_on_a_one_channel_radar_names_the_option_or_the_field(capsys, tmp_path):
+    """``auto`` cannot render a scanning radar of one channel: ``--fidelity auto`` names the option and the radar;
+    ``fidelity: auto`` in the file names its line, whatever the command line asks (it named neither: an independent
+    tester's finding)."""
+    sc = tmp_path / "ka.yaml"
+    sc.write_text("name: ka\nduration_s: 1.0\nseed: 1\nradar: {preset: scanning_ka}\n"
+                  "actors:\n  - {id: a, class: car, x_m: 40.0}\n", encoding="utf-8")
+    rc, _, err = cli(capsys, "run", sc, "--fast", "--fidelity", "auto")
+    assert rc == 2 and "option --fidelity: value 'auto' is not allowed with preset scanning_ka of radar" \
+        in one_error_line(err)
+    sc.write_text(sc.read_text(encoding="utf-8") + "fidelity: auto\n", encoding="utf-8")
+    rc, _, err = cli(capsys, "run", sc, "--fast")
+    assert rc != 0 and "ka.yaml:7: field 'fidelity': value 'auto' is not allowed" in one_error_line(err)
+    sc.write_text(sc.read_text(encoding="utf-8").replace("fidelity: auto", "fidelity: object"), encoding="utf-8")
+    rc, _, err = cli(capsys, "run", sc, "--fast", "--duration", "0.2")
+    assert rc == 0, err

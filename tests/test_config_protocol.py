@@ -458,14 +458,13 @@ def test_a_preset_that_sees_less_than_the_smallest_max_distance_still_loads():
 
 @pytest.mark.parametrize("preset, given, in_force", [("mimo12", None, 112.0), ("ars408_like", None, 250.0),
                                                      ("ars408_like", 10, 10.0), ("mimo12", 112, 112.0),
-                                                     ("ars408_like:5", None, 4.0), ("ars408_like:2046", None, 2046.0),
-                                                     ("ars408_like:2047", None, 2046.0),
-                                                     ("ars408_like:3000", None, 2046.0)])
+                                                     ("ars408_like:5", None, 4.0), ("ars408_like:249", None, 248.0),
+                                                     ("ars408_like:250", None, 250.0)])
 def test_radar_state_echoes_the_max_distance_in_force(preset, given, in_force):
     """mimo12 sees 112.5 m, which RadarState's 2-m grid cannot say (it echoed 112 with 112.5 in force): 112 m is in
-    force by default, and what RadarState says is what the model uses. A preset's range overridden to 5 m or beyond
-    the 2046 m RadarState's field can say (below, at, just above and well above it): 5 m was in force while it said
-    4, and 3000 m while it said 2046 (an independent tester's finding)."""
+    force by default, and what RadarState says is what the model uses. A preset's range overridden to 5 m: 5 m was
+    in force while it said 4 (an independent tester's finding). (Overrides beyond the field of view's reach, which
+    this test once took up to 3000 m, are refused: test_a_preset_reach_beyond_its_field_of_view_is_refused.)"""
     extra = "" if given is None else f", max_distance_m: {given}"
     name, _, reach = preset.partition(":")
     if reach:
@@ -474,6 +473,16 @@ def test_radar_state_echoes_the_max_distance_in_force(preset, given, in_force):
     assert node.config.max_distance_m == in_force
     state = next(m for m in node.cycle(0.0).messages if m.arbitration_id == P.RADAR_STATE)
     assert node.db.decode_message(P.RADAR_STATE, state.data)["RadarState_MaxDistanceCfg"] == in_force
+
+
+@pytest.mark.parametrize("reach", [251, 2046, 2047, 3000])
+def test_a_preset_reach_beyond_its_field_of_view_is_refused(reach):
+    """ars408_like's sectors reach 250 m: a max_range_m of 1000 was taken, said in the warnings and RadarState, and
+    seen to 250 m (an independent tester's finding, 2026-12-03). Just above the reach and beyond RadarState's 2046 m
+    are refused by name, with the sectors."""
+    with pytest.raises(ScenarioError, match=rf"max_range_m': value {reach} is not allowed; expected a number in "
+                                            r"\[2, 250\]: at most the farthest its field of view's sectors reach"):
+        RadarNode(scenario(ACTORS, radar=f"{{preset: ars408_like, overrides: {{max_range_m: {reach}}}}}"))
 
 
 def test_relay_frames_of_another_sensor_are_not_taken_for_ours(bench):

@@ -208,6 +208,34 @@ def test_a_map_too_small_for_the_signal_chain_is_refused_at_load(tmp_path, overr
     assert radar_config(load_scenario(p)).preset.num_chirps == 4
 
 
+@pytest.mark.parametrize("radar, extra, field, allowed", [
+    ("overrides: {pfa: 0.5}", "", "radar.overrides.pfa", "(0, 0.5)"),
+    ("overrides: {pfa: 1}", "", "radar.overrides.pfa", "(0, 0.5)"),
+    ("overrides: {cycle_period_s: 1.0e-6}", "", "radar.overrides.cycle_period_s", "[0.005, 10]"),
+    ("overrides: {stagger_chirp_period_s: 1.0e-9}", "", "radar.overrides.stagger_chirp_period_s", "[1e-07, 0.01]"),
+    ("overrides: {max_range_m: 1000}", "", "radar.overrides.max_range_m", "[2, 250]"),
+    ("overrides: {num_tx: 2, num_rx: 2049}", "", "radar.overrides.num_rx", "at most 4096 virtual channels"),
+    ("", "signal: {dsp: {guard_range: 0}}\n", "signal.dsp.guard_range", "at least 2 guard cells in range"),
+    ("", "signal: {dsp: {guard_doppler: 1}}\n", "signal.dsp.guard_doppler", "at least 2 guard cells in doppler"),
+    ("", "signal: {dsp: {train_range: 0, train_doppler: 0}}\n", "signal.dsp.train_range", "at least 4 training"),
+    ("", "fidelity: auto\n", "fidelity", "expected object, detection or signal"),
+])
+def test_radar_values_refused_later_are_refused_at_load_with_the_file_line_and_field(tmp_path, radar, extra, field,
+                                                                                     allowed):
+    """An independent tester's findings (2026-12-03): these were refused only once the radar was built, without the
+    file and line (pfa 0.5 passed the preset's (0, 0.5] and failed the CFAR's (0, 0.5); a cycle period of 1 µs
+    passed the preset and failed the scenario's bounds; the CFAR ring at the chain), or named another field (a
+    second chirp period of 1 ns named chirp_period_s), or were taken and did nothing (max_range_m beyond the field
+    of view's sectors; auto on a one-channel scanning radar). Each is the field's own line now."""
+    preset = "scanning_ka" if field == "fidelity" else "ars408_like"
+    text = GOOD.replace("  preset: ars408_like", f"  preset: {preset}" + (f"\n  {radar}" if radar else "")) + extra
+    msg = _fails(tmp_path, text, f"field '{field}'", allowed)
+    line = next(i for i, t in enumerate(text.splitlines(), 1) if t.strip().startswith(
+        field.split(".")[-1] if field == "fidelity" else (field.split(".")[0] + ":" if "signal" in field else
+                                                          "overrides")))
+    assert f"bad.yaml:{line}:" in msg, (msg, line)
+
+
 def test_invalid_yaml(tmp_path):
     _fails(tmp_path, GOOD + "  - [unclosed\n", "not valid YAML")
 

@@ -101,7 +101,24 @@ def scenario_from_args(args) -> Scenario:
                          f"radar cycle of {sc.period_s:g} s: a duration in [{sc.period_s:g}, 86400] s")
     if getattr(args, "doa", None) and args.doa != "fft":
         check_doa_option(args.doa, sc.fidelity)
+    if getattr(args, "fidelity", None) == "auto":
+        check_auto_presets(sc)
     return sc
+
+
+def check_auto_presets(scenario: Scenario) -> None:
+    """``--fidelity auto`` on every radar of the scenario, by the models' own rule
+    (``radarnode.radar.levels.auto_refused``): a UsageError naming the option and the radar."""
+    from radarnode.radar.levels import auto_refused
+    from radarnode.radar.presets import get_preset
+    setups = [(f"radars[{i}]", s) for i, s in enumerate(scenario.radars)] if scenario.radars \
+        else [("radar", scenario.radar)]
+    for where, setup in setups:
+        preset = get_preset(setup.preset).with_overrides(setup.overrides)
+        why = auto_refused(preset)
+        if why is not None:
+            raise UsageError(f"option --fidelity: value 'auto' is not allowed with preset {preset.name} of {where} "
+                             f"({why}); expected object, detection or signal")
 
 
 def check_doa_option(doa: str, fidelity: str) -> None:

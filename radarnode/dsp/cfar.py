@@ -43,6 +43,23 @@ def _ring(guard: tuple[int, int], train: tuple[int, int]) -> np.ndarray:
     return ring
 
 
+def ring_problem(guard: tuple[int, int], train: tuple[int, int], correlation: tuple[np.ndarray, np.ndarray]
+                 ) -> tuple[str, str, tuple[int, int], str] | None:
+    """What a CFAR ring of ``guard`` and ``train`` cells (Doppler, range) cannot do with the noise ``correlation``
+    (ρ_d, ρ_r) between cells, as (``guard`` or ``train``, the axis, the value, what is allowed), or None: fewer than
+    4 training cells, or guard cells that do not cover the correlation length (the training cells would share
+    the tested cell's noise)."""
+    n_train = int(_ring(guard, train).sum())
+    if n_train < 4:
+        return "train", "both", tuple(train), f"a ring of at least 4 training cells (this one has {n_train})"
+    for axis, rho, g in (("doppler", correlation[0], guard[0]), ("range", correlation[1], guard[1])):
+        length = stats.correlation_length(np.asarray(rho))
+        if length > g:
+            return "guard", axis, tuple(guard), (f"at least {length} guard cells in {axis}: the window correlates "
+                                                 f"{axis} bins up to {length} apart")
+    return None
+
+
 @dataclass(frozen=True)
 class CfarResult:
     """Detection mask and the noise estimate, both shaped like the power map (doppler, range)."""
@@ -87,19 +104,16 @@ class Cfar:
         self.n_channels = int(n_channels)
         self.footprint = _ring(self.guard, self.train)
         self.n_train = int(self.footprint.sum())
-        if self.n_train < 4:
-            raise ConfigError(f"cfar train: value {train!r} gives {self.n_train} training cells; expected >= 4")
         if correlation is None:
             span = 2 * max(self.guard[0] + self.train[0], self.guard[1] + self.train[1]) + 3
             delta = np.zeros(span, dtype=np.complex128)
             delta[0] = 1.0
             correlation = (delta, delta)
         self.rho_d, self.rho_r = (np.asarray(c, dtype=np.complex128) for c in correlation)
-        for axis, rho, g in (("doppler", self.rho_d, self.guard[0]), ("range", self.rho_r, self.guard[1])):
-            length = stats.correlation_length(rho)
-            if length > g:
-                raise ConfigError(f"cfar guard: value {self.guard!r} is not allowed; the window correlates {axis} "
-                                  f"bins up to {length} apart, so expected at least {length} guard cells in {axis}")
+        problem = ring_problem(self.guard, self.train, (self.rho_d, self.rho_r))
+        if problem is not None:
+            what, _, value, allowed = problem
+            raise ConfigError(f"cfar {what}: value {value!r} is not allowed; expected {allowed}")
 
     def __call__(self, power: np.ndarray) -> CfarResult:
         if power.ndim != 2:

@@ -14,7 +14,7 @@ import numpy as np
 
 from radarnode import validate
 from radarnode.errors import ConfigError, FieldError, short_repr
-from radarnode.dsp.cfar import CFAR_KINDS, make_cfar
+from radarnode.dsp.cfar import CFAR_KINDS, make_cfar, ring_problem
 from radarnode.dsp.detection_stats import DetectionStatistic, noise_correlation
 from radarnode.dsp.doa import DOA_METHODS, make_doa
 from radarnode.dsp.peaks import (MigrationFit, PatchFit, PatchStore, interpolate, local_maxima, nearest_peak,
@@ -100,6 +100,18 @@ def preset_conflicts(config: DspConfig, preset: RadarPreset) -> list[tuple[str, 
     if config.migration_fit is True and preset.num_tx < 2:
         out.append(("migration_fit", f"{preset.num_tx} transmitter: the true speed of a wrapped peak comes from the "
                                      "TDM wrap count", "false or auto"))
+    # the CFAR ring on this preset's map (its windows' noise correlation): refused when the chain was built, without
+    # the file and line (an independent tester's finding)
+    corr = (noise_correlation(window(config.doppler_window, preset.num_chirps)),
+            noise_correlation(window(config.range_window, preset.num_range_bins)))
+    problem = ring_problem((config.guard_doppler, config.guard_range), (config.train_doppler, config.train_range),
+                           corr)
+    if problem is not None:
+        kind, axis, _, allowed = problem
+        field = f"{kind}_{'range' if axis == 'both' else axis}"
+        out.append((field, f"the CFAR ring (guard_doppler, guard_range) = ({config.guard_doppler}, "
+                           f"{config.guard_range}), (train_doppler, train_range) = ({config.train_doppler}, "
+                           f"{config.train_range})", allowed))
     return out
 
 

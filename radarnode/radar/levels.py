@@ -18,6 +18,15 @@ from radarnode.scene.world import Scene
 FIDELITY_LEVELS = ("object", "detection", "signal", "auto")
 
 
+def auto_refused(preset: RadarPreset) -> str | None:
+    """Why ``auto`` cannot render ``preset``, or None: the object level reports a scanning radar's beam angle, the
+    others measure none with one channel, so a frame mixing them would put one actor at its angle and its neighbour
+    at boresight. One rule for the model, the scenario loader (file and line) and ``--fidelity``."""
+    if preset.num_virtual < 2:
+        return "one channel: the detection and signal levels measure no angle, the object level the beam's"
+    return None
+
+
 def check_doa(level: str, options: SignalOptions, scenario=None) -> None:
     """A super-resolution angle estimator exists only in the signal chain: refuse it at another level.
 
@@ -46,11 +55,9 @@ def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Gen
     if level == "signal":
         return models.SignalModel(scene, preset, rng, options)
     if level == "auto":
-        if preset.num_virtual < 2:
-            # the object level reports a scanning radar's beam angle, the others measure none (one channel): a
-            # frame mixing them would put one actor at its angle and its neighbour at boresight
-            raise ConfigError(f"fidelity: value 'auto' is not allowed with preset {preset.name} (one channel: the "
-                              "detection and signal levels measure no angle, the object level the beam's); expected "
+        why = auto_refused(preset)
+        if why is not None:
+            raise ConfigError(f"fidelity: value 'auto' is not allowed with preset {preset.name} ({why}); expected "
                               "object, detection or signal")
         return models.AutoModel(scene, preset, rng, options, clusters_wanted)
     raise ConfigError(f"fidelity: value {level!r} is not allowed; expected one of {', '.join(FIDELITY_LEVELS)}")

@@ -52,6 +52,12 @@ def radar_config(scenario: Scenario) -> RadarConfig:
         child = f"{root}.{exc.field}"
         raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}") from None
+    if scenario.fidelity == "auto":
+        from radarnode.radar.levels import auto_refused
+        why = auto_refused(preset)
+        if why is not None:
+            raise src.error("fidelity", f"field 'fidelity': value 'auto' is not allowed with preset {preset.name} of "
+                                        f"{root} ({why}); expected object, detection or signal")
     signal = _with_preset_pfa(build(SignalOptions, scenario.signal, "signal", src, SIGNAL_SCHEMA), scenario, preset,
                               src, root)
     _check_dsp_for_preset(signal.dsp, preset, src, root)
