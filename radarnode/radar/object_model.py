@@ -869,6 +869,11 @@ class ObjectModel:
         sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
         # where the array sees the actor: a sparse array's grating lobe folds it (the other levels' beamformer does)
         az_seen = ambiguity.apparent_azimuth(p, az)
+        # … and the RCS it infers there: the element pattern divided out at the angle it measures, not the truth's
+        # (a grating lobe's 50° seen at −41.5° read 1.5 dB low at the other levels and true here: a tester's finding)
+        if p.element_spacing_wl > 0.5:
+            lobe_db = np.where(az_seen != az, equation.pattern_db(p, az) - equation.pattern_db(p, az_seen), 0.0)
+            rcs_eff, rcs_body = rcs_eff + lobe_db, rcs_body + lobe_db
         sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az_seen),
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = r_seen + sig_r * z[:, 0]
@@ -893,6 +898,18 @@ class ObjectModel:
         # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
         # (without it the object level put an aliased target 0.4–3 m from where they do)
         m_r = ambiguity.coupled_range(p, m_r, v_meas, m_vr)
+        # beyond the unambiguous range (a preset whose range bins end inside its field of view) the beat folds: the
+        # radar reports the range modulo it, and the RCS it infers at that range, as the other levels do (the object
+        # level reported 131 m where they report 16.4 m: an independent tester's finding). A wrap, as the scatterer
+        # levels model real sampling too (README, known limits)
+        beyond = observable & (r_seen >= p.unambiguous_range_m)
+        if beyond.any():
+            folded = np.mod(m_r, p.unambiguous_range_m)
+            # (and a real-sampling receiver's anti-alias filter, which the SNR carries, is not divided out either)
+            filt = 0.0 if p.complex_sampling else equation.ANTI_ALIAS_REJECTION_DB
+            fold_db = np.where(beyond, 40.0 * np.log10(np.maximum(folded, 0.01) / np.maximum(m_r, 0.01)) - filt, 0.0)
+            m_r = np.where(beyond, folded, m_r)
+            rcs_eff, rcs_body = rcs_eff + fold_db, rcs_body + fold_db
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         # the radial speed the internal tracker takes: with staggered ramps an ambiguous detection's at its track's
