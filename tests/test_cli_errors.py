@@ -576,9 +576,10 @@ def test_fidelity_auto_on_a_one_channel_radar_names_the_option_or_the_field(caps
     sc = tmp_path / "ka.yaml"
     sc.write_text("name: ka\nduration_s: 1.0\nseed: 1\nradar: {preset: scanning_ka}\n"
                   "actors:\n  - {id: a, class: car, x_m: 40.0}\n", encoding="utf-8")
-    rc, _, err = cli(capsys, "run", sc, "--fast", "--fidelity", "auto")
-    assert rc == 2 and "option --fidelity: value 'auto' is not allowed with preset scanning_ka of radar" \
-        in one_error_line(err)
+    for cmd in (["run", sc, "--fast"], ["report", sc]):
+        rc, _, err = cli(capsys, *cmd, "--fidelity", "auto")
+        assert rc == 2 and "option --fidelity: value 'auto' is not allowed with preset scanning_ka of radar" \
+            in one_error_line(err), cmd
     sc.write_text(sc.read_text(encoding="utf-8") + "fidelity: auto\n", encoding="utf-8")
     rc, _, err = cli(capsys, "run", sc, "--fast")
     assert rc != 0 and "ka.yaml:7: field 'fidelity': value 'auto' is not allowed" in one_error_line(err)

@@ -215,6 +215,8 @@ def test_a_map_too_small_for_the_signal_chain_is_refused_at_load(tmp_path, overr
     ("overrides: {stagger_chirp_period_s: 1.0e-9}", "", "radar.overrides.stagger_chirp_period_s", "[1e-07, 0.01]"),
     ("overrides: {max_range_m: 1000}", "", "radar.overrides.max_range_m", "[2, 250]"),
     ("overrides: {num_tx: 2, num_rx: 2049}", "", "radar.overrides.num_rx", "at most 4096 virtual channels"),
+    ("overrides: {num_tx: 2000}", "", "radar.overrides.num_tx", "(here 2000 × 4) at most 4096"),
+    ("overrides: {num_tx: 4097, num_rx: 1}", "", "radar.overrides.num_tx", "(here 4097 × 1) at most 4096"),
     ("", "signal: {dsp: {guard_range: 0}}\n", "signal.dsp.guard_range", "at least 2 guard cells in range"),
     ("", "signal: {dsp: {guard_doppler: 1}}\n", "signal.dsp.guard_doppler", "at least 2 guard cells in doppler"),
     ("", "signal: {dsp: {train_range: 0, train_doppler: 0}}\n", "signal.dsp.train_range", "at least 4 training"),

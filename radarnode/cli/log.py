@@ -86,7 +86,8 @@ def cmd(args) -> int:
             if ecu is None:
                 return
             # the ECU decides on what it decoded from the logged frames, as it would on the bus
-            ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames)
+            ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames,
+                        assembler.yaw_frames)
             ecu.boundaries = assembler.road_boundaries
             # an object list or a cluster list, whichever the radar sends (as run and report): an ECU fed only
             # object lists would decide "radar unavailable" on a cluster radar, on its timer, not every cycle

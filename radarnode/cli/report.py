@@ -171,10 +171,12 @@ def cmd(args) -> int:
         raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
     scenarios = [(path, with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
                  for path in args.scenarios]                                                    # checked first
-    from radarnode.cli.common import check_doa_option, check_doa_presets
+    from radarnode.cli.common import check_auto_presets, check_doa_option, check_doa_presets
     from radarnode.radar.models import check_doa
     from radarnode.radar.setup import radar_config
     for _, sc in scenarios:
+        if args.fidelity == "auto":
+            check_auto_presets(sc)                # the option named, before any run (as run, log, node)
         if args.doa is not None:
             check_doa_option(args.doa, args.fidelity or sc.fidelity)
             check_doa_presets(sc, args.doa)

@@ -108,7 +108,8 @@ def cmd(args) -> int:
             cycles = [cycle] + assembler.drain() if cycle is not None else []
             decision = None
             # the ego motion the assembler decoded, every cycle (its frame count tells a new one from the last)
-            ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames)
+            ecu.set_ego(out.t_s, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames,
+                        assembler.yaw_frames)
             if cycles:
                 ecu.boundaries = assembler.road_boundaries
                 for c in cycles:

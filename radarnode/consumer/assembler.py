@@ -307,6 +307,7 @@ class CycleAssembler(can.Listener):
         #: SpeedInformation frames decoded so far: a reader tells a new ego speed from the last one by it
         #: (:meth:`radarnode.consumer.ecu.Ecu.set_ego`'s ``frames``)
         self.ego_frames = 0
+        self.yaw_frames = 0                   # … and YawRateInformation frames
         self.queue_overflow = 0
         self._queue: queue.Queue = queue.Queue(maxsize=maxsize)
         self._lock = threading.RLock()
@@ -506,6 +507,7 @@ class CycleAssembler(can.Listener):
                 self.ego_frames += 1
             elif base == P.YAW_RATE_INFO:
                 self.ego_yaw_rate_dps = values["RadarDevice_YawRate"]
+                self.yaw_frames += 1
 
     def _own_frame(self, template: int, msg: can.Message) -> None:
         """radarnode's own E2E-protected messages: checked with this sensor's Data ID, then decoded."""

@@ -208,7 +208,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
             assembler.on_message_received(m)
             if fuser is not None:
                 fuser.on_message_received(m)
-        ecu.set_ego(t, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames)
+        ecu.set_ego(t, assembler.ego_speed_mps, assembler.ego_yaw_rate_dps, assembler.ego_frames,
+                    assembler.yaw_frames)
         ecu.boundaries = assembler.road_boundaries          # as the radar reported them (0x680/0x681)
         decision = None
         primary = assembler.drain()

@@ -120,7 +120,8 @@ class RadarPreset:
             validate.integer(f, getattr(self, f), lo=1, hi=1 << 16)
         if self.num_tx * self.num_rx > MAX_VIRTUAL_CHANNELS:
             # the detection statistic's exact CA-CFAR threshold is a recurrence of N² terms (4096: ~3 s a threshold)
-            raise FieldError("num_rx", self.num_rx, f"num_tx × num_rx (here {self.num_tx} × {self.num_rx}) at most "
+            big = "num_tx" if self.num_tx > self.num_rx else "num_rx"          # the factor that is too many
+            raise FieldError(big, getattr(self, big), f"num_tx × num_rx (here {self.num_tx} × {self.num_rx}) at most "
                              f"{MAX_VIRTUAL_CHANNELS} virtual channels (imaging radars have some 2300)")
         validate.boolean("complex_sampling", self.complex_sampling)
         if self.num_chirps % 2 or self.num_chirps < 4:
@@ -306,7 +307,12 @@ class RadarPreset:
         try:
             return dataclasses.replace(self, **overrides)
         except FieldError as exc:
-            raise FieldError(f"overrides.{exc.field}", exc.value, exc.allowed) from None
+            field, value = exc.field, exc.value
+            if field in ("num_tx", "num_rx") and field not in overrides:
+                # the channel count's limit names a factor the file overrode (num_tx: 2000 blamed num_rx: 4)
+                field = "num_rx" if field == "num_tx" else "num_tx"
+                value = overrides.get(field, value)
+            raise FieldError(f"overrides.{field}", value, exc.allowed) from None
 
 
 def _c_over(x: float) -> float:
