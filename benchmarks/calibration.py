@@ -41,7 +41,10 @@ Prints Markdown tables:
 17. (``--only neighbours``) accuracy beside a neighbour: two equal returns 2–6 bins apart at ρ = 30 dB and 6–24
    bins apart at 45 dB and 9–14 at 70–80 dB, a 25-dB return 12–26 bins from a 60-dB one, a 45-dB return 6–10 bins
    from a 55-dB one, rows of 3 and 4 equal returns: the resolved
-   frames and the worst return's RMSE over its CRB, detection against signal level.
+   frames and the worst return's RMSE over its CRB, detection against signal level;
+18. (``--only reading``) the RCS each level's clusters read of the point targets it detects, over the truth, from
+   Pd ≈ 0.05 to 0.95, Swerling 0 and 1: the quartiles (a return detected near the threshold reads high: it faded
+   up, or its noise took it over), and the Pd.
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 12 minutes; ``--quick`` about 3).
 """
@@ -1098,6 +1101,52 @@ def neighbours_table(quick: bool) -> None:
 _CHAINS: dict = {}
 
 
+def _readings(level: str, rho_db: float, swerling: int, frames: int, seed: int) -> tuple[list[float], int, int]:
+    """The cluster RCS over the truth of the point targets one run of :func:`calibrated`'s scene detects, at
+    ``level``; the hits and trials (a cluster within 1.5 range bins and 2 beamwidths of a target is its own)."""
+    sc = calibrated(rho_db, swerling, seed)
+    scene = Scene(sc)
+    model = make_model(level, scene, P, np.random.default_rng(seed), radar_config(sc).signal, clusters_wanted=True)
+    cfg = RuntimeConfig(max_distance_m=P.max_range_m)
+    err, hits, trials = [], 0, 0
+    for k in range(frames):
+        frame, view = model.step(k * sc.period_s, cfg)
+        cl = frame.clusters
+        caz = np.arctan2(cl.dist_lat_m, cl.dist_long_m)
+        for i in range(scene.n):
+            trials += 1
+            d = (np.abs(cl.range_m - view.range_m[i]) / (1.5 * P.range_resolution_m)
+                 + np.abs(np.sin(caz) - np.sin(view.azimuth_rad[i])) / (2.0 * P.angular_resolution_rad))
+            if d.size and d.min() <= 1.0:
+                hits += 1
+                err.append(float(cl.rcs_dbsm[int(np.argmin(d))] - scene.rcs_dbsm[i]))
+    return err, hits, trials
+
+
+def reading_table(quick: bool) -> None:
+    frames = 20 if quick else 40
+    seeds = (11, 12) if quick else (11, 12, 13, 14)
+    print(f"### The RCS read of detected point targets, mimo12 ({len(seeds)} runs × {frames} frames × 10 targets a "
+          "point)\n")
+    print("Reported cluster RCS − true RCS (dB) of the targets each level detects: 25th / 50th / 75th percentile, "
+          "and the Pd. Near the threshold a detected return reads high (it faded up, or its noise took it over); "
+          "the object level draws its reading with its detection (`DetectionStatistic.reading`).\n")
+    print("| Swerling | ρ (dB) | " + " | ".join(f"{lv}: Pd | {lv}: quartiles" for lv in LEVELS) + " |")
+    print("|---|---:|" + "---:|---|" * len(LEVELS))
+    for swerling, rhos in ((1, (11.0, 14.0, 17.0, 20.0, 30.0)), (0, (15.0, 16.5, 18.0, 20.0, 30.0))):
+        for rho in rhos:
+            cells = []
+            for level in LEVELS:
+                err, hits, trials = [], 0, 0
+                for seed in seeds:
+                    e, h, t = _readings(level, rho, swerling, frames, seed)
+                    err, hits, trials = err + e, hits + h, trials + t
+                q = np.percentile(err, [25, 50, 75]) if err else [math.nan] * 3
+                cells.append(f"{hits / trials:.2f} | {q[0]:+.1f} / {q[1]:+.1f} / {q[2]:+.1f}")
+            print(f"| {swerling} | {rho:.1f} | " + " | ".join(cells) + " |", flush=True)
+    print()
+
+
 def _chain_of(name: str) -> DspChain:
     """One DspChain a preset (its statistic's tables are built once)."""
     if name not in _CHAINS:
@@ -1111,7 +1160,7 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
                                        "pairs", "rcs", "posts", "spacing", "triples", "abreast", "layouts",
-                                       "secondary", "neighbours"))
+                                       "secondary", "neighbours", "reading"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -1140,7 +1189,7 @@ def main() -> None:
                      ("rcs", rcs_table), ("posts", posts_table), ("spacing", spacing_table),
                      ("triples", triples_table), ("abreast", abreast_table),
                      ("layouts", layouts_table), ("secondary", secondary_table),
-                     ("neighbours", neighbours_table)):
+                     ("neighbours", neighbours_table), ("reading", reading_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")

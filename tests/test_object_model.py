@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -315,19 +316,46 @@ def test_the_cluster_list_is_each_cycles_nearest_up_to_its_capacity(monkeypatch)
             assert (np.diff(r[part]) >= 0).all()                      # each by range
 
 
-def test_a_detection_s_rcs_reads_an_exponential_power_for_a_fluctuating_target_and_amplitude_noise_for_a_steady():
-    """:func:`measured_rcs_db` against theory: 10·log10 of an Exp(1) power has mean −10·γ/ln 10 = −2.507 dB and
-    standard deviation 10/ln 10 · π/√6 = 5.570 dB, mean power 1; a steady target at ρ = 20 dB reads within its
-    amplitude noise (relative √2·10^(−ρ/20), 0.61 dB)."""
-    from radarnode.radar.object_model import measured_rcs_db
-    z = np.random.default_rng(11).standard_normal(400_000)
-    d = measured_rcs_db(z, np.full(z.size, 30.0), np.zeros(z.size, dtype=bool))
-    assert d.mean() == pytest.approx(-10.0 * 0.5772156649 / math.log(10.0), abs=0.03)
-    assert d.std() == pytest.approx(10.0 / math.log(10.0) * math.pi / math.sqrt(6.0), abs=0.03)
-    assert np.mean(10.0 ** (d / 10.0)) == pytest.approx(1.0, abs=0.01)
-    steady = measured_rcs_db(z, np.full(z.size, 20.0), np.ones(z.size, dtype=bool))
-    assert abs(steady.mean()) < 0.1 and steady.std() == pytest.approx(10.0 / math.log(10.0) * math.sqrt(2.0) * 0.1,
-                                                                      rel=0.1)
+@pytest.mark.parametrize("swerling, rho_db, pd_range", [(1, 14.0, (0.05, 0.2)), (1, 18.0, (0.25, 0.5)),
+                                                        (1, 30.0, (0.85, 1.0)), (0, 16.0, (0.03, 0.3)),
+                                                        (0, 18.0, (0.3, 0.7))])
+def test_near_the_threshold_the_object_level_reads_the_rcs_of_what_it_detects_as_the_detection_level(
+        swerling, rho_db, pd_range):
+    """Ten point targets at one integrated SNR on mimo12 (benchmarks/calibration.py's scene): the RCS their clusters
+    read, over the truth, at the object and the detection level. A return detected near the threshold is one that
+    faded up (Swerling 1) or whose noise took it over: drawn apart from the detection, the object level read the
+    mean (−1.3 dB median at Pd 0.22 where the detection level read +3.9 dB; an independent tester's finding). Now
+    the medians agree within 0.6 dB, and the object level's Pd is what it was (the same detections)."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from calibration import P, calibrated
+    from radarnode.radar.levels import make_model
+    med, pd = {}, {}
+    for level in ("object", "detection"):
+        err, hits, trials = [], 0, 0
+        for seed in (11, 12, 13):
+            sc = calibrated(rho_db, swerling, seed)
+            scene = Scene(sc)
+            model = make_model(level, scene, P, np.random.default_rng(seed), radar_config(sc).signal,
+                               clusters_wanted=True)
+            cfg = RuntimeConfig(max_distance_m=P.max_range_m)
+            for k in range(40):
+                frame, view = model.step(k * sc.period_s, cfg)
+                cl = frame.clusters
+                caz = np.arctan2(cl.dist_lat_m, cl.dist_long_m)
+                for i in range(scene.n):
+                    trials += 1
+                    d = (np.abs(cl.range_m - view.range_m[i]) / (1.5 * P.range_resolution_m)
+                         + np.abs(np.sin(caz) - np.sin(view.azimuth_rad[i])) / (2 * P.angular_resolution_rad))
+                    if d.size and d.min() <= 1.0:
+                        hits += 1
+                        err.append(cl.rcs_dbsm[int(np.argmin(d))] - scene.rcs_dbsm[i])
+        med[level], pd[level] = float(np.median(err)), hits / trials
+    assert pd_range[0] <= pd["object"] <= pd_range[1], pd
+    assert abs(pd["object"] - pd["detection"]) < 0.08, pd
+    assert abs(med["object"] - med["detection"]) < 0.6, (med, pd)
+    if rho_db < 20.0:
+        assert med["object"] > 1.0, med                 # it reads high: the reading was drawn with the detection
 
 
 @pytest.mark.parametrize("swerling", [0, 1])
