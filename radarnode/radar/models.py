@@ -25,7 +25,8 @@ from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.calibration import RESOLUTION
 from radarnode.radar.elevation import GROUND_REFLECTION
 from radarnode.radar.levels import FIDELITY_LEVELS, check_doa, make_model  # noqa: F401 (imported from here too)
-from radarnode.radar.object_model import ObjectModel, RuntimeConfig, StepInfo, check_step, in_fov
+from radarnode.radar.object_model import (POINT_SIZE_M, ObjectModel, RuntimeConfig, StepInfo, check_step, in_fov,
+                                          nearest_in_fov)
 from radarnode.radar.presets import RadarPreset
 from radarnode.radar.scatterers import Scatterers, scene_scatterers
 from radarnode.radar.options import SignalOptions
@@ -286,6 +287,17 @@ def extended_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
     return out
 
 
+def across_an_edge(preset: RadarPreset, view, length_m: np.ndarray, width_m: np.ndarray) -> np.ndarray:
+    """Which actors a sector's edge crosses (their nearest point outside the field of view, a part of them inside:
+    :func:`radarnode.radar.object_model.nearest_in_fov` moves it), bodies larger than a point. The object level
+    measures such a body at its point on the edge, which slides along the edge as the body comes into view; the
+    chain sees the inner parts of its outline. Fed to one tracker in turns, the two were taken for two bodies: a
+    car overtaking into the view listed a second object of it, with a lateral speed of 12 m/s, for four cycles (an
+    independent tester's finding; 11 cycles in seeds 1–6 of that overtake, none at either level alone). Shape (n,)."""
+    x_in, y_in = nearest_in_fov(preset, view, length_m, width_m)
+    return ((x_in != view.x_m) | (y_in != view.y_m)) & ~((length_m <= POINT_SIZE_M) & (width_m <= POINT_SIZE_M))
+
+
 class AutoModel:
     """``auto``: each actor at the cheapest level that keeps the chain's answer, one tracker for all.
 
@@ -299,7 +311,9 @@ class AutoModel:
     counts the other actors only), or its own reflectors
     spread across the beam within one resolution cell (:func:`extended_actors`:
     a bridge deck, a gantry, a car crossing close by), whose glint and splitting
-    the object level's one point per actor does not have. Posts and clutter always
+    the object level's one point per actor does not have, or a sector's edge
+    crosses it (:func:`across_an_edge`: the object level's point slides along
+    the edge, the chain sees the inner outline). Posts and clutter always
     go through the detection level (the object level has no model of them,
     and the chain reports them as clusters and stationary objects), with the
     reflectors of object-level actors in their rings for their energy (their
@@ -345,6 +359,7 @@ class AutoModel:
         at = detection_model.apparent_positions(self.preset, scat)
         conflict = conflicting_actors(self.preset, scat, self.scene.n, at) | extended_actors(self.preset, scat,
                                                                                              self.scene.n, at)
+        conflict |= across_an_edge(self.preset, view, self.scene.length_m, self.scene.width_m)
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
         need = scat.actor_index < 0
