@@ -328,28 +328,13 @@ def test_near_the_threshold_the_object_level_reads_the_rcs_of_what_it_detects_as
     the medians agree within 0.6 dB, and the object level's Pd is what it was (the same detections)."""
     import sys
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
-    from calibration import P, calibrated
-    from radarnode.radar.levels import make_model
+    from calibration import _readings
     med, pd = {}, {}
     for level in ("object", "detection"):
         err, hits, trials = [], 0, 0
         for seed in (11, 12, 13):
-            sc = calibrated(rho_db, swerling, seed)
-            scene = Scene(sc)
-            model = make_model(level, scene, P, np.random.default_rng(seed), radar_config(sc).signal,
-                               clusters_wanted=True)
-            cfg = RuntimeConfig(max_distance_m=P.max_range_m)
-            for k in range(40):
-                frame, view = model.step(k * sc.period_s, cfg)
-                cl = frame.clusters
-                caz = np.arctan2(cl.dist_lat_m, cl.dist_long_m)
-                for i in range(scene.n):
-                    trials += 1
-                    d = (np.abs(cl.range_m - view.range_m[i]) / (1.5 * P.range_resolution_m)
-                         + np.abs(np.sin(caz) - np.sin(view.azimuth_rad[i])) / (2 * P.angular_resolution_rad))
-                    if d.size and d.min() <= 1.0:
-                        hits += 1
-                        err.append(cl.rcs_dbsm[int(np.argmin(d))] - scene.rcs_dbsm[i])
+            e, h, t = _readings(level, rho_db, swerling, 40, seed)
+            err, hits, trials = err + e, hits + h, trials + t
         med[level], pd[level] = float(np.median(err)), hits / trials
     assert pd_range[0] <= pd["object"] <= pd_range[1], pd
     assert abs(pd["object"] - pd["detection"]) < 0.08, pd
