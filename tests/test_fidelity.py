@@ -219,6 +219,35 @@ def test_auto_renders_a_body_wider_than_two_beams_at_the_detection_level():
     np.testing.assert_array_equal(wide_actors(p, view, beams=float(span[0]) + 0.1), [False, False])
 
 
+def test_wide_actors_counts_only_the_span_inside_the_field_of_view():
+    """:func:`span_in_view`: a car behind a front radar (its corners' azimuths either side of ±180°: 356° between
+    them) and cars beside it, outside its ±60° view, span nothing in view and are not wide; a truck close ahead is,
+    by the part of it within the sector's reach; the same span for the corner radar's car beside it."""
+    from radarnode.radar.models import span_in_view, wide_actors
+    text = ("  - {id: behind, class: car, x_m: -20.0, lane: 1, speed_mps: 25.0}\n"
+            "  - {id: beside, class: car, x_m: 1.0, lane: 2, speed_mps: 25.0}\n"
+            "  - {id: beside_r, class: car, x_m: 1.0, lane: 0, speed_mps: 25.0}\n"
+            "  - {id: close, class: truck, x_m: 12.0, lane: 1, speed_mps: 25.0}")
+    sc = scenario(text, ego="{speed_mps: 25.0}")
+    view = Scene(sc).view(0.0)
+    p = PRESETS["ars408_like"]
+    assert view.az_hi_rad[0] - view.az_lo_rad[0] > np.radians(350.0)         # the seam
+    in_view = span_in_view(p, view)
+    np.testing.assert_array_equal(in_view[:3], 0.0)
+    assert in_view[3] == pytest.approx(view.az_hi_rad[3] - view.az_lo_rad[3])     # wholly inside
+    np.testing.assert_array_equal(wide_actors(p, view), [False, False, False, True])
+    # the near sector's ±60° reaches 20 m: the same truck 40 m ahead is in the ±45° one, and narrower
+    far = Scene(scenario(text.replace("x_m: 12.0", "x_m: 40.0"), ego="{speed_mps: 25.0}")).view(0.0)
+    assert 0.0 < span_in_view(p, far)[3] < 2.0 * p.angular_resolution_rad
+    # a corner radar yawed 45°: the car beside it is in view (wide), the one behind and the one on the right are not
+    corner = Scene(scenario(text, ego="{speed_mps: 25.0}",
+                            radar="{preset: srr_corner, mount: {x_m: 3.5, y_m: 0.73, yaw_deg: 45.0}}")).view(0.0)
+    pc = PRESETS["srr_corner"]
+    np.testing.assert_array_equal(wide_actors(pc, corner)[:3], [False, True, False])
+    half = np.radians(pc.fov[0].half_angle_deg)
+    assert span_in_view(pc, corner)[1] == pytest.approx(min(corner.az_hi_rad[1], half) - corner.az_lo_rad[1])
+
+
 def _objects_near_the_first_actor(sc, seed: int) -> tuple[int, int]:
     """``auto`` over the whole scenario: the cycles with an object within 6 m of the first actor's nearest point, and
     those with more than one."""

@@ -12,6 +12,7 @@ chain's answer and feeds one tracker.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 
 import numpy as np
@@ -291,14 +292,37 @@ def extended_actors(preset: RadarPreset, scat: Scatterers, n_actors: int,
 WIDE_BEAMS = 2.0
 
 
+def span_in_view(preset: RadarPreset, view) -> np.ndarray:
+    """The azimuth (rad) each actor spans inside the field of view: its extent between its corners
+    (``view.az_lo_rad``..``view.az_hi_rad``; across the ±π seam, the way round behind the sensor, for a box behind it)
+    cut to each sector its nearest point is within range of, the widest of those cuts. 0 for an actor in no sector's
+    reach or wholly outside every sector. Shape like ``view.x_m``."""
+    lo = np.asarray(view.az_lo_rad, dtype=np.float64)
+    hi = np.asarray(view.az_hi_rad, dtype=np.float64)
+    # a box that does not enclose the sensor spans less than π: an extent of more is the one behind, through ±π,
+    # [hi, lo + 2π], whose parts in front of the sector's edges are [hi, π] and [-π, lo]
+    seam = (hi - lo) > np.pi
+    rng = np.hypot(view.x_m, view.y_m)
+    span = np.zeros(lo.shape)
+    for sector in preset.fov:                                                  # a few sectors
+        h = min(math.radians(sector.half_angle_deg), math.pi)
+        front = np.clip(np.minimum(hi, h) - np.maximum(lo, -h), 0.0, None)
+        behind = np.clip(h - np.maximum(hi, -h), 0.0, None) + np.clip(np.minimum(lo, h) + h, 0.0, None)
+        cut = np.where(seam, behind, front)
+        span = np.maximum(span, np.where(rng <= sector.max_range_m, cut, 0.0))
+    return span
+
+
 def wide_actors(preset: RadarPreset, view, beams: float = WIDE_BEAMS) -> np.ndarray:
-    """Which actors span more than ``beams`` beamwidths of azimuth as the sensor sees them (a body beside a corner
-    radar, a car alongside). The chain reports such a body as several detections across the beam, whose radial
-    speeds let the tracker fit its velocity at once; the object level's one point per actor carries one radial
-    speed, near zero for a body sliding past, and a track started on it at the standing world's speed drifted off
-    it by a metre a cycle: a car overtaking beside a corner radar yawed 45° was listed as two objects in 7–16 of its
-    70 cycles (seeds 1–2) where the signal level listed one (an independent tester's finding). Shape (n,)."""
-    return (view.az_hi_rad - view.az_lo_rad) > beams * preset.angular_resolution_rad
+    """Which actors span more than ``beams`` beamwidths of azimuth inside the field of view (:func:`span_in_view`:
+    a body beside a corner radar, a car alongside). The chain reports such a body as several detections across the
+    beam, whose radial speeds let the tracker fit its velocity at once; the object level's one point per actor
+    carries one radial speed, near zero for a body sliding past, and a track started on it at the standing world's
+    speed drifted off it by a metre a cycle: a car overtaking beside a corner radar yawed 45° was listed as two
+    objects in 7–16 of its 70 cycles (seeds 1–2) where the signal level listed one (an independent tester's
+    finding). A body behind the sensor or beside it outside the view is not one (its extent between its corners
+    crossed the ±π seam and counted as 355°: a second tester's finding). Shape (n,)."""
+    return span_in_view(preset, view) > beams * preset.angular_resolution_rad
 
 
 def across_an_edge(preset: RadarPreset, view, length_m: np.ndarray, width_m: np.ndarray) -> np.ndarray:
