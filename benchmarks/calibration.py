@@ -129,7 +129,7 @@ def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10, rc
 name: calibration
 duration_s: 30
 seed: {seed}
-radar: {{preset: mimo12, output: clusters}}
+radar: {{preset: {P.name}, output: clusters}}
 ego: {{speed_mps: 0.0}}
 road: {{lanes: 1, ego_lane: 0}}
 actors:
@@ -1126,8 +1126,8 @@ def _readings(level: str, rho_db: float, swerling: int, frames: int, seed: int) 
 def reading_table(quick: bool) -> None:
     frames = 20 if quick else 40
     seeds = (11, 12) if quick else (11, 12, 13, 14)
-    print(f"### The RCS read of detected point targets, mimo12 ({len(seeds)} runs × {frames} frames × 10 targets a "
-          "point)\n")
+    print(f"### The RCS read of detected point targets, {P.name} ({len(seeds)} runs × {frames} frames × 10 targets "
+          "a point)\n")
     print("Reported cluster RCS − true RCS (dB) of the targets each level detects: 25th / 50th / 75th percentile, "
           "and the Pd. Near the threshold a detected return reads high (it faded up, or its noise took it over); "
           "the object level draws its reading with its detection (`DetectionStatistic.reading`).\n")
@@ -1155,7 +1155,7 @@ def _chain_of(name: str) -> DspChain:
 
 
 def main() -> None:
-    global LEVELS, RESOLUTION_TRIALS, PD_FRAMES, PD_SWERLING
+    global LEVELS, RESOLUTION_TRIALS, PD_FRAMES, PD_SWERLING, P
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
@@ -1168,7 +1168,14 @@ def main() -> None:
                     "12 with --quick; 10 targets a frame: at 320 the ρ at Pd 0.9 of Swerling 1 is known to about "
                     "±0.25 dB)")
     ap.add_argument("--swerling", default="0,1", help="the Pd tables' Swerling cases: 0, 1 or 0,1")
+    ap.add_argument("--preset", default="mimo12", help="the radar of the reading table (--only reading; every other "
+                    "table is mimo12's or names its own)")
     args = ap.parse_args()
+    if args.preset not in PRESETS:
+        ap.error(f"--preset: value {args.preset!r} is not allowed; expected one of {', '.join(sorted(PRESETS))}")
+    if args.preset != "mimo12" and args.only != "reading":
+        ap.error(f"--preset: value {args.preset!r} is allowed with --only reading only (the other tables are built "
+                 "for mimo12 or name their radars)")
     if args.trials < 1:
         ap.error(f"--trials: value {args.trials} is not allowed; expected an integer ≥ 1")
     if args.frames is not None and args.frames < 2:
@@ -1179,6 +1186,7 @@ def main() -> None:
     RESOLUTION_TRIALS = args.trials
     PD_FRAMES, PD_SWERLING = args.frames, tuple(int(c) for c in cases)
     LEVELS = tuple(lv for lv in args.levels.split(",") if lv)
+    P = PRESETS[args.preset]
     t0 = time.perf_counter()
     # the command as given (its options, not a generic line), so that a table pasted from this output says what made it
     print(f"radarnode calibration, {time.strftime('%Y-%m-%d')}, "

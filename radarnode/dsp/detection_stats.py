@@ -486,6 +486,15 @@ class DetectionStatistic:
         grid, table = self._pd_tables[swerling]
         return np.interp(np.asarray(rho_db, dtype=np.float64), grid, table)
 
+    def snr_of_pd(self, pd: np.ndarray, swerling: int = 1) -> np.ndarray:
+        """The integrated SNR (dB) at which :meth:`pd_of_snr` reaches ``pd``: its table inverted by interpolation
+        (where the table is flat, at the false-alarm floor or at 1, the first SNR of the flat part)."""
+        self.pd_of_snr(0.0, swerling)
+        grid, table = self._pd_tables[swerling]
+        rising = np.maximum.accumulate(table)
+        keep = np.concatenate([[True], np.diff(rising) > 0.0])
+        return np.interp(np.asarray(pd, dtype=np.float64), rising[keep], grid[keep])
+
     #: equal-probability points of the exponential law (the midpoints of 48 quantile bins) over which a Swerling 1
     #: target's two looks in one cycle are averaged (:meth:`pd_second_look`)
     _EXP_POINTS = -np.log1p(-(np.arange(48) + 0.5) / 48)
@@ -550,7 +559,8 @@ class DetectionStatistic:
         frac = (w - lo) / np.maximum(hi - lo, 1e-300)
         return g_lo + np.clip(frac, 0.0, 1.0) * (self._G_GRID[j] - g_lo)
 
-    def reading(self, rho_db: np.ndarray, v: np.ndarray, w: np.ndarray, fluctuating: np.ndarray) -> np.ndarray:
+    def reading(self, rho_db: np.ndarray, v: np.ndarray, w: np.ndarray, fluctuating: np.ndarray,
+                loss_db: np.ndarray | float = 0.0) -> np.ndarray:
         """The integrated SNR the chain reads of a return the test detected, over its mean ρ (linear): the measured
         energy (the statistic less the noise's mean N, as the chain's estimate) divided by the window's and the mean
         straddle's loss, as the chain divides its own out. Drawn jointly with the detection: ``v`` uniform in
@@ -561,14 +571,20 @@ class DetectionStatistic:
         detects (a reading drawn apart from the detection read −9.5 dBsm where the other levels read −4.5/−5.0 at
         Pd ≈ 0.3). The measured energy floored at 1e-30, as the detection level floors its own (a floor at −13 dB
         piled 4 % of a Swerling 1 target's readings at 40 dB on it, where the chain reads fades down to −22 dB: an
-        independent tester's finding). Arrays broadcast."""
+        independent tester's finding). ``loss_db`` (≥ 0): the SNR by which other targets in the training ring
+        lowered the Pd that decided the detection (the masking, as an equivalent loss: :meth:`snr_of_pd` of the Pd
+        without and with it): the return passed the raised threshold, so its fluctuation's posterior and the part
+        of its statistic that passed are those at ρ less the loss, while its energy stays ρ's (drawn at ρ, a
+        fluctuating point among four others 8 m apart on ``ars408_like``, its Pd masked by 0.7–1, read
+        −5.2 / −1.6 / +1.4 dB where the detection level read −4.1 / −0.9 / +1.7). Arrays broadcast."""
         rho_db = np.asarray(rho_db, dtype=np.float64)
+        cond_db = rho_db - np.maximum(np.asarray(loss_db, dtype=np.float64), 0.0)
         fluct = np.broadcast_to(np.asarray(fluctuating, dtype=bool), rho_db.shape)
         g = np.ones(rho_db.shape)
         if fluct.any():
-            g = np.where(fluct, self.fluctuation_given_detection(rho_db, w), 1.0)
+            g = np.where(fluct, self.fluctuation_given_detection(cond_db, w), 1.0)
         g_db = 10.0 * np.log10(np.maximum(g, 1e-300))
-        s = np.clip(np.asarray(v, dtype=np.float64) * self.pd_of_snr(rho_db + g_db, 0), 1e-300, 1.0)
+        s = np.clip(np.asarray(v, dtype=np.float64) * self.pd_of_snr(cond_db + g_db, 0), 1e-300, 1.0)
         loss = self.window_gain * self.straddle_mean
         mean = 10.0 ** (rho_db / 10.0) * loss
         x = statistic_isf(s, mean * g, self.n_channels)

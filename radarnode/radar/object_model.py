@@ -841,6 +841,7 @@ class ObjectModel:
                                                                     & (sc.width_m <= POINT_SIZE_M))
         # the outlines of the extended bodies in view: the masking's (a subset) and the centroid's
         outline = SharedOutline(p, view, sc.length_m, sc.width_m, observable & self.extended, config.max_distance_m)
+        pd_alone = pd
         pd = pd * self._masking(view, rng_m, snr, observable, crossing, config.max_distance_m, outline)
         # where the chain measures it: at its nearest x and its outline's power centroid across (visible_centre_y),
         # as the other levels' tracker measures a group of detections
@@ -929,8 +930,18 @@ class ObjectModel:
         rcs_read, snr_read = np.array(rcs_eff, dtype=np.float64, copy=True), np.array(snr, dtype=np.float64, copy=True)
         t, a = np.nonzero(det_in)
         if t.size:
+            # a detection the other actors' energy in its ring made less likely passed a raised threshold: read as
+            # one of the Pd it had (DetectionStatistic.reading's loss; 0 where nothing masked it)
+            loss = np.zeros(t.size)
+            masked = pd[t, a] < pd_alone[t, a]
+            if masked.any():
+                tm, am = t[masked], a[masked]
+                fl = sc.swerling[am] == 1
+                loss[masked] = np.where(
+                    fl, stat.snr_of_pd(pd_alone[tm, am], 1) - stat.snr_of_pd(pd[tm, am], 1),
+                    stat.snr_of_pd(pd_alone[tm, am], 0) - stat.snr_of_pd(pd[tm, am], 0))
             read_db = 10.0 * np.log10(stat.reading(snr[t, a], u[t, a] / pd[t, a], normal_cdf(z[t, 4, a]),
-                                                   sc.swerling[a] == 1))
+                                                   sc.swerling[a] == 1, loss))
             rcs_read[t, a] += read_db
             snr_read[t, a] += read_db
         out = {"det_in": det_in, "rcs_read": rcs_read, "snr_read": snr_read, "trackable": trackable, "fov": fov,
