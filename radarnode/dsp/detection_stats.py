@@ -491,9 +491,13 @@ class DetectionStatistic:
         (where the table is flat, at the false-alarm floor or at 1, the first SNR of the flat part)."""
         self.pd_of_snr(0.0, swerling)
         grid, table = self._pd_tables[swerling]
-        rising = np.maximum.accumulate(table)
-        keep = np.concatenate([[True], np.diff(rising) > 0.0])
-        return np.interp(np.asarray(pd, dtype=np.float64), rising[keep], grid[keep])
+        inverse = self.__dict__.setdefault("_pd_inverse", {})
+        if swerling not in inverse or inverse[swerling][0] is not table:     # (made once a table)
+            rising = np.maximum.accumulate(table)
+            keep = np.concatenate([[True], np.diff(rising) > 0.0])
+            inverse[swerling] = (table, rising[keep], grid[keep])
+        _, xp, fp = inverse[swerling]
+        return np.interp(np.asarray(pd, dtype=np.float64), xp, fp)
 
     #: equal-probability points of the exponential law (the midpoints of 48 quantile bins) over which a Swerling 1
     #: target's two looks in one cycle are averaged (:meth:`pd_second_look`)
