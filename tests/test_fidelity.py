@@ -10,6 +10,7 @@ from radarnode.errors import ConfigError
 from radarnode.radar.setup import radar_config
 from radarnode.radar.models import GLINT_SPAN_BEAMS, AutoModel, conflicting_actors, extended_actors, make_model
 from radarnode.radar.object_model import RuntimeConfig
+from radarnode.perception.tracker import GROUP_EPS_LONG_M
 from radarnode.radar.presets import PRESETS
 from radarnode.radar.scatterers import point_targets
 from radarnode.scene.world import Scene
@@ -259,7 +260,6 @@ def test_long_actors_are_bodies_whose_reflectors_in_view_span_more_than_the_grou
     """:func:`long_actors`: a truck in the next lane (its side in view: reflectors over 11 m of x) is long; a car
     there (4 m), a truck straight ahead in the ego's lane (its rear face only) and a truck wholly behind the sensor
     are not; the scale is the one given."""
-    from radarnode.perception.tracker import GROUP_EPS_LONG_M
     from radarnode.radar.models import long_actors
     from radarnode.radar.scatterers import scene_scatterers
     sc = scenario("  - {id: truck, class: truck, x_m: 30.0, lane: 2, speed_mps: 22.0}\n"
@@ -274,6 +274,27 @@ def test_long_actors_are_bodies_whose_reflectors_in_view_span_more_than_the_grou
     assert np.ptp(x[0]) > 2 * GROUP_EPS_LONG_M and np.ptp(x[1]) < GROUP_EPS_LONG_M
     np.testing.assert_array_equal(long_actors(p, scat, 4), [True, False, False, False])
     np.testing.assert_array_equal(long_actors(p, scat, 4, eps_long_m=float(np.ptp(x[0])) + 0.1), [False] * 4)
+
+
+@pytest.mark.parametrize("span, long", [(GROUP_EPS_LONG_M - 0.01, False), (GROUP_EPS_LONG_M, False),
+                                        (GROUP_EPS_LONG_M + 0.01, True), (2 * GROUP_EPS_LONG_M, True)])
+def test_long_actors_switches_just_above_the_grouping_scale_counting_only_reflectors_in_view(span, long):
+    """:func:`long_actors` at its threshold: one actor's two reflectors in view ``span`` apart along x, 4 m to the
+    side of a front radar (``ars408_like``), are long only above the scale (strictly: at it the tracker still groups
+    them). A third reflector of the same actor behind the sensor, 20 m further along x, and one beyond the
+    maximum range do not count; neither does a guardrail post (actor −1) in view 30 m away."""
+    from radarnode.radar.models import long_actors
+    from radarnode.radar.scatterers import Scatterers
+    p = PRESETS["ars408_like"]
+    x = np.array([20.0, 20.0 + span, -5.0, p.max_range_m + 10.0, 50.0])
+    y = np.array([4.0, 4.0, 4.0, 4.0, 4.0])
+    zeros = np.zeros_like(x)
+    scat = Scatterers(x_m=x, y_m=y, z_m=zeros, vx_mps=zeros, vy_mps=zeros, rcs_dbsm=zeros + 10.0,
+                      actor_index=np.array([0, 0, 0, 0, -1]))
+    np.testing.assert_array_equal(long_actors(p, scat, 2), [long, False])
+    # the same with the first reflector out of view: one reflector in view spans nothing
+    scat.x_m[0] = -5.0
+    np.testing.assert_array_equal(long_actors(p, scat, 2), [False, False])
 
 
 def _split_cycles(level: str, seed: int) -> int:
