@@ -1209,6 +1209,31 @@ def test_a_detected_fluctuation_follows_its_posterior_against_rejection_sampling
     np.testing.assert_allclose(far, -np.log1p(-q), rtol=0.01)
 
 
+def test_the_posterior_table_built_row_by_row_answers_as_one_built_at_once():
+    """:meth:`fluctuation_given_detection` builds its table's rows when first asked for: a statistic asked in four
+    calls (rows in any order, overlapping, the grid's ends and beyond) answers each call bit for bit as a new one
+    asked only that call, and builds only the rows asked for."""
+    shared = _mimo12_statistic()                     # (one a process: a new one takes its Pd tables, not its rows)
+
+    def new_statistic():
+        stat = ds.DetectionStatistic(shared.cfar, shared.range_window, shared.doppler_window)
+        stat.import_tables(shared.export_tables())
+        return stat
+
+    rng = np.random.default_rng(11)
+    calls = [rng.uniform(20.0, 30.0, 50), rng.uniform(-45.0, 75.0, 400), np.array([-30.0, 60.0, 25.04, 25.06]),
+             rng.uniform(0.0, 22.0, 300)]
+    stat = new_statistic()
+    asked = set()
+    for rho in calls:
+        w = rng.random(rho.size)
+        w[:2] = [0.0, 1.0]
+        np.testing.assert_array_equal(stat.fluctuation_given_detection(rho, w),
+                                      new_statistic().fluctuation_given_detection(rho, w))
+        asked |= set(np.clip(np.rint((rho + 30.0) / 0.1), 0, 900).astype(int).tolist())
+        rows = stat._posterior[0]
+        assert list(rows) == sorted(asked)
+
 @pytest.mark.parametrize("swerling", [0, 1])
 @pytest.mark.parametrize("pd_target", [0.1, 0.5, 0.9])
 def test_the_reading_of_a_detected_return_matches_the_one_cell_test_drawn_with_a_signal(swerling, pd_target):

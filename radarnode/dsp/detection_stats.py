@@ -529,9 +529,10 @@ class DetectionStatistic:
         return np.where(fluct, np.interp(rho, grid, table), steady)
 
     #: the fluctuation factors (power over its mean, Exp(1) a priori) and the SNR step of the table of
-    #: :meth:`fluctuation_given_detection` (built from the Swerling 0 Pd table: 901 × 400, a few ms)
+    #: :meth:`fluctuation_given_detection` (built from the Swerling 0 Pd table: 901 × 400, a row when first read)
     _G_GRID = np.geomspace(1e-4, 60.0, 400)
     _POSTERIOR_STEP_DB = 0.1
+    _POSTERIOR_RHO_DB = np.arange(-30.0, 60.0001, _POSTERIOR_STEP_DB)
 
     def fluctuation_given_detection(self, rho_db: np.ndarray, w: np.ndarray) -> np.ndarray:
         """The power factor g of a Swerling 1 return the test detected at mean integrated SNR ``rho_db``: the
@@ -540,28 +541,47 @@ class DetectionStatistic:
         is one that faded up (g's posterior median 3.3 at Pd 0.1 on mimo12, 0.69 a priori); well above it the
         posterior is the prior. Tabulated on ρ every 0.1 dB (nearest row) and 400 log-spaced g from 1e-4 to 60,
         inverted by linear interpolation of its CDF. Arrays broadcast."""
-        if self.__dict__.get("_posterior") is None:
-            rho = np.arange(-30.0, 60.0001, self._POSTERIOR_STEP_DB)
+        rho_db, w = np.broadcast_arrays(np.asarray(rho_db, dtype=np.float64), np.asarray(w, dtype=np.float64))
+        n_g = self._G_GRID.size
+        i = np.clip(np.rint((rho_db - self._POSTERIOR_RHO_DB[0]) / self._POSTERIOR_STEP_DB), 0,
+                    self._POSTERIOR_RHO_DB.size - 1).astype(np.intp)
+        rows, cdf, flat = self._posterior_rows(i)
+        p = np.searchsorted(rows, i)                               # each element's row among those built
+        w = np.clip(w, 1e-12, 1.0 - 1e-12)
+        j = np.searchsorted(flat, w + 2.0 * i) - p * n_g           # the first grid point whose CDF reaches w
+        j = np.clip(j, 0, n_g - 1)
+        hi = cdf[p, j]
+        lo = np.where(j > 0, cdf[p, np.maximum(j - 1, 0)], 0.0)
+        g_lo = np.where(j > 0, self._G_GRID[np.maximum(j - 1, 0)], 0.0)
+        frac = (w - lo) / np.maximum(hi - lo, 1e-300)
+        return g_lo + np.clip(frac, 0.0, 1.0) * (self._G_GRID[j] - g_lo)
+
+    def _posterior_rows(self, i: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The rows of :meth:`fluctuation_given_detection`'s table built so far, with those of the row indices ``i``
+        (into ``_POSTERIOR_RHO_DB``) built now: (their indices, increasing; their CDFs over ``_G_GRID``; the CDFs
+        flattened with row index k offset by 2k, so that one ``searchsorted`` inverts every element). A row is built
+        when first asked for: a run reads a few hundred of the 901 (166 in a 300-s log of ``highway_cut_in``), and
+        the whole table (2.9 MB a array, written five times) cost a new model's first cycle some 15 ms, most of it
+        the pages' first touch. Each row is the same numbers whenever it is built (every operation is per row)."""
+        built = self.__dict__.get("_posterior")
+        need = np.unique(i)
+        if built is not None:
+            need = need[~np.isin(need, built[0], assume_unique=True)]
+        if need.size:
             g = self._G_GRID
-            dens = self.pd_of_snr(rho[:, None] + 10.0 * np.log10(g)[None, :], 0) * np.exp(-g)[None, :]
+            dens = self.pd_of_snr(self._POSTERIOR_RHO_DB[need][:, None] + 10.0 * np.log10(g)[None, :], 0) \
+                * np.exp(-g)[None, :]
             # the CDF over g by the trapezoid rule, from 0 (below g[0] the density is about dens[:, 0])
             mass = np.concatenate([dens[:, :1] * g[0], 0.5 * (dens[:, 1:] + dens[:, :-1]) * np.diff(g)], axis=1)
             cdf = np.cumsum(mass, axis=1)
             cdf /= cdf[:, -1:]
-            # the rows made one increasing array (row i offset by 2i), so one searchsorted inverts every element
-            self._posterior = (rho, cdf, (cdf + 2.0 * np.arange(rho.size)[:, None]).ravel())
-        rho, cdf, flat = self._posterior
-        rho_db, w = np.broadcast_arrays(np.asarray(rho_db, dtype=np.float64), np.asarray(w, dtype=np.float64))
-        n_g = self._G_GRID.size
-        i = np.clip(np.rint((rho_db - rho[0]) / self._POSTERIOR_STEP_DB), 0, rho.size - 1).astype(np.intp)
-        w = np.clip(w, 1e-12, 1.0 - 1e-12)
-        j = np.searchsorted(flat, w + 2.0 * i) - i * n_g           # the first grid point whose CDF reaches w
-        j = np.clip(j, 0, n_g - 1)
-        hi = cdf[i, j]
-        lo = np.where(j > 0, cdf[i, np.maximum(j - 1, 0)], 0.0)
-        g_lo = np.where(j > 0, self._G_GRID[np.maximum(j - 1, 0)], 0.0)
-        frac = (w - lo) / np.maximum(hi - lo, 1e-300)
-        return g_lo + np.clip(frac, 0.0, 1.0) * (self._G_GRID[j] - g_lo)
+            rows = need
+            if built is not None:
+                rows = np.concatenate([built[0], need])
+                order = np.argsort(rows, kind="stable")
+                rows, cdf = rows[order], np.concatenate([built[1], cdf])[order]
+            self._posterior = built = (rows, cdf, (cdf + 2.0 * rows[:, None]).ravel())
+        return built
 
     def reading(self, rho_db: np.ndarray, v: np.ndarray, w: np.ndarray, fluctuating: np.ndarray,
                 loss_db: np.ndarray | float = 0.0) -> np.ndarray:
