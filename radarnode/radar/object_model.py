@@ -936,10 +936,12 @@ class ObjectModel:
             masked = pd[t, a] < pd_alone[t, a]
             if masked.any():
                 tm, am = t[masked], a[masked]
-                fl = sc.swerling[am] == 1
-                loss[masked] = np.where(
-                    fl, stat.snr_of_pd(pd_alone[tm, am], 1) - stat.snr_of_pd(pd[tm, am], 1),
-                    stat.snr_of_pd(pd_alone[tm, am], 0) - stat.snr_of_pd(pd[tm, am], 0))
+                case, lost = sc.swerling[am], np.zeros(tm.size)
+                for sw in (0, 1):                      # each detection by its own Swerling case's table
+                    k = case == sw
+                    if k.any():
+                        lost[k] = stat.snr_of_pd(pd_alone[tm[k], am[k]], sw) - stat.snr_of_pd(pd[tm[k], am[k]], sw)
+                loss[masked] = lost
             read_db = 10.0 * np.log10(stat.reading(snr[t, a], u[t, a] / pd[t, a], normal_cdf(z[t, 4, a]),
                                                    sc.swerling[a] == 1, loss))
             rcs_read[t, a] += read_db
