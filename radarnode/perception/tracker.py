@@ -218,9 +218,11 @@ RIGID_SPEED_FLOOR_MPS = 0.1
 #: detections further apart than this along the sensor's x are never one group by distance alone (
 #: :func:`group_detections`' DBSCAN scale along x)
 GROUP_EPS_LONG_M = 4.5
+#: … and across it, along the sensor's y (:func:`group_detections`' DBSCAN scale along y)
+GROUP_EPS_M = 2.8
 
 
-def group_detections(det: Detections, eps_m: float = 2.8, eps_mps: float = 1.5,
+def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float = 1.5,
                      eps_long_m: float = GROUP_EPS_LONG_M) -> Groups:
     """DBSCAN over (x, y, radial speed) scaled by (eps_long_m, eps_m, eps_mps); a group per cluster.
 
@@ -844,7 +846,7 @@ class ObjectTracker:
         return (np.where(known, ax, 0.0), np.where(known, ay, 0.0), np.where(known, sig_x, np.nan),
                 np.where(known, sig_y, np.nan))
 
-    def _duplicates(self, eps_m: float = 2.8, eps_long_m: float = GROUP_EPS_LONG_M, eps_mps: float = 1.0
+    def _duplicates(self, eps_m: float = GROUP_EPS_M, eps_long_m: float = GROUP_EPS_LONG_M, eps_mps: float = 1.0
                     ) -> np.ndarray:
         """Tracks that are parts of an older track's body: within the grouping distance of it and moving with
         it (one body split into two groups for a few cycles leaves two tracks that would never meet again)."""
