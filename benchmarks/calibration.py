@@ -102,6 +102,18 @@ def pfa_table(quick: bool) -> None:
     print()
 
 
+def _in_view(r: float, az_deg: float) -> float:
+    """``az_deg`` (within ±40°) scaled into the preset's sectors at range ``r`` — to within 2° of the edge of the
+    widest sector that reaches 5 m past it — where it lies outside them; unchanged where every azimuth of the
+    scene's lies inside (mimo12's every target). ``ars408_like``'s far sector, ±9° beyond 70 m, had left three of
+    the ten targets out of view, and every Pd printed was 0.7× the targets' own (an independent tester's finding);
+    scaled, not clamped: two targets clamped to one azimuth stood behind each other, the farther one hidden."""
+    half = max((s.half_angle_deg for s in P.fov if r <= s.max_range_m - 5.0), default=None)
+    if half is None or 40.0 <= half - 2.0:
+        return az_deg
+    return az_deg * (half - 2.0) / 40.0
+
+
 def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10, rcs_fix: np.ndarray | None = None
                 ) -> str:
     """Point targets at one integrated SNR, spread so that none shares a cell; Doppler offsets cover a bin.
@@ -115,7 +127,7 @@ def point_scene(rho_db: float, swerling: int, seed: int, n_targets: int = 10, rc
         # 30–102 m and under 0.75 m/s: over a run a target drifts less than 2 m, 0.6 dB of SNR at 30 m;
         # the Doppler offsets still cover a bin
         r = 30.0 + 8.0 * k
-        az = math.radians(-40.0 + 80.0 * ((k * 7) % n_targets) / n_targets)
+        az = math.radians(_in_view(r, -40.0 + 80.0 * ((k * 7) % n_targets) / n_targets))
         v = (-2 + k % 5 + (k + 0.5) / n_targets) * P.speed_resolution_mps
         rcs = rho_db - float(equation.snr_db(P, r, 0.0, azimuth_rad=az))
         if rcs_fix is not None:

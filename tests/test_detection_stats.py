@@ -1320,3 +1320,15 @@ def test_snr_of_pd_inverts_pd_of_snr():
         pd = stat.pd_of_snr(rho, swerling)
         rising = (pd > 1e-4) & (pd < 1.0 - 1e-6)
         np.testing.assert_allclose(stat.snr_of_pd(pd[rising], swerling), rho[rising], atol=0.01)
+
+
+@pytest.mark.parametrize("field", ["rho_db", "loss_db"])
+@pytest.mark.parametrize("bad", [math.nan, math.inf])
+def test_reading_refuses_a_value_that_is_not_finite_by_name(field, bad):
+    """:meth:`DetectionStatistic.reading` given a NaN or an infinite SNR or loss: a ValueError that names it, not an
+    IndexError from deep inside the posterior's table (an independent tester's finding)."""
+    stat = _mimo12_statistic()
+    args = {"rho_db": np.array([20.0, 25.0]), "loss_db": np.array([0.0, 1.0])}
+    args[field] = np.array([20.0, bad])
+    with pytest.raises(ValueError, match=field):
+        stat.reading(args["rho_db"], np.array([0.5, 0.5]), np.array([0.5, 0.5]), True, args["loss_db"])

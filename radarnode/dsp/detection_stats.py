@@ -542,6 +542,9 @@ class DetectionStatistic:
         posterior is the prior. Tabulated on ρ every 0.1 dB (nearest row) and 400 log-spaced g from 1e-4 to 60,
         inverted by linear interpolation of its CDF. Arrays broadcast."""
         rho_db, w = np.broadcast_arrays(np.asarray(rho_db, dtype=np.float64), np.asarray(w, dtype=np.float64))
+        if not (np.all(np.isfinite(rho_db)) and np.all(np.isfinite(w))):
+            raise ValueError("DetectionStatistic.fluctuation_given_detection: rho_db and w must be finite (a NaN or an "
+                             "infinity given); expected dB values and uniforms in (0, 1)")
         n_g = self._G_GRID.size
         i = np.clip(np.rint((rho_db - self._POSTERIOR_RHO_DB[0]) / self._POSTERIOR_STEP_DB), 0,
                     self._POSTERIOR_RHO_DB.size - 1).astype(np.intp)
@@ -602,7 +605,13 @@ class DetectionStatistic:
         fluctuating point among four others 8 m apart on ``ars408_like``, its Pd masked by 0.7–1, read
         −5.2 / −1.6 / +1.4 dB where the detection level read −4.1 / −0.9 / +1.7). Arrays broadcast."""
         rho_db = np.asarray(rho_db, dtype=np.float64)
-        cond_db = rho_db - np.maximum(np.asarray(loss_db, dtype=np.float64), 0.0)
+        loss_db = np.asarray(loss_db, dtype=np.float64)
+        for name, value in (("rho_db", rho_db), ("loss_db", loss_db)):
+            if not np.all(np.isfinite(value)):
+                bad = value[~np.isfinite(value)] if value.ndim else value
+                raise ValueError(f"DetectionStatistic.reading: {name} holds {np.size(bad)} value(s) that are not "
+                                 f"finite (first {float(np.ravel(bad)[0])!r}); expected finite dB values")
+        cond_db = rho_db - np.maximum(loss_db, 0.0)
         fluct = np.broadcast_to(np.asarray(fluctuating, dtype=bool), rho_db.shape)
         g = np.ones(rho_db.shape)
         if fluct.any():
