@@ -433,7 +433,7 @@ def test_a_point_masked_by_a_fluctuating_neighbour_reads_as_the_detection_level_
     threshold of an unmasked ring, and read like unmasked ones. The object level took the masking's SNR loss from the
     Pd averaged over the strong one's fluctuation and read them 4.0 / 2.7 / 1.0 dB above the detection level's
     quartiles (−1.1 / +1.1 / +4.0 dB; an independent tester's finding); now the loss of the neighbour's draw the
-    detection was made with (drawn from its posterior): 1.1 / 1.0 / 0.1 dB above (with no loss at all, 2.1 dB
+    detection was made with (drawn from its posterior): 1.1 / 0.9 / 0.0 dB above (with no loss at all, 2.1 dB
     below). Every quartile within 1.25 dB; the Pd within 0.06."""
     q_obj, pd_obj = _weak_beside_strong_readings("object")
     q_det, pd_det = _weak_beside_strong_readings("detection")
