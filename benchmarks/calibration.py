@@ -1119,16 +1119,23 @@ def _readings(level: str, rho_db: float, swerling: int, frames: int, seed: int) 
     sc = calibrated(rho_db, swerling, seed)
     scene = Scene(sc)
     model = make_model(level, scene, P, np.random.default_rng(seed), radar_config(sc).signal, clusters_wanted=True)
-    cfg = RuntimeConfig(max_distance_m=P.max_range_m)
+    return read_errors(model, scene, P, frames, sc.period_s, range(scene.n))
+
+
+def read_errors(model, scene, p, frames: int, period_s: float, targets) -> tuple[list[float], int, int]:
+    """Step ``model`` ``frames`` times: the cluster RCS over the truth of each of ``targets`` (actor indices) a
+    frame detects, and the hits and trials (a cluster within 1.5 range bins and 2 beamwidths of a target is its
+    own; the nearest such)."""
+    cfg = RuntimeConfig(max_distance_m=p.max_range_m)
     err, hits, trials = [], 0, 0
     for k in range(frames):
-        frame, view = model.step(k * sc.period_s, cfg)
+        frame, view = model.step(k * period_s, cfg)
         cl = frame.clusters
         caz = np.arctan2(cl.dist_lat_m, cl.dist_long_m)
-        for i in range(scene.n):
+        for i in targets:
             trials += 1
-            d = (np.abs(cl.range_m - view.range_m[i]) / (1.5 * P.range_resolution_m)
-                 + np.abs(np.sin(caz) - np.sin(view.azimuth_rad[i])) / (2.0 * P.angular_resolution_rad))
+            d = (np.abs(cl.range_m - view.range_m[i]) / (1.5 * p.range_resolution_m)
+                 + np.abs(np.sin(caz) - np.sin(view.azimuth_rad[i])) / (2.0 * p.angular_resolution_rad))
             if d.size and d.min() <= 1.0:
                 hits += 1
                 err.append(float(cl.rcs_dbsm[int(np.argmin(d))] - scene.rcs_dbsm[i]))

@@ -256,20 +256,23 @@ def test_wide_actors_counts_only_the_span_inside_the_field_of_view():
     assert span_in_view(pc, corner)[1] == pytest.approx(min(corner.az_hi_rad[1], half) - corner.az_lo_rad[1])
 
 
+def _ars408_scatterers(actors: str, ego_mps: float, t_s: float):
+    """(``ars408_like``, the scatterers the detection level makes of ``actors`` at ``t_s``, the ego at ``ego_mps``)."""
+    from radarnode.radar.scatterers import scene_scatterers
+    scene = Scene(scenario(actors, ego=f"{{speed_mps: {ego_mps}}}"))
+    p = PRESETS["ars408_like"]
+    return p, scene_scatterers(scene, t_s, scene.view(t_s), p, p.max_range_m)
+
+
 def test_long_actors_are_bodies_whose_reflectors_in_view_span_more_than_the_grouping_scale():
     """:func:`long_actors`: a truck in the next lane (its side in view: reflectors over 11 m of x) is long; a car
     there (4 m), a truck straight ahead in the ego's lane (its rear face only) and a truck wholly behind the sensor
     are not; the scale is the one given."""
     from radarnode.radar.models import long_actors
-    from radarnode.radar.scatterers import scene_scatterers
-    sc = scenario("  - {id: truck, class: truck, x_m: 30.0, lane: 2, speed_mps: 22.0}\n"
-                  "  - {id: car, class: car, x_m: 30.0, lane: 0, speed_mps: 22.0}\n"
-                  "  - {id: ahead, class: truck, x_m: 60.0, lane: 1, speed_mps: 30.0}\n"
-                  "  - {id: behind, class: truck, x_m: -30.0, lane: 2, speed_mps: 30.0}", ego="{speed_mps: 30.0}")
-    scene = Scene(sc)
-    p = PRESETS["ars408_like"]
-    view = scene.view(0.5)
-    scat = scene_scatterers(scene, 0.5, view, p, p.max_range_m)
+    p, scat = _ars408_scatterers("  - {id: truck, class: truck, x_m: 30.0, lane: 2, speed_mps: 22.0}\n"
+                                 "  - {id: car, class: car, x_m: 30.0, lane: 0, speed_mps: 22.0}\n"
+                                 "  - {id: ahead, class: truck, x_m: 60.0, lane: 1, speed_mps: 30.0}\n"
+                                 "  - {id: behind, class: truck, x_m: -30.0, lane: 2, speed_mps: 30.0}", 30.0, 0.5)
     x = {a: scat.x_m[scat.actor_index == a] for a in range(4)}
     assert np.ptp(x[0]) > 2 * GROUP_EPS_LONG_M and np.ptp(x[1]) < GROUP_EPS_LONG_M
     np.testing.assert_array_equal(long_actors(p, scat, 4), [True, False, False, False])
@@ -309,15 +312,11 @@ def test_long_actors_takes_a_truck_crossing_in_front_and_leaves_a_car_seen_from_
     over more than GROUP_EPS_M of y) is long; a car in the next lane and a truck straight ahead in the ego's lane
     (seen from behind: 1.8 and 2.5 m wide) are not."""
     from radarnode.radar.models import long_actors
-    from radarnode.radar.scatterers import scene_scatterers
-    sc = scenario("  - {id: cross, class: truck, waypoints: [{t_s: 0.0, x_m: 26.0, y_m: -20.0}, "
-                  "{t_s: 4.0, x_m: 26.0, y_m: 20.0}]}\n"
-                  "  - {id: car, class: car, x_m: 60.0, lane: 2, speed_mps: 20.0}\n"
-                  "  - {id: truck, class: truck, x_m: 90.0, lane: 1, speed_mps: 20.0}", ego="{speed_mps: 0.0}")
-    scene = Scene(sc)
-    p = PRESETS["ars408_like"]
-    view = scene.view(1.0)                  # (the crossing truck 10 m to the right: the others in sight)
-    scat = scene_scatterers(scene, 1.0, view, p, p.max_range_m)
+    # at 1 s the crossing truck is 10 m to the right: the others in sight
+    p, scat = _ars408_scatterers("  - {id: cross, class: truck, waypoints: [{t_s: 0.0, x_m: 26.0, y_m: -20.0}, "
+                                 "{t_s: 4.0, x_m: 26.0, y_m: 20.0}]}\n"
+                                 "  - {id: car, class: car, x_m: 60.0, lane: 2, speed_mps: 20.0}\n"
+                                 "  - {id: truck, class: truck, x_m: 90.0, lane: 1, speed_mps: 20.0}", 0.0, 1.0)
     y = {a: scat.y_m[scat.actor_index == a] for a in range(3)}
     assert np.ptp(y[0]) > 2 * GROUP_EPS_M and np.ptp(y[1]) < GROUP_EPS_M and np.ptp(y[2]) < GROUP_EPS_M
     np.testing.assert_array_equal(long_actors(p, scat, 3), [True, False, False])

@@ -395,6 +395,9 @@ def _weak_beside_strong_readings(level: str, seeds=(11, 12, 13, 14), frames: int
     """A Swerling 1 point at ρ = 45 dB, 40 m ahead, and three at 25 dB six range bins before and behind it at ±15–25°
     (in its CA-CFAR ring, within a Doppler bin of it), ``ars408_like``: the weak points' cluster RCS over the
     truth, quartiles, and their Pd."""
+    import sys
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    import calibration
     from radarnode.radar.levels import make_model
     p = PRESETS["ars408_like"]
     targets = [(40.0, 0.0, 45.0, 0.2), (40.0 + 6 * p.range_resolution_m, 25.0, 25.0, 0.5),
@@ -414,17 +417,8 @@ def _weak_beside_strong_readings(level: str, seeds=(11, 12, 13, 14), frames: int
                       road="{lanes: 1, ego_lane: 0}", duration=30.0, seed=seed)
         scene = Scene(sc)
         model = make_model(level, scene, p, np.random.default_rng(seed), radar_config(sc).signal, clusters_wanted=True)
-        for k in range(frames):
-            frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m))
-            cl = frame.clusters
-            caz = np.arctan2(cl.dist_lat_m, cl.dist_long_m)
-            for i in range(1, scene.n):
-                trials += 1
-                d = (np.abs(cl.range_m - view.range_m[i]) / (1.5 * p.range_resolution_m)
-                     + np.abs(np.sin(caz) - np.sin(view.azimuth_rad[i])) / (2.0 * p.angular_resolution_rad))
-                if d.size and d.min() <= 1.0:
-                    hits += 1
-                    err.append(float(cl.rcs_dbsm[int(np.argmin(d))] - scene.rcs_dbsm[i]))
+        e, h, n = calibration.read_errors(model, scene, p, frames, sc.period_s, range(1, scene.n))
+        err, hits, trials = err + e, hits + h, trials + n
     return np.percentile(err, [25, 50, 75]), hits / trials
 
 
