@@ -116,3 +116,50 @@ def test_a_ctrl_c_before_the_handler_is_in_place_ends_with_130_and_no_traceback(
     import subprocess
     r = subprocess.run([sys.executable, "-c", EARLY, module], capture_output=True, text=True, timeout=60)
     assert r.returncode == 130 and "Traceback" not in r.stderr and "usage" not in r.stdout, (r.returncode, r.stderr)
+
+
+def test_a_held_signal_sent_again_while_still_importing_is_held_again(monkeypatch):
+    """The held signal is sent again while the main thread still imports (an import longer than RETRY_S): it is held
+    again and a new send is made, never lost. Its send had been taken off the pending ones only once its timer's
+    thread ended, and a signal handled before that was held with nothing sent again: the Ctrl-C of
+    test_a_ctrl_c_inside_an_import_comes_again_after_it was lost once in a full test run on a loaded machine. Here
+    the timers are stand-ins fired by hand, so the signal is handled while the firing one is still alive."""
+    timers = []
+
+    class Timer:                            # threading.Timer's part that held() uses, fired by fire()
+        def __init__(self, interval, function, args):
+            self.function, self.args, self.alive = function, args, False
+            timers.append(self)
+
+        def start(self):
+            self.alive = True
+
+        def is_alive(self):
+            return self.alive
+
+        def cancel(self):
+            self.alive = False
+
+        def fire(self):                     # the timer's thread: the function, then the thread ends
+            self.function(*self.args)
+            self.alive = False
+
+    monkeypatch.setattr(interrupt.threading, "Timer", Timer)
+    got = []
+    inside = _frame("/some/module.py", _frame("<frozen importlib._bootstrap>", _frame("main.py")))
+
+    def handler(signum, frame):
+        got.append(signum)
+        assert interrupt.held(signum, inside)        # the import still going on
+
+    previous = signal.signal(signal.SIGUSR1, handler)
+    try:
+        assert interrupt.held(signal.SIGUSR1, inside) and len(timers) == 1
+        timers[0].fire()
+        assert got == [signal.SIGUSR1] and len(timers) == 2 and timers[1].alive      # held again: a new send
+        assert interrupt.cancel() == signal.SIGUSR1
+        timers[1].fire()                             # cancelled: nothing sent
+        assert got == [signal.SIGUSR1]
+    finally:
+        interrupt.cancel()
+        signal.signal(signal.SIGUSR1, previous)

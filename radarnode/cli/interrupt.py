@@ -19,6 +19,8 @@ import threading
 RETRY_S = 0.05
 _IMPORT_FILES = frozenset({"<frozen importlib._bootstrap>", "<frozen importlib._bootstrap_external>"})
 _pending: dict[int, threading.Timer] = {}
+#: taken by a send and by :func:`cancel` (never by :func:`held`, which a signal handler runs)
+_lock = threading.Lock()
 
 
 def importing(frame) -> bool:
@@ -37,21 +39,36 @@ def held(signum: int, frame) -> bool:
         return False
     timer = _pending.get(signum)
     if timer is None or not timer.is_alive():
-        timer = threading.Timer(RETRY_S, os.kill, (os.getpid(), signum))
+        own: list = []
+        timer = threading.Timer(RETRY_S, _send, (signum, own))
+        own.append(timer)
         timer.daemon = True
         _pending[signum] = timer
         timer.start()
     return True
 
 
+def _send(signum: int, own: list) -> None:
+    """A held signal's send (its timer's thread): taken off the pending ones first, so that the signal, if it finds
+    the main thread importing still, is held again and sent once more. Taken off after the send, as before
+    2026-12-04, it could be handled while its timer was still alive — held, and nothing sent again: the Ctrl-C was
+    lost (once in a full test run on a loaded machine). Not sent if :func:`cancel` came first."""
+    with _lock:
+        if _pending.get(signum) is not own[0]:
+            return
+        del _pending[signum]
+        os.kill(os.getpid(), signum)
+
+
 def cancel() -> int | None:
     """Stop the sends not yet made (the command is ending); the signal of one that was still to come, else None."""
     late = None
-    for signum, timer in list(_pending.items()):
-        if timer.is_alive():
-            timer.cancel()
-            late = signum
-    _pending.clear()
+    with _lock:
+        for signum, timer in list(_pending.items()):
+            if timer.is_alive():
+                timer.cancel()
+                late = signum
+        _pending.clear()
     return late
 
 
