@@ -143,11 +143,20 @@ class CellAveragingCfar(Cfar):
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
-        self.eigenvalues = self._eigenvalues(self.offsets())
+        self.eigenvalues = self.cut_eigenvalues(None, None)
         self.alpha = self.alpha_for_cut(None, None)                                 # on the mean of the whole ring
 
     def _eigenvalues(self, offsets: np.ndarray) -> np.ndarray:
         return stats.ring_eigenvalues(offsets, self.rho_d, self.rho_r)
+
+    def cut_eigenvalues(self, left: int | None, right: int | None) -> np.ndarray:
+        """The training-ring eigenvalues of the ring :meth:`alpha_for_cut` cuts (``None``: none lost), computed once per
+        process for each CFAR configuration and cut, as α is (a 248-cell ring's eigvalsh, about 5 ms, had been
+        computed twice: for the eigenvalues and again for α); read-only. A subclass with eigenvalues of its own
+        (:meth:`_eigenvalues`) computes its own each time."""
+        if type(self)._eigenvalues is not CellAveragingCfar._eigenvalues:
+            return self._eigenvalues(self.offsets(left, right))
+        return _cut_eigenvalues(self.guard, self.train, self.rho_d.tobytes(), self.rho_r.tobytes(), left, right)
 
     def alpha_for_cut(self, left: int | None, right: int | None) -> float:
         """α of a ring that loses the range columns beyond ``left`` bins to the left and ``right`` to the right
@@ -272,9 +281,18 @@ CFAR_KINDS: dict[str, type[Cfar]] = {"ca": CellAveragingCfar, "os": OrderedStati
 def _ca_alpha_for_cut(pfa: float, n_channels: int, guard: tuple[int, int], train: tuple[int, int], rho_d: bytes,
                       rho_r: bytes, left: int | None, right: int | None) -> float:
     """:meth:`CellAveragingCfar.alpha_for_cut` of a CFAR with these settings (correlations: complex128 bytes)."""
+    return stats.ca_alpha(pfa, n_channels, _cut_eigenvalues(guard, train, rho_d, rho_r, left, right))
+
+
+@functools.lru_cache(maxsize=1024)
+def _cut_eigenvalues(guard: tuple[int, int], train: tuple[int, int], rho_d: bytes, rho_r: bytes, left: int | None,
+                     right: int | None) -> np.ndarray:
+    """:meth:`CellAveragingCfar.cut_eigenvalues` of a CFAR with these settings (correlations: complex128 bytes),
+    read-only (one array shared by every caller)."""
     correlations = (np.frombuffer(rho, dtype=np.complex128) for rho in (rho_d, rho_r))
     eig = stats.ring_eigenvalues(stats.ring_offsets(guard, train, left, right), *correlations)
-    return stats.ca_alpha(pfa, n_channels, eig)
+    eig.flags.writeable = False
+    return eig
 
 
 def make_cfar(kind: str, **kwargs) -> Cfar:
