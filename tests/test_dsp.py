@@ -153,6 +153,10 @@ def test_components_are_scipys_connected_components(n, k):
     got = components(n, edges)
     assert len(set(zip(want.tolist(), got.tolist()))) == len(set(want.tolist())) == len(set(got.tolist()))
     assert all(got[i] == i for i in set(got.tolist())) and np.all(got <= np.arange(n))
+    # component_labels: scipy's numbering itself (the detection level's lobe groups, which were scipy's until
+    # 2026-12-04), self-loops and duplicate edges included
+    from radarnode.dsp.cluster import component_labels
+    np.testing.assert_array_equal(component_labels(n, edges), want)
 
 
 @pytest.mark.parametrize("order", ["random", "near and far alternating", "sorted", "reversed"])

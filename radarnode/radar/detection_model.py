@@ -63,6 +63,7 @@ import math
 import numpy as np
 
 from radarnode.dsp import spread
+from radarnode.dsp.cluster import component_labels
 from radarnode.dsp.detection_stats import DetectionStatistic
 from radarnode.dsp.spectra import circular as _circular
 from radarnode.errors import ConfigError
@@ -555,10 +556,9 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     # the groups are read only about hidden cells: where none is, each cell stands for itself
     if not hidden.any():
         return hidden, step, np.arange(n)
-    import scipy.sparse
-    import scipy.sparse.csgraph
-    graph = scipy.sparse.coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    return hidden, step, scipy.sparse.csgraph.connected_components(graph, directed=False)[1]
+    # (scipy's connected_components, its sparse matrix and graph search, cost 0.6 ms a call here, two calls a frame,
+    # a tenth of the detection level's frame)
+    return hidden, step, component_labels(n, pairs)
 
 
 def _seen_between(lost: np.ndarray, step: np.ndarray, cr: np.ndarray, cd: np.ndarray, own: np.ndarray,
