@@ -140,8 +140,10 @@ def test_node_and_consumer_in_two_processes_over_udp_multicast(tmp_path):
     assert (gaps >= 0).all() and gaps.sum() <= missed
     assert all(x["sensor_id"] == 0 for x in lines)
     stamps = [x["timestamp"] for x in lines]
-    steps = sorted(b - a for a, b in zip(stamps, stamps[1:]))
-    assert steps[0] > 0 and 0.06 < steps[len(steps) // 2] < 0.085          # in order, 72-ms cycles (median)
+    # in order, 72-ms cycles (median): a step over a cycle the node dropped and counted spans two periods (on a loaded
+    # machine more than half the steps did, and their median came out 0.144 s), so each is taken per cycle counted
+    steps = sorted((b - a) / (gap + 1) for a, b, gap in zip(stamps, stamps[1:], gaps))
+    assert steps[0] > 0 and 0.06 < steps[len(steps) // 2] < 0.085
     assert any(o["obj_class"] == 1 and 40 < o["dist_long_m"] < 70 for x in lines[5:] for o in x["objects"])
 
 
