@@ -1332,3 +1332,34 @@ def test_reading_refuses_a_value_that_is_not_finite_by_name(field, bad):
     args[field] = np.array([20.0, bad])
     with pytest.raises(ValueError, match=field):
         stat.reading(args["rho_db"], np.array([0.5, 0.5]), np.array([0.5, 0.5]), True, args["loss_db"])
+
+
+@pytest.mark.parametrize("field, bad", [("v", math.nan), ("v", 2.0), ("v", -0.1), ("w", math.nan), ("w", 5.0),
+                                        ("w", -0.5), ("rho_db", 1e308), ("fluctuating", math.nan)])
+def test_reading_refuses_a_uniform_outside_its_range_a_huge_snr_and_a_nan_flag_by_name(field, bad):
+    """:meth:`DetectionStatistic.reading`'s uniforms outside [0, 1], an SNR beyond ±300 dB and a fluctuation flag
+    that is not boolean are refused by name: before, v = 2 read −315 dB, v ≤ 0 +17 dB, w = 5 ×28, a NaN v read NaN,
+    1e308 dB NaN with overflow warnings and a NaN flag counted as True (an independent tester's findings)."""
+    stat = _mimo12_statistic()
+    args = {"rho_db": np.array([20.0, 25.0]), "v": np.array([0.5, 0.5]), "w": np.array([0.5, 0.5]),
+            "fluctuating": np.array([True, True])}
+    args[field] = np.array([args[field][0], bad])
+    with pytest.raises(ValueError, match=field):
+        stat.reading(args["rho_db"], args["v"], args["w"], args["fluctuating"])
+
+
+def test_the_posterior_the_inverse_and_the_masking_refuse_values_outside_their_range():
+    """``fluctuation_given_detection`` with w outside [0, 1] (1.5 had given 32.5, −0.5 1e-8), ``snr_of_pd`` with a NaN
+    or a probability above 1, ``masking_factor`` with a NaN interference (read as unmasked): each a ValueError naming
+    the argument; the edges themselves are taken."""
+    stat = _mimo12_statistic()
+    for w in (1.5, -0.5):
+        with pytest.raises(ValueError, match="w"):
+            stat.fluctuation_given_detection(np.array([20.0]), np.array([w]))
+    assert np.all(np.isfinite(stat.fluctuation_given_detection(np.array([20.0, 20.0]), np.array([0.0, 1.0]))))
+    for pd in (math.nan, 1.5):
+        with pytest.raises(ValueError, match="pd"):
+            stat.snr_of_pd(np.array([pd]))
+    assert np.all(np.isfinite(stat.snr_of_pd(np.array([0.0, 1.0]))))
+    with pytest.raises(ValueError, match="interference"):
+        stat.masking_factor(np.array([20.0]), np.array([math.nan]))

@@ -95,6 +95,21 @@ def correlation_length(rho: np.ndarray) -> int:
     return int(lags.max()) if lags.size else 0
 
 
+#: the largest |integrated SNR| (dB) the statistic's readings take: beyond it 10^(ρ/10) leaves float64's range on the
+#: way (a reading at 1e308 dB came out NaN with overflow warnings: an independent tester's finding)
+RHO_DB_LIMIT = 300.0
+
+
+def _check_range(where: str, name: str, value, lo: float, hi: float, what: str) -> None:
+    """A ValueError naming ``name`` where ``value`` holds a NaN or a value outside [lo, hi]."""
+    a = np.asarray(value, dtype=np.float64)
+    bad = ~((a >= lo) & (a <= hi))                 # (NaN fails both)
+    if np.any(bad):
+        first = float(np.ravel(a[bad] if a.ndim else a)[0])
+        raise ValueError(f"{where}: {name} holds {int(np.count_nonzero(bad))} value(s) outside [{lo:g}, {hi:g}] "
+                         f"(first {first!r}); expected {what} in [{lo:g}, {hi:g}]")
+
+
 def ring_correlation(offsets: np.ndarray, rho_d: np.ndarray, rho_r: np.ndarray) -> np.ndarray:
     """Correlation matrix of a set of cells given as (doppler, range) offsets, shape (n, 2) -> (n, n)."""
     dd = offsets[:, None, 0] - offsets[None, :, 0]
@@ -497,7 +512,9 @@ class DetectionStatistic:
             keep = np.concatenate([[True], np.diff(rising) > 0.0])
             inverse[swerling] = (table, rising[keep], grid[keep])
         _, xp, fp = inverse[swerling]
-        return np.interp(np.asarray(pd, dtype=np.float64), xp, fp)
+        pd = np.asarray(pd, dtype=np.float64)
+        _check_range("DetectionStatistic.snr_of_pd", "pd", pd, 0.0, 1.0, "probabilities")
+        return np.interp(pd, xp, fp)
 
     #: equal-probability points of the exponential law (the midpoints of 48 quantile bins) over which a Swerling 1
     #: target's two looks in one cycle are averaged (:meth:`pd_second_look`)
@@ -545,6 +562,7 @@ class DetectionStatistic:
         if not (np.all(np.isfinite(rho_db)) and np.all(np.isfinite(w))):
             raise ValueError("DetectionStatistic.fluctuation_given_detection: rho_db and w must be finite (a NaN or an "
                              "infinity given); expected dB values and uniforms in (0, 1)")
+        _check_range("DetectionStatistic.fluctuation_given_detection", "w", w, 0.0, 1.0, "uniforms")
         n_g = self._G_GRID.size
         i = np.clip(np.rint((rho_db - self._POSTERIOR_RHO_DB[0]) / self._POSTERIOR_STEP_DB), 0,
                     self._POSTERIOR_RHO_DB.size - 1).astype(np.intp)
@@ -612,8 +630,16 @@ class DetectionStatistic:
                 bad = value[~np.isfinite(value)] if value.ndim else value
                 raise ValueError(f"DetectionStatistic.reading: {name} holds {np.size(bad)} value(s) that are not "
                                  f"finite (first {float(np.ravel(bad)[0])!r}); expected finite dB values")
+        _check_range("DetectionStatistic.reading", "rho_db", rho_db, -RHO_DB_LIMIT, RHO_DB_LIMIT, "dB values")
+        v = np.asarray(v, dtype=np.float64)
+        _check_range("DetectionStatistic.reading", "v", v, 0.0, 1.0, "the uniform that decided the detection over its Pd")
+        _check_range("DetectionStatistic.reading", "w", w, 0.0, 1.0, "uniforms")
+        fluctuating = np.asarray(fluctuating)
+        if fluctuating.dtype.kind not in "bi":
+            raise ValueError(f"DetectionStatistic.reading: fluctuating of dtype {fluctuating.dtype} is not allowed; "
+                             "expected booleans (a NaN would count as True)")
         cond_db = rho_db - np.maximum(loss_db, 0.0)
-        fluct = np.broadcast_to(np.asarray(fluctuating, dtype=bool), rho_db.shape)
+        fluct = np.broadcast_to(fluctuating.astype(bool), rho_db.shape)
         g = np.ones(rho_db.shape)
         if fluct.any():
             g = np.where(fluct, self.fluctuation_given_detection(cond_db, w), 1.0)
@@ -989,6 +1015,8 @@ class DetectionStatistic:
         over ρ (1 dB) and log I (a quarter decade), interpolated bilinearly; 1 below 1 % of the noise's sum."""
         mean_z = self.n_channels * self.eigenvalues.sum()
         rel = np.asarray(interference, dtype=np.float64) / mean_z
+        if np.any(np.isnan(rel)):      # (a NaN compares false everywhere below: it had read as unmasked)
+            raise ValueError("DetectionStatistic.masking_factor: interference holds a NaN; expected energies ≥ 0")
         if not np.any(rel >= 0.01):                  # nothing in any ring: the table is not even built
             return np.ones(np.broadcast(np.asarray(rho_db), rel).shape)
         table = self._mask_table(swerling)
