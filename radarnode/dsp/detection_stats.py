@@ -559,9 +559,9 @@ class DetectionStatistic:
         posterior is the prior. Tabulated on ρ every 0.1 dB (nearest row) and 400 log-spaced g from 1e-4 to 60,
         inverted by linear interpolation of its CDF. Arrays broadcast."""
         rho_db, w = np.broadcast_arrays(np.asarray(rho_db, dtype=np.float64), np.asarray(w, dtype=np.float64))
-        if not (np.all(np.isfinite(rho_db)) and np.all(np.isfinite(w))):
-            raise ValueError("DetectionStatistic.fluctuation_given_detection: rho_db and w must be finite (a NaN or an "
-                             "infinity given); expected dB values and uniforms in (0, 1)")
+        if not np.all(np.isfinite(rho_db)):
+            raise ValueError("DetectionStatistic.fluctuation_given_detection: rho_db must be finite (a NaN or an "
+                             "infinity given); expected dB values")
         _check_range("DetectionStatistic.fluctuation_given_detection", "w", w, 0.0, 1.0, "uniforms")
         n_g = self._G_GRID.size
         i = np.clip(np.rint((rho_db - self._POSTERIOR_RHO_DB[0]) / self._POSTERIOR_STEP_DB), 0,
@@ -625,12 +625,11 @@ class DetectionStatistic:
         −5.2 / −1.6 / +1.4 dB where the detection level read −4.1 / −0.9 / +1.7). Arrays broadcast."""
         rho_db = np.asarray(rho_db, dtype=np.float64)
         loss_db = np.asarray(loss_db, dtype=np.float64)
-        for name, value in (("rho_db", rho_db), ("loss_db", loss_db)):
-            if not np.all(np.isfinite(value)):
-                bad = value[~np.isfinite(value)] if value.ndim else value
-                raise ValueError(f"DetectionStatistic.reading: {name} holds {np.size(bad)} value(s) that are not "
-                                 f"finite (first {float(np.ravel(bad)[0])!r}); expected finite dB values")
         _check_range("DetectionStatistic.reading", "rho_db", rho_db, -RHO_DB_LIMIT, RHO_DB_LIMIT, "dB values")
+        if not np.all(np.isfinite(loss_db)):
+            bad = loss_db[~np.isfinite(loss_db)] if loss_db.ndim else loss_db
+            raise ValueError(f"DetectionStatistic.reading: loss_db holds {np.size(bad)} value(s) that are not "
+                             f"finite (first {float(np.ravel(bad)[0])!r}); expected finite dB values")
         v = np.asarray(v, dtype=np.float64)
         _check_range("DetectionStatistic.reading", "v", v, 0.0, 1.0, "the uniform that decided the detection over its Pd")
         _check_range("DetectionStatistic.reading", "w", w, 0.0, 1.0, "uniforms")
