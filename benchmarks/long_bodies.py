@@ -11,14 +11,19 @@ its own scale) renders it at the detection level. Printed: a row per scene, the 
 diameter, and for thresholds 1.0–1.3 the share of actor-cycles rendered at the detection level against the share of
 the detection level's splits they hold.
 
-Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/long_bodies.py [--preset ars408_like] [--seeds 4] [--only TEXT]``
-(about 3 minutes a preset on the project's machine).
+``--cost``: instead, the cost of the rule on the bodies with most reflectors (a convoy of 50 trucks, a 300-m body
+alongside, at the scatterer spacings 1 m and 0.1 m, the finest a scenario may ask): the median time of an ``auto``
+and a detection-level cycle and of ``long_actors`` on ``auto``'s scatterers of each cycle.
+
+Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/long_bodies.py [--preset ars408_like] [--seeds 4] [--only TEXT]
+[--cost]`` (about 3 minutes a preset on the project's machine).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -98,13 +103,51 @@ def run(level: str, actor: str, road: str, ego: float, preset: str, seed: int, d
     return np.array(out)
 
 
+def cost() -> None:
+    """The rule's cost on the bodies with most reflectors, against the cycle's."""
+    convoy = [f"{{id: t{i}, class: truck, x_m: {20 + 14 * (i // 3) + 4 * (i % 3)}, lane: {i % 3}, speed_mps: 25.0}}"
+              for i in range(50)]
+    train = ["{id: train, class: truck, length_m: 300.0, width_m: 3.0, x_m: 160.0, lane: 2, speed_mps: 25.0}"]
+    print(f"{'scene':10s} {'spacing':>7s} {'reflectors':>10s} {'auto ms':>8s} {'detection ms':>12s} {'long_actors ms':>14s}")
+    for label, actors in (("convoy 50", convoy), ("300-m body", train)):
+        for spacing in (1.0, 0.1):
+            text = (f"name: cost\nduration_s: 0.8\nseed: 1\nradar: {{preset: ars408_like}}\nego: {{speed_mps: 25.0}}\n"
+                    f"road: {{{LANES}}}\nsignal: {{scatterer_spacing_m: {spacing}}}\nactors:\n"
+                    + "".join(f"  - {a}\n" for a in actors))
+            times, rule, count = {}, [], 0
+            for level in ("auto", "detection"):
+                sc = parse_scenario(text)
+                rc = radar_config(sc)
+                scene = Scene(sc)
+                model = make_model(level, scene, rc.preset, np.random.default_rng(1), rc.signal)
+                cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+                steps = []
+                for k in range(sc.num_cycles):
+                    t0 = time.perf_counter()
+                    model.step(k * sc.period_s, cfg)
+                    steps.append(time.perf_counter() - t0)
+                    if level == "auto":
+                        scat = model.info.scatterers
+                        t0 = time.perf_counter()
+                        long_actors(rc.preset, scat, scene.n)
+                        rule.append(time.perf_counter() - t0)
+                        count = int(np.count_nonzero(scat.actor_index >= 0))
+                times[level] = 1e3 * float(np.median(steps))
+            print(f"{label:10s} {spacing:7.1f} {count:10d} {times['auto']:8.1f} {times['detection']:12.1f} "
+                  f"{1e3 * float(np.median(rule)):14.2f}", flush=True)
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--preset", default="ars408_like")
     ap.add_argument("--seeds", type=int, default=4, help="seeds 1..N (default 4)")
     ap.add_argument("--duration", type=float, default=3.0)
     ap.add_argument("--only", default=None, help="scenes whose label contains this text")
+    ap.add_argument("--cost", action="store_true", help="the rule's cost on the bodies with most reflectors instead")
     args = ap.parse_args(argv)
+    if args.cost:
+        cost()
+        return
     seeds = range(1, args.seeds + 1)
     print(f"preset {args.preset}, seeds 1-{args.seeds}, {args.duration:g} s a scene; LONG_DIAMETER {LONG_DIAMETER}")
     print(f"{'scene':30s} {'diameter':>8s} {'rule':>5s} {'before':>6s} {'det split':>9s} {'auto split':>10s}")

@@ -332,6 +332,42 @@ def test_long_actors_takes_a_truck_crossing_in_front_and_leaves_a_car_seen_from_
     np.testing.assert_array_equal(long_actors(p, scat, 3, diameter=float(cross) + 0.01), [False] * 3)
 
 
+def test_long_actors_is_the_largest_distance_between_two_reflectors_in_view():
+    """:func:`long_actors` against every pair of each actor's reflectors in view, counted here one actor at a time:
+    random bodies 0.5–7 m across around the threshold (most between its box's longer side and its diagonal, where
+    it takes the pairs), posts among them, at three diameters. An actor index at or beyond ``n_actors`` is refused
+    by name."""
+    from radarnode.radar.models import long_actors
+    from radarnode.radar.object_model import in_fov
+    from radarnode.radar.scatterers import Scatterers
+    p = PRESETS["ars408_like"]
+    rng = np.random.default_rng(7)
+    between = 0
+    for _ in range(300):
+        m, n = int(rng.integers(0, 60)), int(rng.integers(1, 8))
+        a = rng.integers(-1, n, m)
+        k = np.maximum(a, 0)
+        cx, cy, ext = rng.uniform(5, 60, n), rng.uniform(-8, 8, n), rng.uniform(0.5, 7, n)
+        x = np.where(a >= 0, cx[k] + rng.uniform(-0.5, 0.5, m) * ext[k], rng.uniform(1, 60, m))
+        y = np.where(a >= 0, cy[k] + rng.uniform(-0.3, 0.3, m) * ext[k], rng.uniform(-10, 10, m))
+        z = np.zeros(m)
+        scat = Scatterers(x_m=x, y_m=y, z_m=z, vx_mps=z, vy_mps=z, rcs_dbsm=z, actor_index=a)
+        seen = in_fov(p, scat.range_m, scat.azimuth_rad)
+        widest = np.zeros(n)
+        for b in range(n):
+            u, v = x[(a == b) & seen] / GROUP_EPS_LONG_M, y[(a == b) & seen] / GROUP_EPS_M
+            if u.size >= 2:
+                widest[b] = np.sqrt(((u[:, None] - u) ** 2 + (v[:, None] - v) ** 2).max())
+                between += max(np.ptp(u), np.ptp(v)) <= 1.2 < np.hypot(np.ptp(u), np.ptp(v))
+        for d in (0.5, 1.2, 3.0):
+            np.testing.assert_array_equal(long_actors(p, scat, n, diameter=d), widest > d)
+    assert between > 50
+    z = np.zeros(2)
+    bad = Scatterers(x_m=z + 10.0, y_m=z, z_m=z, vx_mps=z, vy_mps=z, rcs_dbsm=z, actor_index=np.array([0, 3]))
+    with pytest.raises(ValueError, match="actor_index holds 3, not below n_actors = 2"):
+        long_actors(p, bad, 2)
+
+
 @pytest.mark.parametrize("length, long", [(5.05, False), (5.2, False), (5.6, True)])
 def test_long_actors_leaves_a_body_just_over_five_metres_in_the_next_lane_to_the_object_level(length, long):
     """A body 20 m ahead in the next lane, its side seen edge-on (``ars408_like``): 5.05 m long its reflectors span

@@ -350,11 +350,17 @@ def long_actors(preset: RadarPreset, scat: Scatterers, n_actors: int, eps_long_m
     alone (independent testers' findings). Measured in the metric the tracker groups by, the diameter of a body whose
     side is seen edge-on in the next lane grows with its length only: a 5.05-m car there (1.16) is left to the
     object level, where the axis rule rendered every cycle of it at the detection level (1.9 → 5.2 ms a cycle) and
-    the chain listed it once in every cycle. Shape (n_actors,)."""
+    the chain listed it once in every cycle. The box of its reflectors decides most bodies (its longer side beyond
+    ``diameter``: long; its diagonal within: not); the pairs are taken only of bodies between, whose box is at most
+    ``diameter`` on a side (a 300-m body of 2,467 reflectors had cost 6.1 million pairs, 161 ms and 232 MiB: an
+    independent tester's finding). ``actor_index`` ≥ ``n_actors`` is refused. Shape (n_actors,)."""
     out = np.zeros(n_actors, dtype=bool)
     own = scat.actor_index >= 0
     if n_actors == 0 or not own.any():
         return out
+    if int(scat.actor_index.max()) >= n_actors:
+        raise ValueError(f"long_actors: actor_index holds {int(scat.actor_index.max())}, not below n_actors = "
+                         f"{n_actors}; expected -1 (no actor) or an actor's index 0 … n_actors − 1")
     seen = in_fov(preset, scat.range_m[own], scat.azimuth_rad[own])
     if np.count_nonzero(seen) < 2:
         return out
@@ -363,16 +369,29 @@ def long_actors(preset: RadarPreset, scat: Scatterers, n_actors: int, eps_long_m
     a = a[order]
     u = (scat.x_m[own][seen] / eps_long_m)[order]
     v = (scat.y_m[own][seen] / eps_m)[order]
-    # every pair of one actor's reflectors (an actor's k reflectors make k² pairs: a few hundred for a truck)
+    # the diameter lies between the box's longer side and its diagonal: those decide most bodies outright
     count = np.bincount(a, minlength=n_actors)
     first = np.cumsum(count) - count
-    reps = count[a]
-    i = np.repeat(np.arange(a.size), reps)
-    j = first[a[i]] + (np.arange(i.size) - np.repeat(np.cumsum(reps) - reps, reps))
-    d2 = (u[i] - u[j]) ** 2 + (v[i] - v[j]) ** 2
-    widest = np.zeros(n_actors)
-    np.maximum.at(widest, a[i], d2)
-    return widest > diameter * diameter
+    has = np.flatnonzero(count)
+    span_u = np.maximum.reduceat(u, first[has]) - np.minimum.reduceat(u, first[has])
+    span_v = np.maximum.reduceat(v, first[has]) - np.minimum.reduceat(v, first[has])
+    out[has] = np.maximum(span_u, span_v) > diameter
+    open_ = has[~out[has] & (np.hypot(span_u, span_v) > diameter)]
+    if open_.size:
+        # every pair of the reflectors of the bodies left, whose box is at most ``diameter`` on a side (some 5 × 3 m:
+        # a few hundred reflectors at the finest spacing, where a whole body's pairs grew with its length squared)
+        pick = np.isin(a, open_)
+        a, u, v = a[pick], u[pick], v[pick]
+        count = np.bincount(a, minlength=n_actors)
+        first = np.cumsum(count) - count
+        reps = count[a]
+        i = np.repeat(np.arange(a.size), reps)
+        j = first[a[i]] + (np.arange(i.size) - np.repeat(np.cumsum(reps) - reps, reps))
+        d2 = (u[i] - u[j]) ** 2 + (v[i] - v[j]) ** 2
+        widest = np.zeros(n_actors)
+        np.maximum.at(widest, a[i], d2)
+        out[open_] = widest[open_] > diameter * diameter
+    return out
 
 
 def across_an_edge(preset: RadarPreset, view, length_m: np.ndarray, width_m: np.ndarray) -> np.ndarray:
