@@ -45,6 +45,10 @@ Prints Markdown tables:
 18. (``--only reading``) the RCS each level's clusters read of the point targets it detects, over the truth, from
    Pd ≈ 0.05 to 0.95, Swerling 0 and 1: the quartiles (a return detected near the threshold reads high: it faded
    up, or its noise took it over), and the Pd.
+19. (``--only masked``, ``--preset``) the reading of a Swerling 1 return whose CA-CFAR ring holds a steady neighbour's
+   energy I, at the statistic: the detection level's own law (``DetectionStatistic.draw`` with I, the position
+   uniform in the cell, 400,000 draws) against ``DetectionStatistic.reading`` with the equivalent SNR loss the object
+   level derives (``snr_of_pd`` of the Pd alone less that of the masked Pd): the masked Pd and the quartiles' offsets.
 
 Run: ``python benchmarks/calibration.py [--quick] [--only PART] [--trials N]`` (about 12 minutes; ``--quick`` about 3).
 """
@@ -1166,6 +1170,44 @@ def reading_table(quick: bool) -> None:
     print()
 
 
+def masked_table(quick: bool) -> None:
+    """The reading under a steady ring interference: the statistic's own draw against the object level's reading."""
+    from radarnode.dsp.detection_stats import straddle_gain
+    st = _chain_of(P.name).statistic
+    draws = 100_000 if quick else 400_000
+    rng = np.random.default_rng(19)
+    mean_z = st.n_channels * st.eigenvalues.sum()
+    print(f"### The reading of a masked Swerling 1 return, {P.name} ({draws:,} draws a row)\n")
+    print("I: a steady neighbour's energy in the CA-CFAR ring over the noise's mean training sum. Reading − ρ (dB, "
+          "the SNR the chain reads over the return's mean) of the detected draws: the detection level's law "
+          "(`DetectionStatistic.draw` with I) and the object level's (`DetectionStatistic.reading` with the equivalent "
+          "loss L, `snr_of_pd` of the Pd alone less that of the masked Pd): 25th / 50th / 75th percentile.\n")
+    print("| ρ (dB) | I | Pd alone | Pd masked | L (dB) | detection level's law | object level's reading | "
+          "object − detection |")
+    print("|---:|---:|---:|---:|---:|---|---|---|")
+    for rho in (15.0, 20.0, 25.0, 30.0):
+        for rel in (0.3, 1.0, 3.0):
+            pos = (straddle_gain(st.range_window, rng.uniform(-0.5, 0.5, draws))
+                   * straddle_gain(st.doppler_window, rng.uniform(-0.5, 0.5, draws)))
+            energy = 10.0 ** (rho / 10.0) * st.window_gain * pos * rng.exponential(1.0, draws)
+            det, x = st.draw(energy, rng, interference=rel * mean_z)
+            k = int(det.sum())
+            alone = float(st.pd_of_snr(rho, 1))
+            loss = float(st.snr_of_pd(alone, 1) - st.snr_of_pd(det.mean(), 1))
+            if k < 50:
+                print(f"| {rho:.0f} | {rel:g} | {alone:.3f} | {det.mean():.5f} | {loss:.2f} | ({k} detections) | | |")
+                continue
+            mean = 10.0 ** (rho / 10.0) * st.window_gain * st.straddle_mean
+            law = np.percentile(10.0 * np.log10(np.maximum(x[det] - st.n_channels, 1e-30) / mean), [25, 50, 75])
+            read = st.reading(np.full(k, rho), rng.uniform(0.0, 1.0, k), rng.uniform(0.0, 1.0, k),
+                              np.ones(k, dtype=bool), loss)
+            obj = np.percentile(10.0 * np.log10(read), [25, 50, 75])
+            cell = lambda q: " / ".join(f"{v:+.2f}" for v in q)      # noqa: E731
+            print(f"| {rho:.0f} | {rel:g} | {alone:.3f} | {det.mean():.5f} | {loss:.2f} | {cell(law)} | {cell(obj)} | "
+                  f"{cell(obj - law)} |", flush=True)
+    print()
+
+
 def _chain_of(name: str) -> DspChain:
     """One DspChain a preset (its statistic's tables are built once)."""
     if name not in _CHAINS:
@@ -1179,7 +1221,7 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true")
     ap.add_argument("--only", choices=("pfa", "pd", "cells", "accuracy", "resolution", "lobe", "beam", "crowd", "edge",
                                        "pairs", "rcs", "posts", "spacing", "triples", "abreast", "layouts",
-                                       "secondary", "neighbours", "reading"))
+                                       "secondary", "neighbours", "reading", "masked"))
     ap.add_argument("--levels", default="object,detection,signal", help="comma-separated subset of object,detection,signal")
     ap.add_argument("--trials", type=int, default=40, help="trials per point of the resolution table (its 50 %% "
                     "points move by about ±0.1 bin at 40)")
@@ -1187,13 +1229,13 @@ def main() -> None:
                     "12 with --quick; 10 targets a frame: at 320 the ρ at Pd 0.9 of Swerling 1 is known to about "
                     "±0.25 dB)")
     ap.add_argument("--swerling", default="0,1", help="the Pd tables' Swerling cases: 0, 1 or 0,1")
-    ap.add_argument("--preset", default="mimo12", help="the radar of the reading table (--only reading; every other "
+    ap.add_argument("--preset", default="mimo12", help="the radar of the reading tables (--only reading, masked; every other "
                     "table is mimo12's or names its own)")
     args = ap.parse_args()
     if args.preset not in PRESETS:
         ap.error(f"--preset: value {args.preset!r} is not allowed; expected one of {', '.join(sorted(PRESETS))}")
-    if args.preset != "mimo12" and args.only != "reading":
-        ap.error(f"--preset: value {args.preset!r} is allowed with --only reading only (the other tables are built "
+    if args.preset != "mimo12" and args.only not in ("reading", "masked"):
+        ap.error(f"--preset: value {args.preset!r} is allowed with --only reading or masked only (the other tables are built "
                  "for mimo12 or name their radars)")
     if args.trials < 1:
         ap.error(f"--trials: value {args.trials} is not allowed; expected an integer ≥ 1")
@@ -1216,7 +1258,7 @@ def main() -> None:
                      ("rcs", rcs_table), ("posts", posts_table), ("spacing", spacing_table),
                      ("triples", triples_table), ("abreast", abreast_table),
                      ("layouts", layouts_table), ("secondary", secondary_table),
-                     ("neighbours", neighbours_table), ("reading", reading_table)):
+                     ("neighbours", neighbours_table), ("reading", reading_table), ("masked", masked_table)):
         if args.only in (None, name):
             fn(args.quick)
     print(f"(total {time.perf_counter() - t0:.0f} s)")
