@@ -1235,7 +1235,8 @@ def main() -> None:
     if args.preset not in PRESETS:
         ap.error(f"--preset: value {args.preset!r} is not allowed; expected one of {', '.join(sorted(PRESETS))}")
     if args.preset != "mimo12" and args.only not in ("reading", "masked"):
-        ap.error(f"--preset: value {args.preset!r} is allowed with --only reading or masked only (the other tables are built "
+        ap.error(f"--preset: value {args.preset!r} is allowed with --only reading or masked only (the other tables "
+                 "are built "
                  "for mimo12 or name their radars)")
     if args.trials < 1:
         ap.error(f"--trials: value {args.trials} is not allowed; expected an integer ≥ 1")

@@ -108,7 +108,8 @@ def cost() -> None:
     convoy = [f"{{id: t{i}, class: truck, x_m: {20 + 14 * (i // 3) + 4 * (i % 3)}, lane: {i % 3}, speed_mps: 25.0}}"
               for i in range(50)]
     train = ["{id: train, class: truck, length_m: 300.0, width_m: 3.0, x_m: 160.0, lane: 2, speed_mps: 25.0}"]
-    print(f"{'scene':10s} {'spacing':>7s} {'reflectors':>10s} {'auto ms':>8s} {'detection ms':>12s} {'long_actors ms':>14s}")
+    print(f"{'scene':10s} {'spacing':>7s} {'reflectors':>10s} {'auto ms':>8s} {'detection ms':>12s} "
+          f"{'long_actors ms':>14s}")
     for label, actors in (("convoy 50", convoy), ("300-m body", train)):
         for spacing in (1.0, 0.1):
             text = (f"name: cost\nduration_s: 0.8\nseed: 1\nradar: {{preset: ars408_like}}\nego: {{speed_mps: 25.0}}\n"

@@ -112,6 +112,39 @@ def test_every_radar_is_its_own_node_with_its_shifted_ids_and_none_collide():
     assert all(b >= a for a, b in zip(stamps, stamps[1:]))
 
 
+@pytest.mark.parametrize("asked, moves", [(0, False), (2, False), (1, False), (5, True)])
+def test_a_radar_configuration_moves_a_radar_of_a_group_only_to_a_free_sensor_id(asked, moves):
+    """A RadarConfiguration 0x200 + 0x10 with SensorID valid to sensor 1 of a group of three (0, 1, 2): the ID of
+    another radar of the group is refused (config_rejected, RadarState_Temporary_Error set, the ID in force echoed) —
+    it had been taken at once, and two radarnode nodes sent every message on the same CAN IDs (an independent
+    tester's finding: also from random bytes on 0x200); its own ID changes nothing; a free one moves it, and its
+    frames go out on the new IDs from the next cycle, none of them on another radar's."""
+    sc = parse_scenario(THREE.format(duration=1.5))
+    group = make_node(sc)
+    db = group.nodes[1].db
+    m = db.get_message_by_frame_id(P.RADAR_CFG)
+    values = {sig.name: 0 for sig in m.signals}
+    values.update(RadarCfg_SensorID_valid=1, RadarCfg_SensorID=asked)
+    outs = []
+    for k in range(4):
+        if k == 2:
+            group.receive(can.Message(arbitration_id=P.shifted(P.RADAR_CFG, 1), data=m.encode(values),
+                                      is_extended_id=False), k * group.period_s)
+        outs.append(group.cycle(k * group.period_s))
+    out = outs[-1]
+    assert group.sensor_ids == ([0, asked, 2] if moves else [0, 1, 2])
+    rejected = group.nodes[1].counters["config_rejected"]
+    assert rejected == int(asked in (0, 2))
+    # the answer goes out with the cycle the configuration came before
+    state = next(db.decode_message(P.RADAR_STATE, x.data, decode_choices=False) for x in outs[2].outputs[1].messages
+                 if x.arbitration_id - 0x10 * group.sensor_ids[1] == P.RADAR_STATE)
+    assert state["RadarState_SensorID"] == group.sensor_ids[1]
+    assert bool(state["RadarState_Temporary_Error"]) == bool(rejected)
+    ids = [{x.arbitration_id for x in o.messages} - {P.COLL_DET_RELAY} for o in out.outputs]
+    assert not (ids[0] & ids[1] or ids[1] & ids[2] or ids[0] & ids[2])
+    assert P.shifted(P.OBJ_STATUS, group.sensor_ids[1]) in ids[1]
+
+
 def test_adding_radars_does_not_change_the_first_radars_frames():
     from radarnode.wire.node import EgoMotionSender
     sc = parse_scenario(THREE.format(duration=1.5))

@@ -77,7 +77,13 @@ A frame of a group that arrives before the groups the sensor sends ahead of it (
 each whole before the next) are whole in the cycle in progress waits aside: the next header, of higher CAN
 priority, overtakes the last frames of a cycle, which must not take the next cycle's places. The cycle's own
 frame, in order, takes the place; at the cycle's end a frame aside fills a place still empty (a cycle reordered)
-or is counted in ``orphan_frames``.
+or is counted in ``orphan_frames``. A cycle the next header cut short of a few frames of its later groups (its
+general group whole) is held: the overtaken frames come before the next cycle's first general frame and have no
+place in it, and complete it; it is dropped at that first general frame, or at the next cycle's end.
+
+A general group repeated whole, in the sensor's order, after a later group of the cycle began is the next cycle's,
+its header lost (a standing sensor repeats its frames): the cycle is sealed, and a frame that fills one of its places
+after that drops it.
 
 Frames of a group that arrive after their cycle was delivered are counted as
 ``late_frames`` and put their group back into the layout at once.
@@ -246,6 +252,13 @@ class _Pending:
         # sensor's is read from the later groups (:meth:`CycleAssembler._resolve_overflow`)
         self.overflow = False
         self.early = False             # delivered as soon as the layout was complete
+        # the general group repeated whole, in the sensor's order, after a later group began: the sensor's next
+        # cycle, its header lost, repeating a standing scene's frames. A place of an earlier group filled after that
+        # is the next cycle's, and drops this one. ``rerun``: how many of the general group's frames, in order,
+        # repeated so far since a later group began (any other frame taken breaks the run)
+        self.sealed = False
+        self.rerun = 0
+        self.short = False             # held at its end short of a few frames of its later groups (overtaken)
         self.announced: frozenset[int] = frozenset()   # groups announced before its header
         self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
         self.arrival = time.monotonic()
@@ -664,6 +677,10 @@ class CycleAssembler(can.Listener):
                 self._drop_suspect(suspect)
             for other in self._older_suspects.pop(kind, []):
                 self._drop_suspect(other)
+        held = self._held.get(kind)
+        if held is not None and held.short and kind not in self._pending:
+            # a cycle held short of frames, and the (empty) cycle after it ended too: their chance is over
+            self._drop_held(kind)
         self.flush(kind)
         # what accepting this header changes, kept to undo it should the header prove stray
         header.before = (last, self._stride.get(kind), self.stats.lost_cycles)
@@ -750,6 +767,12 @@ class CycleAssembler(can.Listener):
         pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
         held = self._held.get(kind)
+        if held is not None and held.short and base == GENERAL[kind]:
+            # the frames the next header overtook come right after it, before the next cycle's first general frame:
+            # from that frame on, one for a place the held cycle lacks is a later cycle's (its own general frame
+            # lost: it filled the hole of a cycle whose frame was lost, and that cycle went out with it)
+            self._drop_held(kind)
+            held = None
         if held is not None and base != GENERAL[kind] and self._fits(held, base, oid) \
                 and not (pending is not None and self._fits(pending, base, oid)):
             # the next frame of a group that the cycle held back lacks, and no place in the cycle in progress: the
@@ -832,12 +855,28 @@ class CycleAssembler(can.Listener):
                 else:
                     self.stats.orphan_frames += 1      # the frame that came early was an earlier cycle's
         group = p.groups.setdefault(base, {})
+        order = GROUPS[p.kind]
+        later_begun = any(p.groups.get(g) or p.provisional.get(g) for g in order[order.index(base) + 1:])
         if oid in group:
             if group[oid][0] == data:
                 self.stats.duplicate_frames += 1
+                if base == GENERAL[p.kind] and later_begun and p.expected >= 2:
+                    p.rerun = p.rerun + 1 if p.rerun < len(p.order) and p.order[p.rerun] == oid else \
+                        int(p.order[0] == oid)
+                    p.sealed |= p.rerun == p.expected
+                else:
+                    p.rerun = 0
             else:
                 self.stats.conflicting_frames += 1
                 p.bad = True
+            return False
+        p.rerun = 0
+        if p.sealed:
+            # a place filled after the general group came again whole, in order: the next cycle's frame (its header
+            # lost, a standing scene's frames repeated: the public capture's cycle took the next one's Obj_2_Quality
+            # where its own was lost, an independent tester's finding). The cycle is dropped
+            self.stats.orphan_frames += 1
+            p.bad = True
             return False
         if base == GENERAL[p.kind]:
             if len(group) >= p.expected:
@@ -953,6 +992,17 @@ class CycleAssembler(can.Listener):
         present = _present(p)
         seen = self._seen_layouts[p.kind]
         if not complete:
+            held = self._held.get(p.kind)
+            if held is not None and held.short:
+                # the cycle after one held short of frames ended: their chance is over
+                self._drop_held(p.kind)
+            if self._short_of_frames(p, unexpected) and p.kind not in self._held:
+                # whole but for a few frames of its later groups: the next header overtook them (it has the higher
+                # priority). Held, as a cycle short of a group is: its late frames, which have no place in the next
+                # cycle yet, complete it; the next cycle's end drops it if they never come
+                p.short = True
+                self._held[p.kind] = p
+                return
             self.stats.incomplete_cycles += 1
             if p.expected and seen:
                 seen[-1] = seen[-1] | present        # evidence that a group exists, never that it does not
@@ -993,6 +1043,15 @@ class CycleAssembler(can.Listener):
         if p.expected:
             seen.append(frozenset(present))
         self._deliver(p)
+
+    @staticmethod
+    def _short_of_frames(p: _Pending, unexpected: int) -> bool:
+        """Whether cycle ``p`` (ended, not whole) holds its header's count of general frames and, in its later
+        groups, frames for those objects only, some of them missing (none bad, none beyond the count, no repeat of
+        a general frame after a later group began)."""
+        general = p.groups.get(GENERAL[p.kind], {})
+        return (p.expected > 0 and not p.bad and not p.overflow and not p.sealed and not unexpected
+                and len(general) == p.expected and any(len(group) < p.expected for group in p.groups.values()))
 
     def _missing(self, p: _Pending) -> set[int]:
         """Groups of the expected layout that cycle ``p`` (with objects) lacks: what a stray header cuts off. The

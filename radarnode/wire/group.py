@@ -31,11 +31,17 @@ class RadarGroup:
         self.nodes = [RadarNode(sc, database, fidelity) for sc in radar_scenarios(scenario)]
         for node in self.nodes:
             node.bus_load_limit = node.bus_load_limit / len(self.nodes)
+            # a RadarConfiguration may move a radar to a free sensor ID only
+            node.taken_sensor_ids = lambda me=node: {n.config.sensor_id for n in self.nodes if n is not me}
         first = self.nodes[0]
         self.period_s, self.bitrate, self.preset = first.period_s, first.bitrate, first.preset
         self.fidelity = first.fidelity
-        self.sensor_ids = [n.config.sensor_id for n in self.nodes]
         self.bus_load_limit = scenario.radar.bus_load_limit      # the whole bus's (each node keeps to its share)
+
+    @property
+    def sensor_ids(self) -> list[int]:
+        """Each radar's sensor ID as it stands (a RadarConfiguration may move one to a free ID)."""
+        return [n.config.sensor_id for n in self.nodes]
 
     @property
     def scene(self):

@@ -24,6 +24,7 @@ import dataclasses
 import logging
 import math
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import can
@@ -161,6 +162,9 @@ class RadarNode:
         self._meas_counter = 0
         self._fault_until_s = -math.inf   # RadarState_Temporary_Error is set until then (a missed deadline)
         self._warned: set[str] = set()
+        #: the sensor IDs the other radars of this node's group hold (:class:`radarnode.wire.group.RadarGroup` sets
+        #: it): a RadarConfiguration that asks for one of them is refused
+        self.taken_sensor_ids: Callable[[], set[int]] = set
 
     # --- input ------------------------------------------------------------
     def receive(self, msg: can.Message, t_s: float) -> None:
@@ -299,7 +303,14 @@ class RadarNode:
             else:
                 cfg.max_distance_m = float(x)
         if (x := take("RadarCfg_SensorID_valid", "RadarCfg_SensorID", range(8))) is not None:
-            cfg.sensor_id = x
+            if x != cfg.sensor_id and x in self.taken_sensor_ids():
+                # two radars of one group on one sensor ID would send every message on the same CAN IDs (an
+                # independent tester's finding: a 0x200 with SensorID 0 to sensor 1 of a group, or random bytes)
+                self._refuse("cfgsid", "RadarConfiguration: SensorID=%d is not allowed: another radar of this "
+                             "scenario holds it (allowed: an ID none of the others holds); SensorID stays %d", x,
+                             cfg.sensor_id)
+            else:
+                cfg.sensor_id = x
         if (x := take("RadarCfg_RadarPower_valid", "RadarCfg_RadarPower", range(4))) is not None:
             cfg.radar_power = x
         if (x := take("RadarCfg_OutputType_valid", "RadarCfg_OutputType", range(3))) is not None:
