@@ -83,7 +83,8 @@ place in it, and complete it; it is dropped at that first general frame, or at t
 
 A general group repeated whole, in the sensor's order, after a later group of the cycle began is the next cycle's,
 its header lost (a standing sensor repeats its frames): the cycle is sealed, and a frame that fills one of its places
-after that drops it.
+after that drops it; so does a general frame that fills a place right after ``RERUN_FILL`` of the general group's
+frames repeated so, from its first (the next cycle's general frame for the place this cycle lost).
 
 Frames of a group that arrive after their cycle was delivered are counted as
 ``late_frames`` and put their group back into the layout at once.
@@ -225,6 +226,12 @@ def _advances(counter: int, last: int) -> bool:
 def _within_reach(counter: int, last: int, stride: int) -> bool:
     """True when MeasCounter ``counter`` follows ``last`` by at most MAX_JUMP_STRIDES strides."""
     return _advances(counter, last) and (counter - last) & 0xFFFF <= MAX_JUMP_STRIDES * stride
+
+
+#: a general frame that fills a place after this many of the general group's frames repeated in order, from its
+#: first, after a later group began, is the next cycle's (its header lost): the cycle is dropped. One repeat is not
+#: enough: a cycle reordered within itself with one duplicate shows that too (the fuzz tests)
+RERUN_FILL = 2
 
 
 class _Pending:
@@ -869,6 +876,13 @@ class CycleAssembler(can.Listener):
             else:
                 self.stats.conflicting_frames += 1
                 p.bad = True
+            return False
+        if base == GENERAL[p.kind] and later_begun and p.rerun >= RERUN_FILL:
+            # a general frame for a place still empty right after the general group began to repeat, in the
+            # sensor's order from its first frame, after a later group began: the next cycle's general group, its
+            # header lost (a standing sensor repeats its frames; the one for this cycle's lost place differs)
+            self.stats.orphan_frames += 1
+            p.bad = True
             return False
         p.rerun = 0
         if p.sealed:
