@@ -765,6 +765,115 @@ def test_headers_that_overtake_the_cycle_before_in_every_cycle_never_mix_two_cyc
     assert len(got) == 24 and asm.stats.incomplete_cycles == 0, asm.stats.as_dict()
 
 
+def _wrong(stream, truth) -> tuple[list[int], list]:
+    """The MeasCounters delivered with content other than sent, and what was delivered."""
+    got = list(CycleAssembler().feed(stream))
+    return [c.meas_counter for c in got if c.meas_counter not in truth
+            or not _same_cycle(c, truth[c.meas_counter])], got
+
+
+@pytest.mark.parametrize("event", ["lost_general", "lost_last", "duplicate_late", "garbage_late"])
+def test_one_loss_or_repeat_among_overtaking_headers_never_starts_a_cascade(event):
+    """Every header ahead of the cycle before's last frame, and one more fault in cycle 6: its first general frame
+    lost, its last frame lost, the late frame sent twice, or a frame of random content on its ID right after the next
+    header. A cycle that was not held (dropped) left its late frame to wait aside in the next cycle, which filled
+    that cycle's own overtaken place with it at its end — and so on, every cycle after: 69 of 208 cycles of a
+    highway_cut_in log went out wrong after one lost 0x60B, 70 after one duplicated 0x60D (an independent tester's
+    finding). The places a cycle that ended short lacked after its last frame are its tail: the first frames on
+    their IDs after the next header that fill them in order are its own (one sender sends one ID in order), taken
+    (held) or counted as orphans (dropped), and a late copy of one is a duplicate. No cycle delivered other than as
+    sent; at most the faulty cycle and the one after it are lost."""
+    cycles = _node_cycles(16)
+    clean = [m for f, *_ in cycles for m in f]
+    truth = _oracle(clean)
+    stream = _overtaken(clean)
+    heads = [i for i, m in enumerate(stream) if m.arbitration_id == P.OBJ_STATUS]
+    k = 6
+    span = range(heads[k], heads[k + 1])
+    if event == "lost_general":
+        del stream[next(i for i in span if stream[i].arbitration_id == P.OBJ_GENERAL)]
+    elif event == "lost_last":
+        late = heads[k + 1] + 1                      # cycle k's last frame, right after the next header
+        assert stream[late].arbitration_id in LIST_IDS[1:]
+        del stream[late]
+    elif event == "duplicate_late":
+        late = heads[k + 1] + 1
+        stream.insert(late + 3, _msg(stream[late].arbitration_id, stream[late].data))
+    else:
+        late = heads[k + 1] + 1
+        stream.insert(late, _msg(stream[late].arbitration_id, bytes([0xEE]) + bytes(stream[late].data[1:])))
+    wrong, got = _wrong(stream, truth)
+    assert not wrong, wrong
+    assert len(got) >= 14, [c.meas_counter for c in got]
+
+
+@pytest.mark.parametrize("after", [1, 3])
+def test_a_late_frame_behind_the_next_cycles_general_frames_still_completes_its_cycle(after):
+    """The next cycle's general frames 0x60B outrank 0x60C/0x60D too: every cycle's last frame behind the next header
+    and 1 or 3 of the next cycle's general frames. The held cycle had been dropped at the next cycle's first general
+    frame, and the late frame, aside, filled the next cycle's place (202 of 205 cycles wrong: an independent tester's
+    finding). It is the first frame on its ID after that header: every cycle delivered as sent."""
+    cycles = _node_cycles(16)
+    clean = [m for f, *_ in cycles for m in f]
+    truth = _oracle(clean)
+    stream = _overtaken(clean)
+    heads = [i for i, m in enumerate(stream) if m.arbitration_id == P.OBJ_STATUS]
+    for n in range(len(heads) - 1, 0, -1):
+        h = heads[n]
+        end = heads[n + 1] - 1 if n + 1 < len(heads) else len(stream) - 1
+        if stream[h + 1].arbitration_id not in LIST_IDS[2:]:
+            continue                                  # (no frame of the cycle before behind this header)
+        late = stream.pop(h + 1)
+        general = [i for i in range(h + 1, end) if stream[i].arbitration_id == P.OBJ_GENERAL][:after]
+        stream.insert((general[-1] if general else h) + 1, late)
+    wrong, got = _wrong(stream, truth)
+    assert not wrong, wrong
+    assert len(got) == 16, [c.meas_counter for c in got]
+
+
+def test_an_echo_of_the_general_group_inside_a_cycle_does_not_seal_it():
+    """Every cycle's general group sent again, whole and in order, right after its first Obj_2_Quality (a gateway's
+    echo): the rule that seals a cycle whose general group repeats after a later group began (the next cycle, its
+    header lost) dropped every cycle of the public capture (an independent tester's finding). A frame that continues
+    its group where it stopped is the cycle's own: every cycle delivered as sent."""
+    cycles = _node_cycles(12)
+    clean = [m for f, *_ in cycles for m in f]
+    truth = _oracle(clean)
+    stream = []
+    for frames_, *_ in cycles:
+        general = [m for m in frames_ if m.arbitration_id == P.OBJ_GENERAL]
+        seen_quality = False
+        for m in frames_:
+            stream.append(m)
+            if m.arbitration_id == P.OBJ_QUALITY and not seen_quality:
+                seen_quality = True
+                stream += [_msg(g.arbitration_id, g.data) for g in general]
+    wrong, got = _wrong(stream, truth)
+    assert not wrong, wrong
+    assert len(got) == 12
+
+
+def test_a_cycle_with_a_hole_inside_is_not_held_for_a_frame_after_the_next_header():
+    """A cycle that lost a frame in the middle of a group (not its tail) is dropped at the next header, as before
+    the cycles held for their overtaken frames: a frame for that place right after the next header — forged, or the
+    next cycle's with its general frame lost — had completed it (an independent tester's finding: 24 of 24 forged
+    frames took the place). A cycle with its *last* frame lost, and another for that place first on its ID after the
+    next header, cannot be told from one overtaken: a known limit, as a forged frame imitating the sensor's last."""
+    cycles = _node_cycles(12)
+    clean = [m for f, *_ in cycles for m in f]
+    truth = _oracle(clean)
+    k = next(i for i in range(3, 12) if len(cycles[i][1]) >= 3)
+    heads = [i for i, m in enumerate(clean) if m.arbitration_id == P.OBJ_STATUS]
+    quality = [i for i in range(heads[k], heads[k + 1]) if clean[i].arbitration_id == P.OBJ_QUALITY]
+    lost = clean[quality[1]]                                  # the second of three: inside the group
+    forged = _msg(lost.arbitration_id, bytes(lost.data[:1]) + bytes(x ^ 0x55 for x in lost.data[1:]))
+    stream = clean[:quality[1]] + clean[quality[1] + 1:heads[k + 1] + 1 - 1] + [clean[heads[k + 1]], forged] \
+        + clean[heads[k + 1] + 1:]
+    wrong, got = _wrong(stream, truth)
+    assert not wrong, wrong
+    assert cycles[k][4] not in [c.meas_counter for c in got]
+
+
 @pytest.mark.parametrize("lost, which", [(P.OBJ_QUALITY, 0), (P.OBJ_EXTENDED, 0), (P.OBJ_GENERAL, 2)])
 def test_a_lost_header_between_two_cycles_of_a_standing_scene_never_mixes_them(lost, which):
     """A standing sensor repeats its frames cycle after cycle. One list frame of cycle k lost, and the header of cycle

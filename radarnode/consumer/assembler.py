@@ -77,9 +77,11 @@ A frame of a group that arrives before the groups the sensor sends ahead of it (
 each whole before the next) are whole in the cycle in progress waits aside: the next header, of higher CAN
 priority, overtakes the last frames of a cycle, which must not take the next cycle's places. The cycle's own
 frame, in order, takes the place; at the cycle's end a frame aside fills a place still empty (a cycle reordered)
-or is counted in ``orphan_frames``. A cycle the next header cut short of a few frames of its later groups (its
-general group whole) is held: the overtaken frames come before the next cycle's first general frame and have no
-place in it, and complete it; it is dropped at that first general frame, or at the next cycle's end.
+or is counted in ``orphan_frames``. The places a cycle that ended short lacked after its last frame (its *tail*, in the
+sensor's order) are filled by the first frames on their IDs after the next header that fit them in that order (one
+sender sends one ID in order): a cycle whole up to its tail is held and completed by them; a dropped cycle's are
+orphans, and a late copy of one is a duplicate, never a frame aside for the next cycle. A frame for another object
+of either cycle first on such an ID ends the tail, and drops the held cycle; so does the next cycle's end.
 
 A general group repeated whole, in the sensor's order, after a later group of the cycle began is the next cycle's,
 its header lost (a standing sensor repeats its frames): the cycle is sealed, and a frame that fills one of its places
@@ -344,6 +346,16 @@ class CycleAssembler(can.Listener):
         # cycle lacks it too, and both are delivered); never delivered without either
         self._held: dict[str, _Pending] = {}
         self._behind: dict[str, list[_Pending]] = {}    # empty cycles that ended while one was held: after it
+        # the places the last cycle that ended short lacked after its last frame, in the sensor's order, by group: the
+        # frames the next header overtook come first on their IDs (one sender sends one ID in order), so the first
+        # frames of a group after it that fill those places in that order are its own, and the first that does not
+        # ends them
+        self._tails: dict[str, dict[int, collections.deque]] = {}
+        # the frames those tails took (place → payload), of the last two cycles that ended short: a copy of one that
+        # comes again out of its cycle's order (a bus or gateway repeat) is a duplicate, never a frame aside that
+        # fills the next cycle's place (one such copy sent every later cycle out with its predecessor's frame)
+        self._late: dict[str, collections.deque] = {k: collections.deque(maxlen=2) for k in GROUPS}
+        self._tail_objects: dict[str, frozenset] = {}     # the objects of the cycle a tail is of
         self._stride: dict[str, int] = {}
         self._told_none = False          # a RadarState said OutputType none since the last header taken
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
@@ -774,13 +786,38 @@ class CycleAssembler(can.Listener):
         pending = self._pending.get(kind)
         oid = int(values["Obj_ID" if kind == "obj" else "Cluster_ID"])
         held = self._held.get(kind)
-        if held is not None and held.short and base == GENERAL[kind]:
-            # the frames the next header overtook come right after it, before the next cycle's first general frame:
-            # from that frame on, one for a place the held cycle lacks is a later cycle's (its own general frame
-            # lost: it filled the hole of a cycle whose frame was lost, and that cycle went out with it)
-            self._drop_held(kind)
-            held = None
-        if held is not None and base != GENERAL[kind] and self._fits(held, base, oid) \
+        tail = self._tails.get(kind, {}).get(base)
+        if tail:
+            if tail[0] == oid:
+                # the next frame the last cycle lacked after its last one, first on its ID: that cycle's, overtaken
+                # by the next header (and by the next cycle's frames of other IDs). Completes it where it is held;
+                # else it was dropped, and the frame is an orphan (it filled the next cycle's place, which the next
+                # header overtook in turn: one loss, and every later cycle went out with its predecessor's frame)
+                tail.popleft()
+                self._late[kind][-1][(base, oid)] = data
+                if held is not None and held.short and self._fits(held, base, oid):
+                    self._add(held, base, oid, data, values)
+                    if self._layout_complete(held):
+                        del self._held[kind]
+                        self._deliver(held)
+                        self._release(kind)
+                else:
+                    self.stats.orphan_frames += 1
+                return
+            # another frame first on that ID, for an object of that cycle or of the one in progress: the next cycle's
+            # have begun there, and the rest of the tail never comes (a frame for neither, random content, ends nothing)
+            if oid in self._tail_objects.get(kind, ()) or (
+                    pending is not None and oid in pending.groups.get(GENERAL[kind], {})):
+                tail.clear()
+                if held is not None and held.short and len(held.groups.get(base, ())) < held.expected:
+                    self._drop_held(kind)
+                    held = None
+        if base != GENERAL[kind] and pending is not None and (
+                self._ahead_of_order(pending, base) or oid not in pending.groups.get(GENERAL[kind], {})) and any(
+                late.get((base, oid)) == data for late in self._late[kind]):
+            self.stats.duplicate_frames += 1
+            return
+        if held is not None and not held.short and base != GENERAL[kind] and self._fits(held, base, oid) \
                 and not (pending is not None and self._fits(pending, base, oid)):
             # the next frame of a group that the cycle held back lacks, and no place in the cycle in progress: the
             # late groups of a cycle that a stray header cut; whole, it is delivered
@@ -885,10 +922,13 @@ class CycleAssembler(can.Listener):
             p.bad = True
             return False
         p.rerun = 0
-        if p.sealed:
-            # a place filled after the general group came again whole, in order: the next cycle's frame (its header
-            # lost, a standing scene's frames repeated: the public capture's cycle took the next one's Obj_2_Quality
-            # where its own was lost, an independent tester's finding). The cycle is dropped
+        if p.sealed and (later_begun or base == GENERAL[p.kind]
+                         or len(group) >= len(p.order) or p.order[len(group)] != oid):
+            # a place filled after the general group came again whole, in order, that does not continue its group
+            # where it stopped (a later group began, or out of the general group's order): the next cycle's frame (its
+            # header lost, a standing sensor's frames repeated: the public capture's cycle took the next one's
+            # Obj_2_Quality where its own was lost, an independent tester's finding). The cycle is dropped. (One that
+            # continues it is the cycle's own after an echo of its general group: every cycle had been dropped)
             self.stats.orphan_frames += 1
             p.bad = True
             return False
@@ -1005,15 +1045,24 @@ class CycleAssembler(can.Listener):
                     and all(set(group) == set(general) for group in p.groups.values()))
         present = _present(p)
         seen = self._seen_layouts[p.kind]
+        self._tails.pop(p.kind, None)
         if not complete:
             held = self._held.get(p.kind)
             if held is not None and held.short:
                 # the cycle after one held short of frames ended: their chance is over
                 self._drop_held(p.kind)
-            if self._short_of_frames(p, unexpected) and p.kind not in self._held:
-                # whole but for a few frames of its later groups: the next header overtook them (it has the higher
-                # priority). Held, as a cycle short of a group is: its late frames, which have no place in the next
-                # cycle yet, complete it; the next cycle's end drops it if they never come
+            tail, cut = self._tail_places(p)
+            if tail:
+                self._tails[p.kind] = {g: collections.deque(oid for gg, oid in tail if gg == g)
+                                       for g in dict.fromkeys(gg for gg, _ in tail)}
+                self._tail_objects[p.kind] = frozenset(p.order)
+                self._late[p.kind].append({})
+            if cut and self._short_of_frames(p, unexpected) and p.kind not in self._held:
+                # whole up to its last frames, in the sensor's order: the next header overtook them (it has the
+                # higher priority). Held, as a cycle short of a group is: its late frames, first on their IDs after
+                # that header, complete it; a frame of another place first there, or the next cycle's end, drops it.
+                # (A cycle with a hole inside is dropped at once: a later frame for that place, forged, replayed or
+                # the next cycle's with its general frame lost, had completed it)
                 p.short = True
                 self._held[p.kind] = p
                 return
@@ -1057,6 +1106,21 @@ class CycleAssembler(can.Listener):
         if p.expected:
             seen.append(frozenset(present))
         self._deliver(p)
+
+    def _tail_places(self, p: _Pending) -> tuple[list[tuple[int, int]], bool]:
+        """The places (group, object ID) of cycle ``p``'s later groups after the last frame it holds, in the sensor's
+        order (group by group, each in the general group's order), and whether it holds every place before them and
+        its general group whole (cut at its tail). A cycle short of a general frame has a tail too (of the objects
+        whose general frames came): its late frames are absorbed, though it is dropped (the next cycle took them, and
+        every later one its predecessor's overtaken frame: one lost 0x60B, 69 cycles out wrong)."""
+        if not p.expected:
+            return [], False
+        wanted = self._expected_of(p) | _present(p)
+        places = [(g, oid) for g in GROUPS[p.kind][1:] if g in wanted for oid in p.order]
+        have = [oid in p.groups.get(g, {}) for g, oid in places]
+        last = max((i for i, h in enumerate(have) if h), default=-1)
+        whole = len(p.groups.get(GENERAL[p.kind], {})) == p.expected
+        return places[last + 1:], whole and all(have[:last + 1])
 
     @staticmethod
     def _short_of_frames(p: _Pending, unexpected: int) -> bool:
