@@ -796,11 +796,7 @@ class CycleAssembler(can.Listener):
                 tail.popleft()
                 self._late[kind][-1][(base, oid)] = data
                 if held is not None and held.short and self._fits(held, base, oid):
-                    self._add(held, base, oid, data, values)
-                    if self._layout_complete(held):
-                        del self._held[kind]
-                        self._deliver(held)
-                        self._release(kind)
+                    self._fill_held(held, base, oid, data, values)
                 else:
                     self.stats.orphan_frames += 1
                 return
@@ -812,20 +808,16 @@ class CycleAssembler(can.Listener):
                 if held is not None and held.short and len(held.groups.get(base, ())) < held.expected:
                     self._drop_held(kind)
                     held = None
-        if base != GENERAL[kind] and pending is not None and (
-                self._ahead_of_order(pending, base) or oid not in pending.groups.get(GENERAL[kind], {})) and any(
-                late.get((base, oid)) == data for late in self._late[kind]):
+        if base != GENERAL[kind] and pending is not None and any(
+                late.get((base, oid)) == data for late in self._late[kind]) and (
+                self._ahead_of_order(pending, base) or oid not in pending.groups.get(GENERAL[kind], {})):
             self.stats.duplicate_frames += 1
             return
         if held is not None and not held.short and base != GENERAL[kind] and self._fits(held, base, oid) \
                 and not (pending is not None and self._fits(pending, base, oid)):
             # the next frame of a group that the cycle held back lacks, and no place in the cycle in progress: the
             # late groups of a cycle that a stray header cut; whole, it is delivered
-            self._add(held, base, oid, data, values)
-            if self._layout_complete(held):
-                del self._held[kind]
-                self._deliver(held)
-                self._release(kind)
+            self._fill_held(held, base, oid, data, values)
             return
         suspect = self._suspects.get(kind)
         if suspect is not None:
@@ -850,6 +842,15 @@ class CycleAssembler(can.Listener):
         pending.arrival = time.monotonic()
         if self._add(pending, base, oid, data, values):
             self._maybe_complete(kind)
+
+    def _fill_held(self, held: _Pending, base: int, oid: int, data: bytes, values: dict) -> None:
+        """A late frame into the held cycle; whole with it, the held cycle is delivered, and the empty cycles behind
+        it after it."""
+        self._add(held, base, oid, data, values)
+        if self._layout_complete(held):
+            del self._held[held.kind]
+            self._deliver(held)
+            self._release(held.kind)
 
     def _ahead_of_order(self, p: _Pending, base: int) -> bool:
         """Whether a frame of group ``base`` comes before cycle ``p`` holds every frame of the groups the sensor
