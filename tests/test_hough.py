@@ -188,3 +188,57 @@ def test_the_votes_are_integer_counts_of_each_cell_and_a_scratch_accumulator_las
     first = accumulate(x, y, GRID, scratch=own)
     second = accumulate(x[:1], y[:1], GRID, scratch=own)
     assert np.array_equal(first, accumulate(x, y, GRID)) and not np.shares_memory(first, second)
+
+
+def _plain_peaks(acc, half, min_votes):
+    """Every cell of at least ``min_votes`` that no cell of its window exceeds (the window cut by the array's edge;
+    a NaN in it, the maximum of any comparison, leaves none), in row-major order: the definition, written out."""
+    out = []
+    for t, r in zip(*np.nonzero(acc >= min_votes)):
+        win = acc[max(t - half[0], 0):t + half[0] + 1, max(r - half[1], 0):r + half[1] + 1]
+        if acc[t, r] >= win.max():
+            out.append((t, r))
+    return out
+
+
+@pytest.mark.parametrize("count", [1, 3, 15, 16, 17, 32, 200])
+def test_few_and_many_candidates_give_the_same_peaks(count, monkeypatch):
+    """strongest_lines tests up to FEW_CANDIDATES candidate cells each against its own window and more by the
+    maximum filter over their box: both ways, just below, at, just above and at twice the threshold and far beyond
+    (a plateau), with candidates at the accumulator's edges and a NaN cell, the lines are those of the peaks the
+    definition gives."""
+    from radarnode.dsp import hough
+    rng = np.random.default_rng(count)
+    grid = HoughGrid(np.radians(np.arange(60.0, 120.0, 0.5)), np.arange(-140, 141) * 0.25)
+    acc = np.floor(rng.random((grid.theta_rad.size, grid.rho_m.size)) * 3.0)
+    cells = rng.choice(acc.size, size=count, replace=False)
+    cells[:min(count, 2)] = [0, acc.size - 1][:min(count, 2)]           # corners: the window cut by the edge
+    acc.flat[cells] = 4.0 + np.floor(rng.random(count) * 3.0)          # the candidates (≥ min_votes 4)
+    if count > 3:
+        acc.flat[cells[3]] = np.nan                                     # a NaN cell is no candidate, nor a peak
+    half = (10, 4)                                                      # 5° and 1 m in cells of 0.5° and 0.25 m
+    peaks = _plain_peaks(acc, half, 4.0)            # (a window holding the NaN has a NaN maximum: no peak there)
+    want = []                                       # strongest first (stable); one near a line taken is that line
+    for k in np.argsort([-acc[t, r] for t, r in peaks], kind="stable"):
+        t, r = peaks[k]
+        if not any(abs(np.degrees(grid.theta_rad[t] - th)) <= 5.0 and abs(grid.rho_m[r] - rho) <= 1.0
+                   for th, rho, _ in want):
+            want.append((grid.theta_rad[t], grid.rho_m[r], acc[t, r]))
+    assert len(want) >= min(count, 10) - 2
+    assert hough.FEW_CANDIDATES == 16
+    for few in (hough.FEW_CANDIDATES, 0, 10 ** 6):                      # as shipped, always the filter, never it
+        monkeypatch.setattr(hough, "FEW_CANDIDATES", few)
+        got = strongest_lines(acc, grid, max_lines=10 ** 6, min_votes=4.0)    # ±5° and ±1 m: half (10, 4) cells
+        assert [(ln.theta_rad, ln.rho_m, ln.votes) for ln in got] == want
+
+
+def test_one_scratch_serves_two_grids_in_turn():
+    """The scratch keeps one grid's tables (its coefficients and row offsets): accumulating on another grid with it,
+    and back, gives each grid's own accumulator."""
+    from radarnode.dsp.hough import Scratch
+    other = HoughGrid.make(rho_max_m=20.0, rho_step_m=0.3, theta_step_deg=1.0)
+    rng = np.random.default_rng(4)
+    scratch = Scratch()
+    for grid in (GRID, other, GRID, other):
+        x, y = rng.uniform(0.0, 60.0, 50), rng.uniform(-25.0, 25.0, 50)
+        assert np.array_equal(accumulate(x, y, grid, scratch=scratch), accumulate(x, y, grid))

@@ -56,6 +56,11 @@ class HoughGrid:
         return cls(theta, rho)
 
 
+#: up to this many candidate cells, :func:`strongest_lines` tests each against its own window; more (a plateau), by a
+#: maximum filter over the box that holds them (the same peaks either way)
+FEW_CANDIDATES = 16
+
+
 class Scratch:
     """Two work arrays that :func:`accumulate` reuses from call to call instead of allocating them: the (point, θ)
     cells as float64 and as intp. A caller that accumulates many point sets (the road-boundary search, some 800
@@ -66,10 +71,24 @@ class Scratch:
         self._cell = np.empty(0)
         self._idx = np.empty(0, dtype=np.intp)
         self._votes = np.empty(0)
+        self._grid: HoughGrid | None = None         # the grid whose tables are held (grid_tables)
+        self._tables: tuple[np.ndarray, np.ndarray] = (np.empty((3, 0)), np.empty(0))
         #: :func:`accumulate` returns the accumulator in this scratch's memory (valid until its next call with it)
         #: instead of a copy: for a caller that reads each accumulator before the next (the road-boundary search:
         #: a new 270 kB array a call, written page by page, was most of the search's time)
         self.share_result = share_result
+
+    def grid_tables(self, grid: HoughGrid) -> tuple[np.ndarray, np.ndarray]:
+        """:func:`accumulate`'s tables of a grid, made once while the scratch serves that grid: the (3, n_theta)
+        coefficients [cosθ/Δρ, sinθ/Δρ, 1.5 − ρ₀/Δρ] and each θ row's first cell, (n_theta,)."""
+        if self._grid is not grid:
+            n_t, n_r = grid.theta_rad.size, grid.rho_m.size
+            step = grid.rho_m[1] - grid.rho_m[0]
+            coef = np.empty((3, n_t))
+            coef[0], coef[1], coef[2] = (np.cos(grid.theta_rad) / step, np.sin(grid.theta_rad) / step,
+                                         1.5 - grid.rho_m[0] / step)
+            self._grid, self._tables = grid, (coef, np.arange(n_t) * (n_r + 2.0))
+        return self._tables
 
     def arrays(self, n: int) -> tuple[np.ndarray, np.ndarray]:
         """(n,) float64 and intp views of the work arrays, grown (to 1.5× what is asked) when too small."""
@@ -109,17 +128,15 @@ def accumulate(x: np.ndarray, y: np.ndarray, grid: HoughGrid, weights: np.ndarra
     # ρ cell counted from 1, plus ½, so that truncation rounds it (a point exactly half a cell between two votes
     # for the upper one); each θ row has a cell before and after the grid (0 and n_rho + 1) that collect the votes
     # falling outside it, so that a clip replaces the masking
-    step = grid.rho_m[1] - grid.rho_m[0]
     pts = np.empty((x.size, 3))
     pts[:, 0], pts[:, 1], pts[:, 2] = x, y, 1.0
-    coef = np.empty((3, n_t))
-    coef[0], coef[1], coef[2] = np.cos(grid.theta_rad) / step, np.sin(grid.theta_rad) / step, 1.5 - grid.rho_m[0] / step
     scratch = scratch or Scratch()
+    coef, rows = scratch.grid_tables(grid)
     flat, idx = scratch.arrays(x.size * n_t)
     cell = flat.reshape(x.size, n_t)
     np.matmul(pts, coef, out=cell)                                       # (n, n_theta)
     np.clip(cell, 0.0, n_r + 1.0, out=cell)
-    cell += np.arange(n_t) * (n_r + 2.0)                                 # each θ row's own cells
+    np.add(cell, rows, out=cell)                                         # each θ row's own cells
     np.copyto(idx, flat, casting="unsafe")                               # truncation: every value is ≥ 0
     if w is None:
         # one vote each, added into the scratch's zeroed accumulator (exact: integer sums): the road-boundary search
@@ -151,19 +168,31 @@ def strongest_lines(acc: np.ndarray, grid: HoughGrid, max_lines: int = 2, min_vo
     step_t = np.degrees(grid.theta_rad[1] - grid.theta_rad[0]) if grid.theta_rad.size > 1 else 1.0
     half = (max(int(round(suppress_theta_deg / step_t)), 0), max(int(round(suppress_rho_m / step_r)), 0))
     cand = acc >= max(min_votes, min_fraction * top)
-    if not cand.any():                    # (a NaN cell: no strongest line to measure the others by)
+    at = np.flatnonzero(cand)             # (row-major)
+    if not at.size:                       # (a NaN cell: no strongest line to measure the others by)
         return []
-    # the maximum filter over the box that holds the candidates and the cells that can exceed them (half a window
-    # beyond): cells further from every candidate are never tested. Where the box is cut by the accumulator's
-    # edge the filter extends the edge, as over the whole accumulator; elsewhere its extension reaches only cells
-    # more than half a window from every candidate
-    rows, cols = np.flatnonzero(cand.any(axis=1)), np.flatnonzero(cand.any(axis=0))
-    r0, r1 = max(int(rows[0]) - half[0], 0), min(int(rows[-1]) + half[0] + 1, acc.shape[0])
-    c0, c1 = max(int(cols[0]) - half[1], 0), min(int(cols[-1]) + half[1] + 1, acc.shape[1])
-    box = acc[r0:r1, c0:c1]
-    ti, ri = np.nonzero((box >= max_filter(box, half)) & cand[r0:r1, c0:c1])      # (row-major, as over the whole)
-    ti += r0
-    ri += c0
+    # a peak is a candidate no cell of whose window exceeds it. A few candidates (a road-boundary search has one to
+    # three of 34,000 cells) are each tested against their own window, cut by the accumulator's edge (what the
+    # filter's extended edge gives: it repeats cells already in the window); the twenty small passes of the filter
+    # were most of the search. More of them (a plateau): the maximum filter over the box that holds the candidates
+    # and the cells that can exceed them (half a window beyond); cells further from every candidate are never
+    # tested. Where the box is cut by the accumulator's edge the filter extends the edge, as over the whole
+    # accumulator; elsewhere its extension reaches only cells more than half a window from every candidate. The
+    # same peaks, in the same (row-major) order, either way
+    n_r, n_c = acc.shape
+    if at.size <= FEW_CANDIDATES:
+        ti, ri = np.divmod(at, n_c)
+        peak = [acc[max(t - half[0], 0):t + half[0] + 1, max(r - half[1], 0):r + half[1] + 1].max() <= acc[t, r]
+                for t, r in zip(ti.tolist(), ri.tolist())]
+        ti, ri = ti[peak], ri[peak]
+    else:
+        cols = at % n_c
+        r0, r1 = max(int(at[0]) // n_c - half[0], 0), min(int(at[-1]) // n_c + half[0] + 1, n_r)
+        c0, c1 = max(int(cols.min()) - half[1], 0), min(int(cols.max()) + half[1] + 1, n_c)
+        box = acc[r0:r1, c0:c1]
+        ti, ri = np.nonzero((box >= max_filter(box, half)) & cand[r0:r1, c0:c1])
+        ti += r0
+        ri += c0
     order = np.argsort(-acc[ti, ri], kind="stable")
     ti, ri = ti[order], ri[order]
     theta, rho, votes = grid.theta_rad[ti], grid.rho_m[ri], acc[ti, ri]
