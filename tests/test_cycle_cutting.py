@@ -1135,3 +1135,84 @@ def test_a_gateway_shuffling_cycles_with_an_intruder_in_each_still_delivers_them
         stream += rest[:at] + body + rest[at:]
     got = [c for c in CycleAssembler().feed(stream) if isinstance(c, ObjectCycle)]
     assert _match(got, cycles) == (len(cycles), [])
+
+
+def _first_in_next_cycle(stream, k: int, oid: int) -> list:
+    """``stream`` with cycle k + 1's list frames reordered so that object ``oid`` comes first in every group (a
+    sensor that sorts its list anew each cycle, by distance: the ARS 408's and radarnode's own order changes)."""
+    out = list(stream)
+    heads = [i for i, m in enumerate(out) if m.arbitration_id == P.OBJ_STATUS] + [len(out)]
+    lo, hi = heads[k + 1] + 1, heads[k + 2]
+    span = out[lo:hi]
+    for group in LIST_IDS[1:]:
+        at = [i for i, m in enumerate(span) if m.arbitration_id == group]
+        frames = [span[i] for i in at]
+        frames.sort(key=lambda m: m.data[0] != oid)          # (stable: the others keep their order)
+        for i, m in zip(at, frames):
+            span[i] = m
+    out[lo:hi] = span
+    return out
+
+
+def test_a_lost_last_frame_is_never_filled_by_the_next_cycles_own_frame_for_that_object():
+    """One lost frame, the last of cycle k, and cycle k + 1 lists that object first: the held cycle (short of its
+    last frame: the next header may have overtaken it) took the next cycle's own frame for that place, first on its
+    ID after the header, and was delivered with it — a wrong cycle from a single loss, 2 of 3,222 cycles under 2 %
+    random faults on two sensors' bus (an independent tester's scripts; none before session 55's tails). A frame at
+    the next cycle's own turn on its ID (the groups it sends ahead of that ID whole) is left undecided: the next frame
+    on that ID tells — the same object again (the first was the late one), or another object the next cycle lists
+    after it (the first was the next cycle's own) — and the next cycle's end takes it as its own. Every cycle k of the
+    stream: no cycle delivered other than as sent, and every cycle but k delivered; and with every header overtaking
+    the last frame of the cycle before, none lost at all."""
+    cycles = _node_cycles(16)
+    clean = [m for f, *_ in cycles for m in f]
+    truth = _oracle(clean)
+    heads = [i for i, m in enumerate(clean) if m.arbitration_id == P.OBJ_STATUS] + [len(clean)]
+    tried = 0
+    for k in range(1, 14):
+        last = max(i for i in range(heads[k], heads[k + 1]) if clean[i].arbitration_id in LIST_IDS[1:])
+        if not clean[heads[k]].data[0] or last == heads[k]:
+            continue
+        oid = clean[last].data[0]
+        reordered = _first_in_next_cycle(clean, k, oid)
+        truth_k = _oracle(reordered)
+        lost = reordered[:last] + reordered[last + 1:]
+        wrong, got = _wrong(lost, truth_k)
+        assert not wrong, (k, wrong)
+        delivered = {c.meas_counter for c in got}
+        assert delivered == set(truth_k) - {cycles[k][4]}, (k, sorted(set(truth_k) - delivered))
+        # the late frame behind the header: the next cycle's own frame for that object follows it on its ID
+        wrong, got = _wrong(_overtaken(reordered), truth_k)
+        assert not wrong and len(got) == 16, (k, wrong, len(got))
+        tried += 1
+    assert tried >= 10
+
+
+@pytest.mark.parametrize("first", [True, False])
+def test_a_late_frame_at_the_next_cycles_own_turn_on_its_id_still_completes_its_cycle(first):
+    """The other side of the rule above: cycle k's last frame overtaken by the next header and by every frame the next
+    cycle sends ahead of that ID, so that it comes right before the next cycle's own first frame on its ID. Listed
+    first there (the same object again follows it) or not (an object the next cycle lists before it follows): it
+    is the held cycle's, and every cycle is delivered as sent."""
+    cycles = _node_cycles(16)
+    clean = [m for f, *_ in cycles for m in f]
+    heads = [i for i, m in enumerate(clean) if m.arbitration_id == P.OBJ_STATUS] + [len(clean)]
+    tried = 0
+    for k in range(1, 14):
+        last = max(i for i in range(heads[k], heads[k + 1]) if clean[i].arbitration_id in LIST_IDS[1:])
+        n_next = clean[heads[k + 1]].data[0]
+        if not clean[heads[k]].data[0] or last == heads[k] or (not first and n_next < 2):
+            continue
+        m = clean[last]
+        stream = _first_in_next_cycle(clean, k, m.data[0]) if first else list(clean)
+        truth = _oracle(stream)
+        own = next((i for i in range(heads[k + 1], heads[k + 2]) if stream[i].arbitration_id == m.arbitration_id),
+                   None)
+        if own is None or (not first and stream[own].data[0] == m.data[0]):
+            continue
+        moved = stream[:last] + stream[last + 1:]
+        moved.insert(own - 1, m)                          # (own − 1: its index once the frame left its place)
+        wrong, got = _wrong(moved, truth)
+        assert not wrong and len(got) == 16, (k, wrong, len(got))
+        tried += 1
+    assert tried >= 8
