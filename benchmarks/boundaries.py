@@ -20,6 +20,7 @@ versions are timed with the same script.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -111,8 +112,13 @@ def digest(out) -> str:
 
 
 def main() -> None:
-    if "--speed" in sys.argv[:-1]:
-        seconds = float(sys.argv[sys.argv.index("--speed") + 1])
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", default="3", help="seeds whose cycles are pooled, e.g. 1,2,3 (default 3)")
+    ap.add_argument("--speed", type=float, metavar="SECONDS", help="time the estimator on a log this long instead")
+    ap.add_argument("--root", help="import radarnode from this tree (read before radarnode is imported)")
+    args = ap.parse_args()
+    if args.speed is not None:
+        seconds = args.speed
         per_cycle, cycles, out = update_speed(seconds)
         import radarnode
         print(f"RoadBoundaryEstimator.update ({Path(radarnode.__file__).parents[1]}): {per_cycle * 1e6:.0f} µs a "
@@ -124,7 +130,7 @@ def main() -> None:
     print("|---|---:|---:|---:|---:|---:|---:|---:|")
     rows = [(0.0, -5.0, 0.0), (0.0, -15.0, 0.0), (0.0, -25.0, 0.0), (0.0, -5.0, -20.0), (0.0, -5.0, -30.0),
             (1 / 500, -5.0, 0.0), (1 / 250, -5.0, 0.0)]
-    seeds = [int(x) for x in sys.argv[sys.argv.index("--seeds") + 1].split(",")] if "--seeds" in sys.argv[:-1] else [3]
+    seeds = [int(x) for x in args.seeds.split(",")]
     for curvature, rcs, tx in rows:
         parts = [run(curvature, rcs, tx, seed=seed) for seed in seeds]
         err, snr = np.concatenate([e for e, _ in parts]), parts[0][1]

@@ -6,11 +6,13 @@ A car crosses the ego's road (``ars408_like``, the ego standing) at 150 m and 20
 crossing car's speed is across the line of sight, where only position differences measure it, and the radar
 tracker's rules for standing reflectors (a hop, a coast: ``radarnode/perception/tracker.py``) cost it some cycles.
 
-Run: ``python benchmarks/crossing.py [--root DIR]`` (about a minute; ``--root`` imports radarnode from another tree,
+Run: ``python benchmarks/crossing.py [--root DIR]`` (a few seconds; ``--root`` imports radarnode from another tree,
 e.g. ``git archive REV | tar -x -C DIR``, to compare two versions with one script).
 """
 
 from __future__ import annotations
+
+import argparse
 
 import numpy as np
 
@@ -54,6 +56,9 @@ actors:
 
 
 def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--root", help="import radarnode from this tree (read before radarnode is imported)")
+    ap.parse_args()
     print(f"radarnode from {TREE}; detection level, ars408_like, seeds {SEEDS[0]}–{SEEDS[-1]}\n")
     print("| crossing car | cycles seen | reported moving | fraction |")
     print("|---|---:|---:|---:|")

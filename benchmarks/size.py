@@ -8,6 +8,7 @@ noise-free mean of 300 frames. Run: ``python benchmarks/size.py``.
 
 from __future__ import annotations
 
+import argparse
 import sys
 from pathlib import Path
 
@@ -27,6 +28,7 @@ def stats(fp, ra, aa, snr, frames, rng, noise=True):
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()      # (--help; no options)
     rng = np.random.default_rng(0)
     print("| range | D_r (noise-free) | D_az (noise-free) | error D_r / D_az at 15 dB | at 20 dB | at 25 dB | "
           "at 30 dB | at 35 dB |")

@@ -15,6 +15,7 @@ Run: ``python benchmarks/wire.py`` (``make bench``). Prints a Markdown table.
 
 from __future__ import annotations
 
+import argparse
 import statistics
 import sys
 import time
@@ -95,6 +96,7 @@ def jitter(n: int, seconds: float) -> tuple[float, float, int, float, int]:
 
 
 def main() -> None:
+    argparse.ArgumentParser(description=__doc__.split("\n\n")[0]).parse_args()      # (--help; no options)
     print("| objects | frames/cycle | bus load @500 kbit/s | encode median (radarnode) | cantools strict=False | "
           "cantools strict=True | speed-up vs strict=False | jitter median | jitter max |")
     print("|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
