@@ -818,12 +818,7 @@ class CycleAssembler(can.Listener):
                 # by the next header (and by the next cycle's frames of other IDs). Completes it where it is held;
                 # else it was dropped, and the frame is an orphan (it filled the next cycle's place, which the next
                 # header overtook in turn: one loss, and every later cycle went out with its predecessor's frame)
-                tail.popleft()
-                self._late[kind][-1][(base, oid)] = data
-                if held is not None and held.short and self._fits(held, base, oid):
-                    self._fill_held(held, base, oid, data, values)
-                else:
-                    self.stats.orphan_frames += 1
+                self._take_late(kind, base, oid, data, values)
                 return
             if oid in tail and (pending is None or oid not in pending.groups.get(GENERAL[kind], {})
                                 or self._ahead_of_order(pending, base)):
@@ -836,8 +831,7 @@ class CycleAssembler(can.Listener):
                     tail.popleft()
                 tail.popleft()
                 self._late[kind][-1][(base, oid)] = data
-                if held is not None and held.short and len(held.groups.get(base, ())) < held.expected:
-                    self._drop_held(kind)
+                self._drop_held_short_of(kind, base)
                 self.stats.orphan_frames += 1
                 return
             # another frame first on that ID, for an object of that cycle or of the one in progress: the next cycle's
@@ -845,8 +839,7 @@ class CycleAssembler(can.Listener):
             if oid in self._tail_objects.get(kind, ()) or (
                     pending is not None and oid in pending.groups.get(GENERAL[kind], {})):
                 tail.clear()
-                if held is not None and held.short and len(held.groups.get(base, ())) < held.expected:
-                    self._drop_held(kind)
+                if self._drop_held_short_of(kind, base):
                     held = None
         if base != GENERAL[kind] and pending is not None and any(
                 late.get((base, oid)) == data for late in self._late[kind]) and (
@@ -919,25 +912,39 @@ class CycleAssembler(can.Listener):
         frame as it would have; one that has ended takes it into its place)."""
         pending, base, oid, data, values = undecided
         tail = self._tails.get(kind, {}).get(base)
-        held = self._held.get(kind)
         if theirs:
-            if tail and tail[0] == oid:
-                tail.popleft()
-            if self._late[kind]:
-                self._late[kind][-1][(base, oid)] = data
-            if held is not None and held.short and self._fits(held, base, oid):
-                self._fill_held(held, base, oid, data, values)
-            else:
-                self.stats.orphan_frames += 1
+            self._take_late(kind, base, oid, data, values)
             return
         if tail:
             tail.clear()
-        if held is not None and held.short and len(held.groups.get(base, ())) < held.expected:
-            self._drop_held(kind)
+        self._drop_held_short_of(kind, base)
         if self._pending.get(kind) is pending:
             self._list_frame(base, values, data)
         else:
             self._add(pending, base, oid, data, values)
+
+    def _take_late(self, kind: str, base: int, oid: int, data: bytes, values: dict) -> None:
+        """The next place of the tail of group ``base`` filled by its late frame: recorded (a late copy of it is then a
+        duplicate) and put into the cycle held short, whose it is; an orphan where that cycle was dropped."""
+        tail = self._tails.get(kind, {}).get(base)
+        if tail and tail[0] == oid:
+            tail.popleft()
+        if self._late[kind]:
+            self._late[kind][-1][(base, oid)] = data
+        held = self._held.get(kind)
+        if held is not None and held.short and self._fits(held, base, oid):
+            self._fill_held(held, base, oid, data, values)
+        else:
+            self.stats.orphan_frames += 1
+
+    def _drop_held_short_of(self, kind: str, base: int) -> bool:
+        """Drop the cycle held short of frames where it lacks some of group ``base`` (its tail there ended without
+        them); whether it did."""
+        held = self._held.get(kind)
+        if held is not None and held.short and len(held.groups.get(base, ())) < held.expected:
+            self._drop_held(kind)
+            return True
+        return False
 
     def _fill_held(self, held: _Pending, base: int, oid: int, data: bytes, values: dict) -> None:
         """A late frame into the held cycle; whole with it, the held cycle is delivered, and the empty cycles behind
