@@ -869,8 +869,9 @@ def _rd_signal(preset: RadarPreset, tm: _Terms, dtype, floor_db: float = RD_PEAK
         mat = scipy.sparse.csc_array((data[0, :at], rows[:at], indptr), shape=(cells, cols.size))
         for t in range(n_tx):
             mat.data = data[t, :at]                                         # same pattern, this transmitter's values
-            for r in range(n_rx):                                           # one vector a channel: contiguous rows
-                out[t * n_rx + r] += mat @ chan_phase[cols, t, r]
+            # every receiver's channel in one pass over the entries (each cell's sum in the same order as one
+            # vector a channel: the same values)
+            out[t * n_rx:(t + 1) * n_rx] += (mat @ chan_phase[cols, t, :]).T
         held.clear()
         at = 0
 
