@@ -87,10 +87,36 @@ except SystemExit as exc:
     if exc.code:
         raise
 """
+_SIGNAL = """
+import sys
+sys.path.insert(0, sys.argv[1])
+sys.path.insert(0, sys.argv[1] + "/benchmarks")
+import numpy as np
+from radarnode.radar.chain import DspChain
+from radarnode.radar.signal_model import synthesize_rd
+from signal_speed import highway_frames
+dtype = np.{dtype}
+frames = [highway_frames(ego, 1) for ego in (0.0, 28.0, 70.0)]
+chain = DspChain(frames[0][0])
+rng = np.random.default_rng(1)
+maps = [synthesize_rd(p, s[0], rng, dtype=dtype) for p, s in frames]
+chain.process_rd(maps[0])                        # the chain's tables: in both counts
+for _ in range(int(sys.argv[2])):
+    for (p, s), rd in zip(frames, maps):
+        {work}
+"""
 WORKLOADS = {
     "chunk": (_CHUNK, (1, 4), 1.0, "a 1024-cycle chunk"),
     "object": (_OBJECT, (1, 3), 1.0, "1024 cycles, set-up included"),
     "log": (_LOG, (30, 150), 1.0 / 0.072, "a cycle"),            # the scenario's 72-ms cycle: counts in seconds
+    # the signal level's two halves on highway_mimo12 (signal_speed.py's frames at 0, 28 and 70 m/s): a frame
+    "synth64": (_SIGNAL.format(dtype="complex64", work="synthesize_rd(p, s[0], rng, dtype=dtype)"), (1, 3), 3.0,
+                "a frame (0/28/70 m/s)"),
+    "synth128": (_SIGNAL.format(dtype="complex128", work="synthesize_rd(p, s[0], rng, dtype=dtype)"), (1, 3), 3.0,
+                 "a frame (0/28/70 m/s)"),
+    "chain64": (_SIGNAL.format(dtype="complex64", work="chain.process_rd(rd)"), (1, 3), 3.0, "a frame (0/28/70 m/s)"),
+    "chain128": (_SIGNAL.format(dtype="complex128", work="chain.process_rd(rd)"), (1, 3), 3.0,
+                 "a frame (0/28/70 m/s)"),
 }
 
 

@@ -890,7 +890,14 @@ def _rd_signal(preset: RadarPreset, tm: _Terms, dtype, floor_db: float = RD_PEAK
             k = sel.size
             p_terms = int(terms[sel].max())
             coef = _series_coefficients(phi[sel], eps, p_terms)              # (tx, k, j, p)
-            pieces, rows_k = [], []
+            if not dense:
+                size = k * area
+                if at + size > budget:
+                    flush()
+                # column by column: each scatterer's cells of every rectangle together, each rectangle written in
+                # its columns' place (no concatenated copy)
+                block, block_rows = data[:, at: at + size].reshape(n_tx, k, area), rows[at: at + size].reshape(k, area)
+                col = 0
             for off_d, off_r in rects:                                       # one or two rectangles
                 nd, nr = len(off_d), len(off_r)
                 if dense:                                                    # every bin, counted from 0: FFTs
@@ -909,18 +916,14 @@ def _rd_signal(preset: RadarPreset, tm: _Terms, dtype, floor_db: float = RD_PEAK
                     for t in range(n_tx):
                         out[t * n_rx:(t + 1) * n_rx] += chan_phase[sel, t].T @ resp[t].reshape(k, cells).astype(dtype)
                     continue
-                pieces.append(resp.reshape(n_tx, k, nd * nr))
-                rows_k.append((((pd[sel, None].astype(np.int32) + np.asarray(off_d, dtype=np.int32)) % m)[:, :, None]
-                               * n + ((pr[sel, None].astype(np.int32) + np.asarray(off_r, dtype=np.int32)) % n)
-                               [:, None, :]).reshape(k, nd * nr))
+                block[:, :, col: col + nd * nr] = resp.reshape(n_tx, k, nd * nr)
+                block_rows[:, col: col + nd * nr] = (
+                    (((pd[sel, None].astype(np.int32) + np.asarray(off_d, dtype=np.int32)) % m)[:, :, None] * n
+                     + ((pr[sel, None].astype(np.int32) + np.asarray(off_r, dtype=np.int32)) % n)[:, None, :]
+                     ).reshape(k, nd * nr))
+                col += nd * nr
             if dense:
                 continue
-            size = k * area
-            if at + size > budget:
-                flush()
-            # column by column: each scatterer's cells of every rectangle together
-            rows[at: at + size] = np.concatenate(rows_k, axis=1).reshape(-1)
-            data[:, at: at + size] = np.concatenate(pieces, axis=2).reshape(n_tx, size)
             held.append((sel, area))
             at += size
     flush()
