@@ -386,7 +386,6 @@ class PatchFit:
                 count = np.bincount(i, minlength=p.size)
                 slot = np.arange(i.size) - np.repeat(np.cumsum(count) - count, count)     # i is sorted
                 j, c = wd.shape[1], amp.shape[1]
-                tone = wd[:, :, None] * amp[q][:, None, :]                                   # (pairs, J_d, C)
                 cap = -(-count // SUBTRACT_GROUP) * SUBTRACT_GROUP
                 at = np.empty(p.size, dtype=np.int64)
                 for size in np.unique(cap[cap > 0]):                                      # a few sizes
@@ -394,10 +393,15 @@ class PatchFit:
                     at[:] = -1
                     at[members] = np.arange(members.size)
                     pair = np.flatnonzero(at[i] >= 0)
-                    left = np.zeros((members.size, size, j, c), dtype=np.complex128)
+                    # the pairs' factors placed in the group's padded slots (zeros: no neighbour), the tones wd ⊗ a
+                    # formed there: each pair's values as its own product, without a (pairs × J_d × C) copy scattered
+                    # into a zeroed (patches × slots × J_d × C) array (memory traffic: 8 of the 40 ms of a frame)
+                    place = (at[i[pair]], slot[pair])
+                    w_pad = np.zeros((members.size, size, j), dtype=np.complex128)
+                    a_pad = np.zeros((members.size, size, c), dtype=np.complex128)
                     right = np.zeros((members.size, size, j), dtype=np.complex128)
-                    left[at[i[pair]], slot[pair]] = tone[pair]
-                    right[at[i[pair]], slot[pair]] = wr[pair]
+                    w_pad[place], a_pad[place], right[place] = wd[pair], amp[q[pair]], wr[pair]
+                    left = w_pad[:, :, :, None] * a_pad[:, :, None, :]                      # (members, slots, J_d, C)
                     x[members] -= (left.reshape(members.size, -1, j * c).transpose(0, 2, 1) @ right
                                    ).reshape(members.size, j, c, j)
             return self._fit_patches(x, fd[p], fr[p], new[sel], axis_d, axis_r,
