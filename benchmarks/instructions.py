@@ -1,4 +1,4 @@
-"""The object level's cost in instructions, which a shared machine's load does not move (valgrind's callgrind).
+"""The object and signal levels' cost in instructions, which a shared machine's load does not move (valgrind's callgrind).
 
 This machine's wall-clock times move by ±30 % from one run to the next on some days (a virtual machine on a shared
 host): a change of 10–20 % in the object level cannot be told from the load by timing it, alternated or not. The
@@ -16,9 +16,12 @@ the table prints the difference over the difference of the counts: the imports a
   of ``highway_cut_in.yaml`` (object list only, the chunk included) — per 1024 cycles;
 * ``log``: ``radarnode log scenarios/highway_cut_in.yaml --fidelity object --duration D -o x.blf`` (issue 13's
   command: object list, cluster list and road boundaries, file written), D = 30 and 150 s, per cycle, for each
-  process: the run's own and the road boundaries' (``radarnode.wire.pipeline``).
+  process: the run's own and the road boundaries' (``radarnode.wire.pipeline``);
+* ``synth64``, ``synth128``, ``chain64``, ``chain128``: the signal level's two halves, ``synthesize_rd`` and
+  ``DspChain.process_rd``, of ``signal_speed.py``'s highway_mimo12 frames at 0, 28 and 70 m/s (complex64 or
+  complex128), per frame.
 
-Run: ``python benchmarks/instructions.py [--only chunk,object,log] [--before DIR]`` (DIR: another version's tree,
+Run: ``python benchmarks/instructions.py [--only chunk,object,log,synth64,...] [--before DIR]`` (DIR: another version's tree,
 ``git archive REV | tar -x -C DIR``; its rows beside this checkout's and the ratio). Needs ``valgrind`` (Debian's
 package); a workload takes 1–3 minutes under it, two run at a time. Prints a Markdown table.
 """
