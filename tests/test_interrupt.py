@@ -163,3 +163,28 @@ def test_a_held_signal_sent_again_while_still_importing_is_held_again(monkeypatc
     finally:
         interrupt.cancel()
         signal.signal(signal.SIGUSR1, previous)
+
+
+def test_the_unraisable_hook_sends_a_signals_exception_again_and_passes_other_errors_on(monkeypatch):
+    """:func:`interrupt.unraisable`: a KeyboardInterrupt or Terminated that came up where Python cannot raise is sent
+    again as its signal (nothing printed); any other unraisable error goes to the hook that was there before."""
+    from radarnode.errors import Terminated
+    sent, passed = [], []
+    monkeypatch.setattr(interrupt, "_later", sent.append)
+    monkeypatch.setattr(interrupt, "_previous_hook", passed.append)
+    for exc in (KeyboardInterrupt(), Terminated(signal.SIGTERM), ValueError("a real error"), SystemExit(3)):
+        interrupt.unraisable(types.SimpleNamespace(exc_type=type(exc), exc_value=exc, exc_traceback=None,
+                                                   err_msg=None, object=None))
+    assert sent == [signal.SIGINT, signal.SIGTERM]
+    assert [type(a.exc_value) for a in passed] == [ValueError, SystemExit]
+
+
+def test_install_unraisable_returns_the_hook_it_replaced_and_installs_once():
+    before = sys.unraisablehook
+    try:
+        got = interrupt.install_unraisable()
+        assert got is before and sys.unraisablehook is interrupt.unraisable
+        assert interrupt.install_unraisable() is interrupt.unraisable      # a second install keeps the first's
+        assert interrupt._previous_hook is before
+    finally:
+        sys.unraisablehook = before

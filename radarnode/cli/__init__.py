@@ -30,6 +30,7 @@ def main(argv: list[str] | None = None) -> int:
                 and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
         if ours:
             signal.signal(signal.SIGINT, interrupt.on_sigint)
+        hook = interrupt.install_unraisable()   # a signal raised in a weakref callback: sent again, not lost
     except KeyboardInterrupt:       # a Ctrl-C before the handler is in place (an independent tester: 36 of 100
         return 130                  # Ctrl-Cs in the first 25 ms printed Python's traceback from here)
     try:
@@ -42,5 +43,7 @@ def main(argv: list[str] | None = None) -> int:
         late = interrupt.cancel()
         if ours:
             signal.signal(signal.SIGINT, signal.default_int_handler)
+        import sys
+        sys.unraisablehook = hook
     # a signal held while the command's last module loaded, and the command ended before it came again
     return 128 + late if late is not None else status

@@ -7,12 +7,19 @@ except Exception`` swallow that. A Ctrl-C in the first few tenths of a second of
 load, then printed a traceback and ended with 1 (inside cantools' ``DbcComments``: 1 of 15 tries), or was lost and
 the run went on to its end with 0 (once in a full test run). The command's handlers therefore hold a signal that
 finds the main thread importing and send it again :data:`RETRY_S` later, until it lands in the command's own code.
+
+Python cannot raise at all where it runs a weakref callback or a finalizer (``__del__``, a garbage collection's
+callbacks): the exception comes out as "Exception ignored in …" with its traceback, and is gone. A Ctrl-C that landed
+in ``WeakSet._remove`` while ``radarnode log`` started printed that and the run went on to its end with 0 (once in a
+full test run on a loaded machine). :func:`unraisable` is the command's ``sys.unraisablehook``: such a signal's
+exception is sent again as the signal, the same way, and nothing is printed.
 """
 
 from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 
 #: a held signal is sent again after this long (s): imports take milliseconds, a person's Ctrl-C waits for 50 ms
@@ -37,6 +44,12 @@ def held(signum: int, frame) -> bool:
     however often it arrives meanwhile). A handler that gets True returns without raising."""
     if not importing(frame):
         return False
+    _later(signum)
+    return True
+
+
+def _later(signum: int) -> None:
+    """Send ``signum`` again :data:`RETRY_S` from now (once, however often it is asked for meanwhile)."""
     timer = _pending.get(signum)
     if timer is None or not timer.is_alive():
         own: list = []
@@ -45,7 +58,6 @@ def held(signum: int, frame) -> bool:
         timer.daemon = True
         _pending[signum] = timer
         timer.start()
-    return True
 
 
 def _send(signum: int, own: list) -> None:
@@ -77,3 +89,29 @@ def on_sigint(signum: int, frame) -> None:
     if held(signum, frame):
         return
     raise KeyboardInterrupt
+
+
+def unraisable(args) -> None:
+    """``sys.unraisablehook`` while a command runs: a KeyboardInterrupt or :class:`~radarnode.errors.Terminated` that
+    a signal handler raised where Python cannot raise (a weakref callback, a finalizer) is sent again as its signal
+    :data:`RETRY_S` later, printing nothing; anything else goes to the hook that was there before
+    (:func:`install_unraisable`)."""
+    exc = args.exc_value
+    signum = signal.SIGINT if isinstance(exc, KeyboardInterrupt) else getattr(exc, "signum", None)
+    if signum is not None and isinstance(exc, BaseException) and not isinstance(exc, Exception):
+        _later(int(signum))
+        return
+    _previous_hook(args)
+
+
+_previous_hook = sys.unraisablehook
+
+
+def install_unraisable() -> object:
+    """Make :func:`unraisable` ``sys.unraisablehook``; returns the hook it replaced (for the caller to restore)."""
+    global _previous_hook
+    before = sys.unraisablehook
+    if before is not unraisable:
+        _previous_hook = before
+        sys.unraisablehook = unraisable
+    return before
