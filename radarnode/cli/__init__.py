@@ -22,7 +22,9 @@ def main(argv: list[str] | None = None) -> int:
         import signal
         import threading
 
-        from radarnode.cli import interrupt
+        from radarnode.cli import heap, interrupt
+
+        heap.start()            # no cyclic collection while the modules load (radarnode.cli.heap)
 
         # Python's own handler only (a SIGINT ignored, as a job in the background of a shell inherits it, stays
         # ignored)
@@ -32,7 +34,8 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(signal.SIGINT, interrupt.on_sigint)
         hook = interrupt.install_unraisable()   # a signal raised in a weakref callback: sent again, not lost
     except KeyboardInterrupt:       # a Ctrl-C before the handler is in place (an independent tester: 36 of 100
-        return 130                  # Ctrl-Cs in the first 25 ms printed Python's traceback from here)
+        _restore_heap()             # Ctrl-Cs in the first 25 ms printed Python's traceback from here)
+        return 130
     try:
         try:
             from radarnode.cli.main import main as command
@@ -41,9 +44,18 @@ def main(argv: list[str] | None = None) -> int:
         status = command(argv)
     finally:
         late = interrupt.cancel()
+        heap.restore()
         if ours:
             signal.signal(signal.SIGINT, signal.default_int_handler)
         import sys
         sys.unraisablehook = hook
     # a signal held while the command's last module loaded, and the command ended before it came again
     return 128 + late if late is not None else status
+
+
+def _restore_heap() -> None:
+    """The garbage collector as :func:`main` found it, if it had been turned off (:mod:`radarnode.cli.heap`)."""
+    import sys
+    heap = sys.modules.get("radarnode.cli.heap")
+    if heap is not None:
+        heap.restore()

@@ -10,7 +10,7 @@ import sys
 import traceback
 
 from radarnode import __version__
-from radarnode.cli import interrupt
+from radarnode.cli import heap, interrupt
 from radarnode.errors import RadarnodeError, Terminated, UsageError
 
 # (the subcommands' and the parser's modules, which import numpy, python-can and the rest, are imported inside
@@ -129,6 +129,7 @@ def _main(argv: list[str] | None) -> int:
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     logger.info("radarnode %s %s", __version__, args.command)
     logger.debug("options: %s", {k: v for k, v in vars(args).items() if k != "func"})
+    heap.settled()      # the modules are loaded: the heap frozen, the collector on again (radarnode.cli.heap)
     try:
         return int(args.func(args) or 0)
     except RadarnodeError as exc:

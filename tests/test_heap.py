@@ -1,0 +1,100 @@
+"""The command line's garbage collector (radarnode.cli.heap): off while the modules load, on while the command runs,
+and as it was once the command returns. Each test runs in a new process, as a user's command does (and so that the
+entry point is :func:`radarnode.cli.main`, the function, before ``radarnode.cli.main`` the module shadows it)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+#: a command whose work is replaced by the test's ``work(args)``: what the collector is while it runs, and after
+SCRIPT = '''
+import gc, sys, json
+from radarnode.cli import main as entry
+from radarnode.cli import heap
+import radarnode.cli.decode as decode
+seen = {}
+%s
+decode.cmd = work
+log = sys.argv[1]
+open(log, "w").write("(0.000000) can0 200#0000000000000000\\n")
+before = (gc.isenabled(), gc.get_threshold())
+%s
+status = entry(["decode", log])
+after = (gc.isenabled(), gc.get_threshold())
+print(json.dumps({"status": status, "seen": seen, "before": before, "after": after, "frozen": gc.get_freeze_count(),
+                  "gen0": heap.GEN0_THRESHOLD}))
+'''
+
+SPY = '''
+def work(args):
+    seen.update(enabled=gc.isenabled(), threshold=gc.get_threshold(), frozen=gc.get_freeze_count())
+    return 0
+'''
+
+
+def run(work: str, tmp_path: Path, before: str = "") -> dict:
+    import json
+    out = subprocess.run([sys.executable, "-c", SCRIPT % (work, before), str(tmp_path / "x.log")], cwd=ROOT,
+                         capture_output=True, text=True, timeout=120)
+    assert out.returncode == 0, out.stderr
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_a_command_runs_with_the_collector_on_and_returns_it_as_it_was(tmp_path):
+    r = run(SPY, tmp_path)
+    assert r["status"] == 0
+    # during the command: on, the larger threshold, the loaded modules frozen
+    assert r["seen"]["enabled"] is True
+    assert r["seen"]["threshold"][0] == r["gen0"]
+    assert r["seen"]["frozen"] > 10_000
+    # after it: as before, nothing left frozen
+    assert r["after"] == r["before"]
+    assert r["frozen"] == 0
+
+
+def test_a_collector_turned_off_by_the_caller_stays_off(tmp_path):
+    r = run(SPY, tmp_path, before="gc.disable()")
+    assert r["seen"]["enabled"] is False
+    assert r["after"][0] is False
+    assert r["frozen"] == 0
+
+
+def test_cyclic_garbage_made_by_a_command_is_still_collected(tmp_path):
+    """With the larger threshold, a command that makes reference cycles does not keep them: they go at the next
+    collections (a weak reference to one of them dies while the command still runs)."""
+    work = '''
+import weakref
+class Node:
+    pass
+def work(args):
+    first = Node()
+    first.me = first
+    ref = weakref.ref(first)
+    del first
+    for _ in range(5 * heap.GEN0_THRESHOLD):        # containers that live on, each in a cycle of its own
+        junk = [Node() for _ in range(10)]
+        junk.append(junk)
+    seen["alive"] = ref() is not None
+    return 0
+'''
+    r = run(work, tmp_path)
+    assert r["seen"]["alive"] is False
+
+
+def test_radarnode_log_starts_without_a_full_collection(tmp_path):
+    """``radarnode log`` as a user starts it: no collection of the whole heap, and at most one of the middle
+    generation, over a 1-s log (before: one full and eleven middle ones while it loaded and set up)."""
+    code = ("import gc, sys\n"
+            "counts = []\n"
+            "gc.callbacks.append(lambda phase, info: counts.append(info['generation']) if phase == 'start' else None)\n"
+            "from radarnode.cli import main\n"
+            f"status = main(['log', 'scenarios/highway_cut_in.yaml', '--duration', '1', '-o', {str(tmp_path / 'x.log')!r}])\n"
+            "print(status, counts.count(1), counts.count(2))\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    status, middle, full = (int(v) for v in out.stdout.split()[-3:])
+    assert status == 0, out.stderr
+    assert full == 0 and middle <= 1, out.stdout
