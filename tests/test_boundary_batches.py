@@ -72,14 +72,15 @@ def test_a_batch_of_boundary_frames_is_the_frames_of_its_cycles_one_by_one():
     """Cycles of guardrail-like points (found, lost, saturating offsets) with the sensor ID changed in the
     middle: the same payloads, saturation counts, E2E counters and last estimate as one cycle at a time."""
     one, many = _twins()
-    for node in (one, many):          # from cycle 30 a left boundary far beyond RBL_LatOffset's range: saturated
-        update, calls = node.boundaries.update, [0]
+    again = _twins()[0]
+    for node in (one, many, again):   # from cycle 30 a left boundary far beyond RBL_LatOffset's range: saturated
+        estimate, calls = node.boundaries._estimate, [0]     # (a cycle's estimate, whichever way it is updated)
 
-        def far(*a, _update=update, _calls=calls, **k):
-            left, right = _update(*a, **k)
+        def far(*a, _estimate=estimate, _calls=calls, **k):
+            left, right = _estimate(*a, **k)
             _calls[0] += 1
             return (Boundary.found(1e4, 0.0, 0.0, 0.0, 1e4, 1.0) if _calls[0] > 30 else left), right
-        node.boundaries.update = far
+        node.boundaries._estimate = far
     rng = np.random.default_rng(4)
     cycles = []
     for k in range(40):
@@ -97,6 +98,67 @@ def test_a_batch_of_boundary_frames_is_the_frames_of_its_cycles_one_by_one():
     assert one.saturated == many.saturated and one.saturated["RBL_LatOffset"] > 0
     assert one._e2e._counter == many._e2e._counter and one.last_boundaries == many.last_boundaries
     assert many.boundary_payloads_many([]) == []
+    # the road-boundary process's rows leave the range out: the same frames from the clusters' positions
+    assert again.boundary_payloads_many([((*c[0][:4], None), *c[1:]) for c in cycles]) == want
+
+
+def _road_cycles(seed: int, n: int) -> list[tuple]:
+    """Cycles of a radar driving a bend between guardrails with cars among the posts: each cycle's detections
+    (x, y, range rate, dt, sensor velocity, yaw rate, range), with gaps (nothing seen for long enough that the
+    search restarts), cycles of one detection, a stop and a reversing sensor."""
+    rng = np.random.default_rng(seed)
+    out = []
+    for k in range(n):
+        speed = 0.0 if 50 <= k < 55 else (-3.0 if 55 <= k < 58 else 25.0 + 5.0 * math.sin(k / 9.0))
+        yaw = 0.02 * math.sin(k / 17.0) if k > 20 else 0.0
+        kappa = yaw / speed if abs(speed) > 1.0 else 0.0
+        x = np.concatenate([np.arange(3.0, 160.0, 2.5)] * 2) + rng.normal(0, 0.05, 126)
+        y = np.concatenate([np.full(63, 3.7), np.full(63, -4.1)]) + 0.5 * kappa * x * x + rng.normal(0, 0.1, 126)
+        r = np.hypot(x, y)
+        rate = -speed * x / r + rng.normal(0, 0.05, 126)
+        cars = rng.uniform(10.0, 90.0, 3)
+        x, y = np.append(x, cars), np.append(y, rng.uniform(-2.0, 2.0, 3))
+        r = np.hypot(x, y)
+        rate = np.append(rate, rng.uniform(-10.0, 10.0, 3))
+        if 30 <= k < 45:                     # nothing seen: the search restarts
+            x, y, rate, r = x[:0], y[:0], rate[:0], r[:0]
+        elif k in (60, 61):                  # one detection
+            x, y, rate, r = x[:1], y[:1], rate[:1], r[:1]
+        out.append((x, y, rate, 0.072 if k else 0.0, (speed, 0.3 * yaw), yaw, np.maximum(r, 1e-6)))
+    return out
+
+
+@pytest.mark.parametrize("split", [1, 2, 7, 32, 200])
+def test_update_many_is_update_cycle_by_cycle_bit_for_bit(split):
+    """RoadBoundaryEstimator.update_many against update, in batches of 1 to 200 cycles: the same boundaries (every
+    float the same bits), the same accumulated points and odometry pose, on a bend, through a stop, a reversing
+    sensor and a restart of the search."""
+    cycles = _road_cycles(3, 120)
+    one, many = RoadBoundaryEstimator(), RoadBoundaryEstimator()
+    want = [one.update(*c) for c in cycles]
+    got = []
+    for a in range(0, len(cycles), split):
+        part = cycles[a:a + split]
+        got += many.update_many(np.concatenate([c[0] for c in part]), np.concatenate([c[1] for c in part]),
+                                np.concatenate([c[2] for c in part]), np.concatenate([c[6] for c in part]),
+                                [c[0].size for c in part], [c[3:6] for c in part])
+    assert sum(b.valid for pair in want for b in pair) > 100, "boundaries were found"
+    assert any(not pair[0].valid and not pair[1].valid for pair in want[30:45]), "the search restarted"
+    assert [dataclasses.astuple(b) for pair in got for b in pair] == \
+        [dataclasses.astuple(b) for pair in want for b in pair]
+    assert many._pose == one._pose and many._cycle == one._cycle
+    assert len(many._points) == len(one._points)
+    for p, q in zip(many._points, one._points):
+        assert np.array_equal(p, q)
+
+
+def test_update_many_refuses_counts_that_do_not_match():
+    est = RoadBoundaryEstimator()
+    x = np.arange(4.0)
+    with pytest.raises(ValueError, match="counts"):
+        est.update_many(x, x, x, x + 1.0, [2, 1], [(0.072, (20.0, 0.0), 0.0)] * 2)
+    with pytest.raises(ValueError, match="motion"):
+        est.update_many(x, x, x, x + 1.0, [4], [(0.072, (20.0, 0.0), 0.0)] * 2)
 
 
 def test_encode_values_is_encode_for_one_frame_and_refuses_nan_counting_nothing():

@@ -147,12 +147,12 @@ def _run(scenario: Path, cycles: int, pipeline: bool, stop_after: int | None = N
     node = make_node(sc, fidelity="object")
     if saturate:      # a boundary far outside its signal's range: saturated and counted, wherever it is encoded
         est = node.boundaries
-        update = est.update
+        estimate = est._estimate         # (a cycle's estimate, whether updated one cycle or a batch at a time)
 
         def far(*a, **k):
-            left, right = update(*a, **k)
+            left, right = estimate(*a, **k)
             return left.__class__(True, 1e4, 0.0, 0.0, 0.0, 1e4, 1.0), right
-        est.update = far
+        est._estimate = far
     pipe = pl.pipeline_for(node) if pipeline else None
     sent: list[can.Message] = []
     stop = None
@@ -293,7 +293,7 @@ def test_an_exception_in_the_boundary_process_is_raised_in_the_run_and_nothing_h
 
     def broken(*a, **k):
         raise ZeroDivisionError("estimator failed")
-    node.boundaries.update = broken
+    node.boundaries._estimate = broken     # (a cycle's estimate, however it is updated)
     pipe = pl.pipeline_for(node)
     try:
         with pytest.raises(ZeroDivisionError, match="estimator failed"):

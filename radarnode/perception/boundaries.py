@@ -251,18 +251,71 @@ class RoadBoundaryEstimator:
         motion input; ``dt_s`` is the time since the previous call. ``range_m``: the detections' ranges at least
         1e-6 m, ``np.maximum(np.hypot(x_m, y_m), 1e-6)``, where the caller has them (else computed here).
         """
-        # move the odometry pose by the ego motion since the last cycle
+        ox, oy, c, s = self._advance(dt_s, sensor_velocity, yaw_rate_rps)
+        vx, vy = sensor_velocity
+        origin = np.array([[ox], [oy]])                  # (2, 1)
+        r = np.maximum(np.hypot(x_m, y_m), 1e-6) if range_m is None else range_m
+        ground = range_rate_mps + (vx * x_m + vy * y_m) / r
+        still = np.abs(ground) < STATIONARY_MPS
+        return self._estimate(_to_odometry(x_m[still], y_m[still], origin, c, s), origin, c, s, sensor_velocity,
+                              yaw_rate_rps)
+
+    def update_many(self, x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarray, range_m: np.ndarray,
+                    counts: list[int], motion: list[tuple[float, tuple[float, float], float]]
+                    ) -> list[tuple[Boundary, Boundary]]:
+        """:meth:`update` of several cycles in order: their detections one after the other (``counts`` a cycle;
+        ``range_m`` as :meth:`update` takes it, required here) and each cycle's (dt_s, sensor_velocity, yaw_rate_rps).
+        The same estimates, element by element the same numbers: only the cycles' stationary detections are found and
+        moved into the odometry frame in one pass over all of them (the poses depend on the inputs alone), the
+        rest cycle by cycle (the road-boundary process answers 32 cycles at a time, :mod:`radarnode.wire.pipeline`:
+        some twenty numpy calls a cycle fewer)."""
+        if len(counts) != len(motion) or sum(counts) != x_m.size:
+            raise ValueError(f"update_many: {len(counts)} counts summing to {sum(counts)} and {len(motion)} motions "
+                             f"for {x_m.size} detections; expected a count and a motion a cycle, the counts summing "
+                             "to the detections")
+        poses, frames = [], []      # per cycle: its pose as :meth:`_advance` returns it, and as self._pose holds it
+        for dt_s, v, yaw in motion:
+            poses.append(self._advance(dt_s, v, yaw))
+            frames.append(self._pose)
+        n = len(poses)
+        table = np.array([(*p, *v) for p, (_, v, _) in zip(poses, motion)], dtype=np.float64).reshape(n, 6)
+        row = np.repeat(np.arange(n), counts)
+        # element by element :meth:`update`'s expressions, with each detection's cycle's numbers
+        ground = range_rate_mps + (table[row, 4] * x_m + table[row, 5] * y_m) / range_m
+        still = np.abs(ground) < STATIONARY_MPS
+        x, y, k = x_m[still], y_m[still], row[still]
+        c, s = table[k, 2], table[k, 3]
+        points = np.empty((2, x.size))
+        np.multiply(c, x, out=points[0])                 # _to_odometry's rows: c·x + ox − s·y, s·x + oy + c·y
+        points[0] += table[k, 0]
+        points[0] += np.negative(s) * y
+        np.multiply(s, x, out=points[1])
+        points[1] += table[k, 1]
+        points[1] += c * y
+        ends = np.cumsum(np.bincount(k, minlength=n)).tolist()
+        out, start = [], 0
+        for j, ((ox, oy, cj, sj), (_, v, yaw)) in enumerate(zip(poses, motion)):
+            self._pose = frames[j]          # (what the cycle's estimate reads of it)
+            out.append(self._estimate(points[:, start:ends[j]], np.array([[ox], [oy]]), cj, sj, v, yaw))
+            start = ends[j]
+        return out
+
+    def _advance(self, dt_s: float, sensor_velocity: tuple[float, float], yaw_rate_rps: float
+                 ) -> tuple[float, float, float, float]:
+        """Move the odometry pose by the ego motion over ``dt_s``: the new pose's x, y and its heading's cos, sin."""
         vx, vy = sensor_velocity
         ox, oy, h = self._pose
         c, s = math.cos(h), math.sin(h)
         ox, oy, h = ox + (c * vx - s * vy) * dt_s, oy + (s * vx + c * vy) * dt_s, h + yaw_rate_rps * dt_s
         self._pose = (ox, oy, h)
-        c, s = math.cos(h), math.sin(h)
-        origin = np.array([[ox], [oy]])                  # (2, 1)
-        r = np.maximum(np.hypot(x_m, y_m), 1e-6) if range_m is None else range_m
-        ground = range_rate_mps + (vx * x_m + vy * y_m) / r
-        still = np.abs(ground) < STATIONARY_MPS
-        self._points.append(_to_odometry(x_m[still], y_m[still], origin, c, s))
+        return ox, oy, math.cos(h), math.sin(h)
+
+    def _estimate(self, points: np.ndarray, origin: np.ndarray, c: float, s: float,
+                  sensor_velocity: tuple[float, float], yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
+        """One cycle's estimate from its stationary detections in the odometry frame, ``points`` (2, n), the
+        sensor's pose (``origin`` (2, 1), heading cos c, sin s: :meth:`_advance`'s) and motion."""
+        vx, vy = sensor_velocity
+        self._points.append(points)
         del self._points[:-self.cycles]
         d = np.concatenate(self._points, axis=1) - origin    # every accumulated point into the sensor frame
         p = _to_sensor(d[0], d[1], c, s)

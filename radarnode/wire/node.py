@@ -399,14 +399,13 @@ class RadarNode:
         yaw_rate_rps, sensor_id)``): per cycle its two payloads joined, left then right — the same bytes, the same
         saturation counts and E2E counters, each side's frames encoded in one pass (the road-boundary process
         answers a batch of cycles at a time: :mod:`radarnode.wire.pipeline`)."""
-        values: tuple[list, list] = ([], [])
-        sensors = []
-        for columns, dt_s, sensor_velocity, yaw_rate_rps, sensor_id in cycles:
-            for side, b in enumerate(self._boundary_update(columns, dt_s, sensor_velocity, yaw_rate_rps)):
-                values[side].append(self._boundary_values(b))
-            sensors.append(self.config.sensor_id if sensor_id is None else sensor_id)
-        if not sensors:
+        if not cycles:
             return []
+        values: tuple[list, list] = ([], [])
+        sensors = [self.config.sensor_id if c[4] is None else c[4] for c in cycles]
+        for found in self._boundary_update_many(cycles):
+            for side, b in enumerate(found):
+                values[side].append(self._boundary_values(b))
         encoded = []
         for side in (0, 1):
             codec, order = self._boundary_layout(side, sensors[0])[:2]
@@ -426,6 +425,23 @@ class RadarNode:
         rate = (x_m * vx + y_m * vy) / r
         self.last_boundaries = self.boundaries.update(x_m, y_m, rate, dt_s, sensor_velocity, yaw_rate_rps, r)
         return self.last_boundaries
+
+    def _boundary_update_many(self, cycles: list[tuple]) -> list[tuple[Boundary, Boundary]]:
+        """:meth:`_boundary_update` of several cycles (:meth:`boundary_payloads_many`'s), the clusters' columns of
+        all of them in one pass (:meth:`RoadBoundaryEstimator.update_many
+        <radarnode.perception.boundaries.RoadBoundaryEstimator.update_many>`): the same estimates. A cycle's range
+        column may be None: the clusters' ``np.hypot(dist_long, dist_lat)``, as ClusterList.range_m computes it."""
+        x, y, vx, vy = (np.concatenate([c[0][k] for c in cycles]) for k in range(4))
+        if all(c[0][4] is None for c in cycles):
+            r = np.hypot(x, y)
+        else:
+            r = np.concatenate([np.hypot(c[0][0], c[0][1]) if c[0][4] is None else c[0][4] for c in cycles])
+        np.maximum(r, 1e-6, out=r)
+        rate = (x * vx + y * vy) / r
+        found = self.boundaries.update_many(x, y, rate, r, [c[0][0].size for c in cycles],
+                                            [c[1:4] for c in cycles])
+        self.last_boundaries = found[-1]
+        return found
 
     @staticmethod
     def _boundary_values(b: Boundary) -> tuple:

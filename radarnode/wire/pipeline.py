@@ -311,7 +311,7 @@ def _serve(conn, parent_end, nodes: list) -> None:
                     if new >= 0:
                         blocks[index] = new_blocks[new]
                     x, y, vx, vy = blocks[index][:, a:b]
-                    cols = [x, y, vx, vy, np.hypot(x, y)]   # (the range as ClusterList.range_m computes it)
+                    cols = [x, y, vx, vy, None]     # (the range: RadarNode.boundary_payloads_many computes it)
                 by_node.setdefault(index, []).append((place, (cols, *scalars)))
             answers = [b""] * len(cycles)
             for index, items in by_node.items():       # each node's cycles in their order, a node at a time
