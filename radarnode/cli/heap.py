@@ -4,12 +4,14 @@ A command's start imports numpy, python-can, cantools and radarnode (some hundre
 the process ends) and builds its model. Python's cyclic collector ran a dozen times during that start, once over the
 whole heap (about 25 ms of a 0.3-s start here), to find no garbage: a module's objects do not die. So a command runs
 with the collector off until its modules are loaded and its options parsed (:func:`start`), then moves everything
-alive into the permanent generation, which the collector never scans (``gc.freeze``), and turns it on again with a
-larger first threshold (:func:`settled`): a cycle of the object level allocates a few hundred containers that mostly
-die by reference counting, and a collection every ``GEN0_THRESHOLD`` allocations instead of Python's 700 costs a
-``radarnode log`` of 300 s about 40 ms less (measured: 55–60 ms of collections before, under 1 ms after). A process
-that ``radarnode log`` forks for the road boundaries (:mod:`radarnode.wire.pipeline`) inherits the frozen heap, and its
-collections leave the parent's pages alone (as Python's documentation of ``gc.freeze`` advises before a fork).
+alive into the permanent generation, which the collector never scans (``gc.freeze``), and turns it on again
+(:func:`settled`), with a larger first threshold for the commands that render as fast as they can: a cycle of the
+object level allocates a few hundred containers that mostly die by reference counting, and a collection every
+``GEN0_THRESHOLD`` allocations instead of Python's 700 costs a ``radarnode log`` of 300 s about 40 ms less (measured:
+55–60 ms of collections before, under 1 ms after). The real-time commands keep Python's thresholds
+(``REAL_TIME_COMMANDS``). A process that ``radarnode log`` forks for the road boundaries
+(:mod:`radarnode.wire.pipeline`) inherits the frozen heap, and its collections leave the parent's pages alone (as
+Python's documentation of ``gc.freeze`` advises before a fork).
 
 Garbage with reference cycles is still collected: a collection of the youngest generation every ``GEN0_THRESHOLD``
 net allocations of containers, of all of them every 100 such (the thresholds' two others, 10 and 10). :func:`restore`
@@ -23,6 +25,12 @@ import gc
 
 #: allocations of containers (less deallocations) between two collections of the youngest generation (Python's: 700)
 GEN0_THRESHOLD = 10_000
+#: the commands that keep Python's thresholds: on a bus in real time, where a collection of 10,000 young objects
+#: can delay a frame past its deadline; the frozen heap alone takes their full collection over every module's objects
+#: away (``radarnode node scenarios/guardrail_traffic.yaml -i virtual --fidelity detection --send-ego-motion`` for
+#: 60 s: the longest pause 18.6 ms before, the one full collection; 1.7 ms with the heap frozen and Python's
+#: thresholds; 2.4 ms with the larger one)
+REAL_TIME_COMMANDS = ("node", "run", "consume")
 
 _saved: tuple[bool, tuple[int, int, int]] | None = None
 
@@ -35,12 +43,15 @@ def start() -> None:
     gc.disable()
 
 
-def settled() -> None:
-    """The start is over: what is alive now frozen, the collector on again (if it was on) with the larger threshold."""
+def settled(command: str | None = None) -> None:
+    """The start is over: what is alive now frozen, the collector on again (if it was on); with the larger first
+    threshold for a command that renders as fast as it can, with the one it had for one on a bus in real time
+    (``REAL_TIME_COMMANDS``: a collection pauses the process for as long as it scans)."""
     if _saved is None:
         return
     gc.freeze()
-    gc.set_threshold(GEN0_THRESHOLD, 10, 10)
+    if command not in REAL_TIME_COMMANDS:
+        gc.set_threshold(GEN0_THRESHOLD, 10, 10)
     if _saved[0]:
         gc.enable()
 

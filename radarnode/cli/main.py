@@ -129,7 +129,7 @@ def _main(argv: list[str] | None) -> int:
     logging.basicConfig(level=level, format="%(levelname)s %(name)s: %(message)s", stream=sys.stderr)
     logger.info("radarnode %s %s", __version__, args.command)
     logger.debug("options: %s", {k: v for k, v in vars(args).items() if k != "func"})
-    heap.settled()      # the modules are loaded: the heap frozen, the collector on again (radarnode.cli.heap)
+    heap.settled(args.command)      # the modules are loaded: the heap frozen, the collector on again (radarnode.cli.heap)
     try:
         return int(args.func(args) or 0)
     except RadarnodeError as exc:
