@@ -522,3 +522,34 @@ def test_a_loud_peaks_leak_reaches_the_patches_it_should():
     # from peak 0: 10 bins to peaks 1 and 2 (2 in range across the map's edge), 64 to peak 3
     got = reached(d, r, np.arange(4), (64, 128), np.full(4, 3), np.array([8, 0, 0, 0]))
     assert got.tolist() == [False, True, True, False]      # 10 − 3 = 7 < 8 for peaks 1 and 2; 61 ≥ 8 for peak 3
+
+
+@pytest.mark.parametrize("period", [256.0, 64, 7.5, 3.0, 1.0, 0.125, 1e6])
+@pytest.mark.parametrize("dtype", [np.float64, np.float32, np.int64])
+def test_circular_is_the_remainder_formula_bit_for_bit(period, dtype):
+    """spectra.circular takes numpy's remainder only where x + period/2 lies outside [0, period): the same values,
+    signs and dtype as np.mod(x + period/2, period) − period/2 for offsets mostly inside, mostly outside, at the
+    edges, ±0, NaN, ±inf, huge, tiny and integer, in arrays below and above its small-array cut and of two dimensions."""
+    from radarnode.dsp.spectra import circular
+
+    def formula(x):
+        with np.errstate(invalid="ignore"):
+            return np.mod(x + period / 2.0, period) - period / 2.0
+
+    rng = np.random.default_rng(7)
+    p = float(period)
+    edges = np.array([-p / 2, p / 2, 0.0, -0.0, p, -p, np.nextafter(p / 2, 0), np.nextafter(-p / 2, 0),
+                      np.nextafter(-p / 2, -p), 1e300, -1e300, 5e-324, np.nan, np.inf, -np.inf])
+    cases = [rng.normal(0, p / 4, 5000), rng.normal(0, 3 * p, 5000), rng.uniform(-p / 2, p / 2, 5000),
+             rng.normal(0, p / 4, 63), rng.normal(0, p / 4, 64), np.tile(edges, 9), rng.normal(0, p, (3, 70))]
+    for x in cases:
+        if np.dtype(dtype).kind == "i":
+            x = np.nan_to_num(np.clip(x, -1e9, 1e9), nan=0.0)
+        x = x.astype(dtype)
+        want = formula(x)
+        with np.errstate(invalid="ignore"):
+            got = circular(x, period)
+        assert got.dtype == want.dtype and got.shape == want.shape
+        assert np.array_equal(got, want, equal_nan=True)
+        assert np.array_equal(np.signbit(got), np.signbit(want))
+    assert circular(3.0, period) == formula(3.0)
