@@ -234,6 +234,12 @@ def test_the_detected_and_resolved_posts_are_those_the_draws_and_the_resolution_
         g1["cos"], g1["sin"] = np.cos(g1["true_azimuth"]), np.sin(g1["true_azimuth"])
         kept = resolved_posts(rc.preset, g1, u[first], np.arange(int(first.sum())), svx, svy,
                               model.statistic.response)
+        # None for every post (what the block passes): the same; a subset by index: the same as that subset's table
+        assert np.array_equal(resolved_posts(rc.preset, g1, u[first], None, svx, svy, model.statistic.response), kept)
+        some = np.flatnonzero(np.arange(int(first.sum())) % 3 != 1)
+        g2 = {key: val[some] for key, val in g1.items()}
+        assert np.array_equal(resolved_posts(rc.preset, g1, u[first], some, svx, svy, model.statistic.response),
+                              resolved_posts(rc.preset, g2, u[first][some], None, svx, svy, model.statistic.response))
         assert 0 < kept.sum() < first.sum() < g["range"].size      # draws and resolution both drop some
         np.testing.assert_array_equal(block["hit_cycle"], g1["cycle"][kept] - lo)
         np.testing.assert_array_equal(block["post_cycle"], g["cycle"] - lo)

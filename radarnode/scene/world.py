@@ -558,10 +558,10 @@ class Scene:
             return np.zeros(0), np.zeros(0), np.zeros(t.size + 1, dtype=np.int64)
         row = np.concatenate(rows)
         order = np.argsort(row, kind="stable")                     # by time, each time's posts in list order
-        row = row[order]
-        wx, wy = np.concatenate(xs)[order], np.concatenate(ys)[order]
+        row = row.take(order)
+        wx, wy = np.concatenate(xs).take(order), np.concatenate(ys).take(order)
         c, s_ = np.cos(-psi_s), np.sin(-psi_s)
-        dx, dy = wx - px[row], wy - py[row]
-        c, s_ = c[row], s_[row]
+        dx, dy = wx - px.take(row), wy - py.take(row)
+        c, s_ = c.take(row), s_.take(row)
         starts = np.searchsorted(row, np.arange(t.size + 1))
         return c * dx - s_ * dy, s_ * dx + c * dy, starts
