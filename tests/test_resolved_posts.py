@@ -177,3 +177,25 @@ def test_a_detected_post_reads_an_exponential_power_not_the_rail_s_nominal_rcs()
     w = np.mod(np.random.default_rng(1).random(200_000) * 2.0 ** 20, 1.0)
     v = np.random.default_rng(1).random(200_000)
     assert abs(np.corrcoef(v, w)[0, 1]) < 0.01 and abs(np.mean(w) - 0.5) < 0.005 and abs(np.var(w) - 1 / 12) < 0.002
+
+
+def test_the_reach_along_the_keys_is_the_binary_searchs():
+    """object_model._reach tries the offsets one by one; the same number as counting each key's box by a binary
+    search, for spread keys, ties, several cycles, runs of equal keys, a single key and boxes of 0 to 1000 bins."""
+    from radarnode.radar.object_model import _reach
+
+    def searched(key, bins):
+        return int((np.searchsorted(key, key + bins, side="right") - np.arange(key.size)).max()) - 1
+
+    rng = np.random.default_rng(5)
+    seen = set()
+    for trial in range(800):
+        n = int(rng.integers(1, 200))
+        key = [np.sort(rng.uniform(0, 100, n)), np.sort(np.round(rng.uniform(0, 20, n), 1)),
+               np.sort(rng.integers(0, 5, n) * 1000.0 + rng.uniform(0, 50, n)),
+               np.sort(np.repeat(rng.uniform(0, 30, max(1, n // 5)), 5))[:n]][trial % 4]
+        for bins in (0.0, 0.5, 1.0, 3.5, 1000.0):
+            r = _reach(key, bins)
+            assert r == searched(key, bins), (trial, bins)
+            seen.add(r)
+    assert 0 in seen and max(seen) > 20
