@@ -180,3 +180,37 @@ def test_encode_values_is_encode_for_one_frame_and_refuses_nan_counting_nothing(
     assert codec.saturated == before
     with pytest.raises(WireError, match="values for"):
         codec.encode_values([0.0])
+
+
+def _batched(est, cycles, dtype=np.float64):
+    cat = lambda k: np.concatenate([c[k] for c in cycles]).astype(dtype)  # noqa: E731
+    return est.update_many(cat(0), cat(1), cat(2), cat(6), [c[0].size for c in cycles], [c[3:6] for c in cycles])
+
+
+@pytest.mark.parametrize("dtype", [np.float32, np.longdouble])
+def test_update_many_follows_other_dtypes_as_update_does(dtype):
+    """Detections of another dtype than float64 (float32 within its rounding of the stationary threshold: an
+    independent tester's case, where one float64 table kept 63 points and update 7), and a long-double velocity: the
+    same estimates as update cycle by cycle in that dtype."""
+    cycles = _road_cycles(8, 60)
+    cycles = [(x, y, -np.float64(v[0]) * x / r * (1.0 + 1e-7), dt, v, yaw, r) for x, y, _, dt, v, yaw, r in cycles]
+    one, many = RoadBoundaryEstimator(), RoadBoundaryEstimator()
+    want = [one.update(*(np.asarray(a, dtype=dtype) if k in (0, 1, 2, 6) else a for k, a in enumerate(c)))
+            for c in cycles]
+    got = _batched(many, cycles, dtype)
+    assert [dataclasses.astuple(b) for pair in got for b in pair] == \
+        [dataclasses.astuple(b) for pair in want for b in pair]
+    slow = [(x, y, rate, dt, (np.longdouble(v[0]), np.longdouble(v[1])), yaw, r) for x, y, rate, dt, v, yaw, r in cycles]
+    one, many = RoadBoundaryEstimator(), RoadBoundaryEstimator()
+    assert [dataclasses.astuple(b) for c in slow for b in one.update(*c)] == \
+        [dataclasses.astuple(b) for pair in _batched(many, slow) for b in pair]
+
+
+def test_update_many_refuses_columns_that_do_not_fit_and_changes_nothing():
+    est = RoadBoundaryEstimator()
+    _batched(est, _road_cycles(2, 12))
+    pose, cycle, points = est._pose, est._cycle, len(est._points)
+    x = np.arange(4.0)
+    with pytest.raises(ValueError, match="four columns"):
+        est.update_many(x, x, x, x[:3] + 1.0, [4], [(0.072, (20.0, 0.0), 0.0)])
+    assert (est._pose, est._cycle, len(est._points)) == (pose, cycle, points)

@@ -112,3 +112,12 @@ def test_radarnode_log_starts_without_a_full_collection(tmp_path):
     status, middle, full = (int(v) for v in out.stdout.split()[-3:])
     assert status == 0, out.stderr
     assert full == 0 and middle <= 1, out.stdout
+
+
+def test_objects_the_caller_froze_stay_frozen(tmp_path):
+    """A caller that froze its own heap (before a fork, say) finds it frozen after the command (an independent
+    tester's finding: restore() had unfrozen everything)."""
+    r = run(SPY, tmp_path, before="gc.freeze()")
+    assert r["seen"]["enabled"] is True
+    # (frozen objects that die leave the count: a few of the start's do)
+    assert r["frozen"] > 0.9 * r["seen"]["frozen"] > 10_000

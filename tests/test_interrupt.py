@@ -188,3 +188,25 @@ def test_install_unraisable_returns_the_hook_it_replaced_and_installs_once():
         assert interrupt._previous_hook is before
     finally:
         sys.unraisablehook = before
+
+
+def test_a_sigint_ignored_at_start_stays_ignored_during_the_run(tmp_path):
+    """A job a non-interactive shell puts in the background starts with SIGINT ignored: the whole run ignores it (an
+    independent tester: a SIGINT that came once the run had begun ended it with 130, one before it was ignored)."""
+    import signal
+    import subprocess
+    import time
+    from pathlib import Path
+    out = tmp_path / "x.log"
+    p = subprocess.Popen([sys.executable, "-m", "radarnode", "log", "scenarios/highway_cut_in.yaml", "--fidelity",
+                          "object", "--duration", "60", "--no-ego-motion", "-o", str(out)],
+                         cwd=Path(__file__).resolve().parents[1], stderr=subprocess.PIPE, text=True,
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_IGN))
+    for _ in range(40):                 # a SIGINT every 50 ms, over start-up and run
+        time.sleep(0.05)
+        if p.poll() is not None:
+            break
+        p.send_signal(signal.SIGINT)
+    err = p.communicate(timeout=120)[1]
+    assert p.returncode == 0, err
+    assert "interrupted" not in err and out.stat().st_size > 0

@@ -735,3 +735,24 @@ def test_an_asc_file_keeps_its_first_frame_whatever_its_header(capsys, tmp_path,
     rows = [json.loads(x) for x in text.splitlines()]
     assert [(r["can_id"], r["data"], r["timestamp"]) for r in rows] == [
         (0x300, "456E", 0.01), (0x301, "8000", 0.02), (0x301, "8001", 0.03)], rows
+
+
+@pytest.mark.parametrize("suffix", [".log", ".blf", ".asc"])
+def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, monkeypatch, capsys):
+    """A Ctrl-C before the first frame (without the vehicle's frames, so nothing at all was written): no file, where
+    an empty .log of 0 bytes had been kept, which decode refuses as empty (an independent tester's Ctrl-C at 0.1 s);
+    130 and a message that says so."""
+    import radarnode.cli.log as cli_log
+    real = cli_log.pipeline_for
+
+    def interrupted(node, cycles=None):           # (called once the signals are caught, before the first cycle)
+        os.kill(os.getpid(), signal.SIGINT)
+        return real(node, cycles)
+
+    monkeypatch.setattr(cli_log, "pipeline_for", interrupted)
+    out = tmp_path / f"x{suffix}"
+    rc = main(["log", str(SCENARIOS / "highway_cut_in.yaml"), "--duration", "2", "--no-ego-motion", "-o", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 130, err
+    assert "interrupted before the first frame: nothing written" in err
+    assert not out.exists() and not list(tmp_path.iterdir())

@@ -161,7 +161,10 @@ class Stop(threading.Event):
 def stop_on_signals():
     """A :class:`Stop` event set by Ctrl-C or SIGTERM, so loops can finish the current cycle and close files.
 
-    A second signal gives up at once (KeyboardInterrupt for SIGINT, :class:`Terminated` for SIGTERM)."""
+    A second signal gives up at once (KeyboardInterrupt for SIGINT, :class:`Terminated` for SIGTERM). A signal the
+    process was started with ignored (SIG_IGN: a job a non-interactive shell put in the background gets SIGINT so)
+    stays ignored, as during the start-up (an independent tester: such a job ended with 130 on a SIGINT once its run
+    had begun, 0 before)."""
     stop = Stop()
     if threading.current_thread() is not threading.main_thread():
         yield stop
@@ -178,8 +181,9 @@ def stop_on_signals():
         stop.signum = signum
         stop.set()
 
-    for s in previous:
-        signal.signal(s, handler)
+    for s, h in previous.items():
+        if h is not signal.SIG_IGN:    # a signal ignored (a background job of a shell): it stays ignored
+            signal.signal(s, handler)
     try:
         yield stop
     finally:

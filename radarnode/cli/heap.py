@@ -7,16 +7,16 @@ with the collector off until its modules are loaded and its options parsed (:fun
 alive into the permanent generation, which the collector never scans (``gc.freeze``), and turns it on again
 (:func:`settled`), with a larger first threshold for the commands that render as fast as they can: a cycle of the
 object level allocates a few hundred containers that mostly die by reference counting, and a collection every
-``GEN0_THRESHOLD`` allocations instead of Python's 700 costs a ``radarnode log`` of 300 s about 40 ms less (measured:
-55–60 ms of collections before, under 1 ms after). The real-time commands keep Python's thresholds
-(``REAL_TIME_COMMANDS``). A process that ``radarnode log`` forks for the road boundaries
-(:mod:`radarnode.wire.pipeline`) inherits the frozen heap, and its collections leave the parent's pages alone (as
-Python's documentation of ``gc.freeze`` advises before a fork).
+``GEN0_THRESHOLD`` allocations instead of Python's 700 costs a ``radarnode log`` of 300 s about 40 ms less
+(measured in its run's process: 40–48 ms of collections before, one of them over the whole heap; about 3 ms after).
+The real-time commands keep Python's thresholds (``REAL_TIME_COMMANDS``). A process that ``radarnode log`` forks for
+the road boundaries (:mod:`radarnode.wire.pipeline`) inherits the frozen heap, and its collections leave the parent's
+pages alone (as Python's documentation of ``gc.freeze`` advises before a fork).
 
 Garbage with reference cycles is still collected: a collection of the youngest generation every ``GEN0_THRESHOLD``
 net allocations of containers, of all of them every 100 such (the thresholds' two others, 10 and 10). :func:`restore`
-gives the collector back as it was (thresholds, on or off, the frozen objects unfrozen), for a caller that runs
-:func:`radarnode.cli.main` inside its own process (the tests do, hundreds of times).
+gives the collector back as it was (thresholds, on or off, the frozen objects unfrozen unless the caller had frozen
+some), for a caller that runs :func:`radarnode.cli.main` inside its own process (the tests do, hundreds of times).
 """
 
 from __future__ import annotations
@@ -32,14 +32,14 @@ GEN0_THRESHOLD = 10_000
 #: thresholds; 2.4 ms with the larger one)
 REAL_TIME_COMMANDS = ("node", "run", "consume")
 
-_saved: tuple[bool, tuple[int, int, int]] | None = None
+_saved: tuple[bool, tuple[int, int, int], int] | None = None
 
 
 def start() -> None:
     """The collector off until :func:`settled` (its state kept for :func:`restore`)."""
     global _saved
     if _saved is None:
-        _saved = (gc.isenabled(), gc.get_threshold())
+        _saved = (gc.isenabled(), gc.get_threshold(), gc.get_freeze_count())
     gc.disable()
 
 
@@ -57,13 +57,15 @@ def settled(command: str | None = None) -> None:
 
 
 def restore() -> None:
-    """The collector as :func:`start` found it; the frozen objects back in the oldest generation."""
+    """The collector as :func:`start` found it; the frozen objects back in the oldest generation (unless the caller had
+    frozen some: Python cannot tell its from the command's, and its must stay frozen)."""
     global _saved
     if _saved is None:
         return
-    enabled, threshold = _saved
+    enabled, threshold, frozen = _saved
     _saved = None
-    gc.unfreeze()
+    if not frozen:          # (a caller that froze objects of its own keeps them frozen, and the command's with them)
+        gc.unfreeze()
     gc.set_threshold(*threshold)
     if enabled:
         gc.enable()

@@ -46,7 +46,23 @@ def add_subparser(sub) -> None:
     p.set_defaults(func=cmd)
 
 
+class _NothingWritten(Exception):
+    """The run was stopped before it wrote a frame: its file is removed (:func:`cmd`); ``status`` 130 or 143."""
+
+    def __init__(self, status: int) -> None:
+        super().__init__(status)
+        self.status = status
+
+
 def cmd(args) -> int:
+    try:
+        return _log(args)
+    except _NothingWritten as stopped:
+        print(f"interrupted before the first frame: nothing written, no file {args.output!r}", file=sys.stderr)
+        return stopped.status
+
+
+def _log(args) -> int:
     # what the command line alone decides comes first: a format nothing reads back is refused before the run
     check_output_format(args.output, "--output", extra=(".mcap",))
     check_channel(args.output, args.channel, "--channel")
@@ -123,6 +139,10 @@ def cmd(args) -> int:
             writer.stop()
             if bar is not None:
                 bar.close()
+        if stats.frames == 0 and stats.cycles < scenario.num_cycles:
+            # stopped before its first frame: an empty log (a .log of 0 bytes, which nothing can tell from a
+            # truncated one, and decode refuses) is not kept (an independent tester's Ctrl-C at 0.1 s)
+            raise _NothingWritten(stop.exit_status)
     interrupted = stats.cycles < scenario.num_cycles
     if is_mcap(args.output):
         print(summary(writer, args.output), file=sys.stderr)

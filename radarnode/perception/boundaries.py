@@ -204,6 +204,23 @@ class Boundary:
 UNAVAILABLE = Boundary(False)
 
 
+def _next_pose(pose: tuple, dt_s: float, sensor_velocity: tuple[float, float], yaw_rate_rps: float
+               ) -> tuple[tuple, tuple[float, float, float, float]]:
+    """The odometry pose (x, y, heading) moved by the ego motion over ``dt_s``, and the new pose's x, y and its
+    heading's cos, sin."""
+    vx, vy = sensor_velocity
+    ox, oy, h = pose
+    c, s = math.cos(h), math.sin(h)
+    ox, oy, h = ox + (c * vx - s * vy) * dt_s, oy + (s * vx + c * vy) * dt_s, h + yaw_rate_rps * dt_s
+    return (ox, oy, h), (ox, oy, math.cos(h), math.sin(h))
+
+
+def _plain(x) -> bool:
+    """A number whose arithmetic with float64 arrays and Python floats :meth:`RoadBoundaryEstimator.update_many`'s
+    float64 table reproduces: a Python int or float, a numpy integer, float32 or float64."""
+    return isinstance(x, (int, float, np.integer, np.float32, np.float64)) and not isinstance(x, (bool, np.bool_))
+
+
 class RoadBoundaryEstimator:
     """Left and right road boundaries, updated once per radar cycle.
 
@@ -268,15 +285,27 @@ class RoadBoundaryEstimator:
         The same estimates, element by element the same numbers: only the cycles' stationary detections are found and
         moved into the odometry frame in one pass over all of them (the poses depend on the inputs alone), the
         rest cycle by cycle (the road-boundary process answers 32 cycles at a time, :mod:`radarnode.wire.pipeline`:
-        some twenty numpy calls a cycle fewer)."""
-        if len(counts) != len(motion) or sum(counts) != x_m.size:
+        some twenty numpy calls a cycle fewer). Detections other than float64 arrays, or motion other than plain
+        numbers (int, float, float32, float64), are taken cycle by cycle with :meth:`update`: its arithmetic follows
+        their dtype, which one table of float64 would not (an independent tester's float32 detections within float32's
+        rounding of the stationary threshold). Nothing is changed when the inputs do not fit together."""
+        columns = (x_m, y_m, range_rate_mps, range_m)
+        if len(counts) != len(motion) or sum(counts) != x_m.size or any(np.shape(a) != (x_m.size,) for a in columns):
             raise ValueError(f"update_many: {len(counts)} counts summing to {sum(counts)} and {len(motion)} motions "
-                             f"for {x_m.size} detections; expected a count and a motion a cycle, the counts summing "
-                             "to the detections")
+                             f"for detections of shapes {[np.shape(a) for a in columns]}; expected a count and a "
+                             "motion a cycle, the counts summing to the detections, four columns of that length")
+        if not (all(isinstance(a, np.ndarray) and a.dtype == np.float64 for a in columns)
+                and all(_plain(dt_s) and _plain(yaw) and all(_plain(u) for u in np.ravel(np.asarray(v, dtype=object)))
+                        and np.size(v) == 2 for dt_s, v, yaw in motion)):
+            ends = np.cumsum(counts).tolist()
+            return [self.update(x_m[b - c:b], y_m[b - c:b], range_rate_mps[b - c:b], dt_s, v, yaw, range_m[b - c:b])
+                    for c, b, (dt_s, v, yaw) in zip(counts, ends, motion)]
         poses, frames = [], []      # per cycle: its pose as :meth:`_advance` returns it, and as self._pose holds it
+        pose = self._pose
         for dt_s, v, yaw in motion:
-            poses.append(self._advance(dt_s, v, yaw))
-            frames.append(self._pose)
+            pose, now = _next_pose(pose, dt_s, v, yaw)
+            poses.append(now)
+            frames.append(pose)
         n = len(poses)
         table = np.array([(*p, *v) for p, (_, v, _) in zip(poses, motion)], dtype=np.float64).reshape(n, 6)
         row = np.repeat(np.arange(n), counts)
@@ -303,12 +332,8 @@ class RoadBoundaryEstimator:
     def _advance(self, dt_s: float, sensor_velocity: tuple[float, float], yaw_rate_rps: float
                  ) -> tuple[float, float, float, float]:
         """Move the odometry pose by the ego motion over ``dt_s``: the new pose's x, y and its heading's cos, sin."""
-        vx, vy = sensor_velocity
-        ox, oy, h = self._pose
-        c, s = math.cos(h), math.sin(h)
-        ox, oy, h = ox + (c * vx - s * vy) * dt_s, oy + (s * vx + c * vy) * dt_s, h + yaw_rate_rps * dt_s
-        self._pose = (ox, oy, h)
-        return ox, oy, math.cos(h), math.sin(h)
+        self._pose, now = _next_pose(self._pose, dt_s, sensor_velocity, yaw_rate_rps)
+        return now
 
     def _estimate(self, points: np.ndarray, origin: np.ndarray, c: float, s: float,
                   sensor_velocity: tuple[float, float], yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
