@@ -218,7 +218,14 @@ def _next_pose(pose: tuple, dt_s: float, sensor_velocity: tuple[float, float], y
 def _plain(x) -> bool:
     """A number whose arithmetic with float64 arrays and Python floats :meth:`RoadBoundaryEstimator.update_many`'s
     float64 table reproduces: a Python int or float, a numpy integer, float32 or float64."""
-    return isinstance(x, (int, float, np.integer, np.float32, np.float64)) and not isinstance(x, (bool, np.bool_))
+    return type(x) is float or (isinstance(x, (int, float, np.integer, np.float32, np.float64))
+                                and not isinstance(x, (bool, np.bool_)))
+
+
+def _plain_motion(dt_s, sensor_velocity, yaw_rate_rps) -> bool:
+    """A cycle's motion of :func:`_plain` numbers, the velocity a pair of them (a tuple, list or array)."""
+    v = sensor_velocity if type(sensor_velocity) is tuple else list(np.ravel(np.asarray(sensor_velocity, dtype=object)))
+    return len(v) == 2 and _plain(dt_s) and _plain(yaw_rate_rps) and _plain(v[0]) and _plain(v[1])
 
 
 class RoadBoundaryEstimator:
@@ -295,8 +302,7 @@ class RoadBoundaryEstimator:
                              f"for detections of shapes {[np.shape(a) for a in columns]}; expected a count and a "
                              "motion a cycle, the counts summing to the detections, four columns of that length")
         if not (all(isinstance(a, np.ndarray) and a.dtype == np.float64 for a in columns)
-                and all(_plain(dt_s) and _plain(yaw) and all(_plain(u) for u in np.ravel(np.asarray(v, dtype=object)))
-                        and np.size(v) == 2 for dt_s, v, yaw in motion)):
+                and all(_plain_motion(*m) for m in motion)):
             ends = np.cumsum(counts).tolist()
             return [self.update(x_m[b - c:b], y_m[b - c:b], range_rate_mps[b - c:b], dt_s, v, yaw, range_m[b - c:b])
                     for c, b, (dt_s, v, yaw) in zip(counts, ends, motion)]
