@@ -158,12 +158,23 @@ def predicted_line(curve: tuple, ox: float, oy: float, c: float, s: float, kappa
     return my - slope * mx + slope * FIT_CENTRE_M, slope * FIT_SCALE_M
 
 
-def _to_odometry(x: np.ndarray, y: np.ndarray, origin: np.ndarray, c: float, s: float) -> np.ndarray:
-    """Sensor-frame points into the odometry frame of a sensor at ``origin`` (2, 1) with heading cos c, sin s:
-    x = ox + c·x − s·y, y = oy + s·x + c·y; shape (2, *x.shape), the rows x and y (one outer product a column)."""
-    out = np.multiply.outer((c, s), x)
-    out += origin if x.ndim == 1 else origin.reshape(2, *([1] * x.ndim))
-    out += np.multiply.outer((-s, c), y)
+def _to_odometry(x: np.ndarray, y: np.ndarray, ox, oy, c, s) -> np.ndarray:
+    """Sensor-frame points (1-D) into the odometry frame of a sensor at (ox, oy) with heading cos c, sin s:
+    x = ox + c·x − s·y, y = oy + s·x + c·y, in that order; shape (2, n), the rows x and y. The pose is numbers (one
+    cycle's, :meth:`RoadBoundaryEstimator.update`: an outer product a column) or float64 arrays like x (each point's
+    cycle's, :meth:`RoadBoundaryEstimator.update_many`): the same numbers either way."""
+    if np.ndim(c) == 0:
+        out = np.multiply.outer((c, s), x)
+        out += np.array([[ox], [oy]])
+        out += np.multiply.outer((-s, c), y)
+        return out
+    out = np.empty((2, x.size))
+    np.multiply(c, x, out=out[0])
+    out[0] += ox
+    out[0] += np.negative(s) * y
+    np.multiply(s, x, out=out[1])
+    out[1] += oy
+    out[1] += c * y
     return out
 
 
@@ -277,11 +288,10 @@ class RoadBoundaryEstimator:
         """
         ox, oy, c, s = self._advance(dt_s, sensor_velocity, yaw_rate_rps)
         vx, vy = sensor_velocity
-        origin = np.array([[ox], [oy]])                  # (2, 1)
         r = np.maximum(np.hypot(x_m, y_m), 1e-6) if range_m is None else range_m
         ground = range_rate_mps + (vx * x_m + vy * y_m) / r
         still = np.abs(ground) < STATIONARY_MPS
-        return self._estimate(_to_odometry(x_m[still], y_m[still], origin, c, s), origin, c, s, sensor_velocity,
+        return self._estimate(_to_odometry(x_m[still], y_m[still], ox, oy, c, s), ox, oy, c, s, sensor_velocity,
                               yaw_rate_rps)
 
     def update_many(self, x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarray, range_m: np.ndarray,
@@ -318,20 +328,13 @@ class RoadBoundaryEstimator:
         # element by element :meth:`update`'s expressions, with each detection's cycle's numbers
         ground = range_rate_mps + (table[row, 4] * x_m + table[row, 5] * y_m) / range_m
         still = np.abs(ground) < STATIONARY_MPS
-        x, y, k = x_m[still], y_m[still], row[still]
-        c, s = table[k, 2], table[k, 3]
-        points = np.empty((2, x.size))
-        np.multiply(c, x, out=points[0])                 # _to_odometry's rows: c·x + ox − s·y, s·x + oy + c·y
-        points[0] += table[k, 0]
-        points[0] += np.negative(s) * y
-        np.multiply(s, x, out=points[1])
-        points[1] += table[k, 1]
-        points[1] += c * y
+        k = row[still]
+        points = _to_odometry(x_m[still], y_m[still], table[k, 0], table[k, 1], table[k, 2], table[k, 3])
         ends = np.cumsum(np.bincount(k, minlength=n)).tolist()
         out, start = [], 0
         for j, ((ox, oy, cj, sj), (_, v, yaw)) in enumerate(zip(poses, motion)):
             self._pose = frames[j]          # (what the cycle's estimate reads of it)
-            out.append(self._estimate(points[:, start:ends[j]], np.array([[ox], [oy]]), cj, sj, v, yaw))
+            out.append(self._estimate(points[:, start:ends[j]], ox, oy, cj, sj, v, yaw))
             start = ends[j]
         return out
 
@@ -341,14 +344,14 @@ class RoadBoundaryEstimator:
         self._pose, now = _next_pose(self._pose, dt_s, sensor_velocity, yaw_rate_rps)
         return now
 
-    def _estimate(self, points: np.ndarray, origin: np.ndarray, c: float, s: float,
+    def _estimate(self, points: np.ndarray, ox: float, oy: float, c: float, s: float,
                   sensor_velocity: tuple[float, float], yaw_rate_rps: float) -> tuple[Boundary, Boundary]:
         """One cycle's estimate from its stationary detections in the odometry frame, ``points`` (2, n), the
-        sensor's pose (``origin`` (2, 1), heading cos c, sin s: :meth:`_advance`'s) and motion."""
+        sensor's pose (at ox, oy, heading cos c, sin s: :meth:`_advance`'s) and motion."""
         vx, vy = sensor_velocity
         self._points.append(points)
         del self._points[:-self.cycles]
-        d = np.concatenate(self._points, axis=1) - origin    # every accumulated point into the sensor frame
+        d = np.concatenate(self._points, axis=1) - np.array([[ox], [oy]])    # every point into the sensor frame
         p = _to_sensor(d[0], d[1], c, s)
         p = p.compress(p[0] > 0.0, axis=1)                    # ahead
         px, py = p[0], p[1]
