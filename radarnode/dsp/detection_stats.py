@@ -528,9 +528,10 @@ class DetectionStatistic:
         on a 0.1-dB grid over −10 … 50 dB (1.4 ms) and interpolated (one ``np.interp`` a call). ``swerling``
         broadcasts with ``rho_db``."""
         rho = np.asarray(rho_db, dtype=np.float64)
-        steady = self.pd_of_snr(rho + gain_db, 0)
         fluct = np.broadcast_to(np.asarray(swerling) == 1, rho.shape)
-        if not fluct.any():
+        every = rho.size > 0 and bool(fluct.all())
+        steady = None if every else self.pd_of_snr(rho + gain_db, 0)      # (not needed where every look fluctuates)
+        if not every and not fluct.any():
             return steady
         key = round(float(gain_db), 9)
         if key not in self._second_tables:
@@ -543,6 +544,8 @@ class DetectionStatistic:
             self._second_tables[key] = (grid, np.where(marginal > 0.0, both / np.maximum(marginal, 1e-300), 0.0))
             self._table_built()
         grid, table = self._second_tables[key]
+        if every:
+            return np.asarray(np.interp(rho, grid, table))
         return np.where(fluct, np.interp(rho, grid, table), steady)
 
     #: the fluctuation factors (power over its mean, Exp(1) a priori) and the SNR step of the table of
@@ -1101,6 +1104,9 @@ class DetectionStatistic:
             return np.interp(delta, grid, table, left=0.0, right=0.0)
         inside = (delta >= -self.RESPONSE_REACH) & (delta <= self.RESPONSE_REACH)
         pos = (delta + self.RESPONSE_REACH) * self.RESPONSE_PER_BIN      # grid cells from the start
+        if inside.all():                # (no NaN either): the same values without the passes that mask
+            cell = pos.astype(np.intp)
+            return table[cell] + slope[cell] * (pos - cell)
         lost = np.isnan(pos)            # a NaN δ stays NaN, as np.interp keeps it
         pos = np.where(inside, pos, 0.0)
         cell = pos.astype(np.intp)
