@@ -295,15 +295,17 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     snr_peak = 10.0 * np.log10(np.maximum(rho_peak, 1e-30))
     er, ev, ea = chain_efficiency(snr_peak)
     nz = rng.standard_normal((3, idx.size))
+    sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
+    az_peak = np.arcsin(sin_t)                       # the angle the peak's spatial frequency gives
+    bound_r, bound_v, bound_az = equation.crbs(p, snr_peak, az_peak)
     # the speed as the chain measures it, within ±v_max; the coupling it takes out with it wraps with it (a body at
     # the edge read as −v_max has its coupling taken out as at −v_max)
-    est_v = _circular(pos_v + ev * equation.crb_speed_mps(p, snr_peak) / p.doppler_bin_mps * nz[1], m)
+    est_v = _circular(pos_v + ev * bound_v / p.doppler_bin_mps * nz[1], m)
     alias_v = (est_v + _circular(alias_v / p.doppler_bin_mps - est_v, m)) * p.doppler_bin_mps
     est_v = est_v * p.doppler_bin_mps
-    est_r = np.mod((pos_r + er * equation.crb_range_m(p, snr_peak) / p.range_resolution_m * nz[0])
+    est_r = np.mod((pos_r + er * bound_r / p.range_resolution_m * nz[0])
                    * p.range_resolution_m - alias_v * p.range_rate_coupling_s, n_r * p.range_resolution_m)
-    sin_t = np.clip(c_u[idx] / p.element_spacing_wl, -1.0, 1.0)
-    est_az = np.arcsin(sin_t) + ea * equation.crb_azimuth_rad(p, snr_peak, np.arcsin(sin_t)) * nz[2]
+    est_az = az_peak + ea * bound_az * nz[2]
     est_az = np.clip(est_az, -math.pi / 2, math.pi / 2)
     if p.num_virtual < 2:       # one channel measures no angle: boresight, as the chain reports it
         sin_t, est_az = np.zeros(idx.size), np.zeros(idx.size)

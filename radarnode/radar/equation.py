@@ -92,14 +92,12 @@ def pattern_gain(preset: RadarPreset, azimuth_rad: np.ndarray, where: np.ndarray
 
 def crb_range_m(preset: RadarPreset, snr_db_: np.ndarray) -> np.ndarray:
     """σ_R ≥ ΔR·√6 / (2π·√ρ), ρ the per-cell SNR (linear)."""
-    rho = 10.0 ** (np.asarray(snr_db_, dtype=np.float64) / 10.0)
-    return preset.range_resolution_m * np.sqrt(6.0) / (2.0 * np.pi * np.sqrt(rho))
+    return _crb_range(preset, _ratio(snr_db_))
 
 
 def crb_speed_mps(preset: RadarPreset, snr_db_: np.ndarray) -> np.ndarray:
     """σ_v ≥ Δv·√6 / (2π·√ρ)."""
-    rho = 10.0 ** (np.asarray(snr_db_, dtype=np.float64) / 10.0)
-    return preset.speed_resolution_mps * np.sqrt(6.0) / (2.0 * np.pi * np.sqrt(rho))
+    return _crb_speed(preset, _ratio(snr_db_))
 
 
 def crb_azimuth_rad(preset: RadarPreset, snr_db_: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
@@ -108,8 +106,33 @@ def crb_azimuth_rad(preset: RadarPreset, snr_db_: np.ndarray, azimuth_rad: np.nd
     cosθ is bounded below by cos 85° so the bound stays finite at the edge of
     any field of view.
     """
+    return _crb_azimuth(preset, _ratio(snr_db_), azimuth_rad)
+
+
+def crbs(preset: RadarPreset, snr_db_: np.ndarray, azimuth_rad: np.ndarray
+         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(:func:`crb_range_m`, :func:`crb_speed_mps`, :func:`crb_azimuth_rad`) at once: the same values, ρ computed
+    once (the object level's guardrail posts: thousands a block)."""
+    rho = _ratio(snr_db_)
+    return _crb_range(preset, rho), _crb_speed(preset, rho), _crb_azimuth(preset, rho, azimuth_rad)
+
+
+def _ratio(snr_db_: np.ndarray) -> np.ndarray:
+    """ρ, linear, from dB."""
+    return 10.0 ** (np.asarray(snr_db_, dtype=np.float64) / 10.0)
+
+
+def _crb_range(preset: RadarPreset, rho: np.ndarray) -> np.ndarray:
+    return preset.range_resolution_m * np.sqrt(6.0) / (2.0 * np.pi * np.sqrt(rho))
+
+
+def _crb_speed(preset: RadarPreset, rho: np.ndarray) -> np.ndarray:
+    return preset.speed_resolution_mps * np.sqrt(6.0) / (2.0 * np.pi * np.sqrt(rho))
+
+
+def _crb_azimuth(preset: RadarPreset, rho: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
     k = preset.num_virtual
-    rho_e = 10.0 ** (np.asarray(snr_db_, dtype=np.float64) / 10.0) / k
+    rho_e = rho / k
     cos_t = np.maximum(np.cos(np.asarray(azimuth_rad, dtype=np.float64)), np.cos(np.radians(85.0)))
     if k < 2:
         # A single channel measures azimuth by beam scanning: the bound is the beamwidth over √(2ρ).

@@ -279,8 +279,9 @@ def resolved_posts(p: RadarPreset, g: dict, u_hit: np.ndarray, idx: np.ndarray |
         kept[a] &= ~(near & (power[b] > power[a]))
         kept[b] &= ~(near & (power[a] > power[b]))
     if response is not None:
-        kept[np.flatnonzero(kept)[_hidden_peaks(cycle[kept], rb[kept], vb[kept], power[kept], key[kept], p.num_chirps,
-                                                response)]] = False
+        at = np.flatnonzero(kept)
+        kept[at[_hidden_peaks(cycle.take(at), rb.take(at), vb.take(at), power.take(at), key.take(at), p.num_chirps,
+                              response)]] = False
     keep[order] = kept
     return keep
 
@@ -348,14 +349,27 @@ def lobe_hidden(r: np.ndarray, v: np.ndarray, power: np.ndarray, r_o: np.ndarray
     o_r, o_d = r_o - cr, _circular(v_o - cd, m)          # the other, from the peak's cell
     s_r, s_d = np.sign(o_r), np.sign(o_d)                # the steps towards it
     # rows: the peak at its cell and one step on, the other at the same two
-    a_r = response("r", np.stack([cr - r, s_r + cr - r, -o_r, s_r - o_r]))
-    a_d = response("d", np.stack([cd - v, s_d + cd - v, -o_d, s_d - o_d]))
+    a_r = response("r", _lobe_offsets(r, cr, o_r, s_r))
+    a_d = response("d", _lobe_offsets(v, cd, o_d, s_d))
     own = (a_r[:2, None, :] * a_d[None, :2, :]) ** 2 * power          # (range step, Doppler step, n)
     oth = (a_r[2:, None, :] * a_d[None, 2:, :]) ** 2 * power_o
     total = own + oth
     rising = oth > oth[0, 0]
     rising[0, 0] = False
     return np.any(rising & (total > total[0, 0]), axis=(0, 1))
+
+
+def _lobe_offsets(x: np.ndarray, cell: np.ndarray, other: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """:func:`lobe_hidden`'s four offsets along one axis, rows of one array (4, n): the peak from its cell and from
+    the cell one ``step`` on, the other (``other`` from the cell) likewise — cell − x, step + cell − x, −other,
+    step − other, each the same expression as written out (no stack of four temporaries)."""
+    out = np.empty((4,) + np.shape(x), dtype=np.result_type(x, cell, other, step))
+    np.subtract(cell, x, out=out[0])
+    np.add(step, cell, out=out[1])
+    out[1] -= x
+    np.negative(other, out=out[2])
+    np.subtract(step, other, out=out[3])
+    return out
 
 
 def in_fov(preset: RadarPreset, range_m: np.ndarray, azimuth_rad: np.ndarray) -> np.ndarray:
@@ -873,16 +887,17 @@ class ObjectModel:
         # extended actor adds the preset's floor (where on the body the reflection centre lies)
         er, ev, ea = chain_efficiency(snr)
         ext = self.extended
-        sig_r = np.hypot(er * equation.crb_range_m(p, snr), np.where(ext, p.range_sigma_floor_m, 0.0))
-        sig_v = np.hypot(ev * equation.crb_speed_mps(p, snr), np.where(ext, p.speed_sigma_floor_mps, 0.0))
         # where the array sees the actor: a sparse array's grating lobe folds it (the other levels' beamformer does)
         az_seen = ambiguity.apparent_azimuth(p, az)
+        bound_r, bound_v, bound_az = equation.crbs(p, snr, az_seen)
+        sig_r = np.hypot(er * bound_r, np.where(ext, p.range_sigma_floor_m, 0.0))
+        sig_v = np.hypot(ev * bound_v, np.where(ext, p.speed_sigma_floor_mps, 0.0))
         # … and the RCS it infers there: the element pattern divided out at the angle it measures, not the truth's
         # (a grating lobe's 50° seen at −41.5° read 1.5 dB low at the other levels and true here: a tester's finding)
         if p.element_spacing_wl > 0.5:
             lobe_db = np.where(az_seen != az, equation.pattern_db(p, az) - equation.pattern_db(p, az_seen), 0.0)
             rcs_eff, rcs_body = rcs_eff + lobe_db, rcs_body + lobe_db
-        sig_az = np.hypot(ea * equation.crb_azimuth_rad(p, snr, az_seen),
+        sig_az = np.hypot(ea * bound_az,
                           np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
         m_r = r_seen + sig_r * z[:, 0]
         m_az = az_seen + sig_az * z[:, 1]
@@ -1480,11 +1495,7 @@ class ObjectModel:
             raise ValueError("cluster_rows: the last step computed no cluster list (no step yet, or a configuration "
                              "with clusters=False)")
         tab, j = self._cluster_table(*pos)
-        rows = tab.get("rows")
-        if rows is None:
-            rows = tab["rows"] = tab["f"][:4]
-            rows.flags.writeable = False       # (a view: the table's cluster lists stay as they are)
-        return rows, tab["starts"][j], tab["starts"][j + 1]
+        return tab["rows"], tab["starts"][j], tab["starts"][j + 1]
 
     def _dyn_cycle(self, ch: dict, i: int, idx: np.ndarray, vx: np.ndarray, vy: np.ndarray, sv) -> np.ndarray:
         """DynProp of cycle i's objects with the sensor velocity ``sv`` (the ego-motion input's estimate), where
@@ -1516,7 +1527,7 @@ class ObjectModel:
         g_r, g_az = np.hypot(gx, gy), np.arctan2(gy, gx)
         keep = in_fov(p, g_r, g_az) & (g_r <= config.max_distance_m)
         g_r, g_az = g_r[keep], g_az[keep]
-        g_snr = equation.snr_db(p, g_r, np.full(g_r.shape, g.rcs_dbsm), config.power_reduction_db, g_az)
+        g_snr = equation.snr_db(p, g_r, g.rcs_dbsm, config.power_reduction_db, g_az)     # (one RCS: every post's)
         return {"cycle": lo + np.repeat(np.arange(starts.size - 1), np.diff(starts))[keep],
                 "pd": self.statistic.pd_of_snr(g_snr, 1), "snr": g_snr, "range": g_r, "true_azimuth": g_az,
                 "azimuth": ambiguity.apparent_azimuth(p, g_az)}
@@ -1526,9 +1537,10 @@ class ObjectModel:
         """The detected posts' measurement σ (the chain's accuracy at their SNR: point targets, no floor), added to
         their table ``g`` (computed for the posts kept only: a quarter of those in view on a guardrail road)."""
         er, ev, ea = chain_efficiency(g["snr"])
-        g["sig_r"] = er * equation.crb_range_m(p, g["snr"])
-        g["sig_az"] = ea * equation.crb_azimuth_rad(p, g["snr"], g["azimuth"])
-        g["sig_v"] = ev * equation.crb_speed_mps(p, g["snr"])
+        bound_r, bound_v, bound_az = equation.crbs(p, g["snr"], g["azimuth"])
+        g["sig_r"] = er * bound_r
+        g["sig_az"] = ea * bound_az
+        g["sig_v"] = ev * bound_v
 
     def _cluster_table(self, ch: dict, i: int) -> tuple[dict, int]:
         """The cluster lists of the block of ``CLUSTER_BLOCK`` cycles holding the chunk's cycle i, and i's index in
@@ -1639,25 +1651,39 @@ class ObjectModel:
             at = order - first
             at = np.flatnonzero((at >= 0) & (at < post_read[0].size))
             post_read = (at, (order.take(at) - first), post_read[0], post_read[1])
-        x, y, vx, vy, rcs, s_r, s_az, s_v, actor, ambig = (c.take(order) for c in cols)
+        rows = np.empty((4, order.size))
+        for k in range(4):                          # position and velocity: all a reader of rows needs (cluster_rows)
+            cols[k].take(order, out=rows[k])
+        rows.flags.writeable = False
+        return {
+            "cycles": t_n, "states": states, "post_cycle": post_cycle, "hit_cycle": hit_cycle, "rate": rate,
+            "post_read": post_read, "rows": rows,
+            "starts": np.searchsorted(cyc.take(order), np.arange(t_n + 1)).tolist(),
+            # the rest of the table (_cluster_fields), made when a cycle's cluster list is first built from it
+            "sorted": (cols, order, r)}
+
+    def _cluster_fields(self, tab: dict) -> None:
+        """The rest of a block's table (:meth:`_cluster_block`), made once, when a cycle's cluster list is first
+        built from it (a reader of rows only, the road-boundary process, needs none of it): "f", the ClusterList's
+        float fields after DynProp — position and velocity (``rows``), RCS, then sigma_to_xy(r, az, σr, σaz) with
+        its cos and sin taken once, the speeds' σ; and the radial speed, azimuth, and its cos and sin DynProp is
+        computed from —, "i" its integer fields and "near"."""
+        cols, order, r = tab.pop("sorted")
+        p = self.preset
+        x, y, vx, vy = tab["rows"]
+        rcs, s_r, s_az, s_v, actor, ambig = (c.take(order) for c in cols[4:])
         r = r.take(order)
         az = np.arctan2(y, x)
         c, s_ = np.cos(az), np.sin(az)
         ac, as_ = np.abs(c), np.abs(s_)
         lat = p.lateral_speed_sigma_mps
         actor = actor.astype(np.int64)
-        return {
-            "cycles": t_n, "states": states, "post_cycle": post_cycle, "hit_cycle": hit_cycle, "rate": rate,
-            "post_read": post_read,
-            "starts": np.searchsorted(cyc.take(order), np.arange(t_n + 1)).tolist(),
-            # ClusterList's float fields after DynProp: RCS, then sigma_to_xy(r, az, σr, σaz) with its cos and sin
-            # taken once, the speeds' σ; and the radial speed, azimuth, and its cos and sin DynProp is computed from
-            "f": np.stack([x, y, vx, vy, rcs, np.sqrt((c * s_r) ** 2 + (r * s_ * s_az) ** 2),
-                           np.sqrt((s_ * s_r) ** 2 + (r * c * s_az) ** 2), ac * s_v + as_ * lat, as_ * s_v + ac * lat,
-                           vx * c + vy * s_, az, c, s_]),
-            "i": np.stack([np.where(actor >= 0, 1, 2), ambig.astype(np.int64), np.zeros(actor.size, dtype=np.int64),
-                           actor]),
-            "near": r <= p.near_range_m}
+        tab["f"] = np.stack([x, y, vx, vy, rcs, np.sqrt((c * s_r) ** 2 + (r * s_ * s_az) ** 2),
+                             np.sqrt((s_ * s_r) ** 2 + (r * c * s_az) ** 2), ac * s_v + as_ * lat,
+                             as_ * s_v + ac * lat, vx * c + vy * s_, az, c, s_])
+        tab["i"] = np.stack([np.where(actor >= 0, 1, 2), ambig.astype(np.int64), np.zeros(actor.size, dtype=np.int64),
+                             actor])
+        tab["near"] = r <= p.near_range_m
 
     #: the posts' second uniform is the digits of their detection's uniform below 2⁻²⁰ (:meth:`_read_posts`)
     _SPLIT = float(2 ** 20)
@@ -1682,6 +1708,8 @@ class ObjectModel:
         """Cycle i's cluster list: its rows of the chunk's table (:meth:`_cluster_table`), DynProp from the sensor
         velocity ``sv`` the step was given."""
         tab, j = self._cluster_table(ch, i)
+        if "sorted" in tab:
+            self._cluster_fields(tab)
         if tab["post_read"] is not None:
             self._read_posts(tab)
         a, b = tab["starts"][j], tab["starts"][j + 1]
