@@ -151,6 +151,7 @@ class RadarNode:
         self.last_boundaries: tuple[Boundary, Boundary] | None = None
         self._pipe = None                  # a BoundaryPipeline that computes the boundaries (defer_boundaries)
         self._runtime: tuple | None = None    # the last RuntimeConfig and what it was made from (_runtime_config)
+        self._wire_id_tables: dict[int, dict[int, int]] = {}   # CAN IDs on the wire, per sensor ID (_wire_ids)
         self._pipe_index = 0
         self._blank: list = [None, None, {}]   # blank boundary payloads for the pipeline (defer_boundaries)
         self._pipe_rows = False                 # the clusters go to the pipeline as block rows (defer_boundaries)
@@ -500,11 +501,17 @@ class RadarNode:
                            and callable(getattr(self.model, "cluster_rows", None)))
 
     # --- output -------------------------------------------------------------
-    def _msg(self, base_id: int, payload: np.ndarray, t: float) -> can.Message:
-        # ARS 408 messages are shifted by 0x10 × SensorID; own messages arrive here with their final ID
-        can_id = base_id if ids.split_own_id(base_id) is not None else P.shifted(base_id, self.config.sensor_id)
-        return can.Message(arbitration_id=can_id, is_extended_id=False,
-                           data=payload if type(payload) is bytes else payload.tobytes(), timestamp=t, check=False)
+    def _wire_ids(self, sensor_id: int) -> dict[int, int]:
+        """CAN ID on the wire by the ID a cycle's frame is listed under, for ``sensor_id`` (filled as IDs come): ARS
+        408 messages are shifted by 0x10 × SensorID; own messages are listed with their final ID."""
+        table = self._wire_id_tables.get(sensor_id)
+        if table is None:
+            table = self._wire_id_tables[sensor_id] = {}
+        return table
+
+    @staticmethod
+    def _wire_id(base_id: int, sensor_id: int) -> int:
+        return base_id if ids.split_own_id(base_id) is not None else P.shifted(base_id, sensor_id)
 
     def _status_frames(self, t_s: float) -> list[tuple[int, np.ndarray]]:
         cfg = self.config
@@ -726,8 +733,15 @@ class RadarNode:
         dlcs = [len(p) for _, p in out]
         t0 = t_s if timestamp is None else timestamp
         messages, elapsed = [], 0                  # frame k at t0 + the nominal bits of the frames before it
+        sensor, bitrate = cfg.sensor_id, self.bitrate
+        wire = self._wire_ids(sensor)
         for (base, payload), dlc in zip(out, dlcs):
-            messages.append(self._msg(base, payload, t0 + elapsed / self.bitrate))
+            can_id = wire.get(base)
+            if can_id is None:
+                can_id = wire[base] = self._wire_id(base, sensor)
+            messages.append(can.Message(arbitration_id=can_id, is_extended_id=False,
+                                        data=payload if type(payload) is bytes else payload.tobytes(),
+                                        timestamp=t0 + elapsed / bitrate, check=False))
             elapsed += STANDARD_BITS_NOMINAL[dlc]
         self.counters["cycles"] += 1
         self.counters["frames"] += len(messages)
