@@ -162,3 +162,55 @@ def test_frame_ids_follow_a_sensor_id_changed_between_cycles(db):
                 assert own[1] in (sensor, None)
             else:
                 assert P.unshifted(m.arbitration_id)[1] == sensor or m.arbitration_id == P.COLL_DET_RELAY
+
+
+def test_a_few_frames_encoded_in_python_numbers_are_the_arrays_frames(db):
+    """MessageCodec.encode of a few frames (frames × signals ≤ FEW_VALUES) goes frame by frame in Python numbers:
+    the same payloads and the same saturation counts as its array path (forced here with FEW_VALUES = 0), for values
+    inside, at and beyond every signal's range, ints, bools, float32, a 0-d array and a scalar for every frame; a NaN
+    or a column of another length is refused as the array path refuses it."""
+    from collections import Counter
+
+    from radarnode.wire import codec as codec_module
+    from radarnode.wire.codec import MessageCodec
+    from radarnode.errors import WireError
+    rng = np.random.default_rng(8)
+    for frame_id in (P.OBJ_GENERAL, P.OBJ_QUALITY, P.OBJ_EXTENDED, P.CLUSTER_GENERAL, P.OBJ_WARNING):
+        fast, slow = (MessageCodec(db.get_message_by_frame_id(frame_id), Counter()) for _ in range(2))
+        for n in (1, 2, 3):
+            for trial in range(40):
+                values = {}
+                for k, (name, f) in enumerate(zip(fast.signal_names, fast.fields)):
+                    span = f.maximum - f.minimum
+                    col = rng.uniform(f.minimum - 0.1 * span - 1.0, f.maximum + 0.1 * span + 1.0, n)
+                    col[rng.random(n) < 0.2] = f.minimum
+                    col[rng.random(n) < 0.2] = f.maximum
+                    col[rng.random(n) < 0.1] = f.maximum + 0.4e-6 * f.scale        # within the tolerance
+                    kind = (trial + k) % 6
+                    values[name] = (col if kind == 0 else col.astype(np.float32) if kind == 1
+                                    else np.rint(col).astype(np.int64) if kind == 2 and f.minimum >= 0
+                                    else float(col[0]) if kind == 3 else np.array(col[0]) if kind == 4
+                                    else col)
+                    if trial == 7:
+                        values[name] = rng.random(n) < 0.5                          # bools
+                if n * len(fast.fields) > codec_module.FEW_VALUES:
+                    continue
+                got = fast.encode(values)
+                saved = codec_module.FEW_VALUES
+                codec_module.FEW_VALUES = 0
+                try:
+                    want = slow.encode(values)
+                finally:
+                    codec_module.FEW_VALUES = saved
+                assert got.dtype == want.dtype and np.array_equal(got, want), (frame_id, n, trial)
+                assert fast.saturated == slow.saturated
+        assert sum(fast.saturated.values()) > 0           # the test reached beyond the ranges
+    c = MessageCodec(db.get_message_by_frame_id(P.OBJ_GENERAL), Counter())
+    values = {name: np.array([1.0, 2.0]) for name in c.signal_names}
+    values[c.signal_names[3]] = np.array([1.0, np.nan])
+    with pytest.raises(WireError, match=f"signal {c.signal_names[3]} got NaN"):
+        c.encode(values)
+    assert not c.saturated
+    values[c.signal_names[3]] = np.array([1.0, 2.0, 3.0])
+    with pytest.raises(ValueError):
+        c.encode(values)
