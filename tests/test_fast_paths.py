@@ -214,3 +214,37 @@ def test_a_few_frames_encoded_in_python_numbers_are_the_arrays_frames(db):
     values[c.signal_names[3]] = np.array([1.0, 2.0, 3.0])
     with pytest.raises(ValueError):
         c.encode(values)
+
+
+def test_a_few_frames_come_back_writeable_and_counted_field_by_field(db):
+    """The frame-by-frame path returns what the array path returns: a writeable (n, length) array, and its
+    saturated values counted in the shared counter field by field, in the message's signal order, as the array
+    path adds them (frame by frame, a later frame's earlier field went in after an earlier frame's later one: an
+    independent tester's finding)."""
+    from collections import Counter
+
+    from radarnode.wire.codec import MessageCodec
+    c = MessageCodec(db.get_message_by_frame_id(P.OBJ_GENERAL), Counter())
+    out = c.encode({name: np.zeros(2) for name in c.signal_names})
+    out[0, 0] = 1                                              # writeable, as the array path's
+    one = c.encode({name: 0.0 for name in c.signal_names})     # (one frame of scalars: the same)
+    one[0, 0] = 1
+    values = {name: np.zeros(2) for name in c.signal_names}
+    values["Obj_RCS"] = np.array([1e9, 0.0])                    # frame 1 saturates the later field …
+    values["Obj_DistLong"] = np.array([0.0, 1e9])               # … frame 2 the earlier one
+    c.encode(values)
+    assert list(c.saturated) == [n for n in c.signal_names if n in ("Obj_DistLong", "Obj_RCS")]
+    assert c.saturated["Obj_DistLong"] == c.saturated["Obj_RCS"] == 1
+
+
+@pytest.mark.parametrize("gain", [float("nan"), float("inf"), None, "0.58", np.array([0.5]), True])
+def test_the_second_look_refuses_a_gain_that_is_not_a_finite_number(gain):
+    """A NaN gain built a table named second_nan, which the table cache then could not read back (the whole file
+    was computed again every start): refused, whatever the Swerling case, before anything is computed."""
+    stat = _statistic()
+    before = set(stat._second_tables)
+    for swerling in (1, 0, np.array([0, 1])):
+        with pytest.raises(ValueError, match="gain_db .* is not allowed; expected a finite number of dB"):
+            stat.pd_second_look(np.array([10.0, 20.0]), gain, swerling)
+    assert set(stat._second_tables) == before
+    assert np.all(np.isfinite(stat.pd_second_look(np.array([10.0, 20.0]), np.float32(0.58), 1)))

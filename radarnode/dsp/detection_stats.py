@@ -528,6 +528,10 @@ class DetectionStatistic:
         on a 0.1-dB grid over −10 … 50 dB (1.4 ms) and interpolated (one ``np.interp`` a call). ``swerling``
         broadcasts with ``rho_db``."""
         rho = np.asarray(rho_db, dtype=np.float64)
+        if not (np.ndim(gain_db) == 0 and np.asarray(gain_db).dtype.kind in "iuf" and math.isfinite(gain_db)):
+            # (a NaN gain's table, kept by the cache, made its file unreadable: an independent tester's finding)
+            raise ValueError(f"DetectionStatistic.pd_second_look: gain_db {gain_db!r} is not allowed; expected a "
+                             "finite number of dB")
         fluct = np.broadcast_to(np.asarray(swerling) == 1, rho.shape)
         every = rho.size > 0 and bool(fluct.all())
         steady = None if every else self.pd_of_snr(rho + gain_db, 0)      # (not needed where every look fluctuates)

@@ -154,18 +154,26 @@ class MessageCodec:
             for x in row:
                 if x != x:
                     return None
-        return np.frombuffer(b"".join([self.encode_values(row) for row in rows]), dtype=np.uint8
-                             ).reshape(n, self.length)
+        counted: Counter = Counter()
+        payload = bytearray().join([self._frame(row, counted) for row in rows])
+        for name in self.signal_names:        # the counts in encode's order: field by field, not frame by frame
+            if counted[name]:
+                self.saturated[name] += counted[name]
+        return np.frombuffer(payload, dtype=np.uint8).reshape(n, self.length)
 
     def _encode_one(self, cols: list) -> np.ndarray:
         """One frame from scalars (a header, a status, a boundary: several a cycle), in Python numbers: the same
         arithmetic as :meth:`encode`'s columns — clip, minus offset, over scale, round half to even — without
         numpy's per-call cost for a dozen one-element arrays."""
-        return np.frombuffer(self.encode_values(cols), dtype=np.uint8).reshape(1, self.length)
+        return np.frombuffer(bytearray(self.encode_values(cols)), dtype=np.uint8).reshape(1, self.length)
 
     def encode_values(self, values) -> bytes:
         """One frame's payload from its signals' physical values in the message's signal order
         (:attr:`signal_names`), as :meth:`encode` makes it for scalars (saturation counted, NaN refused)."""
+        return self._frame(values, self.saturated)
+
+    def _frame(self, values, saturated: Counter) -> bytes:
+        """:meth:`encode_values`, its saturated values counted in ``saturated``."""
         values = [float(c) for c in values]
         if len(values) != len(self.fields):
             raise WireError(f"message {self.name}: {len(values)} values for {len(self.fields)} signals")
@@ -175,7 +183,7 @@ class MessageCodec:
         word = 0
         for (name, lo, hi, below, above, offset, scale, mask, shift), v in zip(self._scalar, values):
             if v < below or v > above:
-                self.saturated[name] += 1
+                saturated[name] += 1
             v = lo if v < lo else hi if v > hi else v
             word |= (round((v - offset) / scale) & mask) << shift
         return word.to_bytes(8, "big")[: self.length]
