@@ -533,10 +533,8 @@ class DetectionStatistic:
             raise ValueError(f"DetectionStatistic.pd_second_look: gain_db {gain_db!r} is not allowed; expected a "
                              "finite number of dB")
         fluct = np.broadcast_to(np.asarray(swerling) == 1, rho.shape)
-        every = rho.size > 0 and bool(fluct.all())
-        steady = None if every else self.pd_of_snr(rho + gain_db, 0)      # (not needed where every look fluctuates)
-        if not every and not fluct.any():
-            return steady
+        if not fluct.any():
+            return self.pd_of_snr(rho + gain_db, 0)
         key = round(float(gain_db), 9)
         if key not in self._second_tables:
             # (−10 … 50 dB: below, both looks' Pd are the false-alarm floor's; above, 1 — clamped there)
@@ -548,9 +546,10 @@ class DetectionStatistic:
             self._second_tables[key] = (grid, np.where(marginal > 0.0, both / np.maximum(marginal, 1e-300), 0.0))
             self._table_built()
         grid, table = self._second_tables[key]
-        if every:
-            return np.asarray(np.interp(rho, grid, table))
-        return np.where(fluct, np.interp(rho, grid, table), steady)
+        fluctuating = np.interp(rho, grid, table)
+        if fluct.all():                 # (the steady Pd only where a look does not fluctuate)
+            return np.asarray(fluctuating)
+        return np.where(fluct, fluctuating, self.pd_of_snr(rho + gain_db, 0))
 
     #: the fluctuation factors (power over its mean, Exp(1) a priori) and the SNR step of the table of
     #: :meth:`fluctuation_given_detection` (built from the Swerling 0 Pd table: 901 × 400, a row when first read)

@@ -151,7 +151,7 @@ class RadarNode:
         self.last_boundaries: tuple[Boundary, Boundary] | None = None
         self._pipe = None                  # a BoundaryPipeline that computes the boundaries (defer_boundaries)
         self._runtime: tuple | None = None    # the last RuntimeConfig and what it was made from (_runtime_config)
-        self._wire_id_tables: dict[int, dict[int, int]] = {}   # CAN IDs on the wire, per sensor ID (_wire_ids)
+        self._wire_id_tables: dict[int, dict[int, int]] = {}   # CAN IDs on the wire, per sensor ID (_wire_id)
         self._pipe_index = 0
         self._blank: list = [None, None, {}]   # blank boundary payloads for the pipeline (defer_boundaries)
         self._pipe_rows = False                 # the clusters go to the pipeline as block rows (defer_boundaries)
@@ -501,16 +501,10 @@ class RadarNode:
                            and callable(getattr(self.model, "cluster_rows", None)))
 
     # --- output -------------------------------------------------------------
-    def _wire_ids(self, sensor_id: int) -> dict[int, int]:
-        """CAN ID on the wire by the ID a cycle's frame is listed under, for ``sensor_id`` (filled as IDs come): ARS
-        408 messages are shifted by 0x10 × SensorID; own messages are listed with their final ID."""
-        table = self._wire_id_tables.get(sensor_id)
-        if table is None:
-            table = self._wire_id_tables[sensor_id] = {}
-        return table
-
     @staticmethod
     def _wire_id(base_id: int, sensor_id: int) -> int:
+        """The CAN ID on the wire of a frame a cycle lists under ``base_id``: ARS 408 messages are shifted by
+        0x10 × SensorID; own messages are listed with their final ID."""
         return base_id if ids.split_own_id(base_id) is not None else P.shifted(base_id, sensor_id)
 
     def _status_frames(self, t_s: float) -> list[tuple[int, np.ndarray]]:
@@ -734,7 +728,7 @@ class RadarNode:
         t0 = t_s if timestamp is None else timestamp
         messages, elapsed = [], 0                  # frame k at t0 + the nominal bits of the frames before it
         sensor, bitrate = cfg.sensor_id, self.bitrate
-        wire = self._wire_ids(sensor)
+        wire = self._wire_id_tables.setdefault(sensor, {})     # (filled as the IDs come)
         for (base, payload), dlc in zip(out, dlcs):
             can_id = wire.get(base)
             if can_id is None:
