@@ -1,5 +1,5 @@
 """``python -m radarnode``: the same as the ``radarnode`` command."""
 
-from radarnode.cli import main
+from radarnode.cli import program
 
-raise SystemExit(main())
+program()

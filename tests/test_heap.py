@@ -121,3 +121,24 @@ def test_objects_the_caller_froze_stay_frozen(tmp_path):
     assert r["seen"]["enabled"] is True
     # (frozen objects that die leave the count: a few of the start's do)
     assert r["frozen"] > 0.9 * r["seen"]["frozen"] > 10_000
+
+
+def test_the_program_ends_with_the_commands_status_and_its_start_still_frozen(tmp_path):
+    """``radarnode`` as a program (the console script, ``python -m radarnode``: :func:`radarnode.cli.program`) leaves
+    the start's objects frozen as the process ends, so that Python's last collection does not scan them again; the
+    command's status is the process's, a failing command's too. :func:`main` (above) still gives them back."""
+    code = SCRIPT.replace("from radarnode.cli import main as entry", "from radarnode.cli import program") \
+        .replace("status = entry(", "sys.argv[1:] = (").replace(
+            ' else log])\n', ' else log])\ntry:\n    program()\nexcept SystemExit as stop:\n    status = stop.code\n')
+    for work, want in ((SPY, 0), (SPY.replace("return 0", "return 1"), 1)):
+        out = subprocess.run([sys.executable, "-c", code % (work, ""), str(tmp_path / "x.log"), "decode"], cwd=ROOT,
+                             capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        import json
+        r = json.loads(out.stdout.strip().splitlines()[-1])
+        assert r["status"] == want
+        assert r["frozen"] > 0.9 * r["seen"]["frozen"] > 10_000
+    for args, want in ((["--version"], 0), (["decode", str(tmp_path / "missing.log")], 1)):
+        done = subprocess.run([sys.executable, "-m", "radarnode", *args], cwd=ROOT, capture_output=True, text=True,
+                              timeout=120)
+        assert done.returncode == want, done.stderr

@@ -1,3 +1,3 @@
-from radarnode.cli import main
+from radarnode.cli import program
 
-raise SystemExit(main())
+program()

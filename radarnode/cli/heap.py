@@ -56,15 +56,17 @@ def settled(command: str | None = None) -> None:
         gc.enable()
 
 
-def restore() -> None:
+def restore(unfreeze: bool = True) -> None:
     """The collector as :func:`start` found it; the frozen objects back in the oldest generation (unless the caller had
-    frozen some: Python cannot tell its from the command's, and its must stay frozen)."""
+    frozen some: Python cannot tell its from the command's, and its must stay frozen; or ``unfreeze`` is False: the
+    process ends with the command, :func:`radarnode.cli.program`)."""
     global _saved
     if _saved is None:
         return
     enabled, threshold, frozen = _saved
     _saved = None
-    if not frozen:          # (a caller that froze objects of its own keeps them frozen, and the command's with them)
+    # (a caller that froze objects of its own keeps them frozen, and the command's with them)
+    if unfreeze and not frozen:
         gc.unfreeze()
     gc.set_threshold(*threshold)
     if enabled:
