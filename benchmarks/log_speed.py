@@ -5,7 +5,9 @@ Each row times the command as a user starts it — a new Python process, imports
 0x300/0x301 frames) and the file written — as the median wall time of ``--runs`` runs. The real-time factor is
 the scenario's duration over that time. A first row, ``python -c "import radarnode.cli.main, radarnode.cli.log"``,
 is the start-up floor of the command (since 2026-11-28 ``radarnode.cli.main`` alone imports almost nothing: each
-command imports its modules when it runs). The last row is the issue's target case: ``highway_cut_in.yaml --duration 300``.
+command imports its modules when it runs). Then the issue's target case: ``highway_cut_in.yaml --duration 300``, and
+last its end: the time from the command's return (``radarnode.cli.program`` raising SystemExit, or in a tree before it
+``SystemExit(radarnode.cli.main())``, as ``python -m radarnode`` did) to its process's end, the interpreter's exit.
 
 Run: ``.venv/bin/python benchmarks/log_speed.py [--runs N] [--suffix .blf] [--only SUBSTRING] [--before DIR]``.
 Prints a Markdown table. ``--before DIR`` (a tree of another version, e.g. ``git archive REV | tar -x -C DIR``)
@@ -59,6 +61,32 @@ def wall(cmd: list[str], runs: int, roots: tuple[Path, ...] = (ROOT,)) -> list[f
     return [statistics.median(t) for t in times]
 
 
+#: the command as ``python -m radarnode`` runs it, printing when it returns (its SystemExit) on stderr
+ENDING = """
+import sys, time
+import radarnode.cli as cli
+try:
+    cli.program() if hasattr(cli, "program") else sys.exit(cli.main())
+except SystemExit:
+    sys.stderr.write("RETURNED %.6f\\n" % time.time())
+    raise
+"""
+
+
+def ending(cmd: list[str], runs: int, roots: tuple[Path, ...]) -> list[float]:
+    """Median time from the command's return to its process's end in each tree of ``roots``, seconds (the trees'
+    runs interleaved); ``cmd``: the command's arguments after ``radarnode``."""
+    times: list[list[float]] = [[] for _ in roots]
+    for _ in range(runs):
+        for k, root in enumerate(roots):
+            done = subprocess.run([sys.executable, "-c", ENDING, *cmd], check=True, capture_output=True, text=True,
+                                  cwd=root, env=ENV)
+            end = time.time()
+            returned = [line for line in done.stderr.splitlines() if line.startswith("RETURNED ")]
+            times[k].append(end - float(returned[-1].split()[1]))
+    return [statistics.median(t) for t in times]
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--runs", type=int, default=3)
@@ -105,6 +133,14 @@ def main() -> None:
             else:
                 print(f"| {name} | {sim:g} s | {cycles} | {t[0]:.2f} s | {t[1]:.2f} s | {t[0] / t[1]:.2f}× | "
                       f"{sim / t[1]:.0f}× |", flush=True)
+        end = ending(["log", str(ROOT / "scenarios" / "highway_cut_in.yaml"), "--fidelity", "object", "-o", out,
+                      "--duration", "300"], args.runs, roots)
+        name = "(end of the 300-s log: the command's return to its process's end)"
+        if args.before is None:
+            print(f"| {name} | - | - | {1e3 * end[0]:.0f} ms | - |", flush=True)
+        else:
+            print(f"| {name} | - | - | {1e3 * end[0]:.0f} ms | {1e3 * end[1]:.0f} ms | {end[0] / end[1]:.2f}× | - |",
+                  flush=True)
 
 if __name__ == "__main__":
     main()
