@@ -18,7 +18,7 @@ def _fresh(pfa: float = 1e-6):
     cfg = DspConfig(pfa=pfa)
     stat = detection_statistic.__wrapped__(cfg, 12, 64, 64)
     stat.on_table_built = None
-    for name in ("_mask_tables", "_ring_tables"):
+    for name in ("_mask_tables", "_ring_tables", "_response_tables"):
         stat.__dict__.pop(name, None)
     stat._pd_tables.clear()
     return stat
@@ -31,6 +31,8 @@ def _use(stat) -> None:
     stat.masking_factor(np.array([15.0]), np.array([50.0]), 1)
     stat.ring_kernel(np.array([3.25]), np.array([-7.5]))
     stat.ring_cut(np.array([0, 3, 250, 255]), 256)
+    stat.response("r", np.array([0.25]))
+    stat.response("d", np.array([-1.5]))
 
 
 def test_a_second_run_loads_the_tables_the_first_computed_bit_for_bit(tmp_path, monkeypatch):
@@ -56,8 +58,28 @@ def test_a_second_run_loads_the_tables_the_first_computed_bit_for_bit(tmp_path, 
     monkeypatch.setattr(detection_stats, "ca_alpha", no_computing)
     edge = np.array([0, 3, 250, 255])
     assert all(np.array_equal(x, y) for x, y in zip(second.ring_cut(edge, 256), first.ring_cut(edge, 256)))
+    # the windows' response tables (the lobe tests'): taken from the file, not computed (2–7 ms an axis)
+    assert set(second.__dict__["_response_tables"]) == {"r", "d"}
+    for axis in ("r", "d"):
+        x = np.linspace(-5.0, 5.0, 777)
+        assert np.array_equal(second.response(axis, x), first.response(axis, x))
     a, b = first.export_tables(), second.export_tables()
     assert a.keys() == b.keys() and all(np.array_equal(a[k], b[k]) for k in a)
+    assert {"response_r", "response_d"} <= a.keys()
+
+
+@pytest.mark.parametrize("bad", ["short", "beyond one", "nan"])
+def test_a_response_table_not_of_this_statistic_is_refused_and_nothing_taken(bad):
+    good = _fresh()
+    good.response("r", np.array([0.0]))
+    arrays = good.export_tables()
+    table = arrays["response_r"]
+    arrays["response_r"] = {"short": table[:-1], "beyond one": table * 1.5,
+                            "nan": np.where(np.arange(table.size) == 3, np.nan, table)}[bad]
+    fresh = _fresh()
+    with pytest.raises(ValueError, match="response_r"):
+        fresh.import_tables(arrays)
+    assert "r" not in fresh.__dict__.get("_response_tables", {})
 
 
 def test_another_configuration_has_its_own_file(tmp_path, monkeypatch):

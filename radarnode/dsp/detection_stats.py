@@ -1095,12 +1095,11 @@ class DetectionStatistic:
         tables = self.__dict__.setdefault("_response_tables", {})
         if axis not in tables:
             w = self.doppler_window if axis == "d" else self.range_window
-            grid = np.arange(-self.RESPONSE_REACH, self.RESPONSE_REACH + 1e-9, 1.0 / self.RESPONSE_PER_BIN)
+            grid = self._response_grid()
             n = np.arange(w.size)
             resp = (np.exp(2j * np.pi * np.outer(grid, n - (w.size - 1) / 2.0) / w.size) @ w).real / w.sum()
-            # the grid is uniform: a lookup by index, not np.interp's search (the lobe test looks up thousands of
-            # pairs a frame: 7–10× faster there); the last point's slope 0, so that it needs no cell after it
-            tables[axis] = (grid, resp, np.append(np.diff(resp), 0.0))
+            tables[axis] = self._response_table(grid, resp)
+            self._table_built()           # (a disk cache keeps it: 2–7 ms an axis at every start)
         grid, table, slope = tables[axis]
         delta = np.asarray(delta, dtype=np.float64)
         if delta.size < 512:            # a few hundred values: np.interp's one call is cheaper than the passes below
@@ -1117,6 +1116,17 @@ class DetectionStatistic:
         if lost.any():
             out[lost] = np.nan
         return out
+
+    def _response_grid(self) -> np.ndarray:
+        """The offsets (bins) of :meth:`response`'s table."""
+        return np.arange(-self.RESPONSE_REACH, self.RESPONSE_REACH + 1e-9, 1.0 / self.RESPONSE_PER_BIN)
+
+    @staticmethod
+    def _response_table(grid: np.ndarray, resp: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`response`'s table of ``resp`` on ``grid``, with each point's slope to the next: the grid is uniform,
+        a lookup by index, not np.interp's search (the lobe test looks up thousands of pairs a frame: 7–10× faster
+        there); the last point's slope 0, so that it needs no cell after it."""
+        return grid, resp, np.append(np.diff(resp), 0.0)
 
     # --- the tables, for a cache outside this module ----------------------------------------------------------
 
@@ -1151,6 +1161,8 @@ class DetectionStatistic:
             out[f"ring_{axis}"] = np.stack(cols)
         for gain, (grid, table) in self._second_tables.items():      # pd_second_look's, one a gain
             out[f"second_{gain!r}_grid"], out[f"second_{gain!r}"] = grid, table
+        for axis, (_, table, _) in self.__dict__.get("_response_tables", {}).items():
+            out[f"response_{axis}"] = table
         cuts = self.__dict__.get("_cuts", {})
         if cuts:            # the rings the range edges cut: (key, α, mean, variance, count) a row
             out["ring_cuts"] = np.array([(float(k), *v) for k, v in sorted(cuts.items())], dtype=np.float64)
@@ -1159,7 +1171,7 @@ class DetectionStatistic:
     def import_tables(self, arrays: dict[str, np.ndarray]) -> None:
         """Take tables that :meth:`export_tables` gave (for this :meth:`table_key`); raises ValueError, leaving
         this statistic as it was, where a name, shape or value is not what this statistic builds."""
-        pd, mask, ring, cut, second = {}, {}, {}, {}, {}
+        pd, mask, ring, cut, second, response = {}, {}, {}, {}, {}, {}
         for name, a in arrays.items():
             a = np.asarray(a)
             if a.dtype != np.float64 or not np.all(np.isfinite(a)):
@@ -1200,6 +1212,11 @@ class DetectionStatistic:
                     raise ValueError(f"table {name}: shape {a.shape} or a cut or value not allowed; expected (k, 5) "
                                      f"with cut keys in 0..{(reach + 1) ** 2 - 1} and positive values")
                 cut = {int(row[0]): tuple(float(v) for v in row[1:]) for row in a}
+            elif name in ("response_d", "response_r"):
+                grid = self._response_grid()
+                if a.shape != grid.shape or not np.all(np.abs(a) <= 1.0 + 1e-9):
+                    raise ValueError(f"table {name}: shape {a.shape} or an amplitude beyond 1; expected {grid.shape}")
+                response[name[-1]] = self._response_table(grid, a)
             elif not name.endswith("_grid"):
                 raise ValueError(f"table {name}: not a table this statistic builds")
         self._pd_tables.update(pd)
@@ -1207,6 +1224,7 @@ class DetectionStatistic:
         self.__dict__.setdefault("_mask_tables", {}).update(mask)
         self.__dict__.setdefault("_ring_tables", {}).update(ring)
         self.__dict__.setdefault("_cuts", {}).update(cut)
+        self.__dict__.setdefault("_response_tables", {}).update(response)
 
     def threshold_mean(self) -> float:
         """The mean threshold in units of σ²: α·E[Z]/N_T."""
