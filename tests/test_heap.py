@@ -142,3 +142,51 @@ def test_the_program_ends_with_the_commands_status_and_its_start_still_frozen(tm
         done = subprocess.run([sys.executable, "-m", "radarnode", *args], cwd=ROOT, capture_output=True, text=True,
                               timeout=120)
         assert done.returncode == want, done.stderr
+
+
+def test_the_program_runs_again_in_one_process_after_the_command_line_module_is_imported(tmp_path):
+    """``radarnode.cli.main`` (the module) takes the package's name ``main`` once imported: :func:`program` calls the
+    function under a name of its own, so a second program in one process, or one after that import, still runs
+    (an independent tester: ``TypeError: 'module' object is not callable``)."""
+    code = ("import sys\n"
+            "import radarnode.cli as cli\n"
+            "import radarnode.cli.main\n"
+            "codes = []\n"
+            "for _ in range(2):\n"
+            "    sys.argv[1:] = ['decode', 'missing.log']\n"
+            "    try:\n"
+            "        cli.program()\n"
+            "    except SystemExit as stop:\n"
+            "        codes.append(stop.code)\n"
+            "print(codes)\n")
+    out = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120,
+                         env={**__import__("os").environ, "PYTHONPATH": str(ROOT)})
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().splitlines()[-1] == "[1, 1]"
+
+
+@pytest.mark.parametrize("args", [["--version"], ["--help"], ["decode", "--max-cycles", "1", "LOG"]])
+def test_small_output_to_a_closed_pipe_ends_quietly_and_to_a_full_disk_with_one_error(args, tmp_path):
+    """Output small enough to wait in the buffer until the process ends (Python's own flush at exit met the closed
+    pipe or the full disk there: status 120 and "Exception ignored"): a closed pipe ends with the command's status and
+    nothing on stderr; /dev/full with one error line and status 1."""
+    import os
+    log = tmp_path / "x.log"
+    log.write_text("(0.000000) can0 60A#0000000010000000\n")
+    args = [str(log) if a == "LOG" else a for a in args]
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    reader, writer = os.pipe()
+    os.close(reader)                                 # closed before the program writes anything
+    try:
+        done = subprocess.run([sys.executable, "-m", "radarnode", *args], cwd=ROOT, stdout=writer,
+                              stderr=subprocess.PIPE, text=True, timeout=120, env=env)
+    finally:
+        os.close(writer)
+    assert done.returncode == 0, done.stderr
+    assert "Exception ignored" not in done.stderr and "Traceback" not in done.stderr
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-m", "radarnode", *args], cwd=ROOT, stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=120, env=env)
+    assert done.returncode == 1
+    assert "error: standard output: No space left on device" in done.stderr
+    assert "Exception ignored" not in done.stderr and "Traceback" not in done.stderr

@@ -63,10 +63,61 @@ def _restore_heap() -> None:
         heap.restore()
 
 
+#: :func:`main` under a name no submodule takes: importing ``radarnode.cli.main`` (the first command does) puts that
+#: module in this package's namespace as ``main`` (an independent tester: a second :func:`program` in one process
+#: called the module)
+_command_line = main
+
+
 def program() -> None:
     """The ``radarnode`` program (the console script, ``python -m radarnode``): :func:`main` on the process's command
     line, then the process ends with its status. The objects its start froze (radarnode.cli.heap) stay frozen: given
-    back to the collector, Python's last collection at exit scanned them all once more, some 50 ms of every command
-    (``radarnode log`` of 300 s: 58–117 ms, median 75, from the command's return to the process's end; 18–21 ms with
-    them frozen). Objects made by the command itself are collected at exit as before."""
-    raise SystemExit(main(ending=True))
+    back to the collector, Python's last collection at exit scanned them all once more, some 50 ms of a command that
+    ran (``radarnode log`` of 300 s: 51–115 ms, median 65–75, from the command's return to the process's end; 17–28 ms
+    with them frozen; argparse's ``--help``, ``--version`` and usage errors end before anything is frozen). Objects
+    made by the command itself are collected at exit as before.
+
+    What the command printed is written out here (:func:`_flushed`), where its failure is still an answer: output
+    small enough to wait in the buffer for Python's own flush at exit met a closed pipe or a full disk there, and
+    ended with Python's status 120 and "Exception ignored" (an independent tester: ``decode --max-cycles 1 … | head
+    -0``, ``--version >/dev/full``; larger output had already failed inside the command, which ends quietly on a
+    closed pipe and with one error line on a full disk)."""
+    try:
+        status = _command_line(ending=True)
+    except SystemExit as stop:            # argparse: --help, --version, a usage error
+        status = stop.code
+    raise SystemExit(_flushed(status))
+
+
+def _flushed(status):
+    """``status`` once standard output and error are written out: a closed pipe ends quietly (the rest goes to
+    /dev/null, as the command does for a large output); another failure (a full disk) is one error line and status 1
+    where the command had succeeded."""
+    import sys
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            if stream is not None:
+                stream.flush()
+        except BrokenPipeError:
+            _to_devnull(stream)
+        except OSError as exc:
+            _to_devnull(stream)
+            if stream is sys.stdout:
+                try:
+                    print(f"error: standard output: {exc.strerror or exc}", file=sys.stderr, flush=True)
+                except OSError:
+                    pass
+                if status in (0, None):
+                    status = 1
+    return status
+
+
+def _to_devnull(stream) -> None:
+    """``stream``'s file descriptor on /dev/null, so that what its buffer still holds goes nowhere, quietly."""
+    import os
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, stream.fileno())
+        os.close(devnull)
+    except (OSError, ValueError):
+        pass
