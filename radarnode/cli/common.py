@@ -457,6 +457,21 @@ def _signals_held():
 
 
 @contextlib.contextmanager
+def _replacing(path: str | os.PathLike, option: str, keep_suffix: bool):
+    """A new temporary file for ``path`` (:func:`_temporary`, made with the signals held), yielded by name: renamed
+    over ``path`` when the block ends, removed if it fails."""
+    with _signals_held() as release:
+        target, tmp = _temporary(path, option, keep_suffix=keep_suffix)
+        try:
+            release()
+            yield tmp
+            _commit(tmp, target, option)
+        except BaseException:
+            _discard(tmp, target)
+            raise
+
+
+@contextlib.contextmanager
 def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline: str | None = None):
     """Write ``path`` through a temporary name in the same directory, renamed over it only on success.
 
@@ -473,16 +488,9 @@ def atomic_output(path: str | os.PathLike, option: str, mode: str = "w", newline
         with _named_write_errors(path, option), f:
             yield f
         return
-    with _signals_held() as release:
-        target, tmp = _temporary(path, option, keep_suffix=False)
-        try:
-            release()
-            with _named_write_errors(path, option), open(tmp, mode, newline=newline, **kw) as f:
-                yield f
-            _commit(tmp, target, option)
-        except BaseException:
-            _discard(tmp, target)
-            raise
+    with _replacing(path, option, keep_suffix=False) as tmp, _named_write_errors(path, option), \
+            open(tmp, mode, newline=newline, **kw) as f:
+        yield f
 
 
 @contextlib.contextmanager
@@ -495,16 +503,8 @@ def atomic_path(path: str | os.PathLike, option: str):
         with _named_write_errors(path, option):
             yield str(path)
         return
-    with _signals_held() as release:
-        target, tmp = _temporary(path, option, keep_suffix=True)
-        try:
-            release()
-            with _named_write_errors(path, option):
-                yield tmp
-            _commit(tmp, target, option)
-        except BaseException:
-            _discard(tmp, target)
-            raise
+    with _replacing(path, option, keep_suffix=True) as tmp, _named_write_errors(path, option):
+        yield tmp
 
 
 def _umask() -> int:

@@ -149,8 +149,8 @@ def _main(argv: list[str] | None) -> int:
               "expected a smaller scenario, frame or run (--fidelity, radar.overrides, --duration)", file=sys.stderr)
         return 1
     except BrokenPipeError:  # output piped into `head` and the like: end quietly
-        import os
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        from radarnode.cli import _to_devnull
+        _to_devnull(sys.stdout)
         return 0
     except OSError as exc:   # a write that failed mid-way (a full disk, a vanished directory): one line, not a trace
         if args.debug:
