@@ -344,7 +344,7 @@ def test_a_late_first_step_draws_the_cycles_it_skips_without_holding_them():
 @pytest.mark.parametrize("t_s", [1e12, -2e7, 1.0000001e7])
 def test_a_step_beyond_the_longest_time_is_refused_at_every_level(t_s):
     """A step's time beyond ±MAX_STEP_TIME_S (about 116 days) is refused with the value and the limit, at every
-    level: the object level draws every cycle's numbers up to it, and 10¹² s would have run for decades."""
+    level: the object level draws every cycle's numbers up to it, and 10¹² s would have run for weeks."""
     import radarnode.radar.object_model as om
     from radarnode.errors import ConfigError
     from radarnode.radar.models import make_model

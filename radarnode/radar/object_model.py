@@ -210,8 +210,8 @@ def _real(x) -> bool:
 
 
 #: a model step's time lies within ±this, seconds (about 116 days; the command line runs at most 86,400 s): the
-#: object level draws every cycle's random numbers up to the one it steps to, about 7 µs a cycle, so a time of 10¹²
-#: s would have run for decades where it is refused now
+#: object level draws every cycle's random numbers up to the one it steps to (a first step at 10⁶ s: about 4 s), so
+#: a time of 10¹² s would have run for weeks where it is refused now
 MAX_STEP_TIME_S = 1e7
 
 
