@@ -725,6 +725,13 @@ def affine_scan(alpha: np.ndarray, beta: np.ndarray, x0: np.ndarray) -> np.ndarr
     return a * x0 + b
 
 
+def _draw_block(rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
+    """One block of DRAW_BLOCK cycles' random numbers for ``n`` actors, in the order a run draws them: the uniforms
+    ``u`` (DRAW_BLOCK, n), then the normals ``z`` (DRAW_BLOCK, 11, n) (a block drawn again, after a step back, from the
+    state it began at, is the same numbers)."""
+    return {"u": rng.random((DRAW_BLOCK, n)), "z": rng.standard_normal((DRAW_BLOCK, 11, n))}
+
+
 class ObjectModel:
     """Statistical object-level radar model with its own light tracker.
 
@@ -789,7 +796,7 @@ class ObjectModel:
             self._drawn_upto += 1
             self._block_states[self._drawn_upto] = self.rng.bit_generator.state
             self._block_states.pop(self._drawn_upto - KEEP_DRAW_STATES, None)
-            block = {"u": self.rng.random((DRAW_BLOCK, n)), "z": self.rng.standard_normal((DRAW_BLOCK, 11, n))}
+            block = _draw_block(self.rng, n)
             if self._drawn_upto >= first:
                 self._blocks[self._drawn_upto] = block
             # (the blocks of the cycles a step skipped are drawn, so that the generator stands where a run through
@@ -804,7 +811,7 @@ class ObjectModel:
                                      f"the last {KEEP_DRAW_STATES * DRAW_BLOCK} cycles only")
                 again = np.random.Generator(type(self.rng.bit_generator)())
                 again.bit_generator.state = self._block_states[b]
-                self._blocks[b] = {"u": again.random((DRAW_BLOCK, n)), "z": again.standard_normal((DRAW_BLOCK, 11, n))}
+                self._blocks[b] = _draw_block(again, n)
         off = k0 - first * DRAW_BLOCK
         return {name: np.concatenate([self._blocks[b][name] for b in range(first, last + 1)])[off:off + count]
                 for name in ("u", "z")}
