@@ -356,3 +356,20 @@ def test_a_step_beyond_the_longest_time_is_refused_at_every_level(t_s):
         model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(1), rc.signal)
         with pytest.raises(ConfigError, match=rf"t_s: value {t_s!r} is not allowed; .*within ±1e\+07"):
             model.step(t_s, om.RuntimeConfig(max_distance_m=rc.preset.max_range_m))
+
+
+
+@pytest.mark.parametrize("t_s", [9.999999e6, 1e7, -1e7])
+def test_a_step_just_below_and_at_the_longest_time_is_taken(t_s):
+    """Just below and at ±MAX_STEP_TIME_S a step is a step (at the detection level, which draws no cycle before it:
+    the object level would draw 139 million cycles' numbers first, some 40 s)."""
+    import radarnode.radar.object_model as om
+    from radarnode.radar.models import make_model
+    from radarnode.radar.setup import load_scenario, radar_config
+    from radarnode.scene.world import Scene
+    assert om.MAX_STEP_TIME_S == 1e7
+    sc = load_scenario(SCENARIOS / "highway_cut_in.yaml")
+    rc = radar_config(sc)
+    model = make_model("detection", Scene(sc), rc.preset, np.random.default_rng(1), rc.signal)
+    frame, view = model.step(t_s, om.RuntimeConfig(max_distance_m=rc.preset.max_range_m))
+    assert frame.t_s == t_s and np.all(np.isfinite(view.x_m))
