@@ -172,8 +172,6 @@ PATCH_BUCKETS = (3, 6, 12, 32)
 #: PatchFit.refit takes out of a patch the tones of the peaks within this many bins of its edge (a Hann tone's
 #: sidelobes 5 bins from its peak are 50 dB down)
 REFIT_REACH = 5
-#: … one product for the patches of each count of such peaks rounded up to a multiple of this
-SUBTRACT_GROUP = 4
 
 
 @functools.lru_cache(maxsize=16)
@@ -367,45 +365,41 @@ class PatchFit:
             axis_d, axis_r = self.axes[b]
             p = which[sel]
             x = _patches(rd, d[p], r[p], b, (1, 2, 0, 3)) if store is None else store.take(p, b)   # (S, J_d, C, J_r)
-            # the other peaks near enough to reach the patch: pairs (patch, peak), circular distances in bins
-            dd = (d[None, :] - d[p][:, None] + rows // 2) % rows - rows // 2
-            dr = (r[None, :] - r[p][:, None] + cols // 2) % cols - cols // 2
-            near = np.maximum(np.abs(dd), np.abs(dr)) <= b + far[None, :]
-            near[np.arange(p.size), p] = False
-            i, q = np.nonzero(near)
+            key = (b, p.tobytes(), far.tobytes())
+            pairs = None if store is None else store.pairs.get(key)
+            if pairs is None:
+                # the other peaks near enough to reach the patch: pairs (patch, peak), circular distances in bins
+                dd = (d[None, :] - d[p][:, None] + rows // 2) % rows - rows // 2
+                dr = (r[None, :] - r[p][:, None] + cols // 2) % cols - cols // 2
+                near = np.maximum(np.abs(dd), np.abs(dr)) <= b + far[None, :]
+                near[np.arange(p.size), p] = False
+                i, q = np.nonzero(near)
+                # each patch's neighbours go in slots, padded with zeros to the most any patch of the call has
+                count = np.bincount(i, minlength=p.size)
+                slot = np.arange(i.size) - np.repeat(np.cumsum(count) - count, count)     # i is sorted
+                pairs = (i, q, slot, dd[i, q], dr[i, q], int(count.max(initial=0)))
+                if store is not None:
+                    store.pairs[key] = pairs
+            i, q, slot, dd, dr, most = pairs
             if i.size:
                 # W(i − δ) at the patch's offsets from the patch's cell: the axes' response() carries the factor
                 # e^{−iπδ(L−1)/L} of the tone's own offset, so a tone Δ whole bins away gets e^{iπΔ(L−1)/L}
                 ld, lr = axis_d.length, axis_r.length
-                wd = axis_d.response(dd[i, q] + fd[q]) * np.exp(1j * np.pi * dd[i, q] * (ld - 1) / ld)[:, None]
-                wr = axis_r.response(dr[i, q] + fr[q]) * np.exp(1j * np.pi * dr[i, q] * (lr - 1) / lr)[:, None]
-                # Σ over a patch's neighbours of wd ⊗ a ⊗ wr: one product per patch over its neighbours,
-                # (J_d·C × K) @ (K × J_r), the patches grouped by their count of neighbours rounded up to
-                # SUBTRACT_GROUP (padded with zeros to it: one padding to the most any patch has did 1.7× the
-                # arithmetic on the post-lined highway, and zeroed 8 MB a call)
-                count = np.bincount(i, minlength=p.size)
-                slot = np.arange(i.size) - np.repeat(np.cumsum(count) - count, count)     # i is sorted
-                j, c = wd.shape[1], amp.shape[1]
-                cap = -(-count // SUBTRACT_GROUP) * SUBTRACT_GROUP
-                at = np.empty(p.size, dtype=np.int64)
-                for size in np.unique(cap[cap > 0]):                                      # a few sizes
-                    members = np.flatnonzero(cap == size)
-                    at[:] = -1
-                    at[members] = np.arange(members.size)
-                    pair = np.flatnonzero(at[i] >= 0)
-                    # the pairs' factors placed in the group's padded slots (zeros: no neighbour), the tones wd ⊗ a
-                    # formed there: each pair's values as its own product, without a (pairs × J_d × C) copy scattered
-                    # into a zeroed (patches × slots × J_d × C) array (memory traffic: 8 of the 40 ms of a frame)
-                    place = (at[i[pair]], slot[pair])
-                    w_pad = np.zeros((members.size, size, j), dtype=np.complex128)
-                    a_pad = np.zeros((members.size, size, c), dtype=np.complex128)
-                    right = np.zeros((members.size, size, j), dtype=np.complex128)
-                    w_pad[place], a_pad[place], right[place] = wd[pair], amp[q[pair]], wr[pair]
-                    left = w_pad[:, :, :, None] * a_pad[:, :, None, :]                      # (members, slots, J_d, C)
-                    x[members] -= (left.reshape(members.size, -1, j * c).transpose(0, 2, 1) @ right
-                                   ).reshape(members.size, j, c, j)
+                wd = axis_d.response(dd + fd[q]) * np.exp(1j * np.pi * dd * (ld - 1) / ld)[:, None]
+                wr = axis_r.response(dr + fr[q]) * np.exp(1j * np.pi * dr * (lr - 1) / lr)[:, None]
+                # the patch's tones Σ_n wd_n ⊗ a_n ⊗ wr_n are not formed (J_d·C·J_r values a neighbour, the bulk of a
+                # refit's arithmetic): the fit reads a patch only through its collapses on a template of one axis,
+                # and a tone's collapse is its amplitudes times one inner product (PatchFit._fit_patches)
+                shape = (p.size, most)
+                w_pad = np.zeros(shape + (wd.shape[1],), dtype=np.complex128)
+                a_pad = np.zeros(shape + (amp.shape[1],), dtype=np.complex128)
+                r_pad = np.zeros(shape + (wr.shape[1],), dtype=np.complex128)
+                w_pad[i, slot], a_pad[i, slot], r_pad[i, slot] = wd, amp[q], wr
+                tones = (w_pad, a_pad, r_pad)
+            else:
+                tones = None
             return self._fit_patches(x, fd[p], fr[p], new[sel], axis_d, axis_r,
-                                     self.REFIT_ROUNDS if rounds is None else rounds)
+                                     self.REFIT_ROUNDS if rounds is None else rounds, tones)
 
         return _per_bucket(self.buckets, new, fd[which], fr[which], rd.shape[0], fit)
 
@@ -425,9 +419,10 @@ class PatchFit:
         """:meth:`__call__` for peaks whose patches fit in the axes' size."""
         return self._fit_patches(_patches(rd, d, r, axis_d.max_half, (1, 2, 0, 3)), fd, fr, halves, axis_d, axis_r)
 
-    def _fit_patches(self, x, fd, fr, halves, axis_d: _PatchAxis, axis_r: _PatchAxis, rounds=None):
+    def _fit_patches(self, x, fd, fr, halves, axis_d: _PatchAxis, axis_r: _PatchAxis, rounds=None, tones=None):
         """:meth:`_fit` on the peaks' patches ``x``, shape (K, J_d, C, J_r) (:func:`_patches`' axes (1, 2, 0, 3));
-        ``rounds``: the searches' grids (default ``ROUNDS``)."""
+        ``rounds``: the searches' grids (default ``ROUNDS``); ``tones``: (wd, a, wr) of shapes (K, N, J_d), (K, N, C),
+        (K, N, J_r), tones Σ_n wd_n ⊗ a_n ⊗ wr_n to take out of each patch (zeros in unused slots), or None."""
         m, k = axis_d.max_half, x.shape[0]
         c, j = x.shape[2], 2 * m + 1
         # one layout, two views: collapsing over Doppler is a (1 × J_d) @ (J_d × C·J_r) product per peak, over range
@@ -435,9 +430,21 @@ class PatchFit:
         by_d, by_r = x.reshape(k, j, c * j), x.reshape(k, j * c, j)
         # R⁻¹ is real: its products run on real and imaginary parts side by side (_real_left)
         inv_d, inv_r = axis_d.inverse_real[halves], axis_r.inverse_real[halves]          # (K, J, J)
+        if tones is not None:
+            t_d, t_a, t_r = tones
+            t_a = t_a.transpose(0, 2, 1)                                                 # (K, C, N)
+
+        def over_doppler(g):          # Σ_i conj(g_i)·X_c[i, j] for templates g (K, J_d): (K, C, J_r)
+            out = (g[:, None, :].conj() @ by_d).reshape(k, c, j)
+            if tones is not None:     # a tone's share: a_c·(g^H wd)·wr_j
+                out -= (t_a * (t_d @ g.conj()[:, :, None]).transpose(0, 2, 1)) @ t_r
+            return out
 
         def over_range(g):            # Σ_j conj(g_j)·X_c[i, j] for templates g (K, J_r): (K, C, J_d)
-            return (by_r @ g.conj()[:, :, None]).reshape(k, j, c).transpose(0, 2, 1)
+            out = (by_r @ g.conj()[:, :, None]).reshape(k, j, c).transpose(0, 2, 1)
+            if tones is not None:     # a tone's share: a_c·(g^H wr)·wd_i
+                out = out - (t_a * (t_r @ g.conj()[:, :, None]).transpose(0, 2, 1)) @ t_d
+            return out
 
         gd = _real_left(inv_d, axis_d.response(fd)[:, :, None])[:, :, 0]                # R⁻¹h
         for span, points in self.ROUNDS if rounds is None else rounds:
@@ -445,7 +452,7 @@ class PatchFit:
             # range with the Doppler template fixed (the patch collapsed over Doppler), then Doppler likewise;
             # u = R⁻¹v once, so each candidate costs its template and one product: Σ_c |h^H u_c|² / h^H R⁻¹ h.
             # Each collapse uses the other axis' best grid template (within half a step of its estimate)
-            u = _real_left(inv_r, (gd[:, None, :].conj() @ by_d).reshape(k, c, j).transpose(0, 2, 1))   # (K, J_r, C)
+            u = _real_left(inv_r, over_doppler(gd).transpose(0, 2, 1))                   # (K, J_r, C)
             fr, hr = self._search(axis_r, u.transpose(0, 2, 1), fr, grid, halves)
             v = _real_left(inv_d, over_range(_real_left(inv_r, hr[:, :, None])[:, :, 0]).transpose(0, 2, 1))
             fd, hd = self._search(axis_d, v.transpose(0, 2, 1), fd, grid, halves)
@@ -587,21 +594,30 @@ class _ShiftTable:
 
 
 class PatchStore:
-    """The patches of peaks (``d``, ``r``) of one map ``rd``, cut once a size and handed out as copies:
-    :meth:`PatchFit.refit`'s passes fit the same peaks of the same map again (cutting them was a tenth of a refit on
-    the post-lined highway). The map must not change while the store is in use."""
+    """The patches of peaks (``d``, ``r``) of one map ``rd``, cut once a size, and the pairs (patch, neighbour) of
+    :meth:`PatchFit.refit`, found once: its passes fit the same peaks of the same map again, with the same
+    neighbours (cutting the patches was a tenth of a refit on the post-lined highway, copying them for each pass
+    another). The patches are handed out read only, the same array to every call that asks for the same peaks; the
+    map must not change while the store is in use."""
 
     def __init__(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray) -> None:
         self.rd, self.d, self.r = rd, np.asarray(d), np.asarray(r)
         self._cut: dict[int, tuple[np.ndarray, np.ndarray]] = {}      # half-width -> (patches, which are cut)
+        self._given: dict[tuple, np.ndarray] = {}                     # (half-width, peaks) -> their patches
+        self.pairs: dict[tuple, tuple] = {}                           # PatchFit.refit's pairs, by its key
 
     def holds(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray) -> bool:
         """Whether this is the store of map ``rd`` and peaks (``d``, ``r``)."""
         return rd is self.rd and np.array_equal(d, self.d) and np.array_equal(r, self.r)
 
     def take(self, which: np.ndarray, m: int) -> np.ndarray:
-        """A copy of the (2m + 1) × (2m + 1) patches of the peaks ``which``, as :func:`_patches` with axes
-        (1, 2, 0, 3): shape (len(which), J_d, channel, J_r)."""
+        """The (2m + 1) × (2m + 1) patches of the peaks ``which``, as :func:`_patches` with axes (1, 2, 0, 3): shape
+        (len(which), J_d, channel, J_r), read only (shared by every call for the same peaks and size)."""
+        which = np.asarray(which, dtype=np.int64)
+        key = (m, which.tobytes())
+        given = self._given.get(key)
+        if given is not None:
+            return given
         got = self._cut.get(m)
         if got is None:                 # rows only written where a peak is cut: the rest of the memory stays untouched
             j = 2 * m + 1
@@ -612,7 +628,9 @@ class PatchStore:
         if need.size:
             cut[need] = _patches(self.rd, self.d[need], self.r[need], m, (1, 2, 0, 3))
             done[need] = True
-        return cut[which]
+        given = self._given[key] = cut[which]
+        given.flags.writeable = False
+        return given
 
 
 def _patches(rd: np.ndarray, d: np.ndarray, r: np.ndarray, m: int, axes: tuple[int, ...] = (1, 0, 2, 3)
