@@ -784,15 +784,17 @@ def test_an_aliased_speed_leaves_its_range_doppler_coupling_in_the_range_at_ever
     ("ars408_like", 60.0, False),       # beyond the staggered span, two wraps of the first sequence: 5.6 m
     ("ars408_like", 56.0, False),       # beyond the span every detection is ambiguous: a track no unambiguous one
                                         # measured is never listed (one wrap, 2.8 m, was inside the gate: listed)
-    ("fast_chirp", -30.0, True),        # one wrap: 1.9 m
+    ("fast_chirp", -30.0, True),        # one wrap: 1.9 m, and the range the track walks resolves it
 ])
 def test_an_aliased_target_is_an_object_at_the_object_level_where_the_tracker_follows_it(preset, v, listed):
-    """A target reported at an aliased speed moves (true − aliased) × the cycle away from where its track predicts
-    it. The detection and signal levels' tracker follows it at the aliased speed where that is inside its gate, and
-    never confirms it beyond; the object level listed it every cycle at the aliased speed whatever the preset (an
-    oncoming car on mimo12 as a car receding at +24.6 m/s where the other levels listed nothing; an independent
-    tester's finding). Now both levels list it, or neither, and at the aliased speed. With staggered ramps a track
-    whose speed only ambiguous detections measured is not listed at all (the tracker's ``alias_span_mps``)."""
+    """A target reported at an aliased speed moves (true − aliased) × the cycle away from where a track at that
+    speed predicts it. The detection and signal levels' tracker follows it where that is inside its gate, and never
+    confirms it beyond; the object level listed it every cycle at the aliased speed whatever the preset (an oncoming
+    car on mimo12 as a car receding at +24.6 m/s where the other levels listed nothing; an independent tester's
+    finding). Now both levels list it, or neither. Where they list it (a single ramp whose one wrap lies inside the
+    gate) the range the track walks resolved the wrap: at its true speed (it was listed at the aliased one until
+    2026-12-05). With staggered ramps a track whose speed only ambiguous detections measured is not listed at all
+    (the tracker's ``alias_span_mps``)."""
     x = 40.0 if v >= 0 else 120.0
     heading = "" if v >= 0 else ", heading_deg: 180"
     sc = scenario(f"  - {{id: a, class: point, x_m: {x}, y_m: 0.0, speed_mps: {abs(v)}{heading}, rcs_dbsm: 25}}\n",
@@ -811,7 +813,7 @@ def test_an_aliased_target_is_an_object_at_the_object_level_where_the_tracker_fo
             if k >= 3:
                 listed_at.append(bool(near.any()))
                 if near.any():
-                    assert abs(o.vrel_long_mps[near][0] - alias) < 1.5, (level, o.vrel_long_mps[near], alias)
+                    assert abs(o.vrel_long_mps[near][0] - v) < 1.5, (level, o.vrel_long_mps[near], v, alias)
         found[level] = np.mean(listed_at)
     if listed:
         assert found["object"] >= 0.8 and found["detection"] >= 0.5, found
@@ -1066,6 +1068,100 @@ def test_the_tracker_takes_an_ambiguous_detection_at_its_tracks_wrap_and_lists_n
     from radarnode.perception.tracker import ObjectTracker
     lists = run(ObjectTracker(), [AMBIG_AMBIGUOUS] * 5)
     assert len(lists[-1]) >= 1 and lists[-1].vrel_long_mps[0] > 0.0
+
+
+def test_a_single_ramps_tracker_resolves_the_wrap_from_the_range_its_track_walks():
+    """fast_chirp (±18.99 m/s, cycle 50 ms: one wrap moves a target 1.9 m a cycle, within the tracker's 2.85-m
+    gate), ego standing. A car closing at −25 m/s is measured at +12.97 m/s (AmbigState 1) every cycle: the tracker
+    ``tracker_for`` gives the preset at its cycle resolves the wrap from the ranges its track measured, and lists it
+    from its third hit (RANGE_WALK_MIN_HITS), at −25 m/s (the tracker before, ``ObjectTracker()``, listed it receding
+    at +12.97 from its second). A car at −10 m/s (inside ±v_max) keeps its speed, also with 0.15 m of noise on every
+    range over 200 cycles; so does a truck at −8 m/s whose second detection lies 2 m beyond its first (another
+    reflector: over two hits a wrap, which moved a track of it to +30 m/s and listed it there when two hits
+    resolved). A single ramp whose wrap lies beyond the gate (mimo12 at 72 ms: 4.7 m) gets no range walk, nor does a
+    tracker without a span."""
+    from radarnode.perception.tracker import ObjectTracker
+    from radarnode.radar.models import tracker_for
+    p, dt = PRESETS["fast_chirp"], 0.05
+    tracker = tracker_for(p, dt)
+    assert tracker.range_walk and tracker.alias_span_mps == pytest.approx(2 * p.alias_speed_mps)
+    assert not tracker_for(PRESETS["mimo12"], 0.072).range_walk and not tracker_for(p).range_walk
+    with pytest.raises(ValueError, match="range_walk: True is not allowed without alias_span_mps"):
+        ObjectTracker(range_walk=True)
+
+    def run(tr, v, cycles=12, noise=0.0, step=0.0):
+        rng = np.random.default_rng(3)
+        out = []
+        for k in range(cycles):
+            r = 120.0 + v * dt * k + noise * rng.standard_normal() + (step if k else 0.0)
+            out.append(tr.step(k * dt, _cycle(r, float(_alias(v, p)), AMBIG_AMBIGUOUS), (0.0, 0.0)))
+        return out
+
+    lists = run(tracker_for(p, dt), -25.0)
+    listed = [o for o in lists if len(o)]
+    assert [len(o) for o in lists[:2]] == [0, 0] and len(listed) == 10 and all(len(o) == 1 for o in listed)
+    assert all(o.vrel_long_mps[0] == pytest.approx(-25.0, abs=0.5) for o in listed), [o.vrel_long_mps for o in listed]
+    assert all(o.dyn_prop[0] == DYN_ONCOMING for o in listed)
+    before = [o for o in run(ObjectTracker(), -25.0) if len(o)]
+    assert before and all(o.vrel_long_mps[0] == pytest.approx(_alias(-25.0, p), abs=0.5) for o in before)
+    for noise, cycles in ((0.0, 12), (0.15, 200)):
+        listed = [o for o in run(tracker_for(p, dt), -10.0, cycles, noise) if len(o)]
+        assert len(listed) >= cycles - 3 and all(np.all(np.abs(o.vrel_long_mps + 10.0) < 1.0) for o in listed)
+    listed = [o for o in run(tracker_for(p, dt), -8.0, 12, step=2.0) if len(o)]
+    assert all(np.all(np.abs(o.vrel_long_mps + 8.0) < 1.0) for o in listed), [o.vrel_long_mps for o in listed]
+
+
+def test_a_car_closing_beyond_a_single_ramps_span_is_listed_at_its_true_speed_at_every_level():
+    """fast_chirp, ego standing, a car closing at 25 m/s from 120 m (measured at +12.97 m/s, one wrap away): an
+    independent tester found it listed as `moving` away at +13 m/s at every level, and split between two
+    alternating IDs at the detection and signal levels. Now each level lists it in at least 55 of the 58 cycles from
+    its third on (the hits that resolve the wrap), always within 0.5 m/s of its true range rate and as oncoming,
+    under one ID; its clusters keep the aliased speed, flagged ambiguous."""
+    sc = scenario("  - {id: onc, class: car, x_m: 120.0, lane: 0, speed_mps: 25.0, heading_deg: 180.0}\n",
+                  ego="{speed_mps: 0.0}", radar="{preset: fast_chirp, output: objects}",
+                  road="{lanes: 2, lane_width_m: 3.5, ego_lane: 0}", duration=3.0, seed=4)
+    p = radar_config(sc).preset
+    for level in ("object", "detection", "signal"):
+        model = make_model(level, Scene(sc), p, np.random.default_rng(sc.seed), radar_config(sc).signal)
+        rows, ids, cluster_rates = 0, set(), []
+        for k in range(60):
+            frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m, clusters=True))
+            mine = np.flatnonzero(frame.objects.actor_index == 0)
+            assert np.all(np.abs(frame.objects.vrel_long_mps[mine] - view.vx_mps[0]) < 0.5), (level, k)
+            assert np.all(frame.objects.dyn_prop[mine] == DYN_ONCOMING), (level, k)
+            rows += mine.size
+            ids.update(frame.objects.id[mine].tolist())
+            near = np.abs(frame.clusters.dist_long_m - view.x_m[0]) < 3.0
+            cluster_rates += list(zip(frame.clusters.vrel_long_mps[near], frame.clusters.ambig_state[near]))
+        assert rows >= 55 and len(ids) == 1, (level, rows, ids)
+        assert cluster_rates and all(v > 0.0 and st == AMBIG_AMBIGUOUS for v, st in cluster_rates), level
+
+
+@pytest.mark.parametrize("factor, listed", [(0.99, True), (1.0 - 1e-9, True), (1.01, False), (2.0, False)])
+@pytest.mark.parametrize("level", ["object", "detection"])
+def test_a_single_ramps_aliased_target_is_listed_at_its_true_speed_within_the_gate_and_not_beyond(level, factor,
+                                                                                                   listed):
+    """The switch of the range walk (models.tracker_for: one wrap's drift a cycle within ALIAS_GATE_M) and of the
+    object level's listing of an aliased target swept across together: mimo12's one wrap (64.7 m/s) with the cycle
+    set to 0.99, 1, 1.01 and 2 times the gate over it, a point closing at 39.9 m/s (measured at +24.8). Within the
+    gate both levels list it, at its true speed in every cycle they do (never at the aliased one); beyond it neither
+    lists it."""
+    from radarnode.perception.tracker import ALIAS_GATE_M
+    p0 = PRESETS["mimo12"]
+    cycle = factor * ALIAS_GATE_M / (2.0 * p0.alias_speed_mps)
+    sc = scenario("  - {id: a, class: point, x_m: 100.0, y_m: 0.0, speed_mps: 19.9, heading_deg: 180, rcs_dbsm: 25}\n",
+                  ego="{speed_mps: 20.0}", radar=f"{{preset: mimo12, overrides: {{cycle_period_s: {cycle!r}}}}}",
+                  duration=1.5)
+    p = radar_config(sc).preset
+    model = make_model(level, Scene(sc), p, np.random.default_rng(1), radar_config(sc).signal)
+    seen = []
+    for k in range(12):
+        frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m))
+        at = np.abs(frame.objects.dist_long_m - view.range_m[0]) < 6.0
+        assert np.all(np.abs(frame.objects.vrel_long_mps[at] - view.vx_mps[0]) < 1.0), (k, frame.objects.vrel_long_mps)
+        if k >= 3:
+            seen.append(bool(at.any()))
+    assert (np.mean(seen) >= 0.8) if listed else not any(seen), (factor, seen)
 
 
 @pytest.mark.parametrize("v, listed", [

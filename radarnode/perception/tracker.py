@@ -34,6 +34,18 @@ from radarnode.perception.types import (
 GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
 TRACKER_SIGMA_POS_M = 0.5     # a detection group's position noise (ObjectTracker's default)
 CONFIRM_HITS, CONFIRM_WINDOW = 2, 3
+#: how far along the line of sight a detection may lie from a young track's prediction and still be its (the χ² gate
+#: on a radial residual whose variance is the track's and the measurement's position noise, 2·σ²): 2.85 m. A target
+#: a single ramp reports at an aliased speed lands (true − aliased)·cycle from the prediction of a track that took
+#: that speed: within it the track follows the target, beyond it never confirms it
+ALIAS_GATE_M = math.sqrt(GATE_CHI2_3DOF * 2.0) * TRACKER_SIGMA_POS_M
+#: a single ramp's track is listed once the ranges of this many of its hits resolved its wrap (ObjectTracker(
+#: range_walk=True)): two hits cannot tell a wrap from a step between a long vehicle's reflectors (a truck's second
+#: track on fast_chirp was moved a wrap by one and listed at +30 m/s where the truck closed at 8 m/s); three can (a
+#: step that mimics a wrap is as long as the tracker's gate)
+RANGE_WALK_MIN_HITS = 3
+#: … of the last this many hits
+RANGE_WALK_HITS = 4
 COAST_CYCLES = 3
 #: a confirmed track standing still over ground coasts longer: the ego motion predicts where it is, and a
 #: stopped car in the training ring of a bridge deck's CA-CFAR is detected in only a third of the cycles
@@ -481,6 +493,13 @@ def mahalanobis3(nu: np.ndarray, s: np.ndarray) -> np.ndarray:
     return np.where((s00 > 0) & (d1 > 0) & (d2 > 0) & np.isfinite(out), out, np.inf)
 
 
+def follows_one_wrap(span_mps: float, period_s: float) -> bool:
+    """Whether a track at a single ramp's aliased speed follows its target, whose position one wrap (``span_mps``)
+    moves from the track's prediction every cycle (``period_s``): within the gate, ALIAS_GATE_M. Only then does the
+    range the track walks resolve the wrap (ObjectTracker(range_walk=True))."""
+    return span_mps * period_s <= ALIAS_GATE_M
+
+
 def wrap_rate(nu: np.ndarray, span_mps: float) -> np.ndarray:
     """A range-rate difference ``nu`` taken modulo ``span_mps`` into −span/2 … span/2."""
     return np.mod(nu + 0.5 * span_mps, span_mps) - 0.5 * span_mps
@@ -548,12 +567,25 @@ class ObjectTracker:
         (AmbigState 1, unpaired) measures its range rate modulo this span. It joins a track at the wrap nearest the
         track's; a track started from such groups is not listed until an unambiguous group joins it (at the wrap
         that group shows: its speed is then moved by whole spans). Without it (a single ramp, which flags every
-        moving detection ambiguous and can resolve none) range rates are taken as measured.
+        moving detection ambiguous) range rates are taken as measured.
+    range_walk : with a single ramp's 2·v_max as ``alias_span_mps``: no detection resolves a wrap, and the range a
+        track walks does (a single-PRF radar's tracker does the same). An ambiguous group joins a track at the wrap
+        nearest the track's speed. After each hit of a track started from one, where the slope of its measured ranges
+        (least squares over its last RANGE_WALK_HITS hits, from its second) lies within a quarter span of one wrap of
+        its range rate, the track's velocity along the line of sight moves there by whole spans (none where it is the
+        track's own); the track is listed once such a slope over RANGE_WALK_MIN_HITS hits or more resolved it. It can
+        only resolve a target it follows: one wrap's drift a cycle within ALIAS_GATE_M (:func:`follows_one_wrap`,
+        models.tracker_for).
     """
 
     def __init__(self, sigma_pos_m: float = TRACKER_SIGMA_POS_M, sigma_vr_mps: float = 0.3, max_objects: int = 100,
-                 sigma_az_rad: float = math.radians(0.3), alias_span_mps: float | None = None) -> None:
+                 sigma_az_rad: float = math.radians(0.3), alias_span_mps: float | None = None,
+                 range_walk: bool = False) -> None:
+        if range_walk and not alias_span_mps:
+            raise ValueError("range_walk: True is not allowed without alias_span_mps; expected the single ramp's "
+                             "2·v_max as alias_span_mps")
         self.alias_span_mps = alias_span_mps
+        self.range_walk = range_walk
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
         self.sigma_az_rad = sigma_az_rad
         self.max_objects = max_objects
@@ -578,6 +610,10 @@ class ObjectTracker:
         self.vh = np.zeros((0, ACCEL_WINDOW, 2))
         self.th = np.zeros((0, ACCEL_WINDOW))
         self.nh = np.zeros(0, dtype=np.int64)
+        # the last RANGE_WALK_HITS measured ranges of each track and their times, oldest first (range_walk)
+        self.rh = np.zeros((0, RANGE_WALK_HITS))
+        self.rth = np.zeros((0, RANGE_WALK_HITS))
+        self.rn = np.zeros(0, dtype=np.int64)
         # the same for the sensor's own velocity over ground (sensor axes): a standing object's relative acceleration
         self.svh = np.zeros((1, ACCEL_WINDOW, 2))
         self.sth = np.zeros((1, ACCEL_WINDOW))
@@ -606,6 +642,8 @@ class ObjectTracker:
             ti, gi = np.array(pairs).T
             if span:
                 z = self._unwrap(ti, gi, z, groups.ambiguous, span)
+            if self.range_walk:
+                self._walk_history(ti, z[gi], t_s)
             hop = self._hops(ti, z[gi], sensor_velocity)
             self.x[ti], self.p[ti] = update(self.x[ti], self.p[ti], z[gi], r_cov[gi])
             if hop.any():
@@ -617,6 +655,8 @@ class ObjectTracker:
                 self.x[t], self.p[t] = tangential_update(self.x[t], self.p[t], z[g], groups.velocity[g],
                                                          groups.velocity_cov[g])
             hit[ti], used[gi] = True, True
+            if self.range_walk:
+                self._walk(ti[~self.resolved[ti]], span)
             _, shows = self._heading(ti, sensor_velocity)
             radial = ~_standing_rate(z[gi], sensor_velocity)
             # a joined near body's velocity fitted from its detections' radial speeds measures the motion across the
@@ -688,6 +728,46 @@ class ObjectTracker:
             self.nh[t] = 0                  # its velocities so far were at another wrap: the slope starts again
         self.resolved[ti[~amb]] = True
         return z
+
+    def _walk_history(self, idx: np.ndarray, z: np.ndarray, t_s: float) -> None:
+        """Tracks ``idx`` took detections ``z`` (x, y, range rate) at ``t_s``: their measured ranges join the
+        histories the range walk is measured on (:meth:`_walk`)."""
+        if idx.size == 0:
+            return
+        self.rh[idx] = np.roll(self.rh[idx], -1, axis=1)
+        self.rth[idx] = np.roll(self.rth[idx], -1, axis=1)
+        self.rh[idx, -1], self.rth[idx, -1] = np.hypot(z[:, 0], z[:, 1]), t_s
+        self.rn[idx] = np.minimum(self.rn[idx] + 1, RANGE_WALK_HITS)
+
+    def _walk(self, idx: np.ndarray, span: float) -> None:
+        """Unresolved tracks ``idx``, just updated (range_walk): where the slope of their last measured ranges (least
+        squares over two hits or more) lies within a quarter ``span`` of a wrap of their range rate, the velocity
+        along the line of sight moves by the whole spans to it (from the second hit: a track at the aliased speed
+        loses its target at the third), and with at least RANGE_WALK_MIN_HITS hits the track is resolved."""
+        idx = idx[self.rn[idx] >= 2]
+        if idx.size == 0:
+            return
+        n = self.rn[idx]
+        use = np.arange(RANGE_WALK_HITS)[None, :] >= RANGE_WALK_HITS - n[:, None]      # the hits held (newest last)
+        t, r = np.where(use, self.rth[idx], 0.0), np.where(use, self.rh[idx], 0.0)
+        t_mean = t.sum(axis=1) / n
+        r_mean = r.sum(axis=1) / n
+        dt = np.where(use, self.rth[idx] - t_mean[:, None], 0.0)
+        den = np.sum(dt * dt, axis=1)
+        slope = np.sum(dt * np.where(use, self.rh[idx] - r_mean[:, None], 0.0), axis=1) / np.maximum(den, 1e-12)
+        h, _ = measure(self.x[idx])
+        miss = slope - h[:, 2]
+        k = np.round(miss / span)
+        sure = (np.abs(miss - k * span) <= 0.25 * span) & (den > 0.0)
+        self.resolved[idx[sure & (n >= RANGE_WALK_MIN_HITS)]] = True
+        move = sure & (k != 0.0)
+        if move.any():
+            tr = idx[move]
+            rng = np.maximum(np.hypot(self.x[tr, 0], self.x[tr, 1]), 1e-3)
+            shift = k[move] * span
+            self.x[tr, 2] += shift * self.x[tr, 0] / rng
+            self.x[tr, 3] += shift * self.x[tr, 1] / rng
+            self.nh[tr] = 0                 # its velocities so far were at another wrap: the slope starts again
 
     def _hops(self, idx: np.ndarray, z: np.ndarray, sensor_velocity) -> np.ndarray:
         """Which of the tracks ``idx``, each about to take detection ``z`` (x, y, range rate), stand still (never
@@ -802,6 +882,11 @@ class ObjectTracker:
         self.vh = np.concatenate([self.vh, np.zeros((k, ACCEL_WINDOW, 2))])
         self.th = np.concatenate([self.th, np.zeros((k, ACCEL_WINDOW))])
         self.nh = np.concatenate([self.nh, np.zeros(k, dtype=np.int64)])
+        self.rh = np.concatenate([self.rh, np.zeros((k, RANGE_WALK_HITS))])
+        self.rth = np.concatenate([self.rth, np.zeros((k, RANGE_WALK_HITS))])
+        self.rn = np.concatenate([self.rn, np.zeros(k, dtype=np.int64)])
+        if self.range_walk:
+            self._walk_history(np.arange(len(self.x) - k, len(self.x)), z[idx], self.last_t)
 
     def steady_yaw_rate(self) -> float:
         """The yaw rate as a bend's (the mean over the last ``BEND_STEADY_S``) where it kept its sign and stayed within
@@ -875,7 +960,7 @@ class ObjectTracker:
     def _delete(self, gone: np.ndarray) -> None:
         keep = ~gone
         for name in ("x", "p", "hist", "misses", "confirmed", "resolved", "ids", "was_moving", "evidence", "size",
-                     "power", "tag", "vh", "th", "nh"):
+                     "power", "tag", "vh", "th", "nh", "rh", "rth", "rn"):
             setattr(self, name, getattr(self, name)[keep])
 
     def _object_list(self, sensor_velocity) -> ObjectList:

@@ -20,7 +20,8 @@ import numpy as np
 from radarnode.errors import ConfigError
 from radarnode.dsp.spectra import noncoherent_power, range_doppler
 from radarnode.radar.chain import DspChain
-from radarnode.perception.tracker import GROUP_EPS_LONG_M, GROUP_EPS_M, ObjectTracker, clusters_from_detections
+from radarnode.perception.tracker import (GROUP_EPS_LONG_M, GROUP_EPS_M, ObjectTracker, clusters_from_detections,
+                                         follows_one_wrap)
 from radarnode.perception.types import ClusterList, Detections, RadarFrame
 from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.calibration import RESOLUTION
@@ -35,12 +36,20 @@ from radarnode.radar.signal_model import check_cube_memory, decimation_for, synt
 from radarnode.scene.world import Scene, SensorView
 
 
-def tracker_for(preset: RadarPreset) -> ObjectTracker:
-    """The detection and signal levels' tracker for ``preset``: with staggered ramps it takes an unpaired
-    detection's range rate modulo the first sequence's 2·v_max, and lists no track whose speed only such detections
-    measured (:class:`radarnode.perception.tracker.ObjectTracker`)."""
-    span = 2.0 * preset.alias_speed_mps if preset.stagger_chirp_period_s > 0 else None
-    return ObjectTracker(alias_span_mps=span)
+def tracker_for(preset: RadarPreset, period_s: float | None = None) -> ObjectTracker:
+    """The detection and signal levels' tracker for ``preset`` run every ``period_s``: with staggered ramps it takes
+    an unpaired detection's range rate modulo the first sequence's 2·v_max, and lists no track whose speed only such
+    detections measured; with a single ramp whose one wrap moves a target less than the tracker's gate in a cycle
+    (:func:`~radarnode.perception.tracker.follows_one_wrap`: ``fast_chirp``), it follows an aliased target and lists
+    a track once the range it walks resolved the wrap (:class:`radarnode.perception.tracker.ObjectTracker`,
+    ``range_walk``). A single ramp with a longer wrap (``mimo12``, ``acc_lrr``) never follows an aliased target: its
+    range rates are taken as measured."""
+    if preset.stagger_chirp_period_s > 0:
+        return ObjectTracker(alias_span_mps=2.0 * preset.alias_speed_mps)
+    span = 2.0 * preset.alias_speed_mps
+    if period_s is not None and follows_one_wrap(span, period_s):
+        return ObjectTracker(alias_span_mps=span, range_walk=True)
+    return ObjectTracker()
 
 
 def reportable(preset: RadarPreset, det: Detections, config: RuntimeConfig) -> np.ndarray:
@@ -63,7 +72,7 @@ class ScattererModel:
         self.preset = preset
         self.rng = rng
         self.options = options
-        self.tracker = tracker_for(preset)
+        self.tracker = tracker_for(preset, scene.scenario.period_s)
         self.cycle = 0
         self.info = StepInfo()
         self.keep_cube = keep_cube
@@ -449,7 +458,7 @@ class AutoModel:
         self.options = options
         self.clusters_wanted = clusters_wanted
         self.preset = preset
-        self.tracker = tracker_for(preset)
+        self.tracker = tracker_for(preset, scene.scenario.period_s)
         cfar = self.detection.statistic.cfar
         #: the CA-CFAR training ring's reach (range bins, Doppler bins) from a cell under test
         self.ring = (cfar.guard[1] + cfar.train[1], cfar.guard[0] + cfar.train[0])

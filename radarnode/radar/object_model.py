@@ -38,8 +38,8 @@ from radarnode.dsp.detection_stats import normal_cdf
 from radarnode.dsp.spectra import circular as _circular
 from radarnode.errors import ConfigError
 from radarnode.perception.types import Detections
-from radarnode.perception.tracker import (COAST_STATIONARY_CYCLES, GATE_CHI2_3DOF, MIN_BODY_M, RCS_GAIN,
-                                          TRACKER_SIGMA_POS_M, accel_sigma_mps2, classify, cluster_dyn_prop,
+from radarnode.perception.tracker import (ALIAS_GATE_M, COAST_STATIONARY_CYCLES, MIN_BODY_M, RANGE_WALK_MIN_HITS,
+                                          RCS_GAIN, accel_sigma_mps2, classify, cluster_dyn_prop, follows_one_wrap,
                                           orientation_sigma_rad)
 from radarnode.radar import ambiguity, elevation, equation
 from radarnode.radar.chain import DspChain
@@ -60,12 +60,6 @@ MAX_CLUSTERS = 250        # ARS 408 cluster list capacity (near + far counts are
 #: block of a guardrail road costs about 5 ms once every 64 cycles, well within a real-time cycle
 CLUSTER_BLOCK = 64
 MOVING_THRESHOLD_MPS = 1.0   # over-ground speed above which an object counts as moving
-#: how far along the line of sight a detection may lie from a young track's prediction and still be its (the
-#: detection and signal levels' tracker: its χ² gate on a radial residual whose variance is the track's and the
-#: measurement's position noise, 2·σ²): 2.85 m. A target a single ramp reports at an aliased speed lands
-#: (true − aliased)·cycle from the prediction: one wrap of fast_chirp (1.9 m) is followed at the aliased speed, one of
-#: mimo12 (4.7 m) or acc_lrr (13 m) never confirmed (staggered ramps: see _physics)
-ALIAS_GATE_M = math.sqrt(GATE_CHI2_3DOF * 2.0) * TRACKER_SIGMA_POS_M
 VELOCITY_GAIN = 0.3          # the internal tracker's velocity smoothing (alpha filter gain)
 OCCLUSION_SAMPLES = 16
 #: points on each sensor-facing edge of a body, for what it puts into a neighbour's CA-CFAR ring where its outline
@@ -772,6 +766,10 @@ class ObjectModel:
         self.last_t = 0.0
         self.cycle = 0
         self.period_s = scene.scenario.period_s
+        # a single ramp whose wrap the trackers resolve from the range a track walks (the other levels' tracker,
+        # models.tracker_for): an aliased target is listed at its true speed, once RANGE_WALK_MIN_HITS hits resolved it
+        self.range_walk = not preset.stagger_chirp_period_s and follows_one_wrap(2.0 * preset.alias_speed_mps,
+                                                                                 self.period_s)
         #: the cycles the run will step (0 … planned_cycles − 1), when its runner knows (None: the scenario's)
         self.planned_cycles: int | None = None
         self._cache: dict | None = None
@@ -954,19 +952,23 @@ class ObjectModel:
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         # the radial speed the internal tracker takes: with staggered ramps an ambiguous detection's at its track's
-        # wrap, the true one's (below); the cluster list keeps m_vr
+        # wrap, the true one's (below); with a single ramp whose tracker resolves the wrap from the range its track
+        # walks (self.range_walk) the true one too, the track listed once it is resolved (_derived); the cluster list
+        # keeps m_vr
         stagger = bool(p.stagger_chirp_period_s)
-        m_vr_track = np.where(ambig == AMBIG_AMBIGUOUS, v_meas, m_vr) if stagger else m_vr
+        m_vr_track = np.where(ambig == AMBIG_AMBIGUOUS, v_meas, m_vr) if stagger else \
+            v_meas if self.range_walk else m_vr
         meas = np.stack([m_r * mc, m_r * ms, m_vr_track * mc - m_vt * ms, m_vr_track * ms + m_vt * mc], axis=-1)
         sx, sy = sigma_to_xy(r_seen, az_seen, sig_r, sig_az)
         ground = np.hypot(view.vx_mps + view.sensor_vx_mps[:, None], view.vy_mps + view.sensor_vy_mps[:, None])
         # a detection is reported where it was measured inside the field of view, as the other levels report
         # theirs (radarnode.radar.models.reportable): a body at a sector's edge is seen on its inner side only
         measured_in = in_fov(p, m_r, m_az) & (m_r <= config.max_distance_m)
-        # a speed reported aliased (wraps away from the measured one) moves the track's prediction off the target
-        # by the difference times the cycle: within the tracker's gate the other levels' tracker follows the
-        # target at the aliased speed, beyond it never confirms it (its clusters carry the aliased speed, flagged
-        # ambiguous): the internal tracker takes the same detections (ALIAS_GATE_M)
+        # a speed reported aliased (wraps away from the measured one) moves the prediction of a track at that speed
+        # off the target by the difference times the cycle: within the tracker's gate the other levels' tracker
+        # follows the target (and resolves the wrap from the range it walks, self.range_walk), beyond it never
+        # confirms it (its clusters carry the aliased speed, flagged ambiguous): the internal tracker takes the same
+        # detections (ALIAS_GATE_M)
         offset = np.abs(m_vr - v_meas)
         trackable = offset * self.period_s <= ALIAS_GATE_M
         if stagger:
@@ -1014,9 +1016,11 @@ class ObjectModel:
         from them and the physics ``ph``, for every cycle of the chunk."""
         p, sc = self.preset, self.scene
         seen = ph.pop("det_in")                  # every detection (the cluster list); the tracker takes the trackable
-        # a staggered radar's tracker lists no track until an unambiguous detection measured its speed
-        resolved = ph["ambig"] != AMBIG_AMBIGUOUS if p.stagger_chirp_period_s else None
-        flags = self._track_flags(seen & ph.pop("trackable"), ph["fov"], ph.pop("still"), resolved)
+        # a staggered radar's tracker lists no track until an unambiguous detection measured its speed; a single
+        # ramp's that resolves wraps from the range a track walks, until RANGE_WALK_MIN_HITS hits did
+        resolved = ph["ambig"] != AMBIG_AMBIGUOUS if p.stagger_chirp_period_s or self.range_walk else None
+        flags = self._track_flags(seen & ph.pop("trackable"), ph["fov"], ph.pop("still"), resolved,
+                                  RANGE_WALK_MIN_HITS if self.range_walk else None)
         if "body" in ph:
             # the object's reported RCS is its track's average in power (RCS_GAIN per measured cycle, from the
             # track's first detection, as the detection level's tracker and the real sensor report it): so is this
@@ -1300,7 +1304,7 @@ class ObjectModel:
                 "width": np.maximum(width, body[..., 1])}
 
     def _track_flags(self, det: np.ndarray, fov: np.ndarray, stationary: np.ndarray,
-                     resolved: np.ndarray | None = None) -> dict[str, np.ndarray]:
+                     resolved: np.ndarray | None = None, walk_hits: int | None = None) -> dict[str, np.ndarray]:
         """The tracker's bookkeeping for a chunk of cycles, from its state before the chunk.
 
         Detection history, consecutive misses, confirmation (``CONFIRM_HITS`` of the last
@@ -1309,7 +1313,9 @@ class ObjectModel:
         latch — set by a confirmation, reset by a loss (the two never coincide: a detection needs the field
         of view) — i.e. the forward fill of the last event. Where ``resolved`` (T, n) is given (staggered ramps:
         the detection's speed unambiguous), a track is confirmed only once a resolved detection came since its
-        last miss, as the tracker lists no track whose speed only ambiguous detections measured.
+        last miss, as the tracker lists no track whose speed only ambiguous detections measured. ``walk_hits`` (a
+        single ramp whose tracker resolves wraps from the range a track walks): a detection with at least this many
+        in the last eight cycles resolves the track too.
         """
         t_n, n = det.shape
         prior = ((self.hist[None, :] >> np.arange(7, -1, -1)[:, None]) & 1).astype(bool)    # (8, n) oldest first
@@ -1325,6 +1331,8 @@ class ObjectModel:
         misses = steps - last
         confirm = det & (recent >= CONFIRM_HITS) & self.reportable
         run_resolved = np.ones((t_n, n), dtype=bool)
+        if resolved is not None and walk_hits is not None:
+            resolved = resolved | (_POPCOUNT[hist] >= walk_hits)
         if resolved is not None:
             # the last resolved detection after the last miss (before the chunk: the state's flag says which)
             last_res = np.maximum.accumulate(np.where(det & resolved, steps, np.where(self.run_resolved, -1, -3)),
