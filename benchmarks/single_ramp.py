@@ -28,32 +28,25 @@ from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
 from radarnode.scene.world import Scene  # noqa: E402
 
 SEEDS = (1, 2, 3)
-LEVELS = ("object", "detection", "signal")
 
-ONCOMING = """
-name: fc_oncoming
-duration_s: 3.0
-seed: {seed}
-radar: {{preset: fast_chirp, output: objects}}
-ego: {{speed_mps: 0.0}}
-road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0}}
-actors:
-  - {{id: onc, class: car, x_m: 120.0, lane: 0, speed_mps: 25.0, heading_deg: 180.0}}
-"""
+def scene(name: str, duration_s: float, ego_mps: float, road: str, actors: list[str], seed: int) -> str:
+    """A ``fast_chirp`` scenario's YAML: object output, these actors (flow mappings) on this road."""
+    lines = "\n".join(f"  - {a}" for a in actors)
+    return (f"name: {name}\nduration_s: {duration_s}\nseed: {seed}\nradar: {{preset: fast_chirp, output: objects}}\n"
+            f"ego: {{speed_mps: {ego_mps}}}\nroad: {road}\nactors:\n{lines}\n")
 
-MIXED = """
-name: fc_mixed
-duration_s: 8.0
-seed: {seed}
-radar: {{preset: fast_chirp, output: objects}}
-ego: {{speed_mps: 20.0}}
-road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
-actors:
-  - {{id: lead, class: car, x_m: 40.0, lane: 1, speed_mps: 25.0}}
-  - {{id: slow, class: truck, x_m: 90.0, lane: 0, speed_mps: 12.0}}
-  - {{id: onc_slow, class: car, x_m: 150.0, lane: 2, speed_mps: 5.0, heading_deg: 180.0}}
-  - {{id: ped, class: pedestrian, x_m: 30.0, y_m: -8.0, speed_mps: 1.5, heading_deg: 90.0}}
-"""
+
+def oncoming(seed: int) -> str:
+    return scene("fc_oncoming", 3.0, 0.0, "{lanes: 2, lane_width_m: 3.5, ego_lane: 0}",
+                 ["{id: onc, class: car, x_m: 120.0, lane: 0, speed_mps: 25.0, heading_deg: 180.0}"], seed)
+
+
+def mixed(seed: int) -> str:
+    return scene("fc_mixed", 8.0, 20.0, "{lanes: 3, lane_width_m: 3.5, ego_lane: 1}",
+                 ["{id: lead, class: car, x_m: 40.0, lane: 1, speed_mps: 25.0}",
+                  "{id: slow, class: truck, x_m: 90.0, lane: 0, speed_mps: 12.0}",
+                  "{id: onc_slow, class: car, x_m: 150.0, lane: 2, speed_mps: 5.0, heading_deg: 180.0}",
+                  "{id: ped, class: pedestrian, x_m: 30.0, y_m: -8.0, speed_mps: 1.5, heading_deg: 90.0}"], seed)
 
 
 def guardrail(seed: int) -> str:
@@ -62,8 +55,8 @@ def guardrail(seed: int) -> str:
     return text.replace("seed: 5", f"seed: {seed}")
 
 
-SCENES = (("car closing at 25 m/s", lambda s: ONCOMING.format(seed=s), ("object", "detection", "signal")),
-          ("mixed road", lambda s: MIXED.format(seed=s), ("object", "detection")),
+SCENES = (("car closing at 25 m/s", oncoming, ("object", "detection", "signal")),
+          ("mixed road", mixed, ("object", "detection")),
           ("guardrail_traffic", guardrail, ("object", "detection")))
 
 
