@@ -62,8 +62,17 @@ HOP_M = 2.5
 #: … and so has a standing track that takes a detection after this many cycles without one (see Tracker._hops)
 COAST_REANCHOR_MISSES = 2
 #: a new or re-anchored track's prior on its velocity across the line of sight, σ 2 m/s (initial_velocity; a
-#: re-anchored standing track: the standing world's)
+#: re-anchored standing track: the standing world's) …
 TANGENTIAL_PRIOR_VAR = 4.0
+#: … but σ 10 m/s for a new track of a moving reflector (its range rate not the standing world's) where no road
+#: direction is known at it (initial_velocity: the sensor slower than PRIOR_MIN_SENSOR_MPS, or the line of sight more
+#: than PRIOR_MAX_ANGLE_RAD off the road there): the standing world's speed across the line of sight is then a guess,
+#: not knowledge. A road user crossing the ego's road moves mostly across the line of sight, where only its positions
+#: measure it, and with σ 2 m/s the track lagged it until it lost it: a car crossing 35 m ahead at 20 m/s (ego
+#: standing, ars408_like) was listed at its velocity in 0 of 138 cycles at the detection level, under five IDs a seed,
+#: where the object level lists it in all; and a car crossing 60 m ahead of an ego at 15 m/s, clear of its lane 1.5 s
+#: before the ego got there, left a track standing in the lane that FCW warned for (benchmarks/crossing.py)
+CROSSING_PRIOR_VAR = 100.0
 #: below this speed the sensor's motion gives a new track no direction (initial_velocity) …
 PRIOR_MIN_SENSOR_MPS = 1.0
 #: … nor beyond this angle between the line of sight and the road where the body is: a road user crossing it (whose
@@ -128,7 +137,7 @@ def _standing_rate(z: np.ndarray, sensor_velocity) -> np.ndarray:
 
 
 def initial_velocity(x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarray, sensor_velocity,
-                     yaw_rate_rps: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+                     yaw_rate_rps: float = 0.0, with_direction: bool = False) -> tuple[np.ndarray, ...]:
     """A new track's velocity relative to the sensor (its axes) from one detection group at (``x_m``, ``y_m``): the
     radial component measured (``range_rate_mps``), the tangential one from the prior that the body moves over
     ground along the ego's road where it is — the sensor's own direction of motion, turned on a bend as the ego's
@@ -143,7 +152,12 @@ def initial_velocity(x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarra
     The standing world's prior alone gave a car in the next lane at the ego's speed the standing world's speed
     across the line of sight, v·sin(azimuth): 2.8 m/s outwards at 30 m ahead and 20 m/s, which the track carried for
     ten cycles and more (the detection level reported it 0.5 m beyond its centre line; the object level, whose
-    tracker starts from the measured velocity, never did)."""
+    tracker starts from the measured velocity, never did).
+
+    ``with_direction``: also return where the road's direction at the body is known (the sensor moves and the line of
+    sight lies within PRIOR_MAX_ANGLE_RAD of the road there), a boolean array: elsewhere the velocity across the line
+    of sight is the standing world's for want of another (ObjectTracker gives a moving reflector's track
+    CROSSING_PRIOR_VAR there)."""
     svx, svy = float(sensor_velocity[0]), float(sensor_velocity[1])
     r = np.maximum(np.hypot(x_m, y_m), 1e-3)
     ux, uy = x_m / r, y_m / r
@@ -152,7 +166,7 @@ def initial_velocity(x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarra
     vy = -svy + (range_rate_mps - standing_r) * uy
     speed = math.hypot(svx, svy)
     if speed < PRIOR_MIN_SENSOR_MPS:
-        return vx, vy
+        return (vx, vy, np.zeros(np.shape(vx), dtype=bool)) if with_direction else (vx, vy)
     kappa = float(yaw_rate_rps) / speed
     dx, dy = svx / speed, svy / speed
     # the road's heading where the body is: the ego's circle's (or a concentric lane's) at the body's angle about
@@ -164,7 +178,8 @@ def initial_velocity(x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarra
     ok = np.abs(du) >= math.cos(PRIOR_MAX_ANGLE_RAD)
     g = (range_rate_mps - standing_r) / np.where(ok, du, 1.0)
     along = ok & (np.abs(g) <= RIGID_MAX_SPEED_MPS)
-    return np.where(along, g * dx - svx, vx), np.where(along, g * dy - svy, vy)
+    out = np.where(along, g * dx - svx, vx), np.where(along, g * dy - svy, vy)
+    return (*out, ok) if with_direction else out
 
 
 def velocity_slope(history: np.ndarray, times: np.ndarray, count: np.ndarray, min_count: int = 3
@@ -847,19 +862,21 @@ class ObjectTracker:
         x0 = np.zeros((k, 4))
         x0[:, 0:2] = z[idx, 0:2]
         # velocity: the radial component is measured, the tangential one a prior (initial_velocity)
-        x0[:, 2], x0[:, 3] = initial_velocity(z[idx, 0], z[idx, 1], z[idx, 2], sensor_velocity,
-                                              self.steady_yaw_rate())
+        x0[:, 2], x0[:, 3], known = initial_velocity(z[idx, 0], z[idx, 1], z[idx, 2], sensor_velocity,
+                                                     self.steady_yaw_rate(), with_direction=True)
         r = np.maximum(np.hypot(z[idx, 0], z[idx, 1]), 1e-3)
         ux, uy = z[idx, 0] / r, z[idx, 1] / r
         fit = np.isfinite(groups.velocity[idx, 0])          # a joined near body: its fitted velocity
         # initial covariance: the position as measured; the velocity's radial part as measured, its tangential
-        # part from the prior (initial_velocity; σ 2 m/s). A looser position (it was 1 m) let a new track of a guardrail
-        # post take the next post 4 m on, and leave at a false speed.
+        # part from the prior (initial_velocity; σ 2 m/s, a moving reflector's where no road direction is known σ 10
+        # m/s: CROSSING_PRIOR_VAR). A looser position (it was 1 m) let a new track of a guardrail post take the next
+        # post 4 m on, and leave at a false speed.
         p0 = np.zeros((k, 4, 4))
         p0[:, 0:2, 0:2] = r_cov[idx, 0:2, 0:2]
         u = np.stack([ux, uy], axis=1)
+        across = np.where(known | _standing_rate(z[idx], sensor_velocity), TANGENTIAL_PRIOR_VAR, CROSSING_PRIOR_VAR)
         p0[:, 2:4, 2:4] = (self.r_cov[2, 2] * u[:, :, None] * u[:, None, :]
-                           + TANGENTIAL_PRIOR_VAR * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
+                           + across[:, None, None] * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
         if fit.any():
             x0[fit, 2:4] = groups.velocity[idx[fit]]
             p0[fit, 2:4, 2:4] = groups.velocity_cov[idx[fit]] + self.r_cov[2, 2] * np.eye(2)[None]
