@@ -286,3 +286,26 @@ def test_a_car_crossing_the_egos_road_draws_the_warning_the_object_level_draws(e
                   extra="ecu: {acc_enabled: false, expect: {no_fcw: true}}")
     warned = {level: simulate(sc, fidelity=level).warning_time_s is not None for level in ("object", "detection")}
     assert warned == {"object": object_warns, "detection": object_warns}, warned
+
+
+@pytest.mark.parametrize("ambiguous, offset_mps, loose", [
+    (True, 0.0, False), (True, MOVING_THRESHOLD_MPS - 0.01, False), (True, MOVING_THRESHOLD_MPS + 0.01, True),
+    (False, 0.0, True), (True, -5.0, True), (False, -5.0, True),
+])
+def test_an_aliased_range_rate_stands_where_it_does_modulo_the_span(ambiguous, offset_mps, loose):
+    """With staggered ramps a group of only ambiguous detections (AmbigState 1) reports its range rate modulo
+    2·v_max,1: a guardrail post's at 130 km/h reads one span off the standing world's. Its new track keeps the
+    standing world's σ 2 m/s across (as the tracker takes such a group's range rate modulo the span everywhere);
+    an unambiguous group whose range rate lies a span off does move, and starts loose. The sensor at 36 m/s, the
+    reflector 25° off its motion (no road direction known: the loose prior applies to a moving reflector)."""
+    span = 38.9
+    sv = (36.0, 0.0)
+    x, y = _at(25.0)
+    standing = _radial(x, y, -np.array(sv))[0]
+    one = np.ones(1)
+    det = Detections(one * 30.0, one * (standing + span + offset_mps), one * math.radians(25.0), one * 10.0,
+                     one * 30.0, np.zeros(1, dtype=np.int64), np.full(1, 1 if ambiguous else 3, dtype=np.int64))
+    tracker = ObjectTracker(alias_span_mps=span)
+    tracker.step(0.0, det, sv)
+    assert len(tracker.x) == 1
+    assert _across_var(tracker) == pytest.approx(CROSSING_PRIOR_VAR if loose else TANGENTIAL_PRIOR_VAR, rel=1e-9)

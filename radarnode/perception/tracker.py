@@ -128,12 +128,17 @@ def accel_sigma_mps2(speed_sigma_mps: np.ndarray, period_s: float, window: int =
     return np.asarray(speed_sigma_mps) * math.sqrt(12.0 / (n * (n * n - 1))) / max(period_s, 1e-3)
 
 
-def _standing_rate(z: np.ndarray, sensor_velocity) -> np.ndarray:
+def _standing_rate(z: np.ndarray, sensor_velocity, ambiguous: np.ndarray | None = None,
+                   span_mps: float = 0.0) -> np.ndarray:
     """Whether each detection group ``z`` (x, y, range rate; shape (n, 3)) has the range rate of a standing reflector
-    where it is, within MOVING_THRESHOLD_MPS, for a sensor moving at ``sensor_velocity`` (its axes)."""
+    where it is, within MOVING_THRESHOLD_MPS, for a sensor moving at ``sensor_velocity`` (its axes); where
+    ``ambiguous`` (n,) is true, modulo ``span_mps`` (a range rate that may be aliased)."""
     r = np.maximum(np.hypot(z[:, 0], z[:, 1]), 1e-3)
     standing = -(sensor_velocity[0] * z[:, 0] + sensor_velocity[1] * z[:, 1]) / r
-    return np.abs(z[:, 2] - standing) < MOVING_THRESHOLD_MPS
+    off = z[:, 2] - standing
+    if ambiguous is not None and span_mps > 0.0:
+        off = np.where(ambiguous, wrap_rate(off, span_mps), off)
+    return np.abs(off) < MOVING_THRESHOLD_MPS
 
 
 def initial_velocity(x_m: np.ndarray, y_m: np.ndarray, range_rate_mps: np.ndarray, sensor_velocity,
@@ -874,7 +879,10 @@ class ObjectTracker:
         p0 = np.zeros((k, 4, 4))
         p0[:, 0:2, 0:2] = r_cov[idx, 0:2, 0:2]
         u = np.stack([ux, uy], axis=1)
-        across = np.where(known | _standing_rate(z[idx], sensor_velocity), TANGENTIAL_PRIOR_VAR, CROSSING_PRIOR_VAR)
+        # (a group whose range rate may be aliased stands where it does modulo the span: a guardrail post beyond
+        # ±v_max, a staggered pair's unpaired detection at 130 km/h)
+        stands = _standing_rate(z[idx], sensor_velocity, groups.ambiguous[idx], self.alias_span_mps or 0.0)
+        across = np.where(known | stands, TANGENTIAL_PRIOR_VAR, CROSSING_PRIOR_VAR)
         p0[:, 2:4, 2:4] = (self.r_cov[2, 2] * u[:, :, None] * u[:, None, :]
                            + across[:, None, None] * (np.eye(2)[None] - u[:, :, None] * u[:, None, :]))
         if fit.any():
