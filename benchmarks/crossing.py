@@ -69,9 +69,9 @@ actors:
     return seen, moving
 
 
-def near_crossing(speed_mps: float, seed: int, level: str) -> tuple[int, int, int, set, int]:
-    """(cycles in view, cycles followed, cycles at the right velocity, IDs, other objects) of a car crossing
-    NEAR_X_M ahead from the left at ``speed_mps``, at ``level``."""
+def near_crossing(speed_mps: float, seed: int, level: str) -> tuple[int, int, int, dict, int]:
+    """(cycles in view, cycles followed, cycles at the right velocity, {ID: cycles followed under it}, other objects)
+    of a car crossing NEAR_X_M ahead from the left at ``speed_mps``, at ``level`` (also tests/test_track_start.py)."""
     sc = parse_scenario(f"""
 name: near_crossing
 duration_s: {2.0 * 70.0 / speed_mps:.3f}
@@ -88,7 +88,7 @@ actors:
     model = make_model(level, scene, p, np.random.default_rng(seed), cfg.signal, clusters_wanted=False)
     reach = 0.5 * float(np.hypot(scene.length_m[0], scene.width_m[0])) + 1.5
     in_view = followed = right = others = 0
-    ids: set = set()
+    ids: dict[int, int] = {}
     for k in range(sc.num_cycles):
         frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=p.max_range_m, clusters=False))
         ol = frame.objects
@@ -100,7 +100,7 @@ actors:
         if len(ol) and d.min() < reach:
             i = int(np.argmin(d))
             followed += 1
-            ids.add(int(ol.id[i]))
+            ids[int(ol.id[i])] = ids.get(int(ol.id[i]), 0) + 1
             right += bool(np.hypot(ol.vrel_long_mps[i] - view.vx_mps[0], ol.vrel_lat_mps[i] - view.vy_mps[0])
                           < NEAR_SPEED_OK_MPS)
     return in_view, followed, right, ids, others
