@@ -10,8 +10,8 @@ import pytest
 
 from radarnode.radar.setup import radar_config
 from radarnode.radar.chain import DspChain
-from radarnode.perception.types import (AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, DYN_MOVING,
-                                        DYN_ONCOMING, Detections)
+from radarnode.perception.types import (AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_STATIONARY, DYN_CROSSING_MOVING,
+                                        DYN_MOVING, DYN_ONCOMING, Detections)
 from radarnode.radar import ambiguity, detection_model
 from radarnode.radar.models import make_model
 from radarnode.radar.object_model import RuntimeConfig
@@ -1088,6 +1088,87 @@ def test_a_single_ramps_tracker_resolves_the_wrap_from_the_range_its_track_walks
         assert len(listed) >= cycles - 3 and all(np.all(np.abs(o.vrel_long_mps + 10.0) < 1.0) for o in listed)
     listed = [o for o in run(tracker_for(p, dt), -8.0, 12, step=2.0) if len(o)]
     assert all(np.all(np.abs(o.vrel_long_mps + 8.0) < 1.0) for o in listed), [o.vrel_long_mps for o in listed]
+
+
+def _truck_cycles(stray_dy: float, cycles: int = 16, v: float = -8.0, dt: float = 0.05):
+    """A truck closing at ``v`` in the next lane (y −3.4 m), ego standing, on fast_chirp (AmbigState 1 everywhere):
+    its side's four reflectors 3.5 m apart (one group, 10.5 m long) for ten cycles, then its front and one reflector
+    that steps 1.9 m nearer along it each cycle (one wrap's drift: 38 m/s × 50 ms) from 9.5 m behind the front,
+    ``stray_dy`` across from the side; (x, y) of every detection per cycle."""
+    out = []
+    for k in range(cycles):
+        front = 60.0 + v * dt * k
+        if k < 10:
+            xs, ys = front + np.array([0.0, 3.5, 7.0, 10.5]), np.full(4, -3.4)
+        else:
+            xs = np.array([front, front + 9.5 - 1.9 * (k - 10)])
+            ys = np.array([-3.4, -3.4 + stray_dy])
+        out.append((xs, ys))
+    return out
+
+
+def _run_truck(tracker, cycles, v=-8.0, dt=0.05, p=None):
+    lists = []
+    for k, (xs, ys) in enumerate(cycles):
+        r, az = np.hypot(xs, ys), np.arctan2(ys, xs)
+        d = Detections(r, _alias(v * xs / r, p), az, np.zeros(r.size), np.full(r.size, 30.0),
+                       np.zeros(r.size, dtype=np.int64), ambig_state=np.full(r.size, AMBIG_AMBIGUOUS))
+        lists.append(tracker.step(k * dt, d, (0.0, 0.0)))
+    return lists
+
+
+@pytest.mark.parametrize("stray_dy, on_body", [(0.0, True), (0.9, True), (1.2, False), (2.0, False),
+                                               (3.5, False)])
+def test_a_reflector_stepping_along_a_tracked_truck_is_not_walked_to_another_wrap(stray_dy, on_body):
+    """helper-86's finding (fast_chirp, ``highway_cut_in`` at the detection level, seeds 1, 3, 5, 6): a new track of
+    one of a truck's reflectors took the next ones along its side, 74.2, 72.0, 69.8 m, and the range walk moved it a
+    wrap (−42.8 m/s where the truck closed at 4.8) and listed it `oncoming` beside the truck's own track. A track on
+    the body of a confirmed one whose speed there gives its range rate modulo the span (within BODY_MARGIN_M of its
+    extent: 1 m beside a body 0 m wide) now takes that body's wrap and is not walked nor listed
+    (ObjectTracker._body_wrap): inside the margin nothing is listed off the truck's speed. Beyond it, and a lane
+    away, the same detections are another target's, walked and listed one wrap off, as a single ramp must (a car
+    there at −46 m/s would measure the same). The margin applies to the tracks' filtered positions, which lag the
+    detections by a few tenths of a metre across: 0.9 and 1.2 m bracket it, not 0.99 and 1.01."""
+    from radarnode.radar.models import tracker_for
+    p, dt = PRESETS["fast_chirp"], 0.05
+    lists = _run_truck(tracker_for(p, dt), _truck_cycles(stray_dy), p=p)
+    rows = [(round(float(x), 1), round(float(v), 1)) for o in lists for x, v in zip(o.dist_long_m, o.vrel_long_mps)]
+    off = [row for row in rows if abs(row[1] + 8.0) > 1.0]
+    assert any(abs(v + 8.0) < 1.0 for _, v in rows)                  # the truck itself, listed throughout
+    if on_body:
+        assert not off, off
+    else:
+        assert off and all(abs(v + 8.0 - 2 * -p.alias_speed_mps) < 1.5 for _, v in off), off
+
+
+@pytest.mark.parametrize("seed", [1, 3])
+def test_the_default_scene_on_fast_chirp_lists_its_truck_at_its_speed_only(seed):
+    """helper-86's scene itself: ``highway_cut_in`` with ``preset: fast_chirp`` at the detection level (the truck at
+    −4.8 m/s in the right lane, guardrail posts on both sides). Before ObjectTracker._body_wrap a second track of the
+    truck walked a wrap and was listed `oncoming` at −42.8 m/s for 6 cycles in seed 1 and 4 in seed 3. Now every row
+    of the truck is within 3 m/s of its speed, it is listed in at least 290 of the 300 cycles, and at most 30 rows
+    of guardrail posts (or of no truth) are listed moving, oncoming or crossing (11 and 9 here, as before the
+    change)."""
+    import re
+    from pathlib import Path
+    from radarnode.radar.setup import parse_scenario
+    text = (Path(__file__).resolve().parents[1] / "scenarios" / "highway_cut_in.yaml").read_text()
+    text = re.sub(r"preset: *\w+", "preset: fast_chirp", text)
+    text = re.sub(r"^seed: *\d+", f"seed: {seed}", text, flags=re.M)
+    sc = parse_scenario(text)
+    cfg = radar_config(sc)
+    model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(sc.seed), cfg.signal)
+    truck = [a.id for a in sc.actors].index("truck")
+    rails = [-1] + [i for i, a in enumerate(sc.actors) if a.object_class == "guardrail"]    # and no truth at all
+    rows = wrong = moving_posts = 0
+    for k in range(sc.num_cycles):
+        frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
+        o = frame.objects
+        mine = o.actor_index == truck
+        rows += int(mine.any())
+        wrong += int(np.sum(np.abs(o.vrel_long_mps[mine] - view.vx_mps[truck]) >= 3.0))
+        moving_posts += int(np.sum(np.isin(o.actor_index, rails) & np.isin(o.dyn_prop, (DYN_MOVING, DYN_ONCOMING, DYN_CROSSING_MOVING))))
+    assert wrong == 0 and rows >= 290 and moving_posts <= 30, (wrong, rows, moving_posts)
 
 
 def test_a_car_closing_beyond_a_single_ramps_span_is_listed_at_its_true_speed_at_every_level():
