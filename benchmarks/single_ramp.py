@@ -4,7 +4,10 @@
 measures a target closing faster than 18.99 m/s at an aliased speed, one wrap (38 m/s) away. Three scenes, seeds
 1–3: a car closing at 25 m/s from 120 m, the ego standing; a mixed road (ego 20 m/s, a car oncoming at 5 m/s: −25
 m/s, besides a lead, a slower truck and a pedestrian inside the span); ``guardrail_traffic`` with ``fast_chirp``
-(ego 22 m/s on a bend between guardrails, a truck and a car oncoming at −42 and −46 m/s). Printed per scene and
+(ego 22 m/s on a bend between guardrails, a truck and a car oncoming at −42 and −46 m/s); ``highway_cut_in`` with
+``fast_chirp`` (every road user inside the span: a truck at −4.8 m/s whose reflectors step along its side, guardrail
+posts); a car ahead pulling away at 38 m/s over ground from an ego at 25 m/s (+13 m/s relative, inside the span, but
+one wrap from the posts' rate: its detections are stationary candidates, README "Known limits"). Printed per scene and
 level, for the actors beyond the span and for those inside it: the object rows listed for them, those within 3 m/s
 of the true longitudinal relative speed, those more than 15 m/s off (an aliased speed), and the IDs they took.
 
@@ -55,9 +58,22 @@ def guardrail(seed: int) -> str:
     return text.replace("seed: 5", f"seed: {seed}")
 
 
+def cut_in(seed: int) -> str:
+    text = (ROOT / "scenarios" / "highway_cut_in.yaml").read_text()
+    text = text.replace("preset: ars408_like", "preset: fast_chirp")
+    return text.replace("seed: 7", f"seed: {seed}")
+
+
+def one_wrap(seed: int) -> str:
+    return scene("fc_one_wrap", 5.0, 25.0, "{lanes: 3, lane_width_m: 3.5, ego_lane: 1}",
+                 ["{id: away, class: car, x_m: 40.0, lane: 1, speed_mps: 38.0}"], seed)
+
+
 SCENES = (("car closing at 25 m/s", oncoming, ("object", "detection", "signal")),
           ("mixed road", mixed, ("object", "detection")),
-          ("guardrail_traffic", guardrail, ("object", "detection")))
+          ("guardrail_traffic", guardrail, ("object", "detection")),
+          ("highway_cut_in", cut_in, ("object", "detection")),
+          ("car one wrap from the posts' rate", one_wrap, ("object", "detection")))
 
 
 def run(text: str, level: str) -> dict:
