@@ -92,3 +92,52 @@ actors: []
     a = np.concatenate(got)
     assert a.size > 50
     assert abs(np.median(a) - 4.0) < 0.1 and np.mean(np.abs(a - 4.0) < 0.3) > 0.9, np.percentile(a, [5, 50, 95])
+
+
+def test_the_radar_trackers_prediction_keeps_velocity_over_ground_while_the_ego_changes_speed():
+    """The radar tracker's constant-velocity model is one over ground (radarnode.perception.tracker.predict): where
+    the sensor's own velocity changed by Δu over the cycle, a track's relative velocity changes by −Δu and its
+    position by its old relative velocity × dt − Δu·dt/2. For a standing post ahead of an ego braking uniformly at
+    6 m/s² that is the exact kinematics; for a car at 20 m/s over ground too. Before, the relative velocity was kept
+    (a post gained 0.3 m/s a cycle of motion over ground: an independent tester's finding)."""
+    from radarnode.perception.tracker import predict
+    dt, a, u0 = 0.072, -6.0, 45.0
+    u1 = u0 + a * dt
+    x = np.array([[80.0, -6.0, -u0, 0.0], [50.0, 0.0, 20.0 - u0, 0.0]])
+    p = np.repeat(np.eye(4)[None], 2, axis=0)
+    moved, cov = predict(x, p, dt, sensor_velocity=(u1, 0.0), previous_sensor_velocity=(u0, 0.0))
+    ego_travel = u0 * dt + 0.5 * a * dt * dt
+    assert moved[0] == pytest.approx([80.0 - ego_travel, -6.0, -u1, 0.0], abs=1e-12)
+    assert moved[1] == pytest.approx([50.0 + 20.0 * dt - ego_travel, 0.0, 20.0 - u1, 0.0], abs=1e-12)
+    assert np.allclose(cov, predict(x, p, dt)[1])                 # a known change adds no uncertainty
+    kept = predict(x, p, dt, sensor_velocity=(u0, 0.0), previous_sensor_velocity=(u0, 0.0))[0]
+    assert np.array_equal(kept, predict(x, p, dt)[0])             # a constant ego speed: as before, to the bit
+    # on a bend (the road-following branch) the same: a standing post stays standing over ground
+    moved_bend, _ = predict(x[:1], p[:1], dt, yaw_rate_rps=u0 / 250.0, sensor_velocity=(u1, 0.0),
+                            previous_sensor_velocity=(u0, 0.0))
+    assert np.hypot(moved_bend[0, 2] + u1, moved_bend[0, 3]) < 1e-9
+
+
+@pytest.mark.parametrize("preset", ["ars408_like", "mimo12"])
+@pytest.mark.parametrize("curvature", [0.0, 0.004])
+@pytest.mark.parametrize("accel", [-6.0, -2.0, 0.0, 3.0])
+def test_no_guardrail_post_is_listed_moving_while_the_ego_brakes_or_accelerates(preset, curvature, accel):
+    """helper-86's scene: an ego at 45 m/s braking at 6 m/s² between guardrails (posts every 4 m), straight and on a
+    250-m bend. At the detection level 63–144 rows of posts a run were listed moving, oncoming or crossing on
+    ``ars408_like``, 105–133 on ``mimo12``, none at −2 m/s² or at a constant speed: a coasting or barely measured
+    track kept its relative velocity while the ego's changed. Now none at −6, −2, 0 or +3 m/s², except on
+    ``mimo12``'s bend, where 5–25 rows are listed moving at every one of them, at a constant speed too (an older
+    limit on bends, not the ego's acceleration: 133 at −6 m/s² before)."""
+    from tests.helpers import scenario
+    rails = "guardrails: {left_offset_m: 1.0, right_offset_m: 1.0, post_spacing_m: 4.0, rcs_dbsm: 5.0}"
+    sc = scenario(ego=f"{{speed_mps: 45.0, accel: [{{t_s: 0.0, accel_mps2: {accel}}}]}}",
+                  radar=f"{{preset: {preset}, output: objects}}", duration=6.0,
+                  road=f"{{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {curvature}, {rails}}}")
+    cfg = radar_config(sc)
+    model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal)
+    rows = moving = 0
+    for k in range(sc.num_cycles):
+        o = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))[0].objects
+        rows += len(o)
+        moving += int(np.sum(np.isin(o.dyn_prop, (0, 2, 6))))
+    assert rows > 500 and moving <= (30 if (preset, curvature) == ("mimo12", 0.004) else 0), (rows, moving)
