@@ -459,7 +459,8 @@ def extents_along(det: Detections, labels: np.ndarray, heading_rad: np.ndarray) 
 
 def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, yaw_rate_rps: float = 0.0,
             sensor_velocity: tuple[float, float] = (0.0, 0.0),
-            previous_sensor_velocity: tuple[float, float] | None = None) -> tuple[np.ndarray, np.ndarray]:
+            previous_sensor_velocity: tuple[float, float] | None = None,
+            standing: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Constant-velocity prediction of states (n, 4) = [x, y, vx, vy] and covariances (n, 4, 4), on the road.
 
     The velocity is relative to the sensor (the object's over ground minus the sensor's, ``sensor_velocity`` in
@@ -468,21 +469,24 @@ def predict(x: np.ndarray, p: np.ndarray, dt: float, accel_sigma: float = 2.0, y
     a vehicle ahead on the ego's bend at the ego's speed keeps its velocity relative to the sensor, where the
     world-fixed model (every velocity over ground turned by −θ) let it lag by metres per second across.
 
-    What stays constant is the velocity over ground: where the sensor's own changed since the last cycle
-    (``previous_sensor_velocity``, its axes then; the ego braking or accelerating), the relative velocity changes by
-    the opposite, and the position by half of that over ``dt`` (a uniform change). Without it a standing post's
-    track kept the relative velocity of the cycle before: an ego braking at 6 m/s² from 45 m/s put 0.3 m/s a cycle
-    of motion into every post it coasted or barely measured across, and posts were listed moving (an independent
-    tester's finding: 63–144 rows a run at the detection level on ``ars408_like``).
+    A standing object's velocity over ground stays 0: where the sensor's own changed since the last cycle
+    (``previous_sensor_velocity``, its axes then; the ego braking or accelerating), the relative velocity of the
+    tracks ``standing`` (n,) marks changes by the opposite, and their position by half of that over ``dt`` (a
+    uniform change). Without it a standing post's track kept the relative velocity of the cycle before: an ego
+    braking at 6 m/s² from 45 m/s put 0.3 m/s a cycle of motion into every post it coasted or barely measured across,
+    and posts were listed moving (an independent tester's finding: 63–144 rows a run at the detection level on
+    ``ars408_like``). A moving object's acceleration is not known to the prediction: it keeps its relative velocity,
+    right for a lead braking along with the ego (ACC following), where a constant velocity over ground biased its
+    track by up to 3 m/s away and changed its ID every third of a second at −10 m/s² (a second tester's finding).
     """
     f, q = transition("cv", dt, accel_sigma ** 2)
-    if previous_sensor_velocity is not None and dt:
+    if previous_sensor_velocity is not None and standing is not None and dt:
         dv = np.array([previous_sensor_velocity[0] - sensor_velocity[0],
                        previous_sensor_velocity[1] - sensor_velocity[1]], dtype=np.float64)
-        if dv.any():
+        if dv.any() and standing.any():
             x = x.copy()
-            x[:, 2:4] += dv
-            x[:, 0:2] -= 0.5 * dt * dv          # the step below moves it by (v + dv)·dt; the mean is v + dv/2
+            x[standing, 2:4] += dv
+            x[standing, 0:2] -= 0.5 * dt * dv   # the step below moves it by (v + dv)·dt; the mean is v + dv/2
     if not yaw_rate_rps or not dt:
         return x @ f.T, f @ p @ f.T + q
     return road_predict(x, p, f, q, yaw_rate_rps * dt, dt, sensor_velocity)
@@ -669,9 +673,11 @@ class ObjectTracker:
         self.last_t = t_s
         if len(self.x):
             before = (float(self.svh[0, -1, 0]), float(self.svh[0, -1, 1])) if self.snh[0] else None
+            # which tracks stand still over ground, as the last cycle's estimate and sensor velocity say
+            standing = None if before is None else ~self._heading(np.arange(len(self.x)), before)[1]
             self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps,
                                      sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])),
-                                     previous_sensor_velocity=before)
+                                     previous_sensor_velocity=before, standing=standing)
         z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
         r_cov = self._measurement_cov(z, groups.cross_sigma_m)
         span = self.alias_span_mps or 0.0
