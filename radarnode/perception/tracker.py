@@ -44,12 +44,12 @@ ALIAS_GATE_M = math.sqrt(GATE_CHI2_3DOF * 2.0) * TRACKER_SIGMA_POS_M
 #: track on fast_chirp was moved a wrap by one and listed at +30 m/s where the truck closed at 8 m/s); three can (a
 #: step that mimics a wrap is as long as the tracker's gate)
 RANGE_WALK_MIN_HITS = 3
+#: … of the last this many hits
+RANGE_WALK_HITS = 4
 #: an unresolved track within a confirmed track's body extent and this far (m) beyond it, its range rate that body's
 #: there modulo the span within BODY_WRAP_TOL_MPS, is another reflector of it (ObjectTracker._body_wrap)
 BODY_MARGIN_M = 1.0
 BODY_WRAP_TOL_MPS = 1.5
-#: … of the last this many hits
-RANGE_WALK_HITS = 4
 COAST_CYCLES = 3
 #: a confirmed track standing still over ground coasts longer: the ego motion predicts where it is, and a
 #: stopped car in the training ring of a bridge deck's CA-CFAR is detected in only a third of the cycles
@@ -672,11 +672,12 @@ class ObjectTracker:
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
         if len(self.x):
+            now = (float(sensor_velocity[0]), float(sensor_velocity[1]))
             before = (float(self.svh[0, -1, 0]), float(self.svh[0, -1, 1])) if self.snh[0] else None
-            # which tracks stand still over ground, as the last cycle's estimate and sensor velocity say
-            standing = None if before is None else ~self._heading(np.arange(len(self.x)), before)[1]
-            self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps,
-                                     sensor_velocity=(float(sensor_velocity[0]), float(sensor_velocity[1])),
+            # which tracks stand still over ground, as the last cycle's estimate and sensor velocity say (only where
+            # the ego's speed changed: nothing else depends on it)
+            standing = None if before in (None, now) else ~self._heading(np.arange(len(self.x)), before)[1]
+            self.x, self.p = predict(self.x, self.p, dt, yaw_rate_rps=yaw_rate_rps, sensor_velocity=now,
                                      previous_sensor_velocity=before, standing=standing)
         z = np.stack([groups.x_m, groups.y_m, groups.range_rate_mps], axis=1) if len(groups) else np.zeros((0, 3))
         r_cov = self._measurement_cov(z, groups.cross_sigma_m)
@@ -769,11 +770,7 @@ class ObjectTracker:
         z[gi[amb], 2] -= shift[amb]
         move = ~amb & ~self.resolved[ti] & (shift != 0.0)
         if move.any():
-            t = ti[move]
-            r = np.maximum(np.hypot(self.x[t, 0], self.x[t, 1]), 1e-3)
-            self.x[t, 2] += shift[move] * self.x[t, 0] / r
-            self.x[t, 3] += shift[move] * self.x[t, 1] / r
-            self.nh[t] = 0                  # its velocities so far were at another wrap: the slope starts again
+            self._move_wraps(ti[move], shift[move])
         self.resolved[ti[~amb]] = True
         return z
 
@@ -810,12 +807,15 @@ class ObjectTracker:
         self.resolved[idx[sure & (n >= RANGE_WALK_MIN_HITS)]] = True
         move = sure & (k != 0.0)
         if move.any():
-            tr = idx[move]
-            rng = np.maximum(np.hypot(self.x[tr, 0], self.x[tr, 1]), 1e-3)
-            shift = k[move] * span
-            self.x[tr, 2] += shift * self.x[tr, 0] / rng
-            self.x[tr, 3] += shift * self.x[tr, 1] / rng
-            self.nh[tr] = 0                 # its velocities so far were at another wrap: the slope starts again
+            self._move_wraps(idx[move], k[move] * span)
+
+    def _move_wraps(self, idx: np.ndarray, shift: np.ndarray) -> None:
+        """Tracks ``idx``: their velocity along the line of sight moved by ``shift`` (whole spans, m/s); where it
+        moved, their velocities so far were at another wrap, and the slope's history starts again."""
+        r = np.maximum(np.hypot(self.x[idx, 0], self.x[idx, 1]), 1e-3)
+        self.x[idx, 2] += shift * self.x[idx, 0] / r
+        self.x[idx, 3] += shift * self.x[idx, 1] / r
+        self.nh[idx] = np.where(shift != 0.0, 0, self.nh[idx])
 
     def _body_wrap(self, idx: np.ndarray, span: float, sensor_velocity) -> np.ndarray:
         """Which of the unresolved tracks ``idx``, just updated (range_walk), lie on the body of a confirmed, resolved
@@ -848,10 +848,7 @@ class ObjectTracker:
         rows = np.arange(idx.size)
         ok = np.isfinite(cost[rows, j])
         if ok.any():
-            t, shift = idx[ok], k[rows[ok], j[ok]] * span
-            self.x[t, 2] += shift * ux[ok]
-            self.x[t, 3] += shift * uy[ok]
-            self.nh[t] = np.where(shift != 0.0, 0, self.nh[t])     # its velocities so far were at another wrap
+            self._move_wraps(idx[ok], k[rows[ok], j[ok]] * span)
         return ok
 
     def _hops(self, idx: np.ndarray, z: np.ndarray, sensor_velocity) -> np.ndarray:
