@@ -15,7 +15,16 @@ and the objects near no actor (summed over the cycles). There the car's motion i
 sight: the object level's tracker starts from the measured velocity; the radar tracker's from the radial speed
 and a prior across the line of sight (σ 2 m/s, ``TANGENTIAL_PRIOR_VAR``), which it corrects from the positions only.
 
-Run: ``python benchmarks/crossing.py [--only far|near] [--root DIR]`` (far: a few seconds; near: about a minute;
+FCW: a car crosses the ego's road from the left (``ars408_like``, two lanes of 3.6 m, the ego in the right one) and
+clears the ego's lane 1.5 s before the ego gets there, so that no warning is due: ego 10, 15 and 20 m/s, car 10, 15
+and 20 m/s, starting 12 m (first tracked within 20° of the ego's road) or 40 m to the left, seeds 1–10, at the object
+and detection levels (``radarnode.consumer.evaluate.simulate``). Printed per case and level: the seeds in which the
+consumer warned. The object level's warnings are the consumer's rule, not the radar's (at 15 m/s and below the
+car is in the lane within the warning's reach while the ego is still far: a car in the lane is a threat whatever its
+speed across); the detection level should warn where the object level warns.
+
+Run: ``python benchmarks/crossing.py [--only far|near|fcw] [--root DIR]`` (far: a few seconds; near and fcw: about a
+minute each;
 ``--root`` imports radarnode from another tree, e.g. ``git archive REV | tar -x -C DIR``, to compare two versions
 with one script).
 """
@@ -106,12 +115,35 @@ actors:
     return in_view, followed, right, ids, others
 
 
+FCW_EGO, FCW_CAR, FCW_FROM, FCW_SEEDS, FCW_LEVELS = (10.0, 15.0, 20.0), (10.0, 15.0, 20.0), (12.0, 40.0), \
+    tuple(range(1, 11)), ("object", "detection")
+
+
+def crossing_fcw(ego_mps: float, car_mps: float, from_m: float, seed: int, level: str) -> bool:
+    """Whether the consumer warned (FCW) while a car crossed from ``from_m`` to the left, clearing the ego's lane
+    1.5 s before the ego got there (tests/test_track_start.py has three of these cases)."""
+    from radarnode.consumer.evaluate import simulate
+    t_arrive = (from_m + 4.0) / car_mps + 1.5
+    sc = parse_scenario(f"""
+name: crossing_fcw
+duration_s: {round(t_arrive + 0.5, 2)}
+seed: {seed}
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: {ego_mps}}}
+road: {{lanes: 2, lane_width_m: 3.6, ego_lane: 0}}
+ecu: {{acc_enabled: false, expect: {{no_fcw: true}}}}
+actors:
+  - {{id: x, class: car, x_m: {3.7 + ego_mps * t_arrive:.1f}, y_m: {from_m}, speed_mps: {car_mps}, heading_deg: -90}}
+""")
+    return simulate(sc, fidelity=level).warning_time_s is not None
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--only", choices=("far", "near"), help="print one table only")
+    ap.add_argument("--only", choices=("far", "near", "fcw"), help="print one table only")
     ap.add_argument("--root", help="import radarnode from this tree (read before radarnode is imported)")
     args = ap.parse_args()
-    if args.only != "near":
+    if args.only in (None, "far"):
         print(f"radarnode from {TREE}; detection level, ars408_like, seeds {SEEDS[0]}–{SEEDS[-1]}\n")
         print("| crossing car | cycles seen | reported moving | fraction |")
         print("|---|---:|---:|---:|")
@@ -121,7 +153,7 @@ def main() -> None:
                 s, m = crossing(x_m, v, seed)
                 seen, moving = seen + s, moving + m
             print(f"| {x_m:.0f} m ahead, {v:.0f} m/s | {seen} | {moving} | {moving / max(seen, 1):.2f} |", flush=True)
-    if args.only != "far":
+    if args.only in (None, "near"):
         print(f"\nradarnode from {TREE}; a car crossing {NEAR_X_M:.0f} m ahead, the ego standing, ars408_like, seeds "
               f"{NEAR_SEEDS[0]}–{NEAR_SEEDS[-1]} summed; velocity right: within {NEAR_SPEED_OK_MPS:g} m/s of the car's\n")
         print("| crossing speed | level | cycles in view | followed | velocity right | fraction right | IDs (per seed) "
@@ -137,6 +169,17 @@ def main() -> None:
                     per_seed.append(str(len(ids)))
                 print(f"| {v:.0f} m/s | {level} | {total[0]} | {total[1]} | {total[2]} | {total[2] / max(total[0], 1):.2f} "
                       f"| {', '.join(per_seed)} | {total[3]} |", flush=True)
+    if args.only in (None, "fcw"):
+        print(f"\nradarnode from {TREE}; a car crossing the ego's road from the left, clear of the ego's lane 1.5 s before "
+              f"the ego gets there, ars408_like; seeds {FCW_SEEDS[0]}–{FCW_SEEDS[-1]} in which the consumer warned (FCW)\n")
+        print("| ego | car | from | " + " | ".join(f"{lv} level" for lv in FCW_LEVELS) + " |")
+        print("|---:|---:|---:|" + "---:|" * len(FCW_LEVELS))
+        for from_m in FCW_FROM:
+            for ego in FCW_EGO:
+                for car in FCW_CAR:
+                    cells = [sum(crossing_fcw(ego, car, from_m, seed, lv) for seed in FCW_SEEDS) for lv in FCW_LEVELS]
+                    print(f"| {ego:.0f} m/s | {car:.0f} m/s | {from_m:.0f} m | "
+                          + " | ".join(f"{c} of {len(FCW_SEEDS)}" for c in cells) + " |", flush=True)
 
 
 if __name__ == "__main__":

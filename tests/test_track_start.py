@@ -253,23 +253,23 @@ def test_a_car_crossing_near_ahead_is_listed_at_its_velocity_at_the_detection_le
     assert others <= 0.3 * in_view, (others, in_view)
 
 
-@pytest.mark.parametrize("ego_mps, car_mps, object_warns", [(10.0, 20.0, False), (15.0, 20.0, False),
-                                                            (15.0, 15.0, True)])
-def test_a_car_crossing_the_egos_road_draws_the_warning_the_object_level_draws(ego_mps, car_mps, object_warns):
-    """A car crosses the ego's road from the left and clears its lane 1.5 s before the ego gets there. The object
-    level, whose tracker knows the car's velocity across, warns (FCW) only where the car is still in the lane within
-    the warning's reach (at 15 m/s: the consumer's FCW takes a car in the lane for a threat whatever its speed across,
-    noticed and not changed); the detection level's track lagged the car across the lane and warned at 20 m/s too
-    (2.18 and 2.47 s), now as the object level in this seed. Over seeds 1–10 it still warns in 1 and 2 of them (4 and
-    8 before), and where the car is first tracked within 20° of the ego's road no less often (README)."""
+@pytest.mark.parametrize("ego_mps, car_mps", [(10.0, 20.0), (15.0, 20.0), (15.0, 15.0)])
+def test_a_car_crossing_the_egos_road_draws_the_warning_the_object_level_draws(ego_mps, car_mps):
+    """A car crosses the ego's road from the left and clears its lane 1.5 s before the ego gets there: no warning is
+    due. The detection level's track lagged the car across the lane and warned at 20 m/s (2.18 and 2.47 s) where the
+    object level did not; and the consumer's FCW took a car in the lane for a threat whatever its speed across, so
+    at 15 m/s both levels warned. Now FCW leaves out a target that will have cleared the path when the ego gets there
+    (``radarnode.consumer.ecu.clears_path``), and the tracker measures the car's speed across from its side's
+    detections (tests/test_across_fit.py): neither level warns (``benchmarks/crossing.py --only fcw``: 0 of 10 seeds
+    at either level in these cases, from 40 m and from 12 m)."""
     from radarnode.consumer.evaluate import simulate
     t_arrive = (40.0 + 4.0) / car_mps + 1.5
     sc = scenario(f"  - {{id: x, class: car, x_m: {3.7 + ego_mps * t_arrive:.1f}, y_m: 40.0, speed_mps: {car_mps}, "
                   "heading_deg: -90}", ego=f"{{speed_mps: {ego_mps}}}",
                   road="{lanes: 2, lane_width_m: 3.6, ego_lane: 0}", duration=round(t_arrive + 0.5, 2), seed=5,
                   extra="ecu: {acc_enabled: false, expect: {no_fcw: true}}")
-    warned = {level: simulate(sc, fidelity=level).warning_time_s is not None for level in ("object", "detection")}
-    assert warned == {"object": object_warns, "detection": object_warns}, warned
+    warned = {level: simulate(sc, fidelity=level).warning_time_s for level in ("object", "detection")}
+    assert warned == {"object": None, "detection": None}, warned
 
 
 @pytest.mark.parametrize("ambiguous, offset_mps, loose", [

@@ -33,7 +33,7 @@ import numpy as np
 from radarnode.consumer.acc import LEAD_STOPPED_MPS, Acc, AccSettings, Target
 from radarnode.consumer.path import (BoundaryDrift, SensorMount, VehicleTrails, aligned_boundaries, boundary_reference,
                                      course_known, crossing_road, curvature, in_path, measured_reach_m, path_heading,
-                                     trail_fits)
+                                     path_offset_m, trail_fits)
 from radarnode.consumer.assembler import ClusterCycle, ObjectCycle
 from radarnode.consumer.fcw import LEVEL_WARNING, Fcw, FcwSettings
 from radarnode.consumer.overhead import OVERHEAD_DEPTH_M, STRUCTURE_POSSIBLE, STRUCTURE_WIDE, LandmarkMap
@@ -56,6 +56,13 @@ OBSTACLE_MIN_AGE = 4
 OBSTACLE_RCS_POWER = 10.0 ** (OBSTACLE_RCS_DBSM / 10.0)
 RCS_AVERAGE_GAIN = 0.2
 ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / out of the predicted path)
+#: FCW leaves out a target whose speed across the path — the least of it within CLEAR_SIGMAS of its σ — carries the
+#: point the radar reports more than the path's half-width plus the body's extent beyond the path's centre line by
+#: the time the ego gets there (the gap over the closing speed): a car crossing the road that will have cleared it
+#: (ISO 15623 warns for a collision, not for a car in the lane now). The body's extent: the larger of its length and
+#: width as the radar reports them, CLEAR_EXTENT_M where it reports neither (the reported point may be any corner)
+CLEAR_SIGMAS = 3.0
+CLEAR_EXTENT_M = 5.0
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
@@ -128,6 +135,18 @@ LOST_MATCH_M = 3.0
 LOST_MATCH_LATERAL_M = 1.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
+
+
+def clears_path(offset_m: np.ndarray, across_mps: np.ndarray, sigma_mps: np.ndarray, reach_s: np.ndarray,
+                half_width_m: float, extent_m: np.ndarray) -> np.ndarray:
+    """Whether targets at ``offset_m`` from the path's centre line (left positive), moving across it at
+    ``across_mps`` (σ ``sigma_mps``), will have cleared it ``reach_s`` from now: the least speed across within
+    CLEAR_SIGMAS of its σ carries the reported point more than ``half_width_m`` + ``extent_m`` beyond the centre line on
+    the side it moves to (a body of that extent around the point then lies wholly outside the path)."""
+    w = np.asarray(across_mps, dtype=np.float64)
+    least = np.sign(w) * np.maximum(np.abs(w) - CLEAR_SIGMAS * np.asarray(sigma_mps, dtype=np.float64), 0.0)
+    later = np.asarray(offset_m, dtype=np.float64) + least * np.asarray(reach_s, dtype=np.float64)
+    return np.sign(least) * later > half_width_m + np.asarray(extent_m, dtype=np.float64)
 
 
 @dataclass
@@ -519,6 +538,9 @@ class Ecu:
         ssv = self._sensor_motion()[0]                # the same, in the sensor's axes (the trackers' states)
         along = np.zeros(len(tracks))                 # each track's speed over ground along the path where it is
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
+        across = np.zeros(len(tracks))                # … across it (to the left)
+        across_sigma = np.zeros(len(tracks))          # … its σ
+        extent = np.full(len(tracks), CLEAR_EXTENT_M)  # the body's length or width, the larger
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
             gx, gy = vx + su, vy + sv                         # over ground, vehicle axes
@@ -531,6 +553,10 @@ class Ecu:
             there = road_share(self.ego_speed_mps, kappa) * path_heading(kappa, max(xv[i], 0.0))
             tangent[i] = math.cos(there), math.sin(there)
             along[i] = gx * tangent[i, 0] + gy * tangent[i, 1]
+            nx, ny = self.mount.rotate(-tangent[i, 1], tangent[i, 0], inverse=True)        # across, sensor axes
+            normal = np.array([nx, ny])
+            across[i] = -gx * tangent[i, 1] + gy * tangent[i, 0]
+            across_sigma[i] = math.sqrt(max(float(normal @ t.p[2:4, 2:4] @ normal), 0.0))
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
             ahead = kappa * max(xv[i], 0.0)
@@ -549,6 +575,9 @@ class Ecu:
                 obstacle[i] = cluster_strength.get(t.id, False)
                 continue
             k = by_id.get(t.meas_id)
+            if k is not None:
+                size = max(float(ol.length_m[k]), float(ol.width_m[k]))
+                extent[i] = size if math.isfinite(size) and size > 0.0 else CLEAR_EXTENT_M
             landmark = self.landmarks.by_track.get(t.id)
             # its place in the odometry frame, and the road's heading there
             wx, wy = float(wxs[i]), float(wys[i])
@@ -690,8 +719,14 @@ class Ecu:
             return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]),
                           float(along[i] - self.ego_speed_mps), float(lead_accel))
 
+        # when the ego gets to each track (a track not closing is never reached), and whether it has cleared the
+        # path by then
+        closing = self.ego_speed_mps - along
+        reach_s = np.where(closing > 0.1, np.maximum(xv - self.mount.x_m, 0.0) / np.maximum(closing, 0.1), 0.0)
+        clears = clears_path(path_offset_m(xv, yv, kappa), across, across_sigma, reach_s,
+                             self.acc.settings.path_half_width_m, extent)
         acc = pick(moved & ~oncoming, self._target_id)
-        fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming, self._fcw_target_id)
+        fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming & ~clears, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
         self._fcw_target_id = fcw.track_id if fcw is not None else None
         return acc, fcw

@@ -28,8 +28,8 @@ import numpy as np
 from radarnode.dsp.cluster import dbscan
 from radarnode.perception.motion import road_predict, road_share, transition
 from radarnode.perception.types import (
-    AMBIG_AMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING, DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED,
-    MEAS_NEW, MEAS_PREDICTED, ClusterList, Detections, ObjectList)
+    AMBIG_AMBIGUOUS, AMBIG_STAGGERED, AMBIG_UNAMBIGUOUS, DYN_CROSSING_MOVING, DYN_MOVING, DYN_ONCOMING,
+    DYN_STATIONARY, DYN_STOPPED, MEAS_MEASURED, MEAS_NEW, MEAS_PREDICTED, ClusterList, Detections, ObjectList)
 
 GATE_CHI2_3DOF = 16.27        # 99.9 % gate for (x, y, radial speed)
 TRACKER_SIGMA_POS_M = 0.5     # a detection group's position noise (ObjectTracker's default)
@@ -234,6 +234,8 @@ class Groups:
     velocity: np.ndarray | None = None        # (n, 2) a joined near body's fitted relative velocity (NaN: none)
     velocity_cov: np.ndarray | None = None    # (n, 2, 2) its covariance
     ambiguous: np.ndarray | None = None       # (n,) every detection's range rate known only modulo 2·v_max
+    across: np.ndarray | None = None          # (n, 2) a narrower group's fitted relative velocity, a measurement of its
+    across_cov: np.ndarray | None = None      # part across the line of sight only (NaN: none); (n, 2, 2) covariance
 
     def __len__(self) -> int:
         return int(self.x_m.shape[0])
@@ -249,6 +251,12 @@ RIGID_MIN_SPAN_RAD = math.radians(10.0)
 RIGID_MAX_SPEED_MPS = 70.0
 #: the least σ of a radial speed in the fit of a joined group's velocity
 RIGID_SPEED_FLOOR_MPS = 0.1
+#: a group narrower than RIGID_MIN_SPAN_RAD with this many detections or more, whose radial speeds one velocity
+#: explains (RIGID_RESIDUAL_MPS), measures its speed across the line of sight by that fit where the fit's σ across is
+#: at most ACROSS_FIT_MAX_SIGMA_MPS (the road prior's, TANGENTIAL_PRIOR_VAR): a car crossing 25 m ahead, its side's
+#: detections over 7–9° of azimuth
+ACROSS_FIT_MIN_DETECTIONS = 3
+ACROSS_FIT_MAX_SIGMA_MPS = 2.0
 
 
 #: detections further apart than this along the sensor's x are never one group by distance alone (
@@ -273,7 +281,8 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
     if n == 0:
         z = np.zeros(0)
         return Groups(z, z, z, z, z, z, z, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64), z,
-                      np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0, dtype=bool))
+                      np.zeros((0, 2)), np.zeros((0, 2, 2)), np.zeros(0, dtype=bool), np.zeros((0, 2)),
+                      np.zeros((0, 2, 2)))
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
     labels, rigid_v, rigid_cov = join_rigid(det, labels)
@@ -313,6 +322,11 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
             rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own)      # (join_rigid's own arrays)
             r = np.maximum(np.hypot(gx[own], gy[own]), 1e-6)
             vr[own] = (rigid_v[own, 0] * gx[own] + rigid_v[own, 1] * gy[own]) / r
+    across, across_cov = _across_fits(det, labels, gx, gy, np.isfinite(rigid_v[:, 0]))
+    narrow = np.flatnonzero(np.isfinite(across[:, 0]))
+    if narrow.size:    # measured with the fit's radial part at the group's place too, as a wider group is
+        r = np.maximum(np.hypot(gx[narrow], gy[narrow]), 1e-6)
+        vr[narrow] = (across[narrow, 0] * gx[narrow] + across[narrow, 1] * gy[narrow]) / r
     rcs = 10.0 * np.log10(np.bincount(labels, weights=10.0 ** (det.rcs_dbsm / 10.0), minlength=g))
     snr = 10.0 * np.log10(wsum)
     tags = np.full(g, -1, dtype=np.int64)
@@ -328,7 +342,7 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
     # a group of only ambiguous detections (a staggered pair's unpaired ones): its range rate is known modulo 2·v_max
     ambiguous = np.bincount(labels, weights=det.ambig_state != AMBIG_AMBIGUOUS, minlength=g) == 0
     return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov,
-                  ambiguous)
+                  ambiguous, across, across_cov)
 
 
 def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -413,9 +427,10 @@ def _rigid_velocity(det: Detections, labels: np.ndarray, which: np.ndarray) -> t
     return v, cov
 
 
-def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray) -> np.ndarray:
+def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray, min_span_rad: float = RIGID_MIN_SPAN_RAD
+                  ) -> np.ndarray:
     """For label pairs ``cand`` (P, 2) (a pair (k, k) is label k alone): whether one rigid velocity explains the
-    detections of both (see :func:`join_rigid`), shape (P,)."""
+    detections of both (see :func:`join_rigid`) over at least ``min_span_rad`` of azimuth, shape (P,)."""
     sums = _rigid_sums(det, labels)
     a, b = cand[:, 0], cand[:, 1]
     union = sums[a] + np.where((a != b)[:, None], sums[b], 0.0)
@@ -434,8 +449,38 @@ def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray) -> np.n
     bounds = np.cumsum(per) - per
     worst = np.maximum.reduceat(resid, bounds)
     span = np.maximum.reduceat(az, bounds) - np.minimum.reduceat(az, bounds)
-    return (solvable & (worst <= RIGID_RESIDUAL_MPS) & (span >= RIGID_MIN_SPAN_RAD)
+    return (solvable & (worst <= RIGID_RESIDUAL_MPS) & (span >= min_span_rad)
             & (np.hypot(v[:, 0], v[:, 1]) <= RIGID_MAX_SPEED_MPS))
+
+
+def _across_fits(det: Detections, labels: np.ndarray, gx: np.ndarray, gy: np.ndarray, fitted: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """The velocity (G, 2) and its covariance (G, 2, 2) that one rigid motion fitted to the radial speeds of each group
+    not ``fitted`` already gives, where the group has :data:`ACROSS_FIT_MIN_DETECTIONS` detections or more, each
+    with a range rate as measured (AmbigState unambiguous or staggered ramp), the fit explains each within :data:`RIGID_RESIDUAL_MPS` and its σ across
+    the line of sight to (gx, gy) is at most :data:`ACROSS_FIT_MAX_SIGMA_MPS`; NaN elsewhere. Its radial part is the
+    group's range rate (:func:`group_detections`), so only its part across is a further measurement
+    (:func:`tangential_update`): a car crossing 25 m ahead shows its side over 7–9° of azimuth, narrower than
+    :data:`RIGID_MIN_SPAN_RAD`, and its radial speed where it crosses the sensor's axis is the standing world's."""
+    g = gx.size
+    v, cov = np.full((g, 2), np.nan), np.full((g, 2, 2), np.nan)
+    # only range rates measured as they are (unambiguous, or resolved by a staggered pair): one known modulo 2·v_max
+    # (a single ramp's moving detections) or taken for the standing world's (a stationary candidate) is no radial
+    # speed to fit — a wrap, a constant over the group, leaks into the fit across as the wrap times the group's span
+    # (guardrail posts on fast_chirp crossed the ego's lane at 3–4 m/s)
+    sure = np.bincount(labels, weights=~np.isin(det.ambig_state, (AMBIG_STAGGERED, AMBIG_UNAMBIGUOUS)),
+                       minlength=g) == 0
+    own = np.flatnonzero(~fitted & sure & (np.bincount(labels, minlength=g) >= ACROSS_FIT_MIN_DETECTIONS))
+    if own.size:
+        own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1), 0.0)]
+    if own.size:
+        fv, fcov = _rigid_velocity(det, labels, own)
+        r = np.maximum(np.hypot(gx[own], gy[own]), 1e-6)
+        t = np.stack([-gy[own] / r, gx[own] / r], axis=1)
+        var = np.einsum("ni,nij,nj->n", t, fcov, t)
+        good = var <= ACROSS_FIT_MAX_SIGMA_MPS ** 2
+        v[own[good]], cov[own[good]] = fv[good], fcov[good]
+    return v, cov
 
 
 def extents_along(det: Detections, labels: np.ndarray, heading_rad: np.ndarray) -> np.ndarray:
@@ -583,6 +628,13 @@ def update(x, p, z, r_cov):
     return x_new, p_new
 
 
+def _across_known(groups: Groups, which: np.ndarray) -> np.ndarray:
+    """Whether the groups ``which`` carry a narrower group's fit across the line of sight (:func:`_across_fits`)."""
+    if groups.across is None:
+        return np.zeros(which.size, dtype=bool)
+    return np.isfinite(groups.across[which, 0])
+
+
 def tangential_update(x, p, z, v, v_cov):
     """Kalman update of states (n, 4) with the part of a measured velocity ``v`` (n, 2), covariance ``v_cov``
     (n, 2, 2), across the line of sight to the measured positions ``z`` (n, ≥ 2): the radial part is already in the
@@ -702,6 +754,11 @@ class ObjectTracker:
                 t, g = ti[fit], gi[fit]
                 self.x[t], self.p[t] = tangential_update(self.x[t], self.p[t], z[g], groups.velocity[g],
                                                          groups.velocity_cov[g])
+            narrow = _across_known(groups, gi)
+            if narrow.any():   # a narrower group's fit: its speed across the line of sight, as far as it measures it
+                t, g = ti[narrow], gi[narrow]
+                self.x[t], self.p[t] = tangential_update(self.x[t], self.p[t], z[g], groups.across[g],
+                                                         groups.across_cov[g])
             hit[ti], used[gi] = True, True
             if self.range_walk:
                 walk = ti[~self.resolved[ti]]
@@ -950,6 +1007,11 @@ class ObjectTracker:
         if fit.any():
             x0[fit, 2:4] = groups.velocity[idx[fit]]
             p0[fit, 2:4, 2:4] = groups.velocity_cov[idx[fit]] + self.r_cov[2, 2] * np.eye(2)[None]
+        narrow = _across_known(groups, idx)
+        if narrow.any():       # the prior, updated with a narrower group's fit across the line of sight
+            g = idx[narrow]
+            x0[narrow], p0[narrow] = tangential_update(x0[narrow], p0[narrow], z[g], groups.across[g],
+                                                       groups.across_cov[g])
         self.x = np.concatenate([self.x, x0])
         self.p = np.concatenate([self.p, p0])
         self.hist = np.concatenate([self.hist, np.ones(k, dtype=np.uint8)])
