@@ -208,3 +208,17 @@ def test_a_target_not_moving_across_or_not_reached_never_clears():
     out = clears_path(np.array([0.5, 0.5]), np.array([0.0, 10.0]), np.zeros(2), np.array([3.0, 0.0]), HALF,
                       np.full(2, EXTENT))
     assert not out.any()
+
+
+@pytest.mark.parametrize("angle_deg, clears", [(15.0, False), (29.0, False), (31.0, True), (60.0, True), (90.0, True)])
+def test_fcw_clears_only_a_target_moving_across_the_path(angle_deg, clears):
+    """A target 10 m/s over ground, its motion ``angle_deg`` off the path's direction, far enough across to clear in
+    2 s (offset beyond the half-width plus extent by then at any of these angles): left out only beyond
+    CLEAR_MIN_ANGLE_DEG (30°), not a lead on a curve entry whose road the yaw-rate circle does not follow yet."""
+    from radarnode.consumer.ecu import CLEAR_MIN_ANGLE_DEG, clears_path
+    assert CLEAR_MIN_ANGLE_DEG == 30.0
+    a = math.radians(angle_deg)
+    w, along, reach = 10.0 * math.sin(a), 10.0 * math.cos(a), 4.0
+    offset = (HALF + EXTENT + 1.0) - w * reach          # 1 m beyond the limit when the ego gets there
+    assert bool(clears_path(np.array([offset]), np.array([w]), np.zeros(1), np.array([reach]), HALF,
+                            np.array([EXTENT]), np.array([along]))[0]) == clears

@@ -63,6 +63,10 @@ ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / 
 #: width as the radar reports them, CLEAR_EXTENT_M where it reports neither (the reported point may be any corner)
 CLEAR_SIGMAS = 3.0
 CLEAR_EXTENT_M = 5.0
+#: … and only a target that moves across the path more than along it by this angle: its motion over ground at least
+#: CLEAR_MIN_ANGLE_DEG off the path's direction where it is (a crossing road user, not a lead on a curve entry whose
+#: road the yaw-rate circle does not follow yet)
+CLEAR_MIN_ANGLE_DEG = 30.0
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
@@ -138,15 +142,17 @@ TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not 
 
 
 def clears_path(offset_m: np.ndarray, across_mps: np.ndarray, sigma_mps: np.ndarray, reach_s: np.ndarray,
-                half_width_m: float, extent_m: np.ndarray) -> np.ndarray:
+                half_width_m: float, extent_m: np.ndarray, along_mps: np.ndarray | float = 0.0) -> np.ndarray:
     """Whether targets at ``offset_m`` from the path's centre line (left positive), moving across it at
-    ``across_mps`` (σ ``sigma_mps``), will have cleared it ``reach_s`` from now: the least speed across within
-    CLEAR_SIGMAS of its σ carries the reported point more than ``half_width_m`` + ``extent_m`` beyond the centre line on
-    the side it moves to (a body of that extent around the point then lies wholly outside the path)."""
+    ``across_mps`` (σ ``sigma_mps``) and along it at ``along_mps`` over ground, will have cleared it ``reach_s`` from
+    now: the least speed across within CLEAR_SIGMAS of its σ carries the reported point more than ``half_width_m`` +
+    ``extent_m`` beyond the centre line on the side it moves to (a body of that extent around the point then lies
+    wholly outside the path), and that speed is more than CLEAR_MIN_ANGLE_DEG off the path's direction."""
     w = np.asarray(across_mps, dtype=np.float64)
     least = np.sign(w) * np.maximum(np.abs(w) - CLEAR_SIGMAS * np.asarray(sigma_mps, dtype=np.float64), 0.0)
     later = np.asarray(offset_m, dtype=np.float64) + least * np.asarray(reach_s, dtype=np.float64)
-    return np.sign(least) * later > half_width_m + np.asarray(extent_m, dtype=np.float64)
+    crossing = np.abs(least) > math.tan(math.radians(CLEAR_MIN_ANGLE_DEG)) * np.abs(np.asarray(along_mps, dtype=float))
+    return crossing & (np.sign(least) * later > half_width_m + np.asarray(extent_m, dtype=np.float64))
 
 
 @dataclass
@@ -724,7 +730,7 @@ class Ecu:
         closing = self.ego_speed_mps - along
         reach_s = np.where(closing > 0.1, np.maximum(xv - self.mount.x_m, 0.0) / np.maximum(closing, 0.1), 0.0)
         clears = clears_path(path_offset_m(xv, yv, kappa), across, across_sigma, reach_s,
-                             self.acc.settings.path_half_width_m, extent)
+                             self.acc.settings.path_half_width_m, extent, along)
         acc = pick(moved & ~oncoming, self._target_id)
         fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming & ~clears, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
