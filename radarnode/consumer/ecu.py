@@ -60,13 +60,19 @@ ENTER_CYCLES, EXIT_CYCLES = 3, 4     # target selection hysteresis (cycles in / 
 #: point the radar reports more than the path's half-width plus the body's extent beyond the path's centre line by
 #: the time the ego gets there (the gap over the closing speed): a car crossing the road that will have cleared it
 #: (ISO 15623 warns for a collision, not for a car in the lane now). The body's extent: the larger of its length and
-#: width as the radar reports them, CLEAR_EXTENT_M where it reports neither (the reported point may be any corner)
+#: width as the radar reports them, at least CLEAR_EXTENT_M (the reported point may be any corner, and a body seen as
+#: one detection is reported 0.2 m long: a bicycle that stopped in the lane was left out)
 CLEAR_SIGMAS = 3.0
 CLEAR_EXTENT_M = 5.0
 #: … and only a target that moves across the path more than along it by this angle: its motion over ground at least
 #: CLEAR_MIN_ANGLE_DEG off the path's direction where it is (a crossing road user, not a lead on a curve entry whose
 #: road the yaw-rate circle does not follow yet)
 CLEAR_MIN_ANGLE_DEG = 30.0
+#: … and only one that cannot stop inside the path: braking at this deceleration from that least speed across, it
+#: still carries its point beyond the path's half-width plus its extent (a car crossing that brakes to a stop in the
+#: lane — its track's speed across lags the stop by several σ at the detection and signal levels — stays FCW's
+#: candidate while it is in the path; a car's full braking on a dry road, the least stopping distance)
+CLEAR_BRAKE_MPS2 = 10.0
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
@@ -147,12 +153,16 @@ def clears_path(offset_m: np.ndarray, across_mps: np.ndarray, sigma_mps: np.ndar
     ``across_mps`` (σ ``sigma_mps``) and along it at ``along_mps`` over ground, will have cleared it ``reach_s`` from
     now: the least speed across within CLEAR_SIGMAS of its σ carries the reported point more than ``half_width_m`` +
     ``extent_m`` beyond the centre line on the side it moves to (a body of that extent around the point then lies
-    wholly outside the path), and that speed is more than CLEAR_MIN_ANGLE_DEG off the path's direction."""
+    wholly outside the path), that speed is more than CLEAR_MIN_ANGLE_DEG off the path's direction, and braking at
+    CLEAR_BRAKE_MPS2 from it the point would still get that far (it cannot stop in the path)."""
     w = np.asarray(across_mps, dtype=np.float64)
     least = np.sign(w) * np.maximum(np.abs(w) - CLEAR_SIGMAS * np.asarray(sigma_mps, dtype=np.float64), 0.0)
-    later = np.asarray(offset_m, dtype=np.float64) + least * np.asarray(reach_s, dtype=np.float64)
+    offset = np.asarray(offset_m, dtype=np.float64)
+    need = half_width_m + np.asarray(extent_m, dtype=np.float64)
+    later = offset + least * np.asarray(reach_s, dtype=np.float64)
+    stops = np.sign(least) * offset + least * least / (2.0 * CLEAR_BRAKE_MPS2)      # where it stands if it brakes now
     crossing = np.abs(least) > math.tan(math.radians(CLEAR_MIN_ANGLE_DEG)) * np.abs(np.asarray(along_mps, dtype=float))
-    return crossing & (np.sign(least) * later > half_width_m + np.asarray(extent_m, dtype=np.float64))
+    return crossing & (np.sign(least) * later > need) & (stops > need)
 
 
 @dataclass
@@ -546,7 +556,7 @@ class Ecu:
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         across = np.zeros(len(tracks))                # … across it (to the left)
         across_sigma = np.zeros(len(tracks))          # … its σ
-        extent = np.full(len(tracks), CLEAR_EXTENT_M)  # the body's length or width, the larger
+        extent = np.full(len(tracks), CLEAR_EXTENT_M)  # the body's length or width, the larger, at least CLEAR_EXTENT_M
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
             gx, gy = vx + su, vy + sv                         # over ground, vehicle axes
@@ -583,7 +593,7 @@ class Ecu:
             k = by_id.get(t.meas_id)
             if k is not None:
                 size = max(float(ol.length_m[k]), float(ol.width_m[k]))
-                extent[i] = size if math.isfinite(size) and size > 0.0 else CLEAR_EXTENT_M
+                extent[i] = max(size, CLEAR_EXTENT_M) if math.isfinite(size) else CLEAR_EXTENT_M
             landmark = self.landmarks.by_track.get(t.id)
             # its place in the odometry frame, and the road's heading there
             wx, wy = float(wxs[i]), float(wys[i])
