@@ -203,10 +203,10 @@ HALF, EXTENT = 1.8, 4.5
 NEED = HALF + EXTENT
 
 
-def _clears(offset, w, reach, sigma=0.0, along=0.0):
+def _clears(offset, w, reach, sigma=0.0, along=0.0, accel=0.0):
     from radarnode.consumer.ecu import clears_path
     return bool(clears_path(np.array([offset]), np.array([w]), np.array([sigma]), np.array([reach]), HALF,
-                            np.array([EXTENT]), np.array([along]))[0])
+                            np.array([EXTENT]), np.array([along]), np.array([accel]))[0])
 
 
 @pytest.mark.parametrize("later, clears", [(NEED - 0.01, False), (NEED + 0.01, True), (2.0 * NEED, True),
@@ -255,3 +255,13 @@ def test_fcw_clears_only_a_target_moving_across_the_path(angle_deg, clears):
     assert CLEAR_MIN_ANGLE_DEG == 30.0
     a = math.radians(angle_deg)
     assert _clears(0.0, 30.0 * math.sin(a), 4.0, along=30.0 * math.cos(a)) == clears
+
+
+@pytest.mark.parametrize("braking, clears", [(0.0, True), (0.99, True), (1.01, False), (2.0, False), (-5.0, True)])
+@pytest.mark.parametrize("side", [1.0, -1.0])
+def test_fcw_does_not_clear_a_target_braking_across_the_path(braking, clears, side):
+    """30 m/s across on the centre line, far from the ego (every other condition met), its acceleration across
+    against its motion ``braking`` times CLEAR_BRAKING_MPS2 (negative: speeding up): a target braking harder than that
+    may stop in the path (its track's speed lags the braking) and stays a candidate; either side."""
+    from radarnode.consumer.ecu import CLEAR_BRAKING_MPS2
+    assert _clears(0.0, 30.0 * side, 100.0, accel=-side * braking * CLEAR_BRAKING_MPS2) == clears

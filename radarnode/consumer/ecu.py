@@ -73,6 +73,10 @@ CLEAR_MIN_ANGLE_DEG = 30.0
 #: lane — its track's speed across lags the stop by several σ at the detection and signal levels — stays FCW's
 #: candidate while it is in the path; a car's full braking on a dry road, the least stopping distance)
 CLEAR_BRAKE_MPS2 = 10.0
+#: … and only one not braking across the path: its track's acceleration across against its motion there is at most
+#: this (a car crossing at 16–20 m/s that brakes at 9–10 m/s² to a stop in the lane: its track's speed across lags the
+#: braking, and at that speed it looked unable to stop in the path — warned 0.5–0.7 s later at the detection level)
+CLEAR_BRAKING_MPS2 = 1.0
 MOVING_MPS = 1.0                     # over ground: a track that moved faster has been seen moving
 #: the highest reflector above the radar an overhead structure puts in its path (m): a stationary one at range R
 #: seems to move away at up to v·(1 − cos asin(H/R)) (its Doppler is v·cos(elevation)); only more counts as moving
@@ -148,13 +152,15 @@ TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not 
 
 
 def clears_path(offset_m: np.ndarray, across_mps: np.ndarray, sigma_mps: np.ndarray, reach_s: np.ndarray,
-                half_width_m: float, extent_m: np.ndarray, along_mps: np.ndarray | float = 0.0) -> np.ndarray:
+                half_width_m: float, extent_m: np.ndarray, along_mps: np.ndarray | float = 0.0,
+                across_accel_mps2: np.ndarray | float = 0.0) -> np.ndarray:
     """Whether targets at ``offset_m`` from the path's centre line (left positive), moving across it at
     ``across_mps`` (σ ``sigma_mps``) and along it at ``along_mps`` over ground, will have cleared it ``reach_s`` from
     now: the least speed across within CLEAR_SIGMAS of its σ carries the reported point more than ``half_width_m`` +
     ``extent_m`` beyond the centre line on the side it moves to (a body of that extent around the point then lies
     wholly outside the path), that speed is more than CLEAR_MIN_ANGLE_DEG off the path's direction, and braking at
-    CLEAR_BRAKE_MPS2 from it the point would still get that far (it cannot stop in the path)."""
+    CLEAR_BRAKE_MPS2 from it the point would still get that far (it cannot stop in the path), and it is not braking:
+    its acceleration across (``across_accel_mps2``) against its motion there at most CLEAR_BRAKING_MPS2."""
     w = np.asarray(across_mps, dtype=np.float64)
     least = np.sign(w) * np.maximum(np.abs(w) - CLEAR_SIGMAS * np.asarray(sigma_mps, dtype=np.float64), 0.0)
     offset = np.asarray(offset_m, dtype=np.float64)
@@ -162,7 +168,8 @@ def clears_path(offset_m: np.ndarray, across_mps: np.ndarray, sigma_mps: np.ndar
     later = offset + least * np.asarray(reach_s, dtype=np.float64)
     stops = np.sign(least) * offset + least * least / (2.0 * CLEAR_BRAKE_MPS2)      # where it stands if it brakes now
     crossing = np.abs(least) > math.tan(math.radians(CLEAR_MIN_ANGLE_DEG)) * np.abs(np.asarray(along_mps, dtype=float))
-    return crossing & (np.sign(least) * later > need) & (stops > need)
+    braking = np.sign(least) * np.asarray(across_accel_mps2, dtype=np.float64) < -CLEAR_BRAKING_MPS2
+    return crossing & ~braking & (np.sign(least) * later > need) & (stops > need)
 
 
 @dataclass
@@ -556,6 +563,7 @@ class Ecu:
         tangent = np.zeros((len(tracks), 2))          # the path's direction there (vehicle axes)
         across = np.zeros(len(tracks))                # … across it (to the left)
         across_sigma = np.zeros(len(tracks))          # … its σ
+        across_accel = np.zeros(len(tracks))          # … the track's acceleration across it
         extent = np.full(len(tracks), CLEAR_EXTENT_M)  # the body's length or width, the larger, at least CLEAR_EXTENT_M
         for i, t in enumerate(tracks):
             vx, vy = self.mount.rotate(t.x[2], t.x[3])
@@ -573,6 +581,8 @@ class Ecu:
             normal = np.array([nx, ny])
             across[i] = -gx * tangent[i, 1] + gy * tangent[i, 0]
             across_sigma[i] = math.sqrt(max(float(normal @ t.p[2:4, 2:4] @ normal), 0.0))
+            if t.x.size >= 6:
+                across_accel[i] = float(normal @ t.x[4:6])
             # coming towards us along the path where it is (on a curve entry the yaw-rate circle lags the road and
             # can put the oncoming lane in the path: ACC braked for an oncoming car and FCW warned for it)
             ahead = kappa * max(xv[i], 0.0)
@@ -740,7 +750,7 @@ class Ecu:
         closing = self.ego_speed_mps - along
         reach_s = np.where(closing > 0.1, np.maximum(xv - self.mount.x_m, 0.0) / np.maximum(closing, 0.1), 0.0)
         clears = clears_path(path_offset_m(xv, yv, kappa), across, across_sigma, reach_s,
-                             self.acc.settings.path_half_width_m, extent, along)
+                             self.acc.settings.path_half_width_m, extent, along, across_accel)
         acc = pick(moved & ~oncoming, self._target_id)
         fcw = pick((moved | (obstacle & stationary_ok & known)) & ~oncoming & ~clears, self._fcw_target_id)
         self._target_id = acc.track_id if acc is not None else None
