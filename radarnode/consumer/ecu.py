@@ -603,7 +603,8 @@ class Ecu:
             k = by_id.get(t.meas_id)
             if k is not None:
                 size = max(float(ol.length_m[k]), float(ol.width_m[k]))
-                extent[i] = max(size, CLEAR_EXTENT_M) if math.isfinite(size) else CLEAR_EXTENT_M
+                if math.isfinite(size):
+                    extent[i] = max(size, CLEAR_EXTENT_M)
             landmark = self.landmarks.by_track.get(t.id)
             # its place in the odometry frame, and the road's heading there
             wx, wy = float(wxs[i]), float(wys[i])

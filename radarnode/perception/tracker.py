@@ -306,8 +306,7 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
         # a joined near body wraps around the sensor (a car beside a corner radar): its nearest x and mean y may lie
         # off the body, its power centroid does not; measured with the rigid velocity's radial part there
         gx = np.where(joined, np.bincount(labels, weights=power * x, minlength=g) / wsum, xmin)
-        r = np.maximum(np.hypot(gx, gy), 1e-6)
-        vr = np.where(joined, (rigid_v[:, 0] * gx + rigid_v[:, 1] * gy) / r, vr)
+        vr = np.where(joined, _radial_at(rigid_v, gx, gy), vr)
     # a group of its own spread over RIGID_MIN_SPAN_RAD or more of azimuth (a body beside the sensor) whose radial
     # speeds one velocity explains: that velocity too, and its radial part at the group's place (which stays its
     # own). A truck parked beside a sensor passing at 5 m/s: its side's detections, 1–3 m ahead at 35–60°, read as
@@ -320,13 +319,11 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
         own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1))]
         if own.size:
             rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own)      # (join_rigid's own arrays)
-            r = np.maximum(np.hypot(gx[own], gy[own]), 1e-6)
-            vr[own] = (rigid_v[own, 0] * gx[own] + rigid_v[own, 1] * gy[own]) / r
+            vr[own] = _radial_at(rigid_v[own], gx[own], gy[own])
     across, across_cov = _across_fits(det, labels, gx, gy, np.isfinite(rigid_v[:, 0]))
     narrow = np.flatnonzero(np.isfinite(across[:, 0]))
     if narrow.size:    # measured with the fit's radial part at the group's place too, as a wider group is
-        r = np.maximum(np.hypot(gx[narrow], gy[narrow]), 1e-6)
-        vr[narrow] = (across[narrow, 0] * gx[narrow] + across[narrow, 1] * gy[narrow]) / r
+        vr[narrow] = _radial_at(across[narrow], gx[narrow], gy[narrow])
     rcs = 10.0 * np.log10(np.bincount(labels, weights=10.0 ** (det.rcs_dbsm / 10.0), minlength=g))
     snr = 10.0 * np.log10(wsum)
     tags = np.full(g, -1, dtype=np.int64)
@@ -343,6 +340,12 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
     ambiguous = np.bincount(labels, weights=det.ambig_state != AMBIG_AMBIGUOUS, minlength=g) == 0
     return Groups(gx, gy, vr, xmax - xmin, ymax - ymin, rcs, snr, tags, labels, glint, rigid_v, rigid_cov,
                   ambiguous, across, across_cov)
+
+
+def _radial_at(v: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """The radial part of velocities ``v`` (n, 2) at the points (x, y): a fitted body's range rate there."""
+    r = np.maximum(np.hypot(x, y), 1e-6)
+    return (v[:, 0] * x + v[:, 1] * y) / r
 
 
 def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -457,8 +460,9 @@ def _across_fits(det: Detections, labels: np.ndarray, gx: np.ndarray, gy: np.nda
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The velocity (G, 2) and its covariance (G, 2, 2) that one rigid motion fitted to the radial speeds of each group
     not ``fitted`` already gives, where the group has :data:`ACROSS_FIT_MIN_DETECTIONS` detections or more, each
-    with a range rate as measured (AmbigState unambiguous or staggered ramp), the fit explains each within :data:`RIGID_RESIDUAL_MPS` and its σ across
-    the line of sight to (gx, gy) is at most :data:`ACROSS_FIT_MAX_SIGMA_MPS`; NaN elsewhere. Its radial part is the
+    with a range rate as measured (AmbigState unambiguous or staggered ramp), the fit explains each within
+    :data:`RIGID_RESIDUAL_MPS` and its σ across the line of sight to (gx, gy) is at most
+    :data:`ACROSS_FIT_MAX_SIGMA_MPS`; NaN elsewhere. Its radial part is the
     group's range rate (:func:`group_detections`), so only its part across is a further measurement
     (:func:`tangential_update`): a car crossing 25 m ahead shows its side over 7–9° of azimuth, narrower than
     :data:`RIGID_MIN_SPAN_RAD`, and its radial speed where it crosses the sensor's axis is the standing world's."""
