@@ -16,7 +16,8 @@ Two scenes:
 Run: ``python benchmarks/fidelity.py [--frames N] [--object-only | --detection-only | --speed-only]``. Prints
 Markdown tables; ``--object-only`` prints only the object level's speed figures (its row of the highway_mimo12 table
 and the highway_cut_in line, issue 9 item 7), in seconds instead of minutes; ``--detection-only`` the detection
-level's line on highway_cut_in (the same item's ≥ 200×).
+level's line on highway_cut_in (the same item's ≥ 200×) and the frame's parts by the model's own timers (scene, radar,
+perception).
 """
 
 from __future__ import annotations
@@ -110,6 +111,7 @@ def speed(path: Path, level: str, frames: int, dtype: str = "complex128") -> dic
     if hasattr(model, "planned_cycles"):    # as the runner tells it: the object level's chunks end with the run
         model.planned_cycles = frames
     times, scat = [], []
+    parts: dict[str, float] = {}           # the model's own timers (StepInfo.seconds), summed over the frames
     for k in range(frames):
         t0 = time.perf_counter()
         model.step(k * sc.period_s, cfg)
@@ -117,11 +119,13 @@ def speed(path: Path, level: str, frames: int, dtype: str = "complex128") -> dic
         info = getattr(model, "info", None)
         if info is not None and info.scatterers is not None:
             scat.append(len(info.scatterers))
+        for name, sec in (getattr(info, "seconds", None) or {}).items():
+            parts[name] = parts.get(name, 0.0) + sec
     med = statistics.median(times[2:])
     mean = statistics.fmean(times)
     return {"median_s": med, "mean_s": mean, "rtf_mean": sc.period_s / mean,
             "scatterers": statistics.median(scat) if scat else float("nan"),
-            "choices": getattr(model, "choices", None)}
+            "choices": getattr(model, "choices", None), "parts_s": {k: v / frames for k, v in parts.items()}}
 
 
 def main() -> None:
@@ -230,6 +234,10 @@ def _detection_line(frames: int) -> None:
           f"ms per frame, mean {s['mean_s'] * 1e3:.2f} ms, {s['scatterers']:.0f} scatterers a frame: "
           f"{s['rtf_mean']:.0f}× real time; the lobe test {lobes[0] / max(lobes[1], 1) * 1e3:.2f} ms a call, "
           f"{lobes[1] / n:.0f} a frame, {100 * lobes[0] / (s['mean_s'] * n):.0f} % of the frames' time")
+    print("the frame's parts by the model's own timers (mean a frame): " + ", ".join(
+        f"{name} {sec * 1e3:.2f} ms" for name, sec in s["parts_s"].items())
+          + " (scene: its view and scatterers; radar: the detection model's chirp sequences, the ego motion and the velocity ambiguity; "
+          "perception: the cluster list and the tracker)")
 
 
 if __name__ == "__main__":
