@@ -23,7 +23,10 @@ road clutter), scatterers built as the signal level builds them
   Cramér–Rao bound (``equation.crb_range_m``/``crb_speed_mps`` at ρ); misses
   are trials without a detection within the gate.
 
-Run: ``.venv/bin/python benchmarks/signal_speed.py [--frames N] [--trials N] [--blas-threads N]``.
+Run: ``.venv/bin/python benchmarks/signal_speed.py [--frames N] [--trials N] [--blas-threads N]
+[--traffic scenario|relative]``. ``--traffic relative``: the other actors keep the places and relative speeds
+they have at the scenario's 25 m/s at every faster ego speed (by default they keep their speeds, and from about
+55 m/s on the ego drives into the lead car within the frames; :func:`highway_frames`).
 OpenBLAS is limited to ``--blas-threads`` threads (default 1, set before numpy
 is imported; ``default`` leaves OpenBLAS its own choice): on a shared two-core
 machine its idle worker threads spin after every threaded product and take the
@@ -78,9 +81,22 @@ RHO_DB = 20.0
 GATE_RANGE_M, GATE_RATE_MPS = 1.5, 1.0      # beyond v_max the chain's coupling correction shifts the range ~0.4 m
 
 
-def highway_frames(ego_mps: float, frames: int):
-    """(preset, [Scatterers per frame]) of the highway scene at one ego speed."""
+def highway_frames(ego_mps: float, frames: int, traffic: str = "scenario"):
+    """(preset, [Scatterers per frame]) of the highway scene at one ego speed.
+
+    ``traffic``: ``"scenario"`` keeps the actors' speeds as the scenario gives them (21–31 m/s): an ego much faster
+    than them closes on them within the frames (at 70 m/s the lead car's rear is 0.55 m from the sensor in the first
+    frame and the ego overlaps it or has driven through it in the other four: the scene has no collisions);
+    ``"relative"`` adds the ego's speed beyond the scenario's own (25 m/s) to every actor, so that the traffic keeps
+    the places and relative speeds it has at 25 m/s and only the ego's speed over ground changes (rows at or below
+    25 m/s the same as ``"scenario"``)."""
+    if traffic not in ("scenario", "relative"):
+        raise ValueError(f"traffic: value {traffic!r} is not allowed; expected 'scenario' or 'relative'")
     sc = load_scenario(ROOT / "scenarios" / "highway_mimo12.yaml")
+    if traffic == "relative":
+        shift = max(0.0, ego_mps - sc.ego.speed_mps)
+        sc = dataclasses.replace(sc, actors=tuple(dataclasses.replace(a, speed_mps=a.speed_mps + shift)
+                                                  for a in sc.actors))
     sc = dataclasses.replace(sc, ego=dataclasses.replace(sc.ego, speed_mps=ego_mps))
     scene = Scene(sc)
     p = radar_config(sc).preset
@@ -117,12 +133,12 @@ def floor_ms(p, k: int, dtype, reps: int = 7) -> float:
     return _median_ms(run, list(range(reps)))
 
 
-def speed_table(frames: int) -> list[str]:
+def speed_table(frames: int, traffic: str = "scenario") -> list[str]:
     lines = ["| ego speed | scatterers | dtype | floor: product + FFTs | time domain: synthesize + process | ratio "
              "| RD domain: synthesize_rd + process_rd | ratio |",
              "|---:|---:|---|---:|---:|---:|---:|---:|"]
     for ego in EGO_SPEEDS_MPS:
-        p, scats = highway_frames(ego, frames)
+        p, scats = highway_frames(ego, frames, traffic)
         chain = DspChain(p)
         k = int(statistics.median(len(s) for s in scats))
         for name, dt in DTYPES:
@@ -190,12 +206,16 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=50, help="noise draws per speed and path (accuracy; 0: none)")
     ap.add_argument("--blas-threads", default="1",
                     help="OpenBLAS threads, set before numpy is imported ('default': OpenBLAS's own choice)")
+    ap.add_argument("--traffic", choices=("scenario", "relative"), default="scenario",
+                    help="the other actors' speeds: as the scenario gives them (default; an ego faster than ~55 m/s "
+                    "drives into the lead car within the frames), or the ego's speed beyond 25 m/s added to each, so "
+                    "that every row has the traffic of the scenario's own 25 m/s (highway_frames)")
     args = ap.parse_args()
     t0 = time.perf_counter()
-    speed = speed_table(args.frames)
+    speed = speed_table(args.frames, args.traffic)
     acc = accuracy_table(args.trials) if args.trials > 0 else []
     print(f"## Signal level: synthesis + processing, highway_mimo12.yaml, median of {args.frames} frames, "
-          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
+          f"traffic {args.traffic}, OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
     print("\n".join(speed))
     if acc:
         print("\n## Accuracy at every speed\n")
