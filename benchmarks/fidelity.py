@@ -236,8 +236,8 @@ def _detection_line(frames: int) -> None:
           f"{lobes[1] / n:.0f} a frame, {100 * lobes[0] / (s['mean_s'] * n):.0f} % of the frames' time")
     print("the frame's parts by the model's own timers (mean a frame): " + ", ".join(
         f"{name} {sec * 1e3:.2f} ms" for name, sec in s["parts_s"].items())
-          + " (scene: its view and scatterers; radar: the detection model's chirp sequences, the ego motion and the velocity ambiguity; "
-          "perception: the cluster list and the tracker)")
+          + " (scene: its view and scatterers; radar: the detection model's chirp sequences, the ego motion and the "
+          "velocity ambiguity; perception: the cluster list and the tracker)")
 
 
 if __name__ == "__main__":

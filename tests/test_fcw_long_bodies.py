@@ -30,11 +30,11 @@ def test_a_piece_does_not_clear_while_a_piece_trailing_it_has_not():
     assert list(body_clears(np.array([False, True]), offset, across, along, ahead)) == [False, True]
 
 
-@pytest.mark.parametrize("factor, joined", [(0.99, True), (1.01, False), (2.0, False)])
+@pytest.mark.parametrize("factor, joined", [(0.99, True), (1.0, True), (1.01, False), (2.0, False)])
 @pytest.mark.parametrize("what", ["speed", "along", "depth", "gap"])
 def test_pieces_are_one_body_only_within_each_limit(factor, joined, what):
-    """Just below each limit one body, just above and at twice it two (the trailing piece uncleared holds the front one
-    back only when they are one body)."""
+    """Just below and at each limit one body, just above and at twice it two (the trailing piece uncleared holds the
+    front one back only when they are one body)."""
     kw = {"speed": {"dw": factor * CLEAR_BODY_SPEED_MPS}, "along": {"dalong": factor * CLEAR_BODY_SPEED_MPS},
           "depth": {"dahead": factor * CLEAR_BODY_DEPTH_M}, "gap": {"gap": factor * CLEAR_BODY_GAP_M}}[what]
     offset, across, along, ahead = _pair(**kw)

@@ -215,10 +215,9 @@ def body_extent(extent_m: np.ndarray, offset_m: np.ndarray, across_mps: np.ndarr
     together, behind = _same_body(offset_m, across_mps, along_mps, ahead_m)
     if not together.any():
         return extent
-    off = np.asarray(offset_m, dtype=np.float64)
-    span = np.where(together, np.abs(off[:, None] - off[None, :]), 0.0).max(axis=1)
+    span = np.where(together, np.abs(behind), 0.0).max(axis=1)
     largest = np.maximum(extent, np.where(together, extent[None, :], 0.0).max(axis=1))
-    return np.where(together.any(axis=1), np.maximum(extent, span + largest), extent)
+    return np.where(together.any(axis=1), span + largest, extent)
 
 
 def body_clears(clears: np.ndarray, offset_m: np.ndarray, across_mps: np.ndarray, along_mps: np.ndarray,
