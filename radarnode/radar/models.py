@@ -44,12 +44,13 @@ def tracker_for(preset: RadarPreset, period_s: float | None = None) -> ObjectTra
     a track once the range it walks resolved the wrap (:class:`radarnode.perception.tracker.ObjectTracker`,
     ``range_walk``). A single ramp with a longer wrap (``mimo12``, ``acc_lrr``) never follows an aliased target: its
     range rates are taken as measured."""
+    fov = tuple((s.max_range_m, math.radians(s.half_angle_deg)) for s in preset.fov)
     if preset.stagger_chirp_period_s > 0:
-        return ObjectTracker(alias_span_mps=2.0 * preset.alias_speed_mps)
+        return ObjectTracker(alias_span_mps=2.0 * preset.alias_speed_mps, fov=fov)
     span = 2.0 * preset.alias_speed_mps
     if period_s is not None and follows_one_wrap(span, period_s):
-        return ObjectTracker(alias_span_mps=span, range_walk=True)
-    return ObjectTracker()
+        return ObjectTracker(alias_span_mps=span, range_walk=True, fov=fov)
+    return ObjectTracker(fov=fov)
 
 
 def reportable(preset: RadarPreset, det: Detections, config: RuntimeConfig) -> np.ndarray:
