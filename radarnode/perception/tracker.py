@@ -267,7 +267,7 @@ GROUP_EPS_M = 2.8
 
 
 def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float = 1.5,
-                     eps_long_m: float = GROUP_EPS_LONG_M) -> Groups:
+                     eps_long_m: float = GROUP_EPS_LONG_M, staggered: bool = False) -> Groups:
     """DBSCAN over (x, y, radial speed) scaled by (eps_long_m, eps_m, eps_mps); a group per cluster.
 
     Longer along x than across: the side of a truck or a bus comes out as detections 3–4 m apart (its
@@ -276,7 +276,9 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
 
     Near the sensor one body spans tens of degrees, and its radial speed v·u changes across it by more than
     ``eps_mps`` (a car passing 2 m from a corner radar: −2 … +4.5 m/s over 90°): groups that touch and that one
-    rigid velocity explains are one group (:func:`join_rigid`), measured with that velocity's radial part."""
+    rigid velocity explains are one group (:func:`join_rigid`), measured with that velocity's radial part.
+    ``staggered``: the detections come from staggered ramps; only the range rates the pair measured enter a fit
+    (:func:`speed_known`)."""
     n = len(det)
     if n == 0:
         z = np.zeros(0)
@@ -285,7 +287,8 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
                       np.zeros((0, 2, 2)))
     x, y = det.x_m, det.y_m
     labels = dbscan(np.stack([x / eps_long_m, y / eps_m, det.range_rate_mps / eps_mps], axis=1), 1.0, 1)
-    labels, rigid_v, rigid_cov = join_rigid(det, labels)
+    known = speed_known(det, staggered)
+    labels, rigid_v, rigid_cov = join_rigid(det, labels, known)
     g = labels.max() + 1
     power = 10.0 ** (det.snr_db / 10.0)
     wsum = np.bincount(labels, weights=power, minlength=g)
@@ -316,11 +319,11 @@ def group_detections(det: Detections, eps_m: float = GROUP_EPS_M, eps_mps: float
     alone = ~joined & (np.bincount(labels, minlength=g) >= 2)
     if alone.any():
         own = np.flatnonzero(alone)
-        own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1))]
+        own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1), known)]
         if own.size:
-            rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own)      # (join_rigid's own arrays)
+            rigid_v[own], rigid_cov[own] = _rigid_velocity(det, labels, own, known)   # (join_rigid's own arrays)
             vr[own] = _radial_at(rigid_v[own], gx[own], gy[own])
-    across, across_cov = _across_fits(det, labels, gx, gy, np.isfinite(rigid_v[:, 0]))
+    across, across_cov = _across_fits(det, labels, gx, gy, np.isfinite(rigid_v[:, 0]), known)
     narrow = np.flatnonzero(np.isfinite(across[:, 0]))
     if narrow.size:    # measured with the fit's radial part at the group's place too, as a wider group is
         vr[narrow] = _radial_at(across[narrow], gx[narrow], gy[narrow])
@@ -348,7 +351,8 @@ def _radial_at(v: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return (v[:, 0] * x + v[:, 1] * y) / r
 
 
-def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def join_rigid(det: Detections, labels: np.ndarray, known: np.ndarray | None = None
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Groups (``labels``, DBSCAN's) whose nearest detections lie within :data:`RIGID_TOUCH_M` and whose radial
     speeds one relative velocity v explains — |v_r − v·u| ≤ :data:`RIGID_RESIDUAL_MPS` at every detection, u its
     line of sight, over at least :data:`RIGID_MIN_SPAN_RAD` of azimuth, |v| ≤ :data:`RIGID_MAX_SPEED_MPS` — are
@@ -356,7 +360,9 @@ def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndar
     whole joined group passes the same test). Returns the new labels, in the order of the groups' least label (of
     first detection, as DBSCAN numbers them), and
     per new group the fitted v (sensor axes; NaN for a group that was not joined), shape (g, 2), and its covariance
-    (g, 2, 2)."""
+    (g, 2, 2). ``known``: the detections whose range rates the fits use (:func:`speed_known`; None: all)."""
+    if known is None:
+        known = np.ones(labels.size, dtype=bool)
     g = int(labels.max()) + 1 if labels.size else 0
     none = (labels, np.full((g, 2), np.nan), np.full((g, 2, 2), np.nan))
     if g < 2:
@@ -372,7 +378,7 @@ def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndar
     if key.size == 0:
         return none
     cand = np.stack([key // g, key % g], axis=1)
-    ok = _rigid_fit_ok(det, labels, cand)
+    ok = _rigid_fit_ok(det, labels, cand, known)
     if not ok.any():
         return none
     # connected components of the accepted pairs: each group takes the least group index it is joined to
@@ -389,23 +395,39 @@ def join_rigid(det: Detections, labels: np.ndarray) -> tuple[np.ndarray, np.ndar
             break
     # a component joined through a chain (a–b, b–c) must pass the test as a whole; else its groups stay apart
     whole = np.flatnonzero(np.bincount(comp, minlength=g) > 1)
-    good = _rigid_fit_ok(det, comp[labels], np.stack([whole, whole], axis=1))
+    good = _rigid_fit_ok(det, comp[labels], np.stack([whole, whole], axis=1), known)
     comp = np.where(np.isin(comp, whole[~good]), np.arange(g), comp)
     # renumbered by their least group index (DBSCAN numbers its groups in order of first detection: so are these)
     uniq, new = np.unique(comp[labels], return_inverse=True)
     v, cov = np.full((uniq.size, 2), np.nan), np.full((uniq.size, 2, 2), np.nan)
     joined = np.searchsorted(uniq, np.flatnonzero(np.bincount(comp, minlength=g) > 1))   # made of several groups
-    v[joined], cov[joined] = _rigid_velocity(det, new, joined)
+    v[joined], cov[joined] = _rigid_velocity(det, new, joined, known)
     return new, v, cov
 
 
-def _rigid_sums(det: Detections, labels: np.ndarray) -> np.ndarray:
-    """Per label the sums of the normal equations of v_r = v·u: (L, 7) [Σc², Σcs, Σs², Σc·v_r, Σs·v_r, n, Σv_r²]."""
-    c, s, vr = np.cos(det.azimuth_rad), np.sin(det.azimuth_rad), det.range_rate_mps
+def speed_known(det: Detections, staggered: bool) -> np.ndarray:
+    """Which detections' range rates a rigid fit may use, (n,) bool. With staggered ramps (``staggered``) the paired
+    ones (AmbigState staggered ramp) and those of a speed no wrap reaches (unambiguous), as :func:`_across_fits` takes
+    them: an unpaired one (ambiguous) has a range rate known only modulo 2·v_max, and one unpaired but taken for the
+    standing world's (stationary candidate) a hypothesis, not a measurement. A weak spur of a truck's side 2 m beside the
+    sensor, unpaired at +4.0 m/s where the side's paired detection read −1.4 m/s, was joined to it: the two fitted
+    (16, −17.5) m/s exactly, the track took that velocity across, left the truck's lane and coasted through the ego's
+    (the signal level, a truck passed on the left); a spur flagged a stationary candidate is joined the same way (an
+    independent tester's case). A single ramp flags every moving detection ambiguous, and its range rates are taken as
+    measured (:class:`ObjectTracker`): all of them."""
+    if not staggered:
+        return np.ones(len(det), dtype=bool)
+    return np.isin(det.ambig_state, (AMBIG_STAGGERED, AMBIG_UNAMBIGUOUS))
+
+
+def _rigid_sums(det: Detections, labels: np.ndarray, known: np.ndarray) -> np.ndarray:
+    """Per label the sums of the normal equations of v_r = v·u over the detections ``known`` (:func:`speed_known`):
+    (L, 7) [Σc², Σcs, Σs², Σc·v_r, Σs·v_r, n, Σv_r²]."""
+    known = known.astype(np.float64)
+    c, s, vr = np.cos(det.azimuth_rad), np.sin(det.azimuth_rad), det.range_rate_mps * known
     n = int(labels.max()) + 1
-    return np.stack([np.bincount(labels, weights=w, minlength=n) for w in (c * c, c * s, s * s, c * vr, s * vr)]
-                    + [np.bincount(labels, minlength=n).astype(np.float64),
-                       np.bincount(labels, weights=vr * vr, minlength=n)], axis=1)
+    return np.stack([np.bincount(labels, weights=w, minlength=n)
+                     for w in (c * c * known, c * s * known, s * s * known, c * vr, s * vr, known, vr * vr)], axis=1)
 
 
 def _solve_rigid(sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -417,10 +439,11 @@ def _solve_rigid(sums: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.stack([(d * e - b * f) / safe, (a * f - b * e) / safe], axis=1), ok
 
 
-def _rigid_velocity(det: Detections, labels: np.ndarray, which: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _rigid_velocity(det: Detections, labels: np.ndarray, which: np.ndarray, known: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray]:
     """The fitted v (P, 2) of labels ``which`` and its covariance (P, 2, 2): s²·(AᵀA)⁻¹, s² the residual variance
     (at least :data:`RIGID_SPEED_FLOOR_MPS` squared: a fit through two or three detections is exact)."""
-    sums = _rigid_sums(det, labels)[which]
+    sums = _rigid_sums(det, labels, known)[which]
     v, _ = _solve_rigid(sums)
     a, b, d, n = sums[:, 0], sums[:, 1], sums[:, 2], sums[:, 5]
     rss = np.maximum(sums[:, 6] - v[:, 0] * sums[:, 3] - v[:, 1] * sums[:, 4], 0.0)
@@ -430,11 +453,11 @@ def _rigid_velocity(det: Detections, labels: np.ndarray, which: np.ndarray) -> t
     return v, cov
 
 
-def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray, min_span_rad: float = RIGID_MIN_SPAN_RAD
-                  ) -> np.ndarray:
+def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray, known: np.ndarray,
+                  min_span_rad: float = RIGID_MIN_SPAN_RAD) -> np.ndarray:
     """For label pairs ``cand`` (P, 2) (a pair (k, k) is label k alone): whether one rigid velocity explains the
     detections of both (see :func:`join_rigid`) over at least ``min_span_rad`` of azimuth, shape (P,)."""
-    sums = _rigid_sums(det, labels)
+    sums = _rigid_sums(det, labels, known)
     a, b = cand[:, 0], cand[:, 1]
     union = sums[a] + np.where((a != b)[:, None], sums[b], 0.0)
     v, solvable = _solve_rigid(union)
@@ -448,16 +471,20 @@ def _rigid_fit_ok(det: Detections, labels: np.ndarray, cand: np.ndarray, min_spa
     offset = np.arange(per.sum()) - np.repeat(np.cumsum(per) - per, per)
     member = order[np.where(offset < na[pair], start[a][pair] + offset, start[b][pair] + offset - na[pair])]
     az = det.azimuth_rad[member]
-    resid = np.abs(det.range_rate_mps[member] - (v[pair, 0] * np.cos(az) + v[pair, 1] * np.sin(az)))
+    known = known[member]         # (the residuals and the span of the detections the fit used)
+    resid = np.where(known, np.abs(det.range_rate_mps[member] - (v[pair, 0] * np.cos(az) + v[pair, 1] * np.sin(az))),
+                     0.0)
     bounds = np.cumsum(per) - per
     worst = np.maximum.reduceat(resid, bounds)
-    span = np.maximum.reduceat(az, bounds) - np.minimum.reduceat(az, bounds)
+    span = (np.maximum.reduceat(np.where(known, az, -np.inf), bounds)
+            - np.minimum.reduceat(np.where(known, az, np.inf), bounds))
+    measured = sums[:, 5] > 0          # a group with no range rate the fit may use is joined to nothing
     return (solvable & (worst <= RIGID_RESIDUAL_MPS) & (span >= min_span_rad)
-            & (np.hypot(v[:, 0], v[:, 1]) <= RIGID_MAX_SPEED_MPS))
+            & (np.hypot(v[:, 0], v[:, 1]) <= RIGID_MAX_SPEED_MPS) & measured[a] & measured[b])
 
 
-def _across_fits(det: Detections, labels: np.ndarray, gx: np.ndarray, gy: np.ndarray, fitted: np.ndarray
-                 ) -> tuple[np.ndarray, np.ndarray]:
+def _across_fits(det: Detections, labels: np.ndarray, gx: np.ndarray, gy: np.ndarray, fitted: np.ndarray,
+                 known: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The velocity (G, 2) and its covariance (G, 2, 2) that one rigid motion fitted to the radial speeds of each group
     not ``fitted`` already gives, where the group has :data:`ACROSS_FIT_MIN_DETECTIONS` detections or more, each
     with a range rate as measured (AmbigState unambiguous or staggered ramp), the fit explains each within
@@ -476,9 +503,9 @@ def _across_fits(det: Detections, labels: np.ndarray, gx: np.ndarray, gy: np.nda
                        minlength=g) == 0
     own = np.flatnonzero(~fitted & sure & (np.bincount(labels, minlength=g) >= ACROSS_FIT_MIN_DETECTIONS))
     if own.size:
-        own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1), 0.0)]
+        own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1), known, 0.0)]
     if own.size:
-        fv, fcov = _rigid_velocity(det, labels, own)
+        fv, fcov = _rigid_velocity(det, labels, own, known)
         r = np.maximum(np.hypot(gx[own], gy[own]), 1e-6)
         t = np.stack([-gy[own] / r, gx[own] / r], axis=1)
         var = np.einsum("ni,nij,nj->n", t, fcov, t)
@@ -688,8 +715,9 @@ class ObjectTracker:
     alias_span_mps : with staggered ramps, the first sequence's 2·v_max: a group of only ambiguous detections
         (AmbigState 1, unpaired) measures its range rate modulo this span. It joins a track at the wrap nearest the
         track's; a track started from such groups is not listed until an unambiguous group joins it (at the wrap
-        that group shows: its speed is then moved by whole spans). Without it (a single ramp, which flags every
-        moving detection ambiguous) range rates are taken as measured.
+        that group shows: its speed is then moved by whole spans); the rigid fits of near bodies take only the
+        range rates the pair measured (:func:`speed_known`). Without it (a single ramp, which flags every moving
+        detection ambiguous) range rates are taken as measured.
     range_walk : with a single ramp's 2·v_max as ``alias_span_mps``: no detection resolves a wrap, and the range a
         track walks does (a single-PRF radar's tracker does the same). An ambiguous group joins a track at the wrap
         nearest the track's speed. After each hit of a track started from one, where the slope of its measured ranges
@@ -711,6 +739,8 @@ class ObjectTracker:
             raise ValueError("range_walk: True is not allowed without alias_span_mps; expected the single ramp's "
                              "2·v_max as alias_span_mps")
         self.alias_span_mps = alias_span_mps
+        # staggered ramps: a rigid fit takes only the range rates the pair measured (speed_known)
+        self.staggered = bool(alias_span_mps) and not range_walk
         self.range_walk = range_walk
         self.fov = tuple((float(r), float(a)) for r, a in fov)
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
@@ -752,7 +782,7 @@ class ObjectTracker:
     def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float], yaw_rate_rps: float = 0.0
              ) -> ObjectList:
         """One cycle: ``sensor_velocity`` (sensor axes) and ``yaw_rate_rps`` are the ego motion the radar knows."""
-        groups = group_detections(det)
+        groups = group_detections(det, staggered=self.staggered)
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
         if len(self.x):
