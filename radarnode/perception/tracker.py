@@ -417,6 +417,13 @@ def speed_known(det: Detections, staggered: bool) -> np.ndarray:
     measured (:class:`ObjectTracker`): all of them."""
     if not staggered:
         return np.ones(len(det), dtype=bool)
+    return rate_measured(det)
+
+
+def rate_measured(det: Detections) -> np.ndarray:
+    """Which detections carry a range rate as measured, (n,) bool: AmbigState staggered ramp (resolved by the pair)
+    or unambiguous; not one known modulo 2·v_max (ambiguous) nor one taken for the standing world's (stationary
+    candidate)."""
     return np.isin(det.ambig_state, (AMBIG_STAGGERED, AMBIG_UNAMBIGUOUS))
 
 
@@ -499,8 +506,7 @@ def _across_fits(det: Detections, labels: np.ndarray, gx: np.ndarray, gy: np.nda
     # (a single ramp's moving detections) or taken for the standing world's (a stationary candidate) is no radial
     # speed to fit — a wrap, a constant over the group, leaks into the fit across as the wrap times the group's span
     # (guardrail posts on fast_chirp crossed the ego's lane at 3–4 m/s)
-    sure = np.bincount(labels, weights=~np.isin(det.ambig_state, (AMBIG_STAGGERED, AMBIG_UNAMBIGUOUS)),
-                       minlength=g) == 0
+    sure = np.bincount(labels, weights=~rate_measured(det), minlength=g) == 0
     own = np.flatnonzero(~fitted & sure & (np.bincount(labels, minlength=g) >= ACROSS_FIT_MIN_DETECTIONS))
     if own.size:
         own = own[_rigid_fit_ok(det, labels, np.stack([own, own], axis=1), known, 0.0)]
