@@ -38,6 +38,30 @@ def test_a_new_track_of_a_car_at_the_egos_speed_starts_with_no_speed_across():
         assert abs(first) <= 0.3, (seed, first)
 
 
+@pytest.mark.parametrize("curvature_1pm", [0.004, -0.004])
+def test_a_run_that_starts_on_a_bend_starts_its_tracks_along_the_bend(curvature_1pm):
+    """The ego at 25 m/s on R 250 m from the run's first cycle, a car 35 m ahead in the lane inside (or outside) the
+    bend at 23 m/s: the tracker had no 2 s of yaw rate yet and started it on the straight road's prior, about 3 m/s
+    off across (a truck there drew a trail that bent the ECU's path onto its own side, detection level 0 of 3 seeds).
+    Its first report now within 1 m/s of the truth across."""
+    side = 3.5 if curvature_1pm > 0 else -3.5
+    for seed in (1, 2, 3):
+        sc = scenario(f"  - {{id: a, class: car, x_m: 35.0, lane: {2 if side > 0 else 0}, speed_mps: 23.0}}",
+                      ego="{speed_mps: 25.0}", duration=1.0, seed=seed,
+                      road=f"{{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {curvature_1pm}}}")
+        cfg = radar_config(sc)
+        model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(seed), cfg.signal)
+        for k in range(12):
+            frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
+            mine = np.flatnonzero(frame.objects.actor_index == 0)
+            if mine.size:
+                break
+        assert mine.size, seed
+        truth = float(view.vy_mps[0])
+        assert abs(truth) > 2.5                   # the bend's share across: what the straight prior missed
+        assert abs(float(frame.objects.vrel_lat_mps[mine[0]]) - truth) <= 1.0, (seed, k, truth)
+
+
 def _at(az_deg: float, r_m: float = 30.0) -> tuple[np.ndarray, np.ndarray]:
     a = math.radians(az_deg)
     return np.array([r_m * math.cos(a)]), np.array([r_m * math.sin(a)])
@@ -103,26 +127,38 @@ def test_on_a_bend_a_new_track_moves_along_the_egos_road_where_it_is(radius_m, s
         assert np.hypot(*(got - straight)) < 0.9 * np.hypot(*(straight - rel))
 
 
-def _steady(yaws, period=0.072):
-    """The tracker's bend yaw rate after the ego-motion inputs ``yaws``, one a cycle (no detections)."""
+def _steady(yaws, period=0.072, gap_after: int | None = None, gap_s: float = 0.0):
+    """The tracker's bend yaw rate after the ego-motion inputs ``yaws``, one a cycle (no detections); ``gap_s`` more
+    between input ``gap_after`` and the next (the radar's steps interrupted)."""
     from radarnode.perception.types import Detections
     trk = ObjectTracker()
     for k, w in enumerate(yaws):
-        trk.step(k * period, Detections.empty(0), (20.0, 0.0), w)
+        t = k * period + (gap_s if gap_after is not None and k > gap_after else 0.0)
+        trk.step(t, Detections.empty(0), (20.0, 0.0), w)
     return trk.steady_yaw_rate()
 
 
 def test_a_lane_changes_yaw_rate_is_no_bend_a_steady_one_is():
-    """The yaw rate makes a new track's road a bend only where it kept its sign within a factor of 2 for 2 s: a lane
-    change's (3.5 m over 3 s at 20 m/s, a full sine of yaw rate) never does, at any cycle of it; a bend's does once
-    2 s of it are seen. Each limit: 2 s of history just short and just enough, the factor just inside and beyond."""
+    """The yaw rate makes a new track's road a bend only where it kept its sign within a factor of 2 for 2 s, or since
+    the radar's first step: a lane change's (3.5 m over 3 s at 20 m/s, a full sine of yaw rate) never does, at any
+    cycle of it; a bend's does once 2 s of it are seen, and from the first step of a run that starts on it. Each
+    limit: 2 s of history just short (after a gap in the steps) and just enough, the factor just inside and beyond."""
     period = 0.072
     t = np.arange(0.0, 3.0, period)
     lane_change = 0.054 * np.sin(2.0 * math.pi * t / 3.0)
     for k in range(2, t.size + 1):
         assert _steady(lane_change[:k]) == 0.0, k
     n_enough = int(math.ceil(BEND_STEADY_S / period)) + 1          # cycles reaching back BEND_STEADY_S
-    assert _steady([0.08] * (n_enough - 1)) == 0.0
+    # a run that starts on a bend: its history reaches back to the first step, whatever its length …
+    assert _steady([0.08]) == pytest.approx(0.08)
+    assert _steady([0.08] * (n_enough - 1)) == pytest.approx(0.08)
+    assert _steady([0.08] * 5 + [0.0398]) == 0.0          # … and the factor holds from the start
+    assert _steady([0.0] + [0.08] * 5) == 0.0             # (a lane change's yaw rate starts from 0)
+    # after a gap longer than the history kept (2·BEND_STEADY_S), the history no longer reaches the first step:
+    # 2 s of it again, just short and just enough
+    gap = 2.0 * BEND_STEADY_S + 1.0
+    assert _steady([0.08] * (3 + n_enough - 1), gap_after=2, gap_s=gap) == 0.0
+    assert _steady([0.08] * (3 + n_enough), gap_after=2, gap_s=gap) == pytest.approx(0.08)
     assert _steady([0.08] * n_enough) == pytest.approx(0.08)
     assert _steady([-0.02] * (2 * n_enough)) == pytest.approx(-0.02)
     # the window: the last BEND_STEADY_S (n_enough − 1 inputs); the one before it only shows the history is long enough

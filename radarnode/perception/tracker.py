@@ -784,6 +784,7 @@ class ObjectTracker:
         self.last_yaw_rate_rps = 0.0
         self.last_t: float | None = None
         self.yaw_history: list[tuple[float, float]] = []      # (t, yaw rate) of the last 2·BEND_STEADY_S
+        self.first_t: float | None = None                     # the time of the first step (the radar's start)
 
     def step(self, t_s: float, det: Detections, sensor_velocity: tuple[float, float], yaw_rate_rps: float = 0.0
              ) -> ObjectList:
@@ -791,6 +792,8 @@ class ObjectTracker:
         groups = group_detections(det, staggered=self.staggered)
         dt = 0.0 if self.last_t is None else t_s - self.last_t
         self.last_t = t_s
+        if self.first_t is None:
+            self.first_t = float(t_s)
         if len(self.x):
             now = (float(sensor_velocity[0]), float(sensor_velocity[1]))
             before = (float(self.svh[0, -1, 0]), float(self.svh[0, -1, 1])) if self.snh[0] else None
@@ -1141,11 +1144,16 @@ class ObjectTracker:
 
     def steady_yaw_rate(self) -> float:
         """The yaw rate as a bend's (the mean over the last ``BEND_STEADY_S``) where it kept its sign and stayed within
-        a factor of 2 that long, and a history covers it; 0 (a straight road) otherwise."""
+        a factor of 2 that long, and a history covers it; 0 (a straight road) otherwise. In the radar's first
+        ``BEND_STEADY_S`` the history since its first step covers it: a run that starts on a bend has no straight road
+        behind it (its tracks started on the straight road's prior, 3 m/s across at 35 m on R 250 m, and a truck in the
+        inner lane drew a trail that bent the ECU's path onto its own side; a lane change still never counts, as its yaw
+        rate starts from 0 or changes sign)."""
         if not self.yaw_history:
             return 0.0
         t_last = self.yaw_history[-1][0]
-        if self.yaw_history[0][0] > t_last - BEND_STEADY_S + 1e-9:
+        start = self.yaw_history[0][0]
+        if start > t_last - BEND_STEADY_S + 1e-9 and start != self.first_t:
             return 0.0
         w = np.array([w for t, w in self.yaw_history if t >= t_last - BEND_STEADY_S - 1e-9])
         a = np.abs(w)
