@@ -8,9 +8,15 @@ Three tables, each row a scene built here, run through node, consumer and ECU as
 2. a car stopped in the inner lane beyond a curve's exit (R 250 m into a 30-m clothoid, guardrails on both sides,
    and R 400 m into a 60-m clothoid without): FCW must stay silent;
 3. an empty straight road with guardrails on both sides: FCW must stay silent (README, "Known limit, guardrails
-   both sides": it does not at the detection level).
+   both sides": it does not at the detection level);
+4. (``--only neighbours``, new 2026-12-05, session 69) a car or a truck in the lane inside or outside a constant
+   bend from the run's first cycle, 40 m ahead, 2 m/s slower or faster than the ego (25 m/s), closed loop ACC: it
+   must never be ACC's target and FCW must stay silent (an independent tester's scene: a truck 2 m/s slower inside
+   R 250 m was ACC's target at the detection level in every seed).
 
-Run: ``.venv/bin/python benchmarks/bends.py [--seeds 3] [--levels object,detection]`` (about 2 minutes).
+Run: ``.venv/bin/python benchmarks/bends.py [--seeds 3] [--levels object,detection] [--only follow,exit,neighbours]``
+(the first two tables, the default: about 2 minutes; the neighbours: about 4 minutes a level with 3 seeds, 25 at the
+signal level).
 """
 
 from __future__ import annotations
@@ -85,6 +91,26 @@ road:
 ecu: {acc_enabled: false, expect: {no_fcw: true}}
 """
 
+NEIGHBOUR = """
+name: {cls}_{side}_R{radius:+.0f}_v{speed:.0f}
+duration_s: 27.5
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: 25.0}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {curv}}}
+ecu:
+  acc_enabled: true
+  set_speed_mps: 25.0
+  time_gap_s: 2.0
+  closed_loop: true
+  expect: {{no_fcw: true, never_target: [other]}}
+actors:
+  - {{id: other, class: {cls}, x_m: 40.0, lane: {lane}, speed_mps: {speed}}}
+"""
+#: (class, lane, curvature 1/m, speed m/s): lane 2 is left of the ego's (inside a left bend, κ > 0), lane 0 right
+NEIGHBOURS = [(cls, lane, curv, speed) for cls in ("car", "truck") for lane in (2, 0)
+              for curv in (0.004, -0.004, 0.002) for speed in (23.0, 27.0)]
+
 
 def _runs(sc, levels, seeds):
     return {lv: [simulate(dataclasses.replace(sc, seed=s), fidelity=lv) for s in range(1, seeds + 1)] for lv in levels}
@@ -109,12 +135,51 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--levels", default="object,detection")
+    ap.add_argument("--only", default="follow,exit", help="tables: follow, exit (with the empty road), neighbours")
     args = ap.parse_args()
     if args.seeds < 1:
         ap.error(f"--seeds: value {args.seeds} is not allowed; expected an integer ≥ 1")
     levels = [lv for lv in args.levels.split(",") if lv]
+    only = [t for t in args.only.split(",") if t]
+    bad = [t for t in only if t not in ("follow", "exit", "neighbours")]
+    if bad or not only:
+        ap.error(f"--only: value {args.only!r} is not allowed; expected a comma-separated list of follow, exit, "
+                 "neighbours")
     t0 = time.perf_counter()
-    print(f"### ACC behind a lead at the ego's speed on a bend (seeds 1–{args.seeds}; time gap: median of the "
+    if "follow" in only:
+        _follow_table(levels, args.seeds)
+    if "exit" in only:
+        _exit_table(levels, args.seeds)
+    if "neighbours" in only:
+        _neighbour_table(levels, args.seeds)
+    print(f"\n(total {time.perf_counter() - t0:.0f} s)")
+
+
+def _neighbour_table(levels, seeds: int) -> None:
+    print(f"### A vehicle in the next lane on a bend from the run's first cycle, 40 m ahead, ego 25 m/s (seeds "
+          f"1–{seeds}; never ACC's target, FCW silent)\n")
+    print("| vehicle | lane | curvature | its speed | " + " | ".join(f"{lv}: passes" for lv in levels) + " | "
+          + " | ".join(f"{lv}: failures" for lv in levels) + " |")
+    print("|---|---|---:|---:|" + "---:|" * len(levels) + "---|" * len(levels))
+    total = {lv: 0 for lv in levels}
+    for cls, lane, curv, speed in NEIGHBOURS:
+        side = "left" if lane == 2 else "right"
+        inner = (lane == 2) == (curv > 0)
+        sc = parse_scenario(NEIGHBOUR.format(cls=cls, side=side, radius=1.0 / curv, curv=curv, lane=lane,
+                                             speed=speed))
+        runs = _runs(sc, levels, seeds)
+        for lv in levels:
+            total[lv] += sum(r.passed for r in runs[lv])
+        fails = ["; ".join(f"seed {i + 1}: {r.reasons[0]}" for i, r in enumerate(runs[lv]) if not r.passed) or "-"
+                 for lv in levels]
+        print(f"| {cls} | {side} ({'inside' if inner else 'outside'}) | {curv:+.3f} 1/m | {speed:.0f} m/s | "
+              + " | ".join(f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels) + " | "
+              + " | ".join(fails) + " |", flush=True)
+    print("\nall: " + ", ".join(f"{lv} {total[lv]} of {len(NEIGHBOURS) * seeds}" for lv in levels))
+
+
+def _follow_table(levels, seeds: int) -> None:
+    print(f"### ACC behind a lead at the ego's speed on a bend (seeds 1–{seeds}; time gap: median of the "
           "final time gaps along the lane)\n")
     print("| bend | speed | set gap | " + " | ".join(f"{lv}: final gap (passes)" for lv in levels) + " | truth v | "
           + " | ".join(f"{lv}: reported v" for lv in levels) + " |")
@@ -122,16 +187,19 @@ def main() -> None:
     for radius, speed, gap in FOLLOWS:
         sc = parse_scenario(FOLLOW.format(radius=radius, speed=speed, curv=1.0 / radius, gap=gap,
                                           lead_x=round(gap * speed + 5.7, 2)))
-        runs = _runs(sc, levels, args.seeds)
+        runs = _runs(sc, levels, seeds)
         cells = [f"{statistics.median(r.final_time_gap_s for r in runs[lv]):.2f} s "
-                 f"({sum(r.passed for r in runs[lv])}/{args.seeds})" for lv in levels]
+                 f"({sum(r.passed for r in runs[lv])}/{seeds})" for lv in levels]
         vel = [_velocity(sc, lv) for lv in levels]
         truth = vel[0][1]
         print(f"| R {radius:.0f} m | {speed:.0f} m/s | {gap:.1f} s | " + " | ".join(cells)
               + f" | ({truth[0]:+.2f}, {truth[1]:+.2f}) | "
               + " | ".join(f"({v[0][0]:+.2f}, {v[0][1]:+.2f})" for v in vel) + " |", flush=True)
+
+
+def _exit_table(levels, seeds: int) -> None:
     print(f"\n### FCW: a car stopped in the inner lane beyond a curve's exit; an empty road with guardrails (seeds "
-          f"1–{args.seeds}; must stay silent)\n")
+          f"1–{seeds}; must stay silent)\n")
     print("| scene | " + " | ".join(f"{lv}: silent in" for lv in levels) + " | " +
           " | ".join(f"{lv}: warnings at (s)" for lv in levels) + " |")
     print("|---|" + "---:|" * (2 * len(levels)))
@@ -140,12 +208,11 @@ def main() -> None:
               for name, arc, curv, cl, rails in EXITS] + [EMPTY]
     for text in scenes:
         sc = parse_scenario(text)
-        runs = _runs(sc, levels, args.seeds)
-        silent = [f"{sum(r.passed for r in runs[lv])}/{args.seeds}" for lv in levels]
+        runs = _runs(sc, levels, seeds)
+        silent = [f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels]
         times = [", ".join(f"{r.warning_time_s:.2f}" if r.warning_time_s is not None else "-" for r in runs[lv])
                  for lv in levels]
         print(f"| {sc.name} | " + " | ".join(silent) + " | " + " | ".join(times) + " |", flush=True)
-    print(f"\n(total {time.perf_counter() - t0:.0f} s)")
 
 
 if __name__ == "__main__":
