@@ -12,11 +12,15 @@ Three tables, each row a scene built here, run through node, consumer and ECU as
 4. (``--only neighbours``, new 2026-12-05, session 69) a car or a truck in the lane inside or outside a constant
    bend from the run's first cycle, 40 m ahead, 2 m/s slower or faster than the ego (25 m/s), closed loop ACC: it
    must never be ACC's target and FCW must stay silent (an independent tester's scene: a truck 2 m/s slower inside
-   R 250 m was ACC's target at the detection level in every seed).
+   R 250 m was ACC's target at the detection level in every seed);
+5. (``--only exit_at_start``, new 2026-12-05, session 69) the run starts 4, 8 or 15 m before a bend's exit (R 150 m
+   at 20 m/s, R 250 m at 25 m/s, left and right), a car 45 m ahead in the lane inside the bend, 1 m/s slower and
+   already on the straight: it must never be ACC's target and FCW must stay silent (the radar's tracker takes the
+   ego's bend for the road ahead from its first cycle, and this car is where that is wrong).
 
-Run: ``.venv/bin/python benchmarks/bends.py [--seeds 3] [--levels object,detection] [--only follow,exit,neighbours]``
+Run: ``.venv/bin/python benchmarks/bends.py [--seeds 3] [--levels object,detection] [--only follow,exit,neighbours,exit_at_start]``
 (the first two tables, the default: about 2 minutes; the neighbours: about 4 minutes a level with 3 seeds, 25 at the
-signal level).
+signal level; the exits at the start: about 2 minutes a level).
 """
 
 from __future__ import annotations
@@ -111,6 +115,28 @@ actors:
 NEIGHBOURS = [(cls, lane, curv, speed) for cls in ("car", "truck") for lane in (2, 0)
               for curv in (0.004, -0.004, 0.002) for speed in (23.0, 27.0)]
 
+EXIT_AT_START = """
+name: exit_in_{arc:.0f}m_R{radius:+.0f}
+duration_s: 12.0
+seed: 1
+radar: {{preset: ars408_like}}
+ego: {{speed_mps: {speed}}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, segments: [{{type: arc, length_m: {arc}, curvature_1pm: {curv}}},
+        {{type: straight, length_m: 800.0}}]}}
+ecu:
+  acc_enabled: true
+  set_speed_mps: {speed}
+  time_gap_s: 2.0
+  closed_loop: true
+  expect: {{no_fcw: true, never_target: [nb]}}
+actors:
+  - {{id: nb, class: car, x_m: 45.0, lane: {lane}, speed_mps: {car_speed}}}
+"""
+#: (metres of arc left, curvature 1/m, ego speed m/s): a car 45 m ahead in the lane inside the bend, 1 m/s slower,
+#: already on the straight beyond the exit (an independent tester's scenes, session 69)
+EXITS_AT_START = [(arc, curv, speed) for arc in (4.0, 8.0, 15.0)
+                  for curv, speed in ((-1.0 / 150.0, 20.0), (1.0 / 150.0, 20.0), (-0.004, 25.0), (0.004, 25.0))]
+
 
 def _runs(sc, levels, seeds):
     return {lv: [simulate(dataclasses.replace(sc, seed=s), fidelity=lv) for s in range(1, seeds + 1)] for lv in levels}
@@ -135,16 +161,17 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument("--seeds", type=int, default=3)
     ap.add_argument("--levels", default="object,detection")
-    ap.add_argument("--only", default="follow,exit", help="tables: follow, exit (with the empty road), neighbours")
+    ap.add_argument("--only", default="follow,exit", help="tables: follow, exit (with the empty road), neighbours, "
+                    "exit_at_start")
     args = ap.parse_args()
     if args.seeds < 1:
         ap.error(f"--seeds: value {args.seeds} is not allowed; expected an integer ≥ 1")
     levels = [lv for lv in args.levels.split(",") if lv]
     only = [t for t in args.only.split(",") if t]
-    bad = [t for t in only if t not in ("follow", "exit", "neighbours")]
+    bad = [t for t in only if t not in ("follow", "exit", "neighbours", "exit_at_start")]
     if bad or not only:
         ap.error(f"--only: value {args.only!r} is not allowed; expected a comma-separated list of follow, exit, "
-                 "neighbours")
+                 "neighbours, exit_at_start")
     t0 = time.perf_counter()
     if "follow" in only:
         _follow_table(levels, args.seeds)
@@ -152,6 +179,8 @@ def main() -> None:
         _exit_table(levels, args.seeds)
     if "neighbours" in only:
         _neighbour_table(levels, args.seeds)
+    if "exit_at_start" in only:
+        _exit_at_start_table(levels, args.seeds)
     print(f"\n(total {time.perf_counter() - t0:.0f} s)")
 
 
@@ -176,6 +205,27 @@ def _neighbour_table(levels, seeds: int) -> None:
               + " | ".join(f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels) + " | "
               + " | ".join(fails) + " |", flush=True)
     print("\nall: " + ", ".join(f"{lv} {total[lv]} of {len(NEIGHBOURS) * seeds}" for lv in levels))
+
+
+def _exit_at_start_table(levels, seeds: int) -> None:
+    print(f"### The run starts just before a bend's exit, a car 45 m ahead in the lane inside the bend on the straight "
+          f"(seeds 1–{seeds}; never ACC's target, FCW silent)\n")
+    print("| arc left | curvature | ego speed | " + " | ".join(f"{lv}: passes" for lv in levels) + " | "
+          + " | ".join(f"{lv}: failures" for lv in levels) + " |")
+    print("|---:|---:|---:|" + "---:|" * len(levels) + "---|" * len(levels))
+    total = {lv: 0 for lv in levels}
+    for arc, curv, speed in EXITS_AT_START:
+        sc = parse_scenario(EXIT_AT_START.format(arc=arc, radius=1.0 / curv, curv=curv, speed=speed,
+                                                 lane=2 if curv > 0 else 0, car_speed=speed - 1.0))
+        runs = _runs(sc, levels, seeds)
+        for lv in levels:
+            total[lv] += sum(r.passed for r in runs[lv])
+        fails = ["; ".join(f"seed {i + 1}: {r.reasons[0]}" for i, r in enumerate(runs[lv]) if not r.passed) or "-"
+                 for lv in levels]
+        print(f"| {arc:.0f} m | {curv:+.5f} 1/m | {speed:.0f} m/s | "
+              + " | ".join(f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels) + " | "
+              + " | ".join(fails) + " |", flush=True)
+    print("\nall: " + ", ".join(f"{lv} {total[lv]} of {len(EXITS_AT_START) * seeds}" for lv in levels))
 
 
 def _follow_table(levels, seeds: int) -> None:
