@@ -184,48 +184,41 @@ def main() -> None:
     print(f"\n(total {time.perf_counter() - t0:.0f} s)")
 
 
-def _neighbour_table(levels, seeds: int) -> None:
-    print(f"### A vehicle in the next lane on a bend from the run's first cycle, 40 m ahead, ego 25 m/s (seeds "
-          f"1–{seeds}; never ACC's target, FCW silent)\n")
-    print("| vehicle | lane | curvature | its speed | " + " | ".join(f"{lv}: passes" for lv in levels) + " | "
+def _verdict_table(levels, seeds: int, title: str, columns: str, aligns: str, scenes) -> None:
+    """One row a scene (``scenes``: its first cells and its YAML): passes and failures at each level."""
+    print(f"### {title} (seeds 1–{seeds}; never ACC's target, FCW silent)\n")
+    print(f"| {columns} | " + " | ".join(f"{lv}: passes" for lv in levels) + " | "
           + " | ".join(f"{lv}: failures" for lv in levels) + " |")
-    print("|---|---|---:|---:|" + "---:|" * len(levels) + "---|" * len(levels))
+    print(f"|{aligns}" + "---:|" * len(levels) + "---|" * len(levels))
     total = {lv: 0 for lv in levels}
+    for cells, text in scenes:
+        runs = _runs(parse_scenario(text), levels, seeds)
+        for lv in levels:
+            total[lv] += sum(r.passed for r in runs[lv])
+        fails = ["; ".join(f"seed {i + 1}: {r.reasons[0]}" for i, r in enumerate(runs[lv]) if not r.passed) or "-"
+                 for lv in levels]
+        print(f"| {cells} | " + " | ".join(f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels) + " | "
+              + " | ".join(fails) + " |", flush=True)
+    print("\nall: " + ", ".join(f"{lv} {total[lv]} of {len(scenes) * seeds}" for lv in levels))
+
+
+def _neighbour_table(levels, seeds: int) -> None:
+    scenes = []
     for cls, lane, curv, speed in NEIGHBOURS:
         side = "left" if lane == 2 else "right"
         inner = (lane == 2) == (curv > 0)
-        sc = parse_scenario(NEIGHBOUR.format(cls=cls, side=side, radius=1.0 / curv, curv=curv, lane=lane,
-                                             speed=speed))
-        runs = _runs(sc, levels, seeds)
-        for lv in levels:
-            total[lv] += sum(r.passed for r in runs[lv])
-        fails = ["; ".join(f"seed {i + 1}: {r.reasons[0]}" for i, r in enumerate(runs[lv]) if not r.passed) or "-"
-                 for lv in levels]
-        print(f"| {cls} | {side} ({'inside' if inner else 'outside'}) | {curv:+.3f} 1/m | {speed:.0f} m/s | "
-              + " | ".join(f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels) + " | "
-              + " | ".join(fails) + " |", flush=True)
-    print("\nall: " + ", ".join(f"{lv} {total[lv]} of {len(NEIGHBOURS) * seeds}" for lv in levels))
+        scenes.append((f"{cls} | {side} ({'inside' if inner else 'outside'}) | {curv:+.3f} 1/m | {speed:.0f} m/s",
+                       NEIGHBOUR.format(cls=cls, side=side, radius=1.0 / curv, curv=curv, lane=lane, speed=speed)))
+    _verdict_table(levels, seeds, "A vehicle in the next lane on a bend from the run's first cycle, 40 m ahead, ego 25 "
+                   "m/s", "vehicle | lane | curvature | its speed", "---|---|---:|---:|", scenes)
 
 
 def _exit_at_start_table(levels, seeds: int) -> None:
-    print(f"### The run starts just before a bend's exit, a car 45 m ahead in the lane inside the bend on the straight "
-          f"(seeds 1–{seeds}; never ACC's target, FCW silent)\n")
-    print("| arc left | curvature | ego speed | " + " | ".join(f"{lv}: passes" for lv in levels) + " | "
-          + " | ".join(f"{lv}: failures" for lv in levels) + " |")
-    print("|---:|---:|---:|" + "---:|" * len(levels) + "---|" * len(levels))
-    total = {lv: 0 for lv in levels}
-    for arc, curv, speed in EXITS_AT_START:
-        sc = parse_scenario(EXIT_AT_START.format(arc=arc, radius=1.0 / curv, curv=curv, speed=speed,
-                                                 lane=2 if curv > 0 else 0, car_speed=speed - 1.0))
-        runs = _runs(sc, levels, seeds)
-        for lv in levels:
-            total[lv] += sum(r.passed for r in runs[lv])
-        fails = ["; ".join(f"seed {i + 1}: {r.reasons[0]}" for i, r in enumerate(runs[lv]) if not r.passed) or "-"
-                 for lv in levels]
-        print(f"| {arc:.0f} m | {curv:+.5f} 1/m | {speed:.0f} m/s | "
-              + " | ".join(f"{sum(r.passed for r in runs[lv])}/{seeds}" for lv in levels) + " | "
-              + " | ".join(fails) + " |", flush=True)
-    print("\nall: " + ", ".join(f"{lv} {total[lv]} of {len(EXITS_AT_START) * seeds}" for lv in levels))
+    scenes = [(f"{arc:.0f} m | {curv:+.5f} 1/m | {speed:.0f} m/s",
+               EXIT_AT_START.format(arc=arc, radius=1.0 / curv, curv=curv, speed=speed, lane=2 if curv > 0 else 0,
+                                    car_speed=speed - 1.0)) for arc, curv, speed in EXITS_AT_START]
+    _verdict_table(levels, seeds, "The run starts just before a bend's exit, a car 45 m ahead in the lane inside the "
+                   "bend on the straight", "arc left | curvature | ego speed", "---:|---:|---:|", scenes)
 
 
 def _follow_table(levels, seeds: int) -> None:

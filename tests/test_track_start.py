@@ -19,23 +19,28 @@ from radarnode.radar.setup import radar_config
 from radarnode.scene.world import Scene
 
 
+def _first_report(sc, seed: int, cycles: int):
+    """The detection level's first frame that lists actor 0: (its reported velocity across, the truth's, the cycle),
+    or None within ``cycles``."""
+    cfg = radar_config(sc)
+    model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(seed), cfg.signal)
+    for k in range(cycles):
+        frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
+        mine = np.flatnonzero(frame.objects.actor_index == 0)
+        if mine.size:
+            return float(frame.objects.vrel_lat_mps[mine[0]]), float(view.vy_mps[0]), k
+    return None
+
+
 def test_a_new_track_of_a_car_at_the_egos_speed_starts_with_no_speed_across():
     """The detection level's tracker started a car in the next lane, 30 m ahead at the ego's speed (20 m/s), with
     the standing world's speed across the line of sight: 2.8 m/s outwards, which it carried for ten cycles (and
     reported the car 0.5 m beyond its centre line). Its first report now: within 0.3 m/s of none."""
     for seed in (1, 2, 3):
         sc = scenario("  - {id: a, class: car, x_m: 30.0, y_m: 3.5, speed_mps: 20.0}", duration=1.0, seed=seed)
-        cfg = radar_config(sc)
-        model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(seed), cfg.signal)
-        first = None
-        for k in range(12):
-            frame, _ = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
-            mine = np.flatnonzero(frame.objects.actor_index == 0)
-            if mine.size:
-                first = float(frame.objects.vrel_lat_mps[mine[0]])
-                break
-        assert first is not None
-        assert abs(first) <= 0.3, (seed, first)
+        got = _first_report(sc, seed, 12)
+        assert got is not None
+        assert abs(got[0]) <= 0.3, (seed, got)
 
 
 @pytest.mark.parametrize("curvature_1pm", [0.004, -0.004])
@@ -49,17 +54,11 @@ def test_a_run_that_starts_on_a_bend_starts_its_tracks_along_the_bend(curvature_
         sc = scenario(f"  - {{id: a, class: car, x_m: 35.0, lane: {2 if side > 0 else 0}, speed_mps: 23.0}}",
                       ego="{speed_mps: 25.0}", duration=1.0, seed=seed,
                       road=f"{{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {curvature_1pm}}}")
-        cfg = radar_config(sc)
-        model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(seed), cfg.signal)
-        for k in range(12):
-            frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
-            mine = np.flatnonzero(frame.objects.actor_index == 0)
-            if mine.size:
-                break
-        assert mine.size, seed
-        truth = float(view.vy_mps[0])
+        got = _first_report(sc, seed, 12)
+        assert got is not None, seed
+        reported, truth, k = got
         assert abs(truth) > 2.5                   # the bend's share across: what the straight prior missed
-        assert abs(float(frame.objects.vrel_lat_mps[mine[0]]) - truth) <= 1.0, (seed, k, truth)
+        assert abs(reported - truth) <= 1.0, (seed, k, truth)
 
 
 def _at(az_deg: float, r_m: float = 30.0) -> tuple[np.ndarray, np.ndarray]:
@@ -178,15 +177,9 @@ def test_a_new_track_during_the_egos_lane_change_starts_near_its_speed_across():
             sc = scenario("  - {id: a, class: car, x_m: 122.0, y_m: 3.5, speed_mps: 15.0}",
                           ego=f"{{speed_mps: 25.0, lane_change: {{t_s: 0.3, duration_s: 3.0, by_m: {by}}}}}",
                           radar="{preset: mimo12}", duration=3.0, seed=seed)
-            cfg = radar_config(sc)
-            model = make_model("detection", Scene(sc), cfg.preset, np.random.default_rng(seed), cfg.signal)
-            for k in range(30):
-                frame, view = model.step(k * sc.period_s, RuntimeConfig(max_distance_m=cfg.preset.max_range_m))
-                mine = np.flatnonzero(frame.objects.actor_index == 0)
-                if mine.size:
-                    break
-            assert mine.size, (by, seed)
-            assert abs(float(frame.objects.vrel_lat_mps[mine[0]]) - float(view.vy_mps[0])) <= 1.0, (by, seed, k)
+            got = _first_report(sc, seed, 30)
+            assert got is not None, (by, seed)
+            assert abs(got[0] - got[1]) <= 1.0, (by, seed, got)
 
 
 @pytest.mark.parametrize("az_deg, sv, ground_mps, along", [
