@@ -1148,7 +1148,8 @@ class ObjectTracker:
         ``BEND_STEADY_S`` the history since its first step covers it: a run that starts on a bend has no straight road
         behind it (its tracks started on the straight road's prior, 3 m/s across at 35 m on R 250 m, and a truck in the
         inner lane drew a trail that bent the ECU's path onto its own side; a lane change still never counts, as its yaw
-        rate starts from 0 or changes sign)."""
+        rate starts from 0 or changes sign). Its cost: a run that starts a few metres before a bend's exit starts a car
+        already on the straight beyond it as if it followed the bend (``benchmarks/bends.py --only exit_at_start``)."""
         if not self.yaw_history:
             return 0.0
         t_last = self.yaw_history[-1][0]
