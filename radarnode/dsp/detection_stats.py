@@ -1017,7 +1017,9 @@ class DetectionStatistic:
 
     def masking_factor(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:
         """Pd with ``interference`` in the training ring over Pd without (:meth:`pd_interfered`), from a table
-        over ρ (1 dB) and log I (a quarter decade), interpolated bilinearly; 1 below 1 % of the noise's sum."""
+        over ρ (1 dB) and log I (a quarter decade), interpolated bilinearly; 1 below 1 % of the noise's sum.
+        ``rho_db`` and ``interference`` broadcast: a column of SNRs (K, 1) against rows of interference (K, X)
+        reads the SNR's share of the table once a row (the same values as each repeated)."""
         mean_z = self.n_channels * self.eigenvalues.sum()
         rel = np.asarray(interference, dtype=np.float64) / mean_z
         if np.any(np.isnan(rel)):      # (a NaN compares false everywhere below: it had read as unmasked)
@@ -1037,11 +1039,17 @@ class DetectionStatistic:
         i0 = np.minimum(np.floor(fx).astype(np.int64), table.shape[0] - 2)
         j0 = np.minimum(np.floor(fy).astype(np.int64), table.shape[1] - 2)
         ax, ay = fx - i0, fy - j0
-        # the four corners by flat index into the table (one take each, not a 2-D fancy index)
+        # the four corners by flat index into the table (one take each, not a 2-D fancy index), summed in place in
+        # the order of (1 − a_x)(1 − a_y)·f₀₀ + a_x(1 − a_y)·f₁₀ + (1 − a_x)a_y·f₀₁ + a_x·a_y·f₁₁
         flat, row = table.ravel(), table.shape[1]
         at = i0 * row + j0
-        f = ((1 - ax) * (1 - ay) * flat.take(at) + ax * (1 - ay) * flat.take(at + row)
-             + (1 - ax) * ay * flat.take(at + 1) + ax * ay * flat.take(at + row + 1))
+        bx, by = 1 - ax, 1 - ay
+        f = bx * by
+        f *= flat.take(at)
+        for wx, wy, shift in ((ax, by, row), (bx, ay, 1), (ax, ay, row + 1)):
+            term = wx * wy
+            term *= flat.take(at + shift)
+            f += term
         return np.where(rel < 0.01, 1.0, f)
 
     def pd_interfered(self, rho_db: np.ndarray, interference: np.ndarray, swerling: int = 1) -> np.ndarray:

@@ -458,6 +458,13 @@ def nearest_in_fov(preset: RadarPreset, view: SensorView, length_m: np.ndarray, 
     return x_out, y_out
 
 
+#: the first two edges of a stable sort of the four that puts the facing ones first, for each pattern of which face
+#: (bit k: edge k faces), and the bits' weights
+_FACING_PAIRS = np.array([np.argsort([not (b >> k) & 1 for k in range(4)], kind="stable")[:2] for b in range(16)],
+                         dtype=np.intp)
+_EDGE_BITS = np.array([1, 2, 4, 8], dtype=np.intp)
+
+
 def outline_points(centre_x: np.ndarray, centre_y: np.ndarray, heading_rad: np.ndarray, length_m: np.ndarray,
                    width_m: np.ndarray) -> tuple[np.ndarray, ...]:
     """``OUTLINE_SAMPLES`` points on each of the (at most two) edges of each box (n,) that face the sensor, as the
@@ -466,10 +473,10 @@ def outline_points(centre_x: np.ndarray, centre_y: np.ndarray, heading_rad: np.n
     towards an edge's ends, as many points as metres, each weighted by its face's aspect; summing to 1 over a box,
     0 on an edge that does not face)."""
     mx, my, wnx, wny, length, facing = facing_edges(centre_x, centre_y, heading_rad, length_m, width_m)
-    # a box faces a point outside it with one or two edges: those two (a second that does not face gets no weight)
-    two = np.argsort(~facing, axis=1, kind="stable")[:, :2]
-    mx, my, wnx, wny, length, facing = (np.take_along_axis(a, two, axis=1)
-                                        for a in (mx, my, wnx, wny, length, facing))
+    # a box faces a point outside it with one or two edges: those two (a second that does not face gets no weight),
+    # by the pattern of the four edges' facing (the first two of a stable sort that puts the facing edges first)
+    two = _FACING_PAIRS[facing @ _EDGE_BITS] + (4 * np.arange(facing.shape[0]))[:, None]      # flat indices (n, 2)
+    mx, my, wnx, wny, length, facing = (a.reshape(-1).take(two) for a in (mx, my, wnx, wny, length, facing))
     u = (np.arange(OUTLINE_SAMPLES) + 0.5) / OUTLINE_SAMPLES - 0.5                          # (S,)
     px = mx[:, :, None] - wny[:, :, None] * (u * length[:, :, None])                          # (n, 2, S)
     py = my[:, :, None] + wnx[:, :, None] * (u * length[:, :, None])
@@ -1162,8 +1169,7 @@ class ObjectModel:
                 for sw in (0, 1):
                     sel = case[at] == sw
                     if sel.any():
-                        f[sel] = self.statistic.masking_factor(np.repeat(snr[at][sel], x.size), i_all[sel].ravel(),
-                                                               sw).reshape(-1, x.size)
+                        f[sel] = self.statistic.masking_factor(snr[at][sel][:, None], i_all[sel], sw)
                 cdf = np.cumsum(f, axis=1)
                 w = np.mod(u[t[ok], a[ok]] / pd[t[ok], a[ok]] * self._SPLIT_DRAW, 1.0) * cdf[:, -1]
                 k = np.minimum((cdf < w[:, None]).sum(axis=1), x.size - 1)     # the draw: its CDF reaches w
@@ -1196,15 +1202,17 @@ class ObjectModel:
             return out
         x = -np.log1p(-(np.arange(FLUCTUATION_POINTS) + 0.5) / FLUCTUATION_POINTS)          # exponential quantiles
         x = x / x.mean()                                                                   # mean 1 exactly
-        rho = np.repeat(snr[some], x.size)
-        i_all = (steady[some][:, None] + fluctuating[some][:, None] * x[None, :]).ravel()
-        cases = np.repeat(case[some], x.size)
-        f = np.empty(i_all.size)
+        # each cell's SNR once, against its row of draws (masking_factor broadcasts: the SNR's share of the table
+        # read is computed once a cell, not once a draw)
+        rho = snr[some][:, None]
+        i_all = steady[some][:, None] + fluctuating[some][:, None] * x[None, :]
+        cases = case[some]
+        f = np.empty(i_all.shape)
         for sw in (0, 1):
             sel = cases == sw
             if sel.any():
                 f[sel] = stat.masking_factor(rho[sel], i_all[sel], sw)
-        out[some] = f.reshape(-1, x.size).mean(axis=1)
+        out[some] = f.mean(axis=1)
         self._mask_draws = (some, snr[some], steady[some], fluctuating[some], case[some])
         return out
 
