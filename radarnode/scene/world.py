@@ -465,7 +465,8 @@ class Scene:
         lx, ly = _rot(-rel_heading, -cx, -cy)
         hl, hw = self.length_m / 2.0, self.width_m / 2.0
         qx, qy = np.clip(lx, -hl, hl), np.clip(ly, -hw, hw)
-        ox_, oy_ = _rot(rel_heading, qx, qy)
+        c_h, s_h = np.cos(rel_heading), np.sin(rel_heading)          # (the box's turn: here and for its corners)
+        ox_, oy_ = c_h * qx - s_h * qy, s_h * qx + c_h * qy
         rx, ry = cx + ox_, cy + oy_
         small = (self.length_m <= POINT_SIZE_M) & (self.width_m <= POINT_SIZE_M)
         if small.any():
@@ -476,15 +477,17 @@ class Scene:
             scale = np.maximum(rc - depth, 0.0) / rc
             rx, ry = np.where(small, cx * scale, rx), np.where(small, cy * scale, ry)
         # azimuth extent from the four corners
-        kx, ky = _rot(rel_heading[..., None], self._corners_x, self._corners_y)
+        c_h, s_h = c_h[..., None], s_h[..., None]
+        kx, ky = c_h * self._corners_x - s_h * self._corners_y, s_h * self._corners_x + c_h * self._corners_y
         az = np.arctan2(cy[..., None] + ky, cx[..., None] + kx)
         vx, vy = _rot(-c_, avx - svx[:, None], avy - svy[:, None])
         gvx, gvy = _rot(-c_, avx, avy)
         ax_rel, ay_rel = _rot(-c_, aax - eax[:, None], aay - eay[:, None])
         s_vx, s_vy = _rot(-psi_s, svx, svy)
         wrapped = (rel_heading + np.pi) % (2.0 * np.pi) - np.pi
-        lo = az.min(axis=-1) if self.n else np.zeros(rx.shape)
-        hi = az.max(axis=-1) if self.n else np.zeros(rx.shape)
+        # the four corners' extremes pairwise (a reduction over the last axis of 4 costs some 15× as much)
+        lo = np.minimum(np.minimum(az[..., 0], az[..., 1]), np.minimum(az[..., 2], az[..., 3]))
+        hi = np.maximum(np.maximum(az[..., 0], az[..., 1]), np.maximum(az[..., 2], az[..., 3]))
         rz = np.broadcast_to(np.where(self.elevated, self.z_m - self.mount_z_m, 0.0), rx.shape)
         return SensorView(t, rx, ry, vx, vy, ax_rel, ay_rel, gvx, gvy, wrapped, lo, hi, cx, cy, s_vx, s_vy, rz)
 
