@@ -25,12 +25,13 @@ guardrail posts moving at −ego speed, road clutter), scatterers built as the s
 
 Run: ``.venv/bin/python benchmarks/signal_speed.py [--frames N] [--trials N] [--blas-threads N]
 [--traffic scenario|relative] [--ego-lane 0-3]``. ``--ego-lane 3`` puts the ego in the fast lane, beside the left
-guardrail: its posts pass 2.75 m from the sensor and the frame holds about twice the peaks (150–180). ``--traffic relative`` (the default since 2026-12-06): the other actors keep the
-places and relative speeds they have at the scenario's 25 m/s at every faster ego speed, so that every row from 25
-m/s on is the same highway frame and only the ego's speed over ground (the posts' and the clutter's speed, their
-wrap and migration) changes. ``--traffic scenario`` keeps their speeds: from about 55 m/s on the ego drives into
-the lead car within the frames (the scene has no collisions; the car's body is then around the sensor, 0.6–2.7 m
-away, and the frame holds about twice the peaks), which is not a highway frame (:func:`highway_frames`).
+guardrail: its posts pass 2.75 m from the sensor and the frame holds about twice the peaks (150–180).
+``--traffic relative`` (the default since 2026-12-06): the other actors keep the places and relative speeds they
+have at the scenario's 25 m/s at every faster ego speed, so that every row from 25 m/s on is the same highway frame
+and only the ego's speed over ground (the posts' and the clutter's speed, their wrap and migration) changes.
+``--traffic scenario`` keeps their speeds: from about 55 m/s on the ego drives into the lead car within the frames
+(the scene has no collisions; the car's body is then around the sensor, 0.6–2.7 m away, and the frame holds about
+twice the peaks), which is not a highway frame (:func:`highway_frames`).
 OpenBLAS is limited to ``--blas-threads`` threads (default 1, set before numpy
 is imported; ``default`` leaves OpenBLAS its own choice): on a shared two-core
 machine its idle worker threads spin after every threaded product and take the
@@ -146,9 +147,8 @@ def floor_ms(p, k: int, dtype, reps: int = 7) -> float:
 def speed_table(frames: int, traffic: str = "relative", ego_lane: int | None = None) -> list[str]:
     """The speed table's Markdown lines. ``nearest``: the nearest actor's scatterer in any frame (not the posts' or
     the clutter's; an ego that drives into another car has one within a metre or two, the body around the sensor);
-    ``peaks``: the median count of
-    detections the RD path's chain reports a frame (complex128), which the frame's time follows more than the
-    scatterers' count (the fits are per peak)."""
+    ``peaks``: the median count of detections the RD path's chain reports a frame (complex128), which the frame's
+    time follows more than the scatterers' count (the fits are per peak)."""
     lines = ["| ego speed | scatterers | nearest | peaks | dtype | floor: product + FFTs | time domain: synthesize + "
              "process | ratio | RD domain: synthesize_rd + process_rd | ratio |",
              "|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
@@ -239,7 +239,8 @@ def main() -> None:
     acc = accuracy_table(args.trials) if args.trials > 0 else []
     lane = "the scenario's (1)" if args.ego_lane is None else str(args.ego_lane)
     print(f"## Signal level: synthesis + processing, highway_mimo12.yaml, median of {args.frames} frames, "
-          f"traffic {args.traffic}, ego lane {lane}, OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
+          f"traffic {args.traffic}, ego lane {lane}, "
+          f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
     print("\n".join(speed))
     if acc:
         print("\n## Accuracy at every speed\n")

@@ -153,7 +153,11 @@ _VIEW_ARRAY_SET = frozenset(_VIEW_ARRAYS)
 
 
 def _rot(angle: np.ndarray | float, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    c, s = np.cos(angle), np.sin(angle)
+    return _rot_cs(np.cos(angle), np.sin(angle), x, y)
+
+
+def _rot_cs(c, s, x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_rot` by an angle of cosine ``c`` and sine ``s`` (taken once for several rotations by it)."""
     return c * x - s * y, s * x + c * y
 
 
@@ -466,7 +470,7 @@ class Scene:
         hl, hw = self.length_m / 2.0, self.width_m / 2.0
         qx, qy = np.clip(lx, -hl, hl), np.clip(ly, -hw, hw)
         c_h, s_h = np.cos(rel_heading), np.sin(rel_heading)          # (the box's turn: here and for its corners)
-        ox_, oy_ = c_h * qx - s_h * qy, s_h * qx + c_h * qy
+        ox_, oy_ = _rot_cs(c_h, s_h, qx, qy)
         rx, ry = cx + ox_, cy + oy_
         small = (self.length_m <= POINT_SIZE_M) & (self.width_m <= POINT_SIZE_M)
         if small.any():
@@ -477,8 +481,7 @@ class Scene:
             scale = np.maximum(rc - depth, 0.0) / rc
             rx, ry = np.where(small, cx * scale, rx), np.where(small, cy * scale, ry)
         # azimuth extent from the four corners
-        c_h, s_h = c_h[..., None], s_h[..., None]
-        kx, ky = c_h * self._corners_x - s_h * self._corners_y, s_h * self._corners_x + c_h * self._corners_y
+        kx, ky = _rot_cs(c_h[..., None], s_h[..., None], self._corners_x, self._corners_y)
         az = np.arctan2(cy[..., None] + ky, cx[..., None] + kx)
         vx, vy = _rot(-c_, avx - svx[:, None], avy - svy[:, None])
         gvx, gvy = _rot(-c_, avx, avy)
