@@ -408,3 +408,19 @@ def test_a_section_written_as_null_is_named_as_written(tmp_path):
     assert "road.guardrails': value null (written as null, ~ or nothing after 'guardrails:')" in msg, msg
     readme = (Path(__file__).resolve().parents[1] / "scenarios" / "README.md").read_text()
     assert "null for none" not in readme
+
+
+@pytest.mark.parametrize("name", ["'../../escaped'", "a/b", "'a\\\\b'", "'a|b'", "''", "' x'", "'x '", "'..'", "'.'",
+                                  '"a\\nb"', '"a\\tb"', "x" * 201])
+def test_a_name_that_would_name_a_file_elsewhere_or_break_a_table_row_is_refused(tmp_path, name):
+    # report --plots writes NAME_seedN.png into its directory: '../../escaped' wrote two levels above it, 'a/b'
+    # failed only after the whole run, and a newline broke the Markdown row (an independent tester's findings)
+    where, message = _error(tmp_path, f"name: {name}\nduration_s: 1\nseed: 1\n")
+    assert message.startswith(f"{where}:1: field 'name'") and "is not allowed" in message, message
+    assert "1 to 200 printable characters" in message
+
+
+@pytest.mark.parametrize("name", ["x" * 200, "follow_R+250_v30", "crossing_10_5.5_20", "'Übergang 2 km'", "'a.b'"])
+def test_names_up_to_the_limit_with_dots_signs_spaces_and_letters_beyond_ascii_are_taken(tmp_path, name):
+    _, sc = _load(tmp_path, f"name: {name}\nduration_s: 1\nseed: 1\n")
+    assert sc.name == name.strip("'")

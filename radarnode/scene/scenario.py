@@ -546,7 +546,7 @@ class Scenario:
     lines: dict = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
-        validate.text("name", self.name)
+        validate.name("name", self.name)
         validate.text("description", self.description)
         validate.number("duration_s", self.duration_s, lo=0.0, hi=86_400.0, lo_open=True)
         validate.integer("seed", self.seed, lo=0, hi=2**63 - 1)
