@@ -224,3 +224,37 @@ def test_report_scale_out_options_are_checked(capsys):
     with pytest.raises(SystemExit):
         main(["report", sc, "--workers", "0"])
     assert "option --workers: value 0 is not allowed" in capsys.readouterr().err
+
+
+def _report_until(tmp_path, rows: int):
+    """A report of six detection-level runs in one process, interrupted (SIGINT) once ``rows`` result rows are out."""
+    import signal
+    plots = tmp_path / "new" / "plots"
+    p = subprocess.Popen([*CLI, "report", str(SCENARIOS / "nhtsa_lead_stopped.yaml"), "--seeds", "6", "--workers", "1",
+                          "--fidelity", "detection", "--plots", str(plots)], cwd=ROOT, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    lines = [p.stdout.readline(), p.stdout.readline()]          # the table's header: printed before any run ends
+    lines += [p.stdout.readline() for _ in range(rows)]
+    p.send_signal(signal.SIGINT)
+    rest, err = p.communicate(timeout=120)
+    return p.returncode, lines + rest.splitlines(), err, plots
+
+
+def test_report_interrupted_before_a_run_ends_leaves_no_plots_directory_and_says_so(tmp_path):
+    status, lines, err, plots = _report_until(tmp_path, 0)
+    assert status == 130, err
+    assert lines[0].startswith("| scenario | seed |")
+    assert "report: interrupted after 0 of 6 runs" in err, err
+    # the directories --plots made are gone again (an empty one was left behind: an independent tester's finding)
+    assert not plots.exists() and not plots.parent.exists()
+    assert "Traceback" not in err
+
+
+def test_report_interrupted_after_some_runs_has_shown_their_rows_and_kept_their_plots(tmp_path):
+    status, lines, err, plots = _report_until(tmp_path, 2)
+    assert status == 130, err
+    rows = [ln for ln in lines if ln.startswith("| nhtsa_lead_stopped | ")]
+    done = int(re.search(r"interrupted after (\d+) of 6 runs \(their rows above\)", err).group(1))
+    assert 2 <= done < 6 and len(rows) == done, (rows, err)        # each row as its run ended, not all at the end
+    pngs = sorted(x.name for x in plots.iterdir())
+    assert 1 <= len(pngs) <= done and pngs[0] == "nhtsa_lead_stopped_seed1.png"

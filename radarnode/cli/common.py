@@ -24,6 +24,8 @@ from radarnode.radar.setup import load_scenario
 from radarnode.scene.scenario import Scenario
 
 if TYPE_CHECKING:
+    from collections.abc import Iterator
+
     from radarnode.consumer.assembler import ClusterCycle, ConsumerStats
 
 
@@ -245,6 +247,25 @@ def require_matplotlib(who: str):
     except ImportError:
         raise UsageError(f"{who} needs matplotlib, which is not installed: pip install 'radarnode[image]'") from None
     return plt
+
+
+@contextlib.contextmanager
+def plots_into(path: str) -> Iterator[Path]:
+    """:func:`plot_dir` for a command that writes its plots into it: the directories it created are removed again,
+    where they are still empty, when the command fails or is interrupted before it is done (a report interrupted
+    before its first plot left an empty ``--plots`` directory: an independent tester's finding)."""
+    d = Path(path)
+    made = [p for p in (d, *d.parents) if not p.exists()]       # the directories mkdir will make, deepest first
+    d = plot_dir(path)
+    try:
+        yield d
+    except BaseException:
+        for p in made:
+            try:
+                p.rmdir()           # only an empty one; a plot written stays
+            except OSError:
+                break
+        raise
 
 
 def plot_dir(path: str) -> Path:

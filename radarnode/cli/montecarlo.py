@@ -29,7 +29,7 @@ import numpy as np
 
 from radarnode.cli import options
 from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, plot_dir, \
-    progress, require_matplotlib
+    plots_into, progress, require_matplotlib
 from radarnode.errors import FileError
 
 EXPERIMENT_CHOICES = ("snr", "table2", "resolution", "timing")
@@ -247,17 +247,17 @@ def cmd(args) -> int:
         print(f"wrote {args.csv}", file=sys.stderr)
     if plt is not None and mc:
         from radarnode.cli.montecarlo_plots import figures
-        d = plot_dir(args.plots)
         written = []
-        for name, fig in figures(summary, plt).items():
-            target = d / name
-            try:
-                with atomic_path(target, "--plots") as tmp:
-                    fig.savefig(tmp, dpi=90)
-            except OSError as exc:
-                raise FileError(f"option --plots: cannot write {str(target)!r}: {exc.strerror or exc}") from None
-            finally:
-                plt.close(fig)
-            written.append(target)
+        with plots_into(args.plots) as d:
+            for name, fig in figures(summary, plt).items():
+                target = d / name
+                try:
+                    with atomic_path(target, "--plots") as tmp:
+                        fig.savefig(tmp, dpi=90)
+                except OSError as exc:
+                    raise FileError(f"option --plots: cannot write {str(target)!r}: {exc.strerror or exc}") from None
+                finally:
+                    plt.close(fig)
+                written.append(target)
         print(f"wrote {len(written)} plots to {d}", file=sys.stderr)
     return 0

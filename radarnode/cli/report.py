@@ -19,6 +19,7 @@ in the same order wherever they run.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import datetime
 import math
@@ -31,9 +32,9 @@ from pathlib import Path
 
 from radarnode.cli import options
 from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, plot_dir, \
-    progress, require_matplotlib, with_doa
+    plots_into, progress, require_matplotlib, with_doa
 from radarnode.consumer.evaluate import simulate
-from radarnode.errors import FieldError, FileError, UsageError
+from radarnode.errors import FieldError, FileError, Terminated, UsageError
 from radarnode.radar.setup import load_scenario
 
 
@@ -181,7 +182,12 @@ def cmd(args) -> int:
             check_doa_option(args.doa, args.fidelity or sc.fidelity)
             check_doa_presets(sc, args.doa)
         check_doa(args.fidelity or sc.fidelity, radar_config(sc).signal, sc)
-    out_dir = plot_dir(args.plots) if args.plots else None     # created once everything else is known good
+    # the plots' directory is made once everything else is known good, and removed again if the runs fail first
+    with plots_into(args.plots) if args.plots else contextlib.nullcontext() as out_dir:
+        return _report(args, scenarios, need, plt, out_dir)
+
+
+def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")
 
     def out(line: str) -> None:
@@ -191,12 +197,14 @@ def cmd(args) -> int:
     suites = []
     written = []
     # every (scenario, seed) run is independent: on all local cores, or a Dask cluster, results in this order
-    from radarnode.montecarlo.executor import default_workers, run_tasks
+    from radarnode.montecarlo.executor import default_workers, iter_tasks
     tasks = [(dataclasses.replace(sc, seed=seed), args.fidelity) for _, sc in scenarios
              for seed in (range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed])]
+    reported = 0
     try:
-        done = iter(run_tasks(_simulate_task, tasks, workers=args.workers or default_workers(),
-                              scheduler=args.scheduler, dask_local=args.dask_local, on_done=lambda: bar.update(1)))
+        # each row as soon as its run and the runs before it are done: an interrupted report has shown those
+        done = iter_tasks(_simulate_task, tasks, workers=args.workers or default_workers(), scheduler=args.scheduler,
+                          dask_local=args.dask_local, on_done=lambda: bar.update(1))
         out("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
             "final time gap | result |")
         out("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
@@ -206,6 +214,7 @@ def cmd(args) -> int:
             for seed in range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed]:
                 run_sc = dataclasses.replace(sc, seed=seed)
                 r, seconds = next(done)
+                reported += 1
                 runs.append((r, seconds))
                 passes += r.passed and r.checked
                 unchecked += not r.checked
@@ -233,6 +242,11 @@ def cmd(args) -> int:
                 out(f"| {sc.name} | | | | | | | | | {passes} of {args.seeds} seeds pass |")
             short += passes < need and not unchecked
             suites.append((sc.name, str(path), runs))
+    except (KeyboardInterrupt, Terminated):
+        bar.close()
+        print(f"report: interrupted after {reported} of {len(tasks)} runs" + (" (their rows above)" if reported else "")
+              + ("; no --junit file written" if args.junit else ""), file=sys.stderr)
+        raise
     finally:
         bar.close()
     if args.junit:

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import os
 import re
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from radarnode.errors import RadarnodeError, UsageError
@@ -93,16 +93,25 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int = 
     scheduler : a Dask scheduler address (``tcp://host:8786``): the cluster's workers run the tasks.
     dask_local : start a ``LocalCluster`` of this many single-threaded worker processes for the run.
     """
+    return list(iter_tasks(fn, tasks, workers=workers, scheduler=scheduler, dask_local=dask_local, on_done=on_done))
+
+
+def iter_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int = 1, scheduler: str | None = None,
+               dask_local: int | None = None, on_done: Callable[[], None] | None = None) -> Iterator[Any]:
+    """:func:`run_tasks`' results one at a time, in the order of the tasks, each as soon as it and every task before
+    it are done (on a Dask cluster: all at the end), so that a caller can show them as they come and an interrupted
+    run has shown what it finished. Closing the iterator early cancels the local tasks that have not started."""
     tasks = list(tasks)
     if scheduler is not None or dask_local is not None:
-        return _run_dask(fn, tasks, scheduler, dask_local, on_done)
+        yield from _run_dask(fn, tasks, scheduler, dask_local, on_done)
+        return
     if workers <= 1 or len(tasks) <= 1:
-        out = []
         for t in tasks:
-            out.append(fn(t))
+            result = fn(t)
             if on_done:
                 on_done()
-        return out
+            yield result
+        return
     import concurrent.futures as cf
     import multiprocessing
     # spawn: a fresh interpreter per worker (fork with tqdm's monitor thread alive may deadlock, and spawn is
@@ -110,10 +119,15 @@ def run_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int = 
     with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
                                 initializer=limit_blas_threads) as pool:
         futures = [pool.submit(fn, t) for t in tasks]
-        for _ in cf.as_completed(futures):
-            if on_done:
-                on_done()
-        return [f.result() for f in futures]
+        try:
+            if on_done:        # as each finishes, whatever its place (the executor's thread calls it)
+                for f in futures:
+                    f.add_done_callback(lambda _f: on_done())
+            for f in futures:
+                yield f.result()
+        finally:               # a caller that stops early (an error, an interrupt) does not wait for the rest
+            for f in futures:
+                f.cancel()
 
 
 def _run_dask(fn, tasks, scheduler, dask_local, on_done):
@@ -148,5 +162,5 @@ def _run_dask(fn, tasks, scheduler, dask_local, on_done):
             cluster.close()
 
 
-__all__ = ["run_tasks", "default_workers", "limit_blas_threads", "check_scheduler", "require_dask", "SCHEDULER_ADDRESS",
-           "valid_scheduler"]
+__all__ = ["run_tasks", "iter_tasks", "default_workers", "limit_blas_threads", "check_scheduler", "require_dask",
+           "SCHEDULER_ADDRESS", "valid_scheduler"]
