@@ -513,3 +513,60 @@ def test_export_of_one_radar_of_several_draws_it_on_its_own_mount(tmp_path, caps
     assert main(["export", str(blf), "--scenario", str(fc), "--sensor-id", "5", "-o", str(tmp_path / "x.mcap")]) == 2
     assert "option --sensor-id: value 5 is not allowed" in capsys.readouterr().err
     assert not (tmp_path / "x.mcap").exists()
+
+
+@pytest.fixture(scope="module")
+def short_log(tmp_path_factory):
+    """One second of highway_cut_in as a candump .log: one frame per line, its time in brackets."""
+    path = tmp_path_factory.mktemp("short") / "h.log"
+    assert main(["log", str(HIGHWAY), "--duration", "1", "-o", str(path)]) == 0
+    return path
+
+
+@pytest.mark.parametrize("bad", ["nan", "inf", "-inf", "1e300", "4294967296.0", "-1.0"])
+def test_export_leaves_out_frames_whose_time_mcap_cannot_hold_and_says_how_many(short_log, tmp_path, capsys, bad):
+    # a NaN, infinite or huge time in a damaged log ended the export with a traceback from deep inside the recorder
+    # (an independent tester's finding): the frame is left out, counted, and the status says the export is not whole
+    lines = short_log.read_text().splitlines()
+    assert re.match(r"^\(\d+\.\d+\) ", lines[40]) and re.match(r"^\(\d+\.\d+\) ", lines[41])
+    lines[40] = re.sub(r"^\([^)]*\)", f"({bad})", lines[40])
+    damaged = tmp_path / "d.log"
+    damaged.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "d.mcap"
+    assert main(["export", str(damaged), "-o", str(out)]) == 1
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err[-1].startswith(f"error: argument LOG: {str(damaged)!r}: 1 frame left out: a timestamp an MCAP file "
+                              "cannot hold") and f"the other {len(lines) - 1} are in {out}" in err[-1], err
+    assert "Traceback" not in "\n".join(err)
+    raw = read_mcap(out)["topics"]["/can/frames"][3]
+    assert len(raw) == len(lines) - 1                 # every other frame is in it
+    # the frame next to it is, at its own time
+    t41 = float(re.match(r"^\(([^)]*)\)", lines[41]).group(1))
+    assert any(abs(t - t41 * 1e9) < 1e3 for t, _ in raw)
+
+
+def test_export_of_a_log_with_no_frame_mcap_can_time_writes_no_file(short_log, tmp_path, capsys):
+    damaged = tmp_path / "all.log"
+    damaged.write_text("".join(re.sub(r"^\([^)]*\)", "(nan)", ln) + "\n" for ln in short_log.read_text().splitlines()))
+    out = tmp_path / "all.mcap"
+    assert main(["export", str(damaged), "-o", str(out)]) == 1
+    assert "expected frames timed in [0, 4294967296) s" in capsys.readouterr().err
+    assert not out.exists() and list(tmp_path.iterdir()) == [damaged]
+
+
+@pytest.mark.parametrize("start,ok", [(4294967294.0, True), (4294967294.98, False), (4294967296.0, False),
+                                      (1e10, False)])
+def test_an_mcap_log_must_end_before_foxglove_time_ends(tmp_path, capsys, start, ok):
+    # Foxglove's timestamps hold 32-bit seconds: a log to .mcap from --start-time 1e10 ran, then crashed on its first
+    # message (an independent tester's finding); now refused before the run, the limit tested at its edge (the run is
+    # 1 s plus the ECU's 0.02 s latency)
+    out = tmp_path / "t.mcap"
+    status = main(["log", str(HIGHWAY), "--duration", "1", "-o", str(out), "--start-time", repr(start)])
+    err = capsys.readouterr().err
+    if ok:
+        assert status == 0 and out.exists(), err
+        assert all(t < 2 ** 32 * 1e9 for t, _ in read_mcap(out)["topics"]["/can/frames"][3])
+    else:
+        assert status == 2 and not out.exists()
+        assert f"error: option --start-time: value {start!r} is not allowed for an .mcap log" in err
+        assert "expected a start below 4294967294.980 s" in err

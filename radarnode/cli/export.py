@@ -17,6 +17,7 @@ from radarnode.cli import options
 from radarnode.cli.common import SensorCensus, atomic_path, progress
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
+from radarnode.viz import MAX_STAMP_S
 from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, read_frames
 
 
@@ -87,6 +88,8 @@ def cmd(args) -> int:
             rec.close()
         if report.frames == 0:      # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument LOG"))
+        if rec.frames_without_time == report.frames:        # nothing to put on a time line: no output file either
+            raise FileError(f"argument LOG: {_no_time(rec, args.log)}; expected frames timed in [0, {MAX_STAMP_S}) s")
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
     warning = census.warning(sensor_id, "--sensor-id")
@@ -101,5 +104,18 @@ def cmd(args) -> int:
               "start (log --start-time)", file=sys.stderr)
     if report.damaged:
         # everything readable is in the MCAP; the status says the log itself is not whole
+        if rec.frames_without_time:
+            print(f"warning: {_no_time(rec, args.log)}", file=sys.stderr)
         raise FileError(report.message("argument LOG"))
+    if rec.frames_without_time:
+        # the rest is in the MCAP; the status says the export is not whole
+        raise FileError(f"argument LOG: {_no_time(rec, args.log)}; the other {report.frames - rec.frames_without_time} "
+                        f"are in {args.output}")
     return 0
+
+
+def _no_time(rec, log: str) -> str:
+    """What the recorder left out of ``log`` for want of a time (:func:`radarnode.viz.stamp_ok`)."""
+    n = rec.frames_without_time
+    return (f"{log!r}: {n} frame{'s' if n != 1 else ''} left out: a timestamp an MCAP file cannot hold (a finite "
+            f"number of seconds from 0 up to {MAX_STAMP_S}; the first {rec.first_bad_time!r})")

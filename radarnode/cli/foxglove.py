@@ -32,6 +32,17 @@ def require_foxglove(option: str, value) -> None:
                          "it installed: pip install 'radarnode[foxglove]'") from None
 
 
+def check_mcap_span(start_s: float, span_s: float, option: str) -> None:
+    """A usage error naming ``option`` when a run of ``span_s`` seconds from ``start_s`` would end beyond the times a
+    Foxglove message holds (:data:`radarnode.viz.MAX_STAMP_S`), before it is run (an MCAP log started at 1e10 s ran,
+    then ended in a traceback: an independent tester's finding)."""
+    from radarnode.viz import MAX_STAMP_S
+    if start_s + span_s >= MAX_STAMP_S:
+        raise UsageError(f"option {option}: value {start_s!r} is not allowed for an .mcap log of {span_s:g} s: "
+                         f"Foxglove's timestamps end at {MAX_STAMP_S} s (2106-02-07); expected a start below "
+                         f"{MAX_STAMP_S - span_s:.3f} s, or another format (.log keeps any)")
+
+
 def add_live_arguments(parser) -> None:
     g = parser.add_argument_group("Foxglove live view (needs radarnode[foxglove])")
     g.add_argument("--foxglove", action="store_true",

@@ -16,7 +16,7 @@ import can
 
 from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
-from radarnode.cli.foxglove import is_mcap, mcap_writer, require_foxglove, summary
+from radarnode.cli.foxglove import check_mcap_span, is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
 from radarnode.wire.logfiles import check_channel, check_output_format, check_start_time, open_writer
 from radarnode.wire.group import ego_motion_for, make_node
@@ -71,6 +71,8 @@ def _log(args) -> int:
         require_foxglove("--output", args.output)
         args.ecu = True
     scenario = scenario_from_args(args)
+    if is_mcap(args.output):
+        check_mcap_span(args.start_time, scenario.duration_s + scenario.ecu.processing_latency_s, "--start-time")
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate, use_can_config=False)
     scenario = with_bitrate(scenario, bitrate.bit_s)
     node = make_node(scenario)

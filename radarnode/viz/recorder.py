@@ -27,7 +27,7 @@ import can
 
 from radarnode.consumer.assembler import ClusterCycle, CycleAssembler, ObjectCycle
 from radarnode.errors import ConfigError
-from radarnode.viz import TOPICS
+from radarnode.viz import TOPICS, stamp_ok
 from radarnode.viz import messages as M
 from radarnode.wire import ids
 from radarnode.wire.dbc import load_bus_database, load_database, load_own_database
@@ -90,6 +90,9 @@ class FoxgloveRecorder(can.Listener):
         #: decoded cycles given the scene's truth, and those outside the scenario's run (time − start time before 0
         #: or after its end), with the first such cycle's time: a log and a start time that do not go together
         self.truth_cycles, self.cycles_outside_run, self.first_outside_s = 0, 0, None
+        #: frames left out because their time is none a Foxglove message can carry (:func:`stamp_ok`): NaN, ±inf,
+        #: before 0 or from 2**32 s on (a damaged or hand-made log), with the first such time
+        self.frames_without_time, self.first_bad_time = 0, None
 
     # --- sinks --------------------------------------------------------------------------------------------
     def open_mcap(self, path: str, *, metadata: dict[str, str] | None = None,
@@ -138,6 +141,13 @@ class FoxgloveRecorder(can.Listener):
     def on_message_received(self, msg: can.Message) -> None:
         with self._lock:
             if self._closed:
+                return
+            if not stamp_ok(msg.timestamp):
+                # nowhere on the time line of the MCAP file or the live view: left out and counted (a NaN time of a
+                # damaged log ended the export with a traceback: an independent tester's finding)
+                self.frames_without_time += 1
+                if self.first_bad_time is None:
+                    self.first_bad_time = msg.timestamp
                 return
             name = "" if msg.is_extended_id else self._names.get(msg.arbitration_id, "")
             self._publish("/can/frames", msg.timestamp, lambda: M.can_frame(msg, name))
