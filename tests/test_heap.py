@@ -190,3 +190,26 @@ def test_small_output_to_a_closed_pipe_ends_quietly_and_to_a_full_disk_with_one_
     assert done.returncode == 1
     assert "error: standard output: No space left on device" in done.stderr
     assert "Exception ignored" not in done.stderr and "Traceback" not in done.stderr
+
+
+@pytest.mark.skipif(not Path("/dev/full").is_char_device(),
+                    reason="needs /dev/full (Linux): a device that is always full")
+@pytest.mark.parametrize("args", [["decode", "LOG"], ["decode", "LOG", "--summary"],
+                                  ["run", "scenarios/stopped_vehicle.yaml", "--fast", "--duration", "1"]])
+def test_output_that_fails_while_the_command_runs_names_standard_output(args, tmp_path):
+    """A command whose output fails to go out while it runs (a flush on the way, not the one at exit) said only
+    "error: No space left on device", where the README promises "error: standard output: …" (an independent
+    tester's finding)."""
+    import os
+    log = tmp_path / "x.log"
+    made = subprocess.run([sys.executable, "-m", "radarnode", "log", "scenarios/stopped_vehicle.yaml", "--duration",
+                           "10", "-o", str(log)], cwd=ROOT, capture_output=True, timeout=120)
+    assert made.returncode == 0, made.stderr
+    args = [str(log) if a == "LOG" else a for a in args]
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONUNBUFFERED"}
+    with open("/dev/full", "w") as full:
+        done = subprocess.run([sys.executable, "-m", "radarnode", *args], cwd=ROOT, stdout=full,
+                              stderr=subprocess.PIPE, text=True, timeout=120, env=env)
+    assert done.returncode == 1, done.stderr
+    assert done.stderr.strip().splitlines()[-1] == "error: standard output: No space left on device", done.stderr
+    assert done.stderr.count("error:") == 1 and "Traceback" not in done.stderr
