@@ -229,3 +229,27 @@ def test_ego_motion_and_configuration_padded_to_eight_bytes_are_taken(pad):
     node.receive(can.Message(arbitration_id=padded_cfg.arbitration_id, data=bytes(padded_cfg.data) + pad * (
         8 - len(padded_cfg.data)), is_extended_id=False), 0.3)
     assert node.coll_det.active
+
+
+def test_can_fd_frames_are_dropped_and_counted_by_the_node_and_the_consumer():
+    """The ARS 408 and its ECU are classical CAN nodes: their controllers never take a CAN FD frame. A 64-byte FD frame
+    on 0x300 was read as a padded SpeedInformation by both (an independent tester's finding); now dropped and counted,
+    at every length FD has, and the classical frame beside it is taken."""
+    from radarnode.consumer.assembler import CycleAssembler
+    node = RadarNode(scenario(ACTORS, duration=1.0))
+    asm = CycleAssembler()
+    speed = EgoMotionSender(node.scene).frames(0.0)[0]
+    assert P.unshifted(speed.arbitration_id)[0] == P.SPEED_INFO
+    lengths = (2, 8, 12, 64)
+    for n in lengths:
+        fd = can.Message(arbitration_id=speed.arbitration_id, data=bytes(speed.data) + b"\xff" * (n - len(speed.data)),
+                         is_extended_id=False, is_fd=True)
+        node.receive(fd, 0.0)
+        asm.on_message_received(fd)
+    assert node.counters["rx_fd_frames"] == len(lengths) and node.counters["rx_padded"] == 0
+    assert node.motion_rx_state(0.0) != 0                    # no speed taken from them
+    assert asm.stats.fd_frames == len(lengths) and asm.stats.padded_frames == 0 and asm.ego_speed_mps is None
+    assert asm.stats.dropped() == len(lengths)
+    node.receive(speed, 0.0)
+    asm.on_message_received(speed)
+    assert node.counters["rx_speed"] == 1 and asm.ego_speed_mps is not None

@@ -179,6 +179,7 @@ class ConsumerStats:
     status_frames: int = 0          # RadarState, VersionID, ego motion, configuration
     config_state_frames: int = 0    # the sensor's replies: FilterState 0x203/0x204, CollDet 0x408/0x402, relay 0x008
     errors_frames: int = 0          # CAN error and remote frames
+    fd_frames: int = 0              # CAN FD frames: a classical CAN ECU never takes them
     bus_errors: int = 0             # frames the bus could not read (reported through on_error)
     boundary_frames: int = 0        # radarnode's road-boundary frames accepted
     ecu_frames: int = 0             # AccStatus / FcwStatus frames accepted
@@ -189,7 +190,7 @@ class ConsumerStats:
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
                 + self.stray_headers + self.conflicting_frames + self.unexpected_ids + self.extra_frames
-                + self.errors_frames + self.e2e_errors + self.e2e_repeated + self.e2e_wrong_sequence + self.bus_errors)
+                + self.errors_frames + self.fd_frames + self.e2e_errors + self.e2e_repeated + self.e2e_wrong_sequence + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)
@@ -502,6 +503,9 @@ class CycleAssembler(can.Listener):
         self.stats.frames += 1
         if msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id:
             self.stats.errors_frames += 1
+            return
+        if msg.is_fd:                   # (a 64-byte FD frame on 0x300 was read as a padded speed)
+            self.stats.fd_frames += 1
             return
         route = self._routes.get(msg.arbitration_id)
         if route is None:

@@ -173,8 +173,9 @@ class RadarNode:
 
         Frames of other IDs (another sensor's, the node's own traffic) are not for this node and ignored.
         What is for it but cannot be used is dropped and counted, never raised: error frames
-        (``rx_error_frames``), remote frames (``rx_remote_frames``), a DLC shorter than the message's (``rx_wrong_dlc``;
-        a longer one is taken, its first bytes read, and counted in ``rx_padded``), a signal
+        (``rx_error_frames``), remote frames (``rx_remote_frames``), CAN FD frames (``rx_fd_frames``: a classical
+        CAN node never takes them), a DLC shorter than the message's (``rx_wrong_dlc``; a longer one is taken, its
+        first bytes read, and counted in ``rx_padded``), a signal
         outside its DBC range (``rx_out_of_range``, ``rx_invalid_speed_direction``); configuration values the
         sensor refuses are counted in ``config_rejected`` (see :meth:`_refuse`).
         """
@@ -189,6 +190,11 @@ class RadarNode:
             return
         if msg.is_remote_frame:
             self.counters["rx_remote_frames"] += 1
+            return
+        if msg.is_fd:
+            # the ARS 408 is a classical CAN node: its controller never takes a CAN FD frame (a 64-byte FD frame on
+            # 0x300 was read as a padded speed: an independent tester's finding)
+            self.counters["rx_fd_frames"] += 1
             return
         length = self._rx_length[base]
         data = bytes(msg.data)
