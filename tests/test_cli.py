@@ -209,6 +209,16 @@ def test_image_writes_a_png(tmp_path):
     assert r.returncode == 2 and "option --k" in r.stderr
 
 
+def test_image_as_svg_holds_its_maps_as_pictures(tmp_path):
+    # the maps drawn as vectors, cell by cell, made one frame's .svg 435 MB (an independent tester's finding)
+    pytest.importorskip("matplotlib", reason="radarnode image needs the optional matplotlib")
+    out = tmp_path / "frame.svg"
+    r = run("image", str(SCENARIOS / "highway_cut_in.yaml"), "-o", str(out))
+    assert r.returncode == 0, r.stderr
+    text = out.read_text()
+    assert out.stat().st_size < 5_000_000 and text.count("<image ") >= 4      # the four maps, each one picture
+
+
 def test_image_animates_a_scenario(tmp_path):
     pytest.importorskip("matplotlib", reason="radarnode image needs the optional matplotlib")
     out = tmp_path / "run.gif"
@@ -260,3 +270,38 @@ def test_log_imports_only_what_it_needs(tmp_path):
                  "matplotlib"):
         assert name not in loaded, name
     assert {"radarnode.cli.log", "radarnode.radar.object_model", "radarnode.wire.node"} <= loaded
+
+
+def test_a_bus_that_cannot_be_opened_says_the_operating_systems_reason(monkeypatch):
+    # python-can's udp_multicast raises "could not create or configure socket" from the OSError that says why (no
+    # multicast route in a namespace: No such device); the error kept only the first part, blaming the channel (an
+    # independent tester's finding). The reason is given whatever the chain, once, and a text already said is not
+    # repeated
+    import argparse
+
+    import can
+
+    from radarnode.errors import BusError
+    from radarnode.wire.bus import open_bus
+
+    def failing(**kwargs):
+        try:
+            raise OSError(19, "No such device")
+        except OSError as exc:
+            raise can.exceptions.CanInitializationError("could not create or configure socket") from exc
+
+    monkeypatch.setattr(can, "Bus", failing)
+    args = argparse.Namespace(interface="udp_multicast", channel="239.74.163.2", bitrate=None, bus_kwargs=[])
+    with pytest.raises(BusError) as info:
+        open_bus(args)
+    text = str(info.value)
+    assert ("option -i/--interface 'udp_multicast' with option -c/--channel '239.74.163.2': could not create or "
+            "configure socket ([Errno 19] No such device); expected a channel") in text, text
+
+    def plain(**kwargs):
+        raise OSError(13, "Permission denied")
+
+    monkeypatch.setattr(can, "Bus", plain)
+    with pytest.raises(BusError) as info:
+        open_bus(args)
+    assert str(info.value).count("Permission denied") == 1

@@ -104,8 +104,8 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
         raise UsageError(f"{source}: interface {name!r} cannot be used here ({exc}); expected one of "
                          f"{', '.join(sorted(can.interfaces.VALID_INTERFACES))} with its driver installed") from None
     except (can.CanError, ValueError, TypeError, OSError, NotImplementedError) as exc:
-        error = BusError(f"cannot open CAN bus: {_named(args, kwargs)}: {exc}; expected a channel that interface can "
-                         f"open{_CHANNEL_HINTS.get(kwargs.get('interface'), '')}")
+        error = BusError(f"cannot open CAN bus: {_named(args, kwargs)}: {_with_causes(exc)}; expected a channel that "
+                         f"interface can open{_CHANNEL_HINTS.get(kwargs.get('interface'), '')}")
         _drop_half_open(exc)
         raise error from None
     enlarge_receive_buffer(bus)
@@ -128,6 +128,23 @@ _CHANNEL_HINTS = {
     "socketcan": " (socketcan: a CAN network interface that is up, e.g. vcan0: `ip link add dev vcan0 type vcan; ip link set up vcan0`)",
     "virtual": " (virtual: any name)",
 }
+
+
+def _with_causes(exc: BaseException) -> str:
+    """``exc``'s text and, in brackets, that of each exception it was raised from (or during) that it does not say
+    already: python-can's udp_multicast says only "could not create or configure socket" and keeps the operating
+    system's reason (``[Errno 19] No such device``: no multicast route) as the cause (an independent tester's
+    finding)."""
+    text = str(exc) or type(exc).__name__
+    seen = {id(exc)}
+    cause = exc.__cause__ or exc.__context__
+    while cause is not None and id(cause) not in seen:
+        seen.add(id(cause))
+        more = str(cause) or type(cause).__name__
+        if more not in text:
+            text += f" ({more})"
+        cause = cause.__cause__ or cause.__context__
+    return text
 
 
 def _named(args: argparse.Namespace, kwargs: dict) -> str:

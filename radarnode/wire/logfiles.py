@@ -194,6 +194,12 @@ def check_output_format(path: str, option: str, extra: tuple[str, ...] = ()) -> 
         raise UsageError(f"option {option}: value {path!r} needs python-can's MF4 support (asammdf), which is not "
                          "installed: pip install 'radarnode[mf4]'; or use .blf, .asc, .log, .csv, .trc or .db")
     if fmt not in FORMATS:
+        name = Path(path).name
+        if not fmt and name.startswith(".") and log_format("x" + name) in FORMATS + extra:
+            # '.blf' alone is a hidden file's name without a suffix (pathlib's reading): "the suffix '(none)'" puzzled
+            # a tester
+            raise UsageError(f"option {option}: value {path!r} is not allowed: {name!r} is a name without a suffix "
+                             f"(a hidden file's); expected a name before the suffix, such as run{name}")
         raise UsageError(f"option {option}: value {path!r} is not allowed: no CAN log format has the suffix "
                          f"{fmt or '(none)'!r}; expected {allowed_text(extra)}")
     return fmt
