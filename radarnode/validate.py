@@ -59,19 +59,15 @@ def text(field: str, value: object) -> str:
 
 #: the longest name :func:`name` takes (a file name holds 255 bytes; ``report --plots`` writes NAME_seedN.png)
 NAME_MAX_CHARS = 200
-#: characters a name may not hold: it names files (a path separator would write elsewhere) and rows of Markdown tables
-NAME_FORBIDDEN = "/\\|"
 
 
 def name(field: str, value: object) -> str:
-    """A name that also names files and table rows: 1 to NAME_MAX_CHARS printable characters, none of
-    NAME_FORBIDDEN, no space at either end, not ``.`` or ``..``."""
+    """A name that also titles table rows and plot files: 1 to NAME_MAX_CHARS printable characters (no line break or
+    tab) and no space at either end."""
     text(field, value)
-    if (not 0 < len(value) <= NAME_MAX_CHARS or value != value.strip() or value in (".", "..")
-            or any(c in NAME_FORBIDDEN or not c.isprintable() for c in value)):
-        raise FieldError(field, value, f"1 to {NAME_MAX_CHARS} printable characters without '/', '\\' or '|' and "
-                                       "no space at either end, not '.' or '..' (it names report --plots files and "
-                                       "table rows)")
+    if not 0 < len(value) <= NAME_MAX_CHARS or value != value.strip() or not value.isprintable():
+        raise FieldError(field, value, f"1 to {NAME_MAX_CHARS} printable characters (no line break or tab) and no "
+                                       "space at either end (it names report's rows and plot files)")
     return value
 
 

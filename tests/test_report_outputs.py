@@ -258,3 +258,24 @@ def test_report_interrupted_after_some_runs_has_shown_their_rows_and_kept_their_
     assert 2 <= done < 6 and len(rows) == done, (rows, err)        # each row as its run ended, not all at the end
     pngs = sorted(x.name for x in plots.iterdir())
     assert 1 <= len(pngs) <= done and pngs[0] == "nhtsa_lead_stopped_seed1.png"
+
+
+def test_plot_files_of_any_scenario_name_stay_in_the_plots_directory_and_rows_stay_whole(tmp_path):
+    # a '/' in a name wrote the plot into another directory ('../../escaped' two levels above --plots) or failed after
+    # the whole run ('a/b'); a '|' ended the row's first cell (an independent tester's findings)
+    text = (SCENARIOS / "nhtsa_lead_stopped.yaml").read_text()
+    names = ["../../escaped", "a/b", "a_b", "x | y"]
+    paths = []
+    for i, name in enumerate(names):
+        path = tmp_path / f"s{i}.yaml"
+        path.write_text(text.replace("name: nhtsa_lead_stopped", f"name: '{name}'"))
+        paths.append(str(path))
+    plots = tmp_path / "deep" / "plots"
+    r = run("report", *paths, "--plots", str(plots), "--workers", "1")
+    assert r.returncode == 0, r.stderr
+    assert sorted(p.name for p in plots.iterdir()) == ["_.._escaped_seed1.png", "a_b_2_seed1.png", "a_b_seed1.png",
+                                                         "x___y_seed1.png"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["deep", "s0.yaml", "s1.yaml", "s2.yaml", "s3.yaml"]
+    rows = [ln for ln in r.stdout.splitlines() if ln.startswith("| ") and "seed" not in ln and "---" not in ln]
+    assert [ln.split(" | ")[0] for ln in rows] == ["| ../../escaped", "| a/b", "| a_b", "| x \\| y"], rows
+    assert all(ln.count(" | ") == 9 for ln in rows)

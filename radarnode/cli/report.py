@@ -187,8 +187,35 @@ def cmd(args) -> int:
         return _report(args, scenarios, need, plt, out_dir)
 
 
+def plot_stems(names: list[str]) -> dict[str, str]:
+    """Each scenario name's plot file stem (``DIR/<stem>_seed<N>.png``): its ASCII letters, digits and ``._+-``, every
+    other character an underscore, no leading dot, at most 100 characters, and a number added where two names come
+    to the same stem (a name is free text — 'ego 30 m/s, truck left' — and a '/' in it wrote into another directory,
+    '../' two levels up: an independent tester's finding)."""
+    out: dict[str, str] = {}
+    taken: set[str] = set()
+    for name in names:
+        if name in out:
+            continue
+        stem = "".join(c if c.isascii() and (c.isalnum() or c in "._+-") else "_" for c in name).lstrip(".")[:100]
+        stem = stem or "scenario"
+        k, unique = 1, stem
+        while unique in taken:
+            k += 1
+            unique = f"{stem}_{k}"
+        taken.add(unique)
+        out[name] = unique
+    return out
+
+
+def _cell(text: str) -> str:
+    """``text`` in a Markdown table cell: a '|' escaped, so that it does not end the cell."""
+    return text.replace("|", "\\|")
+
+
 def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
     bar = progress(len(scenarios) * args.seeds, "report", unit="run")
+    stems = plot_stems([sc.name for _, sc in scenarios])
 
     def out(line: str) -> None:
         bar.write(line, file=sys.stdout) if not bar.disable else print(line, flush=True)
@@ -220,12 +247,12 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
                 unchecked += not r.checked
                 verdict = ("nothing to check" if not r.checked else "pass" if r.passed
                            else "FAIL: " + "; ".join(r.reasons))
-                out(f"| {sc.name} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
+                out(f"| {_cell(sc.name)} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
                     f"{_fmt(r.min_ttc_s, 's')} | {_fmt(r.min_gap_m, 'm', 1)} | {_fmt(r.peak_decel_mps2, 'm/s²')} | "
                     f"{_fmt(r.peak_jerk_mps3, 'm/s³')} | {_fmt(r.final_time_gap_s, 's')} | {verdict} |")
                 if out_dir is not None:
                     from radarnode.cli.plots import report_figure
-                    target = out_dir / f"{sc.name}_seed{seed}.png"
+                    target = out_dir / f"{stems[sc.name]}_seed{seed}.png"
                     fig = report_figure(run_sc, r, plt)
                     try:
                         with atomic_path(target, "--plots") as tmp:
@@ -237,9 +264,9 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
                         plt.close(fig)
                     written.append(target)
             if unchecked:
-                out(f"| {sc.name} | | | | | | | | | nothing to check (no criterion in ecu.expect) |")
+                out(f"| {_cell(sc.name)} | | | | | | | | | nothing to check (no criterion in ecu.expect) |")
             elif args.seeds > 1:
-                out(f"| {sc.name} | | | | | | | | | {passes} of {args.seeds} seeds pass |")
+                out(f"| {_cell(sc.name)} | | | | | | | | | {passes} of {args.seeds} seeds pass |")
             short += passes < need and not unchecked
             suites.append((sc.name, str(path), runs))
     except (KeyboardInterrupt, Terminated):
