@@ -190,7 +190,8 @@ class ConsumerStats:
     def dropped(self) -> int:
         return (self.unknown_id + self.wrong_dlc + self.decode_errors + self.orphan_frames + self.late_frames
                 + self.stray_headers + self.conflicting_frames + self.unexpected_ids + self.extra_frames
-                + self.errors_frames + self.fd_frames + self.e2e_errors + self.e2e_repeated + self.e2e_wrong_sequence + self.bus_errors)
+                + self.errors_frames + self.fd_frames + self.e2e_errors + self.e2e_repeated + self.e2e_wrong_sequence
+                + self.bus_errors)
 
     def as_dict(self) -> dict[str, int]:
         return dataclasses.asdict(self)

@@ -19,6 +19,7 @@ def stamp_ok(t_s: object) -> bool:
     """Whether a time ``t_s`` (s) can stand on a Foxglove time line: a finite number in [0, :data:`MAX_STAMP_S`)."""
     return isinstance(t_s, (int, float)) and math.isfinite(t_s) and 0.0 <= t_s < MAX_STAMP_S
 
+
 #: topic -> (schema name, what it carries); the wire's topics first, then the scenario's
 TOPICS: dict[str, tuple[str, str]] = {
     "/radar/objects": ("foxglove.SceneUpdate", "decoded object list: a box per object with ID, class, speed and "
