@@ -116,18 +116,39 @@ def iter_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int =
     import multiprocessing
     # spawn: a fresh interpreter per worker (fork with tqdm's monitor thread alive may deadlock, and spawn is
     # what macOS and Windows do anyway)
-    with cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
-                                initializer=limit_blas_threads) as pool:
+    pool = cf.ProcessPoolExecutor(max_workers=min(workers, len(tasks)), mp_context=multiprocessing.get_context("spawn"),
+                                  initializer=_pool_worker)
+    finished = False
+    try:
         futures = [pool.submit(fn, t) for t in tasks]
-        try:
-            if on_done:        # as each finishes, whatever its place (the executor's thread calls it)
-                for f in futures:
-                    f.add_done_callback(lambda _f: on_done())
+        if on_done:            # as each finishes, whatever its place (the executor's thread calls it)
             for f in futures:
-                yield f.result()
-        finally:               # a caller that stops early (an error, an interrupt) does not wait for the rest
-            for f in futures:
-                f.cancel()
+                f.add_done_callback(lambda _f: on_done())
+        for f in futures:
+            yield f.result()
+        finished = True
+    finally:
+        if finished:
+            pool.shutdown(wait=True)
+        else:
+            # a caller that stops early (an error, Ctrl-C, SIGTERM) waits neither for the tasks queued nor for those
+            # running (a signal-level run takes minutes): the workers are stopped. (They ignore SIGINT themselves: a
+            # Ctrl-C that reached them too left one holding the task queue's lock, and the command hung at its exit
+            # waiting for it: an independent tester's finding.)
+            processes = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for proc in processes:
+                proc.terminate()
+            for proc in processes:
+                proc.join(timeout=10.0)
+
+
+def _pool_worker() -> None:
+    """A local pool's worker: SIGINT ignored (the parent, which the terminal's Ctrl-C reaches too, stops the pool),
+    and one BLAS thread (:func:`limit_blas_threads`)."""
+    import signal
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    limit_blas_threads()
 
 
 def _run_dask(fn, tasks, scheduler, dask_local, on_done):
