@@ -86,7 +86,41 @@ def program() -> None:
         status = _command_line(ending=True)
     except SystemExit as stop:            # argparse: --help, --version, a usage error
         status = stop.code
+        refused = stdout_refuses() if status in (0, None) else None
+        if refused is not None:
+            # argparse drops a failed write of its help or version (unbuffered output: PYTHONUNBUFFERED, as many
+            # container images set it, ended `--help > /dev/full` with status 0 and nothing said)
+            _say_standard_output(refused)
+            status = 1
     raise SystemExit(_flushed(status))
+
+
+def stdout_refuses() -> OSError | None:
+    """The error standard output gives an empty write (``> /dev/full``), or None where it takes writes, has no file
+    descriptor (a stream in memory) or is a pipe its reader closed (ended quietly). A failed write of the command's own output has emptied the stream's buffer by
+    then, so a flush would not tell. Where it refuses, its descriptor goes to /dev/null, so that the exit's flush
+    does not fail again."""
+    import sys
+    try:
+        fd = sys.stdout.fileno()
+    except (AttributeError, ValueError, OSError):      # io.UnsupportedOperation: no descriptor
+        return None
+    try:
+        os.write(fd, b"")
+    except BrokenPipeError:             # a reader that closed the pipe: quietly, as everywhere
+        _to_devnull(sys.stdout)
+    except OSError as exc:
+        _to_devnull(sys.stdout)
+        return exc
+    return None
+
+
+def _say_standard_output(exc: OSError) -> None:
+    import sys
+    try:
+        print(f"error: standard output: {exc.strerror or exc}", file=sys.stderr, flush=True)
+    except OSError:
+        pass
 
 
 def _flushed(status):
@@ -103,10 +137,7 @@ def _flushed(status):
         except OSError as exc:
             _to_devnull(stream)
             if stream is sys.stdout:
-                try:
-                    print(f"error: standard output: {exc.strerror or exc}", file=sys.stderr, flush=True)
-                except OSError:
-                    pass
+                _say_standard_output(exc)
                 if status in (0, None):
                     status = 1
     return status

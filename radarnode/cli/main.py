@@ -10,7 +10,7 @@ import sys
 import traceback
 
 from radarnode import __version__
-from radarnode.cli import heap, interrupt
+from radarnode.cli import heap, interrupt, stdout_refuses
 from radarnode.errors import RadarnodeError, Terminated, UsageError
 
 # (the subcommands' and the parser's modules, which import numpy, python-can and the rest, are imported inside
@@ -156,31 +156,13 @@ def _main(argv: list[str] | None) -> int:
         if args.debug:
             traceback.print_exc(file=sys.stderr)
             return 1
-        if not exc.filename and _stdout_failed():
+        if not exc.filename and stdout_refuses() is not None:
             # the command's own output that could not be written (`> /dev/full`): say so, as the final flush does
             print(f"error: standard output: {exc.strerror or exc}", file=sys.stderr)
             return 1
         where = f": {exc.filename!r}" if exc.filename else ""
         print(f"error: {exc.strerror or exc}{where}", file=sys.stderr)
         return 1
-
-
-def _stdout_failed() -> bool:
-    """Whether standard output refuses writes (``> /dev/full``): an empty write to its descriptor fails there, where
-    a failed write of the command's own output has already emptied the stream's buffer. Then the descriptor goes to
-    /dev/null, so that the exit's flush does not fail again."""
-    import os
-    try:
-        fd = sys.stdout.fileno()
-    except (AttributeError, ValueError, OSError):      # no descriptor (a stream in memory: io.UnsupportedOperation)
-        return False
-    try:
-        os.write(fd, b"")
-        return False
-    except OSError:
-        from radarnode.cli import _to_devnull
-        _to_devnull(sys.stdout)
-        return True
 
 
 def threading_main() -> bool:
