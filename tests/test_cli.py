@@ -219,6 +219,17 @@ def test_image_as_svg_holds_its_maps_as_pictures(tmp_path):
     assert out.stat().st_size < 5_000_000 and text.count("<image ") >= 4      # the four maps, each one picture
 
 
+def test_image_draws_a_name_with_dollar_signs_as_text(tmp_path):
+    # matplotlib read 'a $\bad$ b' as TeX and the command ended in its traceback (an independent tester's finding)
+    pytest.importorskip("matplotlib", reason="radarnode image needs the optional matplotlib")
+    sc = tmp_path / "d.yaml"
+    sc.write_text((SCENARIOS / "stopped_vehicle.yaml").read_text().replace("name: stopped_vehicle",
+                                                                            "name: 'a $\\bad$ b'"))
+    out = tmp_path / "d.png"
+    r = run("image", str(sc), "-o", str(out))
+    assert r.returncode == 0 and out.stat().st_size > 20_000, r.stderr
+
+
 def test_image_animates_a_scenario(tmp_path):
     pytest.importorskip("matplotlib", reason="radarnode image needs the optional matplotlib")
     out = tmp_path / "run.gif"

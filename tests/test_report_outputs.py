@@ -264,7 +264,8 @@ def test_plot_files_of_any_scenario_name_stay_in_the_plots_directory_and_rows_st
     # a '/' in a name wrote the plot into another directory ('../../escaped' two levels above --plots) or failed after
     # the whole run ('a/b'); a '|' ended the row's first cell (an independent tester's findings)
     text = (SCENARIOS / "nhtsa_lead_stopped.yaml").read_text()
-    names = ["../../escaped", "a/b", "a_b", "x | y"]
+    # (a $…$ was TeX to matplotlib: a traceback; two files of one name wrote one plot)
+    names = ["../../escaped", "a/b", "a_b", "x | y", "a $\\bad$ b", "a/b"]
     paths = []
     for i, name in enumerate(names):
         path = tmp_path / f"s{i}.yaml"
@@ -273,11 +274,15 @@ def test_plot_files_of_any_scenario_name_stay_in_the_plots_directory_and_rows_st
     plots = tmp_path / "deep" / "plots"
     r = run("report", *paths, "--plots", str(plots), "--workers", "1")
     assert r.returncode == 0, r.stderr
-    assert sorted(p.name for p in plots.iterdir()) == ["_.._escaped_seed1.png", "a_b_2_seed1.png", "a_b_seed1.png",
+    assert sorted(p.name for p in plots.iterdir()) == ["_.._escaped_seed1.png", "a___bad__b_seed1.png",
+                                                         "a_b_2_seed1.png", "a_b_3_seed1.png", "a_b_seed1.png",
                                                          "x___y_seed1.png"]
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["deep", "s0.yaml", "s1.yaml", "s2.yaml", "s3.yaml"]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["deep", "s0.yaml", "s1.yaml", "s2.yaml", "s3.yaml",
+                                                          "s4.yaml", "s5.yaml"]
+    assert "wrote 6 plots" in r.stderr
     rows = [ln for ln in r.stdout.splitlines() if ln.startswith("| ") and "seed" not in ln and "---" not in ln]
-    assert [ln.split(" | ")[0] for ln in rows] == ["| ../../escaped", "| a/b", "| a_b", "| x \\| y"], rows
+    assert [ln.split(" | ")[0] for ln in rows] == ["| ../../escaped", "| a/b", "| a_b", "| x \\| y", "| a $\\bad$ b",
+                                                   "| a/b"], rows
     assert all(ln.count(" | ") == 9 for ln in rows)
 
 

@@ -246,6 +246,9 @@ def require_matplotlib(who: str):
         import matplotlib.pyplot as plt
     except ImportError:
         raise UsageError(f"{who} needs matplotlib, which is not installed: pip install 'radarnode[image]'") from None
+    # the texts are plain: a scenario's name or an actor's id with two '$' in it was read as TeX and ended the command
+    # in matplotlib's traceback (an independent tester's finding); no label of ours is TeX
+    matplotlib.rcParams["text.parse_math"] = False
     return plt
 
 

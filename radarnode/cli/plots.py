@@ -52,9 +52,8 @@ def instants(result) -> dict[str, float | None]:
 def report_figure(scenario, result, plt=None):
     """The five-panel figure of one run (``simulate`` result); a matplotlib Figure, not yet saved."""
     if plt is None:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        from radarnode.cli.common import require_matplotlib
+        plt = require_matplotlib("report_figure")
     tr, e, spec = result.trace, scenario.ecu.expect, scenario.ecu
     t = tr["t"]
     fig, axes = plt.subplots(5, 1, sharex=True, figsize=(10, 12), constrained_layout=True)

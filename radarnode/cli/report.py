@@ -187,16 +187,15 @@ def cmd(args) -> int:
         return _report(args, scenarios, need, plt, out_dir)
 
 
-def plot_stems(names: list[str]) -> dict[str, str]:
-    """Each scenario name's plot file stem (``DIR/<stem>_seed<N>.png``): its ASCII letters, digits and ``._+-``, every
-    other character an underscore, no leading dot, at most 100 characters, and a number added where two names come
-    to the same stem (a name is free text — 'ego 30 m/s, truck left' — and a '/' in it wrote into another directory,
-    '../' two levels up: an independent tester's finding)."""
-    out: dict[str, str] = {}
+def plot_stems(names: list[str]) -> list[str]:
+    """Each scenario's plot file stem (``DIR/<stem>_seed<N>.png``), in the order of ``names``: the name's ASCII letters,
+    digits and ``._+-``, every other character an underscore, no leading dot, at most 100 characters, and a number
+    added where two scenarios come to the same stem, the same name twice included (a name is free text — 'ego 30 m/s,
+    truck left' — and a '/' in it wrote into another directory, '../' two levels up; two files of one name wrote one
+    plot over the other: an independent tester's findings)."""
+    out: list[str] = []
     taken: set[str] = set()
     for name in names:
-        if name in out:
-            continue
         stem = "".join(c if c.isascii() and (c.isalnum() or c in "._+-") else "_" for c in name).lstrip(".")[:100]
         stem = stem or "scenario"
         k, unique = 1, stem
@@ -204,7 +203,7 @@ def plot_stems(names: list[str]) -> dict[str, str]:
             k += 1
             unique = f"{stem}_{k}"
         taken.add(unique)
-        out[name] = unique
+        out.append(unique)
     return out
 
 
@@ -235,7 +234,7 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
         out("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
             "final time gap | result |")
         out("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
-        for path, sc in scenarios:
+        for (path, sc), stem in zip(scenarios, stems):
             passes = unchecked = 0
             runs = []
             for seed in range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed]:
@@ -252,7 +251,7 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
                     f"{_fmt(r.peak_jerk_mps3, 'm/s³')} | {_fmt(r.final_time_gap_s, 's')} | {verdict} |")
                 if out_dir is not None:
                     from radarnode.cli.plots import report_figure
-                    target = out_dir / f"{stems[sc.name]}_seed{seed}.png"
+                    target = out_dir / f"{stem}_seed{seed}.png"
                     fig = report_figure(run_sc, r, plt)
                     try:
                         with atomic_path(target, "--plots") as tmp:
