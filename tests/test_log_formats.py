@@ -756,3 +756,31 @@ def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, m
     assert rc == 130, err
     assert "interrupted before the first frame: nothing written" in err
     assert not out.exists() and not list(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("fmt", ["json", "csv", "text"])
+def test_a_can_fd_frame_in_a_log_is_skipped_by_every_decode_output(capsys, tmp_path, fmt):
+    # the ARS 408's bus is classical CAN: an FD frame on an object-list ID (candump's '##' form) was decoded as a list
+    # header by the JSON and CSV outputs, and its bytes became the cycle counter of the frames after it (an
+    # independent tester's finding); the text output's consumer dropped it already
+    good = tmp_path / "g.log"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
+    lines = good.read_text().splitlines()
+    lines.insert(20, "(0.100000) can0 60A##1001122334455667788990011223344")
+    with_fd = tmp_path / "fd.log"
+    with_fd.write_text("\n".join(lines) + "\n")
+    capsys.readouterr()
+    outs = {}
+    for name, path in (("good", good), ("fd", with_fd)):
+        out = tmp_path / f"{name}.{fmt}"
+        rc, _, err = cli(capsys, "decode", path, "--format", fmt, "-o", out)
+        assert rc == 0, err
+        outs[name] = (out.read_text(), err)
+    if fmt == "text":        # the consumer's counters say it saw one frame more, an FD frame, and dropped it
+        good_text, fd_text = outs["good"][0], outs["fd"][0]
+        assert "fd_frames=1" in fd_text and "fd_frames" not in good_text
+        stats = re.compile(r"frames=\d+, (.*?)(, fd_frames=1)?$", re.M)
+        assert stats.sub(r"\1", fd_text) == stats.sub(r"\1", good_text)
+    else:
+        assert outs["fd"][0] == outs["good"][0]                    # the FD frame left no trace in the records
+        assert "1 error/remote/CAN FD frames skipped" in outs["fd"][1]
