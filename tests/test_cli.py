@@ -316,3 +316,15 @@ def test_a_bus_that_cannot_be_opened_says_the_operating_systems_reason(monkeypat
     with pytest.raises(BusError) as info:
         open_bus(args)
     assert str(info.value).count("Permission denied") == 1
+
+
+def test_closed_loop_on_a_scenario_without_acc_says_it_switches_acc_on():
+    # an FCW-only scene driven in closed loop sped up under ACC into the stopped car it tests, and nothing said why (an
+    # independent tester's finding): the run says so; a scenario with ACC on says nothing
+    r = run("run", str(SCENARIOS / "ncap_ccrs_50kmh_full.yaml"), "--fast", "--quiet", "--closed-loop", "--duration", "1")
+    assert r.returncode == 0, r.stderr
+    assert "note: --closed-loop switches ACC on, which this scenario's ecu.acc_enabled leaves off" in r.stdout
+    r = run("run", str(SCENARIOS / "acc_follow_90.yaml"), "--fast", "--quiet", "--closed-loop", "--duration", "1")
+    assert r.returncode == 0 and "note: --closed-loop" not in r.stdout, r.stderr
+    r = run("run", str(SCENARIOS / "ncap_ccrs_50kmh_full.yaml"), "--fast", "--quiet", "--duration", "1")
+    assert r.returncode == 0 and "note: --closed-loop" not in r.stdout, r.stderr

@@ -93,6 +93,12 @@ def cmd(args) -> int:
         f"radar {node.preset.name}"
     print(f"{radars}, cycle {node.period_s * 1e3:.0f} ms, {scenario.num_cycles} cycles, "
           f"{'simulated' if args.fast else 'real'} time, python-can virtual bus {channel}")
+    if args.closed_loop and not spec.acc_enabled:
+        # (said: an FCW-only scene, ncap_ccrs_50kmh_full, drove on under ACC into the stopped car it tests, and
+        # nothing told why the ego sped up: an independent tester's finding)
+        print(f"note: --closed-loop switches ACC on, which this scenario's ecu.acc_enabled leaves off: the ego follows "
+              f"its request (set speed {spec.set_speed_mps:g} m/s); ACC does not brake for a standing object it never "
+              "saw move")
     with can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as node_bus, \
             can.Bus(interface="virtual", channel=channel, preserve_timestamps=True) as consumer_bus, \
             stop_on_signals() as stop, live_view(args, node, channel) as live:
