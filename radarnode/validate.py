@@ -82,5 +82,8 @@ def _interval(lo: float | None, hi: float | None, lo_open: bool, hi_open: bool) 
 
 
 def _num(v: float) -> str:
-    """A bound as a user writes it: whole numbers in full (1000000, not 1e+06), others short."""
+    """A bound as a user writes it: whole numbers in full (1000000, not 1e+06; an integer bound always, 2**63 − 1 as
+    9223372036854775807, not 9.22337e+18), others short."""
+    if isinstance(v, int) and not isinstance(v, bool):
+        return str(v)
     return str(int(v)) if float(v).is_integer() and abs(v) < 1e15 else f"{v:g}"

@@ -146,6 +146,9 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
     (["log", SCENARIO, "-o", "LOGS/x.blf", "--start-time", "-inf"], "option --start-time: value -inf is not allowed"),
     (["log", SCENARIO, "-o", "LOGS/x.blf", "--duration", "0.1_5"], "option --duration: value 0.1_5 is not allowed"),
     (["report", SCENARIO, "--seeds", "1_0"], "option --seeds: value 1_0 is not allowed"),
+    # an integer bound in full, not 9.22337e+18 (a tester's finding)
+    (["run", SCENARIO, "--seed", "-1"], "option --seed: value -1 is not allowed; expected an integer in "
+                                        "[0, 9223372036854775807]"),
     # a list or a range that starts below zero is a value too (the next option's check is reached)
     (["montecarlo", "--snr-db", "-10:20:2", "--trials", "0"], "option --trials: value 0 is not allowed"),
     (["montecarlo", "--snr-db", "-5,0,5", "--trials", "0"], "option --trials: value 0 is not allowed"),
@@ -590,3 +593,13 @@ def test_fidelity_auto_on_a_one_channel_radar_names_the_option_or_the_field(caps
     sc.write_text(sc.read_text(encoding="utf-8").replace("fidelity: auto", "fidelity: object"), encoding="utf-8")
     rc, _, err = cli(capsys, "run", sc, "--fast", "--duration", "0.2")
     assert rc == 0, err
+
+
+def test_plots_below_a_file_names_the_file(tmp_path, capsys):
+    # "(it is a file)" was said of a name that did not exist, whose parent was the file (a tester's finding)
+    pytest.importorskip("matplotlib")
+    (tmp_path / "afile").write_text("x")
+    rc = main(["report", SCENARIO, "--plots", str(tmp_path / "afile" / "sub")])
+    err = capsys.readouterr().err.strip()
+    assert rc == 1 and err == (f"error: option --plots: value {str(tmp_path / 'afile' / 'sub')!r} is not allowed; "
+                               f"expected a directory ({str(tmp_path / 'afile')!r} above it is a file)"), err

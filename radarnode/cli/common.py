@@ -276,9 +276,14 @@ def plot_dir(path: str) -> Path:
     d = Path(path)
     try:
         d.mkdir(parents=True, exist_ok=True)
-    except (FileExistsError, NotADirectoryError):
+    except FileExistsError:
         raise FileError(f"option --plots: value {path!r} is not allowed; expected a directory (it is a file)") \
             from None
+    except NotADirectoryError:
+        # (not the directory itself: one above it, which said "it is a file" of a name that did not exist)
+        above = next((str(p) for p in reversed(d.parents) if p.is_file()), "a directory above it")
+        raise FileError(f"option --plots: value {path!r} is not allowed; expected a directory ({above!r} above it is "
+                        "a file)") from None
     except OSError as exc:
         raise FileError(f"option --plots: cannot create directory {path!r}: {exc.strerror or exc}") from None
     if not os.access(d, os.W_OK):
