@@ -128,10 +128,21 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
      "option --channel: value 'can99999999999999999999' is not allowed for a .blf log"),
     (["log", SCENARIO, "-o", "LOGS/x.txt"], "option --output: value 'LOGS/x.txt' is not allowed: .txt is"),
     (["log", SCENARIO, "-o", "LOGS/x.unknown"], "option --output: value 'LOGS/x.unknown' is not allowed"),
-    # '.blf' alone is a hidden file's name without a suffix: "the suffix '(none)'" puzzled a tester
+    # '.blf' alone is a hidden file's name without a suffix to pathlib: "the suffix '(none)'" puzzled a tester, and
+    # decode wrote text into '.blf' and JSON into '.csv'
     (["log", SCENARIO, "-o", "LOGS/.blf"], "option --output: value 'LOGS/.blf' is not allowed: '.blf' is a name "
-                                           "without a suffix (a hidden file's); expected a name before the suffix, "
+                                           "without a stem (a hidden file's); expected a name before the suffix, "
                                            "such as run.blf"),
+    (["log", SCENARIO, "-o", "LOGS/.log.gz"], "option --output: value 'LOGS/.log.gz' is not allowed: '.log.gz' is a "
+                                              "name without a stem"),
+    (["export", "LOGS/small.blf", "-o", "LOGS/.mcap"], "option --output: value 'LOGS/.mcap' is not allowed: '.mcap' is"
+                                                       " a name without a stem"),
+    (["image", SCENARIO, "-o", "LOGS/.png"], "option --output: value 'LOGS/.png' is not allowed: '.png' is a name "
+                                             "without a stem"),
+    (["decode", "LOGS/small.blf", "-o", "LOGS/.blf"], "option --output: value 'LOGS/.blf' is not allowed: '.blf' is a "
+                                                      "name without a stem"),
+    (["decode", "LOGS/small.blf", "--format", "json", "-o", "LOGS/.csv"], "option --output: value 'LOGS/.csv' is not "
+                                                                          "allowed: '.csv' is a name without a stem"),
     (["log", SCENARIO, "-o", "LOGS/x.blf.gz"], "option --output: value 'LOGS/x.blf.gz' is not allowed"),
     (["export", "LOGS/small.blf", "-o", "LOGS/x.blf"], "option --output: value 'LOGS/x.blf' is not allowed"),
     (["image", SCENARIO, "-o", "LOGS/x.xyz"], "option --output: value 'LOGS/x.xyz' is not allowed"),

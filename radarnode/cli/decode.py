@@ -29,7 +29,7 @@ from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.busdbc import frame_table, signal_value
-from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, log_format, read_frames
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_stem, log_format, read_frames
 
 FORMATS_OUT = ("text", "json", "csv")
 FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
@@ -287,6 +287,7 @@ def check_output_suffix(path: str, fmt: str) -> None:
     """Refuse (UsageError) an ``-o`` whose suffix says another format than the one written: a CAN log format
     (decode writes no CAN log: ``-o text.blf``), or another of decode's formats (``--format json -o x.csv``).
     Any other suffix (``.txt``, none) is taken as it is."""
+    check_stem(path, "--output", FORMATS + (".mcap",) + tuple(x for own in OWN_SUFFIXES.values() for x in own))
     suffix = log_format(path)
     if suffix in OWN_SUFFIXES.get(fmt, ()):
         return

@@ -18,7 +18,7 @@ from radarnode.cli.common import SensorCensus, atomic_path, progress
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
 from radarnode.viz import MAX_STAMP_S
-from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, read_frames
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, check_stem, read_frames
 
 
 def add_subparser(sub) -> None:
@@ -41,6 +41,7 @@ def cmd(args) -> int:
         # it places the scenario's ego and truth on the log's time line; without a scenario nothing uses it
         raise UsageError(f"option --start-time: value {args.start_time:g} is not allowed without --scenario; "
                          "expected --scenario with it (or no --start-time)")
+    check_stem(args.output, "--output", (".mcap",))
     if not is_mcap(args.output):
         raise UsageError(f"option --output: value {args.output!r} is not allowed; expected a file name ending in "
                          ".mcap")

@@ -22,6 +22,7 @@ import scipy.fft
 
 from radarnode.cli import options
 from radarnode.cli.common import add_scenario_argument, atomic_path, require_matplotlib, scenario_from_args
+from radarnode.wire.logfiles import check_stem
 from radarnode.dsp.spectra import noncoherent_power, range_doppler
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.boundaries import RoadBoundaryEstimator
@@ -209,6 +210,7 @@ def _check_output(path: str, animate: bool, plt) -> None:
     else:
         allowed = sorted(plt.figure().canvas.get_supported_filetypes())
         plt.close("all")
+    check_stem(path, "--output", ["." + a for a in allowed])
     if suffix not in allowed:
         raise UsageError(f"option --output: value {path!r} is not allowed; expected a file name ending in "
                          + " ".join("." + a for a in allowed) + (" (with --animate)" if animate else ""))

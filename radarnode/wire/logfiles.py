@@ -180,10 +180,23 @@ def allowed_text(extra: tuple[str, ...] = ()) -> str:
     return "a file name ending in " + " ".join(shown)
 
 
+def check_stem(path: str, option: str, known) -> None:
+    """A UsageError naming the option when the output's name is one of the suffixes ``known`` alone (``.blf``,
+    ``sub/.log.gz``): a hidden file's name, whose suffix pathlib does not see ('.blf' has none, '.log.gz' has '.gz'),
+    so that a command took it for no format or another ("the suffix '(none)'" puzzled a tester; ``decode -o .csv``
+    wrote text into it). Another hidden name (``decode -o .decoded``) is left as it is."""
+    name = Path(path).name
+    if name.startswith(".") and Path("x" + name).suffixes != Path(name).suffixes \
+            and log_format("x" + name) in tuple(known):
+        raise UsageError(f"option {option}: value {path!r} is not allowed: {name!r} is a name without a stem (a hidden "
+                         f"file's); expected a name before the suffix, such as run{name}")
+
+
 def check_output_format(path: str, option: str, extra: tuple[str, ...] = ()) -> str:
     """The format of an output log file, or a UsageError naming the option, the value and the formats allowed.
 
     ``extra`` are further suffixes the command handles itself (``.mcap``). Called before any work is done."""
+    check_stem(path, option, FORMATS + tuple(extra))
     fmt = log_format(path)
     if fmt in extra:
         return fmt
@@ -194,12 +207,6 @@ def check_output_format(path: str, option: str, extra: tuple[str, ...] = ()) -> 
         raise UsageError(f"option {option}: value {path!r} needs python-can's MF4 support (asammdf), which is not "
                          "installed: pip install 'radarnode[mf4]'; or use .blf, .asc, .log, .csv, .trc or .db")
     if fmt not in FORMATS:
-        name = Path(path).name
-        if not fmt and name.startswith(".") and log_format("x" + name) in FORMATS + extra:
-            # '.blf' alone is a hidden file's name without a suffix (pathlib's reading): "the suffix '(none)'" puzzled
-            # a tester
-            raise UsageError(f"option {option}: value {path!r} is not allowed: {name!r} is a name without a suffix "
-                             f"(a hidden file's); expected a name before the suffix, such as run{name}")
         raise UsageError(f"option {option}: value {path!r} is not allowed: no CAN log format has the suffix "
                          f"{fmt or '(none)'!r}; expected {allowed_text(extra)}")
     return fmt
