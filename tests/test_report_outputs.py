@@ -236,8 +236,21 @@ def _report_until(tmp_path, rows: int):
     lines = [p.stdout.readline(), p.stdout.readline()]          # the table's header: printed before any run ends
     lines += [p.stdout.readline() for _ in range(rows)]
     p.send_signal(signal.SIGINT)
-    rest, err = p.communicate(timeout=120)
+    rest, err = _rest(p, 120)
     return p.returncode, lines + rest.splitlines(), err, plots
+
+
+def _rest(p: subprocess.Popen, timeout: float) -> tuple[str, str]:
+    """What a process whose first lines were read with ``readline`` writes after them, and its stderr, once it ended:
+    ``communicate`` reads the pipes' descriptors and would lose what ``readline`` had already buffered."""
+    import threading
+    err: list[str] = []
+    reader = threading.Thread(target=lambda: err.append(p.stderr.read()), daemon=True)
+    reader.start()
+    rest = p.stdout.read()
+    p.wait(timeout=timeout)
+    reader.join(timeout=timeout)
+    return rest, err[0] if err else ""
 
 
 def test_report_interrupted_before_a_run_ends_leaves_no_plots_directory_and_says_so(tmp_path):
@@ -304,7 +317,7 @@ def test_ctrl_c_on_a_report_with_worker_processes_ends_it_at_once_and_leaves_no_
     assert len(workers) == 2, children                       # the pool's two workers, running
     os.killpg(p.pid, signal.SIGINT)                          # as a terminal's Ctrl-C: every process of the group
     t0 = time.monotonic()
-    _, err = p.communicate(timeout=30)
+    _, err = _rest(p, 30)
     assert p.returncode == 130, err
     assert time.monotonic() - t0 < 10.0                      # no wait for the runs in progress (seconds each)
     assert "report: interrupted after" in err and "Traceback" not in err
@@ -324,9 +337,19 @@ def test_report_workers_leave_sigint_to_the_command(tmp_path):
     children = [int(x) for x in open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()]
     workers = [c for c in children if "spawn_main" in open(f"/proc/{c}/cmdline").read()]
     assert len(workers) == 2, children
+
+    def ignores_sigint(pid):        # the kernel's mask of ignored signals: bit SIGINT − 1
+        mask = next(ln for ln in open(f"/proc/{pid}/status") if ln.startswith("SigIgn:")).split()[1]
+        return bool(int(mask, 16) & (1 << (signal.SIGINT - 1)))
+
+    import time
+    deadline = time.monotonic() + 120.0          # a worker still starting (a loaded machine) has not set it yet
+    while not all(ignores_sigint(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert all(ignores_sigint(w) for w in workers)
     for w in workers:
         os.kill(w, signal.SIGINT)
-    rest, err = p.communicate(timeout=300)
+    rest, err = _rest(p, 300)
     assert p.returncode == 0, err
     rows = [ln for ln in lines + rest.splitlines() if re.match(r"^\| (acc_cut_in|stopped_vehicle) \| \d \|", ln)]
     assert len(rows) == 6 and "Traceback" not in err, (rows, err)
