@@ -97,9 +97,9 @@ def program() -> None:
 
 def stdout_refuses() -> OSError | None:
     """The error standard output gives an empty write (``> /dev/full``), or None where it takes writes, has no file
-    descriptor (a stream in memory) or is a pipe its reader closed (ended quietly). A failed write of the command's own output has emptied the stream's buffer by
-    then, so a flush would not tell. Where it refuses, its descriptor goes to /dev/null, so that the exit's flush
-    does not fail again."""
+    descriptor (a stream in memory) or is a pipe its reader closed (ended quietly). A failed write of the command's
+    own output has emptied the stream's buffer by then, so a flush would not tell. Where it refuses, its descriptor
+    goes to /dev/null, so that the exit's flush does not fail again."""
     import sys
     try:
         fd = sys.stdout.fileno()

@@ -281,7 +281,7 @@ def plot_dir(path: str) -> Path:
             from None
     except NotADirectoryError:
         # (not the directory itself: one above it, which said "it is a file" of a name that did not exist)
-        above = next((str(p) for p in reversed(d.parents) if p.is_file()), "a directory above it")
+        above = next((str(p) for p in reversed(d.parents) if p.is_file()), str(d.parent))
         raise FileError(f"option --plots: value {path!r} is not allowed; expected a directory ({above!r} above it is "
                         "a file)") from None
     except OSError as exc:
