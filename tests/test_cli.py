@@ -328,3 +328,13 @@ def test_closed_loop_on_a_scenario_without_acc_says_it_switches_acc_on():
     assert r.returncode == 0 and "note: --closed-loop" not in r.stdout, r.stderr
     r = run("run", str(SCENARIOS / "ncap_ccrs_50kmh_full.yaml"), "--fast", "--quiet", "--duration", "1")
     assert r.returncode == 0 and "note: --closed-loop" not in r.stdout, r.stderr
+
+
+def test_run_names_the_actors_the_ego_met():
+    # a closed-loop run that drove into the stopped car it tests ended without a word of it (an independent tester's
+    # finding): run reports the contacts report finds, open loop too (this scene's ego drives on, unbraked)
+    r = run("run", str(SCENARIOS / "ncap_ccrs_50kmh_full.yaml"), "--fast", "--quiet")
+    assert r.returncode == 0, r.stderr
+    assert "collisions: 'target' at 6.00 s" in r.stdout
+    r = run("run", str(SCENARIOS / "acc_follow_90.yaml"), "--fast", "--quiet", "--closed-loop", "--duration", "5")
+    assert r.returncode == 0 and "collisions" not in r.stdout, r.stdout

@@ -20,7 +20,7 @@ from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, liv
 from radarnode.consumer.acc import STATE_NAMES
 from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.fusion import FusingConsumer
-from radarnode.consumer.evaluate import DriverModel, EgoActuator, drive, driver_resumes, make_ecu
+from radarnode.consumer.evaluate import DriverModel, EgoActuator, contacts_since, drive, driver_resumes, make_ecu
 from radarnode.consumer.fcw import LEVEL_WARNING
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.group import ego_motion_for, make_node
@@ -105,10 +105,15 @@ def cmd(args) -> int:
         notifier = can.Notifier(consumer_bus, [assembler] + ([fuser] if fuser else []), timeout=0.01)
         shown = [0]
         decoded = []
+        collisions: dict[str, float] = {}           # actor id -> when its box first met the ego's (as report finds)
+        ticks = [0]
 
         def on_cycle(out) -> None:
             if live.on_node_cycle is not None:          # --foxglove: the ego and the truth of this cycle
                 live.on_node_cycle(out)
+            for i, when in contacts_since(node.scene, out.t_s, node.period_s, first=ticks[0] == 0):
+                collisions.setdefault(scenario.actors[i].id, when)
+            ticks[0] += 1
             cycle = assembler.get(timeout=1.0)
             # a cycle that waited for its next header (learning the layout) comes with this one
             cycles = [cycle] + assembler.drain() if cycle is not None else []
@@ -191,6 +196,11 @@ def cmd(args) -> int:
         print("FCW: " + ", ".join(f"{state} at {t:.2f} s" for t, state in warnings))
     print(f"ego speed at the end {node.scene.ego_state(stats.duration_s).speed_mps:.1f} m/s"
           + (" (closed loop)" if args.closed_loop else ""))
+    if collisions:
+        # (a closed-loop run that drove into the stopped car it tests ended without a word of it: an independent
+        # tester's finding; report records the same contacts)
+        print("collisions: " + ", ".join(f"{name!r} at {t:.2f} s" for name, t in sorted(collisions.items(),
+                                                                                        key=lambda x: x[1])))
     objects = summarize_objects([c for c in decoded if hasattr(c, "objects")])
     for oid, d in sorted(objects.items()):
         cls = CLASS_NAMES[d["obj_class"]] if d["obj_class"] >= 0 else "-"

@@ -165,6 +165,17 @@ def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = Non
                mount=SensorMount.of(scenario.radar.mount), wavelength_m=radar_config(scenario).preset.wavelength_m)
 
 
+
+def contacts_since(scene, t_s: float, period_s: float, first: bool = False) -> list[tuple[int, float]]:
+    """(actor index, first time) of every actor whose box meets the ego's since the last cycle (``t_s`` − ``period_s``
+    to ``t_s``; at ``t_s`` only on the ``first`` cycle), sampled every CONTACT_STEP_S: a point actor crossed at 75 m/s
+    meets the ego for 66 ms, between two 72-ms cycles."""
+    steps = 1 if first else max(int(math.ceil(period_s / CONTACT_STEP_S - 1e-9)), 1)
+    times = t_s - period_s * np.arange(steps - 1, -1, -1) / steps
+    met = scene.ego_contacts(times)
+    return [(int(i), float(times[np.argmax(met[:, i])])) for i in np.flatnonzero(met.any(axis=0))]
+
+
 def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
     """Run ``scenario`` in simulated time and return the ECU's figures.
 
@@ -229,13 +240,8 @@ def simulate(scenario: Scenario, fidelity: str | None = None) -> ScenarioResult:
                 assembler.on_message_received(m)       # the ECU's frames, decoded and E2E-checked
         # truth
         ego_state = scene.ego_state(t)
-        # any actor's box meeting the ego's since the last cycle, every CONTACT_STEP_S (a point actor crossed at
-        # 75 m/s meets the ego for 66 ms, between two 72-ms cycles)
-        steps = max(int(math.ceil(period / CONTACT_STEP_S - 1e-9)), 1) if k else 1
-        times = t - period * np.arange(steps - 1, -1, -1) / steps
-        met = scene.ego_contacts(times)
-        for i in np.flatnonzero(met.any(axis=0)):
-            res.collisions.setdefault(scenario.actors[i].id, float(times[np.argmax(met[:, i])]))
+        for i, when in contacts_since(scene, t, period, first=k == 0):
+            res.collisions.setdefault(scenario.actors[i].id, when)
         gap = ttc = math.inf
         rel_speed = math.nan
         if lead is not None:
