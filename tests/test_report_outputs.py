@@ -353,3 +353,23 @@ def test_report_workers_leave_sigint_to_the_command(tmp_path):
     assert p.returncode == 0, err
     rows = [ln for ln in lines + rest.splitlines() if re.match(r"^\| (acc_cut_in|stopped_vehicle) \| \d \|", ln)]
     assert len(rows) == 6 and "Traceback" not in err, (rows, err)
+
+
+def test_a_worker_killed_from_outside_ends_the_report_with_one_error_line(tmp_path):
+    # (the kernel's out-of-memory killer, a kill -9): concurrent.futures' BrokenProcessPool traceback before
+    import os
+    import signal
+    p = subprocess.Popen([*CLI, "report", str(SCENARIOS / "acc_cut_in.yaml"), str(SCENARIOS / "stopped_vehicle.yaml"),
+                          "--seeds", "3", "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True)
+    lines = [p.stdout.readline() for _ in range(3)]
+    assert lines[2].startswith("| acc_cut_in | 1 |"), lines
+    children = [int(x) for x in open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()]
+    workers = [c for c in children if "spawn_main" in open(f"/proc/{c}/cmdline").read()]
+    os.kill(workers[0], signal.SIGKILL)
+    _, err = _rest(p, 120)
+    assert p.returncode == 1, err
+    assert err.strip().splitlines()[-1] == ("error: a worker process ended abruptly (killed from outside, or out of "
+                                            "memory); expected it to finish: try fewer --workers"), err
+    assert "Traceback" not in err
+    assert not [c for c in workers if os.path.exists(f"/proc/{c}")]

@@ -125,7 +125,13 @@ def iter_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int =
             for f in futures:
                 f.add_done_callback(lambda _f: on_done())
         for f in futures:
-            yield f.result()
+            try:
+                result = f.result()
+            except cf.process.BrokenProcessPool:
+                # a worker killed from outside (the kernel's out-of-memory killer, a kill -9): one line, not a trace
+                raise RadarnodeError("a worker process ended abruptly (killed from outside, or out of memory); "
+                                     "expected it to finish: try fewer --workers") from None
+            yield result
         finished = True
     finally:
         if finished:
