@@ -373,3 +373,20 @@ def test_a_worker_killed_from_outside_ends_the_report_with_one_error_line(tmp_pa
                                             "memory); expected it to finish: try fewer --workers"), err
     assert "Traceback" not in err
     assert not [c for c in workers if os.path.exists(f"/proc/{c}")]
+
+
+@pytest.mark.parametrize("sig,delay", [("SIGINT", 0.3), ("SIGINT", 0.8), ("SIGTERM", 0.3), ("SIGTERM", 0.8)])
+def test_a_signal_to_the_group_while_the_workers_start_prints_no_traceback(sig, delay):
+    # a Ctrl-C (or a SIGTERM to the group) while the pool's workers were starting printed their tracebacks:
+    # KeyboardInterrupt in a worker still importing, EOFError in one whose start-up data was cut off (an independent
+    # tester's finding); the signals are held while the workers start, and they leave them to the command
+    import os
+    import signal
+    import time
+    p = subprocess.Popen([*CLI, "report", str(SCENARIOS / "acc_cut_in.yaml"), "--seeds", "3", "--workers", "2"],
+                         cwd=ROOT, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, start_new_session=True)
+    time.sleep(delay)
+    os.killpg(p.pid, getattr(signal, sig))
+    _, err = p.communicate(timeout=60)
+    assert p.returncode in (130, 143), err
+    assert "Traceback" not in err and "Error" not in err and "Exception" not in err, err

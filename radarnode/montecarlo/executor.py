@@ -8,6 +8,7 @@ order of the tasks. Dask is imported only when a scheduler address or a local Da
 
 from __future__ import annotations
 
+import contextlib
 import os
 import re
 from collections.abc import Callable, Iterator, Sequence
@@ -120,7 +121,11 @@ def iter_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int =
                                   initializer=_pool_worker)
     finished = False
     try:
-        futures = [pool.submit(fn, t) for t in tasks]
+        # the workers start (in these submits) with SIGINT and SIGTERM blocked, which they inherit: a signal that
+        # came while one started made its start-up code print a traceback (KeyboardInterrupt while importing, EOFError
+        # when this process stopped writing its start-up data); here the signal waits until they have started
+        with _signals_held():
+            futures = [pool.submit(fn, t) for t in tasks]
         if on_done:            # as each finishes, whatever its place (the executor's thread calls it)
             for f in futures:
                 f.add_done_callback(lambda _f: on_done())
@@ -138,22 +143,48 @@ def iter_tasks(fn: Callable[[Any], Any], tasks: Sequence[Any], *, workers: int =
             pool.shutdown(wait=True)
         else:
             # a caller that stops early (an error, Ctrl-C, SIGTERM) waits neither for the tasks queued nor for those
-            # running (a signal-level run takes minutes): the workers are stopped. (They ignore SIGINT themselves: a
-            # Ctrl-C that reached them too left one holding the task queue's lock, and the command hung at its exit
-            # waiting for it: an independent tester's finding.)
-            processes = list((getattr(pool, "_processes", None) or {}).values())
-            pool.shutdown(wait=False, cancel_futures=True)
-            for proc in processes:
-                proc.terminate()
-            for proc in processes:
+            # running (a signal-level run takes minutes): the workers are killed, then the pool's own thread, which
+            # finds them gone, is joined (left to the interpreter's exit, it raced with it: "Bad file descriptor").
+            # (The workers ignore SIGINT: a Ctrl-C that reached them too left one holding the task queue's lock, and
+            # the command hung at its exit waiting for it: an independent tester's finding.)
+            for proc in list((getattr(pool, "_processes", None) or {}).values()):
+                proc.kill()
                 proc.join(timeout=10.0)
+            pool.shutdown(wait=True)
+
+
+@contextlib.contextmanager
+def _signals_held():
+    """SIGINT and SIGTERM held for the block and delivered when it ends: blocked at the operating system (the workers
+    started in it inherit that) and, in the main thread, taken by a handler that only notes them (a signal that came
+    just before the block runs its Python handler at the next instruction, which may lie inside a worker's start)."""
+    import signal
+    import threading
+    held = (signal.SIGINT, signal.SIGTERM)
+    noted: list[int] = []
+    main = threading.current_thread() is threading.main_thread()
+    before_handlers = {sig: signal.signal(sig, lambda signum, frame: noted.append(signum)) for sig in held} if main \
+        else {}
+    before_mask = signal.pthread_sigmask(signal.SIG_BLOCK, held) if hasattr(signal, "pthread_sigmask") else None
+    try:
+        yield
+    finally:
+        if before_mask is not None:
+            signal.pthread_sigmask(signal.SIG_SETMASK, before_mask)
+        for sig, handler in before_handlers.items():
+            signal.signal(sig, handler)
+        for sig in dict.fromkeys(noted):          # each once, in the order they came, to the handlers before
+            signal.raise_signal(sig)
 
 
 def _pool_worker() -> None:
     """A local pool's worker: SIGINT ignored (the parent, which the terminal's Ctrl-C reaches too, stops the pool),
-    and one BLAS thread (:func:`limit_blas_threads`)."""
+    SIGINT and SIGTERM no longer blocked (they were while it started: :func:`_signals_held`), one BLAS thread
+    (:func:`limit_blas_threads`)."""
     import signal
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    if hasattr(signal, "pthread_sigmask"):
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     limit_blas_threads()
 
 
