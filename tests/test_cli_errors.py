@@ -143,6 +143,10 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
                                                       "name without a stem"),
     (["decode", "LOGS/small.blf", "--format", "json", "-o", "LOGS/.csv"], "option --output: value 'LOGS/.csv' is not "
                                                                           "allowed: '.csv' is a name without a stem"),
+    (["log", SCENARIO, "-o", "LOGS/.gz"], "option --output: value 'LOGS/.gz' is not allowed: '.gz' has no suffix"),
+    # decode wrote plain text under a .gz name
+    (["decode", "LOGS/small.blf", "--format", "json", "-o", "LOGS/x.json.gz"],
+     "option --output: value 'LOGS/x.json.gz' is not allowed: decode writes no compressed output"),
     (["log", SCENARIO, "-o", "LOGS/x.blf.gz"], "option --output: value 'LOGS/x.blf.gz' is not allowed"),
     (["export", "LOGS/small.blf", "-o", "LOGS/x.blf"], "option --output: value 'LOGS/x.blf' is not allowed"),
     (["image", SCENARIO, "-o", "LOGS/x.xyz"], "option --output: value 'LOGS/x.xyz' is not allowed"),
@@ -614,3 +618,14 @@ def test_plots_below_a_file_names_the_file(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert rc == 1 and err == (f"error: option --plots: value {str(tmp_path / 'afile' / 'sub')!r} is not allowed; "
                                f"expected a directory ({str(tmp_path / 'afile')!r} above it is a file)"), err
+
+
+@pytest.mark.skipif(not Path("/proc/self").is_dir(), reason="needs /proc (Linux): a directory that takes no file")
+def test_junit_into_a_directory_that_takes_no_file_fails_before_the_runs(capsys):
+    # /proc passed the permission check and failed after every run (a tester's finding)
+    import time
+    t0 = time.monotonic()
+    rc = main(["report", SCENARIO, "--junit", "/proc/x.xml"])
+    err = capsys.readouterr().err.strip()
+    assert rc == 1 and err.startswith("error: option --junit: cannot write '/proc/x.xml': "), err
+    assert time.monotonic() - t0 < 5.0

@@ -19,6 +19,7 @@ import json
 import math
 import os
 import sys
+from pathlib import Path
 
 import can
 
@@ -288,6 +289,10 @@ def check_output_suffix(path: str, fmt: str) -> None:
     (decode writes no CAN log: ``-o text.blf``), or another of decode's formats (``--format json -o x.csv``).
     Any other suffix (``.txt``, none) is taken as it is."""
     check_stem(path, "--output", FORMATS + (".mcap",) + tuple(x for own in OWN_SUFFIXES.values() for x in own))
+    if Path(path).suffix.lower() == ".gz":
+        # (decode wrote plain text under x.json.gz: a reader that unpacks it fails)
+        raise UsageError(f"option --output: value {path!r} is not allowed: decode writes no compressed output; "
+                         f"expected a file name ending in {SUGGESTED[fmt]} (compress it afterwards)")
     suffix = log_format(path)
     if suffix in OWN_SUFFIXES.get(fmt, ()):
         return

@@ -170,6 +170,15 @@ def cmd(args) -> int:
                         f"{str(Path(args.junit).parent)!r}")
     if args.junit and not os.access(Path(args.junit).parent, os.W_OK):
         raise FileError(f"option --junit: cannot write {args.junit!r}: permission denied")
+    if args.junit:
+        # a file made and removed there: a directory that takes no file whatever its permissions say (/proc, a
+        # read-only mount) failed only after every run (an independent tester's finding)
+        import tempfile
+        try:
+            with tempfile.NamedTemporaryFile(dir=Path(args.junit).parent, prefix=".radarnode-probe-"):
+                pass
+        except OSError as exc:
+            raise FileError(f"option --junit: cannot write {args.junit!r}: {exc.strerror or exc}") from None
     scenarios = [(path, with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
                  for path in args.scenarios]                                                    # checked first
     from radarnode.cli.common import check_auto_presets, check_doa_option, check_doa_presets

@@ -207,8 +207,8 @@ def check_output_format(path: str, option: str, extra: tuple[str, ...] = ()) -> 
         raise UsageError(f"option {option}: value {path!r} needs python-can's MF4 support (asammdf), which is not "
                          "installed: pip install 'radarnode[mf4]'; or use .blf, .asc, .log, .csv, .trc or .db")
     if fmt not in FORMATS:
-        raise UsageError(f"option {option}: value {path!r} is not allowed: no CAN log format has the suffix "
-                         f"{fmt or '(none)'!r}; expected {allowed_text(extra)}")
+        what = f"no CAN log format has the suffix {fmt!r}" if fmt else f"{Path(path).name!r} has no suffix"
+        raise UsageError(f"option {option}: value {path!r} is not allowed: {what}; expected {allowed_text(extra)}")
     return fmt
 
 
