@@ -324,11 +324,9 @@ def test_ctrl_c_on_a_report_with_worker_processes_ends_it_at_once_and_leaves_no_
     assert not [c for c in workers if os.path.exists(f"/proc/{c}")]
 
 
-def test_report_workers_leave_sigint_to_the_command(tmp_path):
-    # the pool's workers ignore SIGINT: the command alone decides what a Ctrl-C stops (a worker that took one while
-    # holding the task queue's lock hung the command at its exit). SIGINT sent to the workers only changes nothing
-    import os
-    import signal
+def _report_with_two_workers():
+    """A report of six runs on a pool of two workers, once its first row is out: (process, the lines read so far,
+    the two workers' pids)."""
     p = subprocess.Popen([*CLI, "report", str(SCENARIOS / "acc_cut_in.yaml"), str(SCENARIOS / "stopped_vehicle.yaml"),
                           "--seeds", "3", "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                          text=True)
@@ -337,6 +335,15 @@ def test_report_workers_leave_sigint_to_the_command(tmp_path):
     children = [int(x) for x in open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()]
     workers = [c for c in children if "spawn_main" in open(f"/proc/{c}/cmdline").read()]
     assert len(workers) == 2, children
+    return p, lines, workers
+
+
+def test_report_workers_leave_sigint_to_the_command(tmp_path):
+    # the pool's workers ignore SIGINT: the command alone decides what a Ctrl-C stops (a worker that took one while
+    # holding the task queue's lock hung the command at its exit). SIGINT sent to the workers only changes nothing
+    import os
+    import signal
+    p, lines, workers = _report_with_two_workers()
 
     def ignores_sigint(pid):        # the kernel's mask of ignored signals: bit SIGINT − 1
         mask = next(ln for ln in open(f"/proc/{pid}/status") if ln.startswith("SigIgn:")).split()[1]
@@ -359,13 +366,7 @@ def test_a_worker_killed_from_outside_ends_the_report_with_one_error_line(tmp_pa
     # (the kernel's out-of-memory killer, a kill -9): concurrent.futures' BrokenProcessPool traceback before
     import os
     import signal
-    p = subprocess.Popen([*CLI, "report", str(SCENARIOS / "acc_cut_in.yaml"), str(SCENARIOS / "stopped_vehicle.yaml"),
-                          "--seeds", "3", "--workers", "2"], cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True)
-    lines = [p.stdout.readline() for _ in range(3)]
-    assert lines[2].startswith("| acc_cut_in | 1 |"), lines
-    children = [int(x) for x in open(f"/proc/{p.pid}/task/{p.pid}/children").read().split()]
-    workers = [c for c in children if "spawn_main" in open(f"/proc/{c}/cmdline").read()]
+    p, lines, workers = _report_with_two_workers()
     os.kill(workers[0], signal.SIGKILL)
     _, err = _rest(p, 120)
     assert p.returncode == 1, err

@@ -286,13 +286,9 @@ SUGGESTED = {"text": ".txt", "json": ".jsonl, .json or .txt", "csv": ".csv or .t
 
 def check_output_suffix(path: str, fmt: str) -> None:
     """Refuse (UsageError) an ``-o`` whose suffix says another format than the one written: a CAN log format
-    (decode writes no CAN log: ``-o text.blf``), or another of decode's formats (``--format json -o x.csv``).
-    Any other suffix (``.txt``, none) is taken as it is."""
+    (decode writes no CAN log: ``-o text.blf``), another of decode's formats (``--format json -o x.csv``) or a
+    compressed one (``.gz``: decode writes none). Any other suffix (``.txt``, none) is taken as it is."""
     check_stem(path, "--output", FORMATS + (".mcap",) + tuple(x for own in OWN_SUFFIXES.values() for x in own))
-    if Path(path).suffix.lower() == ".gz":
-        # (decode wrote plain text under x.json.gz: a reader that unpacks it fails)
-        raise UsageError(f"option --output: value {path!r} is not allowed: decode writes no compressed output; "
-                         f"expected a file name ending in {SUGGESTED[fmt]} (compress it afterwards)")
     suffix = log_format(path)
     if suffix in OWN_SUFFIXES.get(fmt, ()):
         return
@@ -304,6 +300,10 @@ def check_output_suffix(path: str, fmt: str) -> None:
         raise UsageError(f"option --output: value {path!r} is not allowed with --format {fmt}: {what}; expected "
                          f"a file name ending in {SUGGESTED[fmt]} (or any suffix that is not a CAN log's or "
                          "another format's)")
+    if Path(path).suffix.lower() == ".gz":
+        # (decode wrote plain text under x.json.gz: a reader that unpacks it fails)
+        raise UsageError(f"option --output: value {path!r} is not allowed: decode writes no compressed output; "
+                         f"expected a file name ending in {SUGGESTED[fmt]} (compress it afterwards)")
 
 
 def cmd(args) -> int:
