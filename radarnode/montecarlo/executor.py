@@ -172,7 +172,7 @@ def _signals_held():
         if before_mask is not None:
             signal.pthread_sigmask(signal.SIG_SETMASK, before_mask)
         for sig, handler in before_handlers.items():
-            signal.signal(sig, handler)
+            signal.signal(sig, signal.SIG_DFL if handler is None else handler)     # (None: one set outside Python)
         for sig in dict.fromkeys(noted):          # each once, in the order they came, to the handlers before
             signal.raise_signal(sig)
 
