@@ -545,6 +545,28 @@ def test_export_leaves_out_frames_whose_time_mcap_cannot_hold_and_says_how_many(
     assert any(abs(t - t41 * 1e9) < 1e3 for t, _ in raw)
 
 
+def test_export_marks_a_can_fd_frame_and_gives_it_no_message_name(short_log, tmp_path):
+    # a CAN FD frame on 0x300 (SpeedInformation's ID) went into /can/frames under that message's name, nothing saying
+    # it was FD (session 71's note): the node and the consumer drop it, so the raw topic must not name it the message
+    lines = short_log.read_text().splitlines()
+    t = re.match(r"^\(([^)]*)\)", lines[10]).group(1)
+    lines.insert(11, f"({t}) can0 300##1" + "AB" * 64)
+    lines.insert(12, f"({t}) can0 300#R")
+    log = tmp_path / "fd.log"
+    log.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "fd.mcap"
+    assert main(["export", str(log), "-o", str(out)]) == 0
+    recs = [rec for _, rec in read_mcap(out)["topics"]["/can/frames"][3]]
+    assert len(recs) == len(lines)
+    fd = [r for r in recs if r["is_fd"]]
+    assert len(fd) == 1 and fd[0]["can_id"] == 0x300 and fd[0]["message"] == "" and fd[0]["dlc"] == 64
+    assert fd[0]["data"] == "AB" * 64
+    remote = [r for r in recs if r["is_remote_frame"]]
+    assert len(remote) == 1 and remote[0]["can_id"] == 0x300 and not remote[0]["is_fd"]
+    classical = [r for r in recs if r["can_id"] == 0x300 and not r["is_fd"] and not r["is_remote_frame"]]
+    assert classical and all(r["message"] == "SpeedInformation" for r in classical)
+
+
 def test_export_of_a_log_with_no_frame_mcap_can_time_writes_no_file(short_log, tmp_path, capsys):
     damaged = tmp_path / "all.log"
     damaged.write_text("".join(re.sub(r"^\([^)]*\)", "(nan)", ln) + "\n" for ln in short_log.read_text().splitlines()))

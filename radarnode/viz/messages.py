@@ -334,10 +334,14 @@ CAN_FRAME_SCHEMA = {
         "channel": {"type": "string"},
         "can_id": {"type": "integer"},
         "can_id_hex": {"type": "string"},
-        "message": {"type": "string", "description": "name in dbc/radarnode_bus.dbc, '' when unknown"},
+        "message": {"type": "string", "description": "name in dbc/radarnode_bus.dbc, '' when unknown (and for an "
+                    "extended-ID or CAN FD frame: the bus's messages are classical CAN frames with 11-bit IDs)"},
         "is_extended_id": {"type": "boolean"},
         "is_error_frame": {"type": "boolean"},
-        "dlc": {"type": "integer"},
+        "is_remote_frame": {"type": "boolean"},
+        "is_fd": {"type": "boolean", "description": "a CAN FD frame (up to 64 data bytes), which no node of the "
+                  "ARS 408's classical CAN bus sends: radarnode's node and consumer drop and count it"},
+        "dlc": {"type": "integer", "description": "the data length in bytes (a remote frame: the length it asks for)"},
         "data": {"type": "string", "description": "payload, hex"},
     },
 }
@@ -362,6 +366,7 @@ def can_frame(msg: can.Message, name: str) -> dict:
             "can_id": int(msg.arbitration_id),
             "can_id_hex": f"0x{msg.arbitration_id:08X}" if msg.is_extended_id else f"0x{msg.arbitration_id:03X}",
             "message": name, "is_extended_id": bool(msg.is_extended_id), "is_error_frame": bool(msg.is_error_frame),
+            "is_remote_frame": bool(msg.is_remote_frame), "is_fd": bool(msg.is_fd),
             "dlc": int(msg.dlc), "data": bytes(msg.data).hex().upper()}
 
 
