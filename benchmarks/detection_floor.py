@@ -27,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+import machine  # noqa: E402  (the day's machine speed, printed beside the figures)
 from tree import ROOT, use_tree  # --root DIR: radarnode from another tree
 
 use_tree()
@@ -96,7 +97,8 @@ def main() -> None:
         runs_c.append(t_clus / len(dets))
     print(f"highway_cut_in.yaml, preset {p.name} ({'two chirp sequences' if p.stagger_chirp_period_s else 'one'} a "
           f"cycle), {args.frames} frames, medians of {args.repeats} repeats; 200× real time is "
-          f"{BUDGET_S * 1e3:.2f} ms a frame\n")
+          f"{BUDGET_S * 1e3:.2f} ms a frame")
+    print(machine.line() + "\n")
     print("| part | ms a frame | scatterers a frame | of the 200× budget |")
     print("|---|---:|---:|---:|")
     for name, sec, n in rows:

@@ -30,6 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
+import machine  # noqa: E402  (the day's machine speed, printed beside the figures)
 from tree import ROOT, use_tree  # --root DIR: radarnode from another tree
 
 use_tree()
@@ -141,7 +142,8 @@ def main() -> None:
     where = tables.cache_dir() if tables is not None else None
     print(f"(radarnode from {Path(equation.__file__).parents[2]}; the detection statistic's table cache: "
           f"{where if where is not None else 'off'}; the object level's mean includes computing the tables it "
-          "does not hold)\n")
+          "does not hold)")
+    print(machine.line() + "\n")
     points = ROOT / "scenarios" / "point_targets_mimo12.yaml"
     highway = ROOT / "scenarios" / "highway_mimo12.yaml"
     if args.detection_only:

@@ -14,6 +14,9 @@ the table prints the difference over the difference of the counts: the imports a
   the tracker's scan: what the object level computes once for 1024 cycles), per chunk;
 * ``object``: the object level as ``benchmarks/fidelity.py --object-only`` times it — a new model, 1024 steps
   of ``highway_cut_in.yaml`` (object list only, the chunk included) — per 1024 cycles;
+* ``detection``: the detection level as ``benchmarks/fidelity.py --detection-only`` times it — one model stepped
+  through the first 20 and the first 80 cycles of ``highway_cut_in.yaml`` (object list and cluster list) — per frame
+  (the difference of the two runs: frames 20–79, the set-up and the first frame's imports cancel out);
 * ``log``: ``radarnode log scenarios/highway_cut_in.yaml --fidelity object --duration D -o x.blf`` (issue 13's
   command: object list, cluster list and road boundaries, file written), D = 30 and 150 s, per cycle, for each
   process: the run's own and the road boundaries' (``radarnode.wire.pipeline``);
@@ -79,6 +82,22 @@ for _ in range(int(sys.argv[2])):
     for k in range(1024):
         model.step(k * sc.period_s, cfg)
 """
+_DETECTION = """
+import sys
+sys.path.insert(0, sys.argv[1])
+import numpy as np
+from pathlib import Path
+from radarnode.radar.models import make_model
+from radarnode.radar.object_model import RuntimeConfig
+from radarnode.radar.setup import load_scenario, radar_config
+from radarnode.scene.world import Scene
+sc = load_scenario(Path(sys.argv[1]) / "scenarios" / "highway_cut_in.yaml")
+rc = radar_config(sc)
+model = make_model("detection", Scene(sc), rc.preset, np.random.default_rng(sc.seed), rc.signal)
+cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m)
+for k in range(int(sys.argv[2])):
+    model.step(k * sc.period_s, cfg)
+"""
 _LOG = """
 import sys
 sys.path.insert(0, sys.argv[1])
@@ -111,6 +130,8 @@ for _ in range(int(sys.argv[2])):
 WORKLOADS = {
     "chunk": (_CHUNK, (1, 4), 1.0, "a 1024-cycle chunk"),
     "object": (_OBJECT, (1, 3), 1.0, "1024 cycles, set-up included"),
+    # the detection level as fidelity.py --detection-only times it (object list, cluster list): frames 20–79
+    "detection": (_DETECTION, (20, 80), 1.0, "a frame"),
     "log": (_LOG, (30, 150), 1.0 / 0.072, "a cycle"),            # the scenario's 72-ms cycle: counts in seconds
     # the signal level's two halves on highway_mimo12 (signal_speed.py's frames at 0, 28 and 70 m/s): a frame
     "synth64": (_SIGNAL.format(dtype="complex64", work="synthesize_rd(p, s[0], rng, dtype=dtype)"), (1, 3), 3.0,

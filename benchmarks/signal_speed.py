@@ -69,6 +69,8 @@ from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
+import machine  # noqa: E402  (the day's machine speed, printed beside the figures)
+
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
@@ -241,6 +243,7 @@ def main() -> None:
     print(f"## Signal level: synthesis + processing, highway_mimo12.yaml, median of {args.frames} frames, "
           f"traffic {args.traffic}, ego lane {lane}, "
           f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}\n")
+    print(machine.line() + "\n")
     print("\n".join(speed))
     if acc:
         print("\n## Accuracy at every speed\n")
