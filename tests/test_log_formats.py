@@ -758,6 +758,30 @@ def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, m
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
+@pytest.mark.parametrize("line,reason", [
+    ("300##1" + "00" * 9, "CAN FD frame of 9 data bytes (CAN FD has 0–8, 12, 16, 20, 24, 32, 48 or 64)"),
+    ("300##1ABC", "CAN FD frame with DLC 1 and 2 data bytes"),
+    ("300#R-1", "remote frame with DLC -1"),
+])
+def test_a_can_fd_or_remote_frame_no_bus_can_carry_is_a_bad_record(capsys, tmp_path, line, reason):
+    """An independent tester's finding: a CAN FD frame was checked only for more than 64 data bytes (9 bytes, a
+    length CAN FD does not have, and a DLC that was not its data's length passed into export's /can/frames), and a
+    remote frame's DLC not at all (-1 was exported). Each is now a bad record; a 12-byte FD frame and a remote frame
+    asking for DLC 9 (the wire's 4-bit field) are frames, read as before."""
+    good = tmp_path / "g.log"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
+    lines = good.read_text().splitlines()
+    t = re.match(r"^\(([^)]*)\)", lines[20]).group(1)
+    lines[21:21] = [f"({t}) can0 300##1" + "00" * 12, f"({t}) can0 300#R9", f"({t}) can0 {line}"]
+    bad = tmp_path / "bad.log"
+    bad.write_text("\n".join(lines) + "\n")
+    capsys.readouterr()
+    rc, _, err = cli(capsys, "decode", bad)
+    last = err.strip().splitlines()[-1]
+    assert rc == 1 and f"first bad record at line 24: {reason}" in last, last
+    assert f"{len(lines) - 1} frames read" in last, last
+
+
 @pytest.mark.parametrize("fmt", ["json", "csv", "text"])
 def test_a_can_fd_frame_in_a_log_is_skipped_by_every_decode_output(capsys, tmp_path, fmt):
     # the ARS 408's bus is classical CAN: an FD frame on an object-list ID (candump's '##' form) was decoded as a list
@@ -766,7 +790,7 @@ def test_a_can_fd_frame_in_a_log_is_skipped_by_every_decode_output(capsys, tmp_p
     good = tmp_path / "g.log"
     assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
     lines = good.read_text().splitlines()
-    lines.insert(20, "(0.100000) can0 60A##1001122334455667788990011223344")
+    lines.insert(20, "(0.100000) can0 60A##100112233445566778899001122334455")
     with_fd = tmp_path / "fd.log"
     with_fd.write_text("\n".join(lines) + "\n")
     capsys.readouterr()

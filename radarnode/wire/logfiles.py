@@ -363,6 +363,10 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
         yield msg
 
 
+#: the data lengths a CAN FD frame can have (its DLC codes 0–8 bytes, then 12, 16, 20, 24, 32, 48, 64)
+CAN_FD_LENGTHS = frozenset((*range(9), 12, 16, 20, 24, 32, 48, 64))
+
+
 def _frame_problem(msg: can.Message) -> str | None:
     """Why a frame a reader produced cannot be on a CAN bus (a garbled or cut-off record), or None."""
     # a cut-off SQLite row comes back with None where a column was lost: every field is checked for its type (a
@@ -375,13 +379,15 @@ def _frame_problem(msg: can.Message) -> str | None:
         return f"CAN ID {msg.arbitration_id!r} is not a number"
     if msg.arbitration_id < 0 or msg.arbitration_id > (0x1FFFFFFF if msg.is_extended_id else 0x7FF):
         return f"CAN ID 0x{msg.arbitration_id:X} is out of range"
-    if msg.is_remote_frame:
-        return None
+    if msg.is_remote_frame:          # no data: the DLC is a 4-bit field on the wire (9–15 ask for 8 bytes)
+        return None if isinstance(msg.dlc, int) and 0 <= msg.dlc <= 15 else f"remote frame with DLC {msg.dlc!r}"
     if msg.data is None or not isinstance(msg.dlc, int):
         return f"DLC {msg.dlc!r} with data {msg.data!r}"
     n = len(msg.data)
-    if msg.is_fd:
-        return None if n <= 64 else f"{n} data bytes"
+    if msg.is_fd:                    # a length CAN FD's DLC codes, and the frame's DLC that length
+        if n not in CAN_FD_LENGTHS:
+            return f"CAN FD frame of {n} data bytes (CAN FD has 0–8, 12, 16, 20, 24, 32, 48 or 64)"
+        return None if msg.dlc == n else f"CAN FD frame with DLC {msg.dlc} and {n} data bytes"
     if not 0 <= msg.dlc <= 8 or n != msg.dlc:
         return f"DLC {msg.dlc} with {n} data bytes"
     return None
