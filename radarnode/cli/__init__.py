@@ -90,7 +90,7 @@ def program() -> None:
         if refused is not None:
             # argparse drops a failed write of its help or version (unbuffered output: PYTHONUNBUFFERED, as many
             # container images set it, ended `--help > /dev/full` with status 0 and nothing said)
-            _say_standard_output(refused)
+            say_standard_output(refused)
             status = 1
     raise SystemExit(_flushed(status))
 
@@ -115,7 +115,8 @@ def stdout_refuses() -> OSError | None:
     return None
 
 
-def _say_standard_output(exc: OSError) -> None:
+def say_standard_output(exc: OSError) -> None:
+    """The one line that says standard output took no write (a full disk, ``> /dev/full``)."""
     import sys
     try:
         print(f"error: standard output: {exc.strerror or exc}", file=sys.stderr, flush=True)
@@ -137,7 +138,7 @@ def _flushed(status):
         except OSError as exc:
             _to_devnull(stream)
             if stream is sys.stdout:
-                _say_standard_output(exc)
+                say_standard_output(exc)
                 if status in (0, None):
                     status = 1
     return status

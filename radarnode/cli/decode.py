@@ -66,6 +66,13 @@ def _number(v):
     return int(v) if isinstance(v, int) else v
 
 
+def carries_no_message(msg: can.Message) -> bool:
+    """An error, remote or CAN FD frame: none is one of the bus's messages, so decode skips it (a CAN FD frame, which
+    no classical ARS 408 bus carries, was decoded as a list header and its bytes became the cycle counter of the frames
+    after it: an independent tester's finding; the text output's consumer drops it too)."""
+    return bool(msg.is_error_frame or msg.is_remote_frame or msg.is_fd)
+
+
 class FrameDecoder:
     """Frame -> record with sensor ID and cycle counter, decoded with the whole-bus DBC."""
 
@@ -77,10 +84,7 @@ class FrameDecoder:
         self.frames = self.unknown = self.errors = self.skipped = self.bad_times = 0
 
     def record(self, msg: can.Message) -> dict | None:
-        if msg.is_error_frame or msg.is_remote_frame or msg.is_fd:
-            # (a CAN FD frame, which no classical ARS 408 bus carries, was decoded as a list header and its bytes
-            # became the cycle counter of the frames after it: an independent tester's finding; the text output's
-            # consumer drops it too)
+        if carries_no_message(msg):
             self.skipped += 1
             return None
         info = self.table.get(msg.arbitration_id) if not msg.is_extended_id else None
@@ -175,7 +179,7 @@ def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> Frame
         # a first pass for the columns: only the signals of messages that occur, not the whole DBC's ~200
         first = ReadReport(report.path, report.fmt)
         present = {m.arbitration_id for m in _frames(args, first)
-                   if not (m.is_error_frame or m.is_remote_frame or m.is_fd)}
+                   if not carries_no_message(m)}
         if first.frames == 0:                            # not even a header line for a file with no frame
             raise FileError(first.message("argument FILE"))
         columns = _signal_columns(decoder.table, present)

@@ -10,7 +10,7 @@ import sys
 import traceback
 
 from radarnode import __version__
-from radarnode.cli import heap, interrupt, stdout_refuses
+from radarnode.cli import heap, interrupt, say_standard_output, stdout_refuses
 from radarnode.errors import RadarnodeError, Terminated, UsageError
 
 # (the subcommands' and the parser's modules, which import numpy, python-can and the rest, are imported inside
@@ -158,7 +158,7 @@ def _main(argv: list[str] | None) -> int:
             return 1
         if not exc.filename and stdout_refuses() is not None:
             # the command's own output that could not be written (`> /dev/full`): say so, as the final flush does
-            print(f"error: standard output: {exc.strerror or exc}", file=sys.stderr)
+            say_standard_output(exc)
             return 1
         where = f": {exc.filename!r}" if exc.filename else ""
         print(f"error: {exc.strerror or exc}{where}", file=sys.stderr)

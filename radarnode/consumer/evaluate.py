@@ -165,7 +165,6 @@ def make_ecu(scenario: Scenario, period_s: float, acc_enabled: bool | None = Non
                mount=SensorMount.of(scenario.radar.mount), wavelength_m=radar_config(scenario).preset.wavelength_m)
 
 
-
 def contacts_since(scene, t_s: float, period_s: float, first: bool = False) -> list[tuple[int, float]]:
     """(actor index, first time) of every actor whose box meets the ego's since the last cycle (``t_s`` − ``period_s``
     to ``t_s``; at ``t_s`` only on the ``first`` cycle), sampled every CONTACT_STEP_S: a point actor crossed at 75 m/s
