@@ -762,23 +762,29 @@ def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, m
     ("300##1" + "00" * 9, "CAN FD frame of 9 data bytes (CAN FD has 0–8, 12, 16, 20, 24, 32, 48 or 64)"),
     ("300##1ABC", "CAN FD frame with DLC 1 and 2 data bytes"),
     ("300#R-1", "remote frame with DLC -1"),
+    ("300#R16", "remote frame with DLC 16"),                  # just above the wire's 4-bit DLC
+    ("300#R30", "remote frame with DLC 30"),
+    ("300##1" + "00" * 65, "CAN FD frame of 65 data bytes"),  # just above CAN FD's longest
+    ("300##1" + "00" * 128, "CAN FD frame of 128 data bytes"),
 ])
 def test_a_can_fd_or_remote_frame_no_bus_can_carry_is_a_bad_record(capsys, tmp_path, line, reason):
     """An independent tester's finding: a CAN FD frame was checked only for more than 64 data bytes (9 bytes, a
     length CAN FD does not have, and a DLC that was not its data's length passed into export's /can/frames), and a
-    remote frame's DLC not at all (-1 was exported). Each is now a bad record; a 12-byte FD frame and a remote frame
-    asking for DLC 9 (the wire's 4-bit field) are frames, read as before."""
+    remote frame's DLC not at all (-1 was exported). Each is now a bad record; 12- and 64-byte FD frames and remote
+    frames asking for DLC 9 and 15 (the wire's 4-bit field) are frames, read as before."""
     good = tmp_path / "g.log"
     assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
     lines = good.read_text().splitlines()
     t = re.match(r"^\(([^)]*)\)", lines[20]).group(1)
-    lines[21:21] = [f"({t}) can0 300##1" + "00" * 12, f"({t}) can0 300#R9", f"({t}) can0 {line}"]
+    good_lines = [f"({t}) can0 300##1" + "00" * 12, f"({t}) can0 300##1" + "00" * 64, f"({t}) can0 300#R9",
+                  f"({t}) can0 300#R15"]                      # at the limits: frames
+    lines[21:21] = good_lines + [f"({t}) can0 {line}"]
     bad = tmp_path / "bad.log"
     bad.write_text("\n".join(lines) + "\n")
     capsys.readouterr()
     rc, _, err = cli(capsys, "decode", bad)
     last = err.strip().splitlines()[-1]
-    assert rc == 1 and f"first bad record at line 24: {reason}" in last, last
+    assert rc == 1 and f"first bad record at line {22 + len(good_lines)}: {reason}" in last, last
     assert f"{len(lines) - 1} frames read" in last, last
 
 
