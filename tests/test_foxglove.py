@@ -567,6 +567,26 @@ def test_export_marks_a_can_fd_frame_and_gives_it_no_message_name(short_log, tmp
     assert classical and all(r["message"] == "SpeedInformation" for r in classical)
 
 
+def test_export_writes_a_candump_error_frame_of_any_class_as_an_error_frame(short_log, tmp_path):
+    # python-can's candump reader made an error frame only of the bus-error class: a controller-state error frame
+    # (20000004#…, as candump logs it) went into /can/frames as a data frame on extended ID 0x4
+    lines = short_log.read_text().splitlines()
+    t = re.match(r"^\(([^)]*)\)", lines[10]).group(1)
+    lines.insert(11, f"({t}) can0 20000004#0004000000000000")
+    lines.insert(12, f"({t}) can0 00000004#0004000000000000")
+    log = tmp_path / "err.log"
+    log.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "err.mcap"
+    assert main(["export", str(log), "-o", str(out)]) == 0
+    recs = [rec for _, rec in read_mcap(out)["topics"]["/can/frames"][3]]
+    assert len(recs) == len(lines)
+    errors = [r for r in recs if r["is_error_frame"]]
+    assert len(errors) == 1 and errors[0]["can_id"] == 0x4 and errors[0]["message"] == ""
+    assert errors[0]["data"] == "0004000000000000"
+    data = [r for r in recs if r["can_id"] == 0x4 and not r["is_error_frame"]]
+    assert len(data) == 1 and data[0]["is_extended_id"]
+
+
 def test_export_of_a_log_with_no_frame_mcap_can_time_writes_no_file(short_log, tmp_path, capsys):
     damaged = tmp_path / "all.log"
     damaged.write_text("".join(re.sub(r"^\([^)]*\)", "(nan)", ln) + "\n" for ln in short_log.read_text().splitlines()))

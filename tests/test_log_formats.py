@@ -19,6 +19,7 @@ import can
 import pytest
 
 from radarnode.cli.main import main
+from radarnode.wire import logfiles
 from radarnode.wire.logfiles import FORMATS, mf4_available
 from tests.helpers import cli
 from tests.conftest import ROOT, SCENARIOS
@@ -760,7 +761,7 @@ def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, m
 
 @pytest.mark.parametrize("line,reason", [
     ("300##1" + "00" * 9, "CAN FD frame of 9 data bytes (CAN FD has 0–8, 12, 16, 20, 24, 32, 48 or 64)"),
-    ("300##1ABC", "CAN FD frame with DLC 1 and 2 data bytes"),
+    ("300##1ABC", "data of an odd number (3) of hex digits"),
     ("300#R-1", "remote frame with DLC -1"),
     ("300#R16", "remote frame with DLC 16"),                  # just above the wire's 4-bit DLC
     ("300#R30", "remote frame with DLC 30"),
@@ -786,6 +787,79 @@ def test_a_can_fd_or_remote_frame_no_bus_can_carry_is_a_bad_record(capsys, tmp_p
     last = err.strip().splitlines()[-1]
     assert rc == 1 and f"first bad record at line {22 + len(good_lines)}: {reason}" in last, last
     assert f"{len(lines) - 1} frames read" in last, last
+
+
+@pytest.mark.parametrize("line,reason", [
+    ("300##", "a CAN FD frame without its flags digit after '##'"),     # python-can: "string index out of range"
+    ("300##X00", "a CAN FD frame without its flags digit after '##'"),
+    ("300#11.22", "data bytes separated by '.' (cansend's form, not a log's)"),
+    ("300#1122334455667788_9", "a DLC code after '_' (CAN CC's DLC 9–15)"),
+    ("C0000300#11", "CAN ID 0xC0000300 is out of range"),               # python-can: ID 0x300, extended, silently
+    ("1#11", "CAN ID '1' is not 3 hex digits (standard) or 8 (extended)"),
+    ("3000#11", "CAN ID '3000' is not 3 hex digits (standard) or 8 (extended)"),
+    ("300#123", "data of an odd number (3) of hex digits"),             # python-can: 2 bytes, DLC 1
+    ("300#XY", "data 'XY' is not hex digits"),
+    ("300#R1x", "a remote frame whose DLC '1x' is not a number"),
+    ("300###1:2:3#11", "a CAN XL frame ('###')"),
+    ("30011", "no '#' between the CAN ID and the data"),
+])
+def test_a_candump_line_outside_the_format_is_a_bad_record_that_says_why(capsys, tmp_path, line, reason):
+    """python-can's candump reader failed on some lines with its own parsing error ('300##': "string index out of
+    range") and read others wrong without a word (an ID over 29 bits masked to a frame on 0x300, three hex digits of
+    data as two bytes): each is a bad record now, whose reason says what is wrong, and the frames around it are read
+    as before."""
+    good = tmp_path / "g.log"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
+    lines = good.read_text().splitlines()
+    t = re.match(r"^\(([^)]*)\)", lines[20]).group(1)
+    lines.insert(21, f"({t}) can0 {line}")
+    bad = tmp_path / "bad.log"
+    bad.write_text("\n".join(lines) + "\n")
+    capsys.readouterr()
+    rc, _, err = cli(capsys, "decode", bad)
+    last = err.strip().splitlines()[-1]
+    assert rc == 1 and f"first bad record at line 22: {reason}" in last and repr(f"({t}) can0 {line}"[:40]) in last, last
+    assert f"1 bad record skipped; {len(lines) - 1} frames read" in last, last
+
+
+@pytest.mark.parametrize("line", ["(1.000000) can0 {}", "(1.000000) can0 {} R", "(1.000000) vcan1 {} T"])
+def test_a_candump_line_in_the_format_is_read_as_its_frame(tmp_path, line):
+    """The candump grammar's frames at their edges are frames, as python-can reads them: a standard and an extended
+    ID, no data and eight bytes, remote frames with and without a DLC, a 64-byte CAN FD frame with its flags (BRS),
+    lower-case hex; with and without python-can's direction."""
+    frames = ["7FF#", "1FFFFFFF#0011223344556677", "300#R", "300#R8", "300##1" + "ab" * 64, "000#00", "12345678#"]
+    path = tmp_path / "edge.log"
+    path.write_text("".join(line.format(f) + "\n" for f in frames))
+    report = logfiles.ReadReport(str(path), ".log")
+    got = list(logfiles.read_frames(str(path), report))
+    assert not report.damaged, report.first_bad
+    assert [(m.arbitration_id, m.is_extended_id, m.is_remote_frame, m.is_fd, m.dlc, bytes(m.data or b""))
+            for m in got] == [(0x7FF, False, False, False, 0, b""),
+                              (0x1FFFFFFF, True, False, False, 8, bytes.fromhex("0011223344556677")),
+                              (0x300, False, True, False, 0, b""), (0x300, False, True, False, 8, b""),
+                              (0x300, False, False, True, 64, b"\xab" * 64), (0x000, False, False, False, 1, b"\x00"),
+                              (0x12345678, True, False, False, 0, b"")]
+    assert got[4].bitrate_switch and not got[4].error_state_indicator
+
+
+def test_a_candump_error_frame_of_any_class_is_an_error_frame(tmp_path):
+    """candump logs an error frame as its 8-digit CAN ID with the error flag (0x20000000) and the error class in the
+    other bits. python-can's reader made an error frame only of the bus-error class (0x80); a controller's state
+    (0x04), a lost arbitration (0x02) or a transceiver's fault (0x10) became an extended data frame on ID 0x4, 0x2,
+    0x10, which export wrote into /can/frames as a data frame. Each is an error frame now, its class kept as its ID,
+    its data bytes kept; a data frame on an extended ID without the flag stays one."""
+    path = tmp_path / "err.log"
+    path.write_text("(1.000000) can0 20000004#0004000000000000\n(1.001000) can0 20000002#0000000000000000\n"
+                    "(1.002000) can0 20000010#0000000700000000\n(1.003000) can0 20000080#0000000000000000\n"
+                    "(1.004000) can0 00000004#0004000000000000\n")
+    report = logfiles.ReadReport(str(path), ".log")
+    got = list(logfiles.read_frames(str(path), report))
+    assert not report.damaged and len(got) == 5
+    assert [m.is_error_frame for m in got] == [True, True, True, True, False]
+    assert [m.arbitration_id for m in got[:3]] == [0x4, 0x2, 0x10]
+    assert bytes(got[0].data) == bytes.fromhex("0004000000000000") and got[2].data[3] == 7
+    assert [m.timestamp for m in got] == [1.0, 1.001, 1.002, 1.003, 1.004]
+    assert got[4].is_extended_id and got[4].arbitration_id == 4
 
 
 @pytest.mark.parametrize("fmt", ["json", "csv", "text"])

@@ -413,13 +413,15 @@ class _Lines:
         self.lineno = 0             # lines of the file handed out so far
         self.replay: list[str] = []
         self.recording: list[str] | None = []   # lines read before the first frame (headers), while recording
+        self.last: str | None = None            # the line handed out last (the one a reader's frame came from)
 
     def __iter__(self):
         return self
 
     def __next__(self) -> str:
         if self.replay:
-            return self.replay.pop(0)
+            self.last = self.replay.pop(0)
+            return self.last
         try:
             line = next(self._f)
         except StopIteration:
@@ -436,6 +438,7 @@ class _Lines:
             return next(self)
         if self.recording is not None:
             self.recording.append(line)
+        self.last = line
         return line
 
     def close(self) -> None:        # python-can's readers close their file when done; the caller closes this one
@@ -508,6 +511,79 @@ def _trc_line_problem(line: str) -> str | None:
     return None
 
 
+#: a candump log line (can-utils' ``candump -l``, python-can's CanutilsLogWriter): ``(seconds) channel frame``, then
+#: optionally python-can's direction, R or T
+_CANDUMP_LINE = re.compile(r"\s*\((\S*)\)\s+(\S+)\s+(\S+)(\s+[RT])?\s*$")
+_HEX = re.compile(r"[0-9A-Fa-f]*")
+#: the error flag of a SocketCAN CAN ID: candump writes an error frame as its 8-digit ID with this bit, the error
+#: class in the others, and its 8 data bytes
+CAN_ERR_FLAG = 0x20000000
+
+
+def _candump_line_problem(line: str) -> str | None:
+    """python-can's candump reader reads some lines that are no frame of the format wrong and fails on others with
+    an error of its own parsing (``300##`` gave "string index out of range"): a line that is not
+    ``(seconds) channel frame`` with a frame of can-utils' grammar — an ID of 3 hex digits (standard) or 8
+    (extended), then ``#`` and the data bytes (two hex digits each), ``#R`` and an optional DLC, or ``##``, the
+    CAN FD flags digit and the data — is damage, and reported with what is wrong. (A DLC or a length the bus cannot
+    have is the frame check's, :func:`_frame_problem`.)"""
+    if not line.strip():
+        return None
+    text = line.strip()[:40]
+    if "\ufffd" in line or any(c < " " and c not in "\t\r\n" for c in line):
+        return "not text (control characters or invalid UTF-8)"
+    whole = _CANDUMP_LINE.match(line)
+    if not whole:
+        return f"not a candump line '(seconds) channel ID#data': {text!r}"
+    try:
+        float(whole.group(1))          # (one that is not finite is the decoder's to count, as python-can reads it)
+    except ValueError:
+        return f"time stamp {whole.group(1)!r} is not a number of seconds: {text!r}"
+    frame = whole.group(3)
+    can_id, sep, data = frame.partition("#")
+    if not sep:
+        return f"no '#' between the CAN ID and the data: {text!r}"
+    if len(can_id) not in (3, 8) or not _HEX.fullmatch(can_id):
+        return f"CAN ID {can_id!r} is not 3 hex digits (standard) or 8 (extended): {text!r}"
+    if len(can_id) == 8 and int(can_id, 16) > 0x1FFFFFFF and not int(can_id, 16) & CAN_ERR_FLAG:
+        return f"CAN ID 0x{can_id} is out of range (29 bits, or the error flag 0x20000000): {text!r}"
+    if data.startswith("##"):
+        return f"a CAN XL frame ('###'): radarnode reads CAN and CAN FD frames: {text!r}"
+    if data.startswith("#"):
+        if len(data) < 2 or not _HEX.fullmatch(data[1]):
+            return f"a CAN FD frame without its flags digit after '##': {text!r}"
+        data = data[2:]
+    elif data[:1] in ("R", "r"):
+        dlc = data[1:]
+        if not re.fullmatch(r"-?\d*", dlc):
+            return f"a remote frame whose DLC {dlc!r} is not a number: {text!r}"
+        return None
+    if "." in data:
+        return f"data bytes separated by '.' (cansend's form, not a log's): {text!r}"
+    if "_" in data:
+        return f"a DLC code after '_' (CAN CC's DLC 9–15): radarnode reads frames whose DLC is their length: {text!r}"
+    if not _HEX.fullmatch(data):
+        return f"data {data[:16]!r} is not hex digits: {text!r}"
+    if len(data) % 2:
+        return f"data of an odd number ({len(data)}) of hex digits: {text!r}"
+    return None
+
+
+def _candump_error_frame(msg: can.Message, line: str | None) -> can.Message:
+    """python-can's candump reader makes an error frame only of an ID with the bus-error class; any other error class
+    (a controller's state, a lost arbitration, a transceiver's fault) became an extended data frame on the class's
+    bits. ``msg`` as an error frame where its ``line`` has the error flag in its ID: the class in the arbitration ID,
+    the data kept."""
+    whole = _CANDUMP_LINE.match(line) if line is not None else None
+    if msg.is_error_frame or whole is None:
+        return msg
+    can_id = whole.group(3).partition("#")[0]
+    if len(can_id) != 8 or not int(can_id, 16) & CAN_ERR_FLAG:
+        return msg
+    return can.Message(timestamp=msg.timestamp, arbitration_id=int(can_id, 16) & 0x1FFFFFFF, is_extended_id=False,
+                       is_error_frame=True, dlc=msg.dlc, data=msg.data, channel=msg.channel, is_rx=msg.is_rx)
+
+
 class _TrcWarnings(logging.Filter):
     """python-can's TRC reader logs a line it cannot parse and goes on: counted as a bad record instead."""
 
@@ -535,7 +611,8 @@ class _TextFrames:
         opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8", errors="replace")) \
             if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8", errors="replace"))
         with opener() as f:
-            check = {_AscReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
+            check = {_AscReader: _asc_line_problem, TRCReader: _trc_line_problem,
+                     CanutilsLogReader: _candump_line_problem}.get(self.reader_cls)
             lines = self.lines = _Lines(f, report, check)
             trc_log = logging.getLogger("can.io.trc")
             quiet = _TrcWarnings(lines, report)
@@ -546,6 +623,8 @@ class _TextFrames:
                     before = lines.lineno
                     try:
                         for msg in self.reader_cls(lines):
+                            if self.reader_cls is CanutilsLogReader:
+                                msg = _candump_error_frame(msg, lines.last)
                             if lines.recording is not None:
                                 # the headers a restarted reader needs: the lines before the first frame's
                                 preamble, lines.recording = lines.recording[:-1], None
