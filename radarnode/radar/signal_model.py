@@ -941,13 +941,23 @@ def _series_coefficients(phi: np.ndarray, eps: np.ndarray, terms: int) -> np.nda
     c_p = np.ones((phi.size, terms), dtype=np.complex128)
     if terms > 1:
         c_p[:, 1:] = np.cumprod(z[:, None] / p[None, 1:], axis=1)          # z^p/p! without overflow
+    return c_p[None, :, None, :] * _binomial_mix(terms, np.asarray(eps, dtype=np.float64).tobytes())[:, None]
+
+
+@functools.lru_cache(maxsize=64)
+def _binomial_mix(terms: int, eps_bytes: bytes) -> np.ndarray:
+    """C(p, j)·ε_t^(p−j) for j ≤ p, else 0: shape (tx, terms, terms), read only (the slot offsets ``eps_bytes``,
+    float64, and the terms are those of a preset: made once, not per batch of scatterers)."""
+    eps = np.frombuffer(eps_bytes, dtype=np.float64)
+    p = np.arange(terms)
     log_fact = gammaln(p + 1.0)
     jj, pp = np.meshgrid(p, p, indexing="ij")                                 # (j, p)
     upper = jj <= pp
     gap = np.maximum(pp - jj, 0)
     binom = np.where(upper, np.exp(log_fact[pp] - log_fact[jj] - log_fact[gap]), 0.0)
     mix = binom[None] * np.where(upper[None], eps[:, None, None] ** gap[None], 0.0)      # (t, j, p)
-    return c_p[None, :, None, :] * mix[:, None]
+    mix.setflags(write=False)
+    return mix
 
 
 # ----------------------------------------------------------------------------------------------------------
