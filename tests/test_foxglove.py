@@ -574,6 +574,8 @@ def test_export_writes_a_candump_error_frame_of_any_class_as_an_error_frame(shor
     t = re.match(r"^\(([^)]*)\)", lines[10]).group(1)
     lines.insert(11, f"({t}) can0 20000004#0004000000000000")
     lines.insert(12, f"({t}) can0 00000004#0004000000000000")
+    lines.insert(13, f"({t}) can0 20000204#0004000000000860")     # the class's bits are a message's ID (0x204): no name
+    lines.insert(14, f"({t}) can0 20000080#0004000000000860")     # python-can's own (bus error): its data kept
     log = tmp_path / "err.log"
     log.write_text("\n".join(lines) + "\n")
     out = tmp_path / "err.mcap"
@@ -581,8 +583,8 @@ def test_export_writes_a_candump_error_frame_of_any_class_as_an_error_frame(shor
     recs = [rec for _, rec in read_mcap(out)["topics"]["/can/frames"][3]]
     assert len(recs) == len(lines)
     errors = [r for r in recs if r["is_error_frame"]]
-    assert len(errors) == 1 and errors[0]["can_id"] == 0x4 and errors[0]["message"] == ""
-    assert errors[0]["data"] == "0004000000000000"
+    assert [(r["can_id"], r["message"], r["data"]) for r in errors] == [
+        (0x4, "", "0004000000000000"), (0x204, "", "0004000000000860"), (0x80, "", "0004000000000860")]
     data = [r for r in recs if r["can_id"] == 0x4 and not r["is_error_frame"]]
     assert len(data) == 1 and data[0]["is_extended_id"]
 

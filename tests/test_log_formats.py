@@ -762,7 +762,7 @@ def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, m
 @pytest.mark.parametrize("line,reason", [
     ("300##1" + "00" * 9, "CAN FD frame of 9 data bytes (CAN FD has 0–8, 12, 16, 20, 24, 32, 48 or 64)"),
     ("300##1ABC", "data of an odd number (3) of hex digits"),
-    ("300#R-1", "remote frame with DLC -1"),
+    ("300#R-1", "a remote frame whose DLC '-1' is not decimal digits"),
     ("300#R16", "remote frame with DLC 16"),                  # just above the wire's 4-bit DLC
     ("300#R30", "remote frame with DLC 30"),
     ("300##1" + "00" * 65, "CAN FD frame of 65 data bytes"),  # just above CAN FD's longest
@@ -799,9 +799,16 @@ def test_a_can_fd_or_remote_frame_no_bus_can_carry_is_a_bad_record(capsys, tmp_p
     ("3000#11", "CAN ID '3000' is not 3 hex digits (standard) or 8 (extended)"),
     ("300#123", "data of an odd number (3) of hex digits"),             # python-can: 2 bytes, DLC 1
     ("300#XY", "data 'XY' is not hex digits"),
-    ("300#R1x", "a remote frame whose DLC '1x' is not a number"),
+    ("300#R1x", "a remote frame whose DLC '1x' is not decimal digits"),
     ("300###1:2:3#11", "a CAN XL frame ('###')"),
     ("30011", "no '#' between the CAN ID and the data"),
+    ("300#R-", "a remote frame whose DLC '-' is not decimal digits"),     # python-can: "invalid literal for int()"
+    ("300#R8_F", "a DLC code after '_' (CAN CC's DLC 9–15)"),
+    ("20000004#112233445566778899", "an error frame (CAN ID 0x20000004) of 9 data bytes (at most 8)"),
+    ("20000004##11122", "an error frame (CAN ID 0x20000004) as a CAN FD frame"),
+    ("20000004#R", "an error frame (CAN ID 0x20000004) as a remote frame"),
+    ("A0000004#00", "CAN ID 0xA0000004 is out of range"),                 # not candump's: it masks other flags off
+    ("300#11\x0bT", "not text (control characters or invalid UTF-8)"),     # a vertical tab is no separator
 ])
 def test_a_candump_line_outside_the_format_is_a_bad_record_that_says_why(capsys, tmp_path, line, reason):
     """python-can's candump reader failed on some lines with its own parsing error ('300##': "string index out of
@@ -818,7 +825,8 @@ def test_a_candump_line_outside_the_format_is_a_bad_record_that_says_why(capsys,
     capsys.readouterr()
     rc, _, err = cli(capsys, "decode", bad)
     last = err.strip().splitlines()[-1]
-    assert rc == 1 and f"first bad record at line 22: {reason}" in last and repr(f"({t}) can0 {line}"[:40]) in last, last
+    assert rc == 1 and f"first bad record at line 22: {reason}" in last, last
+    assert repr(f"({t}) can0 {line}".strip()[:64]) in last or "not text" in reason, last
     assert f"1 bad record skipped; {len(lines) - 1} frames read" in last, last
 
 
@@ -842,6 +850,36 @@ def test_a_candump_line_in_the_format_is_read_as_its_frame(tmp_path, line):
     assert got[4].bitrate_switch and not got[4].error_state_indicator
 
 
+def test_a_candump_line_python_can_reads_wrong_as_it_stands_is_read_in_its_plain_form(tmp_path):
+    """Lines of the grammar python-can's reader failed on (an independent tester's findings): an FD flags digit A–F
+    (can-utils writes a hex nibble; the reader took the digit for a decimal number), a tab before the direction
+    (the reader looks for " T"), a byte-order mark before the first line; and 2,000 bad lines in a row after a frame,
+    which overflowed the line reader's recursion (a traceback) — now 2,000 bad records and the frame after them."""
+    path = tmp_path / "plain.log"
+    path.write_text("\ufeff(1.0) can0 123#11\n(1.1) can0 123##A1122\n(1.2) can0 123##F\n(1.3)\tcan0\t123#1122\tT\n"
+                    + "(1.4) can0 12#11\n" * 2000 + "(1.5) can0 123#33 R\n", encoding="utf-8")
+    report = logfiles.ReadReport(str(path), ".log")
+    got = list(logfiles.read_frames(str(path), report))
+    assert report.bad == 2000 and report.first_bad.startswith("line 5: CAN ID '12'"), report.first_bad
+    assert [(m.timestamp, bytes(m.data), m.is_fd, m.bitrate_switch, m.error_state_indicator, m.is_rx) for m in got] == [
+        (1.0, b"\x11", False, False, False, True), (1.1, b"\x11\x22", True, False, True, True),
+        (1.2, b"", True, True, True, True), (1.3, b"\x11\x22", False, False, False, False),
+        (1.5, b"\x33", False, False, False, True)]
+
+
+def test_a_file_of_bad_lines_stops_at_the_limit_whatever_refused_them(tmp_path):
+    """MAX_BAD_WITHOUT_A_FRAME bad records and no frame: reading stops, with that as the reason, whether the line check
+    or python-can's reader refused them (999 of the check's and one of the reader's ended as "no progress past this
+    line" before, and 5,000 of the check's went on)."""
+    path = tmp_path / "junk.log"
+    path.write_text("(1.0) can0 12#11\n" * (logfiles.MAX_BAD_WITHOUT_A_FRAME + 500) + "(2.0) can0 123#11\n")
+    report = logfiles.ReadReport(str(path), ".log")
+    assert list(logfiles.read_frames(str(path), report)) == []
+    assert report.bad == logfiles.MAX_BAD_WITHOUT_A_FRAME
+    assert report.cut_short == f"line {logfiles.MAX_BAD_WITHOUT_A_FRAME}: {logfiles.TOO_MANY_BAD}"
+    assert f"reading ended at line {logfiles.MAX_BAD_WITHOUT_A_FRAME}" in report.message("decode")
+
+
 def test_a_candump_error_frame_of_any_class_is_an_error_frame(tmp_path):
     """candump logs an error frame as its 8-digit CAN ID with the error flag (0x20000000) and the error class in the
     other bits. python-can's reader made an error frame only of the bus-error class (0x80); a controller's state
@@ -850,14 +888,16 @@ def test_a_candump_error_frame_of_any_class_is_an_error_frame(tmp_path):
     its data bytes kept; a data frame on an extended ID without the flag stays one."""
     path = tmp_path / "err.log"
     path.write_text("(1.000000) can0 20000004#0004000000000000\n(1.001000) can0 20000002#0000000000000000\n"
-                    "(1.002000) can0 20000010#0000000700000000\n(1.003000) can0 20000080#0000000000000000\n"
+                    "(1.002000) can0 20000010#0000000700000000\n(1.003000) can1 20000080#0004000000000860 T\n"
                     "(1.004000) can0 00000004#0004000000000000\n")
     report = logfiles.ReadReport(str(path), ".log")
     got = list(logfiles.read_frames(str(path), report))
     assert not report.damaged and len(got) == 5
     assert [m.is_error_frame for m in got] == [True, True, True, True, False]
-    assert [m.arbitration_id for m in got[:3]] == [0x4, 0x2, 0x10]
+    assert [m.arbitration_id for m in got[:4]] == [0x4, 0x2, 0x10, 0x80]
     assert bytes(got[0].data) == bytes.fromhex("0004000000000000") and got[2].data[3] == 7
+    # the bus-error class, which python-can's reader made an error frame of without its data, channel or direction
+    assert bytes(got[3].data) == bytes.fromhex("0004000000000860") and got[3].channel == "can1" and not got[3].is_rx
     assert [m.timestamp for m in got] == [1.0, 1.001, 1.002, 1.003, 1.004]
     assert got[4].is_extended_id and got[4].arbitration_id == 4
 

@@ -149,8 +149,10 @@ class FoxgloveRecorder(can.Listener):
                 if self.first_bad_time is None:
                     self.first_bad_time = msg.timestamp
                 return
-            # an FD frame on one of the bus's IDs is not that message (the ARS 408's bus is classical CAN): no name
-            name = "" if msg.is_extended_id or msg.is_fd else self._names.get(msg.arbitration_id, "")
+            # an FD frame on one of the bus's IDs is not that message (the ARS 408's bus is classical CAN), nor is an
+            # error frame whose class has the bits of one: no name
+            name = "" if msg.is_extended_id or msg.is_fd or msg.is_error_frame \
+                else self._names.get(msg.arbitration_id, "")
             self._publish("/can/frames", msg.timestamp, lambda: M.can_frame(msg, name))
             stats = self._assembler.stats
             before = (stats.boundary_frames, stats.ecu_frames)

@@ -79,6 +79,7 @@ TEXT_READERS = {".asc": _AscReader, ".csv": CSVReader, ".log": CanutilsLogReader
 #: every format radarnode writes and reads back; ``.mf4`` only with asammdf installed
 FORMATS = (".asc", ".blf", ".csv", ".db", ".log", ".trc", ".asc.gz", ".csv.gz", ".log.gz", ".trc.gz", ".mf4")
 MAX_BAD_WITHOUT_A_FRAME = 1000      # a file that yields only bad records is not a log of this format
+TOO_MANY_BAD = f"{MAX_BAD_WITHOUT_A_FRAME} bad records and not one frame: not a log of this format"
 #: python-can's readers and the Message constructor raise these on a record they cannot parse
 RECORD_ERRORS = (ValueError, IndexError, KeyError, TypeError, struct.error, AttributeError, OverflowError,
                  UnicodeError, can.CanError)
@@ -317,8 +318,9 @@ class ReadReport:
         if self.frames == 0 and not self.damaged:
             return f"{what}: {self.path!r} holds no CAN frame; expected a log with at least one frame"
         if self.frames == 0:
+            ended = f"; reading ended at {self.cut_short}" if self.cut_short not in (None, self.first_bad) else ""
             return (f"{what}: {self.path!r} holds no frame a {self.fmt} reader can read; first bad record at "
-                    f"{self.first_bad}")
+                    f"{self.first_bad}{ended}")
         parts = [f"{what}: {self.path!r} is damaged: first bad record at {self.first_bad}"]
         if self.bad:
             parts.append(f"{self.bad} bad record{'s' if self.bad != 1 else ''} skipped")
@@ -406,10 +408,11 @@ class _Lines:
     A last line without a line end is a record cut off (a truncated file): it is held back and reported instead
     of being parsed into a wrong frame."""
 
-    def __init__(self, f, report: ReadReport, check=None) -> None:
+    def __init__(self, f, report: ReadReport, check=None, fix=None) -> None:
         self._f = f
         self._report = report
         self._check = check         # line -> None, or why the line is no record of the format
+        self._fix = fix             # a line the check passed -> the line as the reader takes it
         self.lineno = 0             # lines of the file handed out so far
         self.replay: list[str] = []
         self.recording: list[str] | None = []   # lines read before the first frame (headers), while recording
@@ -419,6 +422,13 @@ class _Lines:
         return self
 
     def __next__(self) -> str:
+        while True:                 # (a loop, not a recursion: thousands of bad lines in a row)
+            line = self._next_line()
+            if line is not None:
+                return line
+
+    def _next_line(self) -> str | None:
+        """The next line for the reader, or None where the line was refused (counted in the report)."""
         if self.replay:
             self.last = self.replay.pop(0)
             return self.last
@@ -435,7 +445,12 @@ class _Lines:
         problem = self._check(line) if self._check is not None else None
         if problem is not None:
             self._report.skip(f"line {self.lineno}", problem)
-            return next(self)
+            if self._report.frames == 0 and self._report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+                self._report.stop(f"line {self.lineno}", TOO_MANY_BAD)
+                raise StopIteration
+            return None
+        if self._fix is not None:
+            line = self._fix(line)
         if self.recording is not None:
             self.recording.append(line)
         self.last = line
@@ -512,17 +527,20 @@ def _trc_line_problem(line: str) -> str | None:
 
 
 #: a candump log line (can-utils' ``candump -l``, python-can's CanutilsLogWriter): ``(seconds) channel frame``, then
-#: optionally python-can's direction, R or T
-_CANDUMP_LINE = re.compile(r"\s*\((\S*)\)\s+(\S+)\s+(\S+)(\s+[RT])?\s*$")
+#: optionally python-can's direction, R or T; the fields apart by spaces or tabs (ASCII: a vertical tab, a form feed or
+#: a non-breaking space is no separator of the format)
+_CANDUMP_LINE = re.compile(r"[ \t]*\(([^)]*)\)[ \t]+([!-~]+)[ \t]+([!-~]+)(?:[ \t]+([RT]))?[ \t]*$")
 _HEX = re.compile(r"[0-9A-Fa-f]*")
-#: the lines of a log as candump and python-can write them, matched at once (a quarter of the reader's time a line;
-#: the checks below ran on every line at twice that): a data, remote or CAN FD frame, an ID of 3 hex digits or of 8
-#: below 0x20000000
-_CANDUMP_PLAIN = re.compile(r"\s*\(\d+(?:\.\d+)?\)\s+[!-~]+\s+(?:[0-9A-Fa-f]{3}|[01][0-9A-Fa-f]{7})#"
-                            r"(?:(?:[0-9A-Fa-f]{2})*|#[0-9A-Fa-f](?:[0-9A-Fa-f]{2})*|[Rr]\d?)(?:\s+[RT])?\s*$")
-#: the error flag of a SocketCAN CAN ID: candump writes an error frame as its 8-digit ID with this bit, the error
-#: class in the others, and its 8 data bytes
+#: the lines of a log as candump and python-can write them, which python-can's reader reads as they are, matched at
+#: once (0.9 µs a line; the reader takes 4.3): a data, remote or CAN FD frame (flags 0–9), an ID of 3 hex digits or
+#: of 8 below 0x20000000
+_CANDUMP_PLAIN = re.compile(r"[ \t]*\([0-9]+(?:\.[0-9]+)?\)[ \t]+[!-~]+[ \t]+(?:[0-9A-Fa-f]{3}|[01][0-9A-Fa-f]{7})#"
+                            r"(?:(?:[0-9A-Fa-f]{2})*|#[0-9](?:[0-9A-Fa-f]{2})*|[Rr][0-8]?)(?: [RT])?[ \t]*$")
+#: the error flag of a SocketCAN CAN ID: candump writes an error frame as its 8-digit ID with this bit and the error
+#: class (up to 0x1FFFFFFF), and its data bytes (8)
 CAN_ERR_FLAG = 0x20000000
+#: how much of a refused line its reason quotes (a typical candump line is 45–50 characters)
+_QUOTE = 64
 
 
 def _candump_line_problem(line: str) -> str | None:
@@ -530,38 +548,49 @@ def _candump_line_problem(line: str) -> str | None:
     an error of its own parsing (``300##`` gave "string index out of range"): a line that is not
     ``(seconds) channel frame`` with a frame of can-utils' grammar — an ID of 3 hex digits (standard) or 8
     (extended), then ``#`` and the data bytes (two hex digits each), ``#R`` and an optional DLC, or ``##``, the
-    CAN FD flags digit and the data — is damage, and reported with what is wrong. (A DLC or a length the bus cannot
-    have is the frame check's, :func:`_frame_problem`.)"""
-    if _CANDUMP_PLAIN.match(line) or not line.strip():
+    CAN FD flags digit and the data; an error frame an 8-digit ID with the error flag and at most 8 data bytes — is
+    damage, and reported with what is wrong. (A DLC or a length the bus cannot have is the frame check's,
+    :func:`_frame_problem`.) A line of the grammar python-can's reader cannot take as it is (a tab before the
+    direction, an FD flags digit A–F) is given to it in its plain form by :func:`_candump_plain`."""
+    if _CANDUMP_PLAIN.match(line) or not line.strip(" \t\r\n"):
         return None
-    text = line.strip()[:40]
-    if "\ufffd" in line or any(c < " " and c not in "\t\r\n" for c in line):
+    text = line.strip()[:_QUOTE]
+    if "\ufffd" in line or "\ufeff" in line or any(c < " " and c not in "\t\r\n" for c in line):
         return "not text (control characters or invalid UTF-8)"
     whole = _CANDUMP_LINE.match(line)
     if not whole:
         return f"not a candump line '(seconds) channel ID#data': {text!r}"
+    stamp = whole.group(1)
     try:
-        float(whole.group(1))          # (one that is not finite is the decoder's to count, as python-can reads it)
+        if not stamp.isascii() or "_" in stamp:
+            raise ValueError
+        float(stamp)                   # (one that is not finite is the decoder's to count, as python-can reads it)
     except ValueError:
-        return f"time stamp {whole.group(1)!r} is not a number of seconds: {text!r}"
-    frame = whole.group(3)
-    can_id, sep, data = frame.partition("#")
+        return f"time stamp {stamp!r} is not a number of seconds: {text!r}"
+    can_id, sep, data = whole.group(3).partition("#")
     if not sep:
         return f"no '#' between the CAN ID and the data: {text!r}"
     if len(can_id) not in (3, 8) or not _HEX.fullmatch(can_id):
         return f"CAN ID {can_id!r} is not 3 hex digits (standard) or 8 (extended): {text!r}"
-    if len(can_id) == 8 and int(can_id, 16) > 0x1FFFFFFF and not int(can_id, 16) & CAN_ERR_FLAG:
-        return f"CAN ID 0x{can_id} is out of range (29 bits, or the error flag 0x20000000): {text!r}"
+    value = int(can_id, 16)
+    if len(can_id) == 8 and value > 0x1FFFFFFF and (value > 0x3FFFFFFF or not value & CAN_ERR_FLAG):
+        return f"CAN ID 0x{can_id} is out of range (29 bits, or the error flag 0x20000000 and a class): {text!r}"
+    error = len(can_id) == 8 and bool(value & CAN_ERR_FLAG)
     if data.startswith("##"):
         return f"a CAN XL frame ('###'): radarnode reads CAN and CAN FD frames: {text!r}"
     if data.startswith("#"):
+        if error:
+            return f"an error frame (CAN ID 0x{can_id}) as a CAN FD frame: {text!r}"
         if len(data) < 2 or not _HEX.fullmatch(data[1]):
             return f"a CAN FD frame without its flags digit after '##': {text!r}"
         data = data[2:]
     elif data[:1] in ("R", "r"):
-        dlc = data[1:]
-        if not re.fullmatch(r"-?\d*", dlc):
-            return f"a remote frame whose DLC {dlc!r} is not a number: {text!r}"
+        if error:
+            return f"an error frame (CAN ID 0x{can_id}) as a remote frame: {text!r}"
+        if "_" in data:
+            return f"a DLC code after '_' (CAN CC's DLC 9–15): radarnode reads frames whose DLC is their length: {text!r}"
+        if not re.fullmatch(r"[0-9]*", data[1:]):
+            return f"a remote frame whose DLC {data[1:]!r} is not decimal digits: {text!r}"
         return None
     if "." in data:
         return f"data bytes separated by '.' (cansend's form, not a log's): {text!r}"
@@ -571,22 +600,45 @@ def _candump_line_problem(line: str) -> str | None:
         return f"data {data[:16]!r} is not hex digits: {text!r}"
     if len(data) % 2:
         return f"data of an odd number ({len(data)}) of hex digits: {text!r}"
+    if error and len(data) > 16:
+        return f"an error frame (CAN ID 0x{can_id}) of {len(data) // 2} data bytes (at most 8): {text!r}"
     return None
 
 
+def _candump_plain(line: str) -> str:
+    """A line :func:`_candump_line_problem` accepted, as python-can's reader takes it: one space between the fields
+    (its direction test wants ``" R"``/``" T"`` at the end) and an FD flags digit of 0–7 (it reads the digit as a
+    decimal number; bit 3 of the flags is no flag of CAN FD's, and the reader keeps only BRS and ESI)."""
+    if _CANDUMP_PLAIN.match(line):
+        return line
+    whole = _CANDUMP_LINE.match(line)
+    if whole is None:                  # (blank)
+        return line
+    stamp, channel, frame, direction = whole.groups()
+    can_id, _, data = frame.partition("#")
+    if data.startswith("#") and len(data) > 1:
+        data = f"#{int(data[1], 16) & 0x7}{data[2:]}"
+    return f"({stamp}) {channel} {can_id}#{data}{' ' + direction if direction else ''}\n"
+
+
 def _candump_error_frame(msg: can.Message, line: str | None) -> can.Message:
-    """python-can's candump reader makes an error frame only of an ID with the bus-error class; any other error class
-    (a controller's state, a lost arbitration, a transceiver's fault) became an extended data frame on the class's
-    bits. ``msg`` as an error frame where its ``line`` has the error flag in its ID: the class in the arbitration ID,
-    the data kept."""
-    whole = _CANDUMP_LINE.match(line) if line is not None else None
-    if msg.is_error_frame or whole is None:
+    """python-can's candump reader makes an error frame only of an ID with the bus-error class, and without its data
+    and channel; any other error class (a controller's state, a lost arbitration, a transceiver's fault) became an
+    extended data frame on the class's bits. ``msg`` as an error frame where its ``line`` has the error flag in its
+    ID: the class as the arbitration ID, the data bytes, the channel and the direction kept."""
+    if not (msg.is_error_frame or msg.is_extended_id) or line is None:     # (a standard ID: no error frame)
         return msg
-    can_id = whole.group(3).partition("#")[0]
+    whole = _CANDUMP_LINE.match(line)
+    if whole is None:
+        return msg
+    _, channel, frame, direction = whole.groups()
+    can_id, _, data = frame.partition("#")
     if len(can_id) != 8 or not int(can_id, 16) & CAN_ERR_FLAG:
         return msg
-    return can.Message(timestamp=msg.timestamp, arbitration_id=int(can_id, 16) & 0x1FFFFFFF, is_extended_id=False,
-                       is_error_frame=True, dlc=msg.dlc, data=msg.data, channel=msg.channel, is_rx=msg.is_rx)
+    payload = bytes.fromhex(data)
+    return can.Message(timestamp=msg.timestamp, arbitration_id=int(can_id, 16) & 0x1FFFFFFF, is_error_frame=True,
+                       dlc=len(payload), data=payload, channel=int(channel) if channel.isdigit() else channel,
+                       is_rx=direction != "T")
 
 
 class _TrcWarnings(logging.Filter):
@@ -613,12 +665,14 @@ class _TextFrames:
 
     def __iter__(self) -> Iterator[can.Message]:
         report = self.report
-        opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8", errors="replace")) \
-            if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8", errors="replace"))
+        # (utf-8-sig: a byte-order mark some Windows tools write before the first line is no part of it)
+        opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8-sig", errors="replace")) \
+            if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8-sig", errors="replace"))
         with opener() as f:
             check = {_AscReader: _asc_line_problem, TRCReader: _trc_line_problem,
                      CanutilsLogReader: _candump_line_problem}.get(self.reader_cls)
-            lines = self.lines = _Lines(f, report, check)
+            fix = _candump_plain if self.reader_cls is CanutilsLogReader else None
+            lines = self.lines = _Lines(f, report, check, fix)
             trc_log = logging.getLogger("can.io.trc")
             quiet = _TrcWarnings(lines, report)
             trc_log.addFilter(quiet)
@@ -642,7 +696,10 @@ class _TextFrames:
                         report.skip(f"line {lines.lineno}", exc)
                         if lines.recording is not None:          # a bad line among the headers: not replayed
                             preamble, lines.recording = lines.recording[:-1], lines.recording[:-1]
-                        if lines.lineno == before or (report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME):
+                        if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+                            report.stop(f"line {lines.lineno}", TOO_MANY_BAD)
+                            return
+                        if lines.lineno == before:
                             report.stop(f"line {lines.lineno}", "no progress past this line")
                             return
                         lines.replay = list(preamble)
