@@ -853,26 +853,31 @@ def test_a_candump_line_in_the_format_is_read_as_its_frame(tmp_path, line):
 def test_a_candump_line_python_can_reads_wrong_as_it_stands_is_read_in_its_plain_form(tmp_path):
     """Lines of the grammar python-can's reader failed on (an independent tester's findings): an FD flags digit A–F
     (can-utils writes a hex nibble; the reader took the digit for a decimal number), a tab before the direction
-    (the reader looks for " T"), a byte-order mark before the first line; and 2,000 bad lines in a row after a frame,
+    (the reader looks for " T"), blanks inside the time stamp's brackets and a direction in lower case (python-can's
+    split found a field too many), a byte-order mark before the first line; and 2,000 bad lines in a row after a frame,
     which overflowed the line reader's recursion (a traceback) — now 2,000 bad records and the frame after them."""
     path = tmp_path / "plain.log"
     path.write_text("\ufeff(1.0) can0 123#11\n(1.1) can0 123##A1122\n(1.2) can0 123##F\n(1.3)\tcan0\t123#1122\tT\n"
-                    + "(1.4) can0 12#11\n" * 2000 + "(1.5) can0 123#33 R\n", encoding="utf-8")
+                    + "(1.4) can0 12#11\n" * 2000 + "(1.5) can0 123#33 R\n( 1.6 ) can0 123#44 t\n", encoding="utf-8")
     report = logfiles.ReadReport(str(path), ".log")
     got = list(logfiles.read_frames(str(path), report))
     assert report.bad == 2000 and report.first_bad.startswith("line 5: CAN ID '12'"), report.first_bad
     assert [(m.timestamp, bytes(m.data), m.is_fd, m.bitrate_switch, m.error_state_indicator, m.is_rx) for m in got] == [
         (1.0, b"\x11", False, False, False, True), (1.1, b"\x11\x22", True, False, True, True),
         (1.2, b"", True, True, True, True), (1.3, b"\x11\x22", False, False, False, False),
-        (1.5, b"\x33", False, False, False, True)]
+        (1.5, b"\x33", False, False, False, True), (1.6, b"\x44", False, False, False, False)]
 
 
-def test_a_file_of_bad_lines_stops_at_the_limit_whatever_refused_them(tmp_path):
-    """MAX_BAD_WITHOUT_A_FRAME bad records and no frame: reading stops, with that as the reason, whether the line check
-    or python-can's reader refused them (999 of the check's and one of the reader's ended as "no progress past this
-    line" before, and 5,000 of the check's went on)."""
+@pytest.mark.parametrize("first,second", [("12#11", "12#11"), ("123#R16", "123#R16"), ("12#11", "123#R16"),
+                                          ("123#R16", "12#11")])
+def test_a_file_of_bad_lines_stops_at_the_limit_whatever_refused_them(tmp_path, first, second):
+    """MAX_BAD_WITHOUT_A_FRAME bad records and no frame: reading stops, with that as the reason, whether the line check,
+    python-can's reader or the frame check refused them, in any order (999 of the check's and one of the reader's
+    ended as "no progress past this line" before, 5,000 of the check's went on, and the frame check's never stopped:
+    independent testers' findings)."""
     path = tmp_path / "junk.log"
-    path.write_text("(1.0) can0 12#11\n" * (logfiles.MAX_BAD_WITHOUT_A_FRAME + 500) + "(2.0) can0 123#11\n")
+    half = (logfiles.MAX_BAD_WITHOUT_A_FRAME + 500) // 2
+    path.write_text(f"(1.0) can0 {first}\n" * half + f"(1.0) can0 {second}\n" * half + "(2.0) can0 123#11\n")
     report = logfiles.ReadReport(str(path), ".log")
     assert list(logfiles.read_frames(str(path), report)) == []
     assert report.bad == logfiles.MAX_BAD_WITHOUT_A_FRAME

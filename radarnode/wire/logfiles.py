@@ -360,6 +360,10 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
         problem = _frame_problem(msg)
         if problem is not None:
             report.skip(frames.where(), problem)
+            if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+                if report.cut_short is None:
+                    report.stop(frames.where(), TOO_MANY_BAD)
+                return
             continue
         report.frames += 1
         yield msg
@@ -429,6 +433,11 @@ class _Lines:
 
     def _next_line(self) -> str | None:
         """The next line for the reader, or None where the line was refused (counted in the report)."""
+        if self._report.frames == 0 and self._report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+            # bad records and no frame, whoever refused them: this line's check, the reader, the frame check
+            if self._report.cut_short is None:
+                self._report.stop(f"line {self.lineno}", TOO_MANY_BAD)
+            raise StopIteration
         if self.replay:
             self.last = self.replay.pop(0)
             return self.last
@@ -445,9 +454,6 @@ class _Lines:
         problem = self._check(line) if self._check is not None else None
         if problem is not None:
             self._report.skip(f"line {self.lineno}", problem)
-            if self._report.frames == 0 and self._report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-                self._report.stop(f"line {self.lineno}", TOO_MANY_BAD)
-                raise StopIteration
             return None
         if self._fix is not None:
             line = self._fix(line)
@@ -529,7 +535,7 @@ def _trc_line_problem(line: str) -> str | None:
 #: a candump log line (can-utils' ``candump -l``, python-can's CanutilsLogWriter): ``(seconds) channel frame``, then
 #: optionally python-can's direction, R or T; the fields apart by spaces or tabs (ASCII: a vertical tab, a form feed or
 #: a non-breaking space is no separator of the format)
-_CANDUMP_LINE = re.compile(r"[ \t]*\(([^)]*)\)[ \t]+([!-~]+)[ \t]+([!-~]+)(?:[ \t]+([RT]))?[ \t]*$")
+_CANDUMP_LINE = re.compile(r"[ \t]*\(([^)]*)\)[ \t]+([!-~]+)[ \t]+([!-~]+)(?:[ \t]+([RTrt]))?[ \t]*$")
 _HEX = re.compile(r"[0-9A-Fa-f]*")
 #: the lines of a log as candump and python-can write them, which python-can's reader reads as they are, matched at
 #: once (0.9 µs a line; the reader takes 4.3): a data, remote or CAN FD frame (flags 0–9), an ID of 3 hex digits or
@@ -560,9 +566,9 @@ def _candump_line_problem(line: str) -> str | None:
     whole = _CANDUMP_LINE.match(line)
     if not whole:
         return f"not a candump line '(seconds) channel ID#data': {text!r}"
-    stamp = whole.group(1)
+    stamp = whole.group(1).strip(" \t")            # (blanks inside the brackets: read, as canplayer does)
     try:
-        if not stamp.isascii() or "_" in stamp:
+        if not stamp.isascii() or "_" in stamp or " " in stamp or "\t" in stamp:
             raise ValueError
         float(stamp)                   # (one that is not finite is the decoder's to count, as python-can reads it)
     except ValueError:
@@ -618,7 +624,8 @@ def _candump_plain(line: str) -> str:
     can_id, _, data = frame.partition("#")
     if data.startswith("#") and len(data) > 1:
         data = f"#{int(data[1], 16) & 0x7}{data[2:]}"
-    return f"({stamp}) {channel} {can_id}#{data}{' ' + direction if direction else ''}\n"
+    stamp, tail = stamp.strip(" \t"), " " + direction.upper() if direction else ""
+    return f"({stamp}) {channel} {can_id}#{data}{tail}\n"
 
 
 def _candump_error_frame(msg: can.Message, line: str | None) -> can.Message:
@@ -638,7 +645,7 @@ def _candump_error_frame(msg: can.Message, line: str | None) -> can.Message:
     payload = bytes.fromhex(data)
     return can.Message(timestamp=msg.timestamp, arbitration_id=int(can_id, 16) & 0x1FFFFFFF, is_error_frame=True,
                        dlc=len(payload), data=payload, channel=int(channel) if channel.isdigit() else channel,
-                       is_rx=direction != "T")
+                       is_rx=direction not in ("T", "t"))
 
 
 class _TrcWarnings(logging.Filter):
@@ -697,7 +704,8 @@ class _TextFrames:
                         if lines.recording is not None:          # a bad line among the headers: not replayed
                             preamble, lines.recording = lines.recording[:-1], lines.recording[:-1]
                         if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-                            report.stop(f"line {lines.lineno}", TOO_MANY_BAD)
+                            if report.cut_short is None:
+                                report.stop(f"line {lines.lineno}", TOO_MANY_BAD)
                             return
                         if lines.lineno == before:
                             report.stop(f"line {lines.lineno}", "no progress past this line")
