@@ -545,18 +545,23 @@ def test_export_leaves_out_frames_whose_time_mcap_cannot_hold_and_says_how_many(
     assert any(abs(t - t41 * 1e9) < 1e3 for t, _ in raw)
 
 
+def _export_with(short_log: Path, tmp_path: Path, frames: list[str]) -> tuple[list[str], list[dict]]:
+    """The short log with candump ``frames`` (``ID#data``) after its 11th line, at that line's time, exported: (the
+    log's lines, the /can/frames records)."""
+    lines = short_log.read_text().splitlines()
+    t = re.match(r"^\(([^)]*)\)", lines[10]).group(1)
+    lines[11:11] = [f"({t}) can0 {frame}" for frame in frames]
+    log = tmp_path / "with.log"
+    log.write_text("\n".join(lines) + "\n")
+    out = tmp_path / "with.mcap"
+    assert main(["export", str(log), "-o", str(out)]) == 0
+    return lines, [rec for _, rec in read_mcap(out)["topics"]["/can/frames"][3]]
+
+
 def test_export_marks_a_can_fd_frame_and_gives_it_no_message_name(short_log, tmp_path):
     # a CAN FD frame on 0x300 (SpeedInformation's ID) went into /can/frames under that message's name, nothing saying
     # it was FD (session 71's note): the node and the consumer drop it, so the raw topic must not name it the message
-    lines = short_log.read_text().splitlines()
-    t = re.match(r"^\(([^)]*)\)", lines[10]).group(1)
-    lines.insert(11, f"({t}) can0 300##1" + "AB" * 64)
-    lines.insert(12, f"({t}) can0 300#R")
-    log = tmp_path / "fd.log"
-    log.write_text("\n".join(lines) + "\n")
-    out = tmp_path / "fd.mcap"
-    assert main(["export", str(log), "-o", str(out)]) == 0
-    recs = [rec for _, rec in read_mcap(out)["topics"]["/can/frames"][3]]
+    lines, recs = _export_with(short_log, tmp_path, ["300##1" + "AB" * 64, "300#R"])
     assert len(recs) == len(lines)
     fd = [r for r in recs if r["is_fd"]]
     assert len(fd) == 1 and fd[0]["can_id"] == 0x300 and fd[0]["message"] == "" and fd[0]["dlc"] == 64
@@ -570,17 +575,10 @@ def test_export_marks_a_can_fd_frame_and_gives_it_no_message_name(short_log, tmp
 def test_export_writes_a_candump_error_frame_of_any_class_as_an_error_frame(short_log, tmp_path):
     # python-can's candump reader made an error frame only of the bus-error class: a controller-state error frame
     # (20000004#…, as candump logs it) went into /can/frames as a data frame on extended ID 0x4
-    lines = short_log.read_text().splitlines()
-    t = re.match(r"^\(([^)]*)\)", lines[10]).group(1)
-    lines.insert(11, f"({t}) can0 20000004#0004000000000000")
-    lines.insert(12, f"({t}) can0 00000004#0004000000000000")
-    lines.insert(13, f"({t}) can0 20000204#0004000000000860")     # the class's bits are a message's ID (0x204): no name
-    lines.insert(14, f"({t}) can0 20000080#0004000000000860")     # python-can's own (bus error): its data kept
-    log = tmp_path / "err.log"
-    log.write_text("\n".join(lines) + "\n")
-    out = tmp_path / "err.mcap"
-    assert main(["export", str(log), "-o", str(out)]) == 0
-    recs = [rec for _, rec in read_mcap(out)["topics"]["/can/frames"][3]]
+    lines, recs = _export_with(short_log, tmp_path, [
+        "20000004#0004000000000000", "00000004#0004000000000000",
+        "20000204#0004000000000860",      # the class's bits are a message's ID (0x204): no name
+        "20000080#0004000000000860"])     # python-can's own (bus error): its data kept
     assert len(recs) == len(lines)
     errors = [r for r in recs if r["is_error_frame"]]
     assert [(r["can_id"], r["message"], r["data"]) for r in errors] == [

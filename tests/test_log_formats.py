@@ -759,6 +759,21 @@ def test_a_log_stopped_before_its_first_frame_leaves_no_file(suffix, tmp_path, m
     assert not out.exists() and not list(tmp_path.iterdir())
 
 
+def _decode_with(capsys, tmp_path: Path, frames: list[str]) -> tuple[list[str], int, str]:
+    """A 1-s log with candump ``frames`` (``ID#data``) after its 21st line, at that line's time, decoded: (the log's
+    lines, decode's status, the last line it wrote to stderr)."""
+    good = tmp_path / "g.log"
+    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
+    lines = good.read_text().splitlines()
+    t = re.match(r"^\(([^)]*)\)", lines[20]).group(1)
+    lines[21:21] = [f"({t}) can0 {frame}" for frame in frames]
+    bad = tmp_path / "bad.log"
+    bad.write_text("\n".join(lines) + "\n")
+    capsys.readouterr()
+    rc, _, err = cli(capsys, "decode", bad)
+    return lines, rc, err.strip().splitlines()[-1]
+
+
 @pytest.mark.parametrize("line,reason", [
     ("300##1" + "00" * 9, "CAN FD frame of 9 data bytes (CAN FD has 0–8, 12, 16, 20, 24, 32, 48 or 64)"),
     ("300##1ABC", "data of an odd number (3) of hex digits"),
@@ -773,18 +788,8 @@ def test_a_can_fd_or_remote_frame_no_bus_can_carry_is_a_bad_record(capsys, tmp_p
     length CAN FD does not have, and a DLC that was not its data's length passed into export's /can/frames), and a
     remote frame's DLC not at all (-1 was exported). Each is now a bad record; 12- and 64-byte FD frames and remote
     frames asking for DLC 9 and 15 (the wire's 4-bit field) are frames, read as before."""
-    good = tmp_path / "g.log"
-    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
-    lines = good.read_text().splitlines()
-    t = re.match(r"^\(([^)]*)\)", lines[20]).group(1)
-    good_lines = [f"({t}) can0 300##1" + "00" * 12, f"({t}) can0 300##1" + "00" * 64, f"({t}) can0 300#R9",
-                  f"({t}) can0 300#R15"]                      # at the limits: frames
-    lines[21:21] = good_lines + [f"({t}) can0 {line}"]
-    bad = tmp_path / "bad.log"
-    bad.write_text("\n".join(lines) + "\n")
-    capsys.readouterr()
-    rc, _, err = cli(capsys, "decode", bad)
-    last = err.strip().splitlines()[-1]
+    good_lines = ["300##1" + "00" * 12, "300##1" + "00" * 64, "300#R9", "300#R15"]      # at the limits: frames
+    lines, rc, last = _decode_with(capsys, tmp_path, good_lines + [line])
     assert rc == 1 and f"first bad record at line {22 + len(good_lines)}: {reason}" in last, last
     assert f"{len(lines) - 1} frames read" in last, last
 
@@ -815,18 +820,9 @@ def test_a_candump_line_outside_the_format_is_a_bad_record_that_says_why(capsys,
     range") and read others wrong without a word (an ID over 29 bits masked to a frame on 0x300, three hex digits of
     data as two bytes): each is a bad record now, whose reason says what is wrong, and the frames around it are read
     as before."""
-    good = tmp_path / "g.log"
-    assert main(["log", SCENARIO, "-o", str(good), "--duration", "1"]) == 0
-    lines = good.read_text().splitlines()
-    t = re.match(r"^\(([^)]*)\)", lines[20]).group(1)
-    lines.insert(21, f"({t}) can0 {line}")
-    bad = tmp_path / "bad.log"
-    bad.write_text("\n".join(lines) + "\n")
-    capsys.readouterr()
-    rc, _, err = cli(capsys, "decode", bad)
-    last = err.strip().splitlines()[-1]
+    lines, rc, last = _decode_with(capsys, tmp_path, [line])
     assert rc == 1 and f"first bad record at line 22: {reason}" in last, last
-    assert repr(f"({t}) can0 {line}".strip()[:64]) in last or "not text" in reason, last
+    assert repr(lines[21].strip()[:64]) in last or "not text" in reason, last
     assert f"1 bad record skipped; {len(lines) - 1} frames read" in last, last
 
 
