@@ -309,6 +309,16 @@ class ReadReport:
         if self.first_bad is None:
             self.first_bad = self.cut_short
 
+    def hopeless(self, where: str) -> bool:
+        """Whether ``MAX_BAD_WITHOUT_A_FRAME`` records were bad and none was a frame, whoever refused them (a line
+        check, a reader, the frame check): then the reading stops at ``where`` (said once) — the file is no log of
+        its format."""
+        if self.frames or self.bad < MAX_BAD_WITHOUT_A_FRAME:
+            return False
+        if self.cut_short is None:
+            self.stop(where, TOO_MANY_BAD)
+        return True
+
     @property
     def damaged(self) -> bool:
         return self.bad > 0 or self.cut_short is not None
@@ -360,9 +370,7 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
         problem = _frame_problem(msg)
         if problem is not None:
             report.skip(frames.where(), problem)
-            if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-                if report.cut_short is None:
-                    report.stop(frames.where(), TOO_MANY_BAD)
+            if report.hopeless(frames.where()):
                 return
             continue
         report.frames += 1
@@ -412,11 +420,11 @@ class _Lines:
     A last line without a line end is a record cut off (a truncated file): it is held back and reported instead
     of being parsed into a wrong frame."""
 
-    def __init__(self, f, report: ReadReport, check=None, fix=None) -> None:
+    def __init__(self, f, report: ReadReport, check=None) -> None:
         self._f = f
         self._report = report
-        self._check = check         # line -> None, or why the line is no record of the format
-        self._fix = fix             # a line the check passed -> the line as the reader takes it
+        # line -> (None, the line as the reader takes it), or (why the line is no record of the format, None)
+        self._check = check
         self.lineno = 0             # lines of the file handed out so far
         self.replay: list[str] = []
         self.recording: list[str] | None = []   # lines read before the first frame (headers), while recording
@@ -433,10 +441,7 @@ class _Lines:
 
     def _next_line(self) -> str | None:
         """The next line for the reader, or None where the line was refused (counted in the report)."""
-        if self._report.frames == 0 and self._report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-            # bad records and no frame, whoever refused them: this line's check, the reader, the frame check
-            if self._report.cut_short is None:
-                self._report.stop(f"line {self.lineno}", TOO_MANY_BAD)
+        if self._report.hopeless(f"line {self.lineno}"):
             raise StopIteration
         if self.replay:
             self.last = self.replay.pop(0)
@@ -451,12 +456,11 @@ class _Lines:
         if not line.endswith(("\n", "\r")) and line.strip():
             self._report.skip(f"line {self.lineno}", "the line is cut off (no line end): the file is truncated")
             raise StopIteration
-        problem = self._check(line) if self._check is not None else None
-        if problem is not None:
-            self._report.skip(f"line {self.lineno}", problem)
-            return None
-        if self._fix is not None:
-            line = self._fix(line)
+        if self._check is not None:
+            problem, line = self._check(line)
+            if problem is not None:
+                self._report.skip(f"line {self.lineno}", problem)
+                return None
         if self.recording is not None:
             self.recording.append(line)
         self.last = line
@@ -547,23 +551,33 @@ _CANDUMP_PLAIN = re.compile(r"[ \t]*\([0-9]+(?:\.[0-9]+)?\)[ \t]+[!-~]+[ \t]+(?:
 CAN_ERR_FLAG = 0x20000000
 #: how much of a refused line its reason quotes (a typical candump line is 45–50 characters)
 _QUOTE = 64
+_DLC_CODE = "a DLC code after '_' (CAN CC's DLC 9–15): radarnode reads frames whose DLC is their length"
 
 
-def _candump_line_problem(line: str) -> str | None:
-    """python-can's candump reader reads some lines that are no frame of the format wrong and fails on others with
+def _candump_line(line: str) -> tuple[str | None, str | None]:
+    """(None, the line as python-can's reader takes it), or (why the line is no candump record, None).
+
+    python-can's candump reader reads some lines that are no frame of the format wrong and fails on others with
     an error of its own parsing (``300##`` gave "string index out of range"): a line that is not
     ``(seconds) channel frame`` with a frame of can-utils' grammar — an ID of 3 hex digits (standard) or 8
     (extended), then ``#`` and the data bytes (two hex digits each), ``#R`` and an optional DLC, or ``##``, the
     CAN FD flags digit and the data; an error frame an 8-digit ID with the error flag and at most 8 data bytes — is
     damage, and reported with what is wrong. (A DLC or a length the bus cannot have is the frame check's,
     :func:`_frame_problem`.) A line of the grammar python-can's reader cannot take as it is (a tab before the
-    direction, an FD flags digit A–F) is given to it in its plain form by :func:`_candump_plain`."""
+    direction, an FD flags digit A–F) is given to it in its plain form (:func:`_candump_plain`)."""
     if _CANDUMP_PLAIN.match(line) or not line.strip(" \t\r\n"):
-        return None
+        return None, line
+    whole = _CANDUMP_LINE.match(line)
+    problem = _candump_problem(line, whole)
+    return (problem, None) if problem is not None else (None, _candump_plain(whole))
+
+
+def _candump_problem(line: str, whole: re.Match | None) -> str | None:
+    """:func:`_candump_line`'s check of a line that is not plain (``whole``: its match of ``_CANDUMP_LINE``, if any):
+    why it is no record, or None."""
     text = line.strip()[:_QUOTE]
     if "\ufffd" in line or "\ufeff" in line or any(c < " " and c not in "\t\r\n" for c in line):
         return "not text (control characters or invalid UTF-8)"
-    whole = _CANDUMP_LINE.match(line)
     if not whole:
         return f"not a candump line '(seconds) channel ID#data': {text!r}"
     stamp = whole.group(1).strip(" \t")            # (blanks inside the brackets: read, as canplayer does)
@@ -594,14 +608,14 @@ def _candump_line_problem(line: str) -> str | None:
         if error:
             return f"an error frame (CAN ID 0x{can_id}) as a remote frame: {text!r}"
         if "_" in data:
-            return f"a DLC code after '_' (CAN CC's DLC 9–15): radarnode reads frames whose DLC is their length: {text!r}"
+            return f"{_DLC_CODE}: {text!r}"
         if not re.fullmatch(r"[0-9]*", data[1:]):
             return f"a remote frame whose DLC {data[1:]!r} is not decimal digits: {text!r}"
         return None
     if "." in data:
         return f"data bytes separated by '.' (cansend's form, not a log's): {text!r}"
     if "_" in data:
-        return f"a DLC code after '_' (CAN CC's DLC 9–15): radarnode reads frames whose DLC is their length: {text!r}"
+        return f"{_DLC_CODE}: {text!r}"
     if not _HEX.fullmatch(data):
         return f"data {data[:16]!r} is not hex digits: {text!r}"
     if len(data) % 2:
@@ -611,15 +625,10 @@ def _candump_line_problem(line: str) -> str | None:
     return None
 
 
-def _candump_plain(line: str) -> str:
-    """A line :func:`_candump_line_problem` accepted, as python-can's reader takes it: one space between the fields
-    (its direction test wants ``" R"``/``" T"`` at the end) and an FD flags digit of 0–7 (it reads the digit as a
-    decimal number; bit 3 of the flags is no flag of CAN FD's, and the reader keeps only BRS and ESI)."""
-    if _CANDUMP_PLAIN.match(line):
-        return line
-    whole = _CANDUMP_LINE.match(line)
-    if whole is None:                  # (blank)
-        return line
+def _candump_plain(whole: re.Match) -> str:
+    """A line :func:`_candump_problem` accepted (its match ``whole``), as python-can's reader takes it: one space
+    between the fields (its direction test wants ``" R"``/``" T"`` at the end) and an FD flags digit of 0–7 (it reads
+    the digit as a decimal number; bit 3 of the flags is no flag of CAN FD's, and the reader keeps only BRS and ESI)."""
     stamp, channel, frame, direction = whole.groups()
     can_id, _, data = frame.partition("#")
     if data.startswith("#") and len(data) > 1:
@@ -676,10 +685,10 @@ class _TextFrames:
         opener = (lambda: gzip.open(self.path, "rt", encoding="utf-8-sig", errors="replace")) \
             if self.fmt.endswith(".gz") else (lambda: open(self.path, encoding="utf-8-sig", errors="replace"))
         with opener() as f:
-            check = {_AscReader: _asc_line_problem, TRCReader: _trc_line_problem,
-                     CanutilsLogReader: _candump_line_problem}.get(self.reader_cls)
-            fix = _candump_plain if self.reader_cls is CanutilsLogReader else None
-            lines = self.lines = _Lines(f, report, check, fix)
+            problem = {_AscReader: _asc_line_problem, TRCReader: _trc_line_problem}.get(self.reader_cls)
+            check = _candump_line if self.reader_cls is CanutilsLogReader else \
+                None if problem is None else (lambda line: (problem(line), line))
+            lines = self.lines = _Lines(f, report, check)
             trc_log = logging.getLogger("can.io.trc")
             quiet = _TrcWarnings(lines, report)
             trc_log.addFilter(quiet)
@@ -703,9 +712,7 @@ class _TextFrames:
                         report.skip(f"line {lines.lineno}", exc)
                         if lines.recording is not None:          # a bad line among the headers: not replayed
                             preamble, lines.recording = lines.recording[:-1], lines.recording[:-1]
-                        if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
-                            if report.cut_short is None:
-                                report.stop(f"line {lines.lineno}", TOO_MANY_BAD)
+                        if report.hopeless(f"line {lines.lineno}"):
                             return
                         if lines.lineno == before:
                             report.stop(f"line {lines.lineno}", "no progress past this line")
