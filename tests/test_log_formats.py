@@ -881,6 +881,21 @@ def test_a_file_of_bad_lines_stops_at_the_limit_whatever_refused_them(tmp_path, 
     assert f"reading ended at line {logfiles.MAX_BAD_WITHOUT_A_FRAME}" in report.message("decode")
 
 
+@pytest.mark.parametrize("bad", [logfiles.MAX_BAD_WITHOUT_A_FRAME - 1, logfiles.MAX_BAD_WITHOUT_A_FRAME,
+                                 logfiles.MAX_BAD_WITHOUT_A_FRAME + 1, 2 * logfiles.MAX_BAD_WITHOUT_A_FRAME])
+def test_the_no_frame_limit_at_its_edge(tmp_path, bad):
+    """Just below the limit the frame after the bad lines is read; at it, just above and at twice it, reading stops
+    there and the frame is not read."""
+    path = tmp_path / "edge.log"
+    path.write_text("(1.0) can0 12#11\n" * bad + "(2.0) can0 123#11\n")
+    report = logfiles.ReadReport(str(path), ".log")
+    got = list(logfiles.read_frames(str(path), report))
+    below = bad < logfiles.MAX_BAD_WITHOUT_A_FRAME
+    assert len(got) == (1 if below else 0)
+    assert report.bad == min(bad, logfiles.MAX_BAD_WITHOUT_A_FRAME)
+    assert (report.cut_short is None) == below
+
+
 def test_a_candump_error_frame_of_any_class_is_an_error_frame(tmp_path):
     """candump logs an error frame as its 8-digit CAN ID with the error flag (0x20000000) and the error class in the
     other bits. python-can's reader made an error frame only of the bus-error class (0x80); a controller's state
