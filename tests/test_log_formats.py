@@ -896,6 +896,32 @@ def test_the_no_frame_limit_at_its_edge(tmp_path, bad):
     assert (report.cut_short is None) == below
 
 
+@pytest.mark.parametrize("bad", [logfiles.MAX_BAD_WITHOUT_A_FRAME - 1, logfiles.MAX_BAD_WITHOUT_A_FRAME,
+                                 logfiles.MAX_BAD_WITHOUT_A_FRAME + 1, 2 * logfiles.MAX_BAD_WITHOUT_A_FRAME])
+def test_a_blf_of_damaged_objects_stops_at_the_limit_and_says_so(tmp_path, bad):
+    """A BLF file of damaged objects (a signature and a size too small for a container) before a container with a
+    frame: below the no-frame limit the frame is read; at it, just above and at twice it, reading stops there as a
+    text log's does and says where and why (it stopped without a word before: no "reading ended" in its message)."""
+    path = tmp_path / "junk.blf"
+    writer = can.BLFWriter(str(path))
+    writer.on_message_received(can.Message(timestamp=1.0, arbitration_id=0x123, data=b"\x11", is_extended_id=False))
+    writer.stop()
+    data = path.read_bytes()
+    header = int.from_bytes(data[4:8], "little")
+    path.write_bytes(data[:header] + (b"LOBJ" + bytes(12)) * bad + data[header:])
+    report = logfiles.ReadReport(str(path), ".blf")
+    got = list(logfiles.read_frames(str(path), report))
+    below = bad < logfiles.MAX_BAD_WITHOUT_A_FRAME
+    assert [(m.arbitration_id, bytes(m.data)) for m in got] == ([(0x123, b"\x11")] if below else [])
+    assert report.bad == min(bad, logfiles.MAX_BAD_WITHOUT_A_FRAME)
+    if below:
+        assert report.cut_short is None and "reading ended" not in report.message("decode")
+    else:
+        where = header + 16 * logfiles.MAX_BAD_WITHOUT_A_FRAME          # the object after the last one counted
+        assert report.cut_short == f"byte {where}: {logfiles.TOO_MANY_BAD}", report.cut_short
+        assert f"reading ended at byte {where}" in report.message("decode")
+
+
 def test_a_candump_error_frame_of_any_class_is_an_error_frame(tmp_path):
     """candump logs an error frame as its 8-digit CAN ID with the error flag (0x20000000) and the error class in the
     other bits. python-can's reader made an error frame only of the bus-error class (0x80); a controller's state

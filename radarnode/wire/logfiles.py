@@ -798,7 +798,7 @@ class _BlfFrames:
             pos = f.tell()                       # after the file header
             while pos is not None and pos < size:
                 self.pos = pos
-                if report.frames == 0 and report.bad >= MAX_BAD_WITHOUT_A_FRAME:
+                if report.hopeless(self.where()):
                     return
                 f.seek(pos)
                 head = f.read(head_size)
