@@ -1244,3 +1244,51 @@ def test_one_loss_just_before_the_overtaken_frames_never_starts_a_cascade(frames
             assert len(got) >= 15, (k, i, len(got))
             tried += 1
     assert tried >= 30
+
+
+def _timed(cycles, start: float) -> list[can.Message]:
+    """A node's cycles as a bus carries them: cycle k from ``start`` + k·72 ms, its frames 0.2 ms apart."""
+    return [_msg(m.arbitration_id, m.data, start + k * 0.072 + i * 0.0002)
+            for k, (frames, *_) in enumerate(cycles) for i, m in enumerate(frames)]
+
+
+def _one_senders(cycle, alone: list) -> bool:
+    """Whether a delivered cycle is one a sender sent (``alone``: each sender's cycles, assembled from its frames
+    alone), field by field; a field missing (NaN: a group it was delivered without) is no other sender's value."""
+    from radarnode.perception.types import _names
+    got = cycle.objects
+    for ref in alone:
+        if ref.meas_counter != cycle.meas_counter or len(ref.objects) != len(got):
+            continue
+        same = True
+        for name in _names(type(got)):
+            a, b = np.asarray(getattr(got, name)), np.asarray(getattr(ref.objects, name))
+            if not np.all((a == b) | (np.isnan(a) if a.dtype.kind == "f" else False)):
+                same = False
+                break
+        if same:
+            return True
+    return False
+
+
+@pytest.mark.parametrize("lag", ["echo", 1, 2, 5])
+def test_two_senders_of_one_sensor_id_never_mix_their_cycles(lag, caplog):
+    """Two nodes set to the same sensor ID on one bus, or the bus replaying every frame a cycle later: each frame of one
+    comes right after the other's for the same place, under a header that does not move the count on. The frames
+    of the later groups (sizes, quality) cannot be told apart; a delivered cycle went out with the positions of one
+    sender and the sizes of the other (an independent tester's finding: 18 of 20 cycles mixed, the echo as much).
+    Now no delivered cycle holds another sender's value, and the conflicts are counted."""
+    a = _node_cycles(40, seed=1)
+    b = a if lag == "echo" else _node_cycles(40, seed=2)
+    shift = 0.0721 if lag == "echo" else lag * 0.072 + 0.0001
+    stream_a, stream_b = _timed(a, 0.0), _timed(b, shift)
+    alone = [*CycleAssembler().feed(stream_a), *CycleAssembler().feed(stream_b)]
+    assert len(alone) == 80
+    merged = sorted(stream_a + stream_b, key=lambda m: m.timestamp)
+    asm = CycleAssembler()
+    got = list(asm.feed(merged))
+    mixed = [c.meas_counter for c in got if not _one_senders(c, alone)]
+    assert not mixed, f"{len(mixed)} of {len(got)} delivered cycles mix two senders' frames: {mixed}"
+    assert asm.stats.conflicting_frames > 0
+    said = [r.getMessage() for r in caplog.records if "two frames for one place" in r.getMessage()]
+    assert len(said) == 1 and said[0].startswith("sensor 0: "), said                # once, naming the sensor

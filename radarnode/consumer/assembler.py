@@ -270,6 +270,9 @@ class _Pending:
         self.sealed = False
         self.rerun = 0
         self.short = False             # held at its end short of a few frames of its later groups (overtaken)
+        # places of later groups (group, object) whose first frame a held header's cycle took, as it held the object
+        # too: a second frame for one of them drops both cycles (two senders)
+        self.contested: set[tuple[int, int]] = set()
         # at its end, short of a general frame: the order of all its objects as a later group sent them (None: as
         # its general group's), and the places that came of the objects only later groups named (group, object)
         self.listed: list[int] | None = None
@@ -346,6 +349,7 @@ class CycleAssembler(can.Listener):
         self._last_counter: dict[str, int] = {}
         # a header that did not advance MeasCounter, held until frames show whether the sensor restarted
         self._suspects: dict[str, _Pending] = {}
+        self._two_senders_warned = False
         self._older_suspects: dict[str, list[_Pending]] = {}    # held before the newest one (HELD_HEADERS in all)
         # a cycle that ended whole in itself but without a group the layout expects: a stray header cut it before
         # its last groups (they follow, and it is delivered whole) or the sensor stopped sending the group (the next
@@ -872,8 +876,27 @@ class CycleAssembler(can.Listener):
                 place = pending is not None and self._fits(pending, base, oid) and (
                     general or base in self._learned_groups(kind))
                 if not place or (not general and self._fits(suspect, base, oid)):
+                    if place:
+                        # a later group's place in both cycles: the held one takes the frame (a restarted sensor's
+                        # cycle, the one in progress cut), but a second frame for the place shows two senders
+                        pending.contested.add((base, oid))
                     self._add(suspect, base, oid, data, values)
                     return
+                first = suspect.groups.get(base, {}).get(oid) or suspect.provisional.get(base, {}).get(oid)
+                if (base, oid) in pending.contested and not (first is not None and first[0] == data) \
+                        and not (pending.bad and suspect.bad):
+                    # another frame for a place both cycles have, after the held one took the first (a copy of that
+                    # one goes to the cycle in progress, as before: a duplicate): two senders of one sensor ID, or the bus replaying the last cycle (each frame of one beside the other's for
+                    # the same place), whose later groups cannot be told apart. Neither cycle is delivered: each
+                    # took one of the two, and went out with the other's sizes (an independent tester's finding:
+                    # 18 of 20 cycles mixed)
+                    pending.bad = suspect.bad = True
+                    self.stats.conflicting_frames += 1
+                    if not self._two_senders_warned:
+                        self._two_senders_warned = True
+                        logger.warning("sensor %d: two frames for one place of two cycles (another node with this "
+                                       "sensor ID, or the bus replaying frames): both cycles dropped, and every such "
+                                       "pair after them (counted in conflicting_frames)", self.sensor_id)
         if pending is None:
             self._stray_list_frame(kind, base, oid, data)
             return
