@@ -531,3 +531,82 @@ def test_a_bit_rate_too_low_for_the_cycle_keeps_the_log_in_time_order_and_says_s
     assert rc == 0, err
     stamps = [m.timestamp for m in can.LogReader(str(out))]
     assert len(stamps) > 500 and all(b >= a for a, b in zip(stamps, stamps[1:]))
+
+
+def test_one_late_list_time_neither_drops_the_others_nor_restarts_the_fused_tracks(tmp_path, capsys):
+    """One sensor's header stamped 3 s late (or not a number): the round's time was its lists' latest, so the other
+    sensors' lists were left out as stale and every fused track restarted with new IDs, without a word (an
+    independent tester's finding). The round's time is now the one most of its lists agree with; the late list is
+    left out, counted and said."""
+    log = tmp_path / "x.log"
+    assert main(["log", str(SCENARIOS / "front_and_corners.yaml"), "-o", str(log)]) == 0
+    capsys.readouterr()
+    lines = log.read_text().splitlines()
+    k = next(i for i, line in enumerate(lines) if " 61A#" in line and float(line[1:line.index(")")]) > 5.0)
+    t = float(lines[k][1:lines[k].index(")")])
+    glitch = tmp_path / "glitch.log"
+    glitch.write_text("\n".join(lines[:k] + [f"({t + 3.0:.6f})" + lines[k][lines[k].index(")") + 1:]]
+                                + lines[k + 1:]) + "\n")
+    scen = str(SCENARIOS / "front_and_corners.yaml")
+    assert main(["decode", str(log), "--fuse", scen]) == 0
+    clean = capsys.readouterr()
+    assert main(["decode", str(glitch), "--fuse", scen]) == 0
+    out, err = capsys.readouterr()
+    assert out.splitlines()[-1] == clean.out.splitlines()[-1]             # the same fused objects and rounds
+    assert "warning: fusion: stale_lists=1" in err and "restarts" not in err, err
+    assert "warning: fusion" not in clean.err
+
+
+def test_the_round_time_is_the_one_most_lists_agree_with():
+    fc = FusingConsumer({0: SensorMount(), 1: SensorMount(), 2: SensorMount()})
+    assert fc._round_time([5.0, 8.0, 5.01]) == 5.01                      # the majority's latest
+    assert fc._round_time([8.0, 8.0, 8.01]) == 8.01                      # all moved: a jump, restarted later
+    assert fc._round_time([5.0, math.inf, math.nan, 5.01]) == 5.01
+    assert fc._round_time([math.nan, math.inf]) is None
+    fc.fusion._last_t = 4.93
+    assert fc._round_time([5.0, 8.0]) == 5.0                              # a tie: the one that continues
+    fc.fusion._last_t = 7.95
+    assert fc._round_time([5.0, 8.0]) == 8.0
+
+
+def test_a_bus_error_neither_stops_the_fusing_consumer_nor_raises(caplog):
+    """python-can's notifier ends its thread on an exception its listener does not take (``on_error``): one
+    unreadable UDP datagram stopped ``consume --fuse`` for good, with a traceback (an independent tester's finding).
+    The frames after it are fused; the error is counted and warned once."""
+    import threading
+
+    class Flaky(can.BusABC):
+        def __init__(self, frames):
+            super().__init__(channel="flaky")
+            self.frames, self.done = list(frames), threading.Event()
+
+        def _recv_internal(self, timeout):
+            if len(self.frames) in (len(self.all) // 2, len(self.all) // 3):
+                self.frames.pop(0)
+                raise can.CanOperationError("could not unpack received message")
+            if not self.frames:
+                self.done.set()
+                threading.Event().wait(timeout or 0.01)
+                return None, False
+            return self.frames.pop(0), False
+
+        def send(self, msg, timeout=None):
+            pass
+
+    sc = load_scenario(SCENARIOS / "front_and_corners.yaml")
+    _, frames, _ = _frames(sc)
+    frames = frames[:600]
+    bus = Flaky(frames)
+    bus.all = frames
+    fc = FusingConsumer(_mounts(sc))
+    notifier = can.Notifier(bus, [fc], timeout=0.01)
+    try:
+        assert bus.done.wait(30)
+    finally:
+        notifier.stop()
+        bus.shutdown()
+    assert fc.bus_errors == 2 and fc.counters()["bus_errors"] == 2
+    assert sum(st.frames for st in fc.stats.values()) == 3 * (len(frames) - 2)      # every frame after them read
+    assert [r.getMessage() for r in caplog.records].count(
+        "bus error in the fusing consumer: could not unpack received message (further ones are counted in "
+        "bus_errors)") == 1

@@ -101,6 +101,7 @@ def _consume_fused(args) -> int:
             notifier.stop()
     for sid, st in fuser.stats.items():
         print(f"sensor {sid}: " + format_stats(st), file=sys.stderr)
+    print("fusion: " + ", ".join(f"{k}={v}" for k, v in fuser.counters().items()), file=sys.stderr)
     return stop.exit_status
 
 
