@@ -258,3 +258,22 @@ def test_a_sigterm_while_the_temporary_file_is_made_leaves_no_file(command, tmp_
                        cwd=ROOT)
     assert r.returncode == 143, r.stderr
     assert list(out.iterdir()) == []
+
+
+def test_decode_says_which_frames_are_on_an_extended_id(tmp_path, capsys):
+    """An extended frame 0x0000060A came out of decode's JSON and CSV with the same can_id as the standard 0x60A and
+    nothing to tell them apart but an empty message name (an independent tester's finding): a reader filtering on
+    can_id took the foreign frame. JSON says ``extended``; CSV writes the extended ID in 8 hex digits."""
+    from radarnode.cli.main import main
+    log = tmp_path / "ext.log"
+    log.write_text("(0.1) can0 0000060A#04000110 R\n(0.2) can0 60A#04000110 R\n")
+    out = tmp_path / "frames.jsonl"
+    assert main(["decode", str(log), "--format", "json", "-o", str(out)]) == 0
+    rows = [json.loads(line) for line in out.read_text().splitlines()]
+    assert [(r["can_id"], r["extended"], r["message"]) for r in rows] == [(0x60A, True, None),
+                                                                         (0x60A, False, "Obj_0_Status")]
+    out = tmp_path / "frames.csv"
+    assert main(["decode", str(log), "--format", "csv", "-o", str(out)]) == 0
+    rows = list(csv.reader(out.read_text().splitlines()))
+    assert [(r[2], r[5]) for r in rows[1:]] == [("0x0000060A", ""), ("0x60A", "Obj_0_Status")]
+    capsys.readouterr()

@@ -97,8 +97,10 @@ class FrameDecoder:
         # a NaN or infinite timestamp (a damaged or hand-made log) is written as null: JSON has no NaN
         stamp = float(msg.timestamp) if math.isfinite(msg.timestamp) else None
         self.bad_times += stamp is None
+        # an extended ID is said (JSON "extended"; CSV 8 hex digits, as candump writes it): 0x0000060A with the
+        # radar's low bits read as the standard 0x60A before (an independent tester's finding)
         rec = {"timestamp": stamp, "channel": channel, "can_id": msg.arbitration_id,
-               "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
+               "extended": bool(msg.is_extended_id), "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
                "dlc": msg.dlc, "data": bytes(msg.data).hex().upper(), "signals": {}}
         if info is None:
             self.unknown += 1
@@ -199,7 +201,8 @@ def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> Frame
             sig = rec["signals"]
             row = ["" if rec["timestamp"] is None else repr(rec["timestamp"]),
                    "" if rec["channel"] is None else rec["channel"],
-                   f"0x{rec['can_id']:03X}", "" if rec["sensor_id"] is None else rec["sensor_id"],
+                   f"0x{rec['can_id']:08X}" if rec["extended"] else f"0x{rec['can_id']:03X}",
+                   "" if rec["sensor_id"] is None else rec["sensor_id"],
                    "" if rec["cycle_counter"] is None else rec["cycle_counter"], rec["message"] or "",
                    rec["dlc"], rec["data"]]
             row += ["" if name not in sig or sig[name]["value"] is None else sig[name]["value"]
