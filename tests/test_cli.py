@@ -338,3 +338,20 @@ def test_run_names_the_actors_the_ego_met():
     assert "collisions: 'target' at 6.00 s" in r.stdout
     r = run("run", str(SCENARIOS / "acc_follow_90.yaml"), "--fast", "--quiet", "--closed-loop", "--duration", "5")
     assert r.returncode == 0 and "collisions" not in r.stdout, r.stdout
+
+
+@pytest.mark.parametrize("argv,message", [
+    (["consume", "-i", "virtual", "-c", "", "--count", "1", "--timeout", "1"],
+     "option -c/--channel: value '' is not allowed"),
+    (["consume", "-i", "virtual", "-c", " \t", "--count", "1", "--timeout", "1"],
+     "option -c/--channel: value ' \\t' is not allowed"),
+    (["consume", "-i", "virtual", "-c", "x", "--timeout", "1", "--sensor-id", "\u0661"], "option --sensor-id: value \u0661 is not"),
+    (["consume", "-i", "virtual", "-c", "x", "--timeout", "1", "--sensor-id", "\uff11"], "option --sensor-id: value \uff11 is not"),
+])
+def test_an_empty_channel_and_non_ascii_digits_are_refused(capsys, argv, message):
+    """An empty channel opened python-can's virtual bus on "channel-0"; '١' and '１' were read as sensor 1 (an
+    independent tester's findings)."""
+    from tests.helpers import cli
+    rc, _, err = cli(capsys, *argv)
+    assert rc == 2
+    assert message in err and "Traceback" not in err, err

@@ -136,7 +136,8 @@ def integer(*, lo: int | None = None, hi: int | None = None):
     """An argparse type: an integer (decimal) in [lo, hi]."""
     def parse(text: str) -> int:
         try:
-            value: object = int(text.strip(), 10) if "_" not in text else text
+            # (ASCII digits only: int() reads '١' and '１' as 1)
+            value: object = int(text.strip(), 10) if "_" not in text and text.isascii() else text
         except ValueError:
             value = text
         try:

@@ -24,7 +24,7 @@ UDP_RECEIVE_BUFFER_BYTES = 4 << 20   # udp_multicast: about 5000 datagrams, a se
 def add_bus_arguments(parser: argparse.ArgumentParser, bitrate: bool = True) -> None:
     group = parser.add_argument_group("bus (python-can conventions; missing options come from its config)")
     group.add_argument("-i", "--interface", help="python-can interface, e.g. socketcan, virtual, udp_multicast")
-    group.add_argument("-c", "--channel", help="channel, e.g. vcan0, 239.74.163.2")
+    group.add_argument("-c", "--channel", type=_channel, help="channel, e.g. vcan0, 239.74.163.2")
     if bitrate:
         group.add_argument("-b", "--bitrate", type=bitrate_option,
                            help="bit rate in bit/s, 10000..1000000 (also used for the bus-load budget)")
@@ -87,6 +87,15 @@ def bus_kwargs(args: argparse.Namespace) -> dict:
     if getattr(args, "bitrate", None):
         kwargs["bitrate"] = args.bitrate
     return kwargs
+
+
+def _channel(text: str) -> str:
+    """An argparse type: a channel name, not empty and printable (an empty one opened python-can's virtual bus on a
+    channel of its own choosing, "channel-0": an independent tester's finding)."""
+    if not text.strip() or not text.isprintable():
+        raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a channel name, e.g. vcan0 or "
+                                         "239.74.163.2 (printable characters, not empty)")
+    return text
 
 
 def open_bus(args: argparse.Namespace) -> can.BusABC:
