@@ -100,7 +100,8 @@ class FrameDecoder:
         # an extended ID is said (JSON "extended"; CSV 8 hex digits, as candump writes it): 0x0000060A with the
         # radar's low bits read as the standard 0x60A before (an independent tester's finding)
         rec = {"timestamp": stamp, "channel": channel, "can_id": msg.arbitration_id,
-               "extended": bool(msg.is_extended_id), "sensor_id": sensor, "cycle_counter": None, "message": info.base_name if info else None,
+               "extended": bool(msg.is_extended_id), "sensor_id": sensor, "cycle_counter": None,
+               "message": info.base_name if info else None,
                "dlc": msg.dlc, "data": bytes(msg.data).hex().upper(), "signals": {}}
         if info is None:
             self.unknown += 1

@@ -882,14 +882,13 @@ class CycleAssembler(can.Listener):
                         pending.contested.add((base, oid))
                     self._add(suspect, base, oid, data, values)
                     return
-                first = suspect.groups.get(base, {}).get(oid) or suspect.provisional.get(base, {}).get(oid)
-                if (base, oid) in pending.contested and not (first is not None and first[0] == data) \
-                        and not (pending.bad and suspect.bad):
+                if (base, oid) in pending.contested and not (pending.bad and suspect.bad) \
+                        and self._held_frame(suspect, base, oid) != data:
                     # another frame for a place both cycles have, after the held one took the first (a copy of that
-                    # one goes to the cycle in progress, as before: a duplicate): two senders of one sensor ID, or the bus replaying the last cycle (each frame of one beside the other's for
-                    # the same place), whose later groups cannot be told apart. Neither cycle is delivered: each
-                    # took one of the two, and went out with the other's sizes (an independent tester's finding:
-                    # 18 of 20 cycles mixed)
+                    # one goes to the cycle in progress, as before: a duplicate): two senders of one sensor ID, or the
+                    # bus replaying the last cycle (each frame of one beside the other's for the same place), whose
+                    # later groups cannot be told apart. Neither cycle is delivered: each took one of the two, and
+                    # went out with the other's sizes (an independent tester's finding: 18 of 20 cycles mixed)
                     pending.bad = suspect.bad = True
                     self.stats.conflicting_frames += 1
                     if not self._two_senders_warned:
@@ -903,6 +902,12 @@ class CycleAssembler(can.Listener):
         pending.arrival = time.monotonic()
         if self._add(pending, base, oid, data, values):
             self._maybe_complete(kind)
+
+    @staticmethod
+    def _held_frame(p: _Pending, base: int, oid: int) -> bytes | None:
+        """The data of cycle ``p``'s frame for place (``base``, ``oid``), taken in order or aside; None: none."""
+        frame = p.groups.get(base, {}).get(oid) or p.provisional.get(base, {}).get(oid)
+        return None if frame is None else frame[0]
 
     def _settles(self, kind: str, undecided: tuple, base: int, oid: int, data: bytes) -> bool:
         """A list frame while a tail frame is undecided (``_undecided``): settle it where this frame tells, and return

@@ -486,7 +486,6 @@ class FusingConsumer(can.Listener):
         self._out: list = []
         self.cluster_lists = 0          # cycles of a radar in cluster mode: they close a round, they are not fused
         self.bus_errors = 0             # frames the bus could not read (a notifier's on_error)
-        self.bad_rounds = 0             # rounds whose lists had no finite time: not fused, nothing sent
 
     def on_error(self, exc: Exception) -> None:
         """A frame the bus could not read (a notifier calls this): counted in ``bus_errors``, warned once, and the
@@ -499,7 +498,7 @@ class FusingConsumer(can.Listener):
     def counters(self) -> dict[str, int]:
         """What the fusion left out or restarted, and the bus errors, by name."""
         f = self.fusion
-        return {"stale_lists": f.stale_lists, "restarts": f.restarts, "bad_times": f.bad_times + self.bad_rounds,
+        return {"stale_lists": f.stale_lists, "restarts": f.restarts, "bad_times": f.bad_times,
                 "bad_objects": f.bad_objects, "unknown_sensor": f.unknown_sensor, "cluster_lists": self.cluster_lists,
                 "bus_errors": self.bus_errors}
 
@@ -527,8 +526,8 @@ class FusingConsumer(can.Listener):
             return
         from radarnode.consumer.assembler import ObjectCycle
         t = self._round_time([c.timestamp for c in self._round.values()])
-        if t is None:                    # no list with a time: nothing to fuse at, nothing sent
-            self.bad_rounds += 1
+        if t is None:                    # no list with a time: nothing to fuse at, nothing sent (bad_times)
+            self.fusion.bad_times += 1
             self._round = {}
             return
         # a radar that sends its cluster list closes the round on time, but only object lists are fused
