@@ -610,3 +610,13 @@ def test_a_bus_error_neither_stops_the_fusing_consumer_nor_raises(caplog):
     assert [r.getMessage() for r in caplog.records].count(
         "bus error in the fusing consumer: could not unpack received message (further ones are counted in "
         "bus_errors)") == 1
+
+
+@pytest.mark.parametrize("late,time", [(0.9, 5.9), (1.0, 6.0), (1.1, 5.01), (2.0, 5.01)])
+def test_the_round_time_at_the_gap_limit(late, time):
+    """One list ``late`` s after the others' 5.0 and 5.01, around MAX_GAP_S (1 s) and at twice it: within it every
+    list agrees with the latest time (all fused); beyond it the late one stands alone and the others' time is taken."""
+    from radarnode.consumer.fusion import MAX_GAP_S
+    assert MAX_GAP_S == 1.0
+    fc = FusingConsumer({0: SensorMount(), 1: SensorMount(), 2: SensorMount()})
+    assert fc._round_time([5.0, 5.0 + late, 5.01]) == pytest.approx(time, abs=1e-12)
