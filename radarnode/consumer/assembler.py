@@ -107,6 +107,7 @@ from __future__ import annotations
 import collections
 import dataclasses
 import logging
+import math
 import queue
 import threading
 import time
@@ -234,8 +235,18 @@ def _within_reach(counter: int, last: int, stride: int) -> bool:
 
 #: a general frame that fills a place after this many of the general group's frames repeated in order, from its
 #: first, after a later group began, is the next cycle's (its header lost): the cycle is dropped. One repeat is not
-#: enough: a cycle reordered within itself with one duplicate shows that too (the fuzz tests)
+#: enough by arrival order alone: a cycle reordered within itself with one duplicate shows that too (the fuzz tests)
 RERUN_FILL = 2
+#: … and after this many where each repeat came a good part of a period after its first copy (RERUN_MIN_PERIODS)
+RERUN_FILL_TIMED = 1
+
+#: a repeat of a general frame counts towards a rerun (the next cycle's, its header lost) only where it came at least
+#: this fraction of the sensor's cycle period after the first copy — where both times and the period are known. A
+#: copy sooner is a duplicate on the way (a gateway's, a retransmission): the next cycle's frames come a period later
+RERUN_MIN_PERIODS = 0.5
+
+#: header-to-header periods remembered, per kind; their median is the sensor's cycle period
+PERIOD_MEMORY = 5
 
 
 class _Pending:
@@ -269,6 +280,8 @@ class _Pending:
         # repeated so far since a later group began (any other frame taken breaks the run)
         self.sealed = False
         self.rerun = 0
+        self.rerun_timed = False      # each repeat of that run came a good part of a period after its first copy
+        self.general_times: dict[int, float] = {}    # object ID → time its general frame was taken
         self.short = False             # held at its end short of a few frames of its later groups (overtaken)
         # places of later groups (group, object) whose first frame a held header's cycle took, as it held the object
         # too: a second frame for one of them drops both cycles (two senders)
@@ -372,6 +385,12 @@ class CycleAssembler(can.Listener):
         # the next cycle's end: (the cycle in progress then, group, object ID, payload, signals)
         self._undecided: dict[str, tuple] = {}
         self._stride: dict[str, int] = {}
+        # the sensor's cycle period per kind: the time between headers one stride apart (the last few), and the time
+        # of the last header taken; a repeat of a general frame is the next cycle's only where it came a good part of
+        # a period after the first copy (:meth:`_may_rerun`)
+        self._periods: dict[str, collections.deque] = {k: collections.deque(maxlen=PERIOD_MEMORY) for k in GROUPS}
+        self._header_time: dict[str, float] = {}
+        self._stamp = float("nan")      # the time of the frame being handled
         self._told_none = False          # a RadarState said OutputType none since the last header taken
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
@@ -538,6 +557,7 @@ class CycleAssembler(can.Listener):
         except (cantools.database.DecodeError, ValueError, KeyError):
             self.stats.decode_errors += 1
             return
+        self._stamp = float(msg.timestamp)
         if base in HEADERS:
             self._header(base, values, data, msg.timestamp)
         elif base in LIST_KIND:
@@ -728,6 +748,9 @@ class CycleAssembler(can.Listener):
             stride = self._stride.get(kind)
             if stride is None or gap < stride:
                 self._stride[kind] = stride = gap
+            elapsed = timestamp - self._header_time.get(kind, float("nan"))
+            if gap == stride and math.isfinite(elapsed) and elapsed > 0.0:
+                self._periods[kind].append(elapsed)
             if gap > stride and self._told_none:
                 # cycles the sensor was told not to send (OutputType none; its RadarState says so at the change) are
                 # counted apart: an independent tester found ten such cycles in lost_cycles. (A stray RadarState
@@ -736,6 +759,7 @@ class CycleAssembler(can.Listener):
             elif gap > stride:
                 self._count_lost(kind, last, counter, stride)
         self._told_none = False
+        self._header_time[kind] = timestamp
         self._last_counter[kind] = counter
         self._counters[kind].append(counter)
         announced = self._announced[kind]
@@ -1041,9 +1065,11 @@ class CycleAssembler(can.Listener):
         if oid in group:
             if group[oid][0] == data:
                 self.stats.duplicate_frames += 1
-                if base == GENERAL[p.kind] and later_begun and p.expected >= 2:
-                    p.rerun = p.rerun + 1 if p.rerun < len(p.order) and p.order[p.rerun] == oid else \
-                        int(p.order[0] == oid)
+                timed = self._rerun_evidence(p, oid) if base == GENERAL[p.kind] else None
+                if base == GENERAL[p.kind] and later_begun and p.expected >= 2 and timed is not False:
+                    continuing = p.rerun < len(p.order) and p.order[p.rerun] == oid
+                    p.rerun_timed = (p.rerun_timed or not continuing or not p.rerun) and timed is True
+                    p.rerun = p.rerun + 1 if continuing else int(p.order[0] == oid)
                     p.sealed |= p.rerun == p.expected
                 else:
                     p.rerun = 0
@@ -1051,7 +1077,8 @@ class CycleAssembler(can.Listener):
                 self.stats.conflicting_frames += 1
                 p.bad = True
             return False
-        if base == GENERAL[p.kind] and later_begun and p.rerun >= RERUN_FILL:
+        if base == GENERAL[p.kind] and later_begun and p.rerun and \
+                p.rerun >= (RERUN_FILL_TIMED if p.rerun_timed else RERUN_FILL):
             # a general frame for a place still empty right after the general group began to repeat, in the
             # sensor's order from its first frame, after a later group began: the next cycle's general group, its
             # header lost (a standing sensor repeats its frames; the one for this cycle's lost place differs)
@@ -1076,12 +1103,26 @@ class CycleAssembler(can.Listener):
                 self.stats.extra_frames += 1
                 p.overflow = True
             p.order.append(oid)
+            p.general_times[oid] = self._stamp
         else:
             at = len(group)
             if at >= len(p.order) or p.order[at] != oid:
                 p.reordered = True
         group[oid] = (data, values)
         return True
+
+    def _rerun_evidence(self, p: _Pending, oid: int) -> bool | None:
+        """What the times say of a repeat of cycle ``p``'s general frame for object ``oid``, now: True where it came at
+        least RERUN_MIN_PERIODS of the sensor's cycle period after the first copy (it may be the next cycle's, a
+        standing sensor's with its header lost), False where sooner (a duplicate on the way: a cycle reordered with
+        two copies of its general frames sent at once was dropped for a standing sensor's, the fuzz test's cycle
+        388), None where times cannot tell (the period not known yet, a time missing or running backwards): arrival
+        order alone decides then, as it did before times were read."""
+        periods = self._periods[p.kind]
+        elapsed = self._stamp - p.general_times.get(oid, float("nan"))
+        if not periods or not math.isfinite(elapsed) or elapsed < 0.0:
+            return None
+        return elapsed >= RERUN_MIN_PERIODS * float(np.median(periods))
 
     def _resolve_overflow(self, p: _Pending) -> None:
         """At the end of cycle ``p``, which took more general frames than its header's count: where every later group
