@@ -607,6 +607,44 @@ def test_a_blf_log_keeps_every_channel_number_it_can_store(capsys, tmp_path, cha
     assert {m.channel for m in can.LogReader(str(out))} == {0 if number is None else number}
 
 
+@pytest.mark.parametrize("suffix", [".asc", ".asc.gz", ".blf", ".trc", ".log"])
+def test_decode_picks_a_channel_by_the_number_the_log_file_gives_it(capsys, tmp_path, suffix):
+    """A capture of two buses: the radar's frames on the interface ``can0`` and a copy of them on ``can1``. ASC, BLF
+    and TRC number their channels from 1: ``can0`` is stored as 1. Python-can's ASC and BLF readers gave 1 back as 0,
+    so ``decode x.asc --channel 1`` found nothing (an independent tester's finding). Now a number is the file's own
+    (decode's JSON shows it), and a name the interface's: ``can0`` and ``1`` pick the same bus there; in a candump
+    log, whose names are the interfaces', ``can0`` and ``0`` do."""
+    first = tmp_path / f"a{suffix}"
+    assert main(["log", SCENARIO, "-o", str(first), "--duration", "0.5", "--channel", "can0"]) == 0
+    frames = list(can.LogReader(str(first)))
+    second = [can.Message(timestamp=m.timestamp + 1e-4, arbitration_id=0x7F0, data=bytes(m.data),
+                          is_extended_id=False, channel="can1") for m in frames]
+    both = tmp_path / f"b{suffix}"
+    writer = logfiles.open_writer(str(both))
+    for m, copy in zip(frames, second):
+        m.channel = "can0"
+        writer.on_message_received(m)
+        writer.on_message_received(copy)
+    writer.stop()
+    capsys.readouterr()
+    one_based = suffix != ".log"
+    shown = {"can0": "1" if one_based else "can0", "can1": "2" if one_based else "can1"}
+
+    def picked(channel):
+        rc, out, err = cli(capsys, "decode", both, "--format", "json", "--channel", channel)
+        assert rc == 0, err
+        return [json.loads(line) for line in out.splitlines()], err
+
+    for name, number in (("can0", "1" if one_based else "0"), ("can1", "2" if one_based else "1")):
+        for channel in (name, number):
+            recs, err = picked(channel)
+            assert len(recs) == len(frames) and "warning" not in err, (channel, err)
+            assert {r["channel"] for r in recs} == {shown[name]}, channel
+            assert {r["can_id"] == 0x7F0 for r in recs} == {name == "can1"}, channel
+    recs, err = picked("3" if one_based else "2")
+    assert not recs and f"the log's frames are on: {shown['can0']}, {shown['can1']}" in err, err
+
+
 @pytest.mark.parametrize("damage", ["garbage", "garbled number", "no time"])
 def test_a_damaged_trc_record_is_reported_not_dropped_or_read(capsys, tmp_path, damage):
     # an independent tester's finding: python-can's TRC reader dropped a line of garbage without a word and parsed a

@@ -30,7 +30,8 @@ from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.busdbc import frame_table, signal_value
-from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_stem, log_format, read_frames
+from radarnode.wire.logfiles import (FORMATS, ONE_BASED_CHANNELS, ReadReport, check_input, check_stem, log_format,
+                                     read_frames)
 
 FORMATS_OUT = ("text", "json", "csv")
 FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]
@@ -51,8 +52,9 @@ def add_subparser(sub) -> None:
                    help="text: fuse the object lists of every radar of SCENARIO (its radars' sensor IDs and mounts) "
                         "into one list in the vehicle frame and print that")
     p.add_argument("--channel", default=None, type=options.name("a channel name"),
-                   help="only the frames of this channel (as the log names it: can1, or its number 1): a capture of "
-                        "several buses (default: every channel)")
+                   help="only the frames of this channel (as the log names it: can1, or its number 1; an ASC, BLF "
+                        "or TRC log numbers its channels from 1, and can0 is its channel 1): a capture of several "
+                        "buses (default: every channel)")
     p.add_argument("--summary", action="store_true", help="text: only the per-object summary, no per-cycle tables")
     p.add_argument("--max-cycles", type=options.COUNT, default=0,
                    help="text: print at most this many cycles (0: all)")
@@ -141,11 +143,17 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
 
 class ChannelPick:
     """``--channel``: the frames of one channel (its name, or the same number: python-can's ``channel2int`` takes
-    ``can1`` and ``1`` for one channel), and what the log held, for a warning when none was that channel's."""
+    ``can1`` and ``1`` for one channel), and what the log held, for a warning when none was that channel's.
 
-    def __init__(self, channel: str | None) -> None:
+    In a log that numbers its channels from 1 (``one_based``: ASC, BLF, TRC) a number is the file's, and a name is
+    the interface's, counted from 0 as SocketCAN does: ``can0`` is the file's channel 1, where ``log --channel can0``
+    wrote it."""
+
+    def __init__(self, channel: str | None, one_based: bool = False) -> None:
         from can.util import channel2int
         self.channel, self.number = channel, None if channel is None else channel2int(channel)
+        if one_based and self.number is not None and not channel.isdigit():
+            self.number += 1
         self.taken = 0                       # frames of the channel, over every pass
         self.seen: set[str] = set()          # the channels the log's frames came on
 
@@ -321,7 +329,6 @@ def check_output_suffix(path: str, fmt: str) -> None:
 
 def cmd(args) -> int:
     args.mounts = None
-    args.pick = ChannelPick(args.channel)
     if args.fuse is not None:
         if args.format != "text":
             raise UsageError(f"option --fuse: not allowed with --format {args.format}; expected --format text (the "
@@ -334,6 +341,7 @@ def cmd(args) -> int:
     if args.output is not None:
         check_output_suffix(args.output, args.format)
     fmt = check_input(args.file, "argument FILE")     # a missing, empty or unknown file fails before any output
+    args.pick = ChannelPick(args.channel, fmt in ONE_BASED_CHANNELS)
     if args.output is not None:
         if os.path.exists(args.output) and os.path.samefile(args.output, args.file):
             raise UsageError(f"option --output: value {args.output!r} is not allowed: it is the log being decoded; "

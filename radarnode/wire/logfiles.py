@@ -78,6 +78,12 @@ _ASC_HEADER = re.compile(r"\s*(date\s|base\s|//|(no)?\s*internal\s+events\s+logg
 TEXT_READERS = {".asc": _AscReader, ".csv": CSVReader, ".log": CanutilsLogReader, ".trc": TRCReader}
 #: every format radarnode writes and reads back; ``.mf4`` only with asammdf installed
 FORMATS = (".asc", ".blf", ".csv", ".db", ".log", ".trc", ".asc.gz", ".csv.gz", ".log.gz", ".trc.gz", ".mf4")
+#: formats whose files number their channels from 1 (Vector's ASC and BLF, PEAK's TRC): python-can's writers store a
+#: channel ``can0`` or ``0`` as 1. Its ASC and BLF readers give the file's number less one; :func:`read_frames` gives
+#: the file's own number for every one of them (an ASC log's channel 1 was read as 0: ``decode --channel 1`` found
+#: nothing, an independent tester's finding)
+ONE_BASED_CHANNELS = frozenset({".asc", ".asc.gz", ".blf", ".trc", ".trc.gz"})
+_READ_LESS_ONE = frozenset({".asc", ".asc.gz", ".blf"})
 MAX_BAD_WITHOUT_A_FRAME = 1000      # a file that yields only bad records is not a log of this format
 TOO_MANY_BAD = f"{MAX_BAD_WITHOUT_A_FRAME} bad records and not one frame: not a log of this format"
 #: python-can's readers and the Message constructor raise these on a record they cannot parse
@@ -352,7 +358,8 @@ def _reason(exc: object) -> str:
 def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
     """The frames of a log file, skipping and counting (in ``report``) what cannot be read.
 
-    The file must have passed :func:`check_input`. Errors of the code that consumes the frames pass through.
+    The file must have passed :func:`check_input`. Errors of the code that consumes the frames pass through. A
+    frame's channel is the one the file names (an ASC, BLF or TRC log's numbers from 1: ONE_BASED_CHANNELS).
     """
     fmt = report.fmt
     base = fmt[:-3] if fmt.endswith(".gz") else fmt
@@ -366,6 +373,7 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
         frames = _WholeFrames(path, report, can.io.MF4Reader, "frame")
     else:                                  # pragma: no cover - check_input refuses it
         raise UsageError(f"{path!r}: no reader for {fmt!r}")
+    less_one = fmt in _READ_LESS_ONE
     for msg in frames:
         problem = _frame_problem(msg)
         if problem is not None:
@@ -373,6 +381,8 @@ def read_frames(path: str, report: ReadReport) -> Iterator[can.Message]:
             if report.hopeless(frames.where()):
                 return
             continue
+        if less_one and isinstance(msg.channel, int) and not isinstance(msg.channel, bool):
+            msg.channel += 1                 # the file's own number
         report.frames += 1
         yield msg
 
