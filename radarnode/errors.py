@@ -17,6 +17,21 @@ def short_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
+def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
+    """:func:`short_repr` of a value read from YAML, its ``null``, ``true`` and ``false`` spelt as the file spells
+    them (a scenario error showed ``None`` and ``True``: an independent tester's finding)."""
+    def spell(v: object) -> str:
+        if v is None or isinstance(v, bool):
+            return {None: "null", True: "true", False: "false"}[v]
+        if isinstance(v, (list, tuple)):
+            return "[" + ", ".join(spell(x) for x in v) + "]"
+        if isinstance(v, dict):
+            return "{" + ", ".join(f"{spell(k)}: {spell(x)}" for k, x in v.items()) + "}"
+        return repr(v)
+    text = spell(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 class RadarnodeError(Exception):
     """Base class of every error radarnode raises on purpose.
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 
 import yaml
 
-from radarnode.errors import FieldError, ScenarioError, short_repr
+from radarnode.errors import FieldError, ScenarioError, yaml_repr
 
 
 class Loader(yaml.SafeLoader):
@@ -218,7 +218,7 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
     named = f" ({who})" if who else ""
     if not isinstance(data, dict):
         what = "a mapping" if path else "a mapping of the scenario's fields (name, duration_s, seed, …)"
-        raise src.error(path, f"field '{where}': value {short_repr(data)} is not allowed; expected {what}")
+        raise src.error(path, f"field '{where}': value {yaml_repr(data)} is not allowed; expected {what}")
     aliases = schema.aliases.get(cls, {})
     inverse = {v: k for k, v in aliases.items()}
     fields = {f.name: f for f in dataclasses.fields(cls) if f.name not in schema.internal}
@@ -239,7 +239,7 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
             sub, many = nested
             if many:
                 if not isinstance(value, list):
-                    raise src.error(child, f"field '{child}': value {short_repr(value)} is not allowed; expected a "
+                    raise src.error(child, f"field '{child}': value {yaml_repr(value)} is not allowed; expected a "
                                     "list")
                 meaning = schema.non_empty.get(cls, {}).get(name)
                 if not value and meaning is not None:
@@ -259,7 +259,7 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         key = inverse.get(exc.field.split(".")[0], exc.field.split(".")[0])
         rest = exc.field[len(exc.field.split(".")[0]):]
         child = (f"{path}.{key}" if path else key) + rest
-        raise src.error(child, f"field '{child}'{named}: value {short_repr(exc.value)} is not allowed; expected "
+        raise src.error(child, f"field '{child}'{named}: value {yaml_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}{quoted_number_hint(exc.value)}") from None
     except TypeError as exc:  # pragma: no cover - defensive: a field the schema does not describe
         raise src.error(path, f"{where}: {exc}") from None

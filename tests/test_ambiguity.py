@@ -703,7 +703,7 @@ def test_auto_fits_only_peaks_that_migrate_enough(monkeypatch, threshold, fits):
 
 
 @pytest.mark.parametrize("preset, dsp, said", [
-    ("fast_chirp", "{migration_fit: true}", "value True is not allowed; expected false or auto with preset fast_chirp"),
+    ("fast_chirp", "{migration_fit: true}", "value true is not allowed; expected false or auto with preset fast_chirp"),
     ("scanning_ka", "{doa: capon}", "value 'capon' is not allowed; expected 'fft' with preset scanning_ka")])
 def test_a_scenario_whose_preset_cannot_run_its_dsp_option_is_refused_with_file_and_line(tmp_path, preset, dsp, said):
     """An option the preset cannot run is refused when the scenario is loaded, with the file, the line, the field,

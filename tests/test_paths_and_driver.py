@@ -120,7 +120,7 @@ def test_mixed_timed_and_untimed_waypoints_and_accel_with_times_are_refused(tmp_
     p = tmp_path / "bad.yaml"
     p.write_text(PATH.format(extra="speed_mps: 5.0").replace("{x_m: 50.0, y_m: 3.5}", "{t_s: 2.0, x_m: 50.0, y_m: 3.5}"))
     with pytest.raises(ScenarioError,
-                       match=r":10: field 'actors\[0\].waypoints\[0\].t_s' \(actor 'a'\): value None.*on every waypoint"):
+                       match=r":10: field 'actors\[0\].waypoints\[0\].t_s' \(actor 'a'\): value null.*on every waypoint"):
         load_scenario(p)
     timed = PATH.format(extra="accel: [{t_s: 1.0, accel_mps2: -2.0}]").replace(
         "{x_m: 20.0, y_m: 3.5}", "{t_s: 0.0, x_m: 20.0, y_m: 3.5}").replace(

@@ -266,7 +266,7 @@ def test_lane_out_of_road(tmp_path):
 
 
 def test_bool_is_not_a_number(tmp_path):
-    _fails(tmp_path, GOOD.replace("duration_s: 2.0", "duration_s: true"), ":2:", "duration_s", "True")
+    _fails(tmp_path, GOOD.replace("duration_s: 2.0", "duration_s: true"), ":2:", "duration_s", "value true is")
 
 
 def test_duplicate_key(tmp_path):

@@ -131,3 +131,19 @@ def test_a_refused_max_distance_gets_its_error_and_no_warning_computed_from_it(t
     rc, _, err = cli(capsys, "log", path, "-o", tmp_path / "maxd.blf")
     assert rc == 1 and "field 'radar.max_distance_m': value 4" in err and "never" not in err, err
     assert "10…the preset's max range" in (ROOT / "scenarios" / "README.md").read_text()
+
+
+@pytest.mark.parametrize("line, field, shown", [
+    ("ego: {speed_mps: null}", "ego.speed_mps", "null"),
+    ("ego: {speed_mps: ~}", "ego.speed_mps", "null"),
+    ("ego: {speed_mps: true}", "ego.speed_mps", "true"),
+    ("ego: {speed_mps: False}", "ego.speed_mps", "false"),
+    ("road: {lanes: [1, null, true]}", "road.lanes", "[1, null, true]"),
+    ("radar: {preset: null}", "radar.preset", "null")])
+def test_a_refused_yaml_null_or_boolean_is_shown_as_the_file_spells_it(tmp_path, capsys, line, field, shown):
+    """A scenario error showed YAML's null and true as Python's None and True (an independent tester's finding)."""
+    path = tmp_path / "s.yaml"
+    path.write_text(f"name: s\nduration_s: 2\nseed: 1\n{line}\n")
+    rc, _, err = cli(capsys, "run", path)
+    assert rc == 1 and f"s.yaml:4: field '{field}': value {shown} is not allowed" in err, err
+    assert "None" not in err and "True" not in err and "False" not in err, err

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from radarnode.errors import FieldError, short_repr
+from radarnode.errors import FieldError, yaml_repr
 from radarnode.radar.chain import DspConfig, preset_conflicts
 from radarnode.radar.checks import check_scenario
 from radarnode.radar.options import Impairments, SignalOptions
@@ -50,7 +50,7 @@ def radar_config(scenario: Scenario) -> RadarConfig:
         preset = get_preset(scenario.radar.preset).with_overrides(scenario.radar.overrides)
     except FieldError as exc:
         child = f"{root}.{exc.field}"
-        raise src.error(child, f"field '{child}': value {short_repr(exc.value)} is not allowed; expected "
+        raise src.error(child, f"field '{child}': value {yaml_repr(exc.value)} is not allowed; expected "
                                f"{exc.allowed}") from None
     if scenario.fidelity == "auto":
         from radarnode.radar.levels import auto_refused
@@ -75,8 +75,8 @@ def _with_preset_pfa(signal: SignalOptions, scenario: Scenario, preset: RadarPre
     given = isinstance(dsp, dict) and "pfa" in dsp
     overridden = "pfa" in (scenario.radar.overrides or {})
     if given and overridden and signal.dsp.pfa != preset.pfa:
-        raise src.error("signal.dsp.pfa", f"field 'signal.dsp.pfa': value {short_repr(signal.dsp.pfa)} is not allowed; "
-                                          f"expected {short_repr(preset.pfa)}, the pfa {root}.overrides sets (or one "
+        raise src.error("signal.dsp.pfa", f"field 'signal.dsp.pfa': value {yaml_repr(signal.dsp.pfa)} is not allowed; "
+                                          f"expected {yaml_repr(preset.pfa)}, the pfa {root}.overrides sets (or one "
                                           "of the two left out)")
     if given or signal.dsp.pfa == preset.pfa:
         return signal
@@ -90,7 +90,7 @@ def _check_dsp_for_preset(dsp: DspConfig, preset: RadarPreset, src: Source, root
     if conflicts:
         field, why, allowed = conflicts[0]
         child = f"signal.dsp.{field}"
-        raise src.error(child, f"field '{child}': value {short_repr(getattr(dsp, field))} is not allowed; expected "
+        raise src.error(child, f"field '{child}': value {yaml_repr(getattr(dsp, field))} is not allowed; expected "
                                f"{allowed} with preset {preset.name} of {root} ({why})")
 
 

@@ -20,7 +20,7 @@ from pathlib import Path
 
 
 from radarnode import validate
-from radarnode.errors import FieldError, ScenarioError
+from radarnode.errors import FieldError, ScenarioError, yaml_repr
 from radarnode.schema import Schema, Source, build
 
 #: class name -> (ARS 408 Obj_Class code, default length m, default width m, default RCS dBsm)
@@ -682,8 +682,8 @@ def read_scenario_text(text: str, name: str = "<string>") -> Scenario:
 
 def _built(src: Source, name: str) -> Scenario:
     if isinstance(src.data, dict) and "radars" in src.data and not src.data["radars"]:
-        raise src.error("radars", f"field 'radars': value {src.data['radars']!r} is not allowed; expected a list of "
-                                  "one radar or more (or no 'radars' and one 'radar')")
+        raise src.error("radars", f"field 'radars': value {yaml_repr(src.data['radars'])} is not allowed; expected a "
+                                  "list of one radar or more (or no 'radars' and one 'radar')")
     return build(Scenario, src.data, "", src, SCHEMA, extra={"source": name, "lines": src.lines})
 
 
