@@ -454,7 +454,17 @@ def test_decode_fuse_says_which_sensor_of_the_scenario_sent_nothing(tmp_path, ca
     scen = tmp_path / "three.yaml"
     scen.write_text(THREE.format(duration=0.5))
     assert main(["decode", str(log), "--fuse", str(scen), "--summary"]) == 0
-    assert f"warning: sensor 2 of --fuse {scen} sent no cycle in {log}" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert f"warning: sensor 2 of --fuse {scen} sent no cycle in {log}\n" in err
+    # a scenario whose radars are other sensor IDs than the log's: each warning names the IDs the log holds
+    moved = tmp_path / "moved.yaml"
+    moved.write_text(THREE.format(duration=0.5).replace("sensor_id: 1", "sensor_id: 5").replace("sensor_id: 2",
+                                                                                                "sensor_id: 6"))
+    assert main(["decode", str(log), "--fuse", str(moved), "--summary"]) == 0
+    err = capsys.readouterr().err
+    for sid in (5, 6):
+        assert (f"warning: sensor {sid} of --fuse {moved} sent no cycle in {log} (the log holds frames of sensor ID 1, "
+                "which it has no radar for)") in err, err
 
 
 @pytest.mark.parametrize("gap_s, restarts", [(0.9, 0), (1.0, 0), (1.1, 1), (2.0, 1)])

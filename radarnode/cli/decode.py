@@ -254,10 +254,15 @@ def _write_fused(args, out, report: ReadReport, census: SensorCensus) -> None:
         bar.close()
     if report.frames == 0:
         raise FileError(report.message("argument FILE"))
+    # sensors the log holds that the scenario has no radar for: named where one of its radars sent nothing (a log of
+    # other sensor IDs gave a warning per radar and no word of the IDs it held: an independent tester's finding)
+    others = sorted(census.present - set(fuser.stats))
+    held = f" (the log holds frames of sensor ID {', '.join(map(str, others))}, which it has no radar for)" \
+        if others else ""
     for sid, st in fuser.stats.items():
         out.write(f"sensor {sid}: " + format_stats(st) + "\n")
         if st.as_dict()["cycles"] == 0:
-            print(f"warning: sensor {sid} of --fuse {args.fuse} sent no cycle in {args.file}", file=sys.stderr)
+            print(f"warning: sensor {sid} of --fuse {args.fuse} sent no cycle in {args.file}{held}", file=sys.stderr)
     if fuser.cluster_lists:
         print(f"warning: {fuser.cluster_lists} cluster lists were not fused (only object lists are)", file=sys.stderr)
     left = {k: v for k, v in fuser.counters().items() if v and k not in ("cluster_lists", "bus_errors")}
