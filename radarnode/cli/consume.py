@@ -132,6 +132,9 @@ def cmd(args) -> int:
                 if args.count and n >= args.count:
                     break
         finally:
+            # stopped by --count or a signal: the cycle in progress was cut by this stop, not lost on the bus; after a
+            # --timeout of silence it ended as it is (as at the end of a log)
+            assembler.leave_unfinished = bool(args.count and n >= args.count) or stop.is_set()
             notifier.stop()
     print(format_stats(assembler.stats), file=sys.stderr)
     return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM

@@ -162,6 +162,7 @@ class ConsumerStats:
     cluster_cycles: int = 0
     incomplete_cycles: int = 0      # started but not well-formed: dropped
     timed_out_cycles: int = 0       # closed after cycle_timeout_s of silence (delivered or dropped)
+    unfinished_cycles: int = 0      # in progress when the listener was stopped on purpose: neither sent nor dropped
     lost_cycles: int = 0            # gaps in MeasCounter
     quiet_cycles: int = 0           # gaps in MeasCounter after RadarState said OutputType none: not sent, not lost
     counter_resets: int = 0         # MeasCounter went backwards: sensor restart
@@ -391,6 +392,9 @@ class CycleAssembler(can.Listener):
         self._periods: dict[str, collections.deque] = {k: collections.deque(maxlen=PERIOD_MEMORY) for k in GROUPS}
         self._header_time: dict[str, float] = {}
         self._stamp = float("nan")      # the time of the frame being handled
+        #: at :meth:`stop`, leave the cycles in progress unfinished rather than close them (the listener stopped on
+        #: purpose, before the sensor's cycle ended)
+        self.leave_unfinished = False
         self._told_none = False          # a RadarState said OutputType none since the last header taken
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
@@ -450,6 +454,16 @@ class CycleAssembler(can.Listener):
             logger.warning("bus error in consumer: %s (further ones are counted in bus_errors)", exc)
 
     def stop(self) -> None:
+        """End of listening (a notifier calls this): the cycles in progress are closed (:meth:`flush`), as at the end
+        of data — or, where :attr:`leave_unfinished` was set (``consume --count`` reached, or Ctrl-C: the listener
+        stopped, not the sensor), left unfinished and counted in ``unfinished_cycles``, not in ``incomplete_cycles``
+        (the cycle after the last one asked for was counted as incomplete: an independent tester's finding)."""
+        if self.leave_unfinished:
+            with self._lock:
+                waiting = [p for p in self._pending.values() if not p.early] + list(self._held.values())
+                self.stats.unfinished_cycles += len(waiting)
+                self._pending.clear()
+                self._held.clear()
         self.flush()
 
     # --- reading cycles ----------------------------------------------------------
