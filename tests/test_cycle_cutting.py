@@ -100,14 +100,20 @@ def _intact(cycle, sent, quality: bool, ext: bool, counter: int, warn: dict | No
             and (not (ext and n) or np.array_equal(got.obj_class, sent.obj_class)))
 
 
-def _match(delivered, cycles) -> tuple[int, list]:
-    """Walk the delivered cycles against what the node sent, in order; returns (matched, extra deliveries)."""
+def _match(delivered, cycles, may_drop: frozenset = frozenset()) -> tuple[int, list]:
+    """Walk the delivered cycles against what the node sent, in order; returns (matched, extra deliveries). The
+    cycles whose indices are in ``may_drop`` may be missing (counted as matched then)."""
     k, extra = 0, []
     for c in delivered:
-        if k < len(cycles) and _intact(c, *cycles[k][1:]):
-            k += 1
+        j = k
+        while j < len(cycles) and j in may_drop and not _intact(c, *cycles[j][1:]):
+            j += 1
+        if j < len(cycles) and _intact(c, *cycles[j][1:]):
+            k = j + 1
         else:
             extra.append(c)
+    while k < len(cycles) and k in may_drop:
+        k += 1
     return k, extra
 
 
@@ -247,6 +253,10 @@ def _fuzz(cycles, rng: np.random.Generator, garbage_per_cycle: int = 12, gaps: b
     stream, counts = [], {"garbage": 0, "bogus_empty": 0, "stray_state_off": 0, "lost": 0, "truncated": 0,
                           "bad_stamps": 0}
     expected = []
+    # the cycles (indices into expected) that may be dropped: reordered so that copies of two of their general frames
+    # come after a later group began, which arrival order cannot tell from a standing sensor's next cycle with its
+    # header lost (RERUN_FILL), nor times, where a gateway may have held the cycle back
+    counts["ambiguous"] = set()
     for cycle in cycles:
         frames = [_msg(m.arbitration_id, m.data, m.timestamp) for m in cycle[0]]
         h = next(i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_STATUS)
@@ -294,14 +304,31 @@ def _fuzz(cycles, rng: np.random.Generator, garbage_per_cycle: int = 12, gaps: b
         counts["garbage"] += len(inside) + len(between)
         counts["stray_state_off"] += sum(m.arbitration_id == P.RADAR_STATE and len(m.data) == 8
                                          and not m.data[5] & 0x30 for m in inside + between)   # SendQuality/ExtInfo: bits 44, 45
+        if expected and expected[-1] is cycle and _general_repeats_after_a_later_group(body) >= 2:
+            counts["ambiguous"].add(len(expected) - 1)
         stream += between + frames[:h + 1] + body
     return stream, counts, expected
+
+
+def _general_repeats_after_a_later_group(body) -> int:
+    """How many exact repeats of a general frame come after a frame of a later group, in one cycle's frames."""
+    seen, later, repeats = set(), False, 0
+    for m in body:
+        if m.arbitration_id == P.OBJ_GENERAL:
+            key = bytes(m.data)
+            repeats += later and key in seen
+            seen.add(key)
+        elif m.arbitration_id in (P.OBJ_QUALITY, P.OBJ_EXTENDED, P.OBJ_WARNING):
+            later = True
+    return repeats
 
 
 def _check_fuzz(expected, stream, counts):
     asm = CycleAssembler()
     got = list(asm.feed(stream))
-    matched, extra = _match(got, expected)
+    matched, extra = _match(got, expected, frozenset(counts["ambiguous"]))
+    dropped = len(expected) - (len(got) - len(extra))
+    assert dropped <= 1 + len(expected) // 1000, f"{dropped} ambiguous cycles dropped"    # (rare: the test stays one)
     st = asm.stats
     assert st.frames == len(stream) and st.decode_errors == 0               # nothing raised inside the listener
     assert matched == len(expected), f"{len(expected) - matched} of {len(expected)} well-formed cycles not intact"
@@ -382,7 +409,8 @@ def test_fuzz_over_a_hundred_thousand_frames():
     asm, extra = _check_fuzz(expected, stream, counts)
     print(f"fuzz: {len(stream)} frames, {counts['garbage']} garbage, {counts['stray_state_off']} stray RadarState "
           f"with both groups off, {len(expected)} cycles intact, {counts['lost']} lost and {counts['truncated']} "
-          f"truncated on the way, {extra} bogus empty cycles, stats {asm.stats.as_dict()}")
+          f"truncated on the way, {extra} bogus empty cycles, {len(counts['ambiguous'])} that may be dropped, stats "
+          f"{asm.stats.as_dict()}")
 
 
 def _header_of(frames) -> can.Message:
@@ -876,8 +904,8 @@ def test_a_cycle_with_a_hole_inside_is_not_held_for_a_frame_after_the_next_heade
 
 @pytest.mark.parametrize("lost, which, stamped", [
     *[(lost, which, stamped) for lost, which in ((P.OBJ_QUALITY, 0), (P.OBJ_EXTENDED, 0), (P.OBJ_GENERAL, 2))
-      for stamped in (True, False)],
-    (P.OBJ_GENERAL, 1, True)])
+      for stamped in ("a period later", "unstamped", "held back 40 ms", "whole seconds")],
+    (P.OBJ_GENERAL, 1, "a period later")])
 def test_a_lost_header_between_two_cycles_of_a_standing_scene_never_mixes_them(lost, which, stamped):
     """A standing sensor repeats its frames cycle after cycle. One list frame of cycle k lost, and the header of cycle
     k + 1: the next cycle's general frames came as exact repeats of k's (counted as duplicates), and its frame for
@@ -889,8 +917,11 @@ def test_a_lost_header_between_two_cycles_of_a_standing_scene_never_mixes_them(l
     RERUN_FILL of the group's frames repeated in order, from its first, is the next cycle's too (the third object's
     here; the first two's places are a known limit), and one repeat is enough where it came a good part of a period
     after its first copy (RERUN_FILL_TIMED: the second object's place too; the first's is a known limit). Every cycle
-    delivered is as sent; k is not, and the loss is counted. The next cycle's frames come a period after k's
-    (stamped), or every time is 0 (unstamped: a log without times, where arrival order alone decides)."""
+    delivered is as sent; k is not, and the loss is counted. The next cycle's frames come a period after k's, or
+    every time is 0 (unstamped: a log without times, where arrival order alone decides), or k's list frames were held
+    back 40 ms of the 72-ms period by a gateway, or the logger kept whole seconds: the repeats then come sooner than
+    half a period after their first copies, and arrival order decides (a repeat sooner once reset the rule, and k went
+    out with the next cycle's frame: an independent tester's finding)."""
     cycles = _node_cycles(12)
     clean = [m for frames_, *_ in cycles for m in frames_]
     truth = _oracle(clean)
@@ -905,10 +936,13 @@ def test_a_lost_header_between_two_cycles_of_a_standing_scene_never_mixes_them(l
         if m.arbitration_id == lost and m.data == frames_k[target].data:
             data[-1] ^= 0x01
         again.append(_msg(m.arbitration_id, data, m.timestamp + 0.072))
-    stream = ([m for f, *_ in cycles[:k] for m in f] + frames_k[:target] + frames_k[target + 1:] + again
-              + [m for f, *_ in cycles[k + 2:] for m in f])
-    if not stamped:
-        stream = [_msg(m.arbitration_id, m.data) for m in stream]
+    own = frames_k[:target] + frames_k[target + 1:]
+    if stamped == "held back 40 ms":
+        own = [_msg(m.arbitration_id, m.data, m.timestamp + 0.040 * (m.arbitration_id in LIST_IDS[1:])) for m in own]
+    stream = [m for f, *_ in cycles[:k] for m in f] + own + again + [m for f, *_ in cycles[k + 2:] for m in f]
+    if stamped in ("unstamped", "whole seconds"):
+        stream = [_msg(m.arbitration_id, m.data, 0.0 if stamped == "unstamped" else float(int(m.timestamp)))
+                  for m in stream]
     asm = CycleAssembler()
     got = list(asm.feed(stream))
     wrong = [c.meas_counter for c in got if c.meas_counter not in truth or not _same_cycle(c, truth[c.meas_counter])]
@@ -920,14 +954,15 @@ def test_a_lost_header_between_two_cycles_of_a_standing_scene_never_mixes_them(l
 
 @pytest.mark.parametrize("copies", [1, 2])
 @pytest.mark.parametrize("periods", [0.0, 0.25, 0.49, 0.499, 0.501, 0.51, 1.0, 2.0])
-def test_copies_of_general_frames_sooner_than_half_a_period_are_duplicates_not_the_next_cycle(periods, copies):
-    """A cycle reordered on the way (its third general frame after its first 0x60C) with copies of its first two
-    general frames (or its first) ahead of that frame: the slow fuzz test's cycle 388 was dropped so, taken for a
-    standing sensor's next cycle with its header lost (RERUN_FILL). The next cycle's frames come a period after this
-    cycle's; a copy sooner than RERUN_MIN_PERIODS (half) of the period measured between headers is a duplicate on the
-    way, and the cycle is delivered whole. From half a period on, the copies look like the next cycle's, and the
-    cycle is dropped (never delivered wrong), one copy being enough then (RERUN_FILL_TIMED). (Just below and above
-    half a period, not at it: the times are sums of floats.)"""
+def test_one_copy_of_a_general_frame_is_the_next_cycles_from_half_a_period_on(periods, copies):
+    """A cycle reordered on the way (its third general frame after its first 0x60C) with a copy of its first general
+    frame (or of its first two) ahead of that frame. The next cycle's frames come a period after this cycle's: one
+    copy sooner than RERUN_MIN_PERIODS (half) of the period measured between headers is a duplicate on the way, and
+    the cycle is delivered whole; from half a period on it looks like the next cycle's (a standing sensor's, its
+    header lost), one copy being enough then (RERUN_FILL_TIMED), and the cycle is dropped. Two copies are the next
+    cycle's by arrival order (RERUN_FILL) whenever they came: times only make the rule stricter, since a gateway that
+    held the cycle back makes the next cycle's frames come sooner too (an independent tester's finding), so that
+    cycle is dropped. (Just below and above half a period, not at it: the times are sums of floats.)"""
     cycles = _node_cycles(12)
     period = cycles[1][0][0].timestamp - cycles[0][0][0].timestamp
     clean = [m for f, *_ in cycles for m in f]
@@ -937,13 +972,13 @@ def test_copies_of_general_frames_sooner_than_half_a_period_are_duplicates_not_t
     general = [m for m in frames if m.arbitration_id == P.OBJ_GENERAL]
     frames.remove(general[2])
     at = next(i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_QUALITY) + 1
-    copies = [_msg(g.arbitration_id, g.data, g.timestamp + periods * period) for g in general[:copies]]
-    frames[at:at] = copies + [general[2]]
+    repeats = [_msg(g.arbitration_id, g.data, g.timestamp + periods * period) for g in general[:copies]]
+    frames[at:at] = repeats + [general[2]]
     stream = [m for f, *_ in cycles[:k] for m in f] + frames + [m for f, *_ in cycles[k + 1:] for m in f]
     wrong, got = _wrong(stream, truth)
     assert not wrong, wrong
     delivered = cycles[k][4] in [c.meas_counter for c in got]
-    assert delivered == (periods < 0.5), [c.meas_counter for c in got]
+    assert delivered == (copies == 1 and periods < 0.5), [c.meas_counter for c in got]
     assert len(got) == len(cycles) - (not delivered)
 
 
@@ -1328,3 +1363,51 @@ def test_two_senders_of_one_sensor_id_never_mix_their_cycles(lag, caplog):
     assert asm.stats.conflicting_frames > 0
     said = [r.getMessage() for r in caplog.records if "two frames for one place" in r.getMessage()]
     assert len(said) == 1 and said[0].startswith("sensor 0: "), said                # once, naming the sensor
+
+
+def test_a_header_taken_out_as_stray_leaves_the_sensors_period_as_it_was():
+    """A forged header (a plausible MeasCounter, objects announced, none of its frames) stamped 1000 s back, just
+    before the sensor's own: taken out as stray when the next header continues the count from before it — its time
+    no longer counts towards the period the rerun rule reads (it made the period 1000 s: an independent tester's
+    finding)."""
+    cycles = _node_cycles(10)
+    db = load_database()
+    stream = []
+    for k, (frames, *_, counter, _warn) in enumerate(cycles):
+        if k in (5, 7):
+            head = next(m for m in frames if m.arbitration_id == P.OBJ_STATUS)
+            forged = db.encode_message(P.OBJ_STATUS, {"Obj_NofObjects": 3, "Obj_MeasCounter": counter + 2,
+                                                      "Obj_InterfaceVersion": 1})
+            stream.append(_msg(P.OBJ_STATUS, forged, head.timestamp - 1000.0))
+        stream += frames
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    assert [c.meas_counter for c in got] == [c[4] for c in cycles] and asm.stats.stray_headers == 2
+    period = cycles[1][0][0].timestamp - cycles[0][0][0].timestamp
+    assert np.allclose(asm._periods["obj"], period), list(asm._periods["obj"])
+
+
+@pytest.mark.parametrize("leave", [True, False])
+def test_a_stop_accounts_for_the_empty_cycles_behind_a_held_one(leave):
+    """A cycle held short of a group (0x60D missing) and an empty cycle behind it when the listener stops: left
+    unfinished, both are counted in unfinished_cycles (the empty one vanished, counted nowhere: an independent
+    tester's finding); closed as at the end of data, the held one is incomplete and the empty one delivered."""
+    cycles = _node_cycles(8)
+    db = load_database()
+    stream = [m for f, *_ in cycles[:6] for m in f]
+    stream += [m for m in cycles[6][0] if m.arbitration_id != P.OBJ_EXTENDED]
+    empty = db.encode_message(P.OBJ_STATUS, {"Obj_NofObjects": 0, "Obj_MeasCounter": cycles[6][4] + 1,
+                                             "Obj_InterfaceVersion": 1})
+    stream.append(_msg(P.OBJ_STATUS, empty, 1.0))
+    asm = CycleAssembler()
+    asm.leave_unfinished = leave
+    for m in stream:
+        asm.on_message_received(m)
+    asm.stop()
+    got = [c.meas_counter for c in asm.drain()]
+    st = asm.stats
+    assert got[:6] == [c[4] for c in cycles[:6]]
+    if leave:
+        assert len(got) == 6 and (st.unfinished_cycles, st.incomplete_cycles) == (2, 0), st.as_dict()
+    else:
+        assert got[6:] == [cycles[6][4] + 1] and (st.unfinished_cycles, st.incomplete_cycles) == (0, 1)

@@ -645,6 +645,29 @@ def test_decode_picks_a_channel_by_the_number_the_log_file_gives_it(capsys, tmp_
     assert not recs and f"the log's frames are on: {shown['can0']}, {shown['can1']}" in err, err
 
 
+@pytest.mark.parametrize("suffix", [".asc", ".blf", ".trc", ".log"])
+@pytest.mark.parametrize("channel", ["0", "1", "2", "can0", "can1"])
+def test_log_and_decode_read_one_channel_option_alike(capsys, tmp_path, suffix, channel):
+    """``log --channel 1 -o x.asc`` wrote the file's channel 2 (python-can's writer adds one to a number), so
+    ``decode x.asc --channel 1`` found nothing (an independent tester's finding). In a format that numbers channels
+    from 1 a bare number is the file's channel for both commands (0 is refused), a name the interface's, from 0."""
+    out = tmp_path / f"x{suffix}"
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", out, "--duration", "0.3", "--channel", channel)
+    if suffix != ".log" and channel == "0":
+        assert rc == 2 and f"option --channel: value '0' is not allowed for a {suffix} log: " in err, err
+        assert "from 1" in err, err
+        assert not out.exists()
+        return
+    assert rc == 0, err
+    rc, stdout, err = cli(capsys, "decode", out, "--format", "json", "--channel", channel)
+    recs = [json.loads(line) for line in stdout.splitlines()]
+    assert rc == 0 and recs and "warning" not in err, err
+    # (a candump log names interfaces: python-can writes a number N as canN)
+    shown = {"can0": "1", "can1": "2"}.get(channel, channel) if suffix != ".log" else \
+        f"can{channel}" if channel.isdigit() else channel
+    assert {r["channel"] for r in recs} == {shown}
+
+
 @pytest.mark.parametrize("damage", ["garbage", "garbled number", "no time"])
 def test_a_damaged_trc_record_is_reported_not_dropped_or_read(capsys, tmp_path, damage):
     # an independent tester's finding: python-can's TRC reader dropped a line of garbage without a word and parsed a

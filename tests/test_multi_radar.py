@@ -630,3 +630,24 @@ def test_the_round_time_at_the_gap_limit(late, time):
     assert MAX_GAP_S == 1.0
     fc = FusingConsumer({0: SensorMount(), 1: SensorMount(), 2: SensorMount()})
     assert fc._round_time([5.0, 5.0 + late, 5.01]) == pytest.approx(time, abs=1e-12)
+
+
+@pytest.mark.parametrize("leave", [True, False])
+def test_a_fusing_consumer_stopped_counts_each_sensors_cycle_in_progress(leave):
+    """``consume --fuse`` stopped (by --count or Ctrl-C: ``leave_unfinished``; by --timeout: not) counted the cycles
+    in progress nowhere: the fusing consumer had no ``stop`` (an independent tester's finding). Each sensor's is now
+    unfinished or incomplete, as a lone consumer's."""
+    from radarnode.cli.common import fusion_mounts
+    sc = parse_scenario(THREE.format(duration=1.0))
+    _, frames, _ = _frames(sc)
+    heads = [i for i, m in enumerate(frames) if m.arbitration_id == P.OBJ_STATUS]
+    cut = heads[8] + 2                        # sensor 0's ninth header and its first list frame
+    assert frames[cut - 1].arbitration_id == P.OBJ_GENERAL
+    fuser = FusingConsumer(fusion_mounts(sc))
+    for m in frames[:cut]:
+        fuser.on_message_received(m)
+    fuser.leave_unfinished = leave
+    fuser.stop()
+    st = fuser.stats[0]
+    assert (st.unfinished_cycles, st.incomplete_cycles) == ((1, 0) if leave else (0, 1)), st.as_dict()
+    assert st.cycles == 8

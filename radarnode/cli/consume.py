@@ -98,6 +98,7 @@ def _consume_fused(args) -> int:
                 if args.count and n >= args.count:
                     break
         finally:
+            fuser.leave_unfinished = bool(args.count and n >= args.count) or stop.is_set()   # (as a lone consumer)
             notifier.stop()
     for sid, st in fuser.stats.items():
         print(f"sensor {sid}: " + format_stats(st), file=sys.stderr)

@@ -65,7 +65,7 @@ def cmd(args) -> int:
 def _log(args) -> int:
     # what the command line alone decides comes first: a format nothing reads back is refused before the run
     check_output_format(args.output, "--output", extra=(".mcap",))
-    check_channel(args.output, args.channel, "--channel")
+    channel = check_channel(args.output, args.channel, "--channel")     # (the frames' channel, as the writer takes it)
     check_start_time(args.output, args.start_time, "--start-time")
     if is_mcap(args.output):        # for Foxglove (needs foxglove-sdk): a run to watch shows the ECU's decisions too
         require_foxglove("--output", args.output)
@@ -92,7 +92,7 @@ def _log(args) -> int:
         ecu_frames = [0]
 
         def write(msg: can.Message) -> None:
-            msg.channel = args.channel
+            msg.channel = channel
             writer.on_message_received(msg)
             if assembler is not None:
                 assembler.on_message_received(msg)
@@ -117,7 +117,7 @@ def _log(args) -> int:
             if decision is not None:
                 stamp = args.start_time + out.t_s + scenario.ecu.processing_latency_s
                 for m in ecu.frames(decision, timestamp=stamp):
-                    m.channel = args.channel
+                    m.channel = channel
                     writer.on_message_received(m)
                     ecu_frames[0] += 1
 

@@ -241,9 +241,9 @@ RERUN_FILL = 2
 #: … and after this many where each repeat came a good part of a period after its first copy (RERUN_MIN_PERIODS)
 RERUN_FILL_TIMED = 1
 
-#: a repeat of a general frame counts towards a rerun (the next cycle's, its header lost) only where it came at least
-#: this fraction of the sensor's cycle period after the first copy — where both times and the period are known. A
-#: copy sooner is a duplicate on the way (a gateway's, a retransmission): the next cycle's frames come a period later
+#: a repeat of a general frame that came at least this fraction of the sensor's cycle period after the first copy
+#: (both times and the period known) is the next cycle's as much as its place in arrival order says: the next cycle's
+#: frames come a period later. A run of such repeats needs only RERUN_FILL_TIMED; any other, RERUN_FILL
 RERUN_MIN_PERIODS = 0.5
 
 #: header-to-header periods remembered, per kind; their median is the sensor's cycle period
@@ -292,7 +292,8 @@ class _Pending:
         self.listed: list[int] | None = None
         self.unlisted_came: set[tuple[int, int]] = set()
         self.announced: frozenset[int] = frozenset()   # groups announced before its header
-        self.before: tuple | None = None   # (last MeasCounter, stride, lost_cycles) before this header was taken
+        # (last MeasCounter, stride, lost_cycles, last header's time, periods) before this header was taken
+        self.before: tuple | None = None
         self.arrival = time.monotonic()
 
 
@@ -460,10 +461,12 @@ class CycleAssembler(can.Listener):
         (the cycle after the last one asked for was counted as incomplete: an independent tester's finding)."""
         if self.leave_unfinished:
             with self._lock:
-                waiting = [p for p in self._pending.values() if not p.early] + list(self._held.values())
+                waiting = [p for p in self._pending.values() if not p.early] + list(self._held.values()) \
+                    + [p for behind in self._behind.values() for p in behind]   # (empty cycles after a held one)
                 self.stats.unfinished_cycles += len(waiting)
                 self._pending.clear()
                 self._held.clear()
+                self._behind.clear()
         self.flush()
 
     # --- reading cycles ----------------------------------------------------------
@@ -732,6 +735,7 @@ class CycleAssembler(can.Listener):
                 self.stats.counter_resets += 1
             self.flush(kind)
             self._last_counter[kind] = last = suspect.meas_counter
+            self._header_time[kind] = suspect.timestamp
             self._counters[kind].append(last)
             self._finish(suspect)
         else:
@@ -754,7 +758,8 @@ class CycleAssembler(can.Listener):
             self._drop_held(kind)
         self.flush(kind)
         # what accepting this header changes, kept to undo it should the header prove stray
-        header.before = (last, self._stride.get(kind), self.stats.lost_cycles)
+        header.before = (last, self._stride.get(kind), self.stats.lost_cycles, self._header_time.get(kind),
+                         tuple(self._periods[kind]))
         if last is not None:
             gap = (counter - last) & 0xFFFF
             # The real ARS 408 advances MeasCounter by 2 per object cycle (near and far scans);
@@ -802,13 +807,21 @@ class CycleAssembler(can.Listener):
         p = self._pending.get(kind)
         if p is None or not p.expected or _has_frames(p) or p.before is None or p.before[0] is None:
             return
-        last, stride, lost = p.before
+        last, stride, lost, header_time, periods = p.before
         if not _within_reach(counter, last, stride or 1) or self._continues(kind, counter, p.meas_counter):
             return
         del self._pending[kind]
         self.stats.stray_headers += 1
         self._last_counter[kind] = last
         self.stats.lost_cycles = lost
+        # (nor does its time count towards the sensor's period: a forged header stamped 1000 s back made the period
+        # 1000 s, an independent tester's finding)
+        if header_time is None:
+            self._header_time.pop(kind, None)
+        else:
+            self._header_time[kind] = header_time
+        self._periods[kind].clear()
+        self._periods[kind].extend(periods)
         if stride is None:
             self._stride.pop(kind, None)
         else:
@@ -1079,10 +1092,10 @@ class CycleAssembler(can.Listener):
         if oid in group:
             if group[oid][0] == data:
                 self.stats.duplicate_frames += 1
-                timed = self._rerun_evidence(p, oid) if base == GENERAL[p.kind] else None
-                if base == GENERAL[p.kind] and later_begun and p.expected >= 2 and timed is not False:
+                if base == GENERAL[p.kind] and later_begun and p.expected >= 2:
+                    timed = self._timed_rerun(p, oid)
                     continuing = p.rerun < len(p.order) and p.order[p.rerun] == oid
-                    p.rerun_timed = (p.rerun_timed or not continuing or not p.rerun) and timed is True
+                    p.rerun_timed = (p.rerun_timed or not continuing or not p.rerun) and timed
                     p.rerun = p.rerun + 1 if continuing else int(p.order[0] == oid)
                     p.sealed |= p.rerun == p.expected
                 else:
@@ -1125,17 +1138,18 @@ class CycleAssembler(can.Listener):
         group[oid] = (data, values)
         return True
 
-    def _rerun_evidence(self, p: _Pending, oid: int) -> bool | None:
-        """What the times say of a repeat of cycle ``p``'s general frame for object ``oid``, now: True where it came at
-        least RERUN_MIN_PERIODS of the sensor's cycle period after the first copy (it may be the next cycle's, a
-        standing sensor's with its header lost), False where sooner (a duplicate on the way: a cycle reordered with
-        two copies of its general frames sent at once was dropped for a standing sensor's, the fuzz test's cycle
-        388), None where times cannot tell (the period not known yet, a time missing or running backwards): arrival
-        order alone decides then, as it did before times were read."""
+    def _timed_rerun(self, p: _Pending, oid: int) -> bool:
+        """Whether a repeat of cycle ``p``'s general frame for object ``oid``, now, came at least RERUN_MIN_PERIODS of
+        the sensor's cycle period after the first copy: as the next cycle's would (a standing sensor's, its header
+        lost). Then one repeat is enough (RERUN_FILL_TIMED). A repeat sooner, or times that cannot tell (the period
+        not known yet, a time missing or running backwards), leave arrival order to decide with RERUN_FILL repeats:
+        times only ever make the rule stricter. (A repeat sooner once reset the run, and let a cycle out with the next
+        one's frame where a gateway held the cycle's frames back 40 ms, a logger kept whole seconds or the period had
+        just shortened: an independent tester's finding.)"""
         periods = self._periods[p.kind]
         elapsed = self._stamp - p.general_times.get(oid, float("nan"))
         if not periods or not math.isfinite(elapsed) or elapsed < 0.0:
-            return None
+            return False
         return elapsed >= RERUN_MIN_PERIODS * float(np.median(periods))
 
     def _resolve_overflow(self, p: _Pending) -> None:

@@ -486,6 +486,8 @@ class FusingConsumer(can.Listener):
         self._out: list = []
         self.cluster_lists = 0          # cycles of a radar in cluster mode: they close a round, they are not fused
         self.bus_errors = 0             # frames the bus could not read (a notifier's on_error)
+        #: at :meth:`stop`, each sensor's cycle in progress is left unfinished (``consume --fuse --count``, Ctrl-C)
+        self.leave_unfinished = False
 
     def on_error(self, exc: Exception) -> None:
         """A frame the bus could not read (a notifier calls this): counted in ``bus_errors``, warned once, and the
@@ -505,6 +507,16 @@ class FusingConsumer(can.Listener):
     def on_message_received(self, msg: can.Message) -> None:
         for a in self.assemblers.values():
             a.on_message_received(msg)
+        self._collect()
+
+    def stop(self) -> None:
+        """End of listening (a notifier calls this): each sensor's consumer stops as a lone one does
+        (:meth:`CycleAssembler.stop`: its cycle in progress closed, or counted in ``unfinished_cycles`` where
+        :attr:`leave_unfinished` is set), and the cycles that closes join the rounds. (The cycles in progress were
+        counted nowhere before: an independent tester's finding.)"""
+        for a in self.assemblers.values():
+            a.leave_unfinished = self.leave_unfinished
+            a.stop()
         self._collect()
 
     def feed(self, messages):

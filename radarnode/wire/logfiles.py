@@ -248,15 +248,29 @@ def check_start_time(path: str, start_time_s: float, option: str) -> None:
 BLF_MAX_CHANNEL_NUMBER = 65534
 
 
-def check_channel(path: str, channel: str, option: str) -> None:
-    """A UsageError naming the option when the log format of ``path`` cannot store ``channel``: a BLF file takes a
-    name whose trailing number (python-can's ``channel2int``) is at most BLF_MAX_CHANNEL_NUMBER."""
+def check_channel(path: str, channel: str, option: str) -> str | int:
+    """What to put in the frames' channel for a log ``path`` written with ``--channel channel``, or a UsageError
+    naming the option when its format cannot store it. In a format that numbers channels from 1 (ONE_BASED_CHANNELS)
+    a bare number is the file's channel, as ``decode --channel`` reads it (python-can's writers add one to it: ``1``
+    was written as 2, and decode's ``--channel 1`` then found nothing, an independent tester's finding), and a name
+    the interface's, from 0 (``can0`` is the file's channel 1). A BLF file takes a channel of at most
+    BLF_MAX_CHANNEL_NUMBER + 1 (a name ending in at most BLF_MAX_CHANNEL_NUMBER)."""
     import can.util
+    fmt = log_format(path)
+    if fmt in ONE_BASED_CHANNELS and channel.isdigit():
+        number = int(channel)
+        top = BLF_MAX_CHANNEL_NUMBER + 1 if fmt == ".blf" else None
+        if number < 1 or (top is not None and number > top):
+            what = "BLF stores the channel as a 16-bit number, from 1" if top else "its channels are numbered from 1"
+            raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: {what}; expected "
+                             f"1…{top or ''} or a name such as can0 (its channel 1)")
+        return number - 1                  # (the writer adds the one back)
     number = can.util.channel2int(channel)
-    if log_format(path) == ".blf" and number is not None and number > BLF_MAX_CHANNEL_NUMBER:
+    if fmt == ".blf" and number is not None and number > BLF_MAX_CHANNEL_NUMBER:
         raise UsageError(f"option {option}: value {channel!r} is not allowed for a .blf log: BLF stores the channel "
                          f"as a 16-bit number (the name's trailing number plus one); expected a name ending in "
                          f"0…{BLF_MAX_CHANNEL_NUMBER} or in no number")
+    return channel
 
 
 def check_input_format(path: str, what: str) -> str:
