@@ -11,10 +11,14 @@ from __future__ import annotations
 MAX_VALUE_REPR = 80
 
 
+def _cut(text: str, limit: int) -> str:
+    """``text`` cut to ``limit`` characters with an ellipsis."""
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 def short_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
     """``repr(value)``, cut to ``limit`` characters with an ellipsis, on one line."""
-    text = repr(value)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
+    return _cut(repr(value), limit)
 
 
 def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
@@ -28,8 +32,7 @@ def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
         if isinstance(v, dict):
             return "{" + ", ".join(f"{spell(k)}: {spell(x)}" for k, x in v.items()) + "}"
         return repr(v)
-    text = spell(value)
-    return text if len(text) <= limit else text[: limit - 1] + "…"
+    return _cut(spell(value), limit)
 
 
 class RadarnodeError(Exception):

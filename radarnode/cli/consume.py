@@ -71,6 +71,13 @@ def fused_to_json(fused) -> str:
     return json.dumps({"timestamp": fused.t_s, "type": "fused_objects", "objects": rows})
 
 
+def _stopped_on_purpose(args, n: int, stop) -> bool:
+    """Whether ``consume`` stopped by ``--count`` (``n`` cycles or rounds shown) or a signal: the cycle in progress
+    was cut by this stop, not lost on the bus, and is left unfinished; after a ``--timeout`` of silence it ends as it
+    is (as at the end of a log)."""
+    return bool(args.count and n >= args.count) or stop.is_set()
+
+
 def _consume_fused(args) -> int:
     from radarnode.consumer.fusion import FusingConsumer
     from radarnode.radar.setup import load_scenario
@@ -98,7 +105,7 @@ def _consume_fused(args) -> int:
                 if args.count and n >= args.count:
                     break
         finally:
-            fuser.leave_unfinished = bool(args.count and n >= args.count) or stop.is_set()   # (as a lone consumer)
+            fuser.leave_unfinished = _stopped_on_purpose(args, n, stop)         # (as a lone consumer)
             notifier.stop()
     for sid, st in fuser.stats.items():
         print(f"sensor {sid}: " + format_stats(st), file=sys.stderr)
@@ -133,9 +140,7 @@ def cmd(args) -> int:
                 if args.count and n >= args.count:
                     break
         finally:
-            # stopped by --count or a signal: the cycle in progress was cut by this stop, not lost on the bus; after a
-            # --timeout of silence it ended as it is (as at the end of a log)
-            assembler.leave_unfinished = bool(args.count and n >= args.count) or stop.is_set()
+            assembler.leave_unfinished = _stopped_on_purpose(args, n, stop)
             notifier.stop()
     print(format_stats(assembler.stats), file=sys.stderr)
     return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM

@@ -389,7 +389,7 @@ class CycleAssembler(can.Listener):
         self._stride: dict[str, int] = {}
         # the sensor's cycle period per kind: the time between headers one stride apart (the last few), and the time
         # of the last header taken; a repeat of a general frame is the next cycle's only where it came a good part of
-        # a period after the first copy (:meth:`_may_rerun`)
+        # a period after the first copy (:meth:`_timed_rerun`)
         self._periods: dict[str, collections.deque] = {k: collections.deque(maxlen=PERIOD_MEMORY) for k in GROUPS}
         self._header_time: dict[str, float] = {}
         self._stamp = float("nan")      # the time of the frame being handled
@@ -1094,9 +1094,12 @@ class CycleAssembler(can.Listener):
                 self.stats.duplicate_frames += 1
                 if base == GENERAL[p.kind] and later_begun and p.expected >= 2:
                     timed = self._timed_rerun(p, oid)
-                    continuing = p.rerun < len(p.order) and p.order[p.rerun] == oid
-                    p.rerun_timed = (p.rerun_timed or not continuing or not p.rerun) and timed
-                    p.rerun = p.rerun + 1 if continuing else int(p.order[0] == oid)
+                    if p.rerun < len(p.order) and p.order[p.rerun] == oid:      # the run goes on
+                        p.rerun_timed = timed and (p.rerun_timed or not p.rerun)
+                        p.rerun += 1
+                    else:                                                       # it starts again, or ends
+                        p.rerun_timed = timed
+                        p.rerun = int(p.order[0] == oid)
                     p.sealed |= p.rerun == p.expected
                 else:
                     p.rerun = 0
@@ -1104,7 +1107,7 @@ class CycleAssembler(can.Listener):
                 self.stats.conflicting_frames += 1
                 p.bad = True
             return False
-        if base == GENERAL[p.kind] and later_begun and p.rerun and \
+        if base == GENERAL[p.kind] and later_begun and \
                 p.rerun >= (RERUN_FILL_TIMED if p.rerun_timed else RERUN_FILL):
             # a general frame for a place still empty right after the general group began to repeat, in the
             # sensor's order from its first frame, after a later group began: the next cycle's general group, its
