@@ -237,6 +237,52 @@ def test_export_of_the_log_gives_the_same_wire_topics(highway, tmp_path):
     assert set(read_mcap(bare)["counts"]) == WIRE_TOPICS           # no scenario: nothing but the wire
 
 
+@pytest.mark.parametrize("suffix", [".blf", ".asc", ".log"])
+def test_export_picks_one_bus_of_a_two_bus_capture(capsys, tmp_path, suffix):
+    """A capture of two buses, a radar with sensor ID 0 on each (two seeds of one scene: other objects). ``export``
+    took every frame and decoded the two radars' cycles as one (a noticed gap, session 75). Now ``--channel`` picks
+    one bus, named as ``decode --channel`` names it: each export holds exactly that bus's frames and cycles; without
+    it a warning says that sensor 0 came on two channels; a channel with no frame is refused and writes no file."""
+    from radarnode.wire import logfiles
+    runs = []
+    for seed in ("1", "2"):
+        blf = tmp_path / f"seed{seed}.blf"
+        assert main(["log", str(HIGHWAY), "--fidelity", "object", "--duration", "1.5", "--seed", seed,
+                     "-o", str(blf)]) == 0
+        runs.append(list(can.LogReader(str(blf))))
+    both = tmp_path / f"both{suffix}"
+    writer = logfiles.open_writer(str(both))
+    for bus, frames in enumerate(runs):
+        for m in frames:
+            m.channel = f"can{bus}"
+    for m in sorted(runs[0] + runs[1], key=lambda m: m.timestamp):
+        writer.on_message_received(m)
+    writer.stop()
+    capsys.readouterr()
+    names = ("1", "2") if suffix != ".log" else ("can0", "can1")       # as decode --format json names them
+    for bus, name in enumerate(names):
+        for channel in (name, f"can{bus}"):
+            out = tmp_path / f"bus{bus}-{channel}.mcap"
+            assert main(["export", str(both), "--channel", channel, "-o", str(out)]) == 0
+            err = capsys.readouterr().err
+            assert "warning" not in err, err
+            m = read_mcap(out)
+            _, cycles, asm = decode_blf(tmp_path / f"seed{bus + 1}.blf")
+            assert m["counts"]["/can/frames"] == len(runs[bus])
+            assert m["counts"]["/radar/objects"] == asm.stats.object_cycles > 10
+            got = [sorted(int(meta(e)["id"]) for e in v.entities) for _, v in m["topics"]["/radar/objects"][3]]
+            assert got == [sorted(c.objects.id.tolist()) for c in cycles if isinstance(c, ObjectCycle)]
+    merged = tmp_path / "merged.mcap"
+    assert main(["export", str(both), "-o", str(merged)]) == 0
+    err = capsys.readouterr().err
+    assert "frames of sensor 0 on 2 channels" in err and "pick one with --channel" in err, err
+    none = tmp_path / "none.mcap"
+    assert main(["export", str(both), "--channel", "can7", "-o", str(none)]) == 2
+    err = capsys.readouterr().err
+    assert "option --channel: value 'can7' is not allowed" in err and f"{names[0]}, {names[1]}" in err, err
+    assert not none.exists()
+
+
 def test_export_reads_the_real_ars408_capture(reference_dir, tmp_path):
     log = reference_dir / "candump-ars408-parked.log"
     out = tmp_path / "real.mcap"

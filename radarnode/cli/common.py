@@ -607,6 +607,61 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
     return Bitrate(bit_s, source)
 
 
+class ChannelPick:
+    """``--channel``: the frames of one channel (its name, or the same number: python-can's ``channel2int`` takes
+    ``can1`` and ``1`` for one channel), and what the log held, for a warning when none was that channel's.
+
+    In a log that numbers its channels from 1 (``one_based``: ASC, BLF, TRC) a number is the file's, and a name is
+    the interface's, counted from 0 as SocketCAN does: ``can0`` is the file's channel 1, where ``log --channel can0``
+    wrote it."""
+
+    def __init__(self, channel: str | None, one_based: bool = False) -> None:
+        from can.util import channel2int
+        self.channel, self.number = channel, None if channel is None else channel2int(channel)
+        if one_based and self.number is not None and not channel.isdigit():
+            self.number += 1
+        self.taken = 0                       # frames of the channel, over every pass
+        self.seen: set[str] = set()          # the channels the log's frames came on
+
+    def __call__(self, frames):
+        if self.channel is None:
+            yield from frames
+            return
+        from can.util import channel2int
+        for msg in frames:
+            self.seen.add(str(msg.channel))
+            if str(msg.channel) == self.channel or (
+                    self.number is not None and msg.channel is not None and channel2int(msg.channel) == self.number):
+                self.taken += 1
+                yield msg
+
+    def warning(self) -> str | None:
+        """One line when ``--channel`` was given and no frame was that channel's, else None."""
+        if self.channel is None or self.taken:
+            return None
+        # (a channel the log does not have gave an empty decode, status 0 and no word; a .csv keeps no channel)
+        return (f"warning: no frame on channel {self.channel!r} (option --channel); the log's frames are on: "
+                f"{', '.join(sorted(self.seen)) or 'none'} (as the log names them: decode --format json shows each "
+                "frame's)")
+
+    def refusal(self) -> str | None:
+        """The error of a command that writes nothing without a frame (export) where ``--channel`` picked none."""
+        if self.channel is None or self.taken:
+            return None
+        return (f"option --channel: value {self.channel!r} is not allowed: no frame of the log is on it; expected "
+                f"one of the channels its frames are on: {', '.join(sorted(self.seen)) or 'none'} (as the log names "
+                "them; an ASC, BLF or TRC log numbers its channels from 1, and can0 is its channel 1)")
+
+
+def add_channel_option(p) -> None:
+    """``--channel`` of the commands that read a log (decode, export): :class:`ChannelPick`'s."""
+    from radarnode.cli import options
+    p.add_argument("--channel", default=None, type=options.name("a channel name"),
+                   help="only the frames of this channel (as the log names it: can1, or its number 1; an ASC, BLF "
+                        "or TRC log numbers its channels from 1, and can0 is its channel 1): a capture of several "
+                        "buses (default: every channel)")
+
+
 class SensorCensus:
     """The radar sensor IDs whose frames a log holds (by the whole-bus DBC's ID plan), and the channels they came on,
     to say which to pick when the one asked for has none, or came on several buses."""

@@ -24,8 +24,8 @@ from pathlib import Path
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import SensorCensus, atomic_output, format_cycle, format_fused, format_stats, fusion_mounts, \
-    progress
+from radarnode.cli.common import ChannelPick, SensorCensus, add_channel_option, atomic_output, format_cycle, \
+    format_fused, format_stats, fusion_mounts, progress
 from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_objects
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
@@ -51,10 +51,7 @@ def add_subparser(sub) -> None:
     p.add_argument("--fuse", metavar="SCENARIO",
                    help="text: fuse the object lists of every radar of SCENARIO (its radars' sensor IDs and mounts) "
                         "into one list in the vehicle frame and print that")
-    p.add_argument("--channel", default=None, type=options.name("a channel name"),
-                   help="only the frames of this channel (as the log names it: can1, or its number 1; an ASC, BLF "
-                        "or TRC log numbers its channels from 1, and can0 is its channel 1): a capture of several "
-                        "buses (default: every channel)")
+    add_channel_option(p)
     p.add_argument("--summary", action="store_true", help="text: only the per-object summary, no per-cycle tables")
     p.add_argument("--max-cycles", type=options.COUNT, default=0,
                    help="text: print at most this many cycles (0: all)")
@@ -139,44 +136,6 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
         for sig in info.message.signals:
             cols.setdefault(sig.name, f"{sig.name} [{sig.unit}]" if sig.unit else sig.name)
     return list(cols.items())
-
-
-class ChannelPick:
-    """``--channel``: the frames of one channel (its name, or the same number: python-can's ``channel2int`` takes
-    ``can1`` and ``1`` for one channel), and what the log held, for a warning when none was that channel's.
-
-    In a log that numbers its channels from 1 (``one_based``: ASC, BLF, TRC) a number is the file's, and a name is
-    the interface's, counted from 0 as SocketCAN does: ``can0`` is the file's channel 1, where ``log --channel can0``
-    wrote it."""
-
-    def __init__(self, channel: str | None, one_based: bool = False) -> None:
-        from can.util import channel2int
-        self.channel, self.number = channel, None if channel is None else channel2int(channel)
-        if one_based and self.number is not None and not channel.isdigit():
-            self.number += 1
-        self.taken = 0                       # frames of the channel, over every pass
-        self.seen: set[str] = set()          # the channels the log's frames came on
-
-    def __call__(self, frames):
-        if self.channel is None:
-            yield from frames
-            return
-        from can.util import channel2int
-        for msg in frames:
-            self.seen.add(str(msg.channel))
-            if str(msg.channel) == self.channel or (
-                    self.number is not None and msg.channel is not None and channel2int(msg.channel) == self.number):
-                self.taken += 1
-                yield msg
-
-    def warning(self) -> str | None:
-        """One line when ``--channel`` was given and no frame was that channel's, else None."""
-        if self.channel is None or self.taken:
-            return None
-        # (a channel the log does not have gave an empty decode, status 0 and no word; a .csv keeps no channel)
-        return (f"warning: no frame on channel {self.channel!r} (option --channel); the log's frames are on: "
-                f"{', '.join(sorted(self.seen)) or 'none'} (as the log names them: decode --format json shows each "
-                "frame's)")
 
 
 def _frames(args, report: ReadReport):

@@ -1,4 +1,4 @@
-"""``radarnode export LOG -o run.mcap [--scenario SCENARIO]``: any CAN log as MCAP for Foxglove.
+"""``radarnode export LOG -o run.mcap [--scenario SCENARIO] [--channel CH]``: any CAN log as MCAP for Foxglove.
 
 Reads any python-can log (.blf .asc .log .csv .mf4 .trc …: ``radarnode log``'s, a bench capture, the real
 ARS 408's) and writes what its frames carry in Foxglove's schemas: the decoded objects, clusters, road
@@ -14,11 +14,12 @@ import sys
 from pathlib import Path
 
 from radarnode.cli import options
-from radarnode.cli.common import SensorCensus, atomic_path, progress
+from radarnode.cli.common import ChannelPick, SensorCensus, add_channel_option, atomic_path, progress
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
 from radarnode.viz import MAX_STAMP_S
-from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, check_stem, read_frames
+from radarnode.wire.logfiles import (FORMATS, ONE_BASED_CHANNELS, ReadReport, check_input, check_input_format,
+                                     check_stem, read_frames)
 
 
 def add_subparser(sub) -> None:
@@ -32,6 +33,7 @@ def add_subparser(sub) -> None:
                         "default 0)")
     p.add_argument("--sensor-id", type=options.SENSOR_ID, default=None,
                    help="the radar whose frames are decoded, 0..7 (default: the --scenario's radar.sensor_id, else 0)")
+    add_channel_option(p)
     p.set_defaults(func=cmd)
 
 
@@ -48,6 +50,7 @@ def cmd(args) -> int:
     require_foxglove("--output", args.output)     # before anything is read
     check_input_format(args.log, "argument LOG")
     fmt = check_input(args.log, "argument LOG")
+    pick = ChannelPick(args.channel, fmt in ONE_BASED_CHANNELS)
     scenario = None
     if args.scenario:
         from radarnode.radar.setup import load_scenario
@@ -79,7 +82,7 @@ def cmd(args) -> int:
             rec.open_mcap(tmp, metadata=meta, attachments=attachments)
             bar = progress(None, f"exporting {Path(args.log).name}", unit="frame")
             try:
-                for msg in read_frames(args.log, report):
+                for msg in pick(read_frames(args.log, report)):
                     rec.on_message_received(msg)
                     census.note(msg)
                     bar.update(1)
@@ -89,13 +92,18 @@ def cmd(args) -> int:
             rec.close()
         if report.frames == 0:      # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument LOG"))
+        if pick.refusal():          # --channel picked no frame: no output file either
+            raise UsageError(pick.refusal())
         if rec.frames_without_time == report.frames:        # nothing to put on a time line: no output file either
             raise FileError(f"argument LOG: {_no_time(rec, args.log)}; expected frames timed in [0, {MAX_STAMP_S}) s")
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
-    warning = census.warning(sensor_id, "--sensor-id")
-    if warning:
-        print(warning, file=sys.stderr)
+    # the sensor asked for sent nothing here, or its frames came on two buses (merged into one recording); and
+    # --channel named no channel of the log
+    for warning in (census.warning(sensor_id, "--sensor-id"), census.channel_warning(sensor_id, "--channel"),
+                    pick.warning()):
+        if warning:
+            print(warning, file=sys.stderr)
     if scenario is not None and rec.cycles_outside_run:
         # (a log read back from another time base had no ground truth at all, and nothing said so)
         start = args.start_time or 0.0
