@@ -6,6 +6,9 @@ what would have been allowed, so a user can fix the input without reading code.
 
 from __future__ import annotations
 
+import math
+import re
+
 #: the longest ``repr`` of a value an error message quotes (a whole file read as one string must not become the
 #: message)
 MAX_VALUE_REPR = 80
@@ -21,17 +24,26 @@ def short_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
     return _cut(repr(value), limit)
 
 
+_PLAIN_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+
+
 def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
-    """:func:`short_repr` of a value read from YAML, its ``null``, ``true`` and ``false`` spelt as the file spells
-    them (a scenario error showed ``None`` and ``True``: an independent tester's finding)."""
+    """:func:`short_repr` of a value read from YAML, its ``null``, ``true``, ``false``, ``.nan`` and ``.inf`` and its
+    plain mapping keys spelt as the file spells them (a scenario error showed ``None`` and ``True``: an independent
+    tester's finding; ``nan`` and ``{'speed_mps': …}``: noticed after it)."""
     def spell(v: object) -> str:
         if v is None or isinstance(v, bool):
             return {None: "null", True: "true", False: "false"}[v]
+        if isinstance(v, float) and not math.isfinite(v):             # YAML's .nan, .inf, -.inf
+            return ".nan" if math.isnan(v) else ".inf" if v > 0 else "-.inf"
         if isinstance(v, (list, tuple)):
             return "[" + ", ".join(spell(x) for x in v) + "]"
         if isinstance(v, dict):
-            return "{" + ", ".join(f"{spell(k)}: {spell(x)}" for k, x in v.items()) + "}"
+            return "{" + ", ".join(f"{key(k)}: {spell(x)}" for k, x in v.items()) + "}"
         return repr(v)
+
+    def key(k: object) -> str:                                         # a plain key as the file spells it: speed_mps
+        return k if isinstance(k, str) and _PLAIN_KEY.fullmatch(k) else spell(k)
     return _cut(spell(value), limit)
 
 

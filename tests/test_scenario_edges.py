@@ -4,6 +4,8 @@ waypoints with the heading they have, expectation windows beyond the run."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from tests.helpers import cli
@@ -139,11 +141,18 @@ def test_a_refused_max_distance_gets_its_error_and_no_warning_computed_from_it(t
     ("ego: {speed_mps: true}", "ego.speed_mps", "true"),
     ("ego: {speed_mps: False}", "ego.speed_mps", "false"),
     ("road: {lanes: [1, null, true]}", "road.lanes", "[1, null, true]"),
-    ("radar: {preset: null}", "radar.preset", "null")])
+    ("radar: {preset: null}", "radar.preset", "null"),
+    ("ego: {speed_mps: .nan}", "ego.speed_mps", ".nan"),
+    ("ego: {speed_mps: .inf}", "ego.speed_mps", ".inf"),
+    ("ego: {speed_mps: -.Inf}", "ego.speed_mps", "-.inf"),
+    ("road: {lanes: [2, .NaN]}", "road.lanes", "[2, .nan]"),
+    ("road: {lanes: {count: 2, wide: .inf}}", "road.lanes", "{count: 2, wide: .inf}")])
 def test_a_refused_yaml_null_or_boolean_is_shown_as_the_file_spells_it(tmp_path, capsys, line, field, shown):
-    """A scenario error showed YAML's null and true as Python's None and True (an independent tester's finding)."""
+    """A scenario error showed YAML's null and true as Python's None and True (an independent tester's finding), and
+    .nan, .inf and a mapping's keys as Python's nan, inf and 'count'."""
     path = tmp_path / "s.yaml"
     path.write_text(f"name: s\nduration_s: 2\nseed: 1\n{line}\n")
     rc, _, err = cli(capsys, "run", path)
     assert rc == 1 and f"s.yaml:4: field '{field}': value {shown} is not allowed" in err, err
     assert "None" not in err and "True" not in err and "False" not in err, err
+    assert not re.search(r"value (-?inf|nan)\b", err) and "'count'" not in err, err
