@@ -284,33 +284,26 @@ def test_a_jump_within_what_a_body_spans_is_no_hop():
     assert abs(results[0.0]) < 0.3 and abs(results[8.0]) > 1.0, results
 
 
-@pytest.mark.parametrize("where, misses, reset", [("far", 0, False), ("far", 1, True), ("far", 2, True),
-                                                   ("far", 3, True), ("far", 4, True), ("far", 8, True),
-                                                   ("near", 0, False), ("near", 1, False), ("near", 2, True),
-                                                   ("near", 3, True)])
-def test_a_standing_track_back_from_a_coast_takes_no_speed_from_where_it_finds_its_reflector(where, misses, reset):
-    """COAST_REANCHOR_MISSES = 2 within MOVING_EVIDENCE_RANGE_M (``near``: 17 m), FAR_REANCHOR_MISSES = 1 beyond it
-    (``far``: 120 m): a standing track that coasted that many cycles or more and takes a detection 1.5 m across the
-    line of sight (under HOP_M) is re-anchored like a hop — its speed over ground stays a standing object's, across
-    and along the line of sight (the merged rails' glint at long range walked such tracks across the road in steps
-    under HOP_M, and after a long coast the position jump put about 1 m/s into the radial speed through the filter's
-    cross-covariance: posts became moving and crossing objects at 130 km/h; far out, one missed cycle in two was
-    enough to walk a track 2 m across the road in 1.2 s). Below it the jump is the filter's to weigh, as before."""
-    from radarnode.perception.tracker import (COAST_REANCHOR_MISSES, FAR_REANCHOR_MISSES, HOP_M,
-                                              MOVING_EVIDENCE_RANGE_M)
-    assert COAST_REANCHOR_MISSES == 2 and FAR_REANCHOR_MISSES == 1 and 1.5 < HOP_M
-    speed, x0 = (36.0, 120.0) if where == "far" else (1.0, 17.0)
-    assert (x0 > MOVING_EVIDENCE_RANGE_M) == (where == "far")
-    sv = (speed, 0.0)
+@pytest.mark.parametrize("misses, reset", [(0, False), (1, False), (2, True), (3, True), (4, True), (8, True)])
+def test_a_standing_track_back_from_a_coast_takes_no_speed_from_where_it_finds_its_reflector(misses, reset):
+    """COAST_REANCHOR_MISSES = 2: a standing track that coasted that many cycles or more and takes a detection 1.5 m
+    across the line of sight (under HOP_M) is re-anchored like a hop — its speed over ground stays a standing
+    object's, across and along the line of sight (the merged rails' glint at long range walked such tracks across
+    the road in steps under HOP_M, and after a long coast the position jump put about 1 m/s into the radial speed
+    through the filter's cross-covariance: posts became moving and crossing objects at 130 km/h). Below it (no miss,
+    one) the jump is the filter's to weigh, as before."""
+    from radarnode.perception.tracker import COAST_REANCHOR_MISSES, HOP_M
+    assert COAST_REANCHOR_MISSES == 2 and 1.5 < HOP_M
+    sv = (36.0, 0.0)
     trk = ObjectTracker()
-    y0 = 3.0
+    y0, x0 = 3.0, 120.0
     steps = 6 + misses
     for k in range(steps):
-        x = x0 - speed * 0.072 * k
+        x = x0 - 36.0 * 0.072 * k
         y = y0 + (1.5 if k == steps - 1 else 0.0)
         r, a = math.hypot(x, y), math.atan2(y, x)
         seen = k < 5 or k == steps - 1
-        det = Detections(np.array([r] if seen else []), np.array([-speed * math.cos(a)] if seen else []),
+        det = Detections(np.array([r] if seen else []), np.array([-36.0 * math.cos(a)] if seen else []),
                          np.array([a] if seen else []), np.array([5.0] if seen else []),
                          np.array([30.0] if seen else []), np.array([0] if seen else [], dtype=np.int64))
         out = trk.step(0.072 * k, det, sv)

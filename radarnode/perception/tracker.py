@@ -65,14 +65,6 @@ MOVING_THRESHOLD_MPS = 1.0
 HOP_M = 2.5
 #: … and so has a standing track that takes a detection after this many cycles without one (see Tracker._hops)
 COAST_REANCHOR_MISSES = 2
-#: … and beyond MOVING_EVIDENCE_RANGE_M after this many (where motion is reported at once, no evidence rule
-#: waits): the merged rails of ars408_like at 70–100 m, 130 km/h past posts 2 m apart, walked a standing track that
-#: missed every other cycle 2 m across the road in 1.2 s; the filter took that for 3.6 m/s across (σ 1.2 m/s) and
-#: the track was listed crossing, then stopped, for 12 cycles (signal level, seed 4 of the slow test
-#: test_posts_two_metres_apart_passing_the_sensor_stay_standing). A car crossing 60–150 m ahead, whose motion shows
-#: only in its positions too, is reported moving in as many cycles as before (benchmarks/crossing.py, far: 0.91,
-#: 0.74, 0.72)
-FAR_REANCHOR_MISSES = 1
 #: a new or re-anchored track's prior on its velocity across the line of sight, σ 2 m/s (initial_velocity; a
 #: re-anchored standing track: the standing world's) …
 TANGENTIAL_PRIOR_VAR = 4.0
@@ -1009,10 +1001,8 @@ class ObjectTracker:
         _, moving = self._heading(idx, sensor_velocity)
         # a standing track that coasted (its position across the line of sight extrapolated with a velocity only
         # position differences ever measured) and takes a detection again has nothing to move it by either: the
-        # merged rails' glint at long range walks it across the road in steps under HOP_M otherwise (beyond
-        # MOVING_EVIDENCE_RANGE_M a single missed cycle is such a coast: FAR_REANCHOR_MISSES)
-        far = np.hypot(z[:, 0], z[:, 1]) > MOVING_EVIDENCE_RANGE_M
-        coasted = self.misses[idx] >= np.where(far, FAR_REANCHOR_MISSES, COAST_REANCHOR_MISSES)
+        # merged rails' glint at long range walks it across the road in steps under HOP_M otherwise
+        coasted = self.misses[idx] >= COAST_REANCHOR_MISSES
         return ((across > HOP_M) | coasted) & ~moving & ~self.was_moving[idx] & _standing_rate(z, sensor_velocity)
 
     def _standing_across(self, idx: np.ndarray, sensor_velocity, z: np.ndarray) -> None:
