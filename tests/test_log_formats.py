@@ -668,6 +668,99 @@ def test_log_and_decode_read_one_channel_option_alike(capsys, tmp_path, suffix, 
     assert {r["channel"] for r in recs} == {shown}
 
 
+@pytest.fixture(scope="module")
+def short_frames(tmp_path_factory):
+    """The frames of a 0.5-s log of SCENARIO (one radar, sensor 0)."""
+    path = tmp_path_factory.mktemp("short") / "short.blf"
+    assert main(["log", SCENARIO, "-o", str(path), "--duration", "0.5"]) == 0
+    return list(can.LogReader(str(path)))
+
+
+def _on_channels(path, frames, channels):
+    """``frames`` written once on each of ``channels`` (a copy apiece) into the log ``path``."""
+    writer = logfiles.open_writer(str(path))
+    for m in frames:
+        for ch in channels:
+            writer.on_message_received(can.Message(timestamp=m.timestamp, arbitration_id=m.arbitration_id,
+                                                   data=bytes(m.data), is_extended_id=False, channel=ch))
+    writer.stop()
+
+
+def test_a_candump_channel_is_picked_by_its_exact_name(capsys, tmp_path, short_frames):
+    """``can1`` and ``vcan1`` (and ``CAN1``) are three buses: ``--channel`` picked every name ending in the same number,
+    so two buses were decoded and exported as one without a word (an independent tester's finding). Now the exact
+    name, or a bare number N as python-can writes it, ``canN``."""
+    log = tmp_path / "three.log"
+    _on_channels(log, short_frames, ["can1", "vcan1", "CAN1"])
+    capsys.readouterr()
+    for channel, shown in (("can1", "can1"), ("1", "can1"), ("vcan1", "vcan1"), ("CAN1", "CAN1")):
+        rc, out, err = cli(capsys, "decode", log, "--format", "json", "--channel", channel)
+        recs = [json.loads(line) for line in out.splitlines()]
+        assert rc == 0 and "warning" not in err, (channel, err)
+        assert len(recs) == len(short_frames) and {r["channel"] for r in recs} == {shown}, channel
+    for channel in ("bus1", "-1", "01", "can01"):
+        rc, out, err = cli(capsys, "decode", log, "--format", "json", "--channel", channel)
+        assert rc == 0 and not out and "the log's frames are on: CAN1, can1, vcan1" in err, (channel, err)
+
+
+@pytest.mark.parametrize("suffix", [".blf", ".asc", ".trc"])
+@pytest.mark.parametrize("channel", ["-1", "2.0", "can-1", "ä1", "\uff12", "my-bus_1"])
+def test_a_numbered_log_refuses_a_channel_that_is_neither_its_number_nor_an_interface_name(
+        capsys, tmp_path, short_frames, suffix, channel):
+    """``-1``, ``2.0``, ``can-1``, ``ä1`` and a full-width ２ were read as a name's trailing number and picked channel 2
+    (or 1) of an ASC, BLF or TRC log without a word (an independent tester's finding); log wrote them there too. Now
+    each command refuses them, naming the option, before anything is read or written."""
+    both = tmp_path / f"two{suffix}"
+    _on_channels(both, short_frames, ["can0", "can1"])
+    capsys.readouterr()
+    for argv in (["decode", both, "--format", "json", "--channel", channel],
+                 ["export", both, "-o", tmp_path / "x.mcap", "--channel", channel],
+                 ["log", SCENARIO, "-o", tmp_path / f"new{suffix}", "--duration", "0.3", "--channel", channel]):
+        if argv[0] == "export" and not _has_foxglove():
+            continue
+        rc, out, err = cli(capsys, *argv)
+        assert rc == 2 and f"option --channel: value {channel!r} is not allowed for a {suffix} log" in err, (argv, err)
+        assert not out and not (tmp_path / "x.mcap").exists() and not (tmp_path / f"new{suffix}").exists()
+
+
+def _has_foxglove() -> bool:
+    try:
+        import foxglove  # noqa: F401
+        import mcap  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def test_the_missing_sensor_warning_names_the_channel_picked(capsys, tmp_path, short_frames):
+    """Sensor 0 on can0, sensor 1 (its frames' IDs 0x10 higher) on can1: ``--channel can0 --sensor-id 1`` said "no frame
+    of sensor 1 in the log", which holds them on can1 (an independent tester's finding). Now the warning names the
+    channel it looked on."""
+    log = tmp_path / "mix.log"
+    writer = logfiles.open_writer(str(log))
+    for m in short_frames:
+        for ch, shift in (("can0", 0), ("can1", 0x10)):
+            writer.on_message_received(can.Message(timestamp=m.timestamp, arbitration_id=m.arbitration_id + shift,
+                                                   data=bytes(m.data), is_extended_id=False, channel=ch))
+    writer.stop()
+    capsys.readouterr()
+    rc, _, err = cli(capsys, "decode", log, "--summary", "--channel", "can0", "--sensor-id", "1")
+    assert rc == 0 and "warning: no frame of sensor 1 on channel 'can0' (option --channel); it holds frames of " \
+        "sensor ID 0 there: pick one with --sensor-id" in err, err
+    rc, _, err = cli(capsys, "decode", log, "--summary", "--channel", "can1", "--sensor-id", "1")
+    assert rc == 0 and "warning" not in err, err
+
+
+def test_a_log_without_channels_picks_none_and_says_so(capsys, tmp_path, short_frames):
+    """A .csv log keeps no channel: ``--channel None`` matched every frame (the channel read as the text 'None') and
+    a refusal listed 'None' as a channel (an independent tester's finding)."""
+    log = tmp_path / "x.csv"
+    _on_channels(log, short_frames, ["can0"])
+    capsys.readouterr()
+    rc, out, err = cli(capsys, "decode", log, "--format", "json", "--channel", "None")
+    assert rc == 0 and not out and "the log's frames are on: none (this log keeps no channel" in err, err
+
+
 @pytest.mark.parametrize("damage", ["garbage", "garbled number", "no time"])
 def test_a_damaged_trc_record_is_reported_not_dropped_or_read(capsys, tmp_path, damage):
     # an independent tester's finding: python-can's TRC reader dropped a line of garbage without a word and parsed a

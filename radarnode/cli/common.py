@@ -608,49 +608,56 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
 
 
 class ChannelPick:
-    """``--channel``: the frames of one channel (its name, or the same number: python-can's ``channel2int`` takes
-    ``can1`` and ``1`` for one channel), and what the log held, for a warning when none was that channel's.
+    """``--channel``: the frames of one channel, and what the log held, for a warning when none was that channel's.
 
-    In a log that numbers its channels from 1 (``one_based``: ASC, BLF, TRC) a number is the file's, and a name is
-    the interface's, counted from 0 as SocketCAN does: ``can0`` is the file's channel 1, where ``log --channel can0``
-    wrote it."""
+    A log that keeps names (candump ``.log``) is picked by the exact name, or by a bare number N as python-can's
+    writers spell it (``canN``): ``vcan1`` is not ``can1``, nor ``1`` (each name ending in 1 was one bus before: two
+    buses merged without a word, an independent tester's finding). A log that numbers its channels from 1 (ASC, BLF,
+    TRC) is picked by the file's number, or by an interface name counted from 0 as SocketCAN does: ``can0`` is the
+    file's channel 1, where ``log --channel can0`` wrote it (:func:`radarnode.wire.logfiles.file_channel`, which
+    refuses what is neither). A log that keeps no channel (``.csv``) has none to pick."""
 
-    def __init__(self, channel: str | None, one_based: bool = False) -> None:
-        from can.util import channel2int
-        self.channel, self.number = channel, None if channel is None else channel2int(channel)
-        if one_based and self.number is not None and not channel.isdigit():
-            self.number += 1
+    def __init__(self, channel: str | None, fmt: str, option: str = "--channel") -> None:
+        from radarnode.wire.logfiles import file_channel
+        self.channel = channel
+        self.number = None if channel is None else file_channel(channel, fmt, option)      # a numbered log's
+        self.names = set() if channel is None else \
+            {channel, f"can{channel}"} if channel.isascii() and channel.isdigit() else {channel}
         self.taken = 0                       # frames of the channel, over every pass
-        self.seen: set[str] = set()          # the channels the log's frames came on
+        self.seen: set[str] = set()          # the channels the log's frames came on (a frame without one: none)
 
     def __call__(self, frames):
         if self.channel is None:
             yield from frames
             return
-        from can.util import channel2int
         for msg in frames:
-            self.seen.add(str(msg.channel))
-            if str(msg.channel) == self.channel or (
-                    self.number is not None and msg.channel is not None and channel2int(msg.channel) == self.number):
+            ch = msg.channel
+            if ch is None:
+                continue
+            self.seen.add(str(ch))
+            if (isinstance(ch, str) and ch in self.names) or (
+                    not isinstance(ch, str) and str(ch) == (self.channel if self.number is None else str(self.number))):
                 self.taken += 1
                 yield msg
+
+    def _held(self) -> str:
+        return ", ".join(sorted(self.seen)) if self.seen else "none (this log keeps no channel: a .csv or .db log)"
 
     def warning(self) -> str | None:
         """One line when ``--channel`` was given and no frame was that channel's, else None."""
         if self.channel is None or self.taken:
             return None
-        # (a channel the log does not have gave an empty decode, status 0 and no word; a .csv keeps no channel)
+        # (a channel the log does not have gave an empty decode, status 0 and no word)
         return (f"warning: no frame on channel {self.channel!r} (option --channel); the log's frames are on: "
-                f"{', '.join(sorted(self.seen)) or 'none'} (as the log names them: decode --format json shows each "
-                "frame's)")
+                f"{self._held()} (as the log names them: decode --format json shows each frame's)")
 
     def refusal(self) -> str | None:
         """The error of a command that writes nothing without a frame (export) where ``--channel`` picked none."""
         if self.channel is None or self.taken:
             return None
         return (f"option --channel: value {self.channel!r} is not allowed: no frame of the log is on it; expected "
-                f"one of the channels its frames are on: {', '.join(sorted(self.seen)) or 'none'} (as the log names "
-                "them; an ASC, BLF or TRC log numbers its channels from 1, and can0 is its channel 1)")
+                f"one of the channels its frames are on: {self._held()} (as the log names them; an ASC, BLF or TRC "
+                "log numbers its channels from 1, and can0 is its channel 1)")
 
 
 def add_channel_option(p) -> None:
@@ -691,10 +698,12 @@ class SensorCensus:
         return (f"warning: frames of sensor {wanted} on {len(seen)} channels ({names}) were decoded as one bus: a "
                 f"radar on each?; pick one with {option}")
 
-    def warning(self, wanted: int, option: str) -> str | None:
-        """One line when the log holds other sensors' frames but none of ``wanted``'s, else None."""
+    def warning(self, wanted: int, option: str, channel: str | None = None) -> str | None:
+        """One line when the log (the frames of ``channel``, where ``--channel`` picked one) holds other sensors'
+        frames but none of ``wanted``'s, else None."""
         if wanted in self.present or not self.present:
             return None
         ids = ", ".join(str(i) for i in sorted(self.present))
-        return (f"warning: no frame of sensor {wanted} in the log; it holds frames of sensor ID "
-                f"{ids}: pick one with {option}")
+        where = "in the log" if channel is None else f"on channel {channel!r} (option --channel)"
+        return (f"warning: no frame of sensor {wanted} {where}; it holds frames of sensor ID "
+                f"{ids}{'' if channel is None else ' there'}: pick one with {option}")

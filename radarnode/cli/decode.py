@@ -30,7 +30,7 @@ from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.busdbc import frame_table, signal_value
-from radarnode.wire.logfiles import (FORMATS, ONE_BASED_CHANNELS, ReadReport, check_input, check_stem, log_format,
+from radarnode.wire.logfiles import (FORMATS, ReadReport, check_input, check_stem, log_format,
                                      read_frames)
 
 FORMATS_OUT = ("text", "json", "csv")
@@ -305,7 +305,7 @@ def cmd(args) -> int:
     if args.output is not None:
         check_output_suffix(args.output, args.format)
     fmt = check_input(args.file, "argument FILE")     # a missing, empty or unknown file fails before any output
-    args.pick = ChannelPick(args.channel, fmt in ONE_BASED_CHANNELS)
+    args.pick = ChannelPick(args.channel, fmt)
     if args.output is not None:
         if os.path.exists(args.output) and os.path.samefile(args.output, args.file):
             raise UsageError(f"option --output: value {args.output!r} is not allowed: it is the log being decoded; "
@@ -327,7 +327,7 @@ def cmd(args) -> int:
             nothing_readable()
     if (args.format == "text" and args.mounts is None) or args.sensor_id is not None:
         # the sensor asked for (text: 0 by default) sent nothing here, others did: say which there are
-        warning = census.warning(0 if args.sensor_id is None else args.sensor_id, "--sensor-id")
+        warning = census.warning(0 if args.sensor_id is None else args.sensor_id, "--sensor-id", args.channel)
         if warning:
             print(warning, file=sys.stderr)
         warning = census.channel_warning(0 if args.sensor_id is None else args.sensor_id, "--channel")

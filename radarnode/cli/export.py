@@ -18,7 +18,7 @@ from radarnode.cli.common import ChannelPick, SensorCensus, add_channel_option, 
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
 from radarnode.viz import MAX_STAMP_S
-from radarnode.wire.logfiles import (FORMATS, ONE_BASED_CHANNELS, ReadReport, check_input, check_input_format,
+from radarnode.wire.logfiles import (FORMATS, ReadReport, check_input, check_input_format,
                                      check_stem, read_frames)
 
 
@@ -50,7 +50,7 @@ def cmd(args) -> int:
     require_foxglove("--output", args.output)     # before anything is read
     check_input_format(args.log, "argument LOG")
     fmt = check_input(args.log, "argument LOG")
-    pick = ChannelPick(args.channel, fmt in ONE_BASED_CHANNELS)
+    pick = ChannelPick(args.channel, fmt)
     scenario = None
     if args.scenario:
         from radarnode.radar.setup import load_scenario
@@ -100,7 +100,7 @@ def cmd(args) -> int:
     print(summary(rec, args.output), file=sys.stderr)
     # the sensor asked for sent nothing here, or its frames came on two buses (merged into one recording); and
     # --channel named no channel of the log
-    for warning in (census.warning(sensor_id, "--sensor-id"), census.channel_warning(sensor_id, "--channel"),
+    for warning in (census.warning(sensor_id, "--sensor-id", args.channel), census.channel_warning(sensor_id, "--channel"),
                     pick.warning()):
         if warning:
             print(warning, file=sys.stderr)

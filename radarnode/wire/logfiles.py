@@ -248,6 +248,30 @@ def check_start_time(path: str, start_time_s: float, option: str) -> None:
 BLF_MAX_CHANNEL_NUMBER = 65534
 
 
+_ASCII_NUMBER = re.compile(r"[0-9]+")
+#: an interface name a log that numbers its channels can store: ASCII letters, digits and _, its trailing number (if
+#: any) the interface's from 0, as python-can's writers read it (``can0``; ``vcan12``; ``bus``, no number: channel 1)
+_INTERFACE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*?([0-9]*)")
+
+
+def file_channel(channel: str, fmt: str, option: str) -> int | None:
+    """The channel number a log of format ``fmt`` that numbers its channels from 1 (ONE_BASED_CHANNELS) stores for
+    ``--channel channel``: a bare (ASCII) number is the file's own, a name the interface's from 0 (``can0`` is 1, a
+    name without a number 1, as python-can's writers store them); None for a format that keeps names. A UsageError
+    naming the option for what is neither (``-1``, ``2.0``, ``can-1``, ``ä1``: read as a name's trailing number they
+    picked another channel without a word, an independent tester's finding)."""
+    if fmt not in ONE_BASED_CHANNELS:
+        return None
+    if _ASCII_NUMBER.fullmatch(channel):
+        return int(channel)
+    m = _INTERFACE_NAME.fullmatch(channel)
+    if m is None:
+        raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log, which numbers its "
+                         "channels from 1; expected its number (1, 2, …) or an interface name of ASCII letters, digits "
+                         "and _ (can0 is its channel 1)")
+    return int(m.group(1)) + 1 if m.group(1) else 1
+
+
 def check_channel(path: str, channel: str, option: str) -> str | int:
     """What to put in the frames' channel for a log ``path`` written with ``--channel channel``, or a UsageError
     naming the option when its format cannot store it. In a format that numbers channels from 1 (ONE_BASED_CHANNELS)
@@ -257,7 +281,8 @@ def check_channel(path: str, channel: str, option: str) -> str | int:
     BLF_MAX_CHANNEL_NUMBER + 1 (a name ending in at most BLF_MAX_CHANNEL_NUMBER)."""
     import can.util
     fmt = log_format(path)
-    if fmt in ONE_BASED_CHANNELS and channel.isdigit():
+    file_channel(channel, fmt, option)                 # a name such a format cannot store is refused
+    if fmt in ONE_BASED_CHANNELS and _ASCII_NUMBER.fullmatch(channel):
         number = int(channel)
         top = BLF_MAX_CHANNEL_NUMBER + 1 if fmt == ".blf" else None
         if number < 1 or (top is not None and number > top):
