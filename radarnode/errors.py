@@ -24,7 +24,8 @@ def short_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
     return _cut(repr(value), limit)
 
 
-_PLAIN_KEY = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
+#: a mapping key shown as it is (the loader keeps a key's text, not its quotes): no space, quote or flow character
+_PLAIN_KEY = re.compile(r"[^\s'\"{}\[\],:#&*!|>%@`]+")
 
 
 def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:

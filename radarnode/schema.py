@@ -158,6 +158,12 @@ class Source:
         if isinstance(node, yaml.MappingNode):
             out = {}
             for key_node, value_node in node.value:
+                if not isinstance(key_node, yaml.ScalarNode):
+                    # (a list or mapping as a key, ``{[a, b]: 1}``: a TypeError traceback before, a tester's finding)
+                    what = "a list" if isinstance(key_node, yaml.SequenceNode) else "a mapping"
+                    raise ScenarioError(f"{self.path}:{key_node.start_mark.line + 1}: a key of "
+                                        f"{'field ' + repr(_short(path)) if path else 'the top level'} is {what}; "
+                                        "expected a field name")
                 key = key_node.value
                 child = f"{path}.{key}" if path else str(key)
                 if key in out:

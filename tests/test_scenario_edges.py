@@ -156,3 +156,24 @@ def test_a_refused_yaml_null_or_boolean_is_shown_as_the_file_spells_it(tmp_path,
     assert rc == 1 and f"s.yaml:4: field '{field}': value {shown} is not allowed" in err, err
     assert "None" not in err and "True" not in err and "False" not in err, err
     assert not re.search(r"value (-?inf|nan)\b", err) and "'count'" not in err, err
+
+
+@pytest.mark.parametrize("line, where, what", [("? [a, b]\n: 1", "the top level", "a list"),
+                                               ("ego: {[1]: 2}", "field 'ego'", "a list"),
+                                               ("road: {{lanes: 2}: 1}", "field 'road'", "a mapping")])
+def test_a_list_or_mapping_as_a_key_is_an_error_not_a_traceback(tmp_path, capsys, line, where, what):
+    """``{[a, b]: 1}`` ended in ``TypeError: unhashable type: 'list'`` from inside the loader (an independent tester's
+    finding)."""
+    path = tmp_path / "s.yaml"
+    path.write_text(f"name: s\nduration_s: 2\nseed: 1\n{line}\n")
+    rc, _, err = cli(capsys, "run", path)
+    assert rc == 1 and f"s.yaml:4: a key of {where} is {what}; expected a field name" in err, err
+    assert "Traceback" not in err
+
+
+def test_a_mapping_key_is_shown_as_the_file_spells_it(tmp_path, capsys):
+    """A refused mapping's keys kept Python's quotes where they were not identifiers: {'x-y': 1, '2': 3}."""
+    path = tmp_path / "s.yaml"
+    path.write_text("name: s\nduration_s: 2\nseed: 1\nroad: {lanes: {x-y: 1, 2: 3, a.b: .nan}}\n")
+    rc, _, err = cli(capsys, "run", path)
+    assert rc == 1 and "value {x-y: 1, 2: 3, a.b: .nan} is not allowed" in err, err
