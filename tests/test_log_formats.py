@@ -723,6 +723,16 @@ def test_a_numbered_log_refuses_a_channel_that_is_neither_its_number_nor_an_inte
         assert not out and not (tmp_path / "x.mcap").exists() and not (tmp_path / f"new{suffix}").exists()
 
 
+@pytest.mark.parametrize("channel", ["\uff11", "\u00e41", "can1\u00e9"])
+def test_log_refuses_a_candump_interface_name_its_reader_cannot_read(capsys, tmp_path, channel):
+    """``log --channel ä1 -o x.log`` wrote lines decode then could not read at all (a candump line's interface is
+    printable ASCII; an independent tester's finding): refused before anything is written."""
+    out = tmp_path / "x.log"
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", out, "--duration", "0.3", "--channel", channel)
+    assert rc == 2 and f"option --channel: value {channel!r} is not allowed for a .log log" in err, err
+    assert not out.exists()
+
+
 def _has_foxglove() -> bool:
     try:
         import foxglove  # noqa: F401

@@ -282,6 +282,11 @@ def check_channel(path: str, channel: str, option: str) -> str | int:
     import can.util
     fmt = log_format(path)
     file_channel(channel, fmt, option)                 # a name such a format cannot store is refused
+    if fmt in (".log", ".log.gz") and not re.fullmatch(r"[!-~]+", channel):
+        # a candump line names its interface in printable ASCII: can１ or ä1 were written, and decode then read none
+        # of the file's lines (an independent tester's finding)
+        raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: a candump line names "
+                         "its interface in printable ASCII without spaces; expected such a name (can0)")
     if fmt in ONE_BASED_CHANNELS and _ASCII_NUMBER.fullmatch(channel):
         number = int(channel)
         top = BLF_MAX_CHANNEL_NUMBER + 1 if fmt == ".blf" else None
