@@ -620,9 +620,11 @@ class ChannelPick:
     def __init__(self, channel: str | None, fmt: str, option: str = "--channel") -> None:
         from radarnode.wire.logfiles import file_channel
         self.channel = channel
-        self.number = None if channel is None else file_channel(channel, fmt, option)      # a numbered log's
+        number = None if channel is None else file_channel(channel, fmt, option)           # a numbered log's
+        # what a frame's channel reads as: a name (exact, or canN for a bare N), or a number as text
         self.names = set() if channel is None else \
             {channel, f"can{channel}"} if channel.isascii() and channel.isdigit() else {channel}
+        self.number = channel if number is None else str(number)
         self.taken = 0                       # frames of the channel, over every pass
         self.seen: set[str] = set()          # the channels the log's frames came on (a frame without one: none)
 
@@ -635,8 +637,7 @@ class ChannelPick:
             if ch is None:
                 continue
             self.seen.add(str(ch))
-            if (isinstance(ch, str) and ch in self.names) or (
-                    not isinstance(ch, str) and str(ch) == (self.channel if self.number is None else str(self.number))):
+            if ch in self.names if isinstance(ch, str) else str(ch) == self.number:
                 self.taken += 1
                 yield msg
 

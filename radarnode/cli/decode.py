@@ -30,8 +30,7 @@ from radarnode.consumer.assembler import CycleAssembler, ObjectCycle, summarize_
 from radarnode.errors import FileError, UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.busdbc import frame_table, signal_value
-from radarnode.wire.logfiles import (FORMATS, ReadReport, check_input, check_stem, log_format,
-                                     read_frames)
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_stem, log_format, read_frames
 
 FORMATS_OUT = ("text", "json", "csv")
 FIXED_COLUMNS = ["timestamp", "channel", "can_id", "sensor_id", "cycle_counter", "message", "dlc", "data"]

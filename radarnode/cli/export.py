@@ -18,8 +18,7 @@ from radarnode.cli.common import ChannelPick, SensorCensus, add_channel_option, 
 from radarnode.cli.foxglove import is_mcap, require_foxglove, scenario_metadata, summary
 from radarnode.errors import FileError, UsageError
 from radarnode.viz import MAX_STAMP_S
-from radarnode.wire.logfiles import (FORMATS, ReadReport, check_input, check_input_format,
-                                     check_stem, read_frames)
+from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, check_stem, read_frames
 
 
 def add_subparser(sub) -> None:
@@ -92,16 +91,17 @@ def cmd(args) -> int:
             rec.close()
         if report.frames == 0:      # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument LOG"))
-        if pick.refusal():          # --channel picked no frame: no output file either
-            raise UsageError(pick.refusal())
+        refused = pick.refusal()
+        if refused:                 # --channel picked no frame: no output file either
+            raise UsageError(refused)
         if rec.frames_without_time == report.frames:        # nothing to put on a time line: no output file either
             raise FileError(f"argument LOG: {_no_time(rec, args.log)}; expected frames timed in [0, {MAX_STAMP_S}) s")
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
     # the sensor asked for sent nothing here, or its frames came on two buses (merged into one recording); and
     # --channel named no channel of the log
-    for warning in (census.warning(sensor_id, "--sensor-id", args.channel), census.channel_warning(sensor_id, "--channel"),
-                    pick.warning()):
+    for warning in (census.warning(sensor_id, "--sensor-id", args.channel),
+                    census.channel_warning(sensor_id, "--channel"), pick.warning()):
         if warning:
             print(warning, file=sys.stderr)
     if scenario is not None and rec.cycles_outside_run:

@@ -279,24 +279,23 @@ def check_channel(path: str, channel: str, option: str) -> str | int:
     was written as 2, and decode's ``--channel 1`` then found nothing, an independent tester's finding), and a name
     the interface's, from 0 (``can0`` is the file's channel 1). A BLF file takes a channel of at most
     BLF_MAX_CHANNEL_NUMBER + 1 (a name ending in at most BLF_MAX_CHANNEL_NUMBER)."""
-    import can.util
     fmt = log_format(path)
-    file_channel(channel, fmt, option)                 # a name such a format cannot store is refused
+    number = file_channel(channel, fmt, option)        # (a name such a format cannot store is refused)
     if fmt in (".log", ".log.gz") and not re.fullmatch(r"[!-~]+", channel):
         # a candump line names its interface in printable ASCII: can１ or ä1 were written, and decode then read none
         # of the file's lines (an independent tester's finding)
         raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: a candump line names "
                          "its interface in printable ASCII without spaces; expected such a name (can0)")
-    if fmt in ONE_BASED_CHANNELS and _ASCII_NUMBER.fullmatch(channel):
-        number = int(channel)
-        top = BLF_MAX_CHANNEL_NUMBER + 1 if fmt == ".blf" else None
+    if number is None:
+        return channel
+    top = BLF_MAX_CHANNEL_NUMBER + 1 if fmt == ".blf" else None
+    if _ASCII_NUMBER.fullmatch(channel):
         if number < 1 or (top is not None and number > top):
             what = "BLF stores the channel as a 16-bit number, from 1" if top else "its channels are numbered from 1"
             raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: {what}; expected "
                              f"1…{top or ''} or a name such as can0 (its channel 1)")
         return number - 1                  # (the writer adds the one back)
-    number = can.util.channel2int(channel)
-    if fmt == ".blf" and number is not None and number > BLF_MAX_CHANNEL_NUMBER:
+    if top is not None and number > top:   # the name's trailing number plus one
         raise UsageError(f"option {option}: value {channel!r} is not allowed for a .blf log: BLF stores the channel "
                          f"as a 16-bit number (the name's trailing number plus one); expected a name ending in "
                          f"0…{BLF_MAX_CHANNEL_NUMBER} or in no number")
