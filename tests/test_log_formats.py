@@ -650,13 +650,23 @@ def test_decode_picks_a_channel_by_the_number_the_log_file_gives_it(capsys, tmp_
 def test_log_and_decode_read_one_channel_option_alike(capsys, tmp_path, suffix, channel):
     """``log --channel 1 -o x.asc`` wrote the file's channel 2 (python-can's writer adds one to a number), so
     ``decode x.asc --channel 1`` found nothing (an independent tester's finding). In a format that numbers channels
-    from 1 a bare number is the file's channel for both commands (0 is refused), a name the interface's, from 0."""
+    from 1 a bare number is the file's channel for both commands, a name the interface's, from 0; 0 is refused by
+    log, decode and export alike (decode found no frame on it and only warned, with status 0)."""
     out = tmp_path / f"x{suffix}"
     rc, _, err = cli(capsys, "log", SCENARIO, "-o", out, "--duration", "0.3", "--channel", channel)
     if suffix != ".log" and channel == "0":
         assert rc == 2 and f"option --channel: value '0' is not allowed for a {suffix} log: " in err, err
         assert "from 1" in err, err
         assert not out.exists()
+        assert cli(capsys, "log", SCENARIO, "-o", out, "--duration", "0.3")[0] == 0
+        commands = [("decode", out, "--format", "json")]
+        if _has_foxglove():
+            commands.append(("export", out, "-o", tmp_path / "x.mcap"))
+        for argv in commands:
+            rc, stdout, err = cli(capsys, *argv, "--channel", "0")
+            assert rc == 2 and not stdout, (argv[0], err)
+            assert f"option --channel: value '0' is not allowed for a {suffix} log: " in err and "from 1" in err, err
+        assert not (tmp_path / "x.mcap").exists()
         return
     assert rc == 0, err
     rc, stdout, err = cli(capsys, "decode", out, "--format", "json", "--channel", channel)

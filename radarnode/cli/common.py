@@ -618,12 +618,12 @@ class ChannelPick:
     refuses what is neither). A log that keeps no channel (``.csv``) has none to pick."""
 
     def __init__(self, channel: str | None, fmt: str, option: str = "--channel") -> None:
-        from radarnode.wire.logfiles import file_channel
+        from radarnode.wire.logfiles import ascii_number, file_channel
         self.channel = channel
         number = None if channel is None else file_channel(channel, fmt, option)           # a numbered log's
         # what a frame's channel reads as: a name (exact, or canN for a bare N), or a number as text
         self.names = set() if channel is None else \
-            {channel, f"can{channel}"} if channel.isascii() and channel.isdigit() else {channel}
+            {channel, f"can{channel}"} if ascii_number(channel) else {channel}
         self.number = channel if number is None else str(number)
         self.taken = 0                       # frames of the channel, over every pass
         self.seen: set[str] = set()          # the channels the log's frames came on (a frame without one: none)

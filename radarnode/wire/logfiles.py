@@ -249,6 +249,13 @@ BLF_MAX_CHANNEL_NUMBER = 65534
 
 
 _ASCII_NUMBER = re.compile(r"[0-9]+")
+
+
+def ascii_number(text: str) -> bool:
+    """Whether ``text`` is a bare number in ASCII digits (``１`` and ``-1`` are not): a channel given by its number."""
+    return _ASCII_NUMBER.fullmatch(text) is not None
+
+
 #: an interface name a log that numbers its channels can store: ASCII letters, digits and _, its trailing number (if
 #: any) the interface's from 0, as python-can's writers read it (``can0``; ``vcan12``; ``bus``, no number: channel 1)
 _INTERFACE_NAME = re.compile(r"[A-Za-z_][A-Za-z0-9_]*?([0-9]*)")
@@ -262,7 +269,10 @@ def file_channel(channel: str, fmt: str, option: str) -> int | None:
     picked another channel without a word, an independent tester's finding)."""
     if fmt not in ONE_BASED_CHANNELS:
         return None
-    if _ASCII_NUMBER.fullmatch(channel):
+    if ascii_number(channel):
+        if int(channel) < 1:         # (decode found no frame on 0 and warned, where log refused it)
+            raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: its channels are "
+                             "numbered from 1; expected 1, 2, … or a name such as can0 (its channel 1)")
         return int(channel)
     m = _INTERFACE_NAME.fullmatch(channel)
     if m is None:
@@ -289,11 +299,11 @@ def check_channel(path: str, channel: str, option: str) -> str | int:
     if number is None:
         return channel
     top = BLF_MAX_CHANNEL_NUMBER + 1 if fmt == ".blf" else None
-    if _ASCII_NUMBER.fullmatch(channel):
-        if number < 1 or (top is not None and number > top):
-            what = "BLF stores the channel as a 16-bit number, from 1" if top else "its channels are numbered from 1"
-            raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: {what}; expected "
-                             f"1…{top or ''} or a name such as can0 (its channel 1)")
+    if ascii_number(channel):               # (0 was refused by file_channel)
+        if top is not None and number > top:
+            raise UsageError(f"option {option}: value {channel!r} is not allowed for a {fmt} log: BLF stores the "
+                             f"channel as a 16-bit number, from 1; expected 1…{top} or a name such as can0 (its "
+                             "channel 1)")
         return number - 1                  # (the writer adds the one back)
     if top is not None and number > top:   # the name's trailing number plus one
         raise UsageError(f"option {option}: value {channel!r} is not allowed for a .blf log: BLF stores the channel "
