@@ -170,8 +170,14 @@ def test_posts_at_motorway_speed_never_become_crossing_objects(preset, level, se
                                                            (55.6, "detection", range(1, 9), 6),
                                                            # the suite's longest test (about 2–4 minutes): run
                                                            # with -m slow, to keep CI within its 20 minutes
+                                                           # a known limit (README: the merged rails' walk, seed
+                                                           # 4): strict, so that it fails once the limit is gone
                                                            pytest.param(36.11, "signal", (1, 2, 3, 4), 8,
-                                                                        marks=pytest.mark.slow)])
+                                                                        marks=[pytest.mark.slow, pytest.mark.xfail(
+                                                                            strict=True, reason="known limit: the "
+                                                                            "merged rails' azimuth walks a standing "
+                                                                            "track across the road at 70-98 m, seed 4 "
+                                                                            "(README)")])])
 def test_posts_two_metres_apart_passing_the_sensor_stay_standing(ego_mps, level, seeds, limit):
     """Posts 2 m apart (highway_cut_in's spacing), 130 and 200 km/h: a standing track near the sensor (50–57°) that
     missed its own post took the next one, 1.4 m across the line of sight (under HOP_M), read it as 20 m/s across for
