@@ -185,11 +185,16 @@ class Source:
         return f"{self.path}:{line}" if line else self.path
 
     def _line(self, path: str) -> int | None:
-        while path:
-            if path in self.lines:
+        while True:
+            if path in self.lines:       # ("": the top level's, or an empty top-level key's)
                 return self.lines[path]
+            if not path:
+                return None
             path = path.rsplit(".", 1)[0] if "." in path else path.split("[")[0] if "[" in path else ""
-        return None
+
+
+#: a field name as an error shows it in quotes: no line break, quote or space
+_PLAIN_NAME = re.compile(r"[^\s'\"]+")
 
 
 def quoted_number_hint(value: object) -> str:
@@ -234,7 +239,11 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         name = aliases.get(key, key)
         child = f"{path}.{key}" if path else str(key)
         if name not in fields or not isinstance(key, str):
-            raise src.error(child, f"unknown field '{child}'; allowed here: {', '.join(allowed)}")
+            # a key that is not a plain name (a block scalar's text with its line break, an empty one) as YAML
+            # spells it, on one line
+            shown = f"'{child}'" if isinstance(key, str) and _PLAIN_NAME.fullmatch(key) else \
+                f"{yaml_repr(key)}" + (f" (in field '{path}')" if path else " (at the top level)")
+            raise src.error(child, f"unknown field {shown}; allowed here: {', '.join(allowed)}")
         nested = schema.nested.get(cls, {}).get(name)
         if nested is not None and value is None:
             # a section or list written with nothing after it (``road:``) is YAML's null, not "the defaults"

@@ -177,3 +177,17 @@ def test_a_mapping_key_is_shown_as_the_file_spells_it(tmp_path, capsys):
     path.write_text("name: s\nduration_s: 2\nseed: 1\nroad: {lanes: {x-y: 1, 2: 3, a.b: .nan}}\n")
     rc, _, err = cli(capsys, "run", path)
     assert rc == 1 and "value {x-y: 1, 2: 3, a.b: .nan} is not allowed" in err, err
+
+
+@pytest.mark.parametrize("line, shown, where", [('"": 3', "''", "at the top level"),
+                                                ("? |\n  block\n: 3", r"'block\n'", "at the top level"),
+                                                ('ego: {speed_mps: 10, "a b": 1}', "'a b'", "in field 'ego'")])
+def test_an_unknown_key_that_is_not_a_plain_name_is_shown_on_one_line_with_its_line(tmp_path, capsys, line, shown,
+                                                                                      where):
+    """A block scalar as a key put its line break into the message (two lines), and an empty top-level key's error
+    named no line (a tester's findings)."""
+    path = tmp_path / "s.yaml"
+    path.write_text(f"name: s\nduration_s: 2\nseed: 1\n{line}\n")
+    rc, _, err = cli(capsys, "run", path)
+    assert rc == 1 and re.search(rf"s\.yaml:[4-6]: unknown field {re.escape(shown)} \({where}\); allowed here: ", err), err
+    assert len(err.strip().splitlines()) == 1, err
