@@ -713,6 +713,24 @@ def test_a_candump_channel_is_picked_by_its_exact_name(capsys, tmp_path, short_f
         assert rc == 0 and not out and "the log's frames are on: CAN1, can1, vcan1" in err, (channel, err)
 
 
+def test_candump_interfaces_named_1_and_01_are_two_buses(capsys, tmp_path, short_frames):
+    """python-can reads a candump interface of digits as a number: ``1`` and ``01`` were one channel, 1, so
+    ``--channel 1`` decoded both buses as one and ``--channel 01`` none (a tester's finding). A name of digits that
+    is not a number's own spelling keeps its text."""
+    log = tmp_path / "digits.log"
+    with open(log, "w") as f:
+        for i, m in enumerate(short_frames):
+            for name in ("1", "01"):
+                f.write(f"({m.timestamp + i * 1e-6:.6f}) {name} {m.arbitration_id:03X}#{bytes(m.data).hex().upper()}\n")
+    for channel, shown in (("1", "1"), ("01", "01")):
+        rc, out, err = cli(capsys, "decode", log, "--format", "json", "--channel", channel)
+        recs = [json.loads(line) for line in out.splitlines()]
+        assert rc == 0 and "warning" not in err, (channel, err)
+        assert len(recs) == len(short_frames) and {r["channel"] for r in recs} == {shown}, channel
+    rc, out, err = cli(capsys, "decode", log, "--format", "json", "--channel", "001")
+    assert rc == 0 and not out and "the log's frames are on: 01, 1" in err, err
+
+
 @pytest.mark.parametrize("suffix", [".blf", ".asc", ".trc"])
 @pytest.mark.parametrize("channel", ["-1", "2.0", "can-1", "ä1", "\uff12", "my-bus_1"])
 def test_a_numbered_log_refuses_a_channel_that_is_neither_its_number_nor_an_interface_name(

@@ -700,6 +700,22 @@ def _candump_plain(whole: re.Match) -> str:
     return f"({stamp}) {channel} {can_id}#{data}{tail}\n"
 
 
+def _candump_channel(text: str) -> int | str:
+    """A candump line's interface as a frame's channel: a number as python-can's reader gives it (``1`` is 1), but a
+    name of digits that is not a number's own spelling (``01``) as it is written: python-can read ``1`` and ``01`` as
+    one channel, 1, so two interfaces were one bus to ``--channel`` (a tester's finding)."""
+    return int(text) if text.isascii() and text.isdigit() and str(int(text)) == text else text
+
+
+def _candump_digit_channel(msg: can.Message, line: str | None) -> can.Message:
+    """``msg``, read by python-can from candump ``line`` with a channel of digits (an int): its channel as
+    :func:`_candump_channel` reads the line's."""
+    whole = None if line is None else _CANDUMP_LINE.match(line)
+    if whole is not None:
+        msg.channel = _candump_channel(whole.group(2))
+    return msg
+
+
 def _candump_error_frame(msg: can.Message, line: str | None) -> can.Message:
     """python-can's candump reader makes an error frame only of an ID with the bus-error class, and without its data
     and channel; any other error class (a controller's state, a lost arbitration, a transceiver's fault) became an
@@ -716,7 +732,7 @@ def _candump_error_frame(msg: can.Message, line: str | None) -> can.Message:
         return msg
     payload = bytes.fromhex(data)
     return can.Message(timestamp=msg.timestamp, arbitration_id=int(can_id, 16) & 0x1FFFFFFF, is_error_frame=True,
-                       dlc=len(payload), data=payload, channel=int(channel) if channel.isdigit() else channel,
+                       dlc=len(payload), data=payload, channel=_candump_channel(channel),
                        is_rx=direction not in ("T", "t"))
 
 
@@ -763,6 +779,8 @@ class _TextFrames:
                         for msg in self.reader_cls(lines):
                             if self.reader_cls is CanutilsLogReader:
                                 msg = _candump_error_frame(msg, lines.last)
+                                if isinstance(msg.channel, int):
+                                    msg = _candump_digit_channel(msg, lines.last)
                             if lines.recording is not None:
                                 # the headers a restarted reader needs: the lines before the first frame's
                                 preamble, lines.recording = lines.recording[:-1], None
