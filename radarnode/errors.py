@@ -6,6 +6,7 @@ what would have been allowed, so a user can fix the input without reading code.
 
 from __future__ import annotations
 
+import base64
 import math
 import re
 
@@ -37,6 +38,8 @@ def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
             return {None: "null", True: "true", False: "false"}[v]
         if isinstance(v, float) and not math.isfinite(v):             # YAML's .nan, .inf, -.inf
             return ".nan" if math.isnan(v) else ".inf" if v > 0 else "-.inf"
+        if isinstance(v, (bytes, bytearray)):                         # YAML's !!binary, as the file writes it
+            return "!!binary " + base64.b64encode(bytes(v)).decode("ascii")
         if isinstance(v, (list, tuple)):
             return "[" + ", ".join(spell(x) for x in v) + "]"
         if isinstance(v, dict):
