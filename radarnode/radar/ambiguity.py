@@ -193,8 +193,14 @@ def coupled_range(preset: RadarPreset, range_m: np.ndarray, coupled_mps: np.ndar
     (the speed it reports: ``RadarPreset.range_rate_coupling_s``), modulo the unambiguous range (never negative);
     ``range_m`` itself where the two speeds agree. A target reported at an aliased speed keeps (true − aliased) ×
     the coupling in its range; a speed resolved later (staggered ramps, stationary candidates) recouples it."""
-    shift = (np.asarray(coupled_mps) - np.asarray(taken_out_mps)) * preset.range_rate_coupling_s
+    shift = coupling_left(preset, coupled_mps, taken_out_mps)
     return np.where(shift != 0.0, np.mod(range_m + shift, preset.unambiguous_range_m), range_m)
+
+
+def coupling_left(preset: RadarPreset, coupled_mps: np.ndarray, taken_out_mps: np.ndarray) -> np.ndarray:
+    """The range (m) the range–Doppler coupling of the speed ``coupled_mps`` leaves in a peak once the chain takes
+    it out with ``taken_out_mps`` (:func:`coupled_range` before its fold)."""
+    return (np.asarray(coupled_mps) - np.asarray(taken_out_mps)) * preset.range_rate_coupling_s
 
 
 def resolve(preset: RadarPreset, sequences: list[Detections], sensor_velocity: tuple[float, float]) -> Detections:

@@ -943,17 +943,21 @@ class ObjectModel:
         # the range–Doppler coupling: the chain takes it out of the peak's range with the speed it reports, so a
         # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
         # (without it the object level put an aliased target 0.4–3 m from where they do)
+        unfolded = m_r + ambiguity.coupling_left(p, v_meas, m_vr)
         m_r = ambiguity.coupled_range(p, m_r, v_meas, m_vr)
         # beyond the unambiguous range (a preset whose range bins end inside its field of view) the beat folds: the
         # radar reports the range modulo it, and the RCS it infers at that range, as the other levels do (the object
         # level reported 131 m where they report 16.4 m: an independent tester's finding). A wrap, as the scatterer
-        # levels model real sampling too (README, known limits)
+        # levels model real sampling too (README, known limits). The RCS is read against the range before the fold:
+        # coupled_range has folded already wherever some coupling is left (an aliased speed, or a remainder of 1e-15),
+        # and that range read a fold of 0 dB (30 dBsm at 2 m where the other levels read −25: a tester's finding)
         beyond = observable & (r_seen >= p.unambiguous_range_m)
         if beyond.any():
-            folded = np.mod(m_r, p.unambiguous_range_m)
+            folded = np.mod(unfolded, p.unambiguous_range_m)
             # (and a real-sampling receiver's anti-alias filter, which the SNR carries, is not divided out either)
             filt = 0.0 if p.complex_sampling else equation.ANTI_ALIAS_REJECTION_DB
-            fold_db = np.where(beyond, 40.0 * np.log10(np.maximum(folded, 0.01) / np.maximum(m_r, 0.01)) - filt, 0.0)
+            fold_db = np.where(beyond, 40.0 * np.log10(np.maximum(folded, 0.01) / np.maximum(unfolded, 0.01)) - filt,
+                               0.0)
             m_r = np.where(beyond, folded, m_r)
             rcs_eff, rcs_body = rcs_eff + fold_db, rcs_body + fold_db
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
