@@ -188,3 +188,41 @@ def test_curvature_and_segments_together_are_refused(tmp_path):
         "  segments:\n", "  segments: straight\n").replace("    - {type: straight, length_m: 100}\n", ""))
     with pytest.raises(ScenarioError, match=r"field 'road.segments': value 'straight'.*a list"):
         load_scenario(p)
+
+
+@pytest.mark.parametrize("yaw_deg, x_m", [(180.0, -1.0), (135.0, -0.8), (45.0, 3.5), (90.0, 2.0), (0.0, 3.7)])
+def test_guardrail_posts_reach_as_far_as_the_sensor_looks_whichever_way_it_faces(yaw_deg, x_m):
+    """Posts were made from 5 m behind the ego to the range ahead of it: a rear radar (yaw 180°) saw none beyond 5 m
+    behind at every level, 6 clusters where the front radar saw 200 (a tester's finding). Every post the sensor's
+    ±90° about its yaw can reach, within the range, is there: as many as the road's posts put into the sensor's
+    frame here."""
+    text = f"""
+name: t
+duration_s: 1.0
+seed: 1
+radar: {{preset: ars408_like, mount: {{x_m: {x_m}, y_m: 0.0, yaw_deg: {yaw_deg}}}}}
+ego: {{speed_mps: 20.0}}
+road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, guardrails: {{left_offset_m: 0.8, right_offset_m: 0.8}}}}
+actors: []
+"""
+    sc = dataclasses.replace(read_scenario_text(text), cycle_period_s=0.072)
+    scene = Scene(sc)
+    reach = 250.0
+    gx, gy = scene.guardrail_posts(0.5, reach)
+    # every post 1 km either way of the road's start, into the sensor's frame
+    st = np.arange(-500, 501) * sc.road.guardrails.post_spacing_m
+    wx, wy = [], []
+    for d in (sc.road.left_edge_y_m + 0.8, sc.road.right_edge_y_m - 0.8):
+        x, y, _ = scene.road_to_world(st, np.full_like(st, d))
+        wx.append(x)
+        wy.append(y)
+    px, py, psi, _, _ = scene.sensor_pose(scene.ego_state(0.5))
+    dx, dy = np.concatenate(wx) - px, np.concatenate(wy) - py
+    ax, ay = np.cos(psi) * dx + np.sin(psi) * dy, -np.sin(psi) * dx + np.cos(psi) * dy
+    r, az = np.hypot(gx, gy), np.arctan2(gy, gx)
+    ra, aza = np.hypot(ax, ay), np.arctan2(ay, ax)
+    want = (ra <= reach) & (np.abs(aza) <= math.pi / 2)
+    have = (r <= reach) & (np.abs(az) <= math.pi / 2)
+    assert want.sum() > 100 and have.sum() == want.sum()
+    if math.cos(math.radians(yaw_deg)) < 0.0:           # looking back: posts far behind the ego are seen
+        assert r[have].max() > 200.0

@@ -541,7 +541,11 @@ class Scene:
         px, py, psi_s = ex + ox, ey + oy, heading + myaw
         s_ego = est.x_m[:, 0]
         rows, xs, ys = [], [], []
-        k0 = np.floor((s_ego - 5.0) / g.post_spacing_m).astype(np.int64)
+        # the posts from 5 m behind the ego to 5 m past the range ahead, and as far behind as the sensor can look:
+        # its sectors span at most ±90° about its yaw, whose farthest look back along the ego's axis is −cos … or
+        # −|sin| of it (a rear radar, yaw 180°, saw no post beyond 5 m behind the ego: a tester's finding)
+        back = 1.0 if math.cos(myaw) <= 0.0 else abs(math.sin(myaw))
+        k0 = np.floor((s_ego - 5.0 + min(0.0, float(mx) - back * max_range_m)) / g.post_spacing_m).astype(np.int64)
         k1 = np.ceil((s_ego + max_range_m + 5.0) / g.post_spacing_m).astype(np.int64)
         count = k1 - k0 + 1
         row = np.repeat(np.arange(t.size), count)
