@@ -1358,3 +1358,31 @@ def test_posts_passing_close_beside_the_sensor_at_motorway_speed_stay_standing(p
         listed += len(ol)
         moving += int((~np.isin(ol.dyn_prop, (DYN_STATIONARY, DYN_STOPPED))).sum())
     assert listed > 100 and moving == 0, (listed, moving)
+
+
+@pytest.mark.parametrize("level", ["detection", "object"])
+def test_a_rear_radar_at_motorway_speed_sees_the_posts_behind_standing_and_within_its_range(level):
+    """A rear radar (yaw 180°) saw no guardrail post beyond 5 m behind the ego (the posts were made ahead only: a
+    tester's finding), so the 130-km/h check had nothing to hold; and a standing track receding past the far sector
+    coasted 26 m beyond it, listed out to 276 m. Now the posts behind are seen out to the range, none is reported
+    moving, and nothing is listed beyond the range."""
+    sc = scenario("", ego="{speed_mps: 36.11}", radar="{preset: ars408_like, output: clusters, mount: {x_m: -1.0, "
+                  "y_m: 0.0, yaw_deg: 180}}", road="{lanes: 2, lane_width_m: 3.5, ego_lane: 0, guardrails: "
+                  "{left_offset_m: 1.0, right_offset_m: 1.0, post_spacing_m: 4.0}}", duration=3.0, seed=1)
+    cfg = radar_config(sc)
+    model = make_model(level, Scene(sc), cfg.preset, np.random.default_rng(1), cfg.signal, clusters_wanted=True)
+    run = RuntimeConfig(max_distance_m=cfg.preset.max_range_m, clusters=True)
+    far_cluster = far_object = 0.0
+    moving = listed = 0
+    for k in range(30):
+        frame = model.step(k * sc.period_s, run)[0]
+        cl, ol = frame.clusters, frame.objects
+        far_cluster = max(far_cluster, float(np.hypot(cl.dist_long_m, cl.dist_lat_m).max(initial=0.0)))
+        if len(ol):
+            far_object = max(far_object, float(np.hypot(ol.dist_long_m, ol.dist_lat_m).max()))
+        listed += len(ol)
+        moving += int(np.isin(ol.dyn_prop, (DYN_MOVING, DYN_ONCOMING, DYN_CROSSING_MOVING)).sum())
+    assert far_cluster > 150.0, far_cluster
+    assert moving == 0
+    if level == "detection":          # (the object level lists no guardrail post as an object, ahead or behind)
+        assert listed > 300 and 150.0 < far_object <= cfg.preset.max_range_m + 1.0, (listed, far_object)

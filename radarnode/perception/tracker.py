@@ -887,8 +887,11 @@ class ObjectTracker:
         self.confirmed |= newly & (self.ids >= 0)
         coast = np.where(moving, COAST_CYCLES, COAST_STATIONARY_CYCLES)
         tentative = np.where(moving, 0, CONFIRM_WINDOW_STATIONARY - CONFIRM_HITS)
+        # a track coasting beyond the farthest sector's range has left where the radar can see it (a rear radar's
+        # posts receding at 130 km/h coasted 26 m past its 250 m, listed out to 276 m)
+        beyond = (self.misses > 0) & (np.hypot(self.x[:, 0], self.x[:, 1]) > max(r for r, _ in self.fov))
         self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
-                     | self._duplicates())
+                     | beyond | self._duplicates())
         return self._object_list(sensor_velocity)
 
     def _unwrap(self, ti: np.ndarray, gi: np.ndarray, z: np.ndarray, ambiguous: np.ndarray, span: float
