@@ -425,3 +425,24 @@ def test_names_up_to_the_limit_with_any_printable_character_are_taken(tmp_path, 
     # a name is free text ('m/s' in benchmarks/side_pass.py's): report makes its plot files' names safe itself
     _, sc = _load(tmp_path, f"name: {name}\nduration_s: 1\nseed: 1\n")
     assert sc.name == name.strip("'")
+
+
+# --- range bins that end inside the field of view -------------------------------------------------------------
+
+
+@pytest.mark.parametrize("overrides, end, says", [
+    ("{num_samples: 64}", "57.28 m", "anti-alias filter"),                       # real sampling: the target vanishes
+    ("{num_samples: 64, complex_sampling: true}", "114.56 m", "folds"),          # complex: it folds
+    ("{num_samples: 256}", "229.12 m", "anti-alias filter"),                     # inside 250 m too
+    ("{num_samples: 512}", None, None)])                                          # the preset's own: 458 m
+def test_range_bins_that_end_inside_the_field_of_view_are_a_warning(tmp_path, caplog, overrides, end, says):
+    """ars408_like with 64 samples a chirp sees to 250 m, but its bins end at 57.28 m (real sampling): a target at
+    80 m was not reported at any level and nothing was said (a tester's finding)."""
+    with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
+        p, _ = _load(tmp_path, HEAD + f"radar: {{preset: ars408_like, overrides: {overrides}}}\nactors: []\n")
+    msgs = [r.getMessage() for r in caplog.records]
+    if end is None:
+        assert not msgs, msgs
+        return
+    (msg,) = msgs
+    assert msg.startswith(f"{p}:5: preset ars408_like's range bins end at {end}") and says in msg, msg
