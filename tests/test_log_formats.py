@@ -1162,3 +1162,32 @@ def test_a_can_fd_frame_in_a_log_is_skipped_by_every_decode_output(capsys, tmp_p
     else:
         assert outs["fd"][0] == outs["good"][0]                    # the FD frame left no trace in the records
         assert "1 error/remote/CAN FD frames skipped" in outs["fd"][1]
+
+
+def test_log_says_which_values_it_sent_at_their_signal_limit(capsys, tmp_path):
+    """A point at 50° closing at 100 m/s has a lateral speed of −76.6 m/s; Cluster_VrelLat ends at −64 and every
+    level sent −64.0 without a word, even with -v (a tester's finding). log now says how many values of which
+    signals were sent at a limit; a run with none says nothing of it. With two radars, every radar's count."""
+    scene = tmp_path / "vlat.yaml"
+    scene.write_text("name: vlat\nduration_s: 0.15\nseed: 3\nradar: {preset: ars408_like, output: clusters}\n"
+                     "ego: {speed_mps: 0}\nroad: {lanes: 1, ego_lane: 0}\nactors:\n"
+                     "  - {id: a, class: point, rcs_dbsm: 20.0, swerling: 0, x_m: 16.234, y_m: 14.938, "
+                     "speed_mps: 100.0, heading_deg: -130}\n")
+    rc, _, err = cli(capsys, "log", scene, "-o", tmp_path / "v.blf")
+    assert rc == 0 and re.search(r"note: \d+ values lay beyond their signal's range and were sent at its limit .*"
+                                 r"Cluster_VrelLat \d+", err), err
+    import cantools
+    db = cantools.database.load_file(str(ROOT / "dbc" / "ars408.dbc"))
+    decoded = [db.decode_message(0x701, m.data) for m in can.LogReader(str(tmp_path / "v.blf"))
+               if m.arbitration_id == 0x701]
+    assert decoded and all(c["Cluster_VrelLat"] == pytest.approx(-64.0) for c in decoded)
+    two = tmp_path / "two.yaml"
+    two.write_text(scene.read_text().replace(
+        "radar: {preset: ars408_like, output: clusters}",
+        "radars:\n  - {preset: ars408_like, sensor_id: 0, output: clusters}\n"
+        "  - {preset: ars408_like, sensor_id: 1, output: clusters}"))
+    rc, _, err2 = cli(capsys, "log", two, "-o", tmp_path / "t.blf")
+    n1 = int(re.search(r"Cluster_VrelLat (\d+)", err).group(1))
+    assert rc == 0 and f"Cluster_VrelLat {2 * n1}" in err2, (err, err2)
+    rc, _, err = cli(capsys, "log", SCENARIO, "-o", tmp_path / "s.blf", "--duration", "0.5")
+    assert rc == 0 and "sent at its limit" not in err, err

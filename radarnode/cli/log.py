@@ -152,5 +152,11 @@ def _log(args) -> int:
         print(f"consumer ECU: {ecu_frames[0]} AccStatus/FcwStatus frames logged", file=sys.stderr)
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "
           f"to {args.output}; bus-load budget {100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr)
+    saturated = node.saturated
+    if saturated:
+        # the ARS 408's own limits (a lateral speed of −76.6 m/s went out as −64.0 without a word: a tester's finding)
+        print(f"note: {sum(saturated.values())} values lay beyond their signal's range and were sent at its limit "
+              "(the DBC's minimum or maximum, as the sensor's fields allow): "
+              + ", ".join(f"{k} {v}" for k, v in sorted(saturated.items())), file=sys.stderr)
     # 130/143 when a signal cut the run short: the file is complete, the run is not
     return stop.exit_status if interrupted else 0

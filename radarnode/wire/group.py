@@ -57,6 +57,15 @@ class RadarGroup:
         return total
 
     @property
+    def saturated(self) -> Counter:
+        """Every node's values saturated to their DBC signal's range, summed by signal (the first node's alone
+        before)."""
+        total: Counter = Counter()
+        for n in self.nodes:
+            total.update(n.saturated)
+        return total
+
+    @property
     def config(self):
         return self.nodes[0].config
 
