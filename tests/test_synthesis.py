@@ -300,6 +300,29 @@ def test_a_non_finite_scatterer_is_named(field, bad):
         assert field in msg and "scatterer 1" in msg and "actor_index 8" in msg and repr(bad) in msg
 
 
+@pytest.mark.parametrize("field, huge", [("x_m", 1e200), ("y_m", -1e300), ("z_m", 2e6), ("vx_mps", 1e200),
+                                         ("vy_mps", -2e4), ("rcs_dbsm", 1e300)])
+def test_a_finite_scatterer_beyond_any_scene_is_named(field, huge):
+    """x = 1e200 m is finite, but its square overflowed and the time-domain cube came out non-finite, with numpy's
+    RuntimeWarnings only (a tester's finding). Beyond SCATTERER_LIMITS it is an error naming it; at the limit the
+    time domain synthesises it, finite."""
+    from radarnode.radar.scatterers import SCATTERER_LIMITS
+    scat = point_targets([20.0, 30.0, 40.0], [0.0, 5.0, 10.0], [1.0, 2.0, 3.0])
+    scat.actor_index = np.array([7, 8, 9])
+    getattr(scat, field)[1] = huge
+    for call in (scat.require_finite,
+                 lambda: synthesize(P, scat, np.random.default_rng(0)),
+                 lambda: synthesize_rd(P, scat, np.random.default_rng(0))):
+        with pytest.raises(ConfigError) as info:
+            call()
+        msg = str(info.value)
+        assert field in msg and "scatterer 1" in msg and "actor_index 8" in msg and repr(huge) in msg
+        assert f"within ±{SCATTERER_LIMITS[field][0]:g}" in msg
+    getattr(scat, field)[1] = math.copysign(SCATTERER_LIMITS[field][0], huge)
+    # (the time domain's; the range–Doppler synthesis refuses 10 km/s and 300 dBsm in words of its own)
+    assert np.isfinite(synthesize(P, scat, np.random.default_rng(0))).all()
+
+
 @pytest.mark.parametrize("kw", [{"snr_db": float("nan")}, {"snr_db": float("inf")},
                                 {"power_reduction_db": float("nan")}, {"power_reduction_db": -float("inf")}])
 def test_non_finite_snr_or_power_reduction_is_rejected(kw):

@@ -52,7 +52,7 @@ class Scatterers(_Columns):
         return (self.x_m * self.vx_mps + self.y_m * self.vy_mps) / r
 
     def require_finite(self) -> None:
-        """Raise if any float field holds a NaN or an infinity.
+        """Raise if any float field holds a NaN or an infinity, or a value beyond :data:`SCATTERER_LIMITS`.
 
         One NaN scatterer turns a whole signal-level cube into NaN, and every
         detection of the frame vanishes without a word; this names the culprit
@@ -73,12 +73,25 @@ class Scatterers(_Columns):
                 continue
             values = np.asarray(getattr(self, f.name), dtype=np.float64)
             bad = ~np.isfinite(values)
+            what = "a finite number"
+            limit = SCATTERER_LIMITS.get(f.name)
+            if not bad.any() and limit is not None:
+                # finite but beyond any radar's scene (x = 1e200 m): its square overflowed and the cube came out
+                # non-finite without an error (a tester's finding)
+                bad = np.abs(values) > limit[0]
+                what = f"a number within ±{limit[0]:g} {limit[1]}"
             if bad.any():
                 i = int(np.flatnonzero(bad)[0])
                 raise ConfigError(
                     f"field '{f.name}' of scatterer {i} (actor_index {int(self.actor_index[i])}): value "
-                    f"{float(values[i])!r} is not allowed; expected a finite number "
-                    f"({int(bad.sum())} of {values.size} entries of {f.name} are not finite)")
+                    f"{float(values[i])!r} is not allowed; expected {what} "
+                    f"({int(bad.sum())} of {values.size} entries of {f.name} are not)")
+
+
+#: the largest magnitude a scatterer's field may have (and its unit): a thousand kilometres, ten kilometres a
+#: second, ±300 dBsm — far beyond every scene, well within float64's range for their squares and powers
+SCATTERER_LIMITS = {"x_m": (1e6, "m"), "y_m": (1e6, "m"), "z_m": (1e6, "m"), "vx_mps": (1e4, "m/s"),
+                    "vy_mps": (1e4, "m/s"), "rcs_dbsm": (300.0, "dBsm")}
 
 
 def point_targets(range_m, azimuth_deg, range_rate_mps, rcs_dbsm=10.0) -> Scatterers:
