@@ -1191,3 +1191,6 @@ def test_log_says_which_values_it_sent_at_their_signal_limit(capsys, tmp_path):
     assert rc == 0 and f"Cluster_VrelLat {2 * n1}" in err2, (err, err2)
     rc, _, err = cli(capsys, "log", SCENARIO, "-o", tmp_path / "s.blf", "--duration", "0.5")
     assert rc == 0 and "sent at its limit" not in err, err
+    # the node on a bus says it as log does
+    rc, _, err = cli(capsys, "node", scene, "-i", "virtual", "-c", f"sat-{uuid.uuid4().hex}", "--fast")
+    assert rc == 0 and re.search(r"note: \d+ values lay beyond .*Cluster_VrelLat \d+", err), err

@@ -607,6 +607,17 @@ def resolve_bitrate(cli_bitrate: int | None, scenario_bitrate: int, *, use_can_c
     return Bitrate(bit_s, source)
 
 
+def saturation_note(node) -> str | None:
+    """One line of the values a node (or radar group) sent at their DBC signal's limit, by signal, or None: the ARS
+    408's own limits (a lateral speed of −76.6 m/s went out as −64.0 without a word: a tester's finding)."""
+    saturated = node.saturated
+    if not saturated:
+        return None
+    return (f"note: {sum(saturated.values())} values lay beyond their signal's range and were sent at its limit (the "
+            "DBC's minimum or maximum, as the sensor's fields allow): "
+            + ", ".join(f"{k} {v}" for k, v in sorted(saturated.items())))
+
+
 class ChannelPick:
     """``--channel``: the frames of one channel, and what the log held, for a warning when none was that channel's.
 

@@ -15,7 +15,7 @@ import sys
 import can
 
 from radarnode.cli import options
-from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
+from radarnode.cli.common import add_scenario_argument, atomic_path, progress, resolve_bitrate, saturation_note, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import check_mcap_span, is_mcap, mcap_writer, require_foxglove, summary
 from radarnode.errors import FileError
 from radarnode.wire.logfiles import check_channel, check_output_format, check_start_time, open_writer
@@ -152,11 +152,8 @@ def _log(args) -> int:
         print(f"consumer ECU: {ecu_frames[0]} AccStatus/FcwStatus frames logged", file=sys.stderr)
     print(f"{'interrupted: ' if interrupted else ''}wrote {stats.frames} frames in {stats.cycles} complete cycles "
           f"to {args.output}; bus-load budget {100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr)
-    saturated = node.saturated
-    if saturated:
-        # the ARS 408's own limits (a lateral speed of −76.6 m/s went out as −64.0 without a word: a tester's finding)
-        print(f"note: {sum(saturated.values())} values lay beyond their signal's range and were sent at its limit "
-              "(the DBC's minimum or maximum, as the sensor's fields allow): "
-              + ", ".join(f"{k} {v}" for k, v in sorted(saturated.items())), file=sys.stderr)
+    note = saturation_note(node)
+    if note:
+        print(note, file=sys.stderr)
     # 130/143 when a signal cut the run short: the file is complete, the run is not
     return stop.exit_status if interrupted else 0

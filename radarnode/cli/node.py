@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import sys
 
-from radarnode.cli.common import add_scenario_argument, resolve_bitrate, scenario_from_args, stop_on_signals, with_bitrate
+from radarnode.cli.common import add_scenario_argument, resolve_bitrate, saturation_note, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
 from radarnode.wire.bus import add_bus_arguments, echoes_own, open_bus
 from radarnode.wire.group import ego_motion_for, make_node
@@ -51,4 +51,7 @@ def cmd(args) -> int:
                          on_cycle=live.on_node_cycle, echoes_own=echoes_own(bus))
     print(f"{'interrupted: ' if stop.is_set() else ''}sent {stats.cycles} cycles, {stats.frames} frames; " +
           ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())), file=sys.stderr)
+    note = saturation_note(node)
+    if note:
+        print(note, file=sys.stderr)
     return stop.exit_status       # 130/143 when stopped by SIGINT/SIGTERM
