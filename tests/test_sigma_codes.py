@@ -116,3 +116,34 @@ def test_the_quality_fields_codes_in_one_pass_are_each_fields_own():
         want = (sigma_to_code(np.degrees(ol.orientation_sigma_rad), RMS_TOP_ANGLE_DEG) if signal == "Obj_Orientation_rms"
                 else sigma_to_code(getattr(ol, name)))
         np.testing.assert_array_equal(quality[signal], want)
+
+
+def test_an_orientation_past_plus_or_minus_180_degrees_is_wrapped_not_saturated():
+    """Obj_OrientationAngle spans −180 … 229.2°: an angle just past −180° (a pedestrian crossing leftwards) was sent
+    saturated at −180.0, and log's note counted 30 such values on pedestrian_crossing (a tester's finding). The same
+    direction is sent wrapped now, within the signal's 0.4° step, and nothing is saturated."""
+    import cantools
+    from collections import Counter
+
+    from radarnode.perception.types import ObjectList
+    from radarnode.wire.ars408 import object_signals
+    from radarnode.wire.codec import MessageCodec
+    from tests.conftest import ROOT
+    deg = np.array([-180.2, -179.9, 0.0, 179.9, 180.0, 180.3, 359.0, -540.5])
+    ol = ObjectList.empty(deg.size)
+    ol.orientation_rad = np.radians(deg)
+    _, _, extended = object_signals(ol)
+    sent = extended["Obj_OrientationAngle"]
+    assert np.all((sent >= -180.0) & (sent < 180.0))
+    # the same direction: the difference a whole number of turns
+    turns = (sent - deg) / 360.0
+    np.testing.assert_allclose(turns, np.round(turns), atol=1e-9)
+    db = cantools.database.load_file(str(ROOT / "dbc" / "ars408.dbc"))
+    saturated: Counter = Counter()
+    codec = MessageCodec(db.get_message_by_name("Obj_3_Extended"), saturated)
+    for row in range(deg.size):
+        values = {k: float(np.nan_to_num(v[row])) for k, v in extended.items()}
+        payload = codec.encode_values([values.get(name, 0.0) for name in codec.signal_names])
+        got = db.decode_message("Obj_3_Extended", payload)["Obj_OrientationAngle"]
+        assert (got - deg[row]) / 360.0 == pytest.approx(round((got - deg[row]) / 360.0), abs=0.21 / 360.0)
+    assert not saturated["Obj_OrientationAngle"], saturated

@@ -90,7 +90,9 @@ def object_signals(ol: ObjectList) -> tuple[dict, dict, dict]:
                "Obj_MeasState": ol.meas_state, "Obj_ProbOfExist": ol.prob_of_exist}
     extended = {
         "Obj_ID": ol.id, "Obj_ArelLong": ol.arel_long_mps2, "Obj_ArelLat": ol.arel_lat_mps2,
-        "Obj_Class": ol.obj_class, "Obj_OrientationAngle": np.degrees(ol.orientation_rad),
+        # (an angle just past −180° is the direction just short of +180°: wrapped, not saturated at −180, a tester's
+        # finding on pedestrian_crossing)
+        "Obj_Class": ol.obj_class, "Obj_OrientationAngle": np.mod(np.degrees(ol.orientation_rad) + 180.0, 360.0) - 180.0,
         "Obj_Length": ol.length_m, "Obj_Width": ol.width_m,
     }
     return general, quality, extended
