@@ -39,7 +39,7 @@ def yaml_repr(value: object, limit: int = MAX_VALUE_REPR) -> str:
         if isinstance(v, float) and not math.isfinite(v):             # YAML's .nan, .inf, -.inf
             return ".nan" if math.isnan(v) else ".inf" if v > 0 else "-.inf"
         if isinstance(v, (bytes, bytearray)):                         # YAML's !!binary, as the file writes it
-            return "!!binary " + base64.b64encode(bytes(v)).decode("ascii")
+            return "!!binary " + (base64.b64encode(bytes(v)).decode("ascii") or '""')
         if isinstance(v, (list, tuple)):
             return "[" + ", ".join(spell(x) for x in v) + "]"
         if isinstance(v, dict):

@@ -239,9 +239,9 @@ def build(cls: type, data: object, path: str, src: Source, schema: Schema, extra
         name = aliases.get(key, key)
         child = f"{path}.{key}" if path else str(key)
         if name not in fields or not isinstance(key, str):
-            # a key that is not a plain name (a block scalar's text with its line break, an empty one) as YAML
-            # spells it, on one line
-            shown = f"'{child}'" if isinstance(key, str) and _PLAIN_NAME.fullmatch(key) else \
+            # a key that is not a plain name (a block scalar's text with its line break, an empty one; a control or
+            # invisible character, which a terminal would act on or hide) escaped, on one line
+            shown = f"'{child}'" if isinstance(key, str) and key.isprintable() and _PLAIN_NAME.fullmatch(key) else \
                 f"{yaml_repr(key)}" + (f" (in field '{path}')" if path else " (at the top level)")
             raise src.error(child, f"unknown field {shown}; allowed here: {', '.join(allowed)}")
         nested = schema.nested.get(cls, {}).get(name)

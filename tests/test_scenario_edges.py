@@ -147,7 +147,8 @@ def test_a_refused_max_distance_gets_its_error_and_no_warning_computed_from_it(t
     ("ego: {speed_mps: -.Inf}", "ego.speed_mps", "-.inf"),
     ("road: {lanes: [2, .NaN]}", "road.lanes", "[2, .nan]"),
     ("road: {lanes: {count: 2, wide: .inf}}", "road.lanes", "{count: 2, wide: .inf}"),
-    ("ego: {speed_mps: !!binary aGVsbG8=}", "ego.speed_mps", "!!binary aGVsbG8=")])
+    ("ego: {speed_mps: !!binary aGVsbG8=}", "ego.speed_mps", "!!binary aGVsbG8="),
+    ("ego: {speed_mps: !!binary ''}", "ego.speed_mps", '!!binary ""')])
 def test_a_refused_yaml_null_or_boolean_is_shown_as_the_file_spells_it(tmp_path, capsys, line, field, shown):
     """A scenario error showed YAML's null and true as Python's None and True (an independent tester's finding), and
     .nan, .inf and a mapping's keys as Python's nan, inf and 'count'."""
@@ -182,13 +183,17 @@ def test_a_mapping_key_is_shown_as_the_file_spells_it(tmp_path, capsys):
 
 @pytest.mark.parametrize("line, shown, where", [('"": 3', "''", "at the top level"),
                                                 ("? |\n  block\n: 3", r"'block\n'", "at the top level"),
-                                                ('ego: {speed_mps: 10, "a b": 1}', "'a b'", "in field 'ego'")])
+                                                ('ego: {speed_mps: 10, "a b": 1}', "'a b'", "in field 'ego'"),
+                                                # a terminal's escape and an invisible character, escaped
+                                                ('ego: {speed_mps: 10, "a\\ex": 1}', r"'a\x1bx'", "in field 'ego'"),
+                                                ('ego: {speed_mps: 10, "\\u200bspeed_mps": 1}', r"'\u200bspeed_mps'",
+                                                 "in field 'ego'")])
 def test_an_unknown_key_that_is_not_a_plain_name_is_shown_on_one_line_with_its_line(tmp_path, capsys, line, shown,
                                                                                       where):
-    """A block scalar as a key put its line break into the message (two lines), and an empty top-level key's error
-    named no line (a tester's findings)."""
+    """A block scalar as a key put its line break into the message (two lines), an empty top-level key's error
+    named no line, and a key's terminal escape (ESC) reached the terminal raw (a tester's findings)."""
     path = tmp_path / "s.yaml"
     path.write_text(f"name: s\nduration_s: 2\nseed: 1\n{line}\n")
     rc, _, err = cli(capsys, "run", path)
     assert rc == 1 and re.search(rf"s\.yaml:[4-6]: unknown field {re.escape(shown)} \({where}\); allowed here: ", err), err
-    assert len(err.strip().splitlines()) == 1, err
+    assert len(err.strip().splitlines()) == 1 and "\x1b" not in err and "\u200b" not in err, err
