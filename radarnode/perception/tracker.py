@@ -749,6 +749,7 @@ class ObjectTracker:
         self.staggered = bool(alias_span_mps) and not range_walk
         self.range_walk = range_walk
         self.fov = tuple((float(r), float(a)) for r, a in fov)
+        self.reach = max(r for r, _ in self.fov)      # the farthest sector's range
         self.r_cov = np.diag([sigma_pos_m ** 2, sigma_pos_m ** 2, sigma_vr_mps ** 2])
         self.sigma_az_rad = sigma_az_rad
         self.max_objects = max_objects
@@ -889,7 +890,7 @@ class ObjectTracker:
         tentative = np.where(moving, 0, CONFIRM_WINDOW_STATIONARY - CONFIRM_HITS)
         # a track coasting beyond the farthest sector's range has left where the radar can see it (a rear radar's
         # posts receding at 130 km/h coasted 26 m past its 250 m, listed out to 276 m)
-        beyond = (self.misses > 0) & (np.hypot(self.x[:, 0], self.x[:, 1]) > max(r for r, _ in self.fov))
+        beyond = (self.misses > 0) & (np.hypot(self.x[:, 0], self.x[:, 1]) > self.reach)
         self._delete((self.misses > coast) | (~self.confirmed & (self.misses > tentative)) | (self.x[:, 0] < 0.0)
                      | beyond | self._duplicates())
         return self._object_list(sensor_velocity)

@@ -51,18 +51,18 @@ class RadarGroup:
     @property
     def counters(self) -> Counter:
         """Every node's counters, summed (a frame the bus could not read is counted by the first node)."""
-        total: Counter = Counter()
-        for n in self.nodes:
-            total.update(n.counters)
-        return total
+        return self._summed("counters")
 
     @property
     def saturated(self) -> Counter:
         """Every node's values saturated to their DBC signal's range, summed by signal (the first node's alone
         before)."""
+        return self._summed("saturated")
+
+    def _summed(self, name: str) -> Counter:
         total: Counter = Counter()
         for n in self.nodes:
-            total.update(n.saturated)
+            total.update(getattr(n, name))
         return total
 
     @property

@@ -704,7 +704,7 @@ def _candump_channel(text: str) -> int | str:
     """A candump line's interface as a frame's channel: a number as python-can's reader gives it (``1`` is 1), but a
     name of digits that is not a number's own spelling (``01``) as it is written: python-can read ``1`` and ``01`` as
     one channel, 1, so two interfaces were one bus to ``--channel`` (a tester's finding)."""
-    return int(text) if text.isascii() and text.isdigit() and str(int(text)) == text else text
+    return int(text) if ascii_number(text) and str(int(text)) == text else text
 
 
 def _candump_digit_channel(msg: can.Message, line: str | None) -> can.Message:
