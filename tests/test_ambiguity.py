@@ -1386,3 +1386,24 @@ def test_a_rear_radar_at_motorway_speed_sees_the_posts_behind_standing_and_withi
     assert moving == 0
     if level == "detection":          # (the object level lists no guardrail post as an object, ahead or behind)
         assert listed > 300 and 150.0 < far_object <= cfg.preset.max_range_m + 1.0, (listed, far_object)
+
+
+@pytest.mark.parametrize("preset, speed", [("ars408_like", 30.0), ("ars408_like", 75.0), ("ars408_like", 100.0),
+                                           ("mimo12", 75.0), ("mimo12", 100.0)])
+def test_a_fast_target_reads_its_rcs_at_the_range_reported_at_every_level(preset, speed):
+    """The radar infers the RCS at the range it reports. Where a speed is resolved after the RCS was read
+    (staggered ramps), the range moves by the coupling of the wraps and the RCS must move with it: a 20-dBsm
+    point closing at 75–100 m/s read 19.3–19.6 dBsm at the detection and signal levels of ars408_like where the
+    object level read 20.0 (a tester's finding). A single ramp (mimo12) reports the aliased speed and the range its
+    coupling moved: the object level read the RCS at the true range, 0.1–0.2 dB above the detection level."""
+    sc = scenario(f"  - {{id: a, class: point, x_m: 110.0, y_m: 0.0, speed_mps: {speed}, heading_deg: 180, "
+                  "rcs_dbsm: 20, swerling: 0}\n", ego="{speed_mps: 0.0}", radar=f"{{preset: {preset}, output: clusters}}",
+                  duration=1.0)
+    obj, det = _cluster_medians(sc, "object"), _cluster_medians(sc, "detection")
+    assert obj[3] >= 6 and det[3] >= 6
+    assert obj[2] == pytest.approx(det[2], abs=0.05), (obj, det)
+    if preset == "ars408_like":         # resolved: the true range, the true RCS (the signal level's chain too)
+        sig = _cluster_medians(sc, "signal")
+        assert sig[3] >= 6
+        for rcs in (obj[2], det[2], sig[2]):
+            assert rcs == pytest.approx(20.0, abs=0.1), (obj, det, sig)

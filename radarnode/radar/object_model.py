@@ -943,23 +943,26 @@ class ObjectModel:
         # the range–Doppler coupling: the chain takes it out of the peak's range with the speed it reports, so a
         # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
         # (without it the object level put an aliased target 0.4–3 m from where they do)
+        m_read = m_r
         unfolded = m_r + ambiguity.coupling_left(p, v_meas, m_vr)
         m_r = ambiguity.coupled_range(p, m_r, v_meas, m_vr)
         # beyond the unambiguous range (a preset whose range bins end inside its field of view) the beat folds: the
-        # radar reports the range modulo it, and the RCS it infers at that range, as the other levels do (the object
-        # level reported 131 m where they report 16.4 m: an independent tester's finding). A wrap, as the scatterer
-        # levels model real sampling too (README, known limits). The RCS is read against the range before the fold:
-        # coupled_range has folded already wherever some coupling is left (an aliased speed, or a remainder of 1e-15),
-        # and that range read a fold of 0 dB (30 dBsm at 2 m where the other levels read −25: a tester's finding)
+        # radar reports the range modulo it, as the other levels do (the object level reported 131 m where they
+        # report 16.4 m: an independent tester's finding). A wrap, as the scatterer levels model real sampling too
+        # (README, known limits). The fold is taken from the range before it: coupled_range has folded already
+        # wherever some coupling is left (an aliased speed, or a remainder of 1e-15)
         beyond = observable & (r_seen >= p.unambiguous_range_m)
         if beyond.any():
-            folded = np.mod(unfolded, p.unambiguous_range_m)
-            # (and a real-sampling receiver's anti-alias filter, which the SNR carries, is not divided out either)
-            filt = 0.0 if p.complex_sampling else equation.ANTI_ALIAS_REJECTION_DB
-            fold_db = np.where(beyond, 40.0 * np.log10(np.maximum(folded, 0.01) / np.maximum(unfolded, 0.01)) - filt,
-                               0.0)
-            m_r = np.where(beyond, folded, m_r)
-            rcs_eff, rcs_body = rcs_eff + fold_db, rcs_body + fold_db
+            m_r = np.where(beyond, np.mod(unfolded, p.unambiguous_range_m), m_r)
+            # (a real-sampling receiver's anti-alias filter, which the SNR carries, is not divided out either)
+            if not p.complex_sampling:
+                rcs_eff = rcs_eff - np.where(beyond, equation.ANTI_ALIAS_REJECTION_DB, 0.0)
+                rcs_body = rcs_body - np.where(beyond, equation.ANTI_ALIAS_REJECTION_DB, 0.0)
+        # the RCS the radar infers at the range it reports, as the other levels read it: the coupling an aliased
+        # speed leaves and a fold move it by the radar equation's R⁴ (a 30-dBsm target folded to 2 m read 30 dBsm
+        # where the detection level read −25, a tester's finding)
+        moved_db = ambiguity.range_db(m_read, m_r)
+        rcs_eff, rcs_body = rcs_eff + moved_db, rcs_body + moved_db
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         # the radial speed the internal tracker takes: with staggered ramps an ambiguous detection's at its track's
@@ -1647,9 +1650,11 @@ class ObjectModel:
             vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
             vr_true = vr
             vr, g_amb = ambiguity.apparent_range_rate(p, vr, g["azimuth"], (svx[k], svy[k]), second)
+            mr_read = mr
             mr = ambiguity.coupled_range(p, mr, vr_true, vr)
             cm, sm = np.cos(maz), np.sin(maz)
-            rcs = self.scene.scenario.road.guardrails.rcs_dbsm
+            # read at the range reported (the coupling an aliased speed leaves), as the other levels read it
+            rcs = self.scene.scenario.road.guardrails.rcs_dbsm + ambiguity.range_db(mr_read, mr)
             post_read = (g["snr"], u_hit.take(hit) / g["pd"], len(parts))
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, rcs, g["sig_r"], g["sig_az"], g["sig_v"],
                                         -1, g_amb), k - lo))
