@@ -207,8 +207,12 @@ def range_db(read_at_m: np.ndarray, reported_m: np.ndarray) -> np.ndarray:
     (:func:`coupled_range`), and the radar reports the RCS its power gives at the range it reports: read at the
     first, aliased speed's range, a 20-dBsm point closing at 75–100 m/s read 19.0–19.5 dBsm on ``ars408_like``
     where the object level read 20.0 (a tester's finding)."""
-    a, b = np.asarray(read_at_m, dtype=np.float64), np.asarray(reported_m, dtype=np.float64)
-    return np.where(a == b, 0.0, 40.0 * np.log10(np.maximum(b, 0.01) / np.maximum(a, 0.01)))
+    a, b = np.broadcast_arrays(np.asarray(read_at_m, dtype=np.float64), np.asarray(reported_m, dtype=np.float64))
+    out = np.zeros(a.shape)
+    moved = a != b
+    if moved.any():         # (the logarithm only where a range moved: most detections' and objects' do not)
+        out[moved] = 40.0 * np.log10(np.maximum(b[moved], 0.01) / np.maximum(a[moved], 0.01))
+    return out
 
 
 def coupling_left(preset: RadarPreset, coupled_mps: np.ndarray, taken_out_mps: np.ndarray) -> np.ndarray:

@@ -961,8 +961,9 @@ class ObjectModel:
         # the RCS the radar infers at the range it reports, as the other levels read it: the coupling an aliased
         # speed leaves and a fold move it by the radar equation's R⁴ (a 30-dBsm target folded to 2 m read 30 dBsm
         # where the detection level read −25, a tester's finding)
-        moved_db = ambiguity.range_db(m_read, m_r)
-        rcs_eff, rcs_body = rcs_eff + moved_db, rcs_body + moved_db
+        if np.any(m_r != m_read):
+            moved_db = ambiguity.range_db(m_read, m_r)
+            rcs_eff, rcs_body = rcs_eff + moved_db, rcs_body + moved_db
         m_vt = v_tan + p.lateral_speed_sigma_mps * z[:, 3]
         mc, ms = np.cos(m_az), np.sin(m_az)
         # the radial speed the internal tracker takes: with staggered ramps an ambiguous detection's at its track's
