@@ -553,3 +553,27 @@ def test_circular_is_the_remainder_formula_bit_for_bit(period, dtype):
         assert np.array_equal(got, want, equal_nan=True)
         assert np.array_equal(np.signbit(got), np.signbit(want))
     assert circular(3.0, period) == formula(3.0)
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.3, 1.2, -2.0, 3.0])
+@pytest.mark.parametrize("fd, fr", [(0.0, 0.0), (0.3, -0.4), (-0.5, 0.5)])
+def test_migration_peak_gain_is_the_peak_cell_of_the_migrating_tone_s_windowed_ffts(mu, fd, fr):
+    """MigrationFit.peak_gain against the windowed FFTs of the migrating tone computed sample by sample (its
+    Doppler at mid-chirp, as the chain and the fit define it): the power of the cell the tone lands in over a still
+    tone's at the same offsets, within 0.005 dB (the Chebyshev tables' error at 3 bins is about 1e-3 of the norm)."""
+    from radarnode.dsp.peaks import MigrationFit
+    m = n = 128
+    wd, wr = window("hann", m), window("hann", n)
+    chirp, sample = np.arange(m)[:, None], np.arange(n)[None, :]
+
+    def cell_power(mu_):
+        beat = 40.0 + fr + mu_ * (chirp - m / 2) / m
+        x = np.exp(2j * np.pi * ((fd - mu_ / 2) * chirp / m + beat * sample / n))
+        spec = np.fft.fft(np.fft.fft(x * wr[None, :], axis=1) * wd[:, None], axis=0)
+        return abs(spec[0, 40]) ** 2
+
+    want = 10 * np.log10(cell_power(mu) / cell_power(0.0))
+    got = 10 * np.log10(MigrationFit(wd, wr, 12).peak_gain(np.array([fd]), np.array([fr]), np.array([mu]))[0])
+    assert got == pytest.approx(want, abs=0.005)
+    if mu == 0.0:
+        assert got == pytest.approx(0.0, abs=1e-12)
