@@ -1435,3 +1435,31 @@ def test_the_signal_level_divides_the_range_migration_out_of_a_fast_target_s_rcs
     det, sig = _cluster_medians(sc, "detection"), _cluster_medians(sc, "signal")
     assert det[3] >= 6 and sig[3] >= 6
     assert sig[2] == pytest.approx(det[2], abs=0.1), (det, sig)
+
+
+@pytest.mark.parametrize("second", ["{id: b, class: point, x_m: 60.0, y_m: 0.0, speed_mps: 70.75, heading_deg: 180, "
+                                    "rcs_dbsm: 17, swerling: 0}",
+                                    "{id: b, class: point, x_m: 61.3, y_m: 1.75, speed_mps: 70.0, heading_deg: 180, "
+                                    "rcs_dbsm: 20, swerling: 0}"])
+def test_a_fast_target_beside_a_neighbour_has_the_migration_divided_out_too(second):
+    """A neighbour 3 Doppler bins or 1.3 m away cuts a fast target's patch to 3 × 3 cells, where the still fit's beam
+    beats the migrating one's: the migration's loss was not divided out there (−0.28 and −0.23 dB against the
+    detection level at 70 m/s on mimo12: an independent tester's finding). It is wherever the peak is judged
+    wrapped at the alias number the migrating fit chose."""
+    y = "-1.75" if "61.3" in second else "0.0"
+    sc = scenario(f"  - {{id: a, class: point, x_m: 60.0, y_m: {y}, speed_mps: 70.0, heading_deg: 180, rcs_dbsm: 20, "
+                  f"swerling: 0}}\n  - {second}\n", ego="{speed_mps: 0.0}", radar="{preset: mimo12, output: clusters}",
+                  duration=0.1 + 1e-6, extra="cycle_period_s: 0.01")
+    got = {}
+    for level in ("detection", "signal"):
+        model = make_model(level, Scene(sc), radar_config(sc).preset, np.random.default_rng(3), radar_config(sc).signal)
+        cfg = RuntimeConfig(max_distance_m=radar_config(sc).preset.max_range_m)
+        strongest = []
+        for k in range(sc.num_cycles):
+            model.step(k * sc.period_s, cfg)
+            det = model.info.detections
+            if len(det):
+                strongest.append(det.rcs_dbsm[np.argmax(det.snr_db)])
+        assert len(strongest) >= 8
+        got[level] = float(np.median(strongest))
+    assert got["signal"] == pytest.approx(got["detection"], abs=0.1), got
