@@ -205,7 +205,7 @@ def range_db(read_at_m: np.ndarray, reported_m: np.ndarray) -> np.ndarray:
     equation's R⁴, 40·log10 of the ratio (ranges floored at 1 cm, as :func:`radarnode.radar.equation.snr_db`
     floors them); 0 where the two agree. A speed resolved after the RCS was read recouples the range
     (:func:`coupled_range`), and the radar reports the RCS its power gives at the range it reports: read at the
-    first, aliased speed's range, a 20-dBsm point closing at 75–100 m/s read 19.0–19.5 dBsm on ``ars408_like``
+    first, aliased speed's range, a 20-dBsm point closing at 75–100 m/s read 19.3–19.6 dBsm on ``ars408_like``
     where the object level read 20.0 (a tester's finding)."""
     a, b = np.broadcast_arrays(np.asarray(read_at_m, dtype=np.float64), np.asarray(reported_m, dtype=np.float64))
     out = np.zeros(a.shape)

@@ -368,10 +368,10 @@ class DspChain:
         if d.size > cfg.max_detections:
             keep = np.argsort(power[d, r])[::-1][: cfg.max_detections]
             d, r = d[keep], r[keep]
+        migration_gain = np.ones(d.size)    # each peak cell's power against a still tone's: its migration's loss
         dd, dr = interpolate(power, d, r, cfg.range_window if cfg.range_window == cfg.doppler_window else "")
         snap = rd[:, d, r].T                                            # (detection, channel): the peak cell
         fitted_half = None                  # the patch half-widths of the peaks the patch fit refined (0: not)
-        migrated = None                     # the peaks a migrating fit placed, and their peak cell's gain (below)
         if cfg.range_ml and d.size:
             # the strongest peaks get the joint maximum-likelihood fit over a patch of cells around them
             # (radarnode.dsp.peaks.PatchFit: ~1.1-1.2× the CRB where the three-bin interpolator is ~2.7× in range
@@ -489,7 +489,7 @@ class DspChain:
                 # and 0.2–0.3 dB at 70 m/s beside such a neighbour: testers' findings)
                 alike = (wrap[judged] != 0) & (wrap[judged] == fitted_wrap[judged])
                 migrated = judged[alike]
-                migration_gain = self._migration_fit(m, n).peak_gain(dd[migrated], dr[migrated], mu[alike])
+                migration_gain[migrated] = self._migration_fit(m, n).peak_gain(dd[migrated], dr[migrated], mu[alike])
             snap = trial[rows, wrap]
         # a peak in the span's first Doppler bin interpolated towards its neighbour across the wrap (or in its last
         # towards the first) lies beyond ±v_a: it is reported at its alias inside [−v_a, v_a), as the other levels
@@ -504,9 +504,7 @@ class DspChain:
         with np.errstate(over="ignore"):          # a noise-free map (tests) has a floor of ~0
             energy = np.minimum(np.maximum(power[d, r] / sigma2 - c, 1e-30), 1e300)
         delta_r = np.mod(r_bins, n) - np.rint(np.mod(r_bins, n))
-        rho = energy / np.maximum(stat.energy(1.0, delta_r, dd), 1e-30)
-        if migrated is not None and migrated.size:
-            rho[migrated] /= np.maximum(migration_gain, 1e-30)
+        rho = energy / np.maximum(stat.energy(1.0, delta_r, dd) * migration_gain, 1e-30)
         if d.size and c > 1:   # every angle peak of a cell is a detection, sharing the cell's energy
             row, sin_t, rel_db = self.doa.estimate_peaks(snap, cfg.doa_floor_db, sigma2, cfg.doa_secondary_snr_db,
                                                          DOA_MAX_SOURCES)

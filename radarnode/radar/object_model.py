@@ -944,7 +944,6 @@ class ObjectModel:
         # speed it reports aliased leaves (true − reported) × the coupling in the range, as at the other levels
         # (without it the object level put an aliased target 0.4–3 m from where they do)
         m_read = m_r
-        unfolded = m_r + ambiguity.coupling_left(p, v_meas, m_vr)
         m_r = ambiguity.coupled_range(p, m_r, v_meas, m_vr)
         # beyond the unambiguous range (a preset whose range bins end inside its field of view) the beat folds: the
         # radar reports the range modulo it, as the other levels do (the object level reported 131 m where they
@@ -953,11 +952,12 @@ class ObjectModel:
         # wherever some coupling is left (an aliased speed, or a remainder of 1e-15)
         beyond = observable & (r_seen >= p.unambiguous_range_m)
         if beyond.any():
+            unfolded = m_read + ambiguity.coupling_left(p, v_meas, m_vr)
             m_r = np.where(beyond, np.mod(unfolded, p.unambiguous_range_m), m_r)
             # (a real-sampling receiver's anti-alias filter, which the SNR carries, is not divided out either)
             if not p.complex_sampling:
-                rcs_eff = rcs_eff - np.where(beyond, equation.ANTI_ALIAS_REJECTION_DB, 0.0)
-                rcs_body = rcs_body - np.where(beyond, equation.ANTI_ALIAS_REJECTION_DB, 0.0)
+                filt = np.where(beyond, equation.ANTI_ALIAS_REJECTION_DB, 0.0)
+                rcs_eff, rcs_body = rcs_eff - filt, rcs_body - filt
         # the RCS the radar infers at the range it reports, as the other levels read it: the coupling an aliased
         # speed leaves and a fold move it by the radar equation's R⁴ (a 30-dBsm target folded to 2 m read 30 dBsm
         # where the detection level read −25, a tester's finding)
