@@ -577,3 +577,17 @@ def test_migration_peak_gain_is_the_peak_cell_of_the_migrating_tone_s_windowed_f
     assert got == pytest.approx(want, abs=0.005)
     if mu == 0.0:
         assert got == pytest.approx(0.0, abs=1e-12)
+
+
+def test_migration_fit_refuses_a_chosen_array_of_the_wrong_shape():
+    """``chosen`` (the output array of the migration each peak was fitted with) must hold one value a peak."""
+    from radarnode.dsp.peaks import MigrationFit
+    m = n = 64
+    rd = np.zeros((2, m, n), dtype=np.complex128)
+    rd[:, 20, 30] = 1.0
+    fit = MigrationFit(window("hann", m), window("hann", n), 12)
+    with pytest.raises(ValueError, match=r"chosen: shape \(3,\) is not allowed; expected \(1,\)"):
+        fit(rd, np.array([20]), np.array([30]), np.zeros(1), np.zeros(1), np.array([1.0]), chosen=np.zeros(3))
+    got = np.full(1, np.nan)
+    fit(rd, np.array([20]), np.array([30]), np.zeros(1), np.zeros(1), np.array([[1.0, -2.0]]), chosen=got)
+    assert got[0] in (1.0, -2.0)
