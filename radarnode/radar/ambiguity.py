@@ -96,8 +96,7 @@ def flag_stationary(det: Detections, preset: RadarPreset, sensor_velocity: tuple
     resolved = det.ambig_state == AMBIG_STAGGERED
     take = candidate & ~resolved
     out.range_rate_mps = np.where(take, unwrapped, det.range_rate_mps)
-    out.range_m = coupled_range(preset, det.range_m, det.range_rate_mps, out.range_rate_mps)
-    out.rcs_dbsm = det.rcs_dbsm + range_db(det.range_m, out.range_m)
+    out.range_m, out.rcs_dbsm = recoupled(preset, det.range_m, det.rcs_dbsm, det.range_rate_mps, out.range_rate_mps)
     out.ambig_state = np.where(take, AMBIG_STATIONARY, np.where(resolved, AMBIG_STAGGERED, AMBIG_AMBIGUOUS))
     return out
 
@@ -140,8 +139,8 @@ def resolve_staggered(det1: Detections, det2: Detections, preset: RadarPreset) -
     v1 = det1.range_rate_mps + 2 * v1max * _K[kk]
     v2 = det2.range_rate_mps[j] + 2 * v2max * k2[rows, j, kk]
     out.range_rate_mps = np.where(ok, 0.5 * (v1 + v2), det1.range_rate_mps)
-    out.range_m = coupled_range(preset, det1.range_m, det1.range_rate_mps, out.range_rate_mps)
-    out.rcs_dbsm = det1.rcs_dbsm + range_db(det1.range_m, out.range_m)
+    out.range_m, out.rcs_dbsm = recoupled(preset, det1.range_m, det1.rcs_dbsm, det1.range_rate_mps,
+                                          out.range_rate_mps)
     out.ambig_state = np.where(ok, AMBIG_STAGGERED, AMBIG_AMBIGUOUS).astype(np.int64)
     return out
 
@@ -183,8 +182,8 @@ def resolve_by_neighbours(det: Detections, preset: RadarPreset, sensor_velocity:
     out = det.take(np.arange(len(det)))
     take = ia[ok]
     out.range_rate_mps[take] = speed[rows[ok], j[ok]]
-    out.range_m[take] = coupled_range(preset, det.range_m[take], det.range_rate_mps[take], out.range_rate_mps[take])
-    out.rcs_dbsm[take] = det.rcs_dbsm[take] + range_db(det.range_m[take], out.range_m[take])
+    out.range_m[take], out.rcs_dbsm[take] = recoupled(preset, det.range_m[take], det.rcs_dbsm[take],
+                                                      det.range_rate_mps[take], out.range_rate_mps[take])
     out.ambig_state[take] = AMBIG_STAGGERED
     return out
 
@@ -198,6 +197,15 @@ def coupled_range(preset: RadarPreset, range_m: np.ndarray, coupled_mps: np.ndar
     the coupling in its range; a speed resolved later (staggered ramps, stationary candidates) recouples it."""
     shift = coupling_left(preset, coupled_mps, taken_out_mps)
     return np.where(shift != 0.0, np.mod(range_m + shift, preset.unambiguous_range_m), range_m)
+
+
+def recoupled(preset: RadarPreset, range_m: np.ndarray, rcs_dbsm: np.ndarray, coupled_mps: np.ndarray,
+              taken_out_mps: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(range, RCS) of detections read at ``range_m`` with ``rcs_dbsm`` under the coupling of ``coupled_mps``, once
+    their speed is ``taken_out_mps``: the range :func:`coupled_range` gives and the RCS read there
+    (:func:`range_db`). Every step that resolves a speed after the chain (the three of :func:`resolve`) moves both."""
+    moved = coupled_range(preset, range_m, coupled_mps, taken_out_mps)
+    return moved, rcs_dbsm + range_db(range_m, moved)
 
 
 def range_db(read_at_m: np.ndarray, reported_m: np.ndarray) -> np.ndarray:
