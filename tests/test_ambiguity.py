@@ -1463,3 +1463,89 @@ def test_a_fast_target_beside_a_neighbour_has_the_migration_divided_out_too(seco
         assert len(strongest) >= 8
         got[level] = float(np.median(strongest))
     assert got["signal"] == pytest.approx(got["detection"], abs=0.1), got
+
+
+def _wide_mimo12():
+    """mimo12 with a field of view of ±90° (a user's preset: no shipped one sees beyond ±75°)."""
+    import dataclasses
+    from radarnode.radar.presets import FovSector
+    return dataclasses.replace(PRESETS["mimo12"], fov=(FovSector(PRESETS["mimo12"].max_range_m, 90.0),))
+
+
+def _angles_and_rcs(frames):
+    """(azimuths in degrees, RCS) of the detections within 1.5 m of 15 m over ``frames`` (Detections)."""
+    az, rcs = [], []
+    for d in frames:
+        near = np.abs(d.range_m - 15.0) < 1.5
+        az.extend(np.degrees(d.azimuth_rad[near]))
+        rcs.extend(d.rcs_dbsm[near])
+    return np.array(az), np.array(rcs)
+
+
+@pytest.mark.parametrize("az", [79.9, 80.1, 89.0, 89.5, -89.5])
+def test_near_endfire_the_detection_level_reads_the_angle_as_the_chain_does(az):
+    """A λ/2 array measures d·sinθ, which wraps at ±½: near ±90° noise puts a target on the other side in some
+    frames. The detection level drew the noise in angle and clipped it at ±90°, where it divided out an element
+    pattern of nil: a 20-dBsm point at +89.9° read 44.6 dBsm by the median (99 dBsm in one frame), never on the
+    other side, where the signal level read it at −86° in 0.4 of the frames and −11.7 dBsm (an independent
+    tester's finding; mimo12 with a ±90° field of view). Beyond 80° (ambiguity.ENDFIRE_RAD) it draws in d·sinθ;
+    just below, in angle as before (the two agree there)."""
+    from radarnode.radar.signal_model import synthesize_rd
+    p = _wide_mimo12()
+    chain = DspChain(p)
+    scat = point_targets([15.0], [az], [0.0], 20.0)
+    det_az, det_rcs = _angles_and_rcs(detection_model.detect(p, scat, np.random.default_rng(s), chain.statistic)
+                                      for s in range(400))
+    sig_az, sig_rcs = _angles_and_rcs(chain.process_rd(synthesize_rd(p, scat, np.random.default_rng(s)))
+                                      for s in range(40))
+    assert det_az.size >= 390 and sig_az.size >= 39
+    assert np.all(np.abs(det_az) <= 90.0) and np.all(np.isfinite(det_rcs))
+    other_det, other_sig = np.mean(np.sign(det_az) != np.sign(az)), np.mean(np.sign(sig_az) != np.sign(az))
+    assert abs(other_det - other_sig) <= 0.2, (other_det, other_sig)
+    if abs(az) < 85.0:                           # one side: the angle's spread as the chain's
+        assert other_det == 0.0 and np.std(det_az) == pytest.approx(np.std(sig_az), rel=0.35)
+    assert np.median(det_rcs) == pytest.approx(np.median(sig_rcs), abs=1.5)
+    assert np.median(det_rcs) == pytest.approx(20.0, abs=0.2) if abs(az) < 85.0 else np.median(det_rcs) < 18.0
+
+
+def test_the_detection_level_s_angle_noise_is_continuous_across_its_switch_to_d_sin_theta():
+    """Just below and just above ambiguity.ENDFIRE_RAD (80°) the detection level's angles spread alike: the draw in
+    angle and the draw in d·sinθ agree there to a tenth of σ (the arcsine's curvature)."""
+    p = _wide_mimo12()
+    chain = DspChain(p)
+    edge = math.degrees(ambiguity.ENDFIRE_RAD)
+    spread = {}
+    for az in (edge - 0.01, edge, edge + 0.01):
+        scat = point_targets([15.0], [az], [0.0], 0.0)     # 0 dBsm: σ of about 0.3° there
+        got, _ = _angles_and_rcs(detection_model.detect(p, scat, np.random.default_rng(s), chain.statistic)
+                                 for s in range(600))
+        assert got.size >= 590
+        spread[az] = (np.mean(got) - az, np.std(got))
+    (b0, s0), (b1, s1), (b2, s2) = spread.values()
+    assert s0 > 0.05 and s2 == pytest.approx(s0, rel=0.15) and s1 == pytest.approx(s0, rel=0.15)
+    assert abs(b2 - b0) < 0.2 * s0 and abs(b1 - b0) < 0.2 * s0
+
+
+@pytest.mark.parametrize("az", [89.0, 89.5, -89.5])
+def test_near_endfire_the_object_level_reads_the_angle_and_rcs_as_the_detection_level(az):
+    """The object level drew its angle in angle and reported it unclipped: beyond ±90° (behind the antenna) half
+    the frames at ±89.5°, dropped as outside the field of view. It now draws where the array measures it and reads
+    the RCS with the element pattern at the angle measured, as the other levels."""
+    p = _wide_mimo12()
+    x, y = 3.7 + 15.0 * math.cos(math.radians(az)), 15.0 * math.sin(math.radians(az))
+    sc = scenario(f"  - {{id: p, class: point, x_m: {x:.6f}, y_m: {y:.6f}, speed_mps: 0.0, rcs_dbsm: 20.0, "
+                  "swerling: 0}", ego="{speed_mps: 0.0}", radar="{preset: mimo12, output: clusters}", duration=20.0)
+    got = {}
+    for level in ("object", "detection"):
+        model = make_model(level, Scene(sc), p, np.random.default_rng(5), radar_config(sc).signal,
+                           clusters_wanted=True)
+        cfg = RuntimeConfig(max_distance_m=p.max_range_m, clusters=True)
+        frames = []
+        for k in range(200):
+            model.step(k * sc.period_s, cfg)
+            frames.append(model.info.detections)
+        got[level] = _angles_and_rcs(frames)
+    (oa, orcs), (da, drcs) = got["object"], got["detection"]
+    assert oa.size >= 190 and da.size >= 190 and np.all(np.abs(oa) <= 90.0)
+    assert abs(np.mean(np.sign(oa) != np.sign(az)) - np.mean(np.sign(da) != np.sign(az))) <= 0.12
+    assert np.median(orcs) == pytest.approx(np.median(drcs), abs=1.0)

@@ -305,8 +305,8 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     est_v = est_v * p.doppler_bin_mps
     est_r = np.mod((pos_r + er * bound_r / p.range_resolution_m * nz[0])
                    * p.range_resolution_m - alias_v * p.range_rate_coupling_s, n_r * p.range_resolution_m)
-    est_az = az_peak + ea * bound_az * nz[2]
-    est_az = np.clip(est_az, -math.pi / 2, math.pi / 2)
+    # (near endfire in d·sinθ, where the array measures it: wrapped, never clipped at ±90°)
+    est_az, _ = ambiguity.measured_azimuth(p, az_peak, ea * bound_az, nz[2], snr_peak, ea)
     if p.num_virtual < 2:       # one channel measures no angle: boresight, as the chain reports it
         sin_t, est_az = np.zeros(idx.size), np.zeros(idx.size)
     # the chain divides the window and straddle losses out of the measured energy

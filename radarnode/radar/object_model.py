@@ -920,10 +920,15 @@ class ObjectModel:
         if p.element_spacing_wl > 0.5:
             lobe_db = np.where(az_seen != az, equation.pattern_db(p, az) - equation.pattern_db(p, az_seen), 0.0)
             rcs_eff, rcs_body = rcs_eff + lobe_db, rcs_body + lobe_db
-        sig_az = np.hypot(ea * bound_az,
-                          np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0))
+        floor_az = np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0)
+        sig_az = np.hypot(ea * bound_az, floor_az)
         m_r = r_seen + sig_r * z[:, 0]
-        m_az = az_seen + sig_az * z[:, 1]
+        # (near endfire in d·sinθ, where the array measures it, as the other levels: wrapped, never beyond ±90°, and
+        # the RCS read with the element pattern at the angle measured, as theirs)
+        m_az, endfire = ambiguity.measured_azimuth(p, az_seen, sig_az, z[:, 1], snr, ea, floor_az, observable)
+        if endfire.any():
+            pattern_db = np.where(endfire, equation.pattern_db(p, az_seen) - equation.pattern_db(p, m_az), 0.0)
+            rcs_eff, rcs_body = rcs_eff + pattern_db, rcs_body + pattern_db
         # such a body's measured azimuth is mirrored back about the edge (the scatterer levels report its inner
         # points); a small body is one point, reported only where it is measured inside (as at the other levels)
         if crossing.any():
@@ -1583,6 +1588,7 @@ class ObjectModel:
         g["sig_r"] = er * bound_r
         g["sig_az"] = ea * bound_az
         g["sig_v"] = ev * bound_v
+        g["ea"] = ea
 
     def _cluster_table(self, ch: dict, i: int) -> tuple[dict, int]:
         """The cluster lists of the block of ``CLUSTER_BLOCK`` cycles holding the chunk's cycle i, and i's index in
@@ -1646,7 +1652,8 @@ class ObjectModel:
             k = g["cycle"]
             hit_cycle = k - lo
             nz = rngs["noise"].standard_normal((k.size, 3))
-            mr, maz = g["range"] + g["sig_r"] * nz[:, 0], g["azimuth"] + g["sig_az"] * nz[:, 1]
+            mr = g["range"] + g["sig_r"] * nz[:, 0]
+            maz, endfire = ambiguity.measured_azimuth(p, g["azimuth"], g["sig_az"], nz[:, 1], g["snr"], g["ea"])
             # a stationary post moves at minus the sensor velocity; radar measures its radial part
             vr = -(svx[k] * g["cos"] + svy[k] * g["sin"]) + g["sig_v"] * nz[:, 2]
             vr_true = vr
@@ -1656,6 +1663,8 @@ class ObjectModel:
             cm, sm = np.cos(maz), np.sin(maz)
             # read at the range reported (the coupling an aliased speed leaves), as the other levels read it
             rcs = self.scene.scenario.road.guardrails.rcs_dbsm + ambiguity.range_db(mr_read, mr)
+            if endfire.any():           # read with the element pattern at the angle measured (measured_azimuth)
+                rcs = rcs + np.where(endfire, equation.pattern_db(p, g["azimuth"]) - equation.pattern_db(p, maz), 0.0)
             post_read = (g["snr"], u_hit.take(hit) / g["pd"], len(parts))
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, rcs, g["sig_r"], g["sig_az"], g["sig_v"],
                                         -1, g_amb), k - lo))
