@@ -71,6 +71,16 @@ def apparent_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray
 #: d·sinθ, where the array measures it (:func:`measured_azimuth`); within it, in angle with the bound's 1/cosθ, whose
 #: curvature misses the arcsine's by ½·tanθ·σ_θ: 5 % of σ_θ at 75°, 10 % at 80° (mimo12, ρ 20 dB)
 ENDFIRE_RAD = math.radians(80.0)
+#: … and wherever the wrap of d·sinθ at ±½ (the visible edge ±d where d < ½) lies within this many of its σ: there the
+#: chain reads a return on the other side (or at its scan's edge) in some frames, which a draw in angle, wrapping only
+#: past ±90°, does far more rarely (a −4-dBsm point at 60 m, ρ ≈ 16 dB, at 79.9° on mimo12: 0.014 of the frames
+#: against the chain's 0.044; 0.09 and 0.095 at 80.1°: an independent tester's finding). Beyond 5σ the draw in angle
+#: misses a wrap the chain has in fewer than 3 of 10⁷ frames
+WRAP_REACH_SIGMA = 5.0
+#: the chain's beamformer grid (``radarnode.radar.chain.DspConfig.doa_fft_size``'s default): where d < ½ it reads
+#: no angle beyond half a bin inside its last bin inside the visible ±d (its peak refined towards the bin inside; at
+#: d = 0.4: 82.40° for a return at 85°, 88° or 89.5°, measured); at d = ½ the grid reaches ±90°
+CHAIN_DOA_BINS = 256
 
 
 def measured_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray, sigma_rad: np.ndarray, n: np.ndarray,
@@ -78,22 +88,28 @@ def measured_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray, sigma_rad: np
                      where: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(angle, where drawn in d·sinθ): the angle the chain reports for a return at ``azimuth_rad`` (as the array sees it: :func:`apparent_azimuth`)
     with the standard normal draws ``n``: ``azimuth_rad + sigma_rad·n``; near endfire (beyond
-    :data:`ENDFIRE_RAD`) and wherever that draw leaves ±90°, drawn where the array measures it instead: d·sinθ plus
-    the noise there (the angle bound at boresight times d, times the chain's ``efficiency`` at ``snr_db``; a body's
-    floor ``floor_rad`` times d·cosθ), wrapped into [−½, ½) as the channels' phases wrap, and read back as an angle
-    (a spatial frequency beyond the visible ±d, where d < ½, at the edge, as the chain's scan of sinθ reads it).
+    :data:`ENDFIRE_RAD`), wherever the wrap lies within :data:`WRAP_REACH_SIGMA` of its σ, and wherever that draw
+    leaves ±90°, drawn where the array measures it instead: d·sinθ plus the noise there (the angle bound at
+    boresight times d, times the chain's ``efficiency`` at ``snr_db``; a body's floor ``floor_rad`` times d·cosθ),
+    wrapped into [−½, ½) as the channels' phases wrap, and read back as an angle (a spatial frequency beyond the
+    visible ±d, where d < ½, where the chain's beamformer reads it, half a bin inside the last bin of its grid inside
+    ±d, :data:`CHAIN_DOA_BINS`: read at ±90° the RCS was 99 dBsm, the same tester's finding).
     A target near ±90° is then read on the other side in some frames, as at the signal level, never clipped at
     ±90° (where the element pattern divided out of the RCS is nil: 99 dBsm at the detection level, an independent
     tester's finding). Arrays broadcast to ``azimuth_rad + sigma_rad·n``'s shape; ``where``: only these returns are
     measured (the others keep the draw in angle: a body out of view, whose angle is never reported)."""
     az = np.asarray(azimuth_rad, dtype=np.float64)
     out = az + sigma_rad * n
-    wide = (np.abs(az) > ENDFIRE_RAD) | (np.abs(out) > 0.5 * math.pi)
+    d = preset.element_spacing_wl
+    # the chain's last readable sinθ: ±1 where d ≥ ½, else its beamformer grid's edge inside the visible ±d
+    edge = 1.0 if d >= 0.5 else max(0.0, (math.floor(CHAIN_DOA_BINS * d) - 0.5) / (CHAIN_DOA_BINS * d))
+    # the wrap's (or that edge's) distance in d·sinθ, against the draw's σ there (d·cosθ·σ_θ)
+    near_wrap = min(0.5, d * edge) - d * np.abs(np.sin(az)) < WRAP_REACH_SIGMA * d * np.cos(az) * sigma_rad
+    wide = (np.abs(az) > ENDFIRE_RAD) | near_wrap | (np.abs(out) > 0.5 * math.pi)
     wide &= preset.num_virtual >= 2            # (one channel measures no angle: its callers report boresight)
     if where is not None:
         wide &= where
     if wide.any():
-        d = preset.element_spacing_wl
 
         def pick(x):
             return np.broadcast_to(x, out.shape)[wide]
@@ -101,7 +117,7 @@ def measured_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray, sigma_rad: np
         sigma_u = d * np.hypot(pick(efficiency) * equation.crb_azimuth_rad(preset, pick(snr_db), np.zeros(a.shape)),
                                np.cos(a) * pick(floor_rad))
         drawn = np.mod(d * np.sin(a) + sigma_u * pick(n) + 0.5, 1.0) - 0.5
-        out[wide] = np.arcsin(np.clip(drawn / d, -1.0, 1.0))
+        out[wide] = np.arcsin(np.clip(drawn / d, -edge, edge))
     return out, wide
 
 
