@@ -86,18 +86,18 @@ CHAIN_DOA_BINS = 256
 def measured_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray, sigma_rad: np.ndarray, n: np.ndarray,
                      snr_db: np.ndarray, efficiency: np.ndarray, floor_rad: np.ndarray | float = 0.0,
                      where: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """(angle, where drawn in d·sinθ): the angle the chain reports for a return at ``azimuth_rad`` (as the array sees it: :func:`apparent_azimuth`)
-    with the standard normal draws ``n``: ``azimuth_rad + sigma_rad·n``; near endfire (beyond
-    :data:`ENDFIRE_RAD`), wherever the wrap lies within :data:`WRAP_REACH_SIGMA` of its σ, and wherever that draw
-    leaves ±90°, drawn where the array measures it instead: d·sinθ plus the noise there (the angle bound at
+    """(angle, where drawn in d·sinθ): the angle the chain reports for a return at ``azimuth_rad`` (as the array sees
+    it: :func:`apparent_azimuth`) with the standard normal draws ``n``: ``azimuth_rad + sigma_rad·n``; near endfire
+    (beyond :data:`ENDFIRE_RAD`), wherever the wrap lies within :data:`WRAP_REACH_SIGMA` of its σ, and wherever that
+    draw leaves ±90°, drawn where the array measures it instead: d·sinθ plus the noise there (the angle bound at
     boresight times d, times the chain's ``efficiency`` at ``snr_db``; a body's floor ``floor_rad`` times d·cosθ),
     wrapped into [−½, ½) as the channels' phases wrap, and read back as an angle (a spatial frequency beyond the
-    visible ±d, where d < ½, where the chain's beamformer reads it, half a bin inside the last bin of its grid inside
-    ±d, :data:`CHAIN_DOA_BINS`: read at ±90° the RCS was 99 dBsm, the same tester's finding).
-    A target near ±90° is then read on the other side in some frames, as at the signal level, never clipped at
-    ±90° (where the element pattern divided out of the RCS is nil: 99 dBsm at the detection level, an independent
-    tester's finding). Arrays broadcast to ``azimuth_rad + sigma_rad·n``'s shape; ``where``: only these returns are
-    measured (the others keep the draw in angle: a body out of view, whose angle is never reported)."""
+    visible ±d, where d < ½, where the chain's beamformer reads it, half a bin inside the last bin of its grid
+    inside ±d, :data:`CHAIN_DOA_BINS`). A target near ±90° is then read on the other side in some frames, as at the
+    signal level, never at ±90°, where the element pattern divided out of the RCS is nil (99 dBsm at the detection
+    level, at d = ½ and at d = 0.4: independent testers' findings). Arrays broadcast to ``azimuth_rad +
+    sigma_rad·n``'s shape; ``where``: only these returns are measured (the others keep the draw in angle: a body out
+    of view, whose angle is never reported)."""
     az = np.asarray(azimuth_rad, dtype=np.float64)
     out = az + sigma_rad * n
     d = preset.element_spacing_wl
@@ -113,7 +113,7 @@ def measured_azimuth(preset: RadarPreset, azimuth_rad: np.ndarray, sigma_rad: np
 
         def pick(x):
             return np.broadcast_to(x, out.shape)[wide]
-        a = az[wide] if az.shape == out.shape else pick(az)
+        a = pick(az)
         sigma_u = d * np.hypot(pick(efficiency) * equation.crb_azimuth_rad(preset, pick(snr_db), np.zeros(a.shape)),
                                np.cos(a) * pick(floor_rad))
         drawn = np.mod(d * np.sin(a) + sigma_u * pick(n) + 0.5, 1.0) - 0.5

@@ -74,6 +74,13 @@ def pattern_db(preset: RadarPreset, azimuth_rad: np.ndarray) -> np.ndarray:
     return 2.0 * preset.element_pattern_exponent * 10.0 * np.log10(np.maximum(c, 1e-6))
 
 
+def pattern_moved_db(preset: RadarPreset, seen_rad: np.ndarray, read_rad: np.ndarray, where: np.ndarray) -> np.ndarray:
+    """What an RCS gains where the element pattern is divided out at the angle ``read_rad`` the radar measured instead
+    of at ``seen_rad``, where its power came from: :func:`pattern_db` at the one less at the other where ``where``,
+    else 0 (dB). A grating lobe's or a draw near endfire's angle (``radarnode.radar.ambiguity.measured_azimuth``)."""
+    return np.where(where, pattern_db(preset, seen_rad) - pattern_db(preset, read_rad), 0.0)
+
+
 def pattern_gain(preset: RadarPreset, azimuth_rad: np.ndarray, where: np.ndarray | None = None) -> np.ndarray:
     """:func:`pattern_db` as a power ratio, cos(θ)^2q (cos θ floored at 1e-6, as there), without the logarithm and
     the exponential: the same gain to rounding, a few times cheaper where it weights every outline point of a

@@ -918,7 +918,7 @@ class ObjectModel:
         # … and the RCS it infers there: the element pattern divided out at the angle it measures, not the truth's
         # (a grating lobe's 50° seen at −41.5° read 1.5 dB low at the other levels and true here: a tester's finding)
         if p.element_spacing_wl > 0.5:
-            lobe_db = np.where(az_seen != az, equation.pattern_db(p, az) - equation.pattern_db(p, az_seen), 0.0)
+            lobe_db = equation.pattern_moved_db(p, az, az_seen, az_seen != az)
             rcs_eff, rcs_body = rcs_eff + lobe_db, rcs_body + lobe_db
         floor_az = np.where(ext, math.radians(p.azimuth_sigma_floor_deg), 0.0)
         sig_az = np.hypot(ea * bound_az, floor_az)
@@ -927,7 +927,7 @@ class ObjectModel:
         # the RCS read with the element pattern at the angle measured, as theirs)
         m_az, endfire = ambiguity.measured_azimuth(p, az_seen, sig_az, z[:, 1], snr, ea, floor_az, observable)
         if endfire.any():
-            pattern_db = np.where(endfire, equation.pattern_db(p, az_seen) - equation.pattern_db(p, m_az), 0.0)
+            pattern_db = equation.pattern_moved_db(p, az_seen, m_az, endfire)
             rcs_eff, rcs_body = rcs_eff + pattern_db, rcs_body + pattern_db
         # such a body's measured azimuth is mirrored back about the edge (the scatterer levels report its inner
         # points); a small body is one point, reported only where it is measured inside (as at the other levels)
@@ -1664,7 +1664,7 @@ class ObjectModel:
             # read at the range reported (the coupling an aliased speed leaves), as the other levels read it
             rcs = self.scene.scenario.road.guardrails.rcs_dbsm + ambiguity.range_db(mr_read, mr)
             if endfire.any():           # read with the element pattern at the angle measured (measured_azimuth)
-                rcs = rcs + np.where(endfire, equation.pattern_db(p, g["azimuth"]) - equation.pattern_db(p, maz), 0.0)
+                rcs = rcs + equation.pattern_moved_db(p, g["azimuth"], maz, endfire)
             post_read = (g["snr"], u_hit.take(hit) / g["pd"], len(parts))
             parts.append((_cluster_rows(mr * cm, mr * sm, vr * cm, vr * sm, rcs, g["sig_r"], g["sig_az"], g["sig_v"],
                                         -1, g_amb), k - lo))
