@@ -196,7 +196,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     rb, vb, u = apparent_positions(p, scat)
     ri, vi = np.rint(rb).astype(np.int64), np.rint(vb).astype(np.int64)
     beam = 1.0 / k_el                                   # Rayleigh beamwidth in d·sinθ
-    ai = np.rint(u / beam).astype(np.int64)
+    # angle cells half-open, [k − ½, k + ½) beams: two returns one beamwidth apart always fall in two cells (rint's
+    # ties to even put ±½ beam, a pair one beamwidth apart centred on boresight, in one cell, never resolved)
+    ai = np.floor(u / beam + 0.5).astype(np.int64)
     n_a = k_el + 2
     cell = ((ri % n_r) * m + (vi % m)) * n_a + (ai % n_a)
     # coherent sum within a cell, each scatterer weighted by its straddle amplitude
