@@ -159,6 +159,11 @@ LOST_MATCH_M = 3.0
 LOST_MATCH_LATERAL_M = 1.0
 TRAIL_MIN_LENGTH_M = 2.5             # an object of another class leaves a trail when it is at least this long …
 TRAIL_MIN_WIDTH_M = 1.4              # … or wide (a vehicle the radar did not classify)
+#: … once its track has run this long (s): a track's first second is its tracker's convergence, not the vehicle's
+#: course (a car at 10 m/s in the next lane, first seen 100 m ahead as the ego closed at 20 m/s: its reported place
+#: drifted 0.5 m in that second, the course fitted to its 16-m trail 50–66 m ahead took the drift for the road's
+#: heading and ran 2.6 m towards it 60 m ahead, and FCW warned for it: benchmarks/abreast_fcw.py's one-car rows)
+TRAIL_MIN_AGE_S = 1.0
 
 
 def clears_path(offset_m: np.ndarray, across_mps: np.ndarray, sigma_mps: np.ndarray, reach_s: np.ndarray,
@@ -685,7 +690,7 @@ class Ecu:
                 structure = born in (STOOD_STILL, BORN_AT_STRUCTURE) or (
                     born == BORN_NEAR_STRUCTURE and self._rcs_power.get(t.id, 0.0) < OBSTACLE_RCS_POWER)
                 dyn = int(ol.dyn_prop[k])
-                trail[i] = (dyn == DYN_MOVING and gx > MOVING_MPS
+                trail[i] = (dyn == DYN_MOVING and gx > MOVING_MPS and t.age * self.period_s >= TRAIL_MIN_AGE_S - 1e-9
                             and int(ol.meas_state[k]) != MEAS_PREDICTED and xv[i] > self.mount.x_m
                             and (int(ol.obj_class[k]) in VEHICLE_CLASSES or ol.length_m[k] >= TRAIL_MIN_LENGTH_M
                                  or ol.width_m[k] >= TRAIL_MIN_WIDTH_M))

@@ -315,7 +315,6 @@ TRAIL_MIN_SPAN_M = 15.0        # a trail shorter along x says nothing about curv
 TRAIL_MAX_RESIDUAL_M = 0.4     # rms about a cubic over the trail: more, and it is no smooth course (or no one track)
 TRAIL_DRIFT_M = 0.9            # lateral drift (peak to peak) against the other trails or the boundaries: ¼ lane
 TRAIL_LONE_DRIFT_M = 0.9       # … against the yaw-rate course when nothing else is known, unless it bends as a road
-TRAIL_LONE_MIN_SPAN_M = 30.0   # … and spans this much at least: a shorter one's drift is its vehicle's or its track's
 TRAIL_BEND_RATIO = 1.5         # a lone trail drifting from the yaw-rate course must bend as a road (_bends_like_a_road)
 TRAIL_EXTENT = 1.5             # a trail's course is used up to this multiple of its farthest point
 TRAIL_SIGMA_M = 0.1            # the weight of a trail: its length / (σ² + fit rms²)
@@ -417,11 +416,7 @@ def trail_fits(trails, curvature_1pm: float, reference=None) -> list[TrailFit]:
     Every trail must also agree within TRAIL_DRIFT_M with ``reference`` ((course(x), x from, x to): the
     boundaries' course in the vehicle frame, from :func:`boundary_reference`, or None). A trail that no other
     trail or reference overlaps must keep within TRAIL_LONE_DRIFT_M of the yaw-rate course or drift from it as a
-    road bends (:func:`_bends_like_a_road`), and span TRAIL_LONE_MIN_SPAN_M along x: a shorter one lies far ahead
-    of the ego (a track young or slow), and the course fitted to it carries its few metres' lateral drift — a
-    tracker's first second, a vehicle's own motion — 50 m out as the road's heading (a car at 10 m/s in the next
-    lane, 20 m/s slower than the ego, its track's trail 16 m long 50–66 m ahead drifting 0.5 m, put the course 2.6 m
-    towards it 60 m ahead, and FCW warned for it). A vehicle changing lane drifts against the others: dropped."""
+    road bends (:func:`_bends_like_a_road`). A vehicle changing lane drifts against the others: it is dropped."""
     fits = [f for f in (fit_trail(x, y) for x, y in trails) if f is not None]
     circle = lambda xs: 0.5 * curvature_1pm * xs * xs        # noqa: E731 — the yaw-rate course, x ≪ radius
     if reference is not None:
@@ -447,8 +442,7 @@ def trail_fits(trails, curvature_1pm: float, reference=None) -> list[TrailFit]:
         keep[live[worst]] = False
     for i in np.flatnonzero(keep):
         alone = reference is None and not compared[i, keep & (np.arange(n) != i)].any()
-        if alone and (fits[i].x_max - fits[i].x_min < TRAIL_LONE_MIN_SPAN_M
-                      or off_circle[i] > TRAIL_LONE_DRIFT_M and not _bends_like_a_road(fits[i], curvature_1pm)):
+        if alone and off_circle[i] > TRAIL_LONE_DRIFT_M and not _bends_like_a_road(fits[i], curvature_1pm):
             keep[i] = False
     return [f for f, k in zip(fits, keep) if k]
 
