@@ -231,53 +231,12 @@ def test_on_a_curve_entry_the_trails_keep_fcw_off_the_outer_lane_and_on_the_own_
     assert own_off.ttc_at_warning_s <= own.ttc_at_warning_s - 0.3, (own_off.ttc_at_warning_s, own.ttc_at_warning_s)
 
 
-def _drifting(x0, span_m, drift_m, lane_m=3.5, rng=None):
-    """A trail x0 … x0 + span_m ahead (a point every 0.72 m) whose lateral place drifts linearly by ``drift_m`` over
-    it (a track's first second converging, a vehicle's own motion), on a straight road in the lane ``lane_m`` left."""
-    x = np.linspace(x0, x0 + span_m, max(int(round(span_m / 0.72)) + 1, 6))
-    y = lane_m + drift_m * (x - x0) / span_m
-    if rng is not None:
-        y = y + rng.normal(0.0, 0.05, x.size)
-    return x, y
-
-
-@pytest.mark.parametrize("span_m, kept", [(P.TRAIL_LONE_MIN_SPAN_M - 0.1, False), (P.TRAIL_LONE_MIN_SPAN_M, True),
-                                          (P.TRAIL_LONE_MIN_SPAN_M + 0.1, True), (2.0 * P.TRAIL_LONE_MIN_SPAN_M, True)])
-def test_a_lone_trail_tells_the_road_only_over_its_minimum_span(span_m, kept):
-    """A lone trail (no other trail, no boundary) describes the road only where it spans TRAIL_LONE_MIN_SPAN_M: just
-    below it, dropped; at, just above and at twice it, kept. Far ahead a shorter one's drift is the course's heading:
-    16 m at 50–66 m drifting 0.5 m put the course 2.6 m to the left 60 m ahead (below)."""
-    trail = _drifting(50.0, span_m, 0.5)
-    assert P.fit_trail(*trail) is not None
-    assert (len(P.trail_fits([trail], 0.0)) == 1) == kept
-    # two trails that agree where both run (18 m of 20) are not alone: each is kept, though shorter than that
-    assert len(P.trail_fits([_drifting(50.0, 20.0, 0.1), _drifting(48.0, 20.0, 0.1, lane_m=0.0)], 0.0)) == 2
-
-
-def test_a_short_lone_trail_would_have_bent_the_course_into_the_next_lane():
-    """What the rule keeps out: a young track's trail 16 m long 50–66 m ahead whose lateral place converges by 0.5 m
-    (fast at its oldest end, as a track's first second does) bends the course fitted to it 2.2–2.5 m towards it 60 m
-    ahead, where a car in the next lane 3.5 m left then lies within the path's 1.6-m half-width; it is dropped. The
-    rule is a floor, not a cure: the same drift over 30 m still bends the course 1.6–1.8 m there."""
-    for tau in (0.2, 0.3):
-        x = np.linspace(50.0, 66.0, 23)
-        trail = (x, 3.5 + 0.5 * (1.0 - np.exp(-(x - 50.0) / (tau * 16.0))))
-        c = P.fit_course([P.fit_trail(*trail)], 0.0)
-        assert 60.0 * (c[0] + 60.0 * (c[1] + 60.0 * c[2])) > 1.9
-        assert P.trail_fits([trail], 0.0) == []
-
-
-@pytest.mark.parametrize("preset, level, seed", [("mimo12", "object", 5), ("mimo12", "object", 11),
-                                                 ("ars408_like", "detection", 2), ("ars408_like", "detection", 4)])
-def test_a_car_much_slower_in_the_next_lane_draws_no_fcw(preset, level, seed):
-    """A straight three-lane road, the ego at 30 m/s in the middle lane, one car at 10 m/s in the left lane from 100 m
-    ahead: FCW warned for it 2.3 s in (54 m) in 3 of 12 seeds at the object level (mimo12) and 4 of 12 at the
-    detection level (ars408_like), these seeds among them, when its young track's 16-m trail bent the ECU's path
-    into its lane (the scene of benchmarks/abreast_fcw.py's one-car rows, to 5 m)."""
-    from radarnode.radar.setup import parse_scenario
-    text = f"""
+def _one_car_next_lane(preset: str, seed: int, duration_s: float) -> str:
+    """A straight three-lane road, the ego at 30 m/s in the middle lane, one car at 10 m/s in the left lane whose rear
+    is 100 m ahead of the sensor at the start (the scene of benchmarks/abreast_fcw.py's one-car rows)."""
+    return f"""
 name: one_car_next_lane
-duration_s: 4.8
+duration_s: {duration_s}
 seed: {seed}
 radar: {{preset: {preset}}}
 ego: {{speed_mps: 30.0}}
@@ -286,5 +245,45 @@ ecu: {{acc_enabled: false, expect: {{no_fcw: true}}}}
 actors:
   - {{id: left, class: car, x_m: 105.95, lane: 2, speed_mps: 10.0}}
 """
-    r = simulate(parse_scenario(text), fidelity=level)
+
+
+def test_a_young_track_s_trail_would_have_bent_the_course_into_the_next_lane():
+    """What the age rule keeps out: a trail 16 m long 50–66 m ahead whose lateral place converges by 0.5 m, fast at
+    its oldest end as a track's first second does, bends the course fitted to it 2.2–2.5 m towards it 60 m ahead,
+    where a car in the next lane (3.5 m left) then lies within the path's 1.6-m half-width. Without that second the
+    same vehicle's trail is steady, and the course stays within 0.3 m of the yaw-rate circle's."""
+    x = np.linspace(50.0, 66.0, 23)
+    for tau in (0.2, 0.3):
+        trail = (x, 3.5 + 0.5 * (1.0 - np.exp(-(x - 50.0) / (tau * 16.0))))
+        c = P.fit_course(P.trail_fits([trail], 0.0), 0.0)
+        assert 60.0 * (c[0] + 60.0 * (c[1] + 60.0 * c[2])) > 1.9
+    c = P.fit_course(P.trail_fits([(x, np.full(x.size, 3.5))], 0.0), 0.0)
+    assert abs(60.0 * (c[0] + 60.0 * (c[1] + 60.0 * c[2]))) < 0.3
+
+
+@pytest.mark.parametrize("age", [13, 14, 15, 28])
+def test_a_track_leaves_a_trail_once_it_has_run_a_second(age):
+    """TRAIL_MIN_AGE_S (1 s: 14 cycles of 72 ms): a moving car's ECU track adds its place to the trails from its
+    14th cycle on: none at 13, one point at 14, two at 15, fifteen at 28 (just below, at, just above and at twice
+    the threshold); the track's age and the points counted on the ECU as the run ended."""
+    from radarnode.consumer import ecu as E
+    from radarnode.radar.setup import parse_scenario
+    period = 0.072
+    assert E.TRAIL_MIN_AGE_S == 1.0 and math.ceil(E.TRAIL_MIN_AGE_S / period) == 14
+    # the car's ECU track starts in the run's second cycle: a run of age + 2 cycles ends with it that old (checked)
+    r = simulate(parse_scenario(_one_car_next_lane("ars408_like", 1, round((age + 2) * period, 4))), fidelity="object")
+    ecu = r.trace["ecu"]
+    assert [t.age for t in ecu.tracker.tracks] == [age]
+    assert sum(x.size for x, _ in ecu.trails.trails()) == max(0, age - 13)
+
+
+@pytest.mark.parametrize("preset, level, seed", [("mimo12", "object", 5), ("mimo12", "object", 11),
+                                                 ("ars408_like", "detection", 2), ("ars408_like", "detection", 4)])
+def test_a_car_much_slower_in_the_next_lane_draws_no_fcw(preset, level, seed):
+    """A straight three-lane road, the ego at 30 m/s in the middle lane, one car at 10 m/s in the left lane from 100 m
+    ahead: FCW warned for it 2.3 s in (54 m) in 3 of 12 seeds at the object level (mimo12) and 4 of 12 at the
+    detection level (ars408_like), these seeds among them, when its young track's 16-m trail bent the ECU's path
+    into its lane (the scene of benchmarks/abreast_fcw.py's one-car rows, to 5 m; TRAIL_MIN_AGE_S)."""
+    from radarnode.radar.setup import parse_scenario
+    r = simulate(parse_scenario(_one_car_next_lane(preset, seed, 4.8)), fidelity=level)
     assert r.checked and r.passed and r.warning_time_s is None, r.reasons
