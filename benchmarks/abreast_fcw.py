@@ -1,0 +1,125 @@
+"""Two cars abreast ahead, one in each lane beside the ego's, the ego's lane free: does FCW warn, level by level?
+
+Each row is a scene built here: a straight three-lane road, the ego in the middle lane at 30 m/s, FCW on, no ACC; two
+cars side by side in the left and the right lane (or, as a control, the left one alone), ``dv`` m/s slower than the
+ego, their rear 100 m ahead of the sensor at the start; the run ends when the ego has closed to about 5 m. Judged as
+``radarnode report`` judges a scenario (``ecu.expect: {no_fcw: true}``), over seeds 1…N at each level.
+
+Far ahead the two cars are closer in azimuth than the array resolves (``ars408_like``: 8 channels, a beam of 14.5°,
+the cars ±3.5 m apart at 46 m are 0.61 beam apart; ``mimo12``: 12 channels, 9.6°). The chain then sees one return
+between them, in some frames two (its resolution grows gradually with the separation: BENCHMARKS.md, "Resolution"),
+and its tracker may hold an object in the ego's lane: a false FCW that a real radar of that array gives too. The
+detection level resolves two returns in one angle cell never and in two cells at 0.7 beam or more always (a step at
+the chain's 50 % point), the object level keeps every body apart: this table measures what that does to the verdict.
+``warned for`` counts what FCW's first warning was for (an actor's id, or ``no actor`` for a ghost).
+
+Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/abreast_fcw.py [--seeds 12] [--levels object,detection,signal]
+[--presets ars408_like,mimo12] [--dvs 10,15,20] [--jobs 2] [--root DIR]`` (about 6 minutes with the defaults on two
+cores, most of it the signal level). Prints a Markdown table, a row per scene.
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import itertools
+import multiprocessing
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import machine  # noqa: E402  (the day's machine, printed beside the figures)
+from tree import use_tree  # --root DIR: radarnode from another tree
+
+use_tree()
+
+import radarnode  # noqa: E402
+from radarnode.consumer.evaluate import simulate  # noqa: E402
+from radarnode.radar.setup import parse_scenario  # noqa: E402
+
+EGO_MPS = 30.0
+START_M = 100.0          # the cars' rear ahead of the sensor at t = 0
+END_GAP_M = 5.0          # the run ends when the ego has closed to about this
+SCENE = """
+name: abreast
+duration_s: {duration}
+seed: {seed}
+radar: {{preset: {preset}}}
+ego: {{speed_mps: {ego}}}
+road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1}}
+ecu: {{acc_enabled: false, expect: {{no_fcw: true}}}}
+actors:
+{actors}
+"""
+
+
+def scene_text(preset: str, dv: float, pair: bool, seed: int) -> str:
+    """One row's scene for one seed: the cars' centres placed so that their rear is START_M ahead of the sensor."""
+    speed = EGO_MPS - dv
+    # x_m is the actor's centre from the ego's reference point; the sensor sits at the front of a 4.5-m car on the
+    # ego's axis (radarnode.scene.world): the car's rear is x_m − 2.25, the sensor at about 3.7
+    x = START_M + 3.7 + 2.25
+    cars = [f"  - {{id: left, class: car, x_m: {x}, lane: 2, speed_mps: {speed}}}"]
+    if pair:
+        cars.append(f"  - {{id: right, class: car, x_m: {x}, lane: 0, speed_mps: {speed}}}")
+    duration = round((START_M - END_GAP_M) / dv, 1)
+    return SCENE.format(duration=duration, seed=seed, preset=preset, ego=EGO_MPS, actors="\n".join(cars))
+
+
+def row_name(preset: str, dv: float, pair: bool) -> str:
+    return f"{preset}, {'two cars abreast' if pair else 'one car, left lane'}, {dv:g} m/s slower"
+
+
+def _one(job):
+    preset, dv, pair, level, seed = job
+    r = simulate(parse_scenario(scene_text(preset, dv, pair, seed)), fidelity=level)
+    return (preset, dv, pair), level, seed, r.passed and r.checked, r.warning_time_s, r.warned_for
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--seeds", type=int, default=12)
+    ap.add_argument("--levels", default="object,detection,signal")
+    ap.add_argument("--presets", default="ars408_like,mimo12")
+    ap.add_argument("--dvs", default="10,15,20", help="the cars' speed below the ego's, m/s")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--root", help="import radarnode from this tree (another version) instead")
+    args = ap.parse_args()
+    levels = args.levels.split(",")
+    rows = list(itertools.product(args.presets.split(","), [float(v) for v in args.dvs.split(",")], (True, False)))
+    jobs = [row + (lv, s) for row in rows for lv in levels for s in range(1, args.seeds + 1)]
+    t0 = time.perf_counter()
+    with multiprocessing.Pool(args.jobs) as pool:
+        results = pool.map(_one, jobs, chunksize=1)
+    by: dict[tuple, list] = collections.defaultdict(list)
+    for row, lv, s, ok, t_w, who in results:
+        by[(row, lv)].append((ok, t_w, who))
+    print(f"(radarnode from {Path(radarnode.__file__).parents[1]})")
+    print(machine.line() + "\n")
+    print(f"### Two cars abreast, the ego's lane free: FCW, ego {EGO_MPS:g} m/s, the cars' rear {START_M:g} m ahead "
+          f"at the start, seeds 1–{args.seeds}\n")
+    print("| scene | " + " | ".join(f"{lv}: no FCW" for lv in levels) + " | first warning, median (gap then) | "
+          "warned for |")
+    print("|---|" + "---:|" * len(levels) + "---|---|")
+    for row in rows:
+        cells, times, whom = [], [], collections.Counter()
+        for lv in levels:
+            res = by[(row, lv)]
+            cells.append(f"{sum(ok for ok, _, _ in res)}/{len(res)}")
+            for ok, t_w, who in res:
+                if t_w is not None:
+                    times.append((lv, t_w))
+                    whom[f"{lv} {who}"] += 1
+        warn = "; ".join(
+            f"{lv} {statistics.median(t for l2, t in times if l2 == lv):.2f} s "
+            f"({START_M - row[1] * statistics.median(t for l2, t in times if l2 == lv):.0f} m)"
+            for lv in levels if any(l2 == lv for l2, _ in times)) or "-"
+        print(f"| {row_name(*row)} | " + " | ".join(cells) + f" | {warn} | "
+              + (", ".join(f"{k} ×{v}" for k, v in sorted(whom.items())) or "-") + " |")
+    print(f"\n({len(jobs)} runs in {time.perf_counter() - t0:.0f} s with {args.jobs} processes)")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
