@@ -753,6 +753,49 @@ def test_two_returns_a_beam_apart_never_share_an_angle_cell(preset, centre_beams
         assert near.sum() == 2, (seed, np.degrees(det.azimuth_rad[near]))
 
 
+@pytest.mark.parametrize("preset", ["ars408_like", "mimo12"])
+@pytest.mark.parametrize("centre_beams", [0.0, 3.0, -2.0])
+@pytest.mark.parametrize("sep_beams, resolved", [(0.35, False), (0.69, False), (0.71, True), (0.9, True)])
+def test_two_returns_in_one_angle_cell_are_resolved_as_two_cells_would_be(preset, centre_beams, sep_beams, resolved):
+    """Two equal returns in one angle cell (centred on the cell's middle, boresight or off it) are one return below
+    the chain's angle resolution (``RESOLUTION[2]``, 0.7 beamwidth) and two at and above it, as two returns in two
+    cells are: below it (half and just below), just above it and at 0.9 beam (a cell is one beam wide: twice the
+    limit cannot lie in one). Before :func:`detection_model.split_cells` a pair in one cell was never resolved."""
+    from radarnode.radar.calibration import RESOLUTION
+    assert RESOLUTION[2] == 0.7
+    p = PRESETS[preset]
+    stat = DspChain(p).statistic
+    beam = 1.0 / (p.num_virtual * p.element_spacing_wl)
+    u = (centre_beams + np.array([-0.5, 0.5]) * sep_beams) * beam
+    scat = point_targets([40.0, 40.0], np.degrees(np.arcsin(u)), [0.0, 0.0], 0.0)
+    scat.rcs_dbsm = 30.0 - equation.snr_db(p, scat.range_m, 0.0, 0.0, scat.azimuth_rad)
+    rb, vb, ub = detection_model.apparent_positions(p, scat)
+    cells = np.floor(ub * p.num_virtual + 0.5)
+    assert cells[0] == cells[1]                          # one angle cell
+    for seed in range(6):
+        det = detection_model.detect(p, scat, np.random.default_rng(seed), stat)
+        near = np.abs(det.range_m - 40.0) < 1.0
+        assert near.sum() == (2 if resolved else 1), (seed, np.degrees(det.azimuth_rad[near]))
+
+
+def test_split_cells_cuts_a_cell_only_between_returns_a_resolution_apart():
+    """:func:`detection_model.split_cells` on three cells at once, in a shuffled order: two clusters 0.8 beam apart
+    (the near sides of two cars abreast) are cut at the gap between them; a body spread evenly over 0.95 beam and a
+    pair 0.6 beam apart are not; a cell of one scatterer is not; the sides do not depend on the input's order."""
+    ub = np.concatenate([[-0.45, -0.4, -0.38, 0.37, 0.4], np.linspace(-0.475, 0.475, 11), [-0.3, 0.3], [0.1]])
+    cell = np.concatenate([np.full(5, 7), np.full(11, 3), np.full(2, 12), [5]])
+    power = np.concatenate([[1.0, 2.0, 1.0, 1.5, 2.5], np.ones(11), [1.0, 1.0], [1.0]])
+    side = detection_model.split_cells(cell, ub, power)
+    assert side[:5].tolist() == [0, 0, 0, 1, 1]
+    assert not side[5:].any()
+    perm = np.random.default_rng(3).permutation(cell.size)
+    assert np.array_equal(detection_model.split_cells(cell[perm], ub[perm], power[perm]), side[perm])
+    # a weak return far from a strong one is cut off too: the centroids, not the powers, decide
+    assert detection_model.split_cells(np.zeros(2, dtype=np.int64), np.array([-0.45, 0.3]),
+                                       np.array([1.0, 1e-4])).tolist() == [0, 1]
+    assert detection_model.split_cells(np.zeros(0, dtype=np.int64), np.zeros(0), np.zeros(0)).size == 0
+
+
 @pytest.mark.parametrize("axis", ["range", "doppler"])
 @pytest.mark.parametrize("sep,joined", [(2.0, True), (4.0 - 1e-9, True), (4.08, False), (8.0, False)])
 def test_two_returns_are_one_group_only_within_the_lobe_reach(axis, sep, joined):

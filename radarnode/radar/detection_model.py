@@ -16,7 +16,9 @@ What the signal chain does to scatterers, without the signal:
    cell is seen at their glint point Re(Σ z·x / Σ z) in each axis, as the
    chain's phase slopes see it (an extended reflector's apparent point wanders);
 3. cells closer than the chain's measured resolution (:data:`RESOLUTION`, in
-   range bins, Doppler bins and beamwidths) are one peak: a cell that has a
+   range bins, Doppler bins and beamwidths) are one peak, and a cell whose
+   two sides' returns lie that far apart in angle is two (:func:`split_cells`:
+   the resolution does not depend on where the grid cuts a pair): a cell that has a
    stronger cell within the resolution in every axis gives its power to the
    strongest of them, as a weak tone inside a strong main lobe does; and
    a cell where the stronger lobe of another actor's (or a post's) cell a
@@ -203,6 +205,11 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     cell = ((ri % n_r) * m + (vi % m)) * n_a + (ai % n_a)
     # coherent sum within a cell, each scatterer weighted by its straddle amplitude
     amp = np.sqrt(statistic.energy(rho, rb - ri, vb - vi))
+    # a cell whose two sides hold returns the chain resolves is two cells: the resolution in angle is the same
+    # wherever the grid cuts a pair (two cars abreast, their near sides either side of boresight, were one return
+    # between them in the boresight cell, in the ego's lane, where the chain sees two)
+    cell = cell * 2 + split_cells(cell, u / beam, amp * amp)
+    n_a *= 2
     uniq, inv = np.unique(cell, return_inverse=True)
     inv = inv.ravel()
     phase = np.exp(2j * np.pi * rng.random(k))
@@ -337,6 +344,42 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
                                         s.snr_db + HANN_SIDELOBE_DB, np.full(len(s), -1, dtype=np.int64)))
     parts.append(false_alarms(p, statistic, rng, power_reduction_db))
     return Detections.concat(parts)
+
+
+def split_cells(cell: np.ndarray, ub: np.ndarray, power: np.ndarray) -> np.ndarray:
+    """Each scatterer's side of its cell, 0 or 1: a cell is cut at the widest gap between its scatterers' spatial
+    frequencies ``ub`` (in beamwidths) where the power centroids of the two sides lie the chain's angle resolution
+    (``RESOLUTION[2]``) or more apart, as two cells that far apart are resolved (:func:`_peaks`); 0 elsewhere.
+
+    One cut a cell at most: a cell is one beamwidth wide, so no two gaps in it can both leave sides that far apart.
+    A body spread evenly over a cell is never cut (its halves' centroids lie half a beamwidth apart at most)."""
+    n = cell.size
+    out = np.zeros(n, dtype=np.int64)
+    if n < 2:
+        return out
+    order = np.lexsort((ub, cell))
+    cs, us, ps = cell[order], ub[order], power[order]
+    start = np.empty(n, dtype=bool)
+    start[0] = True
+    start[1:] = cs[1:] != cs[:-1]
+    cid = np.cumsum(start) - 1
+    gap = np.where(start[1:], -1.0, np.diff(us))               # −1: no gap between two cells
+    widest = np.full(int(cid[-1]) + 1, -1.0)
+    np.maximum.at(widest, cid[1:], gap)
+    at = np.flatnonzero((gap > 0.0) & (gap == widest[cid[1:]]))
+    if at.size == 0:
+        return out
+    _, first = np.unique(cid[1:][at], return_index=True)        # one cut a cell, should two gaps be equally wide
+    mark = np.zeros(n, dtype=np.int64)
+    mark[at[first] + 1] = 1
+    c = np.cumsum(mark)
+    side = c - np.maximum.accumulate(np.where(start, c, 0))
+    key = cid * 2 + side
+    pw = np.bincount(key, weights=ps, minlength=2 * widest.size).reshape(-1, 2)
+    centre = np.bincount(key, weights=ps * us, minlength=2 * widest.size).reshape(-1, 2) / np.maximum(pw, 1e-300)
+    apart = (pw[:, 0] > 0.0) & (pw[:, 1] > 0.0) & (centre[:, 1] - centre[:, 0] >= RESOLUTION[2])
+    out[order] = np.where(apart[cid], side, 0)
+    return out
 
 
 def _dominant_actor(actor: np.ndarray, power: np.ndarray, inv: np.ndarray, tag: np.ndarray, mixed: np.ndarray
