@@ -16,6 +16,10 @@ the chain's 50 % point), the object level keeps every body apart: this table mea
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/abreast_fcw.py [--seeds 12] [--levels object,detection,signal]
 [--presets ars408_like,mimo12] [--dvs 10,15,20] [--jobs 2] [--root DIR]`` (about 6 minutes with the defaults on two
 cores, most of it the signal level). Prints a Markdown table, a row per scene.
+``--bands`` instead prints, for the pair, what the radar reports as the gap closes, in 10-m bands of the distance to
+the cars' rear (60 to 10 m): the share of frames with a detection between the cars (|y| < 1.5 m, within 4 m of
+their rear along x), with detections of both cars apart (y > 2 m and y < −2 m), and with a radar object in the ego's
+lane (|y| < 1.5 m, within 6 m): the radar's own output, before the ECU's path and tracks.
 """
 
 from __future__ import annotations
@@ -34,9 +38,14 @@ from tree import use_tree  # --root DIR: radarnode from another tree
 
 use_tree()
 
+import numpy as np  # noqa: E402
+
 import radarnode  # noqa: E402
 from radarnode.consumer.evaluate import simulate  # noqa: E402
-from radarnode.radar.setup import parse_scenario  # noqa: E402
+from radarnode.radar.models import make_model  # noqa: E402
+from radarnode.radar.object_model import RuntimeConfig  # noqa: E402
+from radarnode.radar.setup import parse_scenario, radar_config  # noqa: E402
+from radarnode.scene.world import Scene  # noqa: E402
 
 EGO_MPS = 30.0
 START_M = 100.0          # the cars' rear ahead of the sensor at t = 0
@@ -77,6 +86,58 @@ def _one(job):
     return (preset, dv, pair), level, seed, r.passed and r.checked, r.warning_time_s, r.warned_for
 
 
+#: the distance bands (m, from the sensor to the cars' rear) of ``--bands``, nearest last
+BANDS_M = ((60.0, 50.0), (50.0, 40.0), (40.0, 30.0), (30.0, 20.0), (20.0, 10.0))
+
+
+def _bands_one(job):
+    """One seed of the pair at one level: per band, [frames, a detection between the cars, both cars apart, a radar
+    object in the ego's lane]."""
+    preset, dv, level, seed = job
+    sc = parse_scenario(scene_text(preset, dv, True, seed))
+    rc = radar_config(sc)
+    model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(sc.seed), rc.signal)
+    cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+    counts = np.zeros((len(BANDS_M), 4), dtype=np.int64)
+    for k in range(int(sc.duration_s / sc.period_s)):
+        frame, _ = model.step(k * sc.period_s, cfg)
+        gap = START_M - dv * k * sc.period_s
+        band = [i for i, (hi, lo) in enumerate(BANDS_M) if lo <= gap < hi]
+        if not band:
+            continue
+        d = model.info.detections
+        x, y = d.range_m * np.cos(d.azimuth_rad), d.range_m * np.sin(d.azimuth_rad)
+        near = np.abs(x - gap) < 4.0
+        o = frame.objects
+        counts[band[0]] += (1, np.any(near & (np.abs(y) < 1.5)), np.any(near & (y > 2.0)) and np.any(near & (y < -2.0)),
+                            np.any((np.abs(o.dist_long_m - gap) < 6.0) & (np.abs(o.dist_lat_m) < 1.5)))
+    return (preset, dv, level), counts
+
+
+def bands(args) -> int:
+    levels = args.levels.split(",")
+    rows = list(itertools.product(args.presets.split(","), [float(v) for v in args.dvs.split(",")], levels))
+    jobs = [row + (s,) for row in rows for s in range(1, args.seeds + 1)]
+    t0 = time.perf_counter()
+    with multiprocessing.Pool(args.jobs) as pool:
+        results = pool.map(_bands_one, jobs, chunksize=1)
+    total: dict[tuple, np.ndarray] = {}
+    for row, c in results:
+        total[row] = total.get(row, 0) + c
+    print(f"(radarnode from {Path(radarnode.__file__).parents[1]})")
+    print(machine.line() + "\n")
+    print(f"### Two cars abreast as the gap closes: what the radar reports, ego {EGO_MPS:g} m/s, seeds 1–{args.seeds}\n")
+    print("| scene | level | gap to the cars | frames | a detection between them | both apart | an object in the ego's "
+          "lane |")
+    print("|---|---|---|---:|---:|---:|---:|")
+    for row in rows:
+        for (hi, lo), (n, between, apart, lane) in zip(BANDS_M, total[row]):
+            print(f"| {row_name(row[0], row[1], True)} | {row[2]} | {hi:.0f}–{lo:.0f} m | {n} | {between / n:.2f} | "
+                  f"{apart / n:.2f} | {lane / n:.2f} |")
+    print(f"\n({len(jobs)} runs in {time.perf_counter() - t0:.0f} s with {args.jobs} processes)")
+    return 0
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--seeds", type=int, default=12)
@@ -85,7 +146,11 @@ def main() -> int:
     ap.add_argument("--dvs", default="10,15,20", help="the cars' speed below the ego's, m/s")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--root", help="import radarnode from this tree (another version) instead")
+    ap.add_argument("--bands", action="store_true", help="what the radar reports of the pair as the gap closes, "
+                    "in 10-m bands (no ECU verdict)")
     args = ap.parse_args()
+    if args.bands:
+        return bands(args)
     levels = args.levels.split(",")
     rows = list(itertools.product(args.presets.split(","), [float(v) for v in args.dvs.split(",")], (True, False)))
     jobs = [row + (lv, s) for row in rows for lv in levels for s in range(1, args.seeds + 1)]
