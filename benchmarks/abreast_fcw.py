@@ -9,8 +9,9 @@ Far ahead the two cars are closer in azimuth than the array resolves (``ars408_l
 the cars ±3.5 m apart at 46 m are 0.61 beam apart; ``mimo12``: 12 channels, 9.6°). The chain then sees one return
 between them, in some frames two (its resolution grows gradually with the separation: BENCHMARKS.md, "Resolution"),
 and its tracker may hold an object in the ego's lane: a false FCW that a real radar of that array gives too. The
-detection level resolves two returns in one angle cell never and in two cells at 0.7 beam or more always (a step at
-the chain's 50 % point), the object level keeps every body apart: this table measures what that does to the verdict.
+detection level resolves two returns 0.7 beam apart or more always, less never (a step at the chain's 50 % point;
+until session 81 two returns in one angle cell never, which made the cars' near sides either side of boresight one
+return between them), the object level keeps every body apart: this table measures what that does to the verdict.
 ``warned for`` counts what FCW's first warning was for (an actor's id, or ``no actor`` for a ghost).
 
 Run: ``OPENBLAS_NUM_THREADS=1 python benchmarks/abreast_fcw.py [--seeds 12] [--levels object,detection,signal]
