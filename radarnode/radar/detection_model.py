@@ -242,9 +242,9 @@ def detect(preset: RadarPreset, scat: Scatterers, rng: np.random.Generator, stat
     np.maximum.at(hi, inv, scat.actor_index)
     tag = np.where(lo == hi, lo, -1)          # a cell of one body (the lobe masking below leaves a body's own out)
     # … but for a structure above the road: STRUCTURE_OWN_DB. Only an actor the scene puts above the road gives its
-    # scatterers a height (z_m, from the sensor: its lower edge less the mount's, negative for one below the sensor);
-    # every other scatterer has z_m = 0
-    lifted = (tag >= 0) & (np.bincount(inv, weights=(scat.z_m != 0.0).astype(np.float64), minlength=uniq.size) > 0)
+    # scatterers a height, one for all of them (z_m, from the sensor: its lower edge less the mount's, negative for
+    # one below the sensor); every other scatterer has z_m = 0. A cell of one body: its first scatterer's says
+    lifted = (tag >= 0) & (scat.z_m[first] != 0.0)
     truth = _dominant_actor(scat.actor_index, amp * amp, inv, tag, lo != hi)
 
     # peaks: a cell with a stronger cell within the resolution in every axis gives its energy to the strongest
@@ -533,8 +533,9 @@ def _inside_lobes(r: np.ndarray, v: np.ndarray, u: np.ndarray, field: np.ndarray
     other returns' lobes rise stands higher than its own cell, unless that neighbour holds the cell's own return's
     other half (:data:`ASTRIDE_OWN_DB` over the others' there) and the map falls again beyond it. A body's own
     other cells are left out of its cells' map (the resolution box of :func:`_peaks` merges those: with them a car
-    passing a corner radar split into three objects, more often than in the chain), but for a structure above the road
-    (``lifted``, per cell): its own cells :data:`STRUCTURE_OWN_DB` stronger count. Positions in bins, both axes circular, ``u`` in d·sinθ;
+    passing a corner radar split into three objects, more often than in the chain), but for a structure above the
+    road (``lifted``, per cell): its own cells :data:`STRUCTURE_OWN_DB` stronger count. Positions in bins, both axes
+    circular, ``u`` in d·sinθ;
     ``energy`` the cells' energies at their own bins. A hidden cell gives its energy to no one. ``candidates`` (bool,
     per cell): the cells to test (the peaks; every cell still counts as another return); None tests every cell.
     A cell's answer does not depend on which others are tested (the peaks alone are 0.4 of the cells on a guardrail
