@@ -81,16 +81,31 @@ def _job(args: tuple[Path, int]):
     return census(*args)
 
 
+def _positive(text: str) -> int:
+    """A whole number ≥ 1 (argparse names the option and the value where it is not)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a whole number ≥ 1") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"value {text!r} is not allowed; expected a whole number ≥ 1")
+    return value
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--stride", type=int, default=5, help="every this many cycles (default 5)")
-    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--stride", type=_positive, default=5, help="every this many cycles (default 5)")
+    ap.add_argument("--jobs", type=_positive, default=2)
     ap.add_argument("--only", nargs="*", default=None, help="scenario file names without .yaml (default: all)")
     ap.add_argument("--root", default=None, help="import radarnode from this tree")
     args = ap.parse_args()
     t0 = time.perf_counter()
     paths = sorted((ROOT / "scenarios").glob("*.yaml"))
     if args.only:
+        unknown = sorted(set(args.only) - {p.stem for p in paths})
+        if unknown:
+            ap.error(f"--only: value(s) {', '.join(unknown)} not allowed; expected names of scenarios/*.yaml "
+                     "without .yaml")
         paths = [p for p in paths if p.stem in args.only]
     with multiprocessing.Pool(args.jobs) as pool:
         results = pool.map(_job, [(p, args.stride) for p in paths], chunksize=1)

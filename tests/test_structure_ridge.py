@@ -31,17 +31,22 @@ road: {{lanes: 3, lane_width_m: 3.5, ego_lane: 1, curvature_1pm: {curvature}}}
 """
 
 
-def _deck_detections(curvature: float, ahead_m: float, draws: int) -> tuple[float, float]:
-    """The deck's detections a frame at the detection and signal levels, on the same scatterers each draw (the
-    deck `ahead_m` along the road), the mean over `draws` frames."""
+def _deck_frames(curvature: float):
+    """The preset, a detection-level model of the bridge on a bend (seed 1) whose ``scatterers`` draw each frame's,
+    its runtime configuration and the chain."""
     sc = parse_scenario(_bridge_on_bend(curvature))
     rc = radar_config(sc)
     p = rc.preset
     model = make_model("detection", Scene(sc), p, np.random.default_rng(1), rc.signal, clusters_wanted=False)
-    cfg = RuntimeConfig(max_distance_m=p.max_range_m, clusters=False)
+    return p, model, RuntimeConfig(max_distance_m=p.max_range_m, clusters=False), DspChain(p)
+
+
+def _deck_detections(curvature: float, ahead_m: float, draws: int) -> tuple[float, float]:
+    """The deck's detections a frame at the detection and signal levels, on the same scatterers each draw (the
+    deck `ahead_m` along the road), the mean over `draws` frames."""
+    p, model, cfg, chain = _deck_frames(curvature)
     t = (250.0 - ahead_m) / V
     view = model.scene.view(t)
-    chain = DspChain(p)
     counts = np.zeros((2, draws))
     for k in range(draws):
         scat = model.scatterers(t, view, cfg)               # the deck's fluctuation drawn anew each frame
@@ -75,6 +80,10 @@ def _cells(energies_db, r, u):
     (12.0, True, True),      # a structure's far end 12 dB below its main part, 1.5 bins on: hidden
     (12.0, False, False),    # the same on a vehicle: its own cells are left out of its map, as before
     (8.0, True, False),      # a structure's part 8 dB below (under STRUCTURE_OWN_DB): not counted against it
+    (9.9, True, False),      # just below the threshold
+    (10.0, True, True),      # at it (the main part counts from STRUCTURE_OWN_DB on)
+    (20.0, True, True),      # twice it
+    (20.0, False, False),    # … and a vehicle's, still left out
 ])
 def test_a_structure_s_own_much_stronger_cell_hides_its_weak_cell(weaker_db, lifted, hidden):
     p = get_preset("ars408_like")
@@ -108,13 +117,9 @@ def test_a_structure_below_the_sensor_s_height_is_a_structure_too():
     # edge below the mount (a low-clearance structure, a high mount). The rule is the same on either side: the same
     # scatterers with their heights' signs flipped give the same detections (the first form tested z_m > 0, and a
     # deck 0.1 m below the sensor kept its far end as a peak of its own)
-    sc = parse_scenario(_bridge_on_bend(0.001))
-    rc = radar_config(sc)
-    p = rc.preset
-    model = make_model("detection", Scene(sc), p, np.random.default_rng(1), rc.signal, clusters_wanted=False)
-    cfg = RuntimeConfig(max_distance_m=p.max_range_m, clusters=False)
+    p, model, cfg, chain = _deck_frames(0.001)
     t = 150.0 / V
-    stat = DspChain(p).statistic
+    stat = chain.statistic
     differ = 0
     for k in range(20):
         scat = model.scatterers(t, model.scene.view(t), cfg)
@@ -129,3 +134,16 @@ def test_a_structure_below_the_sensor_s_height_is_a_structure_too():
         ground.z_m = np.zeros(len(scat))
         differ += len(detection_model.detect(p, ground, np.random.default_rng((3, k)), stat)) != len(a)
     assert differ >= 1              # the rule is at work in these frames: without the height the count differs
+
+
+@pytest.mark.parametrize("args, named", [(["--stride", "0"], "--stride: value '0'"),
+                                         (["--jobs", "x"], "--jobs: value 'x'"),
+                                         (["--only", "nosuch"], "--only: value(s) nosuch")])
+def test_the_census_benchmark_refuses_a_bad_option_naming_it(args, named):
+    import subprocess
+    import sys
+    from pathlib import Path
+    script = Path(__file__).resolve().parents[1] / "benchmarks" / "census.py"
+    r = subprocess.run([sys.executable, str(script), *args], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2
+    assert named in r.stderr and "not allowed" in r.stderr and "expected" in r.stderr
