@@ -3,7 +3,9 @@ between and inside cycles, a node that stops or starts sending groups; every wel
 
 from __future__ import annotations
 
+import copy
 import dataclasses
+import math
 import time
 
 import can
@@ -484,6 +486,52 @@ def test_a_sensor_restarted_in_the_middle_of_a_cycle():
     assert matched == len(after) - 1
     assert all(_intact(c, *after[0][1:]) for c in extra)       # at most the restart's first cycle, whole
     assert asm.stats.counter_resets == 1
+
+
+@pytest.mark.parametrize("count", [0, 3])
+@pytest.mark.parametrize("jump", [1000, 40000])
+@pytest.mark.parametrize("lag_s", [0.0, 1e-4, 0.03])
+def test_two_forged_headers_sent_back_to_back_are_no_restart(count, jump, lag_s):
+    """An independent tester's finding: two Obj_0_Status right before a cycle's own header, their MeasCounters far
+    ahead and one after the other, passed for a restarted sensor — two made-up empty cycles went out (or the real
+    cycle under the forged count, one object short), and lost_cycles rose by up to 65,534. A restarted sensor's next
+    header comes a period after its first: the second forged header, sent 0–30 ms after the first (the period is
+    72 ms), continues it by its count only, and both are stray. Every cycle arrives as the node sent it."""
+    cycles = _node_cycles(14)
+    target = 8
+    frames = cycles[target][0]
+    header = _header_of(frames)
+    first = _forged_header(count, cycles[target][4] + jump)
+    second = _forged_header(count, cycles[target][4] + jump + 1)
+    first.timestamp, second.timestamp = header.timestamp - lag_s, header.timestamp
+    at = frames.index(header)
+    stream = [m for c in cycles[:target] for m in c[0]] + frames[:at] + [first, second] + frames[at:] \
+        + [m for c in cycles[target + 1:] for m in c[0]]
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    matched, extra = _match(got, cycles)
+    assert matched == len(cycles) and not extra, [(c.meas_counter, len(c.objects)) for c in got]
+    st = asm.stats
+    assert st.stray_headers == 2 and st.counter_resets == st.lost_cycles == st.incomplete_cycles == 0
+
+
+@pytest.mark.parametrize("stamp", ["whole seconds", "none"])
+def test_a_restart_is_still_followed_where_the_times_cannot_tell(stamp):
+    """Times only make a restart harder to take where they can tell: a logger that keeps whole seconds (most
+    consecutive headers stamped alike) or no times at all leave the count to decide, and the restarted sensor is
+    followed from its first cycle, as before."""
+    before, after = _node_cycles(10), _node_cycles(10, seed=2)
+    stream = []
+    for k, c in enumerate(before + after):
+        for m in c[0]:
+            m = copy.copy(m)
+            m.timestamp = float(math.floor(k * 0.072)) if stamp == "whole seconds" else 0.0
+            stream.append(m)
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    matched, extra = _match(got, before + after)
+    assert matched == len(before) + len(after) and not extra
+    assert asm.stats.counter_resets == 1 and asm.stats.stray_headers == 0 and asm.stats.dropped() == 0
 
 
 def _forged_header(count: int, counter: int) -> can.Message:
@@ -1155,6 +1203,26 @@ def test_cycles_the_sensor_was_told_not_to_send_are_not_lost_and_a_real_loss_sti
     assembler = CycleAssembler()
     list(assembler.feed([m for k, c in enumerate(cycles) if k not in (40, 41, 42) for m in c]))
     assert assembler.stats.lost_cycles == 3
+
+
+def test_a_radarstate_saying_none_with_no_word_of_the_output_back_leaves_a_loss_lost():
+    """An independent tester's finding: random RadarState frames on the bus put real losses in quiet_cycles. The
+    sensor told OutputType none says so, and says objects again before its list resumes; a RadarState that says
+    none followed by no such word before the next header (a stray or forged one) leaves the gap counted lost."""
+    cycles = _node_cycles(20)
+    db = load_database()
+    m = db.get_message_by_frame_id(P.RADAR_STATE)
+    values = {sig.name: 0 for sig in m.signals}
+    values.update(RadarState_MaxDistanceCfg=196, RadarState_OutputTypeCfg=0)
+    none = _msg(P.RADAR_STATE, m.encode(values))
+    stream = []
+    for k, c in enumerate(cycles):
+        if k in (10, 11, 12):
+            continue
+        stream += ([none] if k == 9 else []) + c[0]
+    asm = CycleAssembler()
+    list(asm.feed(stream))
+    assert asm.stats.lost_cycles == 3 and asm.stats.quiet_cycles == 0
 
 
 def test_a_forged_object_in_every_group_never_takes_a_genuine_objects_place():

@@ -249,6 +249,13 @@ RERUN_MIN_PERIODS = 0.5
 #: header-to-header periods remembered, per kind; their median is the sensor's cycle period
 PERIOD_MEMORY = 5
 
+#: a held header (a jump in MeasCounter) is continued only by a header at least this fraction of the sensor's cycle
+#: period after it, where the times can tell (the period known, the last headers' times all apart): a restarted
+#: sensor's next header comes a period after its first; two forged or random headers sent back to back, which
+#: continue each other's count by chance, are not a restart (an independent tester's finding: such a pair went out
+#: as two empty cycles, or took the sensor's next cycle under its count, and put up to 65,534 cycles in lost_cycles)
+CONTINUE_MIN_PERIODS = 0.5
+
 
 class _Pending:
     """Frames of one cycle that is being assembled."""
@@ -391,12 +398,17 @@ class CycleAssembler(can.Listener):
         # of the last header taken; a repeat of a general frame is the next cycle's only where it came a good part of
         # a period after the first copy (:meth:`_timed_rerun`)
         self._periods: dict[str, collections.deque] = {k: collections.deque(maxlen=PERIOD_MEMORY) for k in GROUPS}
+        # … and whether those headers' times were apart at all (a logger that keeps whole seconds stamps most
+        # consecutive headers alike: its times cannot tell a header sent back to back from one a period later)
+        self._apart: dict[str, collections.deque] = {k: collections.deque(maxlen=PERIOD_MEMORY) for k in GROUPS}
         self._header_time: dict[str, float] = {}
         self._stamp = float("nan")      # the time of the frame being handled
         #: at :meth:`stop`, leave the cycles in progress unfinished rather than close them (the listener stopped on
         #: purpose, before the sensor's cycle ended)
         self.leave_unfinished = False
-        self._told_none = False          # a RadarState said OutputType none since the last header taken
+        # what RadarState said of the output since the last header taken: 0 nothing, 1 OutputType none, 2 none and
+        # then objects or clusters again (the sensor announces its output back before the list resumes)
+        self._silence = 0
         # the MeasCounters of the headers taken, per kind: the sensor counts its cycles once for both lists, so a
         # gap in one kind's count that the other kind's cycles fill (a switch of OutputType) lost nothing
         self._counters: dict[str, collections.deque] = {k: collections.deque(maxlen=COUNTER_MEMORY) for k in GROUPS}
@@ -652,9 +664,12 @@ class CycleAssembler(can.Listener):
 
     def _announce(self, state: dict) -> None:
         """RadarState can add groups to the expected layout (for LAYOUT_MEMORY headers), never remove any; one that
-        says OutputType none marks the gap in the count up to the next header as the sensor's silence, not loss."""
+        says OutputType none, and then objects or clusters again, marks the gap in the count up to the next header as the
+        sensor's silence, not loss."""
         if int(state["RadarState_OutputTypeCfg"]) == 0:
-            self._told_none = True
+            self._silence = 1
+        elif self._silence == 1:
+            self._silence = 2
         if int(state["RadarState_SendQualityCfg"]):
             self._announced["obj"][P.OBJ_QUALITY] = LAYOUT_MEMORY
             self._announced["cl"][P.CLUSTER_QUALITY] = LAYOUT_MEMORY
@@ -706,10 +721,10 @@ class CycleAssembler(can.Listener):
             # progress and cuts nothing; the frames that fit its cycle are kept with it. A next header that
             # continues its count shows a restart or a gap (its cycle is then delivered, if whole); one that
             # continues the old count drops it (stray_headers)
-            if suspect is None or not self._continues(kind, counter, suspect.meas_counter):
+            if suspect is None or not self._continues_held(kind, counter, timestamp, suspect):
                 older = self._older_suspects.setdefault(kind, [])
                 # (only one that took frames: replayed old headers, one after each cycle, continue each other too)
-                match = [o for o in older if _has_frames(o) and self._continues(kind, counter, o.meas_counter)]
+                match = [o for o in older if _has_frames(o) and self._continues_held(kind, counter, timestamp, o)]
                 if not match:
                     # held beside the earlier held headers (a few): a restarted sensor's headers between replayed
                     # old ones are still found continuing each other
@@ -759,7 +774,7 @@ class CycleAssembler(can.Listener):
         self.flush(kind)
         # what accepting this header changes, kept to undo it should the header prove stray
         header.before = (last, self._stride.get(kind), self.stats.lost_cycles, self._header_time.get(kind),
-                         tuple(self._periods[kind]))
+                         tuple(self._periods[kind]), tuple(self._apart[kind]))
         if last is not None:
             gap = (counter - last) & 0xFFFF
             # The real ARS 408 advances MeasCounter by 2 per object cycle (near and far scans);
@@ -770,14 +785,18 @@ class CycleAssembler(can.Listener):
             elapsed = timestamp - self._header_time.get(kind, float("nan"))
             if gap == stride and math.isfinite(elapsed) and elapsed > 0.0:
                 self._periods[kind].append(elapsed)
-            if gap > stride and self._told_none:
-                # cycles the sensor was told not to send (OutputType none; its RadarState says so at the change) are
-                # counted apart: an independent tester found ten such cycles in lost_cycles. (A stray RadarState
-                # that says none moves a real loss here: it is still counted.)
+            if gap == stride and math.isfinite(elapsed):
+                self._apart[kind].append(elapsed > 0.0)
+            if gap > stride and self._silence == 2:
+                # cycles the sensor was told not to send (OutputType none; its RadarState says so at the change, and
+                # says objects or clusters again before the list resumes) are counted apart: an independent tester
+                # found ten such cycles in lost_cycles. A RadarState that said none with no word of the output back
+                # before this header (a stray or forged one, or the sensor's lost) leaves the gap lost: random 0x201
+                # frames on the bus put real losses in quiet_cycles (an independent tester's finding)
                 self.stats.quiet_cycles += gap // stride - 1
             elif gap > stride:
                 self._count_lost(kind, last, counter, stride)
-        self._told_none = False
+        self._silence = 0
         self._header_time[kind] = timestamp
         self._last_counter[kind] = counter
         self._counters[kind].append(counter)
@@ -807,7 +826,7 @@ class CycleAssembler(can.Listener):
         p = self._pending.get(kind)
         if p is None or not p.expected or _has_frames(p) or p.before is None or p.before[0] is None:
             return
-        last, stride, lost, header_time, periods = p.before
+        last, stride, lost, header_time, periods, apart = p.before
         if not _within_reach(counter, last, stride or 1) or self._continues(kind, counter, p.meas_counter):
             return
         del self._pending[kind]
@@ -822,6 +841,8 @@ class CycleAssembler(can.Listener):
             self._header_time[kind] = header_time
         self._periods[kind].clear()
         self._periods[kind].extend(periods)
+        self._apart[kind].clear()
+        self._apart[kind].extend(apart)
         if stride is None:
             self._stride.pop(kind, None)
         else:
@@ -832,6 +853,19 @@ class CycleAssembler(can.Listener):
         MAX_JUMP_STRIDES strides once the stride is known."""
         # (the stride not known yet: the ARS 408's 2; radarnode counts in 1s)
         return _within_reach(counter, last, self._stride.get(kind, 2))
+
+    def _continues_held(self, kind: str, counter: int, timestamp: float, held: _Pending) -> bool:
+        """Whether a header (MeasCounter ``counter``, time ``timestamp``) continues the count of the held header
+        ``held`` as the sensor's next one would: by its count (:meth:`_continues`), and, where the times can tell, at
+        least CONTINUE_MIN_PERIODS of the sensor's period after it. Times that cannot tell (the period not known yet, a
+        time missing, the last headers' times not all apart) leave the count to decide: times only make it stricter."""
+        if not self._continues(kind, counter, held.meas_counter):
+            return False
+        periods, apart = self._periods[kind], self._apart[kind]
+        elapsed = timestamp - held.timestamp
+        if not periods or not apart or not all(apart) or not math.isfinite(elapsed):
+            return True
+        return elapsed >= CONTINUE_MIN_PERIODS * float(np.median(periods))
 
     def _drop_suspect(self, suspect: _Pending) -> None:
         """A held header that no header continued: stray; the frames it collected are counted as orphans."""
