@@ -107,6 +107,18 @@ def test_sensor_id_shifts_every_id(db):
     assert not node.config.send_ext_info
 
 
+def test_a_sensor_id_change_is_said_and_counted(db, caplog):
+    """Obeyed as the ARS 408 obeys it, but not silently (an independent tester: one RadarConfiguration on the bus
+    moved the node to sensor 3 with no line in its log, and the consumer of sensor 0 saw only other sensors'
+    frames): a warning names both IDs and ``sensor_id_changes`` counts it; the same ID again changes nothing."""
+    node = RadarNode(scenario(TRAFFIC))
+    with caplog.at_level(logging.WARNING):
+        node.receive(_cfg_frame(db, RadarCfg_SensorID_valid=1, RadarCfg_SensorID=3), 0.0)
+        node.receive(_cfg_frame(db, 3, RadarCfg_SensorID_valid=1, RadarCfg_SensorID=3), 0.1)
+    assert node.config.sensor_id == 3 and node.counters["sensor_id_changes"] == 1
+    assert "SensorID 0 -> 3" in caplog.text and caplog.text.count("SensorID") == 1
+
+
 def test_invalid_configuration_values_are_rejected_and_counted(db, caplog):
     node = RadarNode(scenario(TRAFFIC))
     with caplog.at_level(logging.WARNING):

@@ -316,7 +316,12 @@ class RadarNode:
                 self._refuse("cfgsid", "RadarConfiguration: SensorID=%d is not allowed: another radar of this "
                              "scenario holds it (allowed: an ID none of the others holds); SensorID stays %d", x,
                              cfg.sensor_id)
-            else:
+            elif x != cfg.sensor_id:
+                # obeyed, as the ARS 408 does, and said: every frame now goes out on other CAN IDs, and a consumer
+                # of the old ID sees only other_sensor_frames (an independent tester found the change silent)
+                logger.warning("RadarConfiguration: SensorID %d -> %d: the node now sends on sensor %d's CAN IDs "
+                               "(counted in sensor_id_changes)", cfg.sensor_id, x, x)
+                self.counters["sensor_id_changes"] += 1
                 cfg.sensor_id = x
         if (x := take("RadarCfg_RadarPower_valid", "RadarCfg_RadarPower", range(4))) is not None:
             cfg.radar_power = x
