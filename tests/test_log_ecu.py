@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import can
@@ -15,9 +16,12 @@ from radarnode.wire.ids import FCW_STATUS
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "nhtsa_lead_stopped.yaml"
 
 
-def test_the_logged_ecu_frames_carry_the_warning_when_report_sees_it(tmp_path):
+def test_the_logged_ecu_frames_carry_the_warning_when_report_sees_it(tmp_path, capsys):
     out = tmp_path / "run.blf"
     assert main(["log", str(SCENARIO), "-o", str(out), "--ecu"]) == 0
+    # the summary's count is every frame in the file, the ECU's too (it left them out: an independent tester)
+    wrote = re.search(r"wrote (\d+) frames in", capsys.readouterr().err)
+    assert wrote and int(wrote.group(1)) == sum(1 for _ in can.LogReader(str(out)))
     db = load_own_database()
     fcw = [(m.timestamp, db.decode_message(m.arbitration_id, m.data, decode_choices=False))
            for m in can.LogReader(str(out))
