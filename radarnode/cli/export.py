@@ -92,8 +92,8 @@ def cmd(args) -> int:
         if report.frames == 0:      # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument LOG"))
         refused = pick.refusal()
-        if refused:                 # --channel picked no frame: no output file either
-            raise UsageError(refused)
+        if refused:                 # --channel picked no frame: no output file either (status 1: found in the log,
+            raise FileError(refused)    # not on the command line alone, as the README's table of statuses says)
         if rec.frames_without_time == report.frames:        # nothing to put on a time line: no output file either
             raise FileError(f"argument LOG: {_no_time(rec, args.log)}; expected frames timed in [0, {MAX_STAMP_S}) s")
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
