@@ -866,6 +866,23 @@ def test_export_says_when_the_logs_cycles_lie_outside_the_scenarios_run(capsys, 
     assert "give --start-time the log's start" in err
 
 
+def test_export_says_when_the_logs_vehicle_speed_is_not_the_scenarios_ego(capsys, tmp_path):
+    """An independent tester's finding: a highway log exported with another scenario got that scenario's ground
+    truth, status 0 and no word. The log's SpeedInformation is compared with the scenario's ego (20 m/s here against
+    the other's 27.8): a warning where most frames differ; none with the log's own scenario."""
+    pytest.importorskip("foxglove")
+    log = tmp_path / "run.log"
+    assert main(["log", SCENARIO, "--duration", "1", "-o", str(log)]) == 0
+    capsys.readouterr()
+    rc, _, err = cli(capsys, "export", log, "--scenario", SCENARIO, "-o", tmp_path / "own.mcap")
+    assert rc == 0 and "warning" not in err, err
+    other = str(SCENARIOS / "highway_cut_in.yaml")
+    rc, _, err = cli(capsys, "export", log, "--scenario", other, "-o", tmp_path / "other.mcap")
+    found = re.search(r"warning: the log's vehicle speed \(SpeedInformation 0x300\) is not the ego's of --scenario "
+                      r"'.*highway_cut_in.yaml': (\d+) of (\d+) frames compared differ by more than 1 m/s", err)
+    assert rc == 0 and found and found.group(1) == found.group(2) and int(found.group(2)) >= 5, err
+
+
 @pytest.mark.parametrize("suffix", [".log.gz", ".asc.gz", ".csv.gz", ".trc.gz"])
 def test_a_gz_log_names_itself_in_its_gzip_header(capsys, tmp_path, suffix):
     """gzip keeps the file's name in its header (gunzip -N restores it): it named the temporary file the log was
