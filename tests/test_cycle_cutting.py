@@ -12,7 +12,7 @@ import can
 import numpy as np
 import pytest
 
-from radarnode.consumer.assembler import LAYOUT_MEMORY, CycleAssembler, ObjectCycle
+from radarnode.consumer.assembler import LAYOUT_MEMORY, TOO_SOON_RUN, CycleAssembler, ObjectCycle
 from radarnode.wire import ars408 as P
 from radarnode.wire.dbc import load_database
 from radarnode.wire.node import EgoMotionSender, RadarNode
@@ -1203,6 +1203,47 @@ def test_cycles_the_sensor_was_told_not_to_send_are_not_lost_and_a_real_loss_sti
     assembler = CycleAssembler()
     list(assembler.feed([m for k, c in enumerate(cycles) if k not in (40, 41, 42) for m in c]))
     assert assembler.stats.lost_cycles == 3
+
+
+def test_cycles_not_sent_for_longer_than_the_jump_limit_are_quiet_too():
+    """An independent re-tester's finding: OutputType none for 8 s (111 cycles, more than MAX_JUMP_STRIDES) and then
+    objects again put the gap in lost_cycles, as the header after it takes the held path (a jump far ahead); now that
+    path counts it quiet too where RadarState said none and then the output back."""
+    none = _cfg(RadarCfg_OutputType=0, RadarCfg_OutputType_valid=1)
+    back = _cfg(RadarCfg_OutputType=1, RadarCfg_OutputType_valid=1)
+    sc = scenario(TRAFFIC, duration=110 * 0.072 + 0.1)
+    node = RadarNode(sc)
+    vehicle = EgoMotionSender(node.scene)
+    stream = []
+    for k in range(110):
+        t = k * node.period_s
+        frames = vehicle.frames(t)
+        for m in frames + ([none] if k == 10 else [back] if k == 90 else []):
+            node.receive(m, t)
+        stream += frames + node.cycle(t).messages
+    assembler = CycleAssembler()
+    list(assembler.feed(stream))
+    st = assembler.stats
+    assert st.cycles == 30 and st.lost_cycles == 0 and st.quiet_cycles == 80 and st.counter_resets == 0, st
+
+
+def test_a_restart_is_followed_where_the_log_turns_coarse_after_it():
+    """An independent re-tester's finding: a log stamped to the millisecond, then (a sensor restarted) with every time
+    0 — the period learned from the first part made every later header too soon, and nothing more was delivered. A
+    run of TOO_SOON_RUN headers each continuing the last by its count shows the times cannot tell: from there the
+    count decides, and the restarted sensor's cycles arrive (but its first few, counted stray)."""
+    before, after = _node_cycles(10), _node_cycles(20, seed=2)
+    stream = [m for c in before for m in c[0]]
+    for c in after:
+        for m in c[0]:
+            m = copy.copy(m)
+            m.timestamp = 0.0
+            stream.append(m)
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    assert all(any(_intact(g, *c[1:]) for c in before + after) for g in got)
+    assert len(got) >= len(before) + len(after) - TOO_SOON_RUN - 1, len(got)
+    assert asm.stats.counter_resets == 1
 
 
 def test_a_radarstate_saying_none_with_no_word_of_the_output_back_leaves_a_loss_lost():

@@ -31,8 +31,10 @@ RadarState 0x201 (a stray or forged one must not strip groups):
   forged or corrupted header, or the first of a restarted sensor or after a
   long gap) cuts nothing: it is held beside the cycle in progress with the
   frames that fit its own cycle and not the one in progress; a next header that
-  continues its count shows a restart (``counter_resets``) or a gap
-  (``lost_cycles``) and its cycle is delivered if whole; one that continues the
+  continues its count — at least ``CONTINUE_MIN_PERIODS`` of the sensor's period
+  after it, where the times can tell — shows a restart (``counter_resets``) or a
+  gap (``lost_cycles``; ``quiet_cycles`` after RadarState said OutputType none and
+  then the output back) and its cycle is delivered if whole; one that continues the
   old count drops it (``stray_headers``). Up to ``HELD_HEADERS`` are held at
   once (an old header replayed between a restarted sensor's cycles must not
   push its first header out); an earlier one, continued, must have taken frames;
@@ -255,6 +257,11 @@ PERIOD_MEMORY = 5
 #: continue each other's count by chance, are not a restart (an independent tester's finding: such a pair went out
 #: as two empty cycles, or took the sensor's next cycle under its count, and put up to 65,534 cycles in lost_cycles)
 CONTINUE_MIN_PERIODS = 0.5
+#: … but a run of this many headers, each continuing the last by its count and each too soon by the times, shows the
+#: times cannot tell after all (a log stamped finely, then coarsely or not at all, after a restart: nothing was
+#: delivered for the rest of it, an independent tester's finding): the period is forgotten, and the count decides
+#: until it is learned again. Five forged headers back to back, counting on, pass for a restart (a known limit)
+TOO_SOON_RUN = 4
 
 
 class _Pending:
@@ -401,6 +408,7 @@ class CycleAssembler(can.Listener):
         # … and whether those headers' times were apart at all (a logger that keeps whole seconds stamps most
         # consecutive headers alike: its times cannot tell a header sent back to back from one a period later)
         self._apart: dict[str, collections.deque] = {k: collections.deque(maxlen=PERIOD_MEMORY) for k in GROUPS}
+        self._too_soon: dict[str, int] = {k: 0 for k in GROUPS}     # held headers in a row continued too soon
         self._header_time: dict[str, float] = {}
         self._stamp = float("nan")      # the time of the frame being handled
         #: at :meth:`stop`, leave the cycles in progress unfinished rather than close them (the listener stopped on
@@ -716,6 +724,14 @@ class CycleAssembler(can.Listener):
         last = self._last_counter.get(kind)
         suspect = self._suspects.pop(kind, None)
         if last is not None and not self._continues(kind, counter, last):
+            if suspect is not None and self._continues(kind, counter, suspect.meas_counter) \
+                    and not self._continues_held(kind, counter, timestamp, suspect):
+                self._too_soon[kind] += 1
+                if self._too_soon[kind] >= TOO_SOON_RUN:
+                    self._periods[kind].clear()
+                    self._apart[kind].clear()
+            else:
+                self._too_soon[kind] = 0
             # MeasCounter did not move on, or jumped far ahead: a stale, replayed, forged or corrupted header — or
             # the first of a restarted sensor, or the first after a long gap. It is held beside the cycle in
             # progress and cuts nothing; the frames that fit its cycle are kept with it. A next header that
@@ -743,8 +759,14 @@ class CycleAssembler(can.Listener):
             else:
                 for other in self._older_suspects.pop(kind, []):
                     self._drop_suspect(other)
-            # a second header continuing the first: the sensor restarted, or cycles were lost in between
-            if _advances(suspect.meas_counter, last):
+            # a second header continuing the first: the sensor restarted, or cycles were lost in between — or
+            # were not sent: OutputType none for more than MAX_JUMP_STRIDES cycles, and the output back (RadarState
+            # said both, as below; an independent tester found such a gap of 111 cycles in lost_cycles)
+            self._too_soon[kind] = 0
+            if _advances(suspect.meas_counter, last) and self._silence == 2:
+                stride = self._stride.get(kind, 1)
+                self.stats.quiet_cycles += ((suspect.meas_counter - last) & 0xFFFF) // stride - 1
+            elif _advances(suspect.meas_counter, last):
                 self._count_lost(kind, last, suspect.meas_counter, self._stride.get(kind, 1))
             else:
                 self.stats.counter_resets += 1
