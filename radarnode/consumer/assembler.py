@@ -724,6 +724,8 @@ class CycleAssembler(can.Listener):
         last = self._last_counter.get(kind)
         suspect = self._suspects.pop(kind, None)
         if last is not None and not self._continues(kind, counter, last):
+            # a header that continues the held one by its count but too soon: a run of TOO_SOON_RUN of them says
+            # the times cannot tell (the period is forgotten, and the count decides below)
             if suspect is not None and self._continues(kind, counter, suspect.meas_counter) \
                     and not self._continues_held(kind, counter, timestamp, suspect):
                 self._too_soon[kind] += 1
