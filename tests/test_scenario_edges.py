@@ -197,3 +197,18 @@ def test_an_unknown_key_that_is_not_a_plain_name_is_shown_on_one_line_with_its_l
     rc, _, err = cli(capsys, "run", path)
     assert rc == 1 and re.search(rf"s\.yaml:[4-6]: unknown field {re.escape(shown)} \({where}\); allowed here: ", err), err
     assert len(err.strip().splitlines()) == 1 and "\x1b" not in err and "\u200b" not in err, err
+
+
+def test_report_seeds_1_is_seed_1_and_without_seeds_the_scenarios_own(tmp_path, capsys):
+    """An independent tester's finding: `report --seeds 1` ran the scenario's own seed (7 here), so a report of one
+    seed and one of several did not share a run, and a CI test case changed its name with N. Now `--seeds N` is
+    seeds 1…N; without it the scenario runs once with its own seed."""
+    path = tmp_path / "own.yaml"
+    path.write_text("name: own\nseed: 7\nduration_s: 0.5\nego: {speed_mps: 20.0}\necu: {expect: {no_fcw: true}}\n"
+                    "actors:\n" + CAR + "\n")
+    seeds = {}
+    for argv in ((), ("--seeds", "1"), ("--seeds", "2")):
+        rc, out, err = cli(capsys, "report", path, "--workers", "1", *argv)
+        assert rc == 0, err
+        seeds[argv] = [int(m) for m in re.findall(r"^\| own \| (\d+) \|", out, flags=re.M)]
+    assert seeds == {(): [7], ("--seeds", "1"): [1], ("--seeds", "2"): [1, 2]}, seeds

@@ -4,7 +4,8 @@ Per scenario: warning time, TTC at the warning (constant-speed TTC to the
 ``ecu.expect.lead`` actor, as the NHTSA confirmation tests define it), the
 minimum TTC and gap, peak deceleration and jerk of the ego (closed loop), the
 final time gap, and pass or fail against the scenario's ``ecu.expect``.
-``--seeds N`` repeats each scenario with seeds 1…N and counts the passes.
+``--seeds N`` repeats each scenario with seeds 1…N and counts the passes; without it, each scenario runs once,
+with its own ``seed``.
 ``--junit FILE`` also writes JUnit XML (one test suite per scenario, one test
 case per scenario and seed, the failed expectations as the failure message)
 for a CI system to render; ``--plots DIR`` draws one PNG per scenario and seed
@@ -41,8 +42,9 @@ from radarnode.radar.setup import load_scenario
 def add_subparser(sub) -> None:
     p = sub.add_parser("report", help="judge scenarios against their ACC/FCW expectations", description=__doc__)
     p.add_argument("scenarios", nargs="+", help="scenario files")
-    p.add_argument("--seeds", type=options.integer(lo=1, hi=10_000), default=1,
-                   help="run each scenario with seeds 1..N, N up to 10000 (default 1)")
+    p.add_argument("--seeds", type=options.integer(lo=1, hi=10_000), default=None,
+                   help="run each scenario with seeds 1..N, N up to 10000 (default: once, with the scenario's own "
+                        "seed)")
     p.add_argument("--fidelity", choices=("object", "detection", "signal", "auto"), help="radar model level")
     p.add_argument("--doa", choices=options.DOA_CHOICES,
                    help="angle estimator of the signal chain (super-resolution other than fft: fidelity signal)")
@@ -153,11 +155,19 @@ def junit_xml(suites: list[tuple[str, str, list[tuple[object, float]]]], min_pas
     return ET.ElementTree(root)
 
 
+def _seeds(args, sc) -> list[int]:
+    """The seeds a scenario runs with: 1…N with ``--seeds N`` (``--seeds 1`` is seed 1: it ran the scenario's own
+    seed, so a report of one seed and one of several did not share it, an independent tester's finding), else the
+    scenario's own ``seed``, once."""
+    return list(range(1, args.seeds + 1)) if args.seeds is not None else [sc.seed]
+
+
 def cmd(args) -> int:
     check_scale_out(args)
-    need = args.seeds if args.min_passes is None else args.min_passes
-    if not 1 <= need <= args.seeds:
-        raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {args.seeds}] "
+    runs_each = args.seeds if args.seeds is not None else 1
+    need = runs_each if args.min_passes is None else args.min_passes
+    if not 1 <= need <= runs_each:
+        raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {runs_each}] "
                          "(at most --seeds)")
     plt = require_matplotlib("option --plots") if args.plots else None
     if args.plots and Path(args.plots).is_file():
@@ -222,7 +232,8 @@ def _cell(text: str) -> str:
 
 
 def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
-    bar = progress(len(scenarios) * args.seeds, "report", unit="run")
+    runs_each = args.seeds if args.seeds is not None else 1
+    bar = progress(len(scenarios) * runs_each, "report", unit="run")
     stems = plot_stems([sc.name for _, sc in scenarios])
 
     def out(line: str) -> None:
@@ -234,7 +245,7 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
     # every (scenario, seed) run is independent: on all local cores, or a Dask cluster, results in this order
     from radarnode.montecarlo.executor import default_workers, iter_tasks
     tasks = [(dataclasses.replace(sc, seed=seed), args.fidelity) for _, sc in scenarios
-             for seed in (range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed])]
+             for seed in _seeds(args, sc)]
     reported = 0
     try:
         # each row as soon as its run and the runs before it are done: an interrupted report has shown those
@@ -246,7 +257,7 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
         for (path, sc), stem in zip(scenarios, stems):
             passes = unchecked = 0
             runs = []
-            for seed in range(1, args.seeds + 1) if args.seeds > 1 else [sc.seed]:
+            for seed in _seeds(args, sc):
                 run_sc = dataclasses.replace(sc, seed=seed)
                 r, seconds = next(done)
                 reported += 1
@@ -273,8 +284,8 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
                     written.append(target)
             if unchecked:
                 out(f"| {_cell(sc.name)} | | | | | | | | | nothing to check (no criterion in ecu.expect) |")
-            elif args.seeds > 1:
-                out(f"| {_cell(sc.name)} | | | | | | | | | {passes} of {args.seeds} seeds pass |")
+            elif runs_each > 1:
+                out(f"| {_cell(sc.name)} | | | | | | | | | {passes} of {runs_each} seeds pass |")
             short += passes < need and not unchecked
             suites.append((sc.name, str(path), runs))
     except (KeyboardInterrupt, Terminated):
