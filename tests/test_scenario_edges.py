@@ -212,3 +212,24 @@ def test_report_seeds_1_is_seed_1_and_without_seeds_the_scenarios_own(tmp_path, 
         assert rc == 0, err
         seeds[argv] = [int(m) for m in re.findall(r"^\| own \| (\d+) \|", out, flags=re.M)]
     assert seeds == {(): [7], ("--seeds", "1"): [1], ("--seeds", "2"): [1, 2]}, seeds
+
+
+def test_report_tells_two_files_of_one_scenario_name_apart(tmp_path, capsys):
+    """An independent tester's finding: two scenario files of one `name:` gave two table blocks and two JUnit suites
+    and test cases of the same name, told apart only by a property. Now each is labelled with its file."""
+    import xml.etree.ElementTree as ET
+    paths = []
+    for d in ("a", "b"):
+        (tmp_path / d).mkdir()
+        path = tmp_path / d / "same.yaml"
+        path.write_text("name: same\nseed: 1\nduration_s: 0.5\nego: {speed_mps: 20.0}\necu: {expect: {no_fcw: true}}\n"
+                        "actors:\n" + CAR + "\n")
+        paths.append(path)
+    junit = tmp_path / "j.xml"
+    rc, out, err = cli(capsys, "report", *paths, "--workers", "1", "--junit", junit)
+    assert rc == 0, err
+    rows = re.findall(r"^\| (same[^|]*) \| 1 \|", out, flags=re.M)
+    assert len(rows) == 2 and len(set(rows)) == 2 and all(str(p) in r for p, r in zip(paths, rows)), rows
+    names = [s.get("name") for s in ET.parse(junit).getroot()]
+    cases = [c.get("name") for s in ET.parse(junit).getroot() for c in s.iter("testcase")]
+    assert len(set(names)) == 2 and len(set(cases)) == 2, (names, cases)

@@ -20,6 +20,7 @@ in the same order wherever they run.
 from __future__ import annotations
 
 import argparse
+import collections
 import contextlib
 import dataclasses
 import datetime
@@ -235,6 +236,10 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
     runs_each = args.seeds if args.seeds is not None else 1
     bar = progress(len(scenarios) * runs_each, "report", unit="run")
     stems = plot_stems([sc.name for _, sc in scenarios])
+    # two files of one scenario name are told apart by their file in the table and the JUnit suites, as the plots
+    # are by their stems (two suites and test cases of one name: an independent tester's finding)
+    names = collections.Counter(sc.name for _, sc in scenarios)
+    labels = [sc.name if names[sc.name] == 1 else f"{sc.name} ({path})" for path, sc in scenarios]
 
     def out(line: str) -> None:
         bar.write(line, file=sys.stdout) if not bar.disable else print(line, flush=True)
@@ -254,7 +259,7 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
         out("| scenario | seed | warning at | TTC at warning | min TTC | min gap | peak decel | peak jerk | "
             "final time gap | result |")
         out("|---|---:|---:|---:|---:|---:|---:|---:|---:|---|")
-        for (path, sc), stem in zip(scenarios, stems):
+        for (path, sc), stem, label in zip(scenarios, stems, labels):
             passes = unchecked = 0
             runs = []
             for seed in _seeds(args, sc):
@@ -266,7 +271,7 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
                 unchecked += not r.checked
                 verdict = ("nothing to check" if not r.checked else "pass" if r.passed
                            else "FAIL: " + "; ".join(r.reasons))
-                out(f"| {_cell(sc.name)} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
+                out(f"| {_cell(label)} | {seed} | {_fmt(r.warning_time_s, 's')} | {_fmt(r.ttc_at_warning_s, 's')} | "
                     f"{_fmt(r.min_ttc_s, 's')} | {_fmt(r.min_gap_m, 'm', 1)} | {_fmt(r.peak_decel_mps2, 'm/s²')} | "
                     f"{_fmt(r.peak_jerk_mps3, 'm/s³')} | {_fmt(r.final_time_gap_s, 's')} | {verdict} |")
                 if out_dir is not None:
@@ -283,11 +288,11 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
                         plt.close(fig)
                     written.append(target)
             if unchecked:
-                out(f"| {_cell(sc.name)} | | | | | | | | | nothing to check (no criterion in ecu.expect) |")
+                out(f"| {_cell(label)} | | | | | | | | | nothing to check (no criterion in ecu.expect) |")
             elif runs_each > 1:
-                out(f"| {_cell(sc.name)} | | | | | | | | | {passes} of {runs_each} seeds pass |")
+                out(f"| {_cell(label)} | | | | | | | | | {passes} of {runs_each} seeds pass |")
             short += passes < need and not unchecked
-            suites.append((sc.name, str(path), runs))
+            suites.append((label, str(path), runs))
     except (KeyboardInterrupt, Terminated):
         bar.close()
         print(f"report: interrupted after {reported} of {len(tasks)} runs" + (" (their rows above)" if reported else "")
