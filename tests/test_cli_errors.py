@@ -205,6 +205,16 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
      "option --foxglove-port: value 9000 is not allowed without --foxglove"),
     (["export", "LOGS/small.blf", "-o", "LOGS/y.mcap", "--start-time", "5"],
      "option --start-time: value 5 is not allowed without --scenario"),
+    # … the same for options that only another mode or experiment reads (an independent tester's findings, 2026-12-07)
+    (["run", SCENARIO, "--fast", "--quiet", "--every", "3"], "option --every: value 3 is not allowed with --quiet"),
+    (["image", SCENARIO, "-o", "LOGS/x.png", "--fidelity", "object"],
+     "option --fidelity: value 'object' is not allowed with image"),
+    (["montecarlo", "--experiment", "table2", "--snr-db", "5"],
+     "option --snr-db: value 5 is not allowed with --experiment table2"),
+    (["montecarlo", "--experiment", "snr", "--resolution-snr-db", "5"],
+     "option --resolution-snr-db: value 5 is not allowed with --experiment snr"),
+    (["montecarlo", "--experiment", "timing", "--trials", "20"],
+     "option --trials: value 20 is not allowed with --experiment timing"),
     (["run", SCENARIO, "--duration", "0.01"], "option --duration: value 0.01 is not allowed; expected at least one"),
 ])
 def test_other_usage_errors_are_one_line_and_exit_2(capsys, logs, argv, needle):

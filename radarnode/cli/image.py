@@ -224,6 +224,11 @@ def cmd(args) -> int:
     if args.time is not None and args.animate:
         raise UsageError(f"option --time: value {args.time:g} is not allowed with --animate (it renders every "
                          "cycle); expected --time without --animate, or no --time")
+    if args.fidelity not in (None, "signal"):
+        # the image is always the signal level's cube and chain (an independent tester drew the same PNG with
+        # --fidelity object)
+        raise UsageError(f"option --fidelity: value {args.fidelity!r} is not allowed with image (it draws the signal "
+                         "level's range–Doppler cube and detections); expected --fidelity signal, or no --fidelity")
     args.every = 5 if args.every is None else args.every
     args.time = 0.0 if args.time is None else args.time
     plt = require_matplotlib("radarnode image")

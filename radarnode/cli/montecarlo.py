@@ -30,7 +30,7 @@ import numpy as np
 from radarnode.cli import options
 from radarnode.cli.common import add_scale_out_arguments, atomic_output, atomic_path, check_scale_out, plot_dir, \
     plots_into, progress, require_matplotlib
-from radarnode.errors import FileError
+from radarnode.errors import FileError, UsageError
 
 EXPERIMENT_CHOICES = ("snr", "table2", "resolution", "timing")
 SNR_LIMITS = (-60.0, 100.0)
@@ -65,7 +65,7 @@ def add_subparser(sub) -> None:
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--experiment", nargs="+", choices=EXPERIMENT_CHOICES, default=list(EXPERIMENT_CHOICES),
                    metavar="NAME", help="which to run: " + ", ".join(EXPERIMENT_CHOICES) + " (default: all)")
-    p.add_argument("--trials", type=options.integer(lo=2, hi=1_000_000), default=500,
+    p.add_argument("--trials", type=options.integer(lo=2, hi=1_000_000), default=None,
                    help="trials a point, 2..1000000 (default 500, as seed 001)")
     p.add_argument("--seed", type=options.SEED, default=0, help="seed of the whole sweep (an integer >= 0, default 0)")
     p.add_argument("--snr-db", type=snr_list, default=None, metavar="SNRS",
@@ -78,7 +78,7 @@ def add_subparser(sub) -> None:
                    help="the targets' range from the middle of the bumper, m, [2, 30] (default 10)")
     p.add_argument("--range-sigma-m", type=options.number(lo=0.0, hi=1.0), default=None,
                    help="σ of each radar's range, m, [0, 1] (default: the range CRB at each SNR)")
-    p.add_argument("--resolution-snr-db", type=options.number(lo=SNR_LIMITS[0], hi=SNR_LIMITS[1]), default=20.0,
+    p.add_argument("--resolution-snr-db", type=options.number(lo=SNR_LIMITS[0], hi=SNR_LIMITS[1]), default=None,
                    help="SNR of the resolution experiment, dB (default 20)")
     add_scale_out_arguments(p, "points")
     p.add_argument("--json", action="store_true", help="one JSON document on standard output instead of tables")
@@ -90,6 +90,21 @@ def add_subparser(sub) -> None:
 
 def _check_args(args):
     check_scale_out(args)
+    # an option only an experiment not chosen reads was ignored (an independent tester: --snr-db with table2 alone,
+    # which runs at 15 dB): refused, naming both
+    chosen = set(args.experiment)
+    for option, value, needs in (("--snr-db", args.snr_db, {"snr"}),
+                                 ("--resolution-snr-db", args.resolution_snr_db, {"resolution"}),
+                                 ("--trials", args.trials, {"snr", "table2", "resolution"})):
+        if value is not None and not chosen & needs:
+            shown = ",".join(f"{float(v):g}" for v in value) if hasattr(value, "__len__") else f"{value:g}"
+            raise UsageError(f"option {option}: value {shown} is not allowed with --experiment "
+                             f"{' '.join(args.experiment)} (no experiment chosen reads it); expected --experiment "
+                             f"{' or '.join(sorted(needs))} with it, or no {option}")
+    if args.resolution_snr_db is None:
+        args.resolution_snr_db = 20.0
+    if args.trials is None:
+        args.trials = 500
     plt = None
     if args.plots:
         plt = require_matplotlib("option --plots")

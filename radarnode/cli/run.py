@@ -22,6 +22,7 @@ from radarnode.consumer.assembler import CycleAssembler, summarize_objects
 from radarnode.consumer.fusion import FusingConsumer
 from radarnode.consumer.evaluate import DriverModel, EgoActuator, contacts_since, drive, driver_resumes, make_ecu
 from radarnode.consumer.fcw import LEVEL_WARNING
+from radarnode.errors import UsageError
 from radarnode.perception.types import CLASS_NAMES
 from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
@@ -67,6 +68,10 @@ def format_ecu(d, ego_speed_mps: float) -> str:
 
 def cmd(args) -> int:
     check_live_arguments(args)
+    if args.quiet and args.every is not None:
+        # --quiet prints no cycle: an --every beside it was ignored (an independent tester's finding)
+        raise UsageError(f"option --every: value {args.every} is not allowed with --quiet (it prints only the "
+                         "summary); expected --every without --quiet, or no --every")
     scenario = scenario_from_args(args)
     # the budget's bit rate as node takes it: -b, python-can's CAN_BITRATE/can.conf, else the scenario's
     bitrate = resolve_bitrate(args.bitrate, scenario.radar.bitrate)
