@@ -304,7 +304,8 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
         tree = junit_xml(suites, {name: need for name, _, _ in suites})
         with atomic_output(args.junit, "--junit", mode="wb") as f:
             tree.write(f, encoding="utf-8", xml_declaration=True)
-        print(f"wrote {args.junit}: {sum(len(r) for _, _, r in suites)} test cases", file=sys.stderr)
+        cases = sum(len(r) for _, _, r in suites)
+        print(f"wrote {args.junit}: {cases} test case{'s' if cases != 1 else ''}", file=sys.stderr)
     if written:
         print(f"wrote {len(written)} plots to {out_dir}", file=sys.stderr)
     return 1 if short else 0
