@@ -1180,22 +1180,28 @@ def test_random_frames_on_the_list_ids_never_alter_a_delivered_cycle():
     assert set(lost) <= clashes, (lost, clashes)
 
 
+def _silent_cycles(n_cycles: int, none_at: int, back_at: int) -> list[list]:
+    """A node's frames, cycle by cycle, told OutputType none before cycle ``none_at`` and objects again before
+    ``back_at`` (the cycles between send no list)."""
+    none = _cfg(RadarCfg_OutputType=0, RadarCfg_OutputType_valid=1)
+    back = _cfg(RadarCfg_OutputType=1, RadarCfg_OutputType_valid=1)
+    node = RadarNode(scenario(TRAFFIC, duration=n_cycles * 0.072 + 0.1))
+    vehicle = EgoMotionSender(node.scene)
+    cycles = []
+    for k in range(n_cycles):
+        t = k * node.period_s
+        frames = vehicle.frames(t)
+        for m in frames + ([none] if k == none_at else [back] if k == back_at else []):
+            node.receive(m, t)
+        cycles.append(frames + node.cycle(t).messages)
+    return cycles
+
+
 def test_cycles_the_sensor_was_told_not_to_send_are_not_lost_and_a_real_loss_still_is():
     """OutputType none for ten cycles, then objects again (an independent tester: ``lost_cycles`` counted the ten,
     though RadarState had said none and nothing was lost); three cycles cut from the stream after that are still
     counted lost."""
-    none = _cfg(RadarCfg_OutputType=0, RadarCfg_OutputType_valid=1)
-    back = _cfg(RadarCfg_OutputType=1, RadarCfg_OutputType_valid=1)
-    sc = scenario(TRAFFIC, duration=50 * 0.072 + 0.1)
-    node = RadarNode(sc)
-    vehicle = EgoMotionSender(node.scene)
-    cycles = []
-    for k in range(50):
-        t = k * node.period_s
-        frames = vehicle.frames(t)
-        for m in frames + ([none] if k == 19 else [back] if k == 29 else []):
-            node.receive(m, t)
-        cycles.append(frames + node.cycle(t).messages)
+    cycles = _silent_cycles(50, 19, 29)
     assert sum(any(m.arbitration_id == P.OBJ_STATUS for m in c) for c in cycles) == 40
     assembler = CycleAssembler()
     list(assembler.feed([m for c in cycles for m in c]))
@@ -1209,20 +1215,8 @@ def test_cycles_not_sent_for_longer_than_the_jump_limit_are_quiet_too():
     """An independent re-tester's finding: OutputType none for 8 s (111 cycles, more than MAX_JUMP_STRIDES) and then
     objects again put the gap in lost_cycles, as the header after it takes the held path (a jump far ahead); now that
     path counts it quiet too where RadarState said none and then the output back."""
-    none = _cfg(RadarCfg_OutputType=0, RadarCfg_OutputType_valid=1)
-    back = _cfg(RadarCfg_OutputType=1, RadarCfg_OutputType_valid=1)
-    sc = scenario(TRAFFIC, duration=110 * 0.072 + 0.1)
-    node = RadarNode(sc)
-    vehicle = EgoMotionSender(node.scene)
-    stream = []
-    for k in range(110):
-        t = k * node.period_s
-        frames = vehicle.frames(t)
-        for m in frames + ([none] if k == 10 else [back] if k == 90 else []):
-            node.receive(m, t)
-        stream += frames + node.cycle(t).messages
     assembler = CycleAssembler()
-    list(assembler.feed(stream))
+    list(assembler.feed([m for c in _silent_cycles(110, 10, 90) for m in c]))
     st = assembler.stats
     assert st.cycles == 30 and st.lost_cycles == 0 and st.quiet_cycles == 80 and st.counter_resets == 0, st
 
