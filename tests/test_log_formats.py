@@ -878,8 +878,8 @@ def test_export_says_when_the_logs_vehicle_speed_is_not_the_scenarios_ego(capsys
     assert rc == 0 and "warning" not in err, err
     other = str(SCENARIOS / "highway_cut_in.yaml")
     rc, _, err = cli(capsys, "export", log, "--scenario", other, "-o", tmp_path / "other.mcap")
-    found = re.search(r"warning: the log's vehicle speed \(SpeedInformation 0x300\) is not the ego's of --scenario "
-                      r"'.*highway_cut_in.yaml': (\d+) of (\d+) frames compared differ by more than 1 m/s", err)
+    found = re.search(r"warning: the log's vehicle speed \(SpeedInformation\) is not the ego's of --scenario "
+                      r"'.*highway_cut_in.yaml': (\d+) of (\d+) cycles compared differ by more than 1 m/s", err)
     assert rc == 0 and found and found.group(1) == found.group(2) and int(found.group(2)) >= 5, err
 
 

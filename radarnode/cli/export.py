@@ -10,7 +10,6 @@ The range–Doppler map is not in a log: ``radarnode log --fidelity signal -o ru
 
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 
@@ -22,52 +21,18 @@ from radarnode.viz import MAX_STAMP_S
 from radarnode.wire.logfiles import FORMATS, ReadReport, check_input, check_input_format, check_stem, read_frames
 
 
-class _EgoSpeedCheck:
-    """Whether the log's vehicle speed (SpeedInformation on the radar's ID, as ``radarnode log`` writes it) is the
-    scenario's ego's: a log exported with another run's scenario got that run's ground truth, status 0 and no word (an
-    independent tester's finding). At most one frame in ``EVERY_S`` of the run is compared."""
-
-    TOLERANCE_MPS = 1.0        # the frame's resolution is 0.02 m/s
-    EVERY_S = 0.2
-
-    def __init__(self, scene, start_s: float, sensor_id: int) -> None:
-        from radarnode.wire import ars408 as P
-        from radarnode.wire.dbc import load_database
-        self.scene, self.start_s, self.duration_s = scene, start_s, scene.scenario.duration_s
-        self.can_id = P.shifted(P.SPEED_INFO, sensor_id)
-        self.message = load_database().get_message_by_frame_id(P.SPEED_INFO)
-        self.compared = self.off = 0
-        self.worst = 0.0
-        self._next_s = -math.inf
-
-    def note(self, msg) -> None:
-        if msg.arbitration_id != self.can_id or msg.is_extended_id or msg.is_remote_frame or msg.is_error_frame:
-            return
-        t = msg.timestamp - self.start_s
-        if not (math.isfinite(t) and 0.0 <= t <= self.duration_s and t >= self._next_s):
-            return
-        try:
-            v = self.message.decode(bytes(msg.data), decode_choices=False)
-        except Exception:                       # (a frame the DBC cannot decode: counted by the recorder)
-            return
-        direction = int(v["RadarDevice_SpeedDirection"])
-        if direction == 3:                      # invalid: says nothing
-            return
-        self._next_s = t + self.EVERY_S
-        speed = (-1.0 if direction == 2 else 1.0) * float(v["RadarDevice_Speed"])
-        diff = abs(speed - self.scene.ego_state(t).speed_mps)
-        self.compared += 1
-        self.off += diff > self.TOLERANCE_MPS
-        self.worst = max(self.worst, diff)
-
-    def warning(self, scenario_path: str) -> str | None:
-        """One line where most compared frames disagree with the scenario's ego, else None."""
-        if not self.compared or 2 * self.off <= self.compared:
-            return None
-        return (f"warning: the log's vehicle speed (SpeedInformation 0x{self.can_id:03X}) is not the ego's of "
-                f"--scenario {scenario_path!r}: {self.off} of {self.compared} frames compared differ by more than "
-                f"{self.TOLERANCE_MPS:g} m/s (up to {self.worst:.1f} m/s); its ground truth, ego and /tf are likely "
-                "another run's (check --scenario and --start-time; a closed-loop run's ego is not the scenario's)")
+def _speed_warning(rec, scenario_path: str) -> str | None:
+    """One line where the log's vehicle speed (SpeedInformation on the radar's ID, as ``radarnode log`` writes it)
+    differs from the scenario's ego in most decoded cycles (the recorder compares them at each cycle it gives the
+    truth), else None: a log exported with another run's scenario got that run's ground truth, status 0 and no word
+    (an independent tester's finding)."""
+    from radarnode.viz.recorder import SPEED_TOLERANCE_MPS
+    if not rec.speed_compared or 2 * rec.speed_off <= rec.speed_compared:
+        return None
+    return (f"warning: the log's vehicle speed (SpeedInformation) is not the ego's of --scenario {scenario_path!r}: "
+            f"{rec.speed_off} of {rec.speed_compared} cycles compared differ by more than {SPEED_TOLERANCE_MPS:g} m/s "
+            f"(up to {rec.speed_worst_mps:.1f} m/s); its ground truth, ego and /tf are likely another run's (check "
+            "--scenario and --start-time; a closed-loop run's ego is not the scenario's)")
 
 
 def add_subparser(sub) -> None:
@@ -117,7 +82,6 @@ def cmd(args) -> int:
                              "is drawn around that radar's mount)")
         scenario = mine[0]
     rec = FoxgloveRecorder(sensor_id=sensor_id)
-    speed_check = None
     census = SensorCensus()
     report = ReadReport(args.log, fmt)
     with atomic_path(args.output, "--output") as tmp:
@@ -127,17 +91,13 @@ def cmd(args) -> int:
                 from radarnode.scene.world import Scene
                 m, attachments = scenario_metadata(scenario, "unknown (from a log)")
                 meta.update(m)
-                scene = Scene(scenario)
-                rec.attach_scene(scene, args.start_time or 0.0)
-                speed_check = _EgoSpeedCheck(scene, args.start_time or 0.0, sensor_id)
+                rec.attach_scene(Scene(scenario), args.start_time or 0.0)
             rec.open_mcap(tmp, metadata=meta, attachments=attachments)
             bar = progress(None, f"exporting {Path(args.log).name}", unit="frame")
             try:
                 for msg in pick(read_frames(args.log, report)):
                     rec.on_message_received(msg)
                     census.note(msg)
-                    if speed_check is not None:
-                        speed_check.note(msg)
                     bar.update(1)
             finally:
                 bar.close()
@@ -158,7 +118,7 @@ def cmd(args) -> int:
                     census.channel_warning(sensor_id, "--channel"), pick.warning()):
         if warning:
             print(warning, file=sys.stderr)
-    speed_warning = speed_check.warning(args.scenario) if speed_check is not None else None
+    speed_warning = _speed_warning(rec, args.scenario) if scenario is not None else None
     if speed_warning:
         print(speed_warning, file=sys.stderr)
     if scenario is not None and rec.cycles_outside_run:

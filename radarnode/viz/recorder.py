@@ -51,6 +51,10 @@ def _ns(t_s: float) -> int:
     return max(int(round(float(t_s) * 1e9)), 0)
 
 
+#: a decoded vehicle speed further than this from the scene's ego is another run's (the frame's resolution: 0.02 m/s)
+SPEED_TOLERANCE_MPS = 1.0
+
+
 class FoxgloveRecorder(can.Listener):
     """Decode CAN frames into Foxglove topics (:data:`radarnode.viz.TOPICS`) on its own ``foxglove.Context``.
 
@@ -90,6 +94,10 @@ class FoxgloveRecorder(can.Listener):
         #: decoded cycles given the scene's truth, and those outside the scenario's run (time − start time before 0
         #: or after its end), with the first such cycle's time: a log and a start time that do not go together
         self.truth_cycles, self.cycles_outside_run, self.first_outside_s = 0, 0, None
+        #: of those cycles, the ones where the vehicle speed decoded from the log (SpeedInformation) was compared with
+        #: the scene's ego, those that differ by more than SPEED_TOLERANCE_MPS, and the largest difference: a log
+        #: given another run's scenario (:func:`radarnode.cli.export.cmd` warns)
+        self.speed_compared, self.speed_off, self.speed_worst_mps = 0, 0, 0.0
         #: frames left out because their time is none a Foxglove message can carry (:func:`stamp_ok`): NaN, ±inf,
         #: before 0 or from 2**32 s on (a damaged or hand-made log), with the first such time
         self.frames_without_time, self.first_bad_time = 0, None
@@ -243,6 +251,11 @@ class FoxgloveRecorder(can.Listener):
         sc = scene.scenario
         ego = scene.ego_state(t_s)
         wire_v, wire_yaw = self._assembler.ego_speed_mps, self._assembler.ego_yaw_rate_dps
+        if wire_v is not None:
+            diff = abs(wire_v - ego.speed_mps)
+            self.speed_compared += 1
+            self.speed_off += diff > SPEED_TOLERANCE_MPS
+            self.speed_worst_mps = max(self.speed_worst_mps, diff)
         self._publish("/tf", t_wire, lambda: M.transforms(ego, sc.radar.mount, t_wire))
         self._publish("/ego", t_wire, lambda: M.ego_update(sc.ego.length_m, sc.ego.width_m, t_wire))
         self._publish("/ego/state", t_wire, lambda: {
