@@ -163,9 +163,14 @@ def _seeds(args, sc) -> list[int]:
     return list(range(1, args.seeds + 1)) if args.seeds is not None else [sc.seed]
 
 
+def _runs_each(args) -> int:
+    """How many runs each scenario gets (:func:`_seeds`)."""
+    return args.seeds if args.seeds is not None else 1
+
+
 def cmd(args) -> int:
     check_scale_out(args)
-    runs_each = args.seeds if args.seeds is not None else 1
+    runs_each = _runs_each(args)
     need = runs_each if args.min_passes is None else args.min_passes
     if not 1 <= need <= runs_each:
         raise UsageError(f"option --min-passes: value {need} is not allowed; expected an integer in [1, {runs_each}] "
@@ -233,7 +238,7 @@ def _cell(text: str) -> str:
 
 
 def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
-    runs_each = args.seeds if args.seeds is not None else 1
+    runs_each = _runs_each(args)
     bar = progress(len(scenarios) * runs_each, "report", unit="run")
     stems = plot_stems([sc.name for _, sc in scenarios])
     # two files of one scenario name are told apart by their file in the table and the JUnit suites, as the plots
