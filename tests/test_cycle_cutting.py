@@ -515,6 +515,28 @@ def test_two_forged_headers_sent_back_to_back_are_no_restart(count, jump, lag_s)
     assert st.stray_headers == 2 and st.counter_resets == st.lost_cycles == st.incomplete_cycles == 0
 
 
+@pytest.mark.parametrize("gap_s, first_followed", [(0.035, False), (0.036 + 1e-6, True), (0.037, True), (0.072, True)])
+def test_a_restarts_second_header_half_a_period_after_its_first_confirms_it(gap_s, first_followed):
+    """CONTINUE_MIN_PERIODS at its edge: the period learned is 72 ms, so the restarted sensor's second header must come
+    36 ms or more after its first. Just below, the first is too soon (its cycle counted stray, the restart taken one
+    header later); at (to a microsecond: the times are sums of floats), just above and at twice the limit, the
+    sensor is followed from its first cycle."""
+    before, after = _node_cycles(10), _node_cycles(10, seed=2)
+    second = _header_of(after[1][0]).timestamp
+    shift = second - gap_s - _header_of(after[0][0]).timestamp
+    stream = [m for c in before for m in c[0]]
+    for k, c in enumerate(after):
+        for m in c[0]:
+            m = copy.copy(m)
+            m.timestamp += 10.0 + (shift if k == 0 else 0.0)
+            stream.append(m)
+    asm = CycleAssembler()
+    got = list(asm.feed(stream))
+    matched, extra = _match(got, before + after, may_drop=frozenset() if first_followed else frozenset({10}))
+    assert matched == len(before) + len(after) and not extra, [(c.meas_counter, len(c.objects)) for c in got]
+    assert asm.stats.counter_resets == 1 and asm.stats.stray_headers == (0 if first_followed else 1), asm.stats
+
+
 @pytest.mark.parametrize("stamp", ["whole seconds", "none"])
 def test_a_restart_is_still_followed_where_the_times_cannot_tell(stamp):
     """Times only make a restart harder to take where they can tell: a logger that keeps whole seconds (most
