@@ -259,6 +259,49 @@ def test_patch_fit_of_several_peaks_at_once_equals_one_at_a_time():
             assert np.allclose(a[i], b[0], rtol=1e-9, atol=1e-12)
 
 
+@pytest.mark.parametrize("few, joined", [(17, True), (18, False), (36, False)])
+def test_a_small_bucket_joins_the_next_larger_call_only_where_that_is_cheaper(few, joined):
+    """A call costs call_cells patch cells; a peak of bucket 6 costs 13² = 169 of them there and 25² = 625 in bucket
+    12: ``few`` such peaks join the call of bucket 12 while few·456 < call_cells (456·17.5 here: 17 just below, 18
+    just above, 36 twice the edge). The buckets that hold nothing or run alone are left alone."""
+    from radarnode.dsp.peaks import _call_buckets
+    buckets = (3, 6, 12)
+    halves = np.array([5] * few + [12] * 4 + [2] * 200)
+    got = _call_buckets(buckets, halves, 456 * 17.5)
+    assert set(got[:few].tolist()) == {12 if joined else 6}
+    assert set(got[few:few + 4].tolist()) == {12}
+    assert set(got[few + 4:].tolist()) == {3}          # 200 peaks of 49 cells would cost 115,200 more in bucket 6
+    assert _call_buckets(buckets, halves, 0.0).tolist() == [6] * few + [12] * 4 + [3] * 200   # 0: no joining
+    assert _call_buckets(buckets, np.array([1, 2, 3]), 1e9).tolist() == [3, 3, 3]       # one bucket: as it is
+    # a bucket two sizes down joins the largest when the middle one holds nothing
+    assert _call_buckets(buckets, np.array([1, 12, 12]), 1e9).tolist() == [12, 12, 12]
+
+
+@pytest.mark.parametrize("cls", ["PatchFit", "MigrationFit"])
+def test_joining_buckets_changes_no_fit(cls, monkeypatch):
+    """A patch is exact in a larger bucket (R⁻¹ is zero outside its own cells): the fits with the buckets joined
+    (call_cells huge) and each in its own call (0) agree to rounding, peaks of half-widths 2, 5 and 12 together."""
+    from radarnode.dsp import peaks
+    m = n = 64
+    rng = np.random.default_rng(11)
+    amp = np.exp(2j * np.pi * rng.random(3))
+    tones = ((10.3, 20.2, 1.0), (40.6, 45.1, 0.5), (12.0, 50.7, 2.0), (30.4, 8.8, 1.5))
+    rd = sum(_tone_map(m, n, xd, xr, amp * a) for xd, xr, a in tones)
+    rd = rd + _tone_map(m, n, 0.0, 0.0, np.zeros(3), rng, noise=1.0)
+    d, r = np.array([10, 41, 12, 30]), np.array([20, 45, 51, 9])
+    half = np.array([12, 2, 5, 2])
+    start = rng.uniform(-0.3, 0.3, (2, 4))
+    fit = getattr(peaks, cls)(window("hann", m), window("hann", n), 12)
+    extra = (np.full(4, 0.8),) if cls == "MigrationFit" else ()
+    got = {}
+    for cells in (0.0, 1e12):
+        monkeypatch.setattr(type(fit), "CALL_CELLS", cells)
+        assert len(set(peaks._call_buckets(fit.buckets, half, cells).tolist())) == (3 if cells == 0 else 1)
+        got[cells] = fit(rd, d, r, *start, *extra, half)
+    for a, b in zip(got[0.0], got[1e12]):
+        np.testing.assert_allclose(a, b, rtol=1e-9, atol=1e-11)
+
+
 @pytest.mark.parametrize("dtype", [np.complex64, np.complex128])
 @pytest.mark.parametrize("shape", [(12, 256, 256), (1, 8, 6), (3, 1, 1), (72, 16, 64)])
 def test_noncoherent_power_is_the_sum_over_channels_of_real_and_imaginary_squares(dtype, shape):

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import functools
+import itertools
+import math
 
 import numpy as np
 
@@ -236,12 +238,38 @@ def _checked(rd: np.ndarray, d, r, delta_d, delta_r, half, max_half: int):
     return d, r, _clamp(fd, -1.0, 1.0), _clamp(fr, -1.0, 1.0), halves
 
 
-def _per_bucket(buckets, halves: np.ndarray, fd: np.ndarray, fr: np.ndarray, channels: int, fit):
+def _call_buckets(buckets, halves: np.ndarray, call_cells: float) -> np.ndarray:
+    """The bucket each peak is fitted in: the smallest that holds its patch (half-width ``halves``), or a larger one
+    that other peaks' call runs anyway, where that costs less than a call of its own.
+
+    A patch is exact in any larger bucket (R⁻¹ is zero outside its own cells). The cost model, measured
+    (``benchmarks/fit_calls.py``): a call costs a fixed ``call_cells`` patch cells' worth of arithmetic, and each
+    peak (2b + 1)² cells in bucket b. Of the ways to run the buckets that hold peaks (each either in its own call or
+    in the next larger one that runs; at most 2³ ways), the cheapest is taken. ``call_cells`` 0: every bucket in
+    its own call."""
+    buckets = np.asarray(buckets)
+    bucket = buckets[np.searchsorted(buckets, halves)]
+    present, count = np.unique(bucket, return_counts=True)
+    if present.size < 2 or call_cells <= 0:
+        return bucket
+    best, runs = math.inf, present
+    for mask in itertools.product((False, True), repeat=present.size - 1):
+        tried = np.append(present[:-1][list(mask)], present[-1])          # the buckets that run, ascending
+        into = tried[np.searchsorted(tried, present)]                     # each present bucket's call
+        cost = tried.size * call_cells + float(np.sum(count * (2 * into + 1) ** 2))
+        if cost < best:
+            best, runs = cost, tried
+    return runs[np.searchsorted(runs, bucket)]
+
+
+def _per_bucket(buckets, halves: np.ndarray, fd: np.ndarray, fr: np.ndarray, channels: int, fit,
+                call_cells: float = 0.0):
     """Run ``fit(sel, bucket)`` -> (δ_d, δ_r, snapshot) on the peaks of each patch size bucket (a loop over a few
-    sizes) and gather the results: (δ_d (K,), δ_r (K,), snapshots (K, channels))."""
+    sizes; small groups joined to a larger bucket where that is cheaper, :func:`_call_buckets`) and gather the
+    results: (δ_d (K,), δ_r (K,), snapshots (K, channels))."""
     out_d, out_r = fd.copy(), fr.copy()
     snap = np.zeros((fd.size, channels), dtype=np.complex128)
-    bucket = np.asarray(buckets)[np.searchsorted(buckets, halves)]
+    bucket = _call_buckets(buckets, halves, call_cells)
     for b in buckets:
         sel = np.flatnonzero(bucket == b)
         if sel.size:
@@ -283,6 +311,9 @@ class PatchFit:
     #: … and :meth:`refit`'s, from the first fit's estimates (within a few of its σ: ±0.25 bin reaches 0.1-bin
     #: errors at ρ = 15 dB)
     REFIT_ROUNDS = ((0.25, 5), (1.0 / 16.0, 5), (1.0 / 64.0, 5))
+    #: a call's fixed cost in patch cells (one peak in bucket b costs (2b + 1)², :func:`_call_buckets`): measured
+    #: 8,600 (a call 0.42 ms, a cell 0.049 µs; ``benchmarks/fit_calls.py``, 2026-12-07)
+    CALL_CELLS = 8000.0
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         self.max_half, self.buckets, self.axes = _patch_axes(doppler_window, range_window, max_half)
@@ -324,7 +355,8 @@ class PatchFit:
         if np.any(halves > self.max_half):
             raise ValueError(f"half: values must lie in 1…{self.max_half}")
         return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0],
-                           lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], halves[sel], *self.axes[b]))
+                           lambda sel, b: self._fit(rd, d[sel], r[sel], fd[sel], fr[sel], halves[sel], *self.axes[b]),
+                           self.CALL_CELLS)
 
     def refit(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
               snapshot: np.ndarray, half: np.ndarray, which: np.ndarray, new_half: np.ndarray,
@@ -401,7 +433,7 @@ class PatchFit:
             return self._fit_patches(x, fd[p], fr[p], new[sel], axis_d, axis_r,
                                      self.REFIT_ROUNDS if rounds is None else rounds, tones)
 
-        return _per_bucket(self.buckets, new, fd[which], fr[which], rd.shape[0], fit)
+        return _per_bucket(self.buckets, new, fd[which], fr[which], rd.shape[0], fit, self.CALL_CELLS)
 
     def snapshot(self, rd: np.ndarray, d: np.ndarray, r: np.ndarray, delta_d: np.ndarray, delta_r: np.ndarray,
                  half: np.ndarray | int | None = None) -> np.ndarray:
@@ -413,7 +445,7 @@ class PatchFit:
             raise ValueError(f"half: values must lie in 1…{self.max_half}")
         return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0], lambda sel, b: self._fit_patches(
             _patches(rd, d[sel], r[sel], b, (1, 2, 0, 3)), fd[sel], fr[sel], halves[sel], *self.axes[b],
-            rounds=()))[2]
+            rounds=()), self.CALL_CELLS)[2]
 
     def _fit(self, rd, d, r, fd, fr, halves, axis_d: _PatchAxis, axis_r: _PatchAxis):
         """:meth:`__call__` for peaks whose patches fit in the axes' size."""
@@ -725,6 +757,9 @@ class MigrationFit:
     NEWTON_STEP, NEWTON_SHRINK, NEWTON_ITERATIONS, NEWTON_REACH = (1.0 / 16.0, 1.0 / 512.0), 8.0, 12, 2.0
     #: the widest grid step (bins) a search far from the peak grows to
     NEWTON_WIDEST = 0.25
+    #: a call's fixed cost in patch cells (:func:`_call_buckets`): measured 3,200 (a call 1.0 ms, its Newton loop's
+    #: steps; a cell 0.32 µs; ``benchmarks/fit_calls.py``, 2026-12-07)
+    CALL_CELLS = 3000.0
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
         # patches embedded in the smallest bucket that holds them, as PatchFit does
@@ -801,7 +836,7 @@ class MigrationFit:
                                                      *self.axes[b], None if channels is None else channels[sel])
             return fd_, fr_, snap_
 
-        return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0], fit)
+        return _per_bucket(self.buckets, halves, fd, fr, rd.shape[0], fit, self.CALL_CELLS)
 
     def peak_gain(self, delta_d: np.ndarray, delta_r: np.ndarray, mu: np.ndarray) -> np.ndarray:
         """The power of the cell a tone at offsets (``delta_d``, ``delta_r``) from its centre lands in, for a target
