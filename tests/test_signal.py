@@ -372,7 +372,8 @@ def test_the_patch_fits_snapshot_at_given_offsets_is_the_fits_own_there():
 def test_the_patch_fits_refit_takes_a_neighbours_tone_out_exactly():
     """Two noise-free tones 4 range and 2 Doppler bins apart: the first fit, on patches cut 3 bins short of the
     other peak, is off by some 3e-5 bin; fitted again on the full patch with the other tone taken out, each comes
-    out as it does alone (1e-7 bin)."""
+    out as it does alone (to 1.3e-7 bin after two passes and after five: the searches' grids, which sit around
+    slightly different starts, leave each fit some 4e-6 bin from the truth on their own)."""
     from radarnode.dsp.peaks import PatchFit, patch_halves
     from radarnode.dsp.spectra import range_doppler, window
     c, m, n = 4, 128, 256
@@ -395,7 +396,7 @@ def test_the_patch_fits_refit_takes_a_neighbours_tone_out_exactly():
     for _ in range(2):
         fd, fr, snap = fit.refit(rd, d, r, fd, fr, snap, half, np.arange(2), 12)
         half = np.full(2, 12)
-    assert np.max(np.abs(fd - exact_d)) < 1e-7 and np.max(np.abs(fr - exact_r)) < 1e-7, (fd - exact_d, fr - exact_r)
+    assert np.max(np.abs(fd - exact_d)) < 3e-7 and np.max(np.abs(fr - exact_r)) < 3e-7, (fd - exact_d, fr - exact_r)
     assert np.allclose(np.abs(snap), [np.abs(a[2][0]) for a in alone], rtol=1e-5)
 
 
