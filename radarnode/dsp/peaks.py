@@ -307,10 +307,11 @@ class PatchFit:
     """
 
     #: alternate searches: (half-span, points) of each round's grid around the current estimate, bins. The last
-    #: round's step (1/256 bin) sets what the parabola through the best point and its neighbours leaves: 4e-6 bin
-    #: on a noise-free tone (a last step of 1/32 bin left 7e-5, which is 1.7× the bound at ρ = 80 dB); two
-    #: rounds of 9 points cost less than three of 9, 5 and 5 (2026-12-07: the mimo12 highway frame's processing
-    #: 10–12 % faster; the same RMSE over the CRB at 20, 60 and 80 dB on a 64 × 64 map)
+    #: round's step (1/128 bin) sets what the parabola through the best point and its neighbours leaves: 3e-6 bin
+    #: rms on a noise-free tone (a last step of 1/32 bin left 5e-5, 1.7× the bound at ρ = 80 dB); two rounds, the
+    #: last of 9 points, cost less than three of 9, 5 and 5 (the fit until 2026-12-07) at the same last step, with
+    #: one alternation of the axes fewer: the RMSE over the CRB within 0.5 % of theirs at 20–80 dB and 2 % at 16 dB,
+    #: the mimo12 highway frame's processing 10–12 % faster (``benchmarks/fit_rounds.py``)
     ROUNDS = ((0.5, 9), (1.0 / 32.0, 9))
     #: … and :meth:`refit`'s, from the first fit's estimates (within a few of its σ: ±0.25 bin reaches 0.1-bin
     #: errors at ρ = 15 dB)
