@@ -317,7 +317,7 @@ class PatchFit:
     #: errors at ρ = 15 dB)
     REFIT_ROUNDS = ((0.25, 5), (1.0 / 32.0, 9))
     #: a call's fixed cost in patch cells (one peak in bucket b costs (2b + 1)², :func:`_call_buckets`): measured
-    #: 8,600 (a call 0.42 ms, a cell 0.049 µs; ``benchmarks/fit_calls.py``, 2026-12-07)
+    #: 8,400 (a call 0.31 ms, a cell 0.037 µs; ``benchmarks/fit_calls.py``, 2026-12-07)
     CALL_CELLS = 8000.0
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
@@ -762,8 +762,8 @@ class MigrationFit:
     NEWTON_STEP, NEWTON_SHRINK, NEWTON_ITERATIONS, NEWTON_REACH = (1.0 / 16.0, 1.0 / 512.0), 8.0, 12, 2.0
     #: the widest grid step (bins) a search far from the peak grows to
     NEWTON_WIDEST = 0.25
-    #: a call's fixed cost in patch cells (:func:`_call_buckets`): measured 3,200 (a call 1.0 ms, its Newton loop's
-    #: steps; a cell 0.32 µs; ``benchmarks/fit_calls.py``, 2026-12-07)
+    #: a call's fixed cost in patch cells (:func:`_call_buckets`): measured 3,400–3,700 (a call 1.3 ms, its Newton
+    #: loop's steps; a cell 0.34–0.37 µs; ``benchmarks/fit_calls.py``, 2026-12-07)
     CALL_CELLS = 3000.0
 
     def __init__(self, doppler_window: np.ndarray, range_window: np.ndarray, max_half: int = 12) -> None:
