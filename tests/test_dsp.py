@@ -299,6 +299,10 @@ def test_a_small_bucket_joins_the_next_larger_call_only_where_that_is_cheaper(fe
     assert _call_buckets(buckets, np.array([1, 2, 3]), 1e9).tolist() == [3, 3, 3]       # one bucket: as it is
     # a bucket two sizes down joins the largest when the middle one holds nothing
     assert _call_buckets(buckets, np.array([1, 12, 12]), 1e9).tolist() == [12, 12, 12]
+    assert _call_buckets(buckets, halves, math.inf).tolist() == [12] * (few + 204)          # inf: one call
+    for bad in (math.nan, -1.0, "8000"):
+        with pytest.raises(ValueError, match="call_cells"):
+            _call_buckets(buckets, halves, bad)
 
 
 @pytest.mark.parametrize("cls", ["PatchFit", "MigrationFit"])

@@ -242,16 +242,23 @@ def _call_buckets(buckets, halves: np.ndarray, call_cells: float) -> np.ndarray:
     """The bucket each peak is fitted in: the smallest that holds its patch (half-width ``halves``), or a larger one
     that other peaks' call runs anyway, where that costs less than a call of its own.
 
-    A patch is exact in any larger bucket (R⁻¹ is zero outside its own cells). The cost model, measured
-    (``benchmarks/fit_calls.py``): a call costs a fixed ``call_cells`` patch cells' worth of arithmetic, and each
-    peak (2b + 1)² cells in bucket b. Of the ways to run the buckets that hold peaks (each either in its own call or
-    in the next larger one that runs; at most 2³ ways), the cheapest is taken. ``call_cells`` 0: every bucket in
-    its own call."""
+    A patch is exact in any larger bucket (R⁻¹ is zero outside its own cells): the fits of :meth:`PatchFit.__call__`,
+    :meth:`PatchFit.snapshot` and :class:`MigrationFit` are the same to rounding; :meth:`PatchFit.refit` takes out of
+    a joined patch the tones of the neighbours that reach its larger bucket, a few more (1e-7 m on the highway frames,
+    up to 6e-4 bin on random maps with the chain's leak reach: an independent tester, 2026-12-07). The cost model,
+    measured (``benchmarks/fit_calls.py``): a call costs a fixed ``call_cells`` patch cells' worth of arithmetic, and
+    each peak (2b + 1)² cells in bucket b. Of the ways to run the buckets that hold peaks (each either in its own call
+    or in the next larger one that runs; at most 2³ ways), the cheapest is taken. ``call_cells`` 0: every bucket in
+    its own call; ``inf``: every peak in the largest bucket's call."""
+    if not (isinstance(call_cells, (int, float, np.integer, np.floating)) and call_cells >= 0):
+        raise ValueError(f"call_cells: value {call_cells!r} is not allowed; expected a number of cells >= 0 (or inf)")
     buckets = np.asarray(buckets)
     bucket = buckets[np.searchsorted(buckets, halves)]
     present, count = np.unique(bucket, return_counts=True)
-    if present.size < 2 or call_cells <= 0:
+    if present.size < 2 or call_cells == 0:
         return bucket
+    if math.isinf(call_cells):
+        return np.full(bucket.shape, present[-1])
     best, runs = math.inf, present
     for mask in itertools.product((False, True), repeat=present.size - 1):
         tried = np.append(present[:-1][list(mask)], present[-1])          # the buckets that run, ascending
@@ -310,8 +317,12 @@ class PatchFit:
     #: round's step (1/128 bin) sets what the parabola through the best point and its neighbours leaves: 3e-6 bin
     #: rms on a noise-free tone (a last step of 1/32 bin left 5e-5, 1.7× the bound at ρ = 80 dB); two rounds, the
     #: last of 9 points, cost less than three of 9, 5 and 5 (the fit until 2026-12-07) at the same last step, with
-    #: one alternation of the axes fewer: the RMSE over the CRB within 0.5 % of theirs at 20–80 dB and 2 % at 16 dB,
-    #: the mimo12 highway frame's processing 10–12 % faster (``benchmarks/fit_rounds.py``)
+    #: one alternation of the axes fewer: the mimo12 highway frame's processing 6–11 % faster
+    #: (``benchmarks/fit_rounds.py``). The price: the second round reaches ±0.04 bin where the old second and third
+    #: reached ±0.09, and a fit whose first round ends further off (a start from the three-bin interpolation up to
+    #: 0.35 bin away, at 20 dB) stops short — up to 0.047 bin, 1.2× the bound, in a few percent of the chain's fits
+    #: (an independent tester): the chain's range 1.19 → 1.22× the bound at 20 dB (``calibration.py --only
+    #: accuracy``); on starts near the tone the same RMSE within 0.1 % at 20–80 dB, 1–3 % worse at 16 dB
     ROUNDS = ((0.5, 9), (1.0 / 32.0, 9))
     #: … and :meth:`refit`'s, from the first fit's estimates (within a few of its σ: ±0.25 bin reaches 0.1-bin
     #: errors at ρ = 15 dB)
