@@ -244,7 +244,7 @@ def _call_buckets(buckets, halves: np.ndarray, call_cells: float) -> np.ndarray:
 
     A patch is exact in any larger bucket (R⁻¹ is zero outside its own cells): the fits of :meth:`PatchFit.__call__`,
     :meth:`PatchFit.snapshot` and :class:`MigrationFit` are the same to rounding; :meth:`PatchFit.refit` takes out of
-    a joined patch the tones of the neighbours that reach its larger bucket, a few more (1e-7 m on the highway frames,
+    a joined patch the tones of the neighbours that reach its larger bucket, a few more (3e-7 m on the highway frames,
     up to 6e-4 bin on random maps with the chain's leak reach: an independent tester, 2026-12-07). The cost model,
     measured (``benchmarks/fit_calls.py``): a call costs a fixed ``call_cells`` patch cells' worth of arithmetic, and
     each peak (2b + 1)² cells in bucket b. Of the ways to run the buckets that hold peaks (each either in its own call
