@@ -662,3 +662,17 @@ def test_migration_fit_refuses_a_chosen_array_of_the_wrong_shape():
     got = np.full(1, np.nan)
     fit(rd, np.array([20]), np.array([30]), np.zeros(1), np.zeros(1), np.array([[1.0, -2.0]]), chosen=got)
     assert got[0] in (1.0, -2.0)
+
+
+@pytest.mark.parametrize("n_el, n_fft", [(1, 1), (4, 256), (12, 256), (72, 2048)])
+def test_the_beamformers_steering_table_is_the_exponential_it_replaces_bit_for_bit(n_el, n_fft):
+    """``_steering_table`` (made once) against e^{2πi·k·b/n_fft} evaluated at the bins, as the joint fit of plane
+    waves evaluated it before: the same bits at every bin, and read only (shared by every beamformer)."""
+    from radarnode.dsp.doa import _steering_table
+    table = _steering_table(n_el, n_fft)
+    k = np.arange(n_el)
+    bins = np.random.default_rng(n_fft).integers(0, n_fft, (7, 3))
+    direct = np.exp(2j * np.pi * k[None, :, None] * bins[:, None, :] / n_fft)      # (n, elements, q)
+    np.testing.assert_array_equal(table[bins].transpose(0, 2, 1), direct)
+    np.testing.assert_array_equal(table[bins[:, 0]], np.exp(2j * np.pi * k * bins[:, 0, None] / n_fft))
+    assert table.shape == (n_fft, n_el) and not table.flags.writeable

@@ -11,6 +11,7 @@ does not explain (:class:`SuperResolution`); every other cell keeps the beamform
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
@@ -38,6 +39,17 @@ class Doa:
 
     def estimate(self, snapshots: np.ndarray) -> np.ndarray:  # pragma: no cover - abstract
         raise NotImplementedError
+
+
+@functools.lru_cache(maxsize=8)
+def _steering_table(n_el: int, n_fft: int) -> np.ndarray:
+    """e^{2πi·k·b/n_fft} for elements k < ``n_el`` and FFT bins b < ``n_fft``: shape (n_fft, n_el), read only. The
+    same expression, element for element, as one evaluated at given bins (bit for bit), made once instead of an
+    exponential a wave, element and snapshot at every step of the joint fit."""
+    k = np.arange(n_el)
+    table = np.exp(2j * np.pi * k[None, :] * np.arange(n_fft)[:, None] / n_fft)
+    table.flags.writeable = False
+    return table
 
 
 class FftBeamformer(Doa):
@@ -82,7 +94,7 @@ class FftBeamformer(Doa):
             shape = x.shape[:-1]
             return self._explained_refined(x.reshape(-1, x.shape[-1]), sources, refine).reshape(shape + (sources,))
         n_el = x.shape[-1]
-        k = np.arange(n_el)
+        steer = _steering_table(n_el, self.n_fft)
         out = np.zeros(x.shape[:-1] + (sources,))
         total = np.zeros(x.shape[:-1])
         for q in range(sources):
@@ -90,7 +102,7 @@ class FftBeamformer(Doa):
             b = np.argmax(spec, axis=-1)
             total = total + np.take_along_axis(spec, b[..., None], axis=-1)[..., 0] / n_el
             out[..., q] = total
-            a = np.exp(2j * np.pi * k * b[..., None] / self.n_fft)                  # the peak's steering vector
+            a = steer[b]                                                            # the peak's steering vector
             x = x - a * (np.sum(a.conj() * x, axis=-1, keepdims=True) / n_el)
         return out
 
@@ -100,13 +112,13 @@ class FftBeamformer(Doa):
         beamformer's 256 points a 72-element array has 3.6 a beam, and a wave half a step off loses 6 % of a strong
         source's energy — more than the penalty of a wave, which then decided between hypotheses."""
         n, n_el = x.shape
-        k = np.arange(n_el)
         rows = np.arange(n)
         n_fft = max(self.n_fft, 1 << int(math.ceil(math.log2(REFINE_POINTS_PER_BEAM * n_el))))
+        steer = _steering_table(n_el, n_fft)                                               # (n_fft, elements)
 
         def fit(bins: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
             """The waves at FFT bins ``bins`` (n, q) fitted jointly: the explained energy (n,) and the residual."""
-            a = np.exp(2j * np.pi * k[None, :, None] * bins[:, None, :] / n_fft)           # (n, elements, q)
+            a = np.ascontiguousarray(steer[bins].transpose(0, 2, 1))                      # (n, elements, q)
             ah = a.conj().transpose(0, 2, 1)
             gram = ah @ a + 1e-9 * n_el * np.eye(bins.shape[1])     # two waves on one bin: a regularised solve
             y = ah @ x[:, :, None]
