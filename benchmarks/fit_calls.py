@@ -23,14 +23,13 @@ import os
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import argparse  # noqa: E402
-import statistics  # noqa: E402
 import sys  # noqa: E402
-import time  # noqa: E402
 from pathlib import Path  # noqa: E402
 
 import numpy as np  # noqa: E402
 
 import machine  # noqa: E402
+import signal_speed  # noqa: E402  (its median timer)
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
@@ -43,13 +42,8 @@ PEAKS = (1, 8, 32, 64)
 
 
 def _median_ms(fn, repeats: int) -> float:
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return 1e3 * statistics.median(times)
+    """Median ms of ``repeats`` calls of ``fn()`` after a warm-up (``signal_speed._median_ms``)."""
+    return signal_speed._median_ms(lambda _: fn(), list(range(repeats)))
 
 
 def measure(repeats: int) -> dict[str, dict[tuple[int, int], float]]:
