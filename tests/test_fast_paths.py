@@ -246,3 +246,30 @@ def test_the_second_look_refuses_a_gain_that_is_not_a_finite_number(gain):
             stat.pd_second_look(np.array([10.0, 20.0]), gain, swerling)
     assert set(stat._second_tables) == before
     assert np.all(np.isfinite(stat.pd_second_look(np.array([10.0, 20.0]), np.float32(0.58), 1)))
+
+
+def test_a_cycle_without_objects_gets_a_new_list_of_the_listed_fields_and_dtypes():
+    # a car ahead pulls away past the sensor's range: cycles with an object, then cycles without (which build
+    # their list as a copy of one dict of empty fields instead of 23 views, a fresh list every cycle)
+    sc = scenario("  - {id: away, class: car, x_m: 40.0, lane: 1, speed_mps: 70.0}", duration=12.0)
+    p = radar_config(sc).preset
+    for estimate in (None, "off"):
+        model = make_model("object", Scene(sc), p, np.random.default_rng(sc.seed), radar_config(sc).signal)
+        cfg = RuntimeConfig(max_distance_m=p.max_range_m, clusters=False)
+        frames = []
+        for k in range(int(sc.duration_s / sc.period_s)):
+            # an ego-motion estimate off the truth takes the cycle-by-cycle DynProp path, with or without objects
+            sv = None if estimate is None else (19.0, 0.3)
+            frames.append(model.step(k * sc.period_s, cfg, sv)[0].objects)
+        full = [o for o in frames if len(o)]
+        empty = [o for o in frames if not len(o)]
+        assert full and len(empty) > 20
+        assert len({id(o) for o in frames}) == len(frames)
+        names = list(vars(full[0]))
+        for o in empty:
+            assert list(vars(o)) == names
+            for name in names:
+                got, listed = getattr(o, name), getattr(full[0], name)
+                assert isinstance(got, np.ndarray) and got.shape == (0,) and got.dtype == listed.dtype, name
+        empty[0].note = "mine"
+        assert not hasattr(empty[1], "note")

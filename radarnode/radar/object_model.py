@@ -102,6 +102,11 @@ _OBJECT_INTS = (("meas_state", "meas_state"), ("prob_of_exist", "prob_of_exist")
 # integers above and the actor), shared by every cycle without objects (empty: nothing to modify)
 _NO_OBJECT_ROWS = (tuple(np.zeros(0) for _ in range(4 + len(_OBJECT_FLOATS))),
                    tuple(np.zeros(0, dtype=np.int64) for _ in range(3 + len(_OBJECT_INTS))))
+#: … as an empty object list's fields by name (a cycle without objects takes a copy: a new list, the same arrays)
+_NO_OBJECT_FIELDS = dict(ObjectList.of(
+    _NO_OBJECT_ROWS[1][0], *_NO_OBJECT_ROWS[0][:4], _NO_OBJECT_ROWS[1][1], *_NO_OBJECT_ROWS[0][4:12],
+    *_NO_OBJECT_ROWS[1][2:4], *_NO_OBJECT_ROWS[0][12:14], _NO_OBJECT_ROWS[1][4], *_NO_OBJECT_ROWS[0][14:17],
+    _NO_OBJECT_ROWS[1][5]).__dict__)
 #: the detections' fields (Detections' order after the actor index: range, range rate, azimuth, RCS, SNR; the RCS and
 #: SNR as the chain reads them, :meth:`ObjectModel._physics`)
 _DETECTION_FLOATS = ("m_r", "m_vr", "m_az", "rcs_read", "snr_read")
@@ -1517,15 +1522,20 @@ class ObjectModel:
         self.last_t, self.cycle = t_s, self.cycle + 1
         view = ch["view"].row(i)
         s, e = ch["starts"][i], ch["starts"][i + 1]
-        f, g = (list(ch["obj_f"][:, s:e]), list(ch["obj_i"][:, s:e])) if e > s else _NO_OBJECT_ROWS
         sv = (ch["sv"][0][i], ch["sv"][1][i]) if sensor_velocity_est is None else sensor_velocity_est
-        if ch["by_cycle"] or (sensor_velocity_est is not None
-                              and not math.hypot(sv[0] - ch["sv"][0][i], sv[1] - ch["sv"][1][i]) + 1e-9
-                              < ch["slack"][i]):
-            g = list(g)
-            g[1] = self._dyn_cycle(ch, i, g[-1], f[2], f[3], sv)
-        objects = ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
-                                f[14], f[15], f[16], g[5])
+        by_cycle = ch["by_cycle"] or (sensor_velocity_est is not None
+                                      and not math.hypot(sv[0] - ch["sv"][0][i], sv[1] - ch["sv"][1][i]) + 1e-9
+                                      < ch["slack"][i])
+        if e > s or by_cycle:
+            f, g = (list(ch["obj_f"][:, s:e]), list(ch["obj_i"][:, s:e])) if e > s else _NO_OBJECT_ROWS
+            if by_cycle:
+                g = list(g)
+                g[1] = self._dyn_cycle(ch, i, g[-1], f[2], f[3], sv)
+            objects = ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
+                                    f[14], f[15], f[16], g[5])
+        else:                   # a cycle without objects (half the cycles of a long run): its fields in one copy
+            objects = object.__new__(ObjectList)
+            objects.__dict__ = _NO_OBJECT_FIELDS.copy()
         self.info.at(ch, i, self.reportable)
         clusters = self._cluster_list(ch, i, sv) if config.clusters and cluster_list else _NO_CLUSTERS
         return RadarFrame(t_s, self.cycle - 1, objects, clusters), view
