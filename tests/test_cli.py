@@ -355,3 +355,45 @@ def test_an_empty_channel_and_non_ascii_digits_are_refused(capsys, argv, message
     rc, _, err = cli(capsys, *argv)
     assert rc == 2
     assert message in err and "Traceback" not in err, err
+
+
+def test_the_bus_keys_python_can_reads_are_known_for_its_named_only_buses():
+    import argparse
+
+    import can
+    from can.interfaces.socketcan import SocketcanBus
+    from can.interfaces.udp_multicast import UdpMulticastBus
+
+    from radarnode.wire.bus import open_bus, read_keys
+
+    assert {"port", "hop_limit", "receive_own_messages", "fd", "channel"} <= read_keys(UdpMulticastBus)
+    assert {"local_loopback", "ignore_rx_error_frames", "can_filters"} <= read_keys(SocketcanBus)
+    assert "kwargs" not in read_keys(SocketcanBus) and "self" not in read_keys(SocketcanBus)
+
+    class OtherBus(can.BusABC):      # an interface that may read more from its **kwargs: not checked
+        def __init__(self, channel=None, **kwargs):
+            super().__init__(channel, **kwargs)
+
+        def send(self, msg, timeout=None):
+            pass
+
+        def _recv_internal(self, timeout):
+            return None, False
+
+    assert read_keys(OtherBus) == frozenset()
+    # a key of its own reaches it: open_bus names no unread key for a bus whose keys it does not know
+    args = argparse.Namespace(interface="virtual", channel="k", bitrate=None, bus_kwargs=["vendor_option=3"])
+    import radarnode.wire.bus as wb
+    real = can.Bus
+    try:
+        wb.can.Bus = lambda **kw: OtherBus(kw.get("channel"))
+        bus = open_bus(args)
+        bus.shutdown()
+    finally:
+        wb.can.Bus = real
+    # … and a good key of the virtual bus opens it
+    args = argparse.Namespace(interface="virtual", channel="k", bitrate=None,
+                              bus_kwargs=["receive_own_messages=True", "rx_queue_size=0"])
+    bus = open_bus(args)
+    assert bus.receive_own_messages is True
+    bus.shutdown()

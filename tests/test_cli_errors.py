@@ -175,6 +175,14 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
      "option --bus-kwargs: value 'receive_own_messages=maybe' is not allowed; expected receive_own_messages=True"),
     (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "bitrate=250000"],
      "option --bus-kwargs: key 'bitrate' ('250000') is not allowed; expected -b/--bitrate"),
+    # a key the bus does not read was dropped without a word: a misspelt receive_own_messages ran the node with its
+    # default; fd on the virtual bus (which takes protocol) likewise
+    (["node", SCENARIO, "-i", "virtual", "-c", "x", "--bus-kwargs", "receive_own_messagez=True"],
+     "option --bus-kwargs: key 'receive_own_messagez' is not allowed for interface 'virtual'"),
+    (["consume", "-i", "virtual", "-c", "x", "--bus-kwargs", "receive_own_messages=True", "fd=True"],
+     "option --bus-kwargs: key 'fd' is not allowed for interface 'virtual': python-can's VirtualBus does not read it "
+     "(it would be dropped without a word); expected one of can_filters, channel, config_context, ignore_config, "
+     "preserve_timestamps, protocol, receive_own_messages, rx_queue_size"),
     (["node", SCENARIO, "-i", "no_such_interface", "-c", "x"], "option -i/--interface: interface 'no_such_interface'"),
     (["consume", "-i", "no_such_interface", "-c", "x"], "option -i/--interface: interface 'no_such_interface'"),
     # consume took --sensor-id 1 with --fuse, ignored it and exited 0 (decode refused the pair; a tester's finding)

@@ -8,6 +8,7 @@ from its configuration file (``~/can.conf``, ``can.ini``) and the environment
 from __future__ import annotations
 
 import argparse
+import inspect
 import logging
 import math
 import socket
@@ -117,9 +118,46 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
                          f"interface can open{_CHANNEL_HINTS.get(kwargs.get('interface'), '')}")
         _drop_half_open(exc)
         raise error from None
+    unread = unread_keys(bus, bus_kwargs_given(args))
+    if unread:
+        allowed = ", ".join(sorted(read_keys(type(bus))))
+        bus.shutdown()
+        name = kwargs.get("interface") or getattr(bus, "interface", None) or type(bus).__name__
+        raise UsageError(f"option --bus-kwargs: key {unread[0]!r} is not allowed for interface {name!r}: python-can's "
+                         f"{type(bus).__name__} does not read it (it would be dropped without a word); expected one "
+                         f"of {allowed}")
     enlarge_receive_buffer(bus)
     name_bus(bus, kwargs)
     return bus
+
+
+#: python-can buses that read no keyword argument beyond the named parameters of their ``__init__`` and BusABC's
+#: ``can_filters`` (python-can 4.x, read in its source): any other key given to them is dropped without a word. Other
+#: interfaces read further keys from their ``**kwargs`` and are not checked here
+_NAMED_ONLY_BUSES = frozenset({"VirtualBus", "UdpMulticastBus", "SocketcanBus"})
+
+
+def read_keys(bus_class: type) -> frozenset[str]:
+    """The keyword arguments a bus of ``bus_class`` reads (its ``__init__``'s named parameters, BusABC's
+    ``can_filters`` and can.Bus's own ``config_context`` and ``ignore_config``), or an empty set where its
+    ``**kwargs`` may hold more (:data:`_NAMED_ONLY_BUSES`)."""
+    if bus_class.__name__ not in _NAMED_ONLY_BUSES:
+        return frozenset()
+    named = {name for name, par in inspect.signature(bus_class.__init__).parameters.items()
+             if par.kind in (par.POSITIONAL_OR_KEYWORD, par.KEYWORD_ONLY) and name != "self"}
+    return frozenset(named | {"can_filters", "config_context", "ignore_config"})
+
+
+def unread_keys(bus: can.BusABC, given: list[str]) -> list[str]:
+    """The keys of ``given`` (``--bus-kwargs``) that ``bus`` does not read (:func:`read_keys`), in their order;
+    none for a bus whose keys are not known."""
+    known = read_keys(type(bus))
+    return [key for key in given if known and key not in known]
+
+
+def bus_kwargs_given(args: argparse.Namespace) -> list[str]:
+    """The keys of the ``--bus-kwargs`` items (checked by :func:`bus_kwargs`), in their order."""
+    return [item.partition("=")[0].strip() for item in getattr(args, "bus_kwargs", []) or []]
 
 
 def echoes_own(bus: can.BusABC) -> bool:
