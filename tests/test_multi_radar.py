@@ -517,10 +517,13 @@ def test_decode_of_a_capture_of_two_buses_picks_one_with_channel(tmp_path, capsy
         rc, out, err = cli(capsys, "decode", both, "--summary", "--channel", channel)
         assert rc == 0 and "warning" not in err, err
         assert "cycles=69," in out and "orphan_frames" not in out and "stray_headers" not in out, out
-    # a channel the log does not have: an empty decode said nothing (the re-test's finding); now a warning naming
-    # the channels it holds
+    # a channel the log does not have: an empty decode said nothing (the re-test's finding), then a warning with
+    # status 0; now an error naming the channels it holds, status 1, and no output file (as export)
     rc, out, err = cli(capsys, "decode", both, "--summary", "--channel", "can2")
-    assert "warning: no frame on channel 'can2' (option --channel); the log's frames are on: can0, can1" in err, err
+    assert rc == 1 and ("option --channel: value 'can2' is not allowed: no frame of the log is on it; expected one of "
+                        "the channels its frames are on: can0, can1") in err, err
+    rc, out, err = cli(capsys, "decode", both, "--format", "json", "--channel", "can2", "-o", tmp_path / "x.json")
+    assert rc == 1 and "value 'can2' is not allowed" in err and not (tmp_path / "x.json").exists(), err
 
 
 def test_a_bit_rate_too_low_for_the_cycle_keeps_the_log_in_time_order_and_says_so(capsys, caplog, tmp_path):

@@ -619,7 +619,7 @@ def saturation_note(node) -> str | None:
 
 
 class ChannelPick:
-    """``--channel``: the frames of one channel, and what the log held, for a warning when none was that channel's.
+    """``--channel``: the frames of one channel, and what the log held, for the error when none was that channel's.
 
     A log that keeps names (candump ``.log``) is picked by the exact name, or by a bare number N as python-can's
     writers spell it (``canN``): ``vcan1`` is not ``can1``, nor ``1`` (each name ending in 1 was one bus before: two
@@ -655,16 +655,9 @@ class ChannelPick:
     def _held(self) -> str:
         return ", ".join(sorted(self.seen)) if self.seen else "none (this log keeps no channel: a .csv or .db log)"
 
-    def warning(self) -> str | None:
-        """One line when ``--channel`` was given and no frame was that channel's, else None."""
-        if self.channel is None or self.taken:
-            return None
-        # (a channel the log does not have gave an empty decode, status 0 and no word)
-        return (f"warning: no frame on channel {self.channel!r} (option --channel); the log's frames are on: "
-                f"{self._held()} (as the log names them: decode --format json shows each frame's)")
-
     def refusal(self) -> str | None:
-        """The error of a command that writes nothing without a frame (export) where ``--channel`` picked none."""
+        """The error where ``--channel`` picked no frame (decode, export: status 1, no output file; an empty decode
+        said nothing at first, then warned with status 0), else None."""
         if self.channel is None or self.taken:
             return None
         return (f"option --channel: value {self.channel!r} is not allowed: no frame of the log is on it; expected "

@@ -315,6 +315,9 @@ def cmd(args) -> int:
     def nothing_readable() -> None:
         if report.frames == 0:          # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument FILE"))
+        refused = args.pick.refusal()
+        if refused:     # --channel picked no frame: no output file either, and status 1 as export's (an empty decode
+            raise FileError(refused)    # with a warning and status 0 read as a decode of a silent bus)
 
     census = SensorCensus()
     if args.output is None:
@@ -332,9 +335,6 @@ def cmd(args) -> int:
         warning = census.channel_warning(0 if args.sensor_id is None else args.sensor_id, "--channel")
         if warning:
             print(warning, file=sys.stderr)
-    warning = args.pick.warning()
-    if warning:
-        print(warning, file=sys.stderr)
     if result is not None:
         where = f" to {args.output}" if args.output else ""
         print(f"decoded {result.frames} frames{where}: {result.unknown} of unknown ID, {result.errors} not "

@@ -112,10 +112,9 @@ def cmd(args) -> int:
             raise FileError(f"argument LOG: {_no_time(rec, args.log)}; expected frames timed in [0, {MAX_STAMP_S}) s")
     print(f"read {report.frames} frames from {args.log}", file=sys.stderr)
     print(summary(rec, args.output), file=sys.stderr)
-    # the sensor asked for sent nothing here, or its frames came on two buses (merged into one recording); and
-    # --channel named no channel of the log
+    # the sensor asked for sent nothing here, or its frames came on two buses (merged into one recording)
     for warning in (census.warning(sensor_id, "--sensor-id", args.channel),
-                    census.channel_warning(sensor_id, "--channel"), pick.warning()):
+                    census.channel_warning(sensor_id, "--channel")):
         if warning:
             print(warning, file=sys.stderr)
     speed_warning = _speed_warning(rec, args.scenario) if scenario is not None else None
