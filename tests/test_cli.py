@@ -254,7 +254,7 @@ def test_run_closed_loop_slows_the_ego_to_the_lead():
     r = run("run", str(SCENARIOS / "acc_follow_90.yaml"), "--fast", "--closed-loop", "--duration", "20",
             "--every", "100")
     assert r.returncode == 0, r.stderr
-    assert "ACC active, target track" in r.stdout and "(closed loop)" in r.stdout
+    assert "ACC active, target object" in r.stdout and "(closed loop)" in r.stdout
     speed = float(r.stdout.split("ego speed at the end ")[1].split(" m/s")[0])
     assert abs(speed - 25.0) < 1.0
 
@@ -397,3 +397,45 @@ def test_the_bus_keys_python_can_reads_are_known_for_its_named_only_buses():
     bus = open_bus(args)
     assert bus.receive_own_messages is True
     bus.shutdown()
+
+
+def test_run_names_acc_and_fcw_targets_by_the_object_id_of_the_table_above():
+    """The ECU line said "target track 1" of the object the table listed as ID 0 (the ECU numbers its own tracks):
+    the lead at 50 m read as the car cutting in at 30 m. Now every cycle's target is an ID of that cycle's table, at
+    that object's distance."""
+    from radarnode.perception.types import CLASS_NAMES
+    r = run("run", str(SCENARIOS / "highway_cut_in.yaml"), "--fast", "--every", "7")
+    assert r.returncode == 0, r.stderr
+    checked = 0
+    table: dict[int, float] = {}
+    for line in r.stdout.splitlines():
+        if line.startswith("cycle "):
+            table = {}
+        fields = line.split()
+        if len(fields) == 9 and fields[0].isdigit() and fields[1] in CLASS_NAMES:
+            table[int(fields[0])] = float(fields[3])
+        found = re.findall(r"target object (\d+) at ([\d.]+) m", line) + re.findall(r"FCW \w+ \(object (\d+), ()", line)
+        for obj, dist in found:
+            assert int(obj) in table, (line, table)
+            if dist:
+                assert abs(table[int(obj)] - float(dist)) < 1.0, (line, table)
+            checked += 1
+    assert checked >= 40
+    assert "target track" not in r.stdout and "ECU track" not in r.stdout
+
+
+def test_the_ecu_line_says_coasted_of_a_target_not_measured_this_cycle():
+    from radarnode.cli.run import format_ecu
+    from radarnode.consumer.acc import Target
+    from radarnode.consumer.ecu import EcuOutput
+
+    def line(target, fcw_target=None, ttc=99.9):
+        return format_ecu(EcuOutput(1.0, 0.0, 0, 0, 0, ttc, 0.0, target, True, fcw_target=fcw_target), 20.0)
+
+    measured = Target(7, 3, 40.0, 0.0, -2.0, 0.0)
+    assert "target object 3 at 40.0 m" in line(measured) and "(TTC -)" in line(measured)
+    coasted = Target(7, 3, 40.0, 0.0, -2.0, 0.0, coasted=True)
+    assert "target object 3 (coasted) at 40.0 m" in line(coasted, coasted, 20.0)
+    assert "FCW none (object 3 (coasted), TTC 20.0 s)" in line(coasted, coasted, 20.0)
+    # a track no radar object stood behind: the ECU's own number
+    assert "target ECU track 7 at 40.0 m" in line(Target(7, -1, 40.0, 0.0, -2.0, 0.0))

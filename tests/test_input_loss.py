@@ -246,6 +246,7 @@ def test_a_lead_that_brakes_is_coasted_to_its_stop_and_stays():
         v_lead = new
         if target is None:
             break
+        assert target.coasted and target.object_id == 1     # what `run` prints as "object 1 (coasted)"
         assert target.distance_m == pytest.approx(max(gap, 0.0), abs=1e-9)
         assert target.rel_speed_mps == pytest.approx(v_lead - 15.0, abs=1e-9)
         assert (target.lead_accel_mps2 == 0.0) is (v_lead == 0.0)

@@ -49,12 +49,23 @@ def add_subparser(sub) -> None:
     p.set_defaults(func=cmd, fast=False)
 
 
+def _named(target) -> str:
+    """The object an ECU decision is about, by the radar object ID the table shows, "(coasted)" where it is not in
+    this cycle's table (the ECU predicts its track, or carries a lost target on); the ECU's own track number only
+    where no radar object ever stood behind it. The line said "target track 1" of the object listed as ID 0 (the ECU
+    numbers its tracks itself): a reader took the car cutting in, ID 1, for ACC's target."""
+    name = f"object {target.object_id}" if target.object_id >= 0 else f"ECU track {target.track_id}"
+    return name + (" (coasted)" if target.coasted else "")
+
+
 def format_ecu(d, ego_speed_mps: float) -> str:
-    """One line with the consumer ECU's decision."""
+    """One line with the consumer ECU's decision: ACC's target with its gap and speed (along the sensor's x, as the
+    table), FCW's level, and the object FCW judges with its TTC (FCW's: the closing with both cars' accelerations,
+    so not the gap over the speed where either accelerates)."""
     acc = f"ACC {STATE_NAMES[d.acc_state]}"
     if d.target is not None:
         gap = d.target.distance_m / ego_speed_mps if ego_speed_mps > 0.5 else float("inf")
-        acc += (f", target track {d.target.track_id} at {d.target.distance_m:.1f} m "
+        acc += (f", target {_named(d.target)} at {d.target.distance_m:.1f} m "
                 f"({d.target.rel_speed_mps:+.1f} m/s, gap {gap:.2f} s)")
     acc += f", request {d.accel_request_mps2:+.2f} m/s²"
     faults = [name for bad, name in ((not d.radar_ok, "radar unavailable"), (not d.ego_ok, "ego motion missing"))
@@ -63,7 +74,8 @@ def format_ecu(d, ego_speed_mps: float) -> str:
         acc += f" [FAULT: {', '.join(faults)}]"
     fcw = ["none", "pre-warning", "WARNING"][d.warning_level]
     ttc = f"{d.ttc_s:.1f} s" if d.ttc_s < 99 else "-"
-    return f"{acc}; FCW {fcw} (TTC {ttc})"
+    judged = f"{_named(d.fcw_target)}, " if d.fcw_target is not None and d.ttc_s < 99 else ""
+    return f"{acc}; FCW {fcw} ({judged}TTC {ttc})"
 
 
 def cmd(args) -> int:

@@ -69,7 +69,9 @@ def iso15622_limits(speed_mps: float) -> tuple[float, float, float]:
 
 @dataclass(frozen=True)
 class Target:
-    """The selected object: track ID, distance (m, along x), relative speed (m/s, negative closing), lead accel."""
+    """The selected object: track ID, distance (m, along x), relative speed (m/s, negative closing), lead accel;
+    ``coasted``: not measured this cycle (the ECU's track predicted, or a lost target carried on by dead reckoning),
+    so its radar object is not in the cycle's object list."""
 
     track_id: int
     object_id: int
@@ -77,6 +79,7 @@ class Target:
     lateral_m: float
     rel_speed_mps: float
     lead_accel_mps2: float
+    coasted: bool = False
 
 
 class Acc:

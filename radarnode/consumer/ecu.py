@@ -808,7 +808,7 @@ class Ecu:
             lead_accel = (ax + self.ego_accel_mps2) * tangent[i, 0] + ay * tangent[i, 1]
             # distance ahead of the sensor along the vehicle's axis, lateral from the vehicle's centre line
             return Target(t.id, t.meas_id, float(xv[i] - self.mount.x_m), float(yv[i]),
-                          float(along[i] - self.ego_speed_mps), float(lead_accel))
+                          float(along[i] - self.ego_speed_mps), float(lead_accel), t.misses > 0)
 
         # when the ego gets to each track (a track not closing is never reached), and whether it has cleared the
         # path by then
@@ -925,7 +925,8 @@ class Ecu:
             return None
         along = new_v * math.cos(c["heading"] - self.odometry[2])        # its speed along the ego's heading now
         return dataclasses.replace(c["target"], distance_m=max(xv - m.x_m, 0.0), lateral_m=yv,
-                                   rel_speed_mps=along - v, lead_accel_mps2=c["a"] if new_v > 0 else 0.0)
+                                   rel_speed_mps=along - v, lead_accel_mps2=c["a"] if new_v > 0 else 0.0,
+                                   coasted=True)
 
     def _vehicle_to_odometry(self, x_m, y_m):
         """Vehicle-frame points (floats or arrays) in the odometry frame (the dead-reckoned pose of this cycle)."""
@@ -984,7 +985,7 @@ class Ecu:
                 bounds, m, trails, crossing)[0]:
             self._lost_place = None
             return None
-        return Target(lost.track_id, lost.object_id, xv - m.x_m, yv, -v, 0.0)
+        return Target(lost.track_id, lost.object_id, xv - m.x_m, yv, -v, 0.0, True)
 
     def frames(self, out: EcuOutput, timestamp: float | None = None) -> list[can.Message]:
         """AccStatus and FcwStatus for ``out``, E2E protected."""
