@@ -118,6 +118,24 @@ def test_log_interrupted_is_complete_and_readable(tmp_path):
     assert n_cycles > 20 and f"in {n_cycles} complete cycles" in err
 
 
+def test_run_interrupted_says_so_in_its_summary():
+    """A run stopped by Ctrl-C printed the summary of a whole run: its counts read as the scenario's (a tester's
+    finding). Now the summary says where it stopped; a whole run's does not."""
+    p = subprocess.Popen([*CLI, "run", DEFAULT, "--every", "1"], cwd=ROOT, stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True)
+    seen = ""
+    deadline = time.monotonic() + 120.0
+    while time.monotonic() < deadline and seen.count("objects\n") < 10:      # real time: ten cycles shown
+        seen += p.stdout.readline()
+    p.send_signal(signal.SIGINT)
+    out, err = p.communicate(timeout=60)
+    assert p.returncode == 130, err
+    m = re.search(r"summary: interrupted at ([\d.]+) s of 15 s: (\d+) cycles", out)
+    assert m and 0.5 < float(m.group(1)) < 15.0 and 10 <= int(m.group(2)) < 208, out
+    whole = run("run", DEFAULT, "--fast", "--quiet", "--duration", "1")
+    assert whole.returncode == 0 and "summary: 13 cycles" in whole.stdout and "interrupted" not in whole.stdout, whole.stdout
+
+
 @pytest.mark.skipif(not can_unshare(), reason="udp_multicast traffic is kept inside a private network namespace "
                     "(unshare -n, needs root and iproute2) so it never leaves this machine; not available here")
 def test_node_and_consumer_in_two_processes_over_udp_multicast(tmp_path):

@@ -203,8 +203,10 @@ def cmd(args) -> int:
         notifier.stop()
     assembler.flush()
     decoded += assembler.drain()
-    print(f"\nsummary: {stats.cycles} cycles, {stats.frames} frames, bus load {100 * stats.bus_load(node.bitrate):.1f} % "
-          f"of {bitrate}, worst-case stuffing")
+    # (a run stopped by Ctrl-C or SIGTERM printed the same summary as a whole one: the counts read as the run's)
+    stopped = f"interrupted at {stats.duration_s:.2f} s of {scenario.duration_s:g} s: " if stop.is_set() else ""
+    print(f"\nsummary: {stopped}{stats.cycles} cycles, {stats.frames} frames, bus load "
+          f"{100 * stats.bus_load(node.bitrate):.1f} % of {bitrate}, worst-case stuffing")
     print("node: " + ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())))
     if node.saturated:
         print("saturated values: " + ", ".join(f"{k}={v}" for k, v in sorted(node.saturated.items())))
