@@ -257,7 +257,7 @@ def test_report_interrupted_before_a_run_ends_leaves_no_plots_directory_and_says
     status, lines, err, plots = _report_until(tmp_path, 0)
     assert status == 130, err
     assert lines[0].startswith("| scenario | seed |")
-    assert "report: interrupted after 0 of 6 runs" in err, err
+    assert "report: interrupted after 0 of 6 runs" in err and "kept" not in err, err
     # the directories --plots made are gone again (an empty one was left behind: an independent tester's finding)
     assert not plots.exists() and not plots.parent.exists()
     assert "Traceback" not in err
@@ -271,6 +271,9 @@ def test_report_interrupted_after_some_runs_has_shown_their_rows_and_kept_their_
     assert 2 <= done < 6 and len(rows) == done, (rows, err)        # each row as its run ended, not all at the end
     pngs = sorted(x.name for x in plots.iterdir())
     assert 1 <= len(pngs) <= done and pngs[0] == "nhtsa_lead_stopped_seed1.png"
+    # … and the line says so (it said nothing of them: a tester's finding)
+    kept = f"; kept {len(pngs)} plot{'s' if len(pngs) != 1 else ''} in {plots}"
+    assert kept in err, err
 
 
 def test_plot_files_of_any_scenario_name_stay_in_the_plots_directory_and_rows_stay_whole(tmp_path):

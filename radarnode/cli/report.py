@@ -300,7 +300,9 @@ def _report(args, scenarios, need: int, plt, out_dir: Path | None) -> int:
             suites.append((label, str(path), runs))
     except (KeyboardInterrupt, Terminated):
         bar.close()
+        # (the plots written so far stay: the line said nothing of them, a tester's finding)
         print(f"report: interrupted after {reported} of {len(tasks)} runs" + (" (their rows above)" if reported else "")
+              + (f"; kept {len(written)} plot{'s' if len(written) != 1 else ''} in {out_dir}" if written else "")
               + ("; no --junit file written" if args.junit else ""), file=sys.stderr)
         raise
     finally:
