@@ -446,3 +446,43 @@ def test_range_bins_that_end_inside_the_field_of_view_are_a_warning(tmp_path, ca
         return
     (msg,) = msgs
     assert msg.startswith(f"{p}:5: preset ars408_like's range bins end at {end}") and says in msg, msg
+
+
+LOOP = ("name: loop\nduration_s: {dur}\nseed: 1\nradar: {{preset: ars408_like}}\nego: {{speed_mps: 10.0}}\n"
+        "road: {{lanes: 2, lane_width_m: 3.5, ego_lane: 0, {road}}}\n"
+        "actors:\n  - {{id: lead, class: car, x_m: {x}, lane: 0, speed_mps: {v}}}\n")
+R20 = "curvature_1pm: 0.05"        # the tightest road allowed: a loop is 2π·20 = 125.7 m long
+
+
+@pytest.mark.parametrize("x_m,refused", [(115.0, False), (126.5, True), (135.0, True), (150.0, True),
+                                         (251.0, True)])
+def test_an_actor_a_loop_or_more_along_a_tight_road_is_refused(tmp_path, x_m, refused):
+    # a lead 150 m along a road of radius 20 m sat 8 m ahead in the world while report measured 150 m along the lane:
+    # a wrong verdict, and nothing said (a tester's finding). Under a loop (330°: the actor 10 m behind the ego in the
+    # world; at 124–125 m it sits on the ego, which the overlap check refuses) is a scene; from 360° on the lane has
+    # come back over itself (126.5 m: just past the ego's rear axle, refused as a loop before the overlap)
+    text = LOOP.format(dur=3, road=R20, x=x_m, v=10.0)
+    if not refused:
+        _load(tmp_path, text)
+        return
+    path, msg = _error(tmp_path, text)
+    turn = round(x_m * 0.05 * 180.0 / 3.141592653589793)
+    assert msg.startswith(f"{path}:6: field 'road.curvature_1pm': actor 'lead' is {x_m:.0f} m ahead along the road "
+                          f"from the ego at t = 0.00 s, where the road turns through {turn}° between them"), msg
+    assert "expected a road that turns less than 360° between the ego and every actor" in msg
+
+
+def test_a_loop_reached_during_the_run_is_named_with_its_time_and_driving_round_is_not(tmp_path):
+    # the lead pulls away at 10 m/s more than the ego: 100 m along at the start, a loop (125.7 m) after 2.57 s
+    path, msg = _error(tmp_path, LOOP.format(dur=5, road=R20, x=100.0, v=20.0))
+    assert "actor 'lead' is 126 m ahead along the road from the ego at t = 2.59 s, where the road turns through 361°" \
+        in msg, msg
+    # ego and lead 30 m apart driving round the loop for a minute (nearly five loops): a scene, not refused
+    _load(tmp_path, LOOP.format(dur=60, road=R20, x=30.0, v=10.0))
+    # an actor a loop behind the ego is refused the same way
+    path, msg = _error(tmp_path, LOOP.format(dur=3, road=R20, x=-150.0, v=10.0))
+    assert "actor 'lead' is 150 m behind along the road from the ego at t = 0.00 s" in msg, msg
+    # … and a road of segments names its segments
+    segments = ("segments: [{type: straight, length_m: 50}, {type: arc, length_m: 300, curvature_1pm: 0.03}]")
+    path, msg = _error(tmp_path, LOOP.format(dur=3, road=segments, x=280.0, v=10.0))
+    assert "field 'road.segments': actor 'lead' is 280 m ahead" in msg and "turns through 395°" in msg, msg

@@ -243,6 +243,12 @@ class Scene:
         return self.dynamic_ego
 
     # --- road geometry ---------------------------------------------------
+    def stations(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Where along the road (its station s, m) the ego, shape (T,), and the actors, shape (T, n), are at
+        ``times`` (the scenario's motion; a closed loop's ego is not known in advance)."""
+        t = np.asarray(times, dtype=np.float64)
+        return self._ego.state(t).x_m[:, 0], self._movers.state(t).x_m
+
     def road_to_world(self, s: np.ndarray, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """World position and road heading at road coordinates (s, d)."""
         return self.road.to_world(s, d)
