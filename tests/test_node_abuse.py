@@ -253,3 +253,47 @@ def test_can_fd_frames_are_dropped_and_counted_by_the_node_and_the_consumer():
     node.receive(speed, 0.0)
     asm.on_message_received(speed)
     assert node.counters["rx_speed"] == 1 and asm.ego_speed_mps is not None
+
+
+def test_a_bus_that_does_not_take_some_frames_loses_only_those_and_the_node_goes_on(caplog):
+    """A send the bus refused (socketcan's ENOBUFS: a full transmit queue on a physical bus no other node
+    acknowledges) ended the node with a traceback. Now each such frame is lost and counted in tx_failed, warned once,
+    and every other frame goes out in order."""
+    sc = scenario(ACTORS, duration=2.0)
+    node = RadarNode(sc)
+    got, tried = [], [0]
+
+    def flaky(m):                   # the bus refuses frames 40–79 of the run
+        tried[0] += 1
+        if 40 <= tried[0] - 1 < 80:
+            raise can.CanOperationError("Failed to transmit: [Errno 105] No buffer space available", 105)
+        got.append(m)
+
+    kept = []
+    stats = run_node(node, clock=SimulatedClock(), sinks=[flaky, kept.append])
+    assert stats.cycles == int(2.0 / node.period_s) and node.counters["tx_failed"] == 40
+    assert len(got) == tried[0] - 40 and len(kept) == tried[0]       # the other sink took every frame
+    assert [m.arbitration_id for m in got] == [m.arbitration_id for m in kept[:40] + kept[80:]]
+    assert sum("tx_failed" in r.getMessage() for r in caplog.records) == 1
+
+
+def test_a_send_to_a_bus_whose_reader_is_full_times_out_instead_of_hanging():
+    """A virtual bus whose other end keeps a bounded queue it never reads: the node's send waited for ever (and a
+    Ctrl-C only set the stop it never reached). Sent with SEND_TIMEOUT_S each frame it cannot deliver is lost and
+    counted, and the run ends."""
+    import functools
+    import time
+
+    from radarnode.wire.bus import SEND_TIMEOUT_S
+    sc = scenario(ACTORS, duration=1.0)
+    node = RadarNode(sc)
+    with can.Bus(interface="virtual", channel="full-reader", rx_queue_size=5) as reader, \
+            can.Bus(interface="virtual", channel="full-reader") as sender:
+        t0 = time.perf_counter()
+        stats = run_node(node, clock=SimulatedClock(), sinks=[functools.partial(sender.send, timeout=SEND_TIMEOUT_S)])
+        took = time.perf_counter() - t0
+        queued = 0
+        while reader.recv(0.0) is not None:
+            queued += 1
+    assert queued == 5 and node.counters["tx_failed"] == stats.frames - 5
+    assert took < 5.0, took

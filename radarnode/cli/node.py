@@ -7,11 +7,12 @@ possible with scenario timestamps.
 
 from __future__ import annotations
 
+import functools
 import sys
 
 from radarnode.cli.common import add_scenario_argument, resolve_bitrate, saturation_note, scenario_from_args, stop_on_signals, with_bitrate
 from radarnode.cli.foxglove import add_live_arguments, check_live_arguments, live_view
-from radarnode.wire.bus import add_bus_arguments, echoes_own, open_bus
+from radarnode.wire.bus import SEND_TIMEOUT_S, add_bus_arguments, echoes_own, open_bus
 from radarnode.wire.group import ego_motion_for, make_node
 from radarnode.wire.runner import RealTimeClock, SimulatedClock, run_node
 
@@ -46,10 +47,13 @@ def cmd(args) -> int:
         print(f"radarnode node: {scenario.name} on {bus.channel_info}, {_sensors(node)}, "
               f"{scenario.num_cycles} cycles of {node.period_s * 1e3:.0f} ms; bus-load budget "
               f"{100 * node.bus_load_limit:.0f} % of {bitrate}", file=sys.stderr, flush=True)
-        stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(), sinks=[bus.send, *live.sinks],
+        stats = run_node(node, clock=SimulatedClock() if args.fast else RealTimeClock(),
+                         sinks=[functools.partial(bus.send, timeout=SEND_TIMEOUT_S), *live.sinks],
                          recv=live.tap(lambda timeout: bus.recv(timeout)), vehicle=vehicle, stop=stop,
                          on_cycle=live.on_node_cycle, echoes_own=echoes_own(bus))
-    print(f"{'interrupted: ' if stop.is_set() else ''}sent {stats.cycles} cycles, {stats.frames} frames; " +
+    failed = node.counters.get("tx_failed", 0)       # frames the bus did not take (lost, not sent)
+    print(f"{'interrupted: ' if stop.is_set() else ''}sent {stats.cycles} cycles, {stats.frames - failed} frames"
+          + (f" ({failed} more the bus did not take)" if failed else "") + "; " +
           ", ".join(f"{k}={v}" for k, v in sorted(node.counters.items())), file=sys.stderr)
     note = saturation_note(node)
     if note:

@@ -20,6 +20,11 @@ from radarnode.errors import BusError, UsageError
 logger = logging.getLogger(__name__)
 
 UDP_RECEIVE_BUFFER_BYTES = 4 << 20   # udp_multicast: about 5000 datagrams, a second of a saturated 500 kbit/s bus
+#: how long the node's send of one frame may wait for a bus that does not take it (a full transmit queue; a virtual
+#: bus whose reader's bounded queue is full): then the frame is lost and counted (``tx_failed``). Without it a send
+#: waited for ever and the node, stuck in it, kept neither its cycle nor a Ctrl-C. The cycle's 17–80 frames then cost
+#: at most this each, well inside the 72-ms period
+SEND_TIMEOUT_S = 0.002
 
 
 def add_bus_arguments(parser: argparse.ArgumentParser, bitrate: bool = True) -> None:

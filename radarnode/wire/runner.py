@@ -253,7 +253,15 @@ def run_node(node: RadarNode, *, clock: SimulatedClock | RealTimeClock, sinks: I
             if clock.realtime:
                 m.timestamp = clock.timestamp(0.0)
             for sink in sinks:
-                sink(m)
+                try:
+                    sink(m)
+                except can.CanError as exc:
+                    # the bus did not take the frame (a full transmit queue: on a physical bus with no other node
+                    # to acknowledge, socketcan's ENOBUFS; a send timeout): lost, counted, and the node goes on, as
+                    # a controller drops what it cannot send (it ended the node with a traceback)
+                    node.counters["tx_failed"] += 1
+                    node.warn_once("tx_failed", "the bus did not take a frame (%s); it is lost, counted in "
+                                   "tx_failed, warned once", exc)
 
     def prepare(k: int) -> CycleOutput:
         """Take the input received so far, send the vehicle's frames, compute cycle k."""
