@@ -29,11 +29,11 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
   an actor at 150 m/s) is then reported at its alias with that flag, at every level, and listed as no object;
   the warning names the actor, its range rate and when.
 
-* **A road that comes back over itself between the ego and an actor** (error): at some cycle the road between the
-  ego's station and an actor's turns through 360° or more (a tight constant-radius road, an actor far along it).
-  The lane then loops back: the radar sees the actor across the loop, near, while ``report`` measures the gap along
-  the lane (a lead 150 m along a road of radius 20 m sat 8 m ahead in the world, and the verdict was wrong). A run
-  that only drives round a loop, its actors near, is not refused.
+* **An actor placed a loop or more along a circular road** (error): on a road of one constant curvature
+  (``road.curvature_1pm``) the lane is a loop of 2π/|κ|; an actor that starts that far or further from the ego along
+  it stands where one a loop nearer would (a lead 150 m along a road of radius 20 m sat 24 m ahead, the radar saw it
+  there, and ``report`` measured 150 m). Only the start is checked: an actor that laps the ego later, and a road of
+  segments that comes back near itself, are measured along the lane as they are (scenarios/README.md).
 
 * **A run of no cycle, a window beyond the run** (error): ``duration_s`` shorter than one radar cycle; an
   ``ecu.expect.gap_settle_s`` (or ``acc_follows``' default 2 s) after the run's last cycle.
@@ -241,41 +241,32 @@ def _check_visibility(scenario: Scenario, src: Source) -> None:
     _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t)
 
 
-#: the road's turn between the ego and an actor from which the lane has come back over itself (a full loop)
-LOOP_RAD = 2.0 * math.pi
-
-
 def _check_road_loop(scenario: Scenario, src: Source) -> None:
-    """ScenarioError where, at some cycle, the road between the ego and an actor (not a guardrail) turns through
-    :data:`LOOP_RAD` or more: the actor is a loop or more along the lane from the ego (the module's list)."""
+    """ScenarioError for an actor placed a loop or more along a road of one constant curvature from the ego at the
+    start (the module's list): it stands where an actor a loop nearer would, and ``report`` measures its gap along
+    the lane. Only the placement is checked: where the actors are later depends on the run (a closed loop, a
+    driver, ``--duration``), and on a road of segments the lane can come back near itself at any turn."""
+    kappa = abs(scenario.road.curvature_1pm)
+    if kappa == 0.0 or scenario.road.segments:
+        return
     from radarnode.scene.world import Scene
-    if scenario.road.curvature_1pm == 0.0 and not scenario.road.segments:
-        return
     scene = Scene(scenario)
-    if scene.road.straight:
+    loop = 2.0 * math.pi / kappa
+    ego_s, actor_s = scene.stations(np.zeros(1))
+    along = actor_s[0] - ego_s[0]
+    far = np.flatnonzero(~scene.is_guardrail & (np.abs(along) >= loop))
+    if far.size == 0:
         return
-    cols = np.flatnonzero(~scene.is_guardrail)
-    if cols.size == 0:
-        return
-    n_cycles = max(scenario.num_cycles, 1)
-    for k0 in range(0, n_cycles, CHUNK_CYCLES):
-        times = np.arange(k0, min(k0 + CHUNK_CYCLES, n_cycles)) * scenario.period_s
-        ego_s, actor_s = scene.stations(times)
-        actor_s = actor_s[:, cols]
-        turn = np.abs(scene.road.heading(actor_s) - scene.road.heading(ego_s)[:, None])      # (T, actors)
-        hit = np.argwhere(turn >= LOOP_RAD)
-        if hit.size == 0:
-            continue
-        k, j = hit[0]
-        actor = scenario.actors[int(cols[j])]
-        along = float(actor_s[k, j] - ego_s[k])
-        field = "road.segments" if scenario.road.segments else "road.curvature_1pm"
-        raise src.error(field, f"field {field!r}: actor {actor.id!r} is {abs(along):.0f} m "
-                                f"{'ahead' if along > 0 else 'behind'} along the road from the ego at t = {times[k]:.2f} "
-                                f"s, where the road turns through {math.degrees(turn[k, j]):.0f}° between them: the "
-                                "lane comes back over itself (the radar sees the actor across the loop, near, while "
-                                "report measures the gap along the lane); expected a road that turns less than 360° "
-                                "between the ego and every actor (a larger radius, or the actor nearer)")
+    i = int(far[0])
+    actor = scenario.actors[i]
+    base = f"actors[{i}]"
+    key = f"{base}.x_m" if f"{base}.x_m" in scenario.lines else f"{base}.waypoints" if actor.waypoints else base
+    d = float(along[i])
+    raise src.error(key, f"actor '{actor.id}' ({base}) starts {abs(d):.1f} m {'ahead of' if d > 0 else 'behind'} the "
+                         f"ego along a road of radius {1.0 / kappa:g} m (road.curvature_1pm), whose lane is a loop of "
+                         f"{loop:.1f} m: it stands where {abs(math.fmod(d, loop)):.1f} m would put it, the radar "
+                         f"sees it there, and report would measure its gap as {abs(d):.1f} m; expected it less than "
+                         f"one loop from the ego ({loop:.1f} m)")
 
 
 def _seen_by(scenario: Scenario, candidates: list[int]) -> tuple[np.ndarray, ...]:
