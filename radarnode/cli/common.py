@@ -629,8 +629,9 @@ class ChannelPick:
     refuses what is neither). A log that keeps no channel (``.csv``) has none to pick."""
 
     def __init__(self, channel: str | None, fmt: str, option: str = "--channel") -> None:
-        from radarnode.wire.logfiles import ascii_number, file_channel
+        from radarnode.wire.logfiles import ONE_BASED_CHANNELS, ascii_number, file_channel
         self.channel = channel
+        self.one_based = fmt in ONE_BASED_CHANNELS      # (the refusal's hint on numbering is for these formats)
         number = None if channel is None else file_channel(channel, fmt, option)           # a numbered log's
         # what a frame's channel reads as: a name (exact, or canN for a bare N), or a number as text
         self.names = set() if channel is None else \
@@ -660,9 +661,10 @@ class ChannelPick:
         said nothing at first, then warned with status 0), else None."""
         if self.channel is None or self.taken:
             return None
+        numbered = "; an ASC, BLF or TRC log numbers its channels from 1, and can0 is its channel 1" \
+            if self.one_based else ""
         return (f"option --channel: value {self.channel!r} is not allowed: no frame of the log is on it; expected "
-                f"one of the channels its frames are on: {self._held()} (as the log names them; an ASC, BLF or TRC "
-                "log numbers its channels from 1, and can0 is its channel 1)")
+                f"one of the channels its frames are on: {self._held()} (as the log names them{numbered})")
 
 
 def add_channel_option(p) -> None:

@@ -137,6 +137,16 @@ def _signal_columns(table, arbitration_ids: set[int]) -> list[tuple[str, str]]:
     return list(cols.items())
 
 
+def refuse_channel(args, report: ReadReport) -> None:
+    """FileError where ``--channel`` picked no frame of the log (after a pass over it; before a summary or a CSV
+    header is written): no output file, status 1, as export's. An empty decode with a warning and status 0 read as a
+    decode of a silent bus; the summary line before the error still did (a tester's finding). A damaged log's
+    damage is named with it (its unreadable part may hold the channel)."""
+    refused = args.pick.refusal()
+    if refused:
+        raise FileError(refused + (f"; {report.message('argument FILE')}" if report.damaged else ""))
+
+
 def _frames(args, report: ReadReport):
     """The log's frames (:func:`read_frames`), only those of ``--channel`` where it is given."""
     return args.pick(read_frames(args.file, report))
@@ -151,6 +161,7 @@ def _write_machine(args, out, report: ReadReport, census: SensorCensus) -> Frame
                    if not carries_no_message(m)}
         if first.frames == 0:                            # not even a header line for a file with no frame
             raise FileError(first.message("argument FILE"))
+        refuse_channel(args, first)                      # … nor for a --channel with no frame
         columns = _signal_columns(decoder.table, present)
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(FIXED_COLUMNS + [header for _, header in columns])
@@ -212,6 +223,7 @@ def _write_fused(args, out, report: ReadReport, census: SensorCensus) -> None:
         bar.close()
     if report.frames == 0:
         raise FileError(report.message("argument FILE"))
+    refuse_channel(args, report)
     # sensors the log holds that the scenario has no radar for: named where one of its radars sent nothing (a log of
     # other sensor IDs gave a warning per radar and no word of the IDs it held: an independent tester's finding)
     others = sorted(census.present - set(fuser.stats))
@@ -255,6 +267,7 @@ def _write_text(args, out, report: ReadReport, census: SensorCensus) -> None:
         bar.close()
     if report.frames == 0:                               # no frame, no summary of nothing
         raise FileError(report.message("argument FILE"))
+    refuse_channel(args, report)                         # … nor of a --channel with no frame
     out.write(format_stats(assembler.stats) + "\n")
     objects = summarize_objects([c for c in cycles if isinstance(c, ObjectCycle)])
     for oid, d in sorted(objects.items(), key=lambda kv: -kv[1]["cycles"]):
@@ -315,9 +328,7 @@ def cmd(args) -> int:
     def nothing_readable() -> None:
         if report.frames == 0:          # an empty log, or not a log of this format: no output file at all
             raise FileError(report.message("argument FILE"))
-        refused = args.pick.refusal()
-        if refused:     # --channel picked no frame: no output file either, and status 1 as export's (an empty decode
-            raise FileError(refused)    # with a warning and status 0 read as a decode of a silent bus)
+        refuse_channel(args, report)
 
     census = SensorCensus()
     if args.output is None:
