@@ -70,8 +70,9 @@ def iso15622_limits(speed_mps: float) -> tuple[float, float, float]:
 @dataclass(frozen=True)
 class Target:
     """The selected object: track ID, distance (m, along x), relative speed (m/s, negative closing), lead accel;
-    ``coasted``: not measured this cycle (the ECU's track predicted, or a lost target carried on by dead reckoning),
-    so its radar object is not in the cycle's object list."""
+    ``coasted``: not measured this cycle — the ECU's track took no object of the cycle's list (it predicts it: the
+    radar did not list it, or listed it where the track's gate did not take it, as at an impact), or a lost target
+    carried on by dead reckoning."""
 
     track_id: int
     object_id: int
