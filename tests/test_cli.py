@@ -409,6 +409,14 @@ def test_the_bus_keys_python_can_reads_are_known_for_its_named_only_buses():
         bus.shutdown()
     finally:
         wb.can.Bus = real
+    # python-can's own keys choose the bus (interface= without -i was refused as dropped: a tester's finding), and a
+    # bus chosen by python-can's configuration is named as -i names it
+    args = argparse.Namespace(interface=None, channel="k", bitrate=None, bus_kwargs=["interface=virtual"])
+    open_bus(args).shutdown()
+    from radarnode.errors import UsageError
+    args = argparse.Namespace(interface=None, channel="k", bitrate=None, bus_kwargs=["interface=virtual", "foo=1"])
+    with pytest.raises(UsageError, match="key 'foo' is not allowed for interface 'virtual': python-can's VirtualBus"):
+        open_bus(args)
     # … and a good key of the virtual bus opens it
     args = argparse.Namespace(interface="virtual", channel="k", bitrate=None,
                               bus_kwargs=["receive_own_messages=True", "rx_queue_size=0"])

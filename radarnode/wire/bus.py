@@ -82,6 +82,12 @@ def bus_kwargs(args: argparse.Namespace) -> dict:
         if isinstance(value, float) and not math.isfinite(value):
             raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected a finite number, "
                              "True/False or text")
+        if key == "can_filters":
+            # a list of {can_id, can_mask} entries, which KEY=VALUE cannot give: the text was taken and failed on
+            # every frame (bus_errors, status 0: a tester's finding); and the consumer needs every radar frame
+            raise UsageError(f"option --bus-kwargs: key 'can_filters' ({text!r}) is not allowed: it takes a list of "
+                             "{can_id, can_mask} entries, which KEY=VALUE cannot give; expected no filter (the node "
+                             "and the consumer pick their own frames by ID)")
         if key in _BOOLEAN_KWARGS and not isinstance(value, bool):
             raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected {key}=True or "
                              f"{key}=False")
@@ -125,12 +131,19 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
         raise error from None
     unread = unread_keys(bus, bus_kwargs_given(args))
     if unread:
-        allowed = ", ".join(sorted(read_keys(type(bus))))
+        # (can_filters is refused on the command line; bustype and context are the deprecated interface and
+        # config_context)
+        allowed = ", ".join(sorted(read_keys(type(bus)) - {"can_filters", "bustype", "context"}))
         bus.shutdown()
-        name = kwargs.get("interface") or getattr(bus, "interface", None) or type(bus).__name__
-        raise UsageError(f"option --bus-kwargs: key {unread[0]!r} is not allowed for interface {name!r}: python-can's "
-                         f"{type(bus).__name__} does not read it (it would be dropped without a word); expected one "
-                         f"of {allowed}")
+        name = kwargs.get("interface") or kwargs.get("bustype")
+        chosen = getattr(args, "interface", None) or {"interface", "bustype"} & set(bus_kwargs_given(args))
+        where = "" if chosen else " (from python-can's configuration)"
+        if name is None:        # the interface python-can's configuration chose: its name, as -i takes it
+            name = next((key for key, (_, cls) in can.interfaces.BACKENDS.items() if cls == type(bus).__name__),
+                        type(bus).__name__)
+        raise UsageError(f"option --bus-kwargs: key {unread[0]!r} is not allowed for interface {name!r}{where}: "
+                         f"python-can's {type(bus).__name__} does not read it (it would be dropped without a word); "
+                         f"expected one of {allowed}")
     enlarge_receive_buffer(bus)
     name_bus(bus, kwargs)
     return bus
@@ -144,13 +157,17 @@ _NAMED_ONLY_BUSES = frozenset({"VirtualBus", "UdpMulticastBus", "SocketcanBus"})
 
 def read_keys(bus_class: type) -> frozenset[str]:
     """The keyword arguments a bus of ``bus_class`` reads (its ``__init__``'s named parameters, BusABC's
-    ``can_filters`` and can.Bus's own ``config_context`` and ``ignore_config``), or an empty set where its
-    ``**kwargs`` may hold more (:data:`_NAMED_ONLY_BUSES`)."""
+    ``can_filters`` and can.Bus's own ``interface``, ``config_context`` and ``ignore_config``, with their deprecated
+    names), or an empty set where its ``**kwargs`` may hold more (:data:`_NAMED_ONLY_BUSES`)."""
     if bus_class.__name__ not in _NAMED_ONLY_BUSES:
         return frozenset()
     named = {name for name, par in inspect.signature(bus_class.__init__).parameters.items()
              if par.kind in (par.POSITIONAL_OR_KEYWORD, par.KEYWORD_ONLY) and name != "self"}
-    return frozenset(named | {"can_filters", "config_context", "ignore_config"})
+    # can.Bus's own (interface, config_context, ignore_config) and their deprecated spellings (bustype, context):
+    # python-can reads them to choose and configure the bus (interface= without -i was refused as dropped: a
+    # tester's finding)
+    own = {name for name in inspect.signature(can.Bus).parameters if name != "kwargs"}
+    return frozenset(named | own | {"can_filters", "bustype", "context"})
 
 
 def unread_keys(bus: can.BusABC, given: list[str]) -> list[str]:
