@@ -22,8 +22,9 @@ logger = logging.getLogger(__name__)
 UDP_RECEIVE_BUFFER_BYTES = 4 << 20   # udp_multicast: about 5000 datagrams, a second of a saturated 500 kbit/s bus
 #: how long the node's send of one frame may wait for a bus that does not take it (a full transmit queue; a virtual
 #: bus whose reader's bounded queue is full): then the frame is lost and counted (``tx_failed``). Without it a send
-#: waited for ever and the node, stuck in it, kept neither its cycle nor a Ctrl-C. The cycle's 17–80 frames then cost
-#: at most this each, well inside the 72-ms period
+#: waited for ever and the node, stuck in it, kept neither its cycle nor a Ctrl-C. On a bus that takes nothing a
+#: cycle's 17 frames then cost 34 ms; a cycle of 36 or more frames misses its 72-ms deadline, and the node drops and
+#: counts such cycles as any late one (README, "On time like the sensor")
 SEND_TIMEOUT_S = 0.002
 
 
@@ -129,21 +130,10 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
                          f"interface can open{_CHANNEL_HINTS.get(kwargs.get('interface'), '')}")
         _drop_half_open(exc)
         raise error from None
-    unread = unread_keys(bus, bus_kwargs_given(args))
-    if unread:
-        # (can_filters is refused on the command line; bustype and context are the deprecated interface and
-        # config_context)
-        allowed = ", ".join(sorted(read_keys(type(bus)) - {"can_filters", "bustype", "context"}))
+    refused = _unread_refusal(bus, args, kwargs)
+    if refused:
         bus.shutdown()
-        name = kwargs.get("interface") or kwargs.get("bustype")
-        chosen = getattr(args, "interface", None) or {"interface", "bustype"} & set(bus_kwargs_given(args))
-        where = "" if chosen else " (from python-can's configuration)"
-        if name is None:        # the interface python-can's configuration chose: its name, as -i takes it
-            name = next((key for key, (_, cls) in can.interfaces.BACKENDS.items() if cls == type(bus).__name__),
-                        type(bus).__name__)
-        raise UsageError(f"option --bus-kwargs: key {unread[0]!r} is not allowed for interface {name!r}{where}: "
-                         f"python-can's {type(bus).__name__} does not read it (it would be dropped without a word); "
-                         f"expected one of {allowed}")
+        raise UsageError(refused)
     enlarge_receive_buffer(bus)
     name_bus(bus, kwargs)
     return bus
@@ -153,6 +143,25 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
 #: ``can_filters`` (python-can 4.x, read in its source): any other key given to them is dropped without a word. Other
 #: interfaces read further keys from their ``**kwargs`` and are not checked here
 _NAMED_ONLY_BUSES = frozenset({"VirtualBus", "UdpMulticastBus", "SocketcanBus"})
+
+
+def _unread_refusal(bus: can.BusABC, args: argparse.Namespace, kwargs: dict) -> str | None:
+    """The error for the first ``--bus-kwargs`` key ``bus`` does not read (:func:`unread_keys`), else None; the
+    interface named as -i names it, and where it came from when not from -i or the keys."""
+    given = bus_kwargs_given(args)
+    unread = unread_keys(bus, given)
+    if not unread:
+        return None
+    # (can_filters is refused on the command line; bustype and context are the deprecated interface and config_context)
+    allowed = ", ".join(sorted(read_keys(type(bus)) - {"can_filters", "bustype", "context"}))
+    name = kwargs.get("interface") or kwargs.get("bustype")
+    where = "" if getattr(args, "interface", None) or {"interface", "bustype"} & set(given) else \
+        " (from python-can's configuration)"
+    if name is None:        # the interface python-can's configuration chose: its name, as -i takes it
+        name = next((key for key, (_, cls) in can.interfaces.BACKENDS.items() if cls == type(bus).__name__),
+                    type(bus).__name__)
+    return (f"option --bus-kwargs: key {unread[0]!r} is not allowed for interface {name!r}{where}: python-can's "
+            f"{type(bus).__name__} does not read it (it would be dropped without a word); expected one of {allowed}")
 
 
 def read_keys(bus_class: type) -> frozenset[str]:
