@@ -13,11 +13,11 @@ parabola leaves, and each round is one more alternation of the two axes. The var
 Printed for each: the error on noise-free tones (rms and max over 200 tones, bins) and the RMSE over the CRB of
 one tone's frequency, √6/(2π√ρ) bins, Doppler / range, at ρ = 16, 20, 30, 60 and 80 dB (``--trials`` noisy tones a
 point, the same draws for every variant; a 64 × 64 Hann map, 4 channels, the tone anywhere within its cell, started
-from the three-bin interpolation; the RMSE over the trials that every variant fitted on the tone's own peak, within
-half a bin — a noise peak taken is a miss — so that the variants are compared on the same draws: "k out" counts
-the trials left out, "its own" those this variant missed). Then, with ``--frames`` > 0, the complex128 chain's ``process_rd`` on the
-``highway_mimo12`` frames of ``signal_speed.py`` at 0, 30, 50 and 70 m/s, median ms, the variants alternated in one
-process (the first fit and the refit use the same variant's grids: the refit's first round is ±0.25 bin of 5
+from the three-bin interpolation; the RMSE over the trials that every variant fitted on the tone's own peak,
+within half a bin — a noise peak taken is a miss — so that the variants are compared on the same draws: "k out"
+counts the trials left out, "its own" those this variant missed). Then, with ``--frames`` > 0, the complex128
+chain's ``process_rd`` on the ``highway_mimo12`` frames of ``signal_speed.py`` at 0, 30, 50 and 70 m/s, median ms,
+the variants alternated in one process (the first fit and the refit use the same variant's grids: the refit's first round is ±0.25 bin of 5
 points in every variant). Prints Markdown tables.
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/fit_rounds.py [--trials N] [--frames N]`` (about 4

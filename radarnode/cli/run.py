@@ -53,8 +53,8 @@ def _named(target) -> str:
     """The object an ECU decision is about, by the radar object ID the table shows, "(coasted)" where the ECU's
     track of it took no measurement this cycle (it predicts the track: the object is not in this cycle's table, or
     is, where the track's gate did not take it, as at an impact; or it carries a lost target on); the ECU's own track
-    number only where no radar object ever stood behind it. The line said "target track 1" of the object listed as ID 0 (the ECU
-    numbers its tracks itself): a reader took the car cutting in, ID 1, for ACC's target."""
+    number only where no radar object ever stood behind it. The line said "target track 1" of the object listed as
+    ID 0 (the ECU numbers its tracks itself): a reader took the car cutting in, ID 1, for ACC's target."""
     name = f"object {target.object_id}" if target.object_id >= 0 else f"ECU track {target.track_id}"
     return name + (" (coasted)" if target.coasted else "")
 
