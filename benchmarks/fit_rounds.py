@@ -17,8 +17,8 @@ from the three-bin interpolation; the RMSE over the trials that every variant fi
 within half a bin — a noise peak taken is a miss — so that the variants are compared on the same draws: "k out"
 counts the trials left out, "its own" those this variant missed). Then, with ``--frames`` > 0, the complex128
 chain's ``process_rd`` on the ``highway_mimo12`` frames of ``signal_speed.py`` at 0, 30, 50 and 70 m/s, median ms,
-the variants alternated in one process (the first fit and the refit use the same variant's grids: the refit's first round is ±0.25 bin of 5
-points in every variant). Prints Markdown tables.
+the variants alternated in one process (the first fit and the refit use the same variant's grids: the refit's
+first round is ±0.25 bin of 5 points in every variant). Prints Markdown tables.
 
 Run: ``OPENBLAS_NUM_THREADS=1 .venv/bin/python benchmarks/fit_rounds.py [--trials N] [--frames N]`` (about 4
 minutes with the defaults; ``--frames 0`` the accuracy alone, ``--trials 0`` the timing alone).
