@@ -139,6 +139,51 @@ def test_auto_counts_its_choices_and_uses_signal_for_impairments():
     assert model.choices["signal"] == 1
 
 
+def test_a_stated_snr_is_refused_at_the_object_level_and_auto_renders_every_actor_for_it(tmp_path, capsys):
+    """signal.snr_db (every scatterer's per-sample SNR) was taken and ignored at the object level, the default, and
+    by auto's object part: a lead at 40 m listed in 40 of 41 cycles at 61 dB, where the detection and signal levels
+    at the stated −45 dB listed it in none (an independent tester's finding). The object level refuses it now, and
+    auto renders every actor at the detection level; RF impairments, which only the signal level has, are refused
+    at the object and detection levels likewise."""
+    import dataclasses
+
+    from radarnode.cli.main import main
+    from radarnode.errors import ConfigError
+    sc = scenario("  - {id: lead, class: car, x_m: 40.0, lane: 1, speed_mps: 20.0}", duration=2.0)
+    rc = radar_config(sc)
+    stated = dataclasses.replace(rc.signal, snr_db=-45.0)
+    with pytest.raises(ConfigError, match="field 'signal.snr_db': value -45 is not allowed at fidelity 'object'"):
+        make_model("object", Scene(sc), rc.preset, np.random.default_rng(0), stated)
+    cfg = RuntimeConfig(max_distance_m=rc.preset.max_range_m, clusters=False)
+    listed = {}
+    for level in ("auto", "detection"):
+        model = make_model(level, Scene(sc), rc.preset, np.random.default_rng(1), stated)
+        listed[level] = sum(len(model.step(k * 0.072, cfg)[0].objects) for k in range(20))
+        if level == "auto":
+            assert model.choices == {"object": 0, "detection": 20, "signal": 0}
+            assert model.actor_frames == {"object": 0, "detection": 20}
+    assert listed == {"auto": 0, "detection": 0}            # −45 dB a sample: far below the threshold, at both
+    # the same scene without it: auto at the object level, the lead listed
+    model = make_model("auto", Scene(sc), rc.preset, np.random.default_rng(1), rc.signal)
+    assert sum(len(model.step(k * 0.072, cfg)[0].objects) for k in range(20)) >= 15
+    assert model.choices["object"] == 20
+    imp = dataclasses.replace(rc.signal, impairments=dataclasses.replace(rc.signal.impairments, adc_bits=10))
+    for level in ("object", "detection"):
+        with pytest.raises(ConfigError, match=f"RF impairments are not allowed at fidelity '{level}'"):
+            make_model(level, Scene(sc), rc.preset, np.random.default_rng(0), imp)
+    # from a file: its line
+    path = tmp_path / "snr.yaml"
+    path.write_text("name: snr\nduration_s: 1.0\nseed: 1\nradar: {preset: ars408_like}\nego: {speed_mps: 20.0}\n"
+                    "road: {lanes: 3, lane_width_m: 3.5, ego_lane: 1}\nsignal: {snr_db: -45}\nactors:\n"
+                    "  - {id: lead, class: car, x_m: 40.0, lane: 1, speed_mps: 20.0}\n")
+    capsys.readouterr()
+    assert main(["log", str(path), "-o", str(tmp_path / "x.asc")]) == 1
+    err = capsys.readouterr().err
+    assert f"{path}:7: field 'signal.snr_db': value -45 is not allowed at fidelity 'object'" in err, err
+    assert not (tmp_path / "x.asc").exists()
+    assert main(["log", str(path), "-o", str(tmp_path / "x.asc"), "--fidelity", "detection"]) == 0
+
+
 def _auto_and(level, text, radar, frames, seed=3, ego="{speed_mps: 0.0}"):
     """Run ``auto`` and ``level`` on the same scene: per level the model and, per frame, (frame, view, detections)."""
     sc = scenario(text, radar=radar, ego=ego, duration=frames * 0.072 + 1, seed=seed)

@@ -198,7 +198,7 @@ def cmd(args) -> int:
     scenarios = [(path, with_doa(_with_ecu_options(load_scenario(path), args), args.doa))
                  for path in args.scenarios]                                                    # checked first
     from radarnode.cli.common import check_auto_presets, check_doa_option, check_doa_presets
-    from radarnode.radar.models import check_doa
+    from radarnode.radar.levels import check_level
     from radarnode.radar.setup import radar_config
     for _, sc in scenarios:
         if args.fidelity == "auto":
@@ -206,7 +206,7 @@ def cmd(args) -> int:
         if args.doa is not None:
             check_doa_option(args.doa, args.fidelity or sc.fidelity)
             check_doa_presets(sc, args.doa)
-        check_doa(args.fidelity or sc.fidelity, radar_config(sc).signal, sc)
+        check_level(args.fidelity or sc.fidelity, radar_config(sc).signal, sc)
     # the plots' directory is made once everything else is known good, and removed again if the runs fail first
     with plots_into(args.plots) if args.plots else contextlib.nullcontext() as out_dir:
         return _report(args, scenarios, need, plt, out_dir)

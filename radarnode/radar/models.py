@@ -463,7 +463,8 @@ class AutoModel:
     reflectors of object-level actors in their rings for their energy (their
     detections are the object level's). RF impairments
     exist only in the time-domain signal: a scene that asks for them runs the
-    signal level throughout. Because both parts feed one tracker, a change of
+    signal level throughout; a stated ``signal.snr_db`` (every scatterer's SNR) renders
+    every actor at the detection level, the object level having no scatterers. Because both parts feed one tracker, a change of
     level never drops a track, swaps an ID or empties a frame.
     """
 
@@ -508,6 +509,10 @@ class AutoModel:
         conflict |= wide_actors(self.preset, view, self.wide_beams)
         conflict |= long_actors(self.preset, scat, self.scene.n)
         conflict |= shadowed_actors(self.preset, self.scene, view, config.max_distance_m)
+        if self.options.snr_db is not None:
+            # a stated per-scatterer SNR is the scatterer levels' (the object level takes the radar equation: its
+            # actors kept their distance-given SNR beside the stated one, an independent tester's finding)
+            conflict[:] = True
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
         need = scat.actor_index < 0

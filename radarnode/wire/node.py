@@ -35,7 +35,7 @@ from radarnode.perception.boundaries import Boundary, RoadBoundaryEstimator
 from radarnode.perception.types import MEAS_NEW, RadarFrame
 from radarnode.radar import presets
 from radarnode.radar.setup import radar_config, radar_path
-from radarnode.radar.levels import check_doa, make_model
+from radarnode.radar.levels import check_level, make_model
 from radarnode.radar.object_model import MAX_OBJECTS, RuntimeConfig
 from radarnode.scene.scenario import Scenario
 from radarnode.scene.world import Scene, SensorView
@@ -121,7 +121,7 @@ class RadarNode:
             sort_index=P.SORT_CODES[setup.sort_index], radar_power=setup.radar_power, sensor_id=setup.sensor_id)
         self.scene = Scene(scenario)
         self.fidelity = fidelity or scenario.fidelity
-        check_doa(self.fidelity, radar_config(scenario).signal, scenario)       # file:line of signal.dsp.doa
+        check_level(self.fidelity, radar_config(scenario).signal, scenario)       # file:line of the field
         self.model = make_model(self.fidelity, self.scene, self.preset, np.random.default_rng(scenario.seed),
                                 radar_config(scenario).signal, clusters_wanted=setup.output == "clusters")
         self.counters: Counter = Counter()
