@@ -578,6 +578,12 @@ def test_a_signal_level_cube_larger_than_memory_allows_is_refused_before_the_run
     line = one_error_line(capsys.readouterr().err)
     assert "radar.overrides" in line and "8192 chirps" in line and "12.0 GiB" in line
     assert not out.exists() and not list(tmp_path.glob("*.blf*"))
+    # … naming the file and the line of its overrides, and in a report of several scenarios before any runs (it named
+    # neither, after the rows of the scenarios before it: an independent tester's finding)
+    assert line.startswith(f"error: {sc}:5: radar.overrides: a signal-level frame"), line
+    assert main(["report", str(SCENARIOS / "stopped_vehicle.yaml"), str(sc)]) == 1
+    got = capsys.readouterr()
+    assert got.out == "" and one_error_line(got.err).startswith(f"error: {sc}:5: radar.overrides"), got
 
 
 def test_out_of_memory_during_a_run_is_one_line(capsys, tmp_path, monkeypatch):

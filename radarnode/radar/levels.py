@@ -64,12 +64,34 @@ def check_level(level: str, options: SignalOptions, scenario=None) -> None:
         msg = (f"field 'signal.impairments': RF impairments are not allowed at fidelity {level!r}: they exist only in "
                "the time-domain signal; expected fidelity 'signal' or 'auto' (which then runs the signal level), or "
                "no signal.impairments")
+    if msg is None and scenario is not None:
+        field, msg = _cube_refusal(level, options, scenario)
     if msg is None:
         return
     if scenario is not None:
         from radarnode.schema import Source
         raise Source.of_lines(scenario.source, scenario.lines).error(field, msg)
     raise ConfigError(msg)
+
+
+def _cube_refusal(level: str, options: SignalOptions, scenario) -> tuple[str | None, str | None]:
+    """(field, error) for a signal-level cube larger than this machine allows at ``level``
+    (:func:`radarnode.radar.signal_model.check_cube_memory`, every chirp sequence of the scenario's radar), else
+    (None, None): checked here, with the scenario, so that the error names its file and the line of its overrides
+    before any run (it named neither, and a ``report`` of several scenarios did not say which to fix: an independent
+    tester's finding)."""
+    if not (level == "signal" or (level == "auto" and options.impairments.any)):
+        return None, None
+    from radarnode.radar.setup import radar_config, radar_path
+    from radarnode.radar.signal_model import check_cube_memory
+    preset = radar_config(scenario).preset
+    field = f"{radar_path(scenario)}.overrides"
+    try:
+        for seq in [preset] + ([preset.second_sequence()] if preset.stagger_chirp_period_s else []):
+            check_cube_memory(seq, options.complex_dtype, field)
+    except ConfigError as exc:
+        return field, str(exc)
+    return None, None
 
 
 def make_model(level: str, scene: Scene, preset: RadarPreset, rng: np.random.Generator,

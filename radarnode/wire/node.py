@@ -168,6 +168,7 @@ class RadarNode:
         self.taken_sensor_ids: Callable[[], set[int]] = set
 
     # --- input ------------------------------------------------------------
+
     def receive(self, msg: can.Message, t_s: float) -> None:
         """Handle a received frame: configuration (0x200, 0x202, 0x400, 0x401) and ego motion (0x300, 0x301).
 
