@@ -570,9 +570,10 @@ def test_a_signal_level_cube_larger_than_memory_allows_is_refused_before_the_run
         for dtype in ("complex64", "complex128"):
             check_cube_memory(preset, dtype)
     sc = tmp_path / "big.yaml"
-    sc.write_text("name: big\nduration_s: 0.2\nseed: 1\nfidelity: signal\n"
+    # (a cycle of 0.3 s: the 8192 chirps take 246 ms, which a 72-ms cycle refuses first)
+    sc.write_text("name: big\nduration_s: 0.4\nseed: 1\nfidelity: signal\n"
                   "radar: {preset: mimo12, overrides: {num_chirps: 8192, num_samples: 8192}}\n"
-                  "ego: {speed_mps: 20.0}\nactors: []\n")
+                  "cycle_period_s: 0.3\nego: {speed_mps: 20.0}\nactors: []\n")
     out = tmp_path / "x.blf"
     assert main(["log", str(sc), "-o", str(out)]) == 1
     line = one_error_line(capsys.readouterr().err)

@@ -490,3 +490,28 @@ def test_only_the_placement_on_a_circular_road_is_checked_not_the_run():
     # the shipped bend follow made ten minutes long: a scene
     text = (SCENARIOS / "acc_follow_bend_250.yaml").read_text()
     parse_scenario(re.sub(r"duration_s: [\d.]+", "duration_s: 600", text))
+
+
+@pytest.mark.parametrize("preset,cycle,refused", [("mimo12", 0.0076, True), ("mimo12", 0.0077, False),
+                                                  ("ars408_like", 0.0137, True), ("ars408_like", 0.0138, False),
+                                                  ("ars408_like", 0.005, True)])
+def test_a_cycle_shorter_than_the_radars_frame_is_refused(tmp_path, preset, cycle, refused):
+    # a 5-ms cycle ran on presets whose frame of chirps takes 7.7 ms (mimo12) and 13.7 ms (ars408_like's two
+    # sequences, 6.4 + 7.3 ms): a timing no radar has (an independent tester's finding)
+    text = f"{HEAD}radar: {{preset: {preset}}}\ncycle_period_s: {cycle}\nactors: []\n"
+    if not refused:
+        _load(tmp_path, text)
+        return
+    path, msg = _error(tmp_path, text)
+    frame = {"mimo12": "7.7 ms", "ars408_like": "13.7 ms (its two chirp sequences, 6.4 + 7.3 ms)"}[preset]
+    assert msg.startswith(f"{path}:6: field 'cycle_period_s': value {cycle} is not allowed: one frame of the {preset} "
+                          f"radar's chirps takes {frame}, longer than the cycle of {cycle * 1e3:g} ms"), msg
+
+
+def test_overrides_that_make_the_frame_longer_than_the_cycle_are_refused(tmp_path):
+    path, msg = _error(tmp_path, f"{HEAD}radar: {{preset: mimo12, overrides: {{num_chirps: 8192}}}}\nactors: []\n")
+    assert msg.startswith(f"{path}:5: field 'radar.overrides': one frame of the mimo12 radar's chirps takes 246.1 ms, "
+                          "longer than the cycle of 72 ms that reports it; expected fewer chirps"), msg
+    # … and a cycle long enough takes them
+    _load(tmp_path, f"{HEAD}radar: {{preset: mimo12, overrides: {{num_chirps: 8192}}}}\ncycle_period_s: 0.25\n"
+                    "actors: []\n")

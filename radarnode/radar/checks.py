@@ -35,6 +35,8 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
   there, and ``report`` measured 150 m). Only the start is checked: an actor that laps the ego later, and a road of
   segments that comes back near itself, are measured along the lane as they are (scenarios/README.md).
 
+* **A frame longer than its cycle** (error): a radar's chirps (both sequences of a staggered one) take longer
+  than ``cycle_period_s`` (or the preset's cycle, with ``radar.overrides`` that lengthen the frame).
 * **A run of no cycle, a window beyond the run** (error): ``duration_s`` shorter than one radar cycle; an
   ``ecu.expect.gap_settle_s`` (or ``acc_follows``' default 2 s) after the run's last cycle.
 
@@ -72,6 +74,7 @@ def check_scenario(scenario: Scenario) -> Scenario:
             _check_waypoint_fields(scenario, src, i, actor)
     _check_max_distance(scenario, src)          # (before the warnings that read it)
     _check_range_bins(scenario, src)
+    _check_frame_in_cycle(scenario, src)
     if scenario.actors:
         _check_road_loop(scenario, src)
         _check_overlap_at_start(scenario, src)
@@ -357,6 +360,32 @@ def _check_speed_span(scenario: Scenario, src: Source) -> None:
                            "%+.1f m/s) and, as on such a sensor, are flagged AmbigState 3 'unambiguous'; no object "
                            "is listed for it", src.where(base), actor.id, base, worst[i], when[i], vmax,
                            preset.name, float(np.mod(worst[i] + vmax, 2 * vmax) - vmax))
+
+
+def _check_frame_in_cycle(scenario: Scenario, src: Source) -> None:
+    """ScenarioError where a radar's chirps take longer than its cycle: one frame (both chirp sequences of a
+    staggered radar) must fit in the cycle that reports it. A 5-ms cycle ran on presets whose frame takes 7.7 and
+    13.7 ms, and 8192 chirps of a 246-ms frame in a 72-ms cycle (an independent tester's finding)."""
+    from radarnode.radar.setup import radar_config, radar_path, radar_scenarios
+    period = scenario.period_s
+    for sc in radar_scenarios(scenario):
+        p = radar_config(sc).preset
+        parts = [p.num_chirps * p.frame_chirp_period_s]
+        if p.stagger_chirp_period_s:
+            q = p.second_sequence()
+            parts.append(q.num_chirps * q.frame_chirp_period_s)
+        frame = sum(parts)
+        if frame <= period:
+            continue
+        what = (f"one frame of the {p.name} radar's chirps takes {1e3 * frame:.1f} ms"
+                + (f" (its two chirp sequences, {' + '.join(f'{1e3 * x:.1f}' for x in parts)} ms)" if len(parts) > 1
+                   else "") + f", longer than the cycle of {1e3 * period:g} ms that reports it")
+        if scenario.cycle_period_s is not None and _given(scenario, "cycle_period_s"):
+            raise src.error("cycle_period_s", f"field 'cycle_period_s': value {scenario.cycle_period_s!r} is not "
+                                              f"allowed: {what}; expected at least {frame:.4g}")
+        field = f"{radar_path(sc)}.overrides"
+        raise src.error(field, f"field '{field}': {what}; expected fewer chirps (num_chirps) or a shorter chirp "
+                               f"period, or cycle_period_s of at least {frame:.4g} s")
 
 
 def _check_range_bins(scenario: Scenario, src: Source) -> None:
