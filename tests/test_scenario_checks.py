@@ -230,7 +230,9 @@ def test_the_radar_s_max_distance_counts(tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="radarnode.radar.checks"):
         _load(tmp_path, HEAD + "radar: {max_distance_m: 100}\nactors:\n  - {id: a, class: car, x_m: 200.0, "
                                "speed_mps: 20.0}\n")
-    assert "sees 0.2–100 m" in caplog.records[0].getMessage()
+    # every sector with its range, the farthest cut at max_distance_m
+    assert "sees from 0.2 m to 100 m within ±9°, to 70 m within ±45°, to 20 m within ±60°" \
+        in caplog.records[0].getMessage(), caplog.records[0].getMessage()
 
 
 def test_the_warning_shows_on_the_command_line(tmp_path):

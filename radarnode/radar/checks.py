@@ -312,8 +312,11 @@ def _seen_by(scenario: Scenario, candidates: list[int]) -> tuple[np.ndarray, ...
 
 
 def _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t) -> None:
-    half = max(s.half_angle_deg for s in preset.fov)
     max_m = preset.max_range_m if scenario.radar.max_distance_m is None else scenario.radar.max_distance_m
+    # every sector with its own range (the widest angle with the farthest range read as one sector: a point at
+    # 70.3 m and 44.5°, outside ars408_like's ±45° to 70 m, was said to be outside "0.2–250 m within ±60°": a
+    # tester's finding)
+    sectors = ", ".join(f"to {min(s.max_range_m, max_m):g} m within ±{s.half_angle_deg:g}°" for s in preset.fov)
     others = f" (nor do the other {len(scenario.radars) - 1} radars)" if len(scenario.radars) > 1 else ""
     for i in np.flatnonzero(~seen):
         actor = scenario.actors[i]
@@ -321,9 +324,9 @@ def _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t) ->
         named = [f"ecu.expect.{k}" for k in ("lead", "acc_follows") if getattr(scenario.ecu.expect, k) == actor.id]
         line = src.where(f"{base}.x_m" if f"{base}.x_m" in scenario.lines else base)
         logger.warning("%s: actor '%s' (%s) is never in the radar's field of view during the scenario's %g s: "
-                       "preset %s sees %g–%g m within ±%g°, the actor comes no nearer than %.1f m (azimuth %.1f° at "
+                       "preset %s sees from %g m %s, the actor comes no nearer than %.1f m (azimuth %.1f° at "
                        "t = %.2f s), so the radar never reports it%s%s", line, actor.id, base, scenario.duration_s,
-                       preset.name, preset.min_range_m, max_m, half, closest[i], math.degrees(closest_az[i]),
+                       preset.name, preset.min_range_m, sectors, closest[i], math.degrees(closest_az[i]),
                        closest_t[i], others, f"; it is {' and '.join(named)}" if named else "")
 
 
