@@ -61,13 +61,13 @@ def text(field: str, value: object) -> str:
 NAME_MAX_CHARS = 200
 
 
-def name(field: str, value: object) -> str:
-    """A name that also titles table rows and plot files: 1 to NAME_MAX_CHARS printable characters (no line break or
-    tab) and no space at either end."""
+def name(field: str, value: object, names: str = "report's rows and plot files") -> str:
+    """A name that also titles table rows and plot files (``names``: what it names, for the error): 1 to
+    NAME_MAX_CHARS printable characters (no line break or tab) and no space at either end."""
     text(field, value)
     if not 0 < len(value) <= NAME_MAX_CHARS or value != value.strip() or not value.isprintable():
         raise FieldError(field, value, f"1 to {NAME_MAX_CHARS} printable characters (no line break or tab) and no "
-                                       "space at either end (it names report's rows and plot files)")
+                                       f"space at either end (it names {names})")
     return value
 
 

@@ -517,3 +517,15 @@ def test_overrides_that_make_the_frame_longer_than_the_cycle_are_refused(tmp_pat
     # … and a cycle long enough takes them
     _load(tmp_path, f"{HEAD}radar: {{preset: mimo12, overrides: {{num_chirps: 8192}}}}\ncycle_period_s: 0.25\n"
                     "actors: []\n")
+
+
+@pytest.mark.parametrize("actor_id,ok", [("", False), (" lead", False), ("lead\tcar", False), ("x" * 201, False),
+                                         ("lead car", True), ("x" * 200, True)])
+def test_an_actor_id_is_a_name(tmp_path, actor_id, ok):
+    # an empty id was taken (a tester's finding): warnings, errors and ecu.expect then named an actor ''
+    text = HEAD + f"actors:\n  - {{id: {actor_id!r}, class: car, x_m: 40.0, speed_mps: 20.0}}\n".replace("'", '"')
+    if ok:
+        _load(tmp_path, text)
+        return
+    path, msg = _error(tmp_path, text)
+    assert msg.startswith(f"{path}:6: field 'actors[0].id'") and "printable characters" in msg, msg

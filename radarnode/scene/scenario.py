@@ -354,7 +354,8 @@ class Actor:
     height_m: float | None = None    # height of the body (default by class)
 
     def __post_init__(self) -> None:
-        validate.text("id", self.id)
+        # (an empty id was taken, and warnings and ecu.expect named an actor '': a tester's finding)
+        validate.name("id", self.id, "the actor in warnings, errors and ecu.expect")
         validate.choice("class", self.object_class, ACTOR_CLASSES)
         validate.number("x_m", self.x_m, lo=-1e5, hi=1e5)
         if self.y_m is not None:
