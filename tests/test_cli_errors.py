@@ -657,3 +657,24 @@ def test_junit_into_a_directory_that_takes_no_file_fails_before_the_runs(capsys)
     err = capsys.readouterr().err.strip()
     assert rc == 1 and err.startswith("error: option --junit: cannot write '/proc/x.xml': "), err
     assert time.monotonic() - t0 < 5.0
+
+
+def test_every_radars_cube_is_checked_before_a_report_runs_and_image_names_the_file(capsys, tmp_path):
+    # the second radar's too-large cube was found after the first scenario's runs (rows printed), and image's refusal
+    # named no file (a tester's findings)
+    ok = SCENARIOS / "stopped_vehicle.yaml"
+    big = tmp_path / "bigm.yaml"
+    big.write_text("name: bigm\nduration_s: 0.6\nseed: 1\ncycle_period_s: 0.3\nfidelity: signal\nradars:\n"
+                   "  - {preset: srr_corner, sensor_id: 0}\n  - preset: mimo12\n    sensor_id: 1\n"
+                   "    overrides: {num_chirps: 8192, num_samples: 8192}\nactors:\n  - {id: lead, class: car, x_m: 20}\n")
+    assert main(["report", str(ok), str(big)]) == 1
+    got = capsys.readouterr()
+    assert got.out == "" and one_error_line(got.err).startswith(f"error: {big}:10: radars[1].overrides: a signal-level "
+                                                                "frame of 12 channels × 8192 chirps"), got
+    one = tmp_path / "big.yaml"
+    one.write_text("name: big\nduration_s: 0.4\nseed: 1\nfidelity: signal\n"
+                   "radar: {preset: mimo12, overrides: {num_chirps: 8192, num_samples: 8192}}\n"
+                   "cycle_period_s: 0.3\nego: {speed_mps: 20.0}\nactors: []\n")
+    assert main(["image", str(one), "-o", str(tmp_path / "big.png")]) == 1
+    assert one_error_line(capsys.readouterr().err).startswith(f"error: {one}:5: radar.overrides: a signal-level frame")
+    assert not (tmp_path / "big.png").exists()

@@ -505,15 +505,30 @@ def test_a_cycle_shorter_than_the_radars_frame_is_refused(tmp_path, preset, cycl
         _load(tmp_path, text)
         return
     path, msg = _error(tmp_path, text)
-    frame = {"mimo12": "7.7 ms", "ars408_like": "13.7 ms (its two chirp sequences, 6.4 + 7.3 ms)"}[preset]
+    frame = {"mimo12": "7.6907 ms", "ars408_like": "13.7143 ms (its two chirp sequences, 6.400 + 7.314 ms)"}[preset]
+    need = {"mimo12": "0.007691", "ars408_like": "0.013715"}[preset]
     assert msg.startswith(f"{path}:6: field 'cycle_period_s': value {cycle} is not allowed: one frame of the {preset} "
                           f"radar's chirps takes {frame}, longer than the cycle of {cycle * 1e3:g} ms"), msg
+    # the least cycle suggested is taken (rounded up: 0.01371 was suggested for a 13.7143-ms frame, and refused)
+    assert msg.endswith(f"expected at least {need}"), msg
+    _load(tmp_path, text.replace(f"cycle_period_s: {cycle}", f"cycle_period_s: {need}"))
 
 
 def test_overrides_that_make_the_frame_longer_than_the_cycle_are_refused(tmp_path):
     path, msg = _error(tmp_path, f"{HEAD}radar: {{preset: mimo12, overrides: {{num_chirps: 8192}}}}\nactors: []\n")
-    assert msg.startswith(f"{path}:5: field 'radar.overrides': one frame of the mimo12 radar's chirps takes 246.1 ms, "
-                          "longer than the cycle of 72 ms that reports it; expected fewer chirps"), msg
+    assert msg.startswith(f"{path}:5: field 'radar.overrides': one frame of the mimo12 radar's chirps takes 246.1019 "
+                          "ms, longer than the cycle of 72 ms that reports it; expected fewer chirps"), msg
+    # several radars: the field that set the cycle (the first radar's overrides), or the radar whose overrides
+    # lengthened its frame, with the cycle's source (the error named a radar's overrides it did not have: a tester's
+    # finding)
+    path, msg = _error(tmp_path, HEAD + "radars:\n  - {preset: srr_corner, sensor_id: 0, overrides: {cycle_period_s: "
+                                        "0.01}}\n  - {preset: ars408_like, sensor_id: 1}\nactors: []\n")
+    assert msg.startswith(f"{path}:6: field 'radars[0].overrides': cycle_period_s 0.01 is not allowed here: one frame "
+                          "of the ars408_like radar's chirps takes 13.7143 ms"), msg
+    path, msg = _error(tmp_path, HEAD + "radars:\n  - {preset: srr_corner, sensor_id: 0}\n  - {preset: ars408_like, "
+                                        "sensor_id: 1, overrides: {num_chirps: 512}}\nactors: []\n")
+    assert msg.startswith(f"{path}:7: field 'radars[1].overrides': one frame of the ars408_like radar's chirps takes "
+                          "54.8571 ms") and "(the cycle of srr_corner, radars[0], the scenario's)" in msg, msg
     # … and a cycle long enough takes them
     _load(tmp_path, f"{HEAD}radar: {{preset: mimo12, overrides: {{num_chirps: 8192}}}}\ncycle_period_s: 0.25\n"
                     "actors: []\n")

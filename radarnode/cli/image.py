@@ -28,6 +28,7 @@ from radarnode.errors import FileError, UsageError
 from radarnode.perception.boundaries import RoadBoundaryEstimator
 from radarnode.perception.views import direct_perspective
 from radarnode.radar.setup import radar_config, with_signal
+from radarnode.radar.levels import check_level
 from radarnode.radar.models import SignalModel
 from radarnode.radar.object_model import RuntimeConfig
 from radarnode.scene.world import Scene
@@ -78,6 +79,9 @@ class Renderer:
         self.scenario = with_signal(scenario, decimate=False)
         self.preset = radar_config(self.scenario).preset
         self.scene = Scene(self.scenario)
+        # the signal level's options and cube checked with the file and the field's line (its cube's refusal named
+        # neither: a tester's finding)
+        check_level("signal", radar_config(self.scenario).signal, self.scenario)
         self.model = SignalModel(self.scene, self.preset, np.random.default_rng(self.scenario.seed),
                                  radar_config(self.scenario).signal, keep_cube=True)
         self.boundaries = RoadBoundaryEstimator()

@@ -199,14 +199,15 @@ def cmd(args) -> int:
                  for path in args.scenarios]                                                    # checked first
     from radarnode.cli.common import check_auto_presets, check_doa_option, check_doa_presets
     from radarnode.radar.levels import check_level
-    from radarnode.radar.setup import radar_config
+    from radarnode.radar.setup import radar_config, radar_scenarios
     for _, sc in scenarios:
         if args.fidelity == "auto":
             check_auto_presets(sc)                # the option named, before any run (as run, log, node)
         if args.doa is not None:
             check_doa_option(args.doa, args.fidelity or sc.fidelity)
             check_doa_presets(sc, args.doa)
-        check_level(args.fidelity or sc.fidelity, radar_config(sc).signal, sc)
+        for one in radar_scenarios(sc):          # every radar (its cube): the second radar's was found after a run
+            check_level(args.fidelity or sc.fidelity, radar_config(one).signal, one)
     # the plots' directory is made once everything else is known good, and removed again if the runs fail first
     with plots_into(args.plots) if args.plots else contextlib.nullcontext() as out_dir:
         return _report(args, scenarios, need, plt, out_dir)

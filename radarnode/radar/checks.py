@@ -368,10 +368,13 @@ def _check_speed_span(scenario: Scenario, src: Source) -> None:
 def _check_frame_in_cycle(scenario: Scenario, src: Source) -> None:
     """ScenarioError where a radar's chirps take longer than its cycle: one frame (both chirp sequences of a
     staggered radar) must fit in the cycle that reports it. A 5-ms cycle ran on presets whose frame takes 7.7 and
-    13.7 ms, and 8192 chirps of a 246-ms frame in a 72-ms cycle (an independent tester's finding)."""
+    13.7 ms, and 8192 chirps of a 246-ms frame in a 72-ms cycle (an independent tester's finding). The error names
+    what set the cycle — ``cycle_period_s``, or the overrides of the radar whose preset gives a scenario of several
+    its cycle — or else the overrides that lengthened this radar's frame."""
     from radarnode.radar.setup import radar_config, radar_path, radar_scenarios
     period = scenario.period_s
-    for sc in radar_scenarios(scenario):
+    radars = radar_scenarios(scenario)
+    for sc in radars:
         p = radar_config(sc).preset
         parts = [p.num_chirps * p.frame_chirp_period_s]
         if p.stagger_chirp_period_s:
@@ -380,15 +383,22 @@ def _check_frame_in_cycle(scenario: Scenario, src: Source) -> None:
         frame = sum(parts)
         if frame <= period:
             continue
-        what = (f"one frame of the {p.name} radar's chirps takes {1e3 * frame:.1f} ms"
-                + (f" (its two chirp sequences, {' + '.join(f'{1e3 * x:.1f}' for x in parts)} ms)" if len(parts) > 1
+        need = math.ceil(frame * 1e6) / 1e6                  # (rounded up: the value suggested is taken)
+        what = (f"one frame of the {p.name} radar's chirps takes {1e3 * frame:.4f} ms"
+                + (f" (its two chirp sequences, {' + '.join(f'{1e3 * x:.3f}' for x in parts)} ms)" if len(parts) > 1
                    else "") + f", longer than the cycle of {1e3 * period:g} ms that reports it")
         if scenario.cycle_period_s is not None and _given(scenario, "cycle_period_s"):
             raise src.error("cycle_period_s", f"field 'cycle_period_s': value {scenario.cycle_period_s!r} is not "
-                                              f"allowed: {what}; expected at least {frame:.4g}")
-        field = f"{radar_path(sc)}.overrides"
-        raise src.error(field, f"field '{field}': {what}; expected fewer chirps (num_chirps) or a shorter chirp "
-                               f"period, or cycle_period_s of at least {frame:.4g} s")
+                                              f"allowed: {what}; expected at least {need:g}")
+        first = radars[0]
+        if "cycle_period_s" in (first.radar.overrides or {}):      # the first radar's overrides set the cycle
+            field = f"{radar_path(first)}.overrides"
+            raise src.error(field, f"field '{field}': cycle_period_s {period:g} is not allowed here: {what}; expected "
+                                   f"cycle_period_s of at least {need:g}")
+        field = f"{radar_path(sc)}.overrides" if sc.radar.overrides else f"{radar_path(sc)}.preset"
+        cycle = "" if sc is first else f" (the cycle of {first.radar.preset}, {radar_path(first)}, the scenario's)"
+        raise src.error(field, f"field '{field}': {what}{cycle}; expected fewer chirps (num_chirps) or a shorter chirp "
+                               f"period, or cycle_period_s of at least {need:g} s")
 
 
 def _check_range_bins(scenario: Scenario, src: Source) -> None:
