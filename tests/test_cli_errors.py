@@ -183,6 +183,15 @@ def test_every_numeric_option_refuses_what_it_does_not_allow(capsys, logs, cmd, 
      "option --bus-kwargs: key 'fd' is not allowed for interface 'virtual': python-can's VirtualBus does not read it "
      "(it would be dropped without a word); expected one of channel, config_context, ignore_config, interface, "
      "preserve_timestamps, protocol, receive_own_messages, rx_queue_size"),
+    # a key that -i or -c overrode was dropped without a word: the node ran on the virtual bus, channel a (a tester's
+    # finding)
+    (["node", SCENARIO, "-i", "virtual", "-c", "a", "--bus-kwargs", "interface=udp_multicast"],
+     "option --bus-kwargs: key 'interface' ('udp_multicast') is not allowed with -i/--interface 'virtual'; expected "
+     "one of them"),
+    (["consume", "-i", "virtual", "-c", "a", "--bus-kwargs", "channel=b"],
+     "option --bus-kwargs: key 'channel' ('b') is not allowed with -c/--channel 'a'; expected one of them"),
+    (["node", SCENARIO, "-c", "a", "--bus-kwargs", "bustype=bogus"],
+     "option --bus-kwargs bustype: interface 'bogus' cannot be used here"),
     # a filter list cannot be given as KEY=VALUE: its text failed on every frame, status 0 (a tester's finding)
     (["consume", "-i", "virtual", "-c", "x", "--bus-kwargs", "can_filters=x"],
      "option --bus-kwargs: key 'can_filters' ('x') is not allowed: it takes a list of {can_id, can_mask} entries"),

@@ -83,6 +83,12 @@ def bus_kwargs(args: argparse.Namespace) -> dict:
         if isinstance(value, float) and not math.isfinite(value):
             raise UsageError(f"option --bus-kwargs: value {item!r} is not allowed; expected a finite number, "
                              "True/False or text")
+        for option, attr, keys in (("-i/--interface", "interface", ("interface", "bustype")),
+                                   ("-c/--channel", "channel", ("channel",))):
+            if key in keys and getattr(args, attr, None):
+                # the option's value was taken and the key dropped without a word (a tester's finding)
+                raise UsageError(f"option --bus-kwargs: key {key!r} ({text!r}) is not allowed with {option} "
+                                 f"{getattr(args, attr)!r}; expected one of them")
         if key == "can_filters":
             # a list of {can_id, can_mask} entries, which KEY=VALUE cannot give: the text was taken and failed on
             # every frame (bus_errors, status 0: a tester's finding); and the consumer needs every radar frame
@@ -121,8 +127,10 @@ def open_bus(args: argparse.Namespace) -> can.BusABC:
     try:
         bus = can.Bus(**kwargs)
     except (can.exceptions.CanInterfaceNotImplementedError, ImportError) as exc:
-        source = "option -i/--interface" if getattr(args, "interface", None) else "python-can configuration"
-        name = kwargs.get("interface", "(none)")
+        given = {"interface", "bustype"} & set(bus_kwargs_given(args))
+        source = "option -i/--interface" if getattr(args, "interface", None) else \
+            f"option --bus-kwargs {sorted(given)[0]}" if given else "python-can configuration"
+        name = kwargs.get("interface") or kwargs.get("bustype") or "(none)"
         raise UsageError(f"{source}: interface {name!r} cannot be used here ({exc}); expected one of "
                          f"{', '.join(sorted(can.interfaces.VALID_INTERFACES))} with its driver installed") from None
     except (can.CanError, ValueError, TypeError, OSError, NotImplementedError) as exc:
