@@ -75,7 +75,7 @@ def format_ecu(d, ego_speed_mps: float) -> str:
         acc += f" [FAULT: {', '.join(faults)}]"
     fcw = ["none", "pre-warning", "WARNING"][d.warning_level]
     ttc = f"{d.ttc_s:.1f} s" if d.ttc_s < 99 else "-"
-    judged = f"{_named(d.fcw_target)}, " if d.fcw_target is not None and d.ttc_s < 99 else ""
+    judged = f"{_named(d.fcw_target)}, " if d.fcw_target is not None else ""     # (a held warning's too, TTC -)
     return f"{acc}; FCW {fcw} ({judged}TTC {ttc})"
 
 
