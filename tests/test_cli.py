@@ -460,6 +460,8 @@ def test_the_ecu_line_says_coasted_of_a_target_not_measured_this_cycle():
 
     measured = Target(7, 3, 40.0, 0.0, -2.0, 0.0)
     assert "target object 3 at 40.0 m" in line(measured) and "(TTC -)" in line(measured)
+    # FCW's object is named while its TTC is unbounded too (a held warning showed no object: a tester's finding)
+    assert "FCW none (object 3, TTC -)" in line(measured, measured)
     coasted = Target(7, 3, 40.0, 0.0, -2.0, 0.0, coasted=True)
     assert "target object 3 (coasted) at 40.0 m" in line(coasted, coasted, 20.0)
     assert "FCW none (object 3 (coasted), TTC 20.0 s)" in line(coasted, coasted, 20.0)

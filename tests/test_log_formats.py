@@ -796,7 +796,8 @@ def test_a_log_without_channels_picks_none_and_says_so(capsys, tmp_path, short_f
     _on_channels(log, short_frames, ["can0"])
     capsys.readouterr()
     rc, out, err = cli(capsys, "decode", log, "--format", "json", "--channel", "None")
-    assert rc == 1 and not out and "the channels its frames are on: none (this log keeps no channel" in err, err
+    assert rc == 1 and not out and ("the channels its frames are on: none: this log keeps no channel (a .csv or .db "
+                                    "log)") in err and "as the log names them" not in err, err
 
 
 @pytest.mark.parametrize("damage", ["garbage", "garbled number", "no time"])

@@ -654,7 +654,7 @@ class ChannelPick:
                 yield msg
 
     def _held(self) -> str:
-        return ", ".join(sorted(self.seen)) if self.seen else "none (this log keeps no channel: a .csv or .db log)"
+        return ", ".join(sorted(self.seen)) if self.seen else "none: this log keeps no channel (a .csv or .db log)"
 
     def refusal(self) -> str | None:
         """The error where ``--channel`` picked no frame (decode, export: status 1, no output file; an empty decode
@@ -663,8 +663,9 @@ class ChannelPick:
             return None
         numbered = "; an ASC, BLF or TRC log numbers its channels from 1, and can0 is its channel 1" \
             if self.one_based else ""
+        named = f" (as the log names them{numbered})" if self.seen else ""
         return (f"option --channel: value {self.channel!r} is not allowed: no frame of the log is on it; expected "
-                f"one of the channels its frames are on: {self._held()} (as the log names them{numbered})")
+                f"one of the channels its frames are on: {self._held()}{named}")
 
 
 def add_channel_option(p) -> None:
