@@ -317,7 +317,9 @@ def _warn_unseen(scenario, src, preset, seen, closest, closest_az, closest_t) ->
     # 70.3 m and 44.5°, outside ars408_like's ±45° to 70 m, was said to be outside "0.2–250 m within ±60°": a
     # tester's finding)
     sectors = ", ".join(f"to {min(s.max_range_m, max_m):g} m within ±{s.half_angle_deg:g}°" for s in preset.fov)
-    others = f" (nor do the other {len(scenario.radars) - 1} radars)" if len(scenario.radars) > 1 else ""
+    n_other = len(scenario.radars) - 1
+    others = "" if n_other < 1 else " (nor does the other radar)" if n_other == 1 else \
+        f" (nor do the other {n_other} radars)"
     for i in np.flatnonzero(~seen):
         actor = scenario.actors[i]
         base = f"actors[{i}]"
