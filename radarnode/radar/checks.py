@@ -37,6 +37,7 @@ Run by the loader (:func:`radarnode.radar.setup.load_scenario`) on every scenari
 
 * **A frame longer than its cycle** (error): a radar's chirps (both sequences of a staggered one) take longer
   than ``cycle_period_s`` (or the preset's cycle, with ``radar.overrides`` that lengthen the frame).
+
 * **A run of no cycle, a window beyond the run** (error): ``duration_s`` shorter than one radar cycle; an
   ``ecu.expect.gap_settle_s`` (or ``acc_follows``' default 2 s) after the run's last cycle.
 
