@@ -379,10 +379,7 @@ def _check_frame_in_cycle(scenario: Scenario, src: Source) -> None:
     radars = radar_scenarios(scenario)
     for sc in radars:
         p = radar_config(sc).preset
-        parts = [p.num_chirps * p.frame_chirp_period_s]
-        if p.stagger_chirp_period_s:
-            q = p.second_sequence()
-            parts.append(q.num_chirps * q.frame_chirp_period_s)
+        parts = [q.num_chirps * q.frame_chirp_period_s for q in p.sequences()]
         frame = sum(parts)
         if frame <= period:
             continue

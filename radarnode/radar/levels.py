@@ -87,7 +87,7 @@ def _cube_refusal(level: str, options: SignalOptions, scenario) -> tuple[str | N
     preset = radar_config(scenario).preset
     field = f"{radar_path(scenario)}.overrides"
     try:
-        for seq in [preset] + ([preset.second_sequence()] if preset.stagger_chirp_period_s else []):
+        for seq in preset.sequences():
             check_cube_memory(seq, options.complex_dtype, field)
     except ConfigError as exc:
         return field, str(exc)

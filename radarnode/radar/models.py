@@ -88,8 +88,7 @@ class ScattererModel:
 
     def sequences(self) -> list[RadarPreset]:
         """One preset per chirp sequence of a cycle (two with staggered ramps)."""
-        p = self.preset
-        return [p, p.second_sequence()] if p.stagger_chirp_period_s else [p]
+        return self.preset.sequences()
 
     def detections(self, scat: Scatterers, config: RuntimeConfig, preset: RadarPreset) -> Detections:
         """The detections of one chirp sequence (``preset``) of the cycle, speeds as measured (aliased)."""

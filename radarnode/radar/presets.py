@@ -259,6 +259,10 @@ class RadarPreset:
         hi = self.max_range_rate_mps if self.max_range_rate_mps is not None else v
         return lo, hi
 
+    def sequences(self) -> list[RadarPreset]:
+        """One preset per chirp sequence of a cycle (two with staggered ramps: this and :meth:`second_sequence`)."""
+        return [self, self.second_sequence()] if self.stagger_chirp_period_s else [self]
+
     def second_sequence(self) -> RadarPreset:
         """The staggered second chirp sequence as a preset of its own (same waveform, other chirp period)."""
         if not self.stagger_chirp_period_s:
