@@ -102,11 +102,17 @@ _OBJECT_INTS = (("meas_state", "meas_state"), ("prob_of_exist", "prob_of_exist")
 # integers above and the actor), shared by every cycle without objects (empty: nothing to modify)
 _NO_OBJECT_ROWS = (tuple(np.zeros(0) for _ in range(4 + len(_OBJECT_FLOATS))),
                    tuple(np.zeros(0, dtype=np.int64) for _ in range(3 + len(_OBJECT_INTS))))
-#: … as an empty object list's fields by name (a cycle without objects takes a copy: a new list, the same arrays)
-_NO_OBJECT_FIELDS = dict(ObjectList.of(
-    _NO_OBJECT_ROWS[1][0], *_NO_OBJECT_ROWS[0][:4], _NO_OBJECT_ROWS[1][1], *_NO_OBJECT_ROWS[0][4:12],
-    *_NO_OBJECT_ROWS[1][2:4], *_NO_OBJECT_ROWS[0][12:14], _NO_OBJECT_ROWS[1][4], *_NO_OBJECT_ROWS[0][14:17],
-    _NO_OBJECT_ROWS[1][5]).__dict__)
+
+
+def _object_list(f, g) -> ObjectList:
+    """The object list of float rows ``f`` and integer rows ``g`` (obj_f's and obj_i's order, above)."""
+    return ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4], f[14], f[15],
+                         f[16], g[5])
+
+
+#: the empty object list of _NO_OBJECT_ROWS, its fields by name (a cycle without objects takes a copy: a new list, the
+#: same arrays)
+_NO_OBJECT_FIELDS = dict(_object_list(*_NO_OBJECT_ROWS).__dict__)
 #: the detections' fields (Detections' order after the actor index: range, range rate, azimuth, RCS, SNR; the RCS and
 #: SNR as the chain reads them, :meth:`ObjectModel._physics`)
 _DETECTION_FLOATS = ("m_r", "m_vr", "m_az", "rcs_read", "snr_read")
@@ -1531,8 +1537,7 @@ class ObjectModel:
             if by_cycle:
                 g = list(g)
                 g[1] = self._dyn_cycle(ch, i, g[-1], f[2], f[3], sv)
-            objects = ObjectList.of(g[0], f[0], f[1], f[2], f[3], g[1], *f[4:12], g[2], g[3], f[12], f[13], g[4],
-                                    f[14], f[15], f[16], g[5])
+            objects = _object_list(f, g)
         else:                   # a cycle without objects (half the cycles of a long run): its fields in one copy
             objects = object.__new__(ObjectList)
             objects.__dict__ = _NO_OBJECT_FIELDS.copy()
