@@ -462,9 +462,10 @@ class AutoModel:
     reflectors of object-level actors in their rings for their energy (their
     detections are the object level's). RF impairments
     exist only in the time-domain signal: a scene that asks for them runs the
-    signal level throughout; a stated ``signal.snr_db`` (every scatterer's SNR) renders
-    every actor at the detection level, the object level having no scatterers. Because both parts feed one tracker, a change of
-    level never drops a track, swaps an ID or empties a frame.
+    signal level throughout; a stated ``signal.snr_db`` (every scatterer's SNR)
+    renders every actor at the detection level, the object level having no
+    scatterers. Because both parts feed one tracker, a change of level never
+    drops a track, swaps an ID or empties a frame.
     """
 
     def __init__(self, scene: Scene, preset: RadarPreset, rng: np.random.Generator,
@@ -502,16 +503,17 @@ class AutoModel:
         scat = self.detection.scatterers(t_s, view, config)
         # (where each scatterer appears, once for both tests: ``positions``, detection_model.apparent_positions)
         at = detection_model.apparent_positions(self.preset, scat)
-        conflict = conflicting_actors(self.preset, scat, self.scene.n, at) | extended_actors(self.preset, scat,
-                                                                                             self.scene.n, at)
-        conflict |= across_an_edge(self.preset, view, self.scene.length_m, self.scene.width_m)
-        conflict |= wide_actors(self.preset, view, self.wide_beams)
-        conflict |= long_actors(self.preset, scat, self.scene.n)
-        conflict |= shadowed_actors(self.preset, self.scene, view, config.max_distance_m)
         if self.options.snr_db is not None:
             # a stated per-scatterer SNR is the scatterer levels' (the object level takes the radar equation: its
             # actors kept their distance-given SNR beside the stated one, an independent tester's finding)
-            conflict[:] = True
+            conflict = np.ones(self.scene.n, dtype=bool)
+        else:
+            conflict = conflicting_actors(self.preset, scat, self.scene.n, at) | extended_actors(self.preset, scat,
+                                                                                                 self.scene.n, at)
+            conflict |= across_an_edge(self.preset, view, self.scene.length_m, self.scene.width_m)
+            conflict |= wide_actors(self.preset, view, self.wide_beams)
+            conflict |= long_actors(self.preset, scat, self.scene.n)
+            conflict |= shadowed_actors(self.preset, self.scene, view, config.max_distance_m)
         # posts and clutter are many small reflectors: only the detection level has them (the chain reports them
         # as clusters and its tracker as stationary objects)
         need = scat.actor_index < 0
