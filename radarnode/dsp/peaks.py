@@ -322,7 +322,8 @@ class PatchFit:
     #: reached ±0.09, and a fit whose first round ends further off (a start from the three-bin interpolation up to
     #: 0.35 bin away, at 20 dB) stops short — up to 0.047 bin, 1.2× the bound, in a few percent of the chain's fits
     #: (an independent tester): the chain's range 1.19 → 1.22× the bound at 20 dB (``calibration.py --only
-    #: accuracy``); on starts near the tone the same RMSE within 0.1 % at 20–80 dB, 1–3 % worse at 16 dB
+    #: accuracy``); on starts near the tone the same RMSE within 0.1 % at 20–80 dB, at 16 dB 0.5 % worse in Doppler
+    #: and 3.9 % in range (one common set of trials, ``fit_rounds.py``)
     ROUNDS = ((0.5, 9), (1.0 / 32.0, 9))
     #: … and :meth:`refit`'s, from the first fit's estimates (within a few of its σ: ±0.25 bin reaches 0.1-bin
     #: errors at ρ = 15 dB)
